@@ -1,0 +1,38 @@
+#include "cli_common.hpp"
+
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <exception>
+#include <stdexcept>
+
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::cli {
+
+int Guard(const std::function<int()>& body) {
+  try {
+    return body();
+  } catch (const InputError& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::invalid_argument& e) {
+    fmt::print(stderr, "error: {}\n", e.what());
+    return kExitBadInput;
+  } catch (const std::exception& e) {
+    fmt::print(stderr, "failed: {}\n", e.what());
+    return kExitFailure;
+  }
+}
+
+void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,
+                const std::string& issue) {
+  auto* cmd = parent.add_subcommand(name, description + " [not in this build yet: " + issue + "]");
+  cmd->allow_extras();
+  cmd->callback([name, issue] {
+    fmt::print(stderr, "hapticlab {}: not available in this build yet ({}).\n", name, issue);
+    throw CLI::RuntimeError(kExitFailure);
+  });
+}
+
+}  // namespace hapticlab::cli

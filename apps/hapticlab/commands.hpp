@@ -1,0 +1,10 @@
+#pragma once
+// Registration functions of the command groups (one file each).
+
+#include <CLI/CLI.hpp>
+
+namespace hapticlab::cli {
+
+void RegisterExport(CLI::App& app);
+
+}  // namespace hapticlab::cli

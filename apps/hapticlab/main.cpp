@@ -1,0 +1,41 @@
+// hapticlab: the one command line of HapticLab.
+
+#include <CLI/CLI.hpp>
+#include <fmt/core.h>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "hapticlab/core/version.hpp"
+
+int main(int argc, char** argv) {
+  using namespace hapticlab::cli;
+  CLI::App app{
+      "HapticLab: model real textures, render them on a force-feedback device plus a\n"
+      "vibrotactile actuator, run psychophysical studies comparing real and virtual\n"
+      "textures, and analyse the ratings. Run 'hapticlab COMMAND --help' for details.\n"
+      "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.",
+      "hapticlab"};
+  app.set_version_flag("--version", fmt::format("hapticlab {} ({})", hapticlab::kVersion,
+                                                 hapticlab::kGitSha));
+  app.require_subcommand(1);
+
+  RegisterExport(app);
+  AddPlanned(app, "study", "Validate, plan, run, resume and inspect study protocols", "issue #4");
+  AddPlanned(app, "model", "Fit, build, render and check material models", "issues #3, #6, #7");
+  AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
+  AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
+  AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");
+  AddPlanned(app, "stats", "rmANOVA, Tukey HSD, Kruskal-Wallis, Shapiro-Wilk on CSV", "issue #5");
+  AddPlanned(app, "analyze", "Run a study's declared analyses and write the report", "issue #5");
+  AddPlanned(app, "demo", "Run a complete simulated study end to end", "issue #4");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? kExitOk : kExitBadInput;
+  }
+  return kExitOk;
+}

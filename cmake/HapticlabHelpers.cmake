@@ -1,0 +1,39 @@
+# Helpers shared by every module (STYLE.md §2).
+
+add_library(hl_warnings INTERFACE)
+target_compile_options(hl_warnings INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wimplicit-fallthrough -Wvla
+  # Designated initializers that omit defaulted fields are idiomatic C++20.
+  -Wno-missing-field-initializers)
+if(HL_WERROR)
+  target_compile_options(hl_warnings INTERFACE -Werror)
+endif()
+if(HL_SANITIZE)
+  string(REPLACE ";" "," _hl_san "${HL_SANITIZE}")
+  target_compile_options(hl_warnings INTERFACE -fsanitize=${_hl_san} -fno-omit-frame-pointer)
+  target_link_options(hl_warnings INTERFACE -fsanitize=${_hl_san})
+endif()
+
+# hl_add_module(<name> SOURCES ... DEPS PUBLIC ... PRIVATE ...)
+# Creates target hl_<name> with alias hapticlab::<name>; public headers live in
+# <name>/include/hapticlab/<name>/.
+function(hl_add_module name)
+  cmake_parse_arguments(M "" "" "SOURCES;DEPS" ${ARGN})
+  add_library(hl_${name} STATIC ${M_SOURCES})
+  add_library(hapticlab::${name} ALIAS hl_${name})
+  target_include_directories(hl_${name} PUBLIC
+    $<BUILD_INTERFACE:${CMAKE_CURRENT_SOURCE_DIR}/include>)
+  target_link_libraries(hl_${name} ${M_DEPS})
+  target_link_libraries(hl_${name} PRIVATE hl_warnings)
+endfunction()
+
+# hl_add_test(<module> <source>) builds tests/<module>/<source>_test.cpp.
+function(hl_add_test module source)
+  cmake_parse_arguments(T "" "" "DEPS" ${ARGN})
+  set(target ${module}_${source}_test)
+  add_executable(${target} ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
+  target_link_libraries(${target} PRIVATE hapticlab::${module} ${T_DEPS}
+                        hl_test_util GTest::gtest_main hl_warnings)
+  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60
+                       PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data")
+endfunction()

@@ -1,0 +1,180 @@
+#pragma once
+/// @file The study record in SQLite (DESIGN.md §5): typed access to every table.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+struct sqlite3;
+
+namespace hapticlab::db {
+
+/// Latest schema version this build writes. Older files are migrated forward on open.
+inline constexpr int kSchemaVersion = 3;
+
+/// A study: one protocol, its text and hash, and the study seed.
+struct Study {
+  std::int64_t id = 0;
+  std::string name;
+  std::string protocol_toml;  ///< the protocol file exactly as run
+  std::string protocol_hash;  ///< hex digest of protocol_toml
+  std::uint64_t seed = 0;     ///< study seed; participants derive theirs from it
+};
+
+/// A participant, known only by a pseudonymous code.
+struct Participant {
+  std::int64_t id = 0;
+  std::int64_t study_id = 0;
+  std::string code;        ///< pseudonymous, e.g. "P07"; see IsPseudonymousCode
+  int index = 0;           ///< participant index used for planning (0-based)
+  std::uint64_t seed = 0;  ///< per-participant seed used for planning and simulation
+};
+
+/// One sitting of a participant, with the provenance needed to reproduce it.
+struct Session {
+  std::int64_t id = 0;
+  std::int64_t participant_id = 0;
+  std::string started_at;        ///< ISO-8601 UTC, filled by the database when empty
+  std::string ended_at;          ///< empty while running
+  std::string status = "running";///< running | completed | aborted | crashed
+  std::string software_version;  ///< "<version>+<git sha>"
+  std::string device;            ///< device back-end name and serial
+  std::string calibration;       ///< device calibration description or hash
+  std::string provenance_json;   ///< protocol hash, seeds, model hashes (JSON object)
+  std::string plan_json;         ///< the resolved trial plan (schema v3)
+};
+
+/// Trial status values.
+inline constexpr const char* kTrialPlanned = "planned";
+inline constexpr const char* kTrialRunning = "running";
+inline constexpr const char* kTrialCompleted = "completed";
+inline constexpr const char* kTrialFaulted = "faulted";
+inline constexpr const char* kTrialAborted = "aborted";
+
+/// One trial of a session's plan.
+struct Trial {
+  std::int64_t id = 0;
+  std::int64_t session_id = 0;
+  int plan_index = 0;           ///< position in the resolved plan (0-based)
+  std::string phase;            ///< training | reference | main
+  std::string material;         ///< material shown (real sample id / virtual model)
+  std::string comparison;       ///< the other stimulus: "virtual" or a material (reference)
+  std::string method;           ///< rendering method name; empty for real-real pairs
+  int repetition = 0;           ///< 0-based repetition index
+  std::string left;             ///< stimulus on the left square
+  std::string right;            ///< stimulus on the right square
+  std::string status = kTrialPlanned;
+  int attempts = 0;             ///< how many times the trial was started
+};
+
+/// One rating of one criterion in one trial.
+struct Rating {
+  std::string criterion;        ///< e.g. "roughness"
+  double score = 0;             ///< on the protocol's scale (0-100 by default)
+  double response_time_s = 0;   ///< from stimulus end to confirmation [s]
+};
+
+/// An event in a session: break, pause, abort, device fault, trial re-queue...
+struct Event {
+  std::int64_t id = 0;
+  std::int64_t session_id = 0;
+  std::optional<std::int64_t> trial_id;
+  std::string kind;
+  std::string detail;
+  std::string created_at;
+};
+
+/// A chunk of a trajectory stream: samples at a constant rate, packed float32 row-major
+/// (sample-major: samples[i * channels.size() + c]).
+struct TrajectoryChunk {
+  std::int64_t trial_id = 0;
+  std::string stream;               ///< e.g. "force", "vibration"
+  double start_time_s = 0;          ///< time of the first sample [s]
+  double rate_hz = 0;               ///< sample rate [Hz]
+  std::vector<std::string> channels;///< channel names with units, e.g. "fx_N"
+  std::vector<float> samples;
+  std::size_t sample_count() const { return channels.empty() ? 0 : samples.size() / channels.size(); }
+};
+
+/// True when `code` is a pseudonymous participant code: 1-32 characters of letters, digits,
+/// '-' or '_', containing at least one digit (so a bare name such as "Alice" is refused).
+bool IsPseudonymousCode(const std::string& code);
+
+/// Options for opening a database.
+struct OpenOptions {
+  bool create = true;                 ///< create the file when missing
+  int migrate_to = kSchemaVersion;    ///< migrate up to this version (tests use older ones)
+  bool read_only = false;
+  int busy_timeout_ms = 10000;        ///< wait for another writer this long
+};
+
+/// A connection to a study record. Not thread-safe: one per thread.
+class Database {
+ public:
+  /// Opens (and creates/migrates) the file. Throws std::runtime_error naming the file when
+  /// it is not a HapticLab database or is newer than this build.
+  explicit Database(const std::string& path, const OpenOptions& options = {});
+  ~Database();
+  Database(const Database&) = delete;
+  Database& operator=(const Database&) = delete;
+  Database(Database&& other) noexcept;
+  Database& operator=(Database&& other) noexcept;
+
+  const std::string& path() const { return path_; }
+  /// Schema version stored in the file.
+  int SchemaVersion() const;
+  /// Applies forward migrations up to `target`. Each runs in its own transaction.
+  void Migrate(int target = kSchemaVersion);
+  /// "ok" when SQLite's integrity check passes, else its report.
+  std::string IntegrityCheck() const;
+
+  // Studies and participants.
+  std::int64_t CreateStudy(const Study& s);
+  std::optional<Study> FindStudy(const std::string& name) const;
+  std::vector<Study> Studies() const;
+  std::int64_t AddParticipant(const Participant& p);
+  std::optional<Participant> FindParticipant(std::int64_t study_id, const std::string& code) const;
+  std::vector<Participant> Participants(std::int64_t study_id) const;
+
+  // Sessions.
+  std::int64_t StartSession(const Session& s);
+  void EndSession(std::int64_t session_id, const std::string& status);
+  std::vector<Session> Sessions(std::int64_t participant_id) const;
+
+  // Trials and ratings.
+  std::int64_t AddTrial(const Trial& t);
+  /// Adds many trials in one transaction (a session's plan). Returns their ids.
+  std::vector<std::int64_t> AddTrials(const std::vector<Trial>& trials);
+  /// Marks a trial running and counts the attempt.
+  void StartTrial(std::int64_t trial_id);
+  void SetTrialStatus(std::int64_t trial_id, const std::string& status);
+  /// Stores every rating of the trial and marks it completed, in one transaction: after a
+  /// crash either all of them and the completion marker are present, or none.
+  void CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings);
+  std::vector<Trial> Trials(std::int64_t session_id) const;
+  std::vector<Rating> Ratings(std::int64_t trial_id) const;
+
+  // Events, models, measurements, trajectories.
+  std::int64_t LogEvent(const Event& e);
+  std::vector<Event> Events(std::int64_t session_id) const;
+  std::int64_t SaveMaterialModel(const std::string& name, const std::string& toml_text);
+  std::int64_t SaveMeasurement(const std::string& material, const std::string& csv_text,
+                               const std::string& metadata_json);
+  void InsertTrajectoryChunk(const TrajectoryChunk& c);
+  std::vector<TrajectoryChunk> TrajectoryChunks(std::int64_t trial_id) const;
+
+  /// Raw handle for module-internal use (export, writer).
+  sqlite3* handle() const { return db_; }
+  /// Runs SQL with no result rows; throws std::runtime_error with SQLite's message.
+  void Exec(const std::string& sql) const;
+
+ private:
+  std::string path_;
+  sqlite3* db_ = nullptr;
+};
+
+/// Hex SHA-256 digest of a text (OpenSSL), for provenance of protocols and models.
+std::string HashText(const std::string& text);
+
+}  // namespace hapticlab::db

@@ -1,0 +1,27 @@
+#pragma once
+/// @file Tidy long-format CSV export of a study record, for R and pandas.
+
+#include <string>
+#include <vector>
+
+#include "hapticlab/db/database.hpp"
+
+namespace hapticlab::db {
+
+/// One file written by ExportCsv.
+struct ExportedFile {
+  std::string path;
+  std::size_t rows = 0;
+};
+
+/// Writes into `out_dir` (created when missing):
+/// - `ratings.csv`: one row per rating, with its study, participant, trial and design cells;
+/// - `trials.csv`: one row per trial with status and attempts;
+/// - `events.csv`: one row per event;
+/// - `trajectory_<stream>.csv`: one row per sample (study, participant, trial_id, t_s, then
+///   the stream's channels). Floats are printed with 9 significant digits, so float32
+///   samples round-trip exactly.
+/// Throws std::runtime_error naming the file on I/O failure.
+std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir);
+
+}  // namespace hapticlab::db

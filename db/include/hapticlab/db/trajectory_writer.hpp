@@ -1,0 +1,121 @@
+#pragma once
+/// @file Background writer of trajectory streams: real-time threads push samples into
+/// lock-free queues; one writer thread packs them into chunks and commits them to SQLite.
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "hapticlab/core/spsc_queue.hpp"
+
+namespace hapticlab::db {
+
+/// Most channels one stream may carry (position, velocity, force, commanded force, ...).
+inline constexpr std::size_t kMaxChannels = 16;
+
+/// One sample as queued between the real-time thread and the writer.
+struct TrajectorySample {
+  double t_s;                                ///< sample time [s]
+  std::array<float, kMaxChannels> values;    ///< first `channels` entries are used
+};
+
+/// Options of a TrajectoryWriter.
+struct WriterOptions {
+  std::size_t queue_capacity = 1 << 16;  ///< samples per stream queue (16 s at 4 kHz)
+  std::size_t chunk_samples = 2048;      ///< samples per stored chunk
+  bool start_thread = true;              ///< false: call Start() later (tests)
+};
+
+/// A stream's producer end. Push is wait-free, allocation-free and never throws; it is the
+/// only call a real-time thread makes.
+class TrajectoryStream {
+ public:
+  /// Queues one sample of `channel_count()` values. Returns false (and counts an overflow)
+  /// when the queue is full; never waits.
+  bool Push(double t_s, const float* values) noexcept {
+    TrajectorySample s;
+    s.t_s = t_s;
+    for (std::size_t i = 0; i < channels_; ++i) s.values[i] = values[i];
+    return queue_.TryPush(s);
+  }
+  std::size_t channel_count() const { return channels_; }
+  std::uint64_t overflow_count() const { return queue_.overflow_count(); }
+  std::uint64_t written_count() const { return written_.load(std::memory_order_relaxed); }
+
+ private:
+  friend class TrajectoryWriter;
+  TrajectoryStream(std::int64_t trial_id, std::string name, double rate_hz,
+                   std::vector<std::string> channels, std::size_t capacity);
+
+  std::int64_t trial_id_;
+  std::string name_;
+  double rate_hz_;
+  std::vector<std::string> channel_names_;
+  std::size_t channels_;
+  SpscQueue<TrajectorySample> queue_;
+  std::atomic<std::uint64_t> written_{0};
+  std::atomic<bool> closing_{false};
+  // Writer-thread state: the chunk being filled.
+  std::vector<float> pending_;
+  double pending_start_s_ = 0;
+  double last_t_s_ = 0;
+  std::size_t pending_count_ = 0;
+};
+
+/// Owns a database connection and a thread that drains every open stream into
+/// `trajectory_chunk` rows. A chunk is cut when it is full or when the sample times are not
+/// contiguous at the stream's rate (a dropped sample starts a new chunk), so every sample's
+/// time is start_time_s + i / rate_hz.
+class TrajectoryWriter {
+ public:
+  explicit TrajectoryWriter(const std::string& db_path, const WriterOptions& options = {});
+  ~TrajectoryWriter();  ///< writes everything queued, then stops
+  TrajectoryWriter(const TrajectoryWriter&) = delete;
+  TrajectoryWriter& operator=(const TrajectoryWriter&) = delete;
+
+  /// Registers a stream (not real-time: allocates). The returned pointer stays valid until
+  /// CloseStream or the writer's destruction.
+  /// @param rate_hz nominal sample rate [Hz], > 0
+  /// @param channels channel names with units (1..kMaxChannels), e.g. {"x_m", "fz_N"}
+  TrajectoryStream* OpenStream(std::int64_t trial_id, const std::string& name, double rate_hz,
+                               const std::vector<std::string>& channels);
+  /// Writes what the stream queued and forgets it. Blocks until written.
+  void CloseStream(TrajectoryStream* stream);
+  /// Blocks until every sample queued before the call is committed.
+  void Flush();
+  void Start();
+
+  /// Samples committed to the database so far, over all streams.
+  std::uint64_t written_samples() const { return written_.load(std::memory_order_relaxed); }
+  /// Chunks committed so far.
+  std::uint64_t written_chunks() const { return chunks_.load(std::memory_order_relaxed); }
+  /// The first error the writer thread met (empty when none). After an error the writer
+  /// keeps draining queues so producers never stall, and counts the lost samples.
+  std::string error() const;
+
+ private:
+  void Run();
+  // Drains queues; returns samples moved. Commits full chunks (and all pending when `all`).
+  std::size_t Pass(bool all);
+
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+  WriterOptions options_;
+  std::mutex streams_mu_;  // guards streams_ (writer thread and registration only)
+  std::vector<std::unique_ptr<TrajectoryStream>> streams_;
+  std::atomic<bool> stop_{false};
+  std::atomic<std::uint64_t> flush_requests_{0};
+  std::atomic<std::uint64_t> flush_done_{0};
+  std::atomic<std::uint64_t> written_{0};
+  std::atomic<std::uint64_t> chunks_{0};
+  mutable std::mutex error_mu_;
+  std::string error_;
+  std::thread thread_;
+};
+
+}  // namespace hapticlab::db

@@ -1,0 +1,431 @@
+#include "hapticlab/db/database.hpp"
+
+#include <openssl/evp.h>
+#include <sqlite3.h>
+
+#include <cctype>
+#include <cstring>
+#include <stdexcept>
+#include <utility>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
+#include "schema.hpp"
+#include "sqlite_util.hpp"
+
+namespace hapticlab::db {
+
+using internal::ExecSql;
+using internal::Stmt;
+using internal::Transaction;
+
+namespace {
+
+std::string JoinChannels(const std::vector<std::string>& c) {
+  std::string s;
+  for (const auto& x : c) s += (s.empty() ? "" : ",") + x;
+  return s;
+}
+
+std::vector<std::string> SplitChannels(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t start = 0;
+  while (start <= s.size()) {
+    const auto comma = s.find(',', start);
+    const auto end = comma == std::string::npos ? s.size() : comma;
+    if (end > start) out.push_back(s.substr(start, end - start));
+    if (comma == std::string::npos) break;
+    start = comma + 1;
+  }
+  return out;
+}
+
+Trial ReadTrial(const Stmt& s) {
+  Trial t;
+  t.id = s.Int(0);
+  t.session_id = s.Int(1);
+  t.plan_index = static_cast<int>(s.Int(2));
+  t.phase = s.Text(3);
+  t.material = s.Text(4);
+  t.comparison = s.Text(5);
+  t.method = s.Text(6);
+  t.repetition = static_cast<int>(s.Int(7));
+  t.left = s.Text(8);
+  t.right = s.Text(9);
+  t.status = s.Text(10);
+  t.attempts = static_cast<int>(s.Int(11));
+  return t;
+}
+
+}  // namespace
+
+bool IsPseudonymousCode(const std::string& code) {
+  if (code.empty() || code.size() > 32) return false;
+  bool digit = false;
+  for (unsigned char c : code) {
+    if (std::isdigit(c)) digit = true;
+    else if (!std::isalpha(c) && c != '-' && c != '_') return false;
+  }
+  return digit;
+}
+
+std::string HashText(const std::string& text) {
+  unsigned char md[EVP_MAX_MD_SIZE];
+  unsigned int len = 0;
+  if (EVP_Digest(text.data(), text.size(), md, &len, EVP_sha256(), nullptr) != 1)
+    throw std::runtime_error("SHA-256 digest failed");
+  static const char* kHex = "0123456789abcdef";
+  std::string s;
+  for (unsigned int i = 0; i < len; ++i) {
+    s += kHex[md[i] >> 4];
+    s += kHex[md[i] & 15];
+  }
+  return s;
+}
+
+Database::Database(const std::string& path, const OpenOptions& options) : path_(path) {
+  int flags = options.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
+  if (options.create && !options.read_only) flags |= SQLITE_OPEN_CREATE;
+  if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
+    std::string msg = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw std::runtime_error(path + ": cannot open database: " + msg);
+  }
+  sqlite3_busy_timeout(db_, options.busy_timeout_ms);
+  try {
+    ExecSql(db_, "PRAGMA foreign_keys = ON");
+    if (!options.read_only) {
+      ExecSql(db_, "PRAGMA journal_mode = WAL");
+      // FULL: a committed transaction survives power loss, not only a process crash.
+      ExecSql(db_, "PRAGMA synchronous = FULL");
+      Migrate(options.migrate_to);
+    } else {
+      const int v = SchemaVersion();
+      if (v > kSchemaVersion)
+        throw std::runtime_error(path + ": schema version " + std::to_string(v) +
+                                 " is newer than this build supports (" +
+                                 std::to_string(kSchemaVersion) + ")");
+    }
+  } catch (...) {
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw;
+  }
+}
+
+Database::~Database() {
+  if (db_) sqlite3_close(db_);
+}
+Database::Database(Database&& o) noexcept : path_(std::move(o.path_)), db_(std::exchange(o.db_, nullptr)) {}
+Database& Database::operator=(Database&& o) noexcept {
+  if (this != &o) {
+    if (db_) sqlite3_close(db_);
+    path_ = std::move(o.path_);
+    db_ = std::exchange(o.db_, nullptr);
+  }
+  return *this;
+}
+
+void Database::Exec(const std::string& sql) const { ExecSql(db_, sql.c_str()); }
+
+int Database::SchemaVersion() const {
+  Stmt has(db_, "SELECT count(*) FROM sqlite_master WHERE type='table' AND name='schema_version'");
+  has.Step();
+  if (has.Int(0) == 0) {
+    Stmt any(db_, "SELECT count(*) FROM sqlite_master WHERE type='table'");
+    any.Step();
+    if (any.Int(0) != 0)
+      throw std::runtime_error(path_ + ": not a HapticLab database (no schema_version table)");
+    return 0;
+  }
+  Stmt v(db_, "SELECT max(version) FROM schema_version");
+  return v.Step() && !v.IsNull(0) ? static_cast<int>(v.Int(0)) : 0;
+}
+
+void Database::Migrate(int target) {
+  if (target < 0 || target > kSchemaVersion)
+    throw std::invalid_argument("schema version " + std::to_string(target) + " does not exist");
+  const int current = SchemaVersion();
+  if (current > kSchemaVersion)
+    throw std::runtime_error(path_ + ": schema version " + std::to_string(current) +
+                             " is newer than this build supports (" +
+                             std::to_string(kSchemaVersion) + "); upgrade HapticLab");
+  for (int k = current + 1; k <= target; ++k) {
+    Transaction tx(db_);
+    if (k == 1) {
+      ExecSql(db_,
+              "CREATE TABLE schema_version (version INTEGER NOT NULL, applied_at TEXT NOT NULL "
+              "DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now')))");
+    }
+    ExecSql(db_, internal::MigrationSql(k));
+    Stmt ins(db_, "INSERT INTO schema_version(version) VALUES (?)");
+    ins.Bind(1, k).Run();
+    tx.Commit();
+  }
+}
+
+std::string Database::IntegrityCheck() const {
+  Stmt s(db_, "PRAGMA integrity_check");
+  std::string out;
+  while (s.Step()) out += (out.empty() ? "" : "\n") + s.Text(0);
+  return out;
+}
+
+std::int64_t Database::CreateStudy(const Study& st) {
+  HL_THROW_UNLESS(!st.name.empty(), "study name must not be empty");
+  Stmt s(db_, "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES (?,?,?,?)");
+  s.Bind(1, st.name).Bind(2, st.protocol_toml)
+      .Bind(3, st.protocol_hash.empty() ? HashText(st.protocol_toml) : st.protocol_hash)
+      .Bind(4, static_cast<std::int64_t>(st.seed)).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+std::optional<Study> Database::FindStudy(const std::string& name) const {
+  for (auto& s : Studies())
+    if (s.name == name) return s;
+  return std::nullopt;
+}
+
+std::vector<Study> Database::Studies() const {
+  Stmt s(db_, "SELECT id, name, protocol_toml, protocol_hash, seed FROM study ORDER BY id");
+  std::vector<Study> out;
+  while (s.Step())
+    out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4))});
+  return out;
+}
+
+std::int64_t Database::AddParticipant(const Participant& p) {
+  if (!IsPseudonymousCode(p.code))
+    throw InputError("", 0, "participant",
+                     "'" + p.code + "' is not a pseudonymous code: use 1-32 letters, digits, "
+                     "'-' or '_' including at least one digit (e.g. P07); never a name");
+  Stmt s(db_, "INSERT INTO participant(study_id, code, idx, seed) VALUES (?,?,?,?)");
+  s.Bind(1, p.study_id).Bind(2, p.code).Bind(3, p.index)
+      .Bind(4, static_cast<std::int64_t>(p.seed)).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+std::optional<Participant> Database::FindParticipant(std::int64_t study_id,
+                                                     const std::string& code) const {
+  Stmt s(db_, "SELECT id, study_id, code, idx, seed FROM participant WHERE study_id=? AND code=?");
+  s.Bind(1, study_id).Bind(2, code);
+  if (!s.Step()) return std::nullopt;
+  return Participant{s.Int(0), s.Int(1), s.Text(2), static_cast<int>(s.Int(3)),
+                     static_cast<std::uint64_t>(s.Int(4))};
+}
+
+std::vector<Participant> Database::Participants(std::int64_t study_id) const {
+  Stmt s(db_, "SELECT id, study_id, code, idx, seed FROM participant WHERE study_id=? ORDER BY idx, id");
+  s.Bind(1, study_id);
+  std::vector<Participant> out;
+  while (s.Step())
+    out.push_back({s.Int(0), s.Int(1), s.Text(2), static_cast<int>(s.Int(3)),
+                   static_cast<std::uint64_t>(s.Int(4))});
+  return out;
+}
+
+std::int64_t Database::StartSession(const Session& se) {
+  Stmt s(db_,
+         "INSERT INTO session(participant_id, status, software_version, device, calibration, "
+         "provenance_json, plan_json) VALUES (?,?,?,?,?,?,?)");
+  s.Bind(1, se.participant_id).Bind(2, se.status).Bind(3, se.software_version)
+      .Bind(4, se.device).Bind(5, se.calibration)
+      .Bind(6, se.provenance_json.empty() ? std::string("{}") : se.provenance_json)
+      .Bind(7, se.plan_json.empty() ? std::string("[]") : se.plan_json).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+void Database::EndSession(std::int64_t session_id, const std::string& status) {
+  Stmt s(db_,
+         "UPDATE session SET status=?, ended_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=?");
+  s.Bind(1, status).Bind(2, session_id).Run();
+}
+
+std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
+  Stmt s(db_,
+         "SELECT id, participant_id, started_at, coalesce(ended_at,''), status, software_version, "
+         "device, calibration, provenance_json, plan_json FROM session WHERE participant_id=? "
+         "ORDER BY id");
+  s.Bind(1, participant_id);
+  std::vector<Session> out;
+  while (s.Step()) {
+    Session x;
+    x.id = s.Int(0);
+    x.participant_id = s.Int(1);
+    x.started_at = s.Text(2);
+    x.ended_at = s.Text(3);
+    x.status = s.Text(4);
+    x.software_version = s.Text(5);
+    x.device = s.Text(6);
+    x.calibration = s.Text(7);
+    x.provenance_json = s.Text(8);
+    x.plan_json = s.Text(9);
+    out.push_back(std::move(x));
+  }
+  return out;
+}
+
+namespace {
+constexpr const char* kInsertTrial =
+    "INSERT INTO trial(session_id, plan_index, phase, material, comparison, method, repetition, "
+    "left_stimulus, right_stimulus, status, attempts) VALUES (?,?,?,?,?,?,?,?,?,?,?)";
+void BindTrial(Stmt& s, const Trial& t) {
+  s.Bind(1, t.session_id).Bind(2, t.plan_index).Bind(3, t.phase).Bind(4, t.material)
+      .Bind(5, t.comparison).Bind(6, t.method).Bind(7, t.repetition).Bind(8, t.left)
+      .Bind(9, t.right).Bind(10, t.status).Bind(11, t.attempts);
+}
+}  // namespace
+
+std::int64_t Database::AddTrial(const Trial& t) {
+  Stmt s(db_, kInsertTrial);
+  BindTrial(s, t);
+  s.Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+std::vector<std::int64_t> Database::AddTrials(const std::vector<Trial>& trials) {
+  Transaction tx(db_);
+  Stmt s(db_, kInsertTrial);
+  std::vector<std::int64_t> ids;
+  ids.reserve(trials.size());
+  for (const auto& t : trials) {
+    BindTrial(s, t);
+    s.Run();
+    s.Reset();
+    ids.push_back(sqlite3_last_insert_rowid(db_));
+  }
+  tx.Commit();
+  return ids;
+}
+
+void Database::StartTrial(std::int64_t trial_id) {
+  Stmt s(db_,
+         "UPDATE trial SET status='running', attempts=attempts+1, "
+         "started_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=? AND status<>'completed'");
+  s.Bind(1, trial_id).Run();
+  if (sqlite3_changes(db_) != 1)
+    throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
+                             " does not exist or is already completed");
+}
+
+void Database::SetTrialStatus(std::int64_t trial_id, const std::string& status) {
+  Stmt s(db_, "UPDATE trial SET status=? WHERE id=?");
+  s.Bind(1, status).Bind(2, trial_id).Run();
+  if (sqlite3_changes(db_) != 1)
+    throw std::runtime_error(path_ + ": no trial " + std::to_string(trial_id));
+}
+
+void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings) {
+  Transaction tx(db_);
+  Stmt ins(db_, "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (?,?,?,?)");
+  for (const auto& r : ratings) {
+    ins.Bind(1, trial_id).Bind(2, r.criterion).Bind(3, r.score).Bind(4, r.response_time_s);
+    ins.Run();
+    ins.Reset();
+  }
+  // The completion marker commits with the ratings; a completed trial cannot be completed again.
+  Stmt done(db_,
+            "UPDATE trial SET status='completed', completed_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') "
+            "WHERE id=? AND status<>'completed'");
+  done.Bind(1, trial_id).Run();
+  if (sqlite3_changes(db_) != 1)
+    throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
+                             " does not exist or is already completed; ratings not stored");
+  tx.Commit();
+}
+
+std::vector<Trial> Database::Trials(std::int64_t session_id) const {
+  Stmt s(db_,
+         "SELECT id, session_id, plan_index, phase, material, comparison, method, repetition, "
+         "left_stimulus, right_stimulus, status, attempts FROM trial WHERE session_id=? "
+         "ORDER BY plan_index, id");
+  s.Bind(1, session_id);
+  std::vector<Trial> out;
+  while (s.Step()) out.push_back(ReadTrial(s));
+  return out;
+}
+
+std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
+  Stmt s(db_, "SELECT criterion, score, response_time_s FROM rating WHERE trial_id=? ORDER BY id");
+  s.Bind(1, trial_id);
+  std::vector<Rating> out;
+  while (s.Step()) out.push_back({s.Text(0), s.Real(1), s.Real(2)});
+  return out;
+}
+
+std::int64_t Database::LogEvent(const Event& e) {
+  Stmt s(db_, "INSERT INTO event(session_id, trial_id, kind, detail) VALUES (?,?,?,?)");
+  s.Bind(1, e.session_id);
+  if (e.trial_id) s.Bind(2, *e.trial_id);
+  else s.BindNull(2);
+  s.Bind(3, e.kind).Bind(4, e.detail).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+std::vector<Event> Database::Events(std::int64_t session_id) const {
+  Stmt s(db_, "SELECT id, session_id, trial_id, kind, detail, created_at FROM event "
+              "WHERE session_id=? ORDER BY id");
+  s.Bind(1, session_id);
+  std::vector<Event> out;
+  while (s.Step()) {
+    Event e{s.Int(0), s.Int(1), std::nullopt, s.Text(3), s.Text(4), s.Text(5)};
+    if (!s.IsNull(2)) e.trial_id = s.Int(2);
+    out.push_back(std::move(e));
+  }
+  return out;
+}
+
+std::int64_t Database::SaveMaterialModel(const std::string& name, const std::string& toml_text) {
+  const std::string hash = HashText(toml_text);
+  Stmt f(db_, "SELECT id FROM material_model WHERE name=? AND hash=?");
+  f.Bind(1, name).Bind(2, hash);
+  if (f.Step()) return f.Int(0);
+  Stmt s(db_, "INSERT INTO material_model(name, hash, toml) VALUES (?,?,?)");
+  s.Bind(1, name).Bind(2, hash).Bind(3, toml_text).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+std::int64_t Database::SaveMeasurement(const std::string& material, const std::string& csv_text,
+                                       const std::string& metadata_json) {
+  Stmt s(db_, "INSERT INTO measurement(material, hash, csv, metadata_json) VALUES (?,?,?,?)");
+  s.Bind(1, material).Bind(2, HashText(csv_text)).Bind(3, csv_text)
+      .Bind(4, metadata_json.empty() ? std::string("{}") : metadata_json).Run();
+  return sqlite3_last_insert_rowid(db_);
+}
+
+void Database::InsertTrajectoryChunk(const TrajectoryChunk& c) {
+  HL_THROW_UNLESS(!c.channels.empty(), "trajectory chunk needs at least one channel");
+  HL_THROW_UNLESS(c.samples.size() % c.channels.size() == 0,
+                  "trajectory chunk sample count is not a multiple of its channel count");
+  HL_THROW_UNLESS(c.rate_hz > 0, "trajectory chunk rate must be positive");
+  Stmt s(db_,
+         "INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, "
+         "sample_count, samples) VALUES (?,?,?,?,?,?,?)");
+  s.Bind(1, c.trial_id).Bind(2, c.stream).Bind(3, c.start_time_s).Bind(4, c.rate_hz)
+      .Bind(5, JoinChannels(c.channels)).Bind(6, static_cast<std::int64_t>(c.sample_count()))
+      .BindBlob(7, c.samples.data(), c.samples.size() * sizeof(float)).Run();
+}
+
+std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id) const {
+  Stmt s(db_,
+         "SELECT trial_id, stream, start_time_s, rate_hz, channels, sample_count, samples FROM "
+         "trajectory_chunk WHERE trial_id=? ORDER BY stream, start_time_s, id");
+  s.Bind(1, trial_id);
+  std::vector<TrajectoryChunk> out;
+  while (s.Step()) {
+    TrajectoryChunk c;
+    c.trial_id = s.Int(0);
+    c.stream = s.Text(1);
+    c.start_time_s = s.Real(2);
+    c.rate_hz = s.Real(3);
+    c.channels = SplitChannels(s.Text(4));
+    const auto bytes = static_cast<std::size_t>(s.BlobBytes(6));
+    c.samples.resize(bytes / sizeof(float));
+    if (bytes) std::memcpy(c.samples.data(), s.Blob(6), bytes);
+    out.push_back(std::move(c));
+  }
+  return out;
+}
+
+}  // namespace hapticlab::db

@@ -1,0 +1,81 @@
+#include "sqlite_util.hpp"
+
+#include <stdexcept>
+
+namespace hapticlab::db::internal {
+
+void ThrowSqlite(sqlite3* db, const std::string& what) {
+  const char* file = db ? sqlite3_db_filename(db, "main") : nullptr;
+  throw std::runtime_error((file && *file ? std::string(file) + ": " : std::string()) + what +
+                           ": " + (db ? sqlite3_errmsg(db) : "no connection"));
+}
+
+Stmt::Stmt(sqlite3* db, const char* sql) : db_(db) {
+  if (sqlite3_prepare_v2(db, sql, -1, &s_, nullptr) != SQLITE_OK)
+    ThrowSqlite(db, std::string("prepare '") + sql + "'");
+}
+Stmt::~Stmt() { sqlite3_finalize(s_); }
+
+Stmt& Stmt::Bind(int i, std::int64_t v) {
+  if (sqlite3_bind_int64(s_, i, v) != SQLITE_OK) ThrowSqlite(db_, "bind");
+  return *this;
+}
+Stmt& Stmt::Bind(int i, double v) {
+  if (sqlite3_bind_double(s_, i, v) != SQLITE_OK) ThrowSqlite(db_, "bind");
+  return *this;
+}
+Stmt& Stmt::Bind(int i, const std::string& v) {
+  if (sqlite3_bind_text(s_, i, v.data(), static_cast<int>(v.size()), SQLITE_TRANSIENT) != SQLITE_OK)
+    ThrowSqlite(db_, "bind");
+  return *this;
+}
+Stmt& Stmt::BindNull(int i) {
+  if (sqlite3_bind_null(s_, i) != SQLITE_OK) ThrowSqlite(db_, "bind");
+  return *this;
+}
+Stmt& Stmt::BindBlob(int i, const void* data, std::size_t bytes) {
+  if (sqlite3_bind_blob64(s_, i, data, bytes, SQLITE_TRANSIENT) != SQLITE_OK)
+    ThrowSqlite(db_, "bind");
+  return *this;
+}
+bool Stmt::Step() {
+  const int rc = sqlite3_step(s_);
+  if (rc == SQLITE_ROW) return true;
+  if (rc == SQLITE_DONE) return false;
+  ThrowSqlite(db_, "step");
+}
+void Stmt::Run() {
+  while (Step()) {
+  }
+}
+void Stmt::Reset() {
+  sqlite3_reset(s_);
+  sqlite3_clear_bindings(s_);
+}
+std::string Stmt::Text(int col) const {
+  const auto* p = sqlite3_column_text(s_, col);
+  return p ? std::string(reinterpret_cast<const char*>(p),
+                         static_cast<std::size_t>(sqlite3_column_bytes(s_, col)))
+           : std::string();
+}
+
+Transaction::Transaction(sqlite3* db) : db_(db) { ExecSql(db_, "BEGIN IMMEDIATE"); }
+Transaction::~Transaction() {
+  if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+}
+void Transaction::Commit() {
+  ExecSql(db_, "COMMIT");
+  done_ = true;
+}
+
+void ExecSql(sqlite3* db, const char* sql) {
+  char* err = nullptr;
+  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+    std::string msg = err ? err : "unknown error";
+    sqlite3_free(err);
+    throw std::runtime_error(std::string(sqlite3_db_filename(db, "main")) + ": " + msg +
+                             " (in: " + std::string(sql).substr(0, 80) + ")");
+  }
+}
+
+}  // namespace hapticlab::db::internal

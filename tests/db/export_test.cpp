@@ -1,0 +1,67 @@
+#include "hapticlab/db/export.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+
+#include "hapticlab/core/csv.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::db {
+namespace {
+
+TEST(Export, TablesRoundTripThroughCsv) {
+  test::TempDir dir;
+  Database db(dir.File("e.db"));
+  const auto st = db.CreateStudy({.name = "ch5, hybrid", .protocol_toml = "x", .seed = 3});
+  const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
+  const auto se = db.StartSession({.participant_id = p});
+  const auto ids = db.AddTrials(
+      {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim",
+        .comparison = "virtual", .method = "hybrid", .left = "real", .right = "virtual"},
+       {.session_id = se, .plan_index = 1, .phase = "reference", .material = "Cork",
+        .comparison = "Velvet"}});
+  db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
+  db.LogEvent({.session_id = se, .kind = "break", .detail = "after \"block\" 1"});
+  std::vector<float> samples;
+  for (int i = 0; i < 30; ++i) samples.push_back(std::sin(0.1f * static_cast<float>(i)) * 1e-3f);
+  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .start_time_s = 0.5,
+                            .rate_hz = 1000, .channels = {"x_m", "y_m", "fz_N"},
+                            .samples = samples});
+
+  const auto files = ExportCsv(db, dir.File("out"));
+  ASSERT_EQ(files.size(), 4u);
+
+  const auto ratings = ReadCsv(dir.File("out/ratings.csv"));
+  ASSERT_EQ(ratings.rows.size(), 2u);
+  EXPECT_EQ(ratings.rows[0][ratings.Require("study")], "ch5, hybrid");
+  EXPECT_EQ(ratings.rows[0][ratings.Require("participant")], "P02");
+  EXPECT_EQ(ratings.rows[0][ratings.Require("method")], "hybrid");
+  std::map<std::string, double> score;
+  for (std::size_t r = 0; r < ratings.rows.size(); ++r)
+    score[ratings.rows[r][ratings.Require("criterion")]] = ratings.Number(r, ratings.Require("score"));
+  EXPECT_EQ(score["roughness"], 71.25);
+  EXPECT_EQ(score["overall"], 0.1);  // exact: 17 significant digits
+
+  const auto trials = ReadCsv(dir.File("out/trials.csv"));
+  ASSERT_EQ(trials.rows.size(), 2u);
+  EXPECT_EQ(trials.rows[0][trials.Require("status")], "completed");
+  EXPECT_EQ(trials.rows[1][trials.Require("comparison")], "Velvet");
+
+  const auto events = ReadCsv(dir.File("out/events.csv"));
+  ASSERT_EQ(events.rows.size(), 1u);
+  EXPECT_EQ(events.rows[0][events.Require("detail")], "after \"block\" 1");
+
+  const auto traj = ReadCsv(dir.File("out/trajectory_force.csv"));
+  ASSERT_EQ(traj.rows.size(), 10u);
+  for (std::size_t i = 0; i < 10; ++i) {
+    EXPECT_NEAR(traj.Number(i, traj.Require("t_s")), 0.5 + 0.001 * static_cast<double>(i), 1e-12);
+    EXPECT_EQ(static_cast<float>(traj.Number(i, traj.Require("x_m"))), samples[i * 3]);
+    EXPECT_EQ(static_cast<float>(traj.Number(i, traj.Require("fz_N"))), samples[i * 3 + 2]);
+  }
+}
+
+}  // namespace
+}  // namespace hapticlab::db

@@ -1,0 +1,48 @@
+#pragma once
+// Helpers shared by the tests.
+
+#include <cstdint>
+#include <string>
+
+namespace hapticlab::test {
+
+/// Absolute path of a file under tests/data.
+std::string DataPath(const std::string& relative);
+
+/// A fresh temporary directory, removed (recursively) when the object is destroyed.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::string& path() const { return path_; }
+  std::string File(const std::string& name) const { return path_ + "/" + name; }
+
+ private:
+  std::string path_;
+};
+
+/// Counts heap allocations made by the current thread while alive (a global operator new
+/// hook, like Drake's LimitMalloc). Real-time code runs inside one and the test asserts
+/// count() == 0.
+class NoAllocGuard {
+ public:
+  NoAllocGuard();
+  ~NoAllocGuard();
+  NoAllocGuard(const NoAllocGuard&) = delete;
+  NoAllocGuard& operator=(const NoAllocGuard&) = delete;
+  std::uint64_t count() const;
+
+ private:
+  std::uint64_t start_;
+};
+
+/// Runs a shell command, returns its exit status; stdout+stderr go to *output when given.
+int RunCommand(const std::string& command, std::string* output = nullptr);
+
+/// Writes a text file (throws on failure).
+void WriteFile(const std::string& path, const std::string& text);
+std::string ReadFile(const std::string& path);
+
+}  // namespace hapticlab::test
