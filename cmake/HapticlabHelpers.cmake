@@ -32,7 +32,7 @@ function(hl_add_test module source)
   cmake_parse_arguments(T "" "" "DEPS" ${ARGN})
   set(target ${module}_${source}_test)
   add_executable(${target} ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
-  target_link_libraries(${target} PRIVATE hapticlab::${module} ${T_DEPS}
+  target_link_libraries(${target} PRIVATE hapticlab::${module} ${T_DEPS} fmt::fmt
                         hl_test_util GTest::gtest_main hl_warnings)
   gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60
                        PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data")

@@ -1,0 +1,89 @@
+#pragma once
+/// @file The hybrid renderer's two ticks (dissertation ch. V.1.4): the force tick computes
+/// the texture force, low-passes it at f_c, clamps it and publishes the vibration filter;
+/// the vibration tick synthesizes acceleration and high-passes it at f_c. The ticks may run
+/// on two threads (one each); they share only a lock-free triple buffer.
+///
+/// Safety (every tick): non-finite device data, data older than `stale_after_s`, or a
+/// non-finite result command zero force on that very tick, reset the filters and count a
+/// fault; the commanded force's magnitude never exceeds `max_force_N`.
+
+#include <atomic>
+#include <cstdint>
+
+#include "hapticlab/core/triple_buffer.hpp"
+#include "hapticlab/renderer/biquad.hpp"
+#include "hapticlab/renderer/force.hpp"
+#include "hapticlab/renderer/vibration.hpp"
+
+namespace hapticlab::renderer {
+
+/// How one trial renders a material (a protocol's "method").
+struct RenderOptions {
+  ForceAlgorithm algorithm = ForceAlgorithm::kFric2;
+  bool vibration = true;          ///< synthesize vibration at all
+  bool hybrid_filter = true;      ///< low-pass force and high-pass vibration at f_c
+  double force_rate_hz = 1000;    ///< force tick rate [Hz]
+  double vibration_rate_hz = 10000;///< vibration tick rate [Hz]
+  double max_force_N = 8.0;       ///< device force limit [N]
+  double device_max_stiffness_N_per_m = 3000;  ///< base K defaults to half of this (ch. V)
+  double stale_after_s = 0.005;   ///< device data older than this is a fault [s]
+  std::uint64_t seed = 1;         ///< vibration noise seed (recorded with the trial)
+};
+
+/// Device reading handed to the force tick.
+struct DeviceSample {
+  ToolState state;
+  double t_s = 0;  ///< time the sample was measured [s]
+};
+
+/// What the force tick commands and observes.
+struct ForceCommand {
+  Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< commanded (filtered, clamped) [N]
+  ForceOutput raw;         ///< unfiltered model output
+  bool fault = false;      ///< this tick was a fault: force is zero
+  bool saturated = false;  ///< the limit clamped this tick
+};
+
+/// Fault and activity counters (single writer per field: force or vibration thread).
+struct RtCounters {
+  std::atomic<std::uint64_t> force_ticks{0};
+  std::atomic<std::uint64_t> vibration_ticks{0};
+  std::atomic<std::uint64_t> nan_faults{0};
+  std::atomic<std::uint64_t> stale_faults{0};
+  std::atomic<std::uint64_t> saturations{0};
+};
+
+class HybridRenderer {
+ public:
+  /// @throws std::invalid_argument on inconsistent options (f_c above a loop's Nyquist rate...)
+  HybridRenderer(const MaterialModel& m, const RenderOptions& o);
+
+  /// Force thread: one tick at `now_s`. noexcept, allocation-free.
+  ForceCommand ForceTick(const DeviceSample& in, double now_s) noexcept;
+  /// Vibration thread: the next actuator sample [m/s^2]. noexcept, allocation-free.
+  double VibrationTick() noexcept;
+
+  const RtCounters& counters() const { return counters_; }
+  const RenderOptions& options() const { return options_; }
+  double cutoff_hz() const { return cutoff_hz_; }
+
+ private:
+  void Fault(std::atomic<std::uint64_t>& counter) noexcept;
+
+  RenderOptions options_;
+  double cutoff_hz_;
+  ForceModel force_;
+  std::array<Biquad, 3> force_lp_;
+  VibrationInterpolator interp_;
+  TripleBuffer<ArFilter> filter_box_;
+  // vibration-thread state
+  ArSynth synth_;
+  Biquad vib_hp_;
+  double phase_ = 1.0;   // fraction of a model-rate period elapsed
+  double step_ = 0.2;    // model rate / vibration rate
+  double prev_ = 0, next_ = 0;
+  RtCounters counters_;
+};
+
+}  // namespace hapticlab::renderer

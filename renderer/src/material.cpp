@@ -1,0 +1,415 @@
+#include "hapticlab/renderer/material.hpp"
+
+#include <fmt/format.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/renderer/ar.hpp"
+
+namespace hapticlab::renderer {
+namespace {
+
+// Typed access to a TOML table that records every problem instead of stopping at the first.
+class Reader {
+ public:
+  Reader(std::string file, Diagnostics* d) : file_(std::move(file)), d_(d) {}
+
+  int Line(const toml::node* n) const { return n ? static_cast<int>(n->source().begin.line) : 0; }
+  void Error(const toml::node* n, const std::string& key, const std::string& msg) {
+    d_->Add(file_, Line(n), key, msg);
+  }
+
+  std::optional<double> Number(const toml::table& t, const std::string& prefix,
+                               const std::string& key, bool required) {
+    const toml::node* n = t.get(key);
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    if (!n) {
+      if (required) d_->Add(file_, Line(&t), full, "missing; expected a number");
+      return std::nullopt;
+    }
+    if (auto v = n->value<double>()) {
+      if (!std::isfinite(*v)) {
+        Error(n, full, "must be finite");
+        return std::nullopt;
+      }
+      return v;
+    }
+    Error(n, full, "expected a number");
+    return std::nullopt;
+  }
+
+  std::optional<std::string> String(const toml::table& t, const std::string& prefix,
+                                    const std::string& key, bool required) {
+    const toml::node* n = t.get(key);
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    if (!n) {
+      if (required) d_->Add(file_, Line(&t), full, "missing; expected a string");
+      return std::nullopt;
+    }
+    if (auto v = n->value<std::string>()) return v;
+    Error(n, full, "expected a string");
+    return std::nullopt;
+  }
+
+  std::vector<double> Numbers(const toml::table& t, const std::string& prefix,
+                              const std::string& key, bool required) {
+    const toml::node* n = t.get(key);
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    std::vector<double> out;
+    if (!n) {
+      if (required) d_->Add(file_, Line(&t), full, "missing; expected an array of numbers");
+      return out;
+    }
+    const auto* arr = n->as_array();
+    if (!arr) {
+      Error(n, full, "expected an array of numbers");
+      return out;
+    }
+    for (std::size_t i = 0; i < arr->size(); ++i) {
+      auto v = (*arr)[i].value<double>();
+      if (!v || !std::isfinite(*v)) {
+        Error(&(*arr)[i], fmt::format("{}[{}]", full, i), "expected a finite number");
+        continue;
+      }
+      out.push_back(*v);
+    }
+    return out;
+  }
+
+  const std::string& file() const { return file_; }
+  Diagnostics& diag() { return *d_; }
+
+ private:
+  std::string file_;
+  Diagnostics* d_;
+};
+
+void CheckKnownKeys(Reader& r, const toml::table& t, const std::string& prefix,
+                    std::initializer_list<const char*> known) {
+  for (const auto& [k, v] : t) {
+    bool ok = false;
+    for (const char* name : known) ok = ok || k.str() == name;
+    if (!ok)
+      r.Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()),
+              "unknown key (a typo?)");
+  }
+}
+
+HuntCrossleyParams ReadHc(Reader& r, const toml::table& t, const std::string& prefix,
+                          HuntCrossleyParams def, bool k_required) {
+  HuntCrossleyParams p = def;
+  if (auto v = r.Number(t, "contact", prefix + "_K", k_required)) p.K = *v;
+  if (auto v = r.Number(t, "contact", prefix + "_B", false)) p.B = *v;
+  if (auto v = r.Number(t, "contact", prefix + "_n", false)) p.n = *v;
+  return p;
+}
+
+void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
+                   VibrationBank* bank, int depth);
+
+void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::path& path,
+                       VibrationBank* bank, int depth) {
+  if (depth > 2) {
+    r.Error(at, "vibration.file", "vibration files nest too deeply");
+    return;
+  }
+  toml::table doc;
+  try {
+    doc = toml::parse_file(path.string());
+  } catch (const toml::parse_error& e) {
+    r.diag().Add(path.string(), static_cast<int>(e.source().begin.line), "",
+                 std::string(e.description()));
+    return;
+  }
+  Diagnostics inner;
+  Reader ri(path.string(), &inner);
+  const toml::table* vt = doc["vibration"].as_table();
+  if (!vt) inner.Add(path.string(), 0, "vibration", "missing [vibration] table");
+  else ReadVibration(ri, *vt, path.parent_path(), bank, depth + 1);
+  for (const auto& d : inner.items()) r.diag().Add(d.file, d.line, d.field, d.message);
+}
+
+void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
+                   VibrationBank* bank, int depth) {
+  CheckKnownKeys(r, t, "vibration",
+                 {"file", "sample_rate_hz", "min_speed_mps", "speeds_mps", "forces_N", "cells",
+                  "triangles"});
+  if (auto f = r.String(t, "vibration", "file", false)) {
+    ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
+    return;
+  }
+  if (auto v = r.Number(t, "vibration", "sample_rate_hz", true)) bank->sample_rate_hz = *v;
+  if (auto v = r.Number(t, "vibration", "min_speed_mps", false)) bank->min_speed_mps = *v;
+  bank->grid_speeds_mps = r.Numbers(t, "vibration", "speeds_mps", false);
+  bank->grid_forces_N = r.Numbers(t, "vibration", "forces_N", false);
+  const toml::node* cells_node = t.get("cells");
+  const toml::array* cells = cells_node ? cells_node->as_array() : nullptr;
+  if (!cells) {
+    r.Error(&t, "vibration.cells", "missing; expected [[vibration.cells]] tables");
+    return;
+  }
+  for (std::size_t i = 0; i < cells->size(); ++i) {
+    const std::string prefix = fmt::format("vibration.cells[{}]", i);
+    const toml::table* c = (*cells)[i].as_table();
+    if (!c) {
+      r.Error(&(*cells)[i], prefix, "expected a table");
+      continue;
+    }
+    CheckKnownKeys(r, *c, prefix, {"speed_mps", "force_N", "ar", "variance", "ma", "gain"});
+    ArCell cell;
+    cell.speed_mps = r.Number(*c, prefix, "speed_mps", true).value_or(0);
+    cell.force_N = r.Number(*c, prefix, "force_N", true).value_or(0);
+    cell.coeffs = r.Numbers(*c, prefix, "ar", true);
+    cell.variance = r.Number(*c, prefix, "variance", true).value_or(0);
+    const int line = r.Line(c);
+    if (cell.variance < 0) r.diag().Add(r.file(), line, prefix + ".variance", "must be >= 0");
+    if (cell.coeffs.empty() || cell.coeffs.size() > static_cast<std::size_t>(kMaxArOrder)) {
+      r.diag().Add(r.file(), line, prefix + ".ar",
+                   fmt::format("order must be 1..{}", kMaxArOrder));
+    } else if (!IsStableAr(cell.coeffs)) {
+      r.diag().Add(r.file(), line, prefix + ".ar",
+                   "unstable AR filter (a root of A(z) on or outside the unit circle)");
+    } else {
+      cell.lsf = ArToLsf(cell.coeffs);
+    }
+    cell.ma = r.Numbers(*c, prefix, "ma", false);
+    cell.gain = r.Number(*c, prefix, "gain", false).value_or(1.0);
+    if (!cell.ma.empty()) {
+      std::vector<double> neg(cell.ma.size());
+      for (std::size_t k = 0; k < neg.size(); ++k) neg[k] = -cell.ma[k];
+      if (cell.ma.size() > static_cast<std::size_t>(kMaxArOrder) || !IsStableAr(neg))
+        r.diag().Add(r.file(), line, prefix + ".ma",
+                     "MA part must have order <= 64 and be minimum phase (roots inside the unit circle)");
+      else
+        cell.ma_lsf = ArToLsf(neg);
+    }
+    bank->cells.push_back(std::move(cell));
+  }
+  if (const toml::node* tri = t.get("triangles")) {
+    const toml::array* arr = tri->as_array();
+    if (!arr) r.Error(tri, "vibration.triangles", "expected an array of [i, j, k]");
+    for (std::size_t i = 0; arr && i < arr->size(); ++i) {
+      const toml::array* one = (*arr)[i].as_array();
+      std::array<int, 3> idx{};
+      bool ok = one && one->size() == 3;
+      for (std::size_t k = 0; ok && k < 3; ++k) {
+        auto v = (*one)[k].value<std::int64_t>();
+        ok = v && *v >= 0 && *v < static_cast<std::int64_t>(bank->cells.size());
+        if (ok) idx[k] = static_cast<int>(*v);
+      }
+      if (!ok)
+        r.Error(&(*arr)[i], fmt::format("vibration.triangles[{}]", i),
+                fmt::format("expected three 0-based cell indices below {}", bank->cells.size()));
+      else bank->triangles.push_back(idx);
+    }
+  }
+}
+
+}  // namespace
+
+MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
+  toml::table doc;
+  try {
+    doc = toml::parse(text, name);
+  } catch (const toml::parse_error& e) {
+    throw InputError(name, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
+  }
+  Diagnostics diag;
+  Reader r(name, &diag);
+  const auto base = std::filesystem::path(name).parent_path();
+  MaterialModel m;
+  m.source_path = name;
+  CheckKnownKeys(r, doc, "", {"name", "effects", "contact", "friction", "geometry", "vibration",
+                              "hybrid", "notes"});
+  m.name = r.String(doc, "", "name", true).value_or("");
+  if (const toml::node* e = doc.get("effects")) {
+    if (const toml::array* arr = e->as_array()) {
+      for (const auto& x : *arr) {
+        if (auto s = x.value<std::string>()) m.effects.push_back(*s);
+        else r.Error(&x, "effects", "expected strings");
+      }
+    } else {
+      r.Error(e, "effects", "expected an array of effect names");
+    }
+  }
+  if (const toml::table* c = doc["contact"].as_table()) {
+    CheckKnownKeys(r, *c, "contact",
+                   {"texture_K", "texture_B", "texture_n", "base_model", "base_K", "base_B",
+                    "base_n", "layer_thickness_m"});
+    m.contact.texture = ReadHc(r, *c, "texture", m.contact.texture, true);
+    if (auto bm = r.String(*c, "contact", "base_model", false)) {
+      if (*bm == "linear") m.contact.base_model = BaseModel::kLinear;
+      else if (*bm == "hunt-crossley") m.contact.base_model = BaseModel::kHuntCrossley;
+      else r.Error(c->get("base_model"), "contact.base_model", "expected \"linear\" or \"hunt-crossley\"");
+    }
+    m.contact.base = ReadHc(r, *c, "base", m.contact.base, false);
+    if (auto v = r.Number(*c, "contact", "layer_thickness_m", false)) m.contact.layer_thickness_m = *v;
+  } else {
+    diag.Add(name, 0, "contact", "missing [contact] table");
+  }
+  if (const toml::table* f = doc["friction"].as_table()) {
+    CheckKnownKeys(r, *f, "friction", {"kappa_N_per_m", "mu_k", "mu_b_Ns_per_m"});
+    m.friction.kappa_N_per_m = r.Number(*f, "friction", "kappa_N_per_m", true).value_or(1);
+    m.friction.mu_k = r.Number(*f, "friction", "mu_k", true).value_or(0);
+    m.friction.mu_b_Ns_per_m = r.Number(*f, "friction", "mu_b_Ns_per_m", false).value_or(0);
+  } else {
+    diag.Add(name, 0, "friction", "missing [friction] table");
+  }
+  if (const toml::table* g = doc["geometry"].as_table()) {
+    CheckKnownKeys(r, *g, "geometry",
+                   {"kind", "file", "width", "height", "pitch_m", "amplitude_m", "wavelength_m"});
+    const std::string kind = r.String(*g, "geometry", "kind", false).value_or(
+        g->contains("file") ? "file" : "flat");
+    if (kind == "file") {
+      const auto file = r.String(*g, "geometry", "file", true);
+      const auto w = r.Number(*g, "geometry", "width", true);
+      const auto h = r.Number(*g, "geometry", "height", true);
+      const auto p = r.Number(*g, "geometry", "pitch_m", true);
+      if (p && *p <= 0) r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be > 0");
+      if (file && w && h && p && *p > 0) {
+        try {
+          m.geometry = std::make_shared<HeightMap>(HeightMap::LoadRawF32(
+              (base / *file).string(), static_cast<int>(*w), static_cast<int>(*h), *p));
+        } catch (const InputError& e) {
+          for (const auto& d : e.diagnostics()) diag.Add(d.file, d.line, d.field, d.message);
+          diag.Add(name, r.Line(g->get("file")), "geometry.file", "height map could not be loaded");
+        }
+      }
+    } else if (kind == "sine") {
+      const auto a = r.Number(*g, "geometry", "amplitude_m", true);
+      const auto l = r.Number(*g, "geometry", "wavelength_m", true);
+      if (a && l) {
+        if (*a < 0 || *l <= 0) r.Error(g, "geometry", "amplitude_m must be >= 0 and wavelength_m > 0");
+        else m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
+      }
+    } else if (kind != "flat") {
+      r.Error(g->get("kind"), "geometry.kind", "expected \"file\", \"sine\" or \"flat\"");
+    }
+  }
+  if (const toml::table* v = doc["vibration"].as_table()) ReadVibration(r, *v, base, &m.vibration, 0);
+  if (const toml::table* h = doc["hybrid"].as_table()) {
+    CheckKnownKeys(r, *h, "hybrid", {"cutoff_hz"});
+    if (auto v = r.Number(*h, "hybrid", "cutoff_hz", true)) m.hybrid_cutoff_hz = *v;
+  }
+  diag.ThrowIfAny();
+  ValidateMaterial(m);
+  return m;
+}
+
+MaterialModel LoadMaterial(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path, 0, "", "cannot open material model");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ParseMaterial(ss.str(), path);
+}
+
+void ValidateMaterial(const MaterialModel& m) {
+  Diagnostics d;
+  const std::string& f = m.source_path;
+  auto hc = [&](const HuntCrossleyParams& p, const std::string& prefix, bool allow_zero_k) {
+    if (!(p.K > 0) && !(allow_zero_k && p.K == 0))
+      d.Add(f, 0, prefix + "_K", "stiffness must be > 0");
+    if (p.B < 0) d.Add(f, 0, prefix + "_B", "damping must be >= 0");
+    if (!(p.n >= 1 && p.n <= 2)) d.Add(f, 0, prefix + "_n", "exponent must be in [1, 2]");
+  };
+  hc(m.contact.texture, "contact.texture", false);
+  hc(m.contact.base, "contact.base", true);
+  if (m.contact.layer_thickness_m < 0) d.Add(f, 0, "contact.layer_thickness_m", "must be >= 0");
+  if (!(m.friction.kappa_N_per_m > 0)) d.Add(f, 0, "friction.kappa_N_per_m", "must be > 0");
+  if (!(m.friction.mu_k >= 0)) d.Add(f, 0, "friction.mu_k", "must be >= 0");
+  if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
+  if (!(m.hybrid_cutoff_hz > 0)) d.Add(f, 0, "hybrid.cutoff_hz", "must be > 0");
+  const auto& b = m.vibration;
+  if (!b.empty()) {
+    if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
+    const std::size_t p = b.cells[0].coeffs.size();
+    for (std::size_t i = 0; i < b.cells.size(); ++i) {
+      if (b.cells[i].coeffs.size() != p)
+        d.Add(f, 0, fmt::format("vibration.cells[{}].ar", i),
+              fmt::format("order {} differs from the first cell's {}", b.cells[i].coeffs.size(), p));
+      if (b.cells[i].ma.size() != b.cells[0].ma.size())
+        d.Add(f, 0, fmt::format("vibration.cells[{}].ma", i), "MA order differs from the first cell's");
+      if (b.cells[i].lsf.size() != b.cells[i].coeffs.size() ||
+          b.cells[i].ma_lsf.size() != b.cells[i].ma.size())
+        d.Add(f, 0, fmt::format("vibration.cells[{}]", i), "LSFs missing (unstable filter?)");
+    }
+    const bool grid = !b.grid_speeds_mps.empty() || !b.grid_forces_N.empty();
+    if (grid) {
+      const auto n = b.grid_speeds_mps.size() * b.grid_forces_N.size();
+      if (n != b.cells.size())
+        d.Add(f, 0, "vibration.cells",
+              fmt::format("a {} x {} grid needs {} cells, found {}", b.grid_speeds_mps.size(),
+                          b.grid_forces_N.size(), n, b.cells.size()));
+      for (const auto* axis : {&b.grid_speeds_mps, &b.grid_forces_N})
+        for (std::size_t i = 1; i < axis->size(); ++i)
+          if (!((*axis)[i] > (*axis)[i - 1]))
+            d.Add(f, 0, axis == &b.grid_speeds_mps ? "vibration.speeds_mps" : "vibration.forces_N",
+                  "grid values must be strictly ascending");
+    } else if (b.cells.size() > 1 && b.triangles.empty()) {
+      d.Add(f, 0, "vibration.triangles",
+            "scattered cells need a triangulation (or give speeds_mps and forces_N for a grid)");
+    }
+  }
+  d.ThrowIfAny();
+}
+
+std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_file) {
+  std::string s;
+  s += fmt::format("name = \"{}\"\n", m.name);
+  s += "effects = [";
+  for (std::size_t i = 0; i < m.effects.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", m.effects[i]);
+  s += "]\n\n[contact]\n";
+  s += fmt::format("texture_K = {:.17g}  # N/m^n\ntexture_B = {:.17g}  # N s/m^(n+1)\ntexture_n = {:.17g}\n",
+                   m.contact.texture.K, m.contact.texture.B, m.contact.texture.n);
+  s += fmt::format("base_model = \"{}\"\nbase_K = {:.17g}\nbase_B = {:.17g}\nbase_n = {:.17g}\n",
+                   m.contact.base_model == BaseModel::kLinear ? "linear" : "hunt-crossley",
+                   m.contact.base.K, m.contact.base.B, m.contact.base.n);
+  s += fmt::format("layer_thickness_m = {:.17g}\n\n[friction]\n", m.contact.layer_thickness_m);
+  s += fmt::format("kappa_N_per_m = {:.17g}\nmu_k = {:.17g}\nmu_b_Ns_per_m = {:.17g}\n\n",
+                   m.friction.kappa_N_per_m, m.friction.mu_k, m.friction.mu_b_Ns_per_m);
+  if (!geometry_file.empty() && m.geometry) {
+    s += fmt::format("[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = {}\npitch_m = {:.17g}\n\n",
+                     geometry_file, m.geometry->width(), m.geometry->height(), m.geometry->pitch_m());
+  } else {
+    s += "[geometry]\nkind = \"flat\"\n\n";
+  }
+  s += fmt::format("[hybrid]\ncutoff_hz = {:.17g}\n", m.hybrid_cutoff_hz);
+  const auto& b = m.vibration;
+  if (!b.empty()) {
+    s += fmt::format("\n[vibration]\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
+                     b.sample_rate_hz, b.min_speed_mps);
+    auto list = [](const std::vector<double>& v) {
+      std::string o = "[";
+      for (std::size_t i = 0; i < v.size(); ++i) o += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);
+      return o + "]";
+    };
+    if (!b.grid_speeds_mps.empty()) {
+      s += "speeds_mps = " + list(b.grid_speeds_mps) + "\n";
+      s += "forces_N = " + list(b.grid_forces_N) + "\n";
+    }
+    if (!b.triangles.empty()) {
+      s += "triangles = [";
+      for (std::size_t i = 0; i < b.triangles.size(); ++i)
+        s += fmt::format("{}[{}, {}, {}]", i ? ", " : "", b.triangles[i][0], b.triangles[i][1],
+                         b.triangles[i][2]);
+      s += "]\n";
+    }
+    for (const auto& c : b.cells) {
+      s += fmt::format("\n[[vibration.cells]]\nspeed_mps = {:.17g}\nforce_N = {:.17g}\nvariance = {:.17g}\n",
+                       c.speed_mps, c.force_N, c.variance);
+      s += "ar = " + list(c.coeffs) + "\n";
+      if (!c.ma.empty()) s += "ma = " + list(c.ma) + fmt::format("\ngain = {:.17g}\n", c.gain);
+    }
+  }
+  return s;
+}
+
+}  // namespace hapticlab::renderer

@@ -1,0 +1,159 @@
+#include "hapticlab/renderer/material.hpp"
+
+#include <gtest/gtest.h>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::renderer {
+namespace {
+
+constexpr const char* kGood = R"(name = "Denim"
+effects = ["coulomb", "viscous", "dahl", "hc-damping"]
+
+[contact]
+texture_K = 800.0
+texture_B = 2.0
+texture_n = 1.2
+base_model = "linear"
+base_K = 1500.0
+
+[friction]
+kappa_N_per_m = 2500.0
+mu_k = 0.35
+mu_b_Ns_per_m = 0.4
+
+[geometry]
+kind = "sine"
+amplitude_m = 2e-5
+wavelength_m = 1e-3
+
+[hybrid]
+cutoff_hz = 90
+
+[vibration]
+sample_rate_hz = 2000
+speeds_mps = [0.04, 0.08]
+forces_N = [0.5, 1.5]
+
+[[vibration.cells]]
+speed_mps = 0.04
+force_N = 0.5
+ar = [0.5, -0.2]
+variance = 0.1
+
+[[vibration.cells]]
+speed_mps = 0.04
+force_N = 1.5
+ar = [0.6, -0.25]
+variance = 0.2
+
+[[vibration.cells]]
+speed_mps = 0.08
+force_N = 0.5
+ar = [0.4, -0.1]
+variance = 0.3
+
+[[vibration.cells]]
+speed_mps = 0.08
+force_N = 1.5
+ar = [0.7, -0.3]
+variance = 0.4
+)";
+
+TEST(Material, ParsesAFullModel) {
+  const auto m = ParseMaterial(kGood, "denim.toml");
+  EXPECT_EQ(m.name, "Denim");
+  EXPECT_EQ(m.effects.size(), 4u);
+  EXPECT_DOUBLE_EQ(m.contact.texture.n, 1.2);
+  EXPECT_DOUBLE_EQ(m.friction.mu_b_Ns_per_m, 0.4);
+  EXPECT_DOUBLE_EQ(m.hybrid_cutoff_hz, 90);
+  ASSERT_EQ(m.vibration.cells.size(), 4u);
+  EXPECT_EQ(m.vibration.cells[3].lsf.size(), 2u);
+  EXPECT_NEAR(m.geometry->max_m() - m.geometry->min_m(), 4e-5, 1e-9);
+}
+
+TEST(Material, ReportsEveryProblemWithLineAndKey) {
+  std::string bad = kGood;
+  bad.replace(bad.find("texture_n = 1.2"), 15, "texture_n = 2.5");
+  bad.replace(bad.find("mu_k = 0.35"), 11, "mu_k = \"x\"");
+  bad.replace(bad.find("ar = [0.7, -0.3]"), 16, "ar = [2.0, -1.0]");  // unit-circle double pole
+  bad.replace(bad.find("cutoff_hz = 90"), 14, "cutof_hz = 90");
+  try {
+    ParseMaterial(bad, "bad.toml");
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("bad.toml:13: friction.mu_k: expected a number"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("vibration.cells[3].ar: unstable"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("hybrid.cutof_hz: unknown key"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("hybrid.cutoff_hz: missing"), std::string::npos) << msg;
+    EXPECT_GE(e.diagnostics().size(), 4u);
+  }
+  // Range checks run once parsing succeeded.
+  std::string range = kGood;
+  range.replace(range.find("texture_n = 1.2"), 15, "texture_n = 2.5");
+  try {
+    ParseMaterial(range, "range.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("contact.texture_n: exponent must be in [1, 2]"),
+              std::string::npos) << e.what();
+  }
+}
+
+TEST(Material, SyntaxErrorsNameTheLine) {
+  try {
+    ParseMaterial("name = \"x\"\n[contact\n", "syn.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).line, 2) << e.what();
+  }
+}
+
+TEST(Material, GridNeedsAllCells) {
+  std::string bad = kGood;
+  bad.replace(bad.find("forces_N = [0.5, 1.5]"), 21, "forces_N = [0.5, 1.0, 1.5]");
+  EXPECT_THROW(ParseMaterial(bad, "g.toml"), InputError);
+}
+
+TEST(Material, TomlRoundTripWithHeightFile) {
+  test::TempDir dir;
+  auto m = ParseMaterial(kGood, dir.File("denim.toml"));
+  m.geometry->SaveRawF32(dir.File("denim.f32"));
+  test::WriteFile(dir.File("out.toml"), MaterialToToml(m, "denim.f32"));
+  const auto back = LoadMaterial(dir.File("out.toml"));
+  EXPECT_EQ(back.name, m.name);
+  EXPECT_DOUBLE_EQ(back.contact.texture.K, m.contact.texture.K);
+  EXPECT_DOUBLE_EQ(back.friction.kappa_N_per_m, m.friction.kappa_N_per_m);
+  EXPECT_EQ(back.geometry->data(), m.geometry->data());
+  ASSERT_EQ(back.vibration.cells.size(), 4u);
+  EXPECT_EQ(back.vibration.cells[2].coeffs, m.vibration.cells[2].coeffs);
+  EXPECT_EQ(back.vibration.grid_forces_N, m.vibration.grid_forces_N);
+}
+
+TEST(Material, MissingHeightFileIsNamed) {
+  test::TempDir dir;
+  test::WriteFile(dir.File("m.toml"), R"(name = "x"
+[contact]
+texture_K = 100.0
+[friction]
+kappa_N_per_m = 100.0
+mu_k = 0.2
+[geometry]
+file = "nope.f32"
+width = 4
+height = 4
+pitch_m = 1e-5
+)");
+  try {
+    LoadMaterial(dir.File("m.toml"));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.f32"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("m.toml:8: geometry.file"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace hapticlab::renderer
