@@ -1,0 +1,52 @@
+#pragma once
+/// @file Measurement CSV v1 (DESIGN.md §5): recorded tool kinematics, forces and (optionally)
+/// acceleration, in SI units, z the surface normal with the surface at z = 0.
+///
+///   # hapticlab-measurement v1
+///   # material: NAME
+///   # key: value            (free metadata: speed_mps, force_N, rate_hz, ...)
+///   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N[,acc_mps2]
+///
+/// Forces are those the surface exerts on the tool. Rows are in time order.
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace hapticlab {
+
+struct MeasurementRow {
+  double t_s = 0;
+  Eigen::Vector3d p_m = Eigen::Vector3d::Zero();
+  Eigen::Vector3d v_mps = Eigen::Vector3d::Zero();
+  Eigen::Vector3d f_N = Eigen::Vector3d::Zero();
+  double acc_mps2 = 0;  ///< normal acceleration at the tool; 0 when the file has none
+};
+
+struct Measurement {
+  std::string file;
+  std::string material;
+  std::map<std::string, std::string> metadata;
+  bool has_forces = true;
+  bool has_acceleration = false;
+  std::vector<MeasurementRow> rows;
+};
+
+/// Options for reading a measurement.
+struct MeasurementReadOptions {
+  /// Only t_s and positions are required; velocities missing -> central differences,
+  /// forces missing -> zeros with has_forces = false.
+  bool kinematics_only = false;
+};
+
+/// Reads a measurement CSV v1. Throws InputError naming file, line and column for missing
+/// columns, non-numbers, NaN, and times that do not increase.
+Measurement ReadMeasurementCsv(const std::string& path, const MeasurementReadOptions& o = {});
+Measurement ParseMeasurementCsv(const std::string& text, const std::string& name,
+                                const MeasurementReadOptions& o = {});
+/// Writes a measurement CSV v1 (17 significant digits).
+void WriteMeasurementCsv(const std::string& path, const Measurement& m);
+
+}  // namespace hapticlab

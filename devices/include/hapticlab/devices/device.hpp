@@ -1,0 +1,43 @@
+#pragma once
+/// @file Device interfaces the runner drives: a force-feedback device and a vibrotactile
+/// actuator. Back-ends (sim, falcon, audio, ...) implement them; the real-time loops call
+/// only the noexcept methods below.
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "hapticlab/renderer/hybrid.hpp"
+
+namespace hapticlab::devices {
+
+/// What a haptic device can do (from its datasheet or driver).
+struct DeviceCapabilities {
+  std::string name;                     ///< back-end and model, e.g. "sim", "falcon"
+  double max_force_N = 8.0;             ///< continuous force limit [N]
+  double max_stiffness_N_per_m = 3000;  ///< largest stable rendered stiffness [N/m]
+  double max_rate_hz = 4000;            ///< fastest force loop the link supports [Hz]
+  Eigen::Vector3d workspace_m{0.16, 0.12, 0.12};  ///< workspace box extents [m]
+};
+
+/// A force-feedback device. Read and Write are called from the force loop only.
+class HapticDevice {
+ public:
+  virtual ~HapticDevice() = default;
+  virtual DeviceCapabilities Capabilities() const = 0;
+  /// Reads the newest tool state; returns false when the device is disconnected or has no
+  /// data. Never blocks longer than the device's own transfer.
+  virtual bool Read(renderer::DeviceSample* out) noexcept = 0;
+  /// Commands a force on the tool [N] (already clamped by the renderer).
+  virtual void WriteForce(const Eigen::Vector3d& force_N) noexcept = 0;
+};
+
+/// A vibrotactile actuator driven with acceleration samples [m/s^2] at a fixed rate.
+class Actuator {
+ public:
+  virtual ~Actuator() = default;
+  virtual double SampleRateHz() const = 0;
+  virtual void Write(double acc_mps2) noexcept = 0;
+};
+
+}  // namespace hapticlab::devices

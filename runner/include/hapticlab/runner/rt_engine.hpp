@@ -1,0 +1,99 @@
+#pragma once
+/// @file The real-time engine: a force loop and a vibration loop on their own threads,
+/// each waking at absolute deadlines, sharing state only through the renderer's lock-free
+/// hand-off, and recording through the db writer's SPSC streams.
+///
+/// Safety: a device read failure (disconnect, no data) or `max_consecutive_misses` late
+/// force ticks in a row command zero force on that tick and count a fault; the renderer
+/// itself zeroes NaN and stale data and clamps to the device limit.
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <thread>
+
+#include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/devices/device.hpp"
+#include "hapticlab/renderer/hybrid.hpp"
+
+namespace hapticlab::runner {
+
+/// Channels of the force stream, in order (15 values per force tick).
+inline const std::vector<std::string>& ForceStreamChannels() {
+  static const std::vector<std::string> k{"x_m",   "y_m",       "z_m",       "vx_mps",   "vy_mps",
+                                          "vz_mps", "fx_N",      "fy_N",      "fz_N",     "cmd_fx_N",
+                                          "cmd_fy_N", "cmd_fz_N", "normal_N", "speed_mps", "fault"};
+  return k;
+}
+/// Channels of the vibration stream.
+inline const std::vector<std::string>& VibrationStreamChannels() {
+  static const std::vector<std::string> k{"acc_mps2"};
+  return k;
+}
+
+struct EngineOptions {
+  int max_consecutive_misses = 3;   ///< late force ticks in a row before forcing zero force
+  bool realtime_priority = false;   ///< ask for SCHED_FIFO (needs privileges; result reported)
+  /// Test hooks run on each loop thread before its first and after its last tick.
+  std::function<void()> on_thread_enter, on_thread_exit;
+};
+
+/// Counters and timing statistics, written by the loops, read by anyone.
+struct EngineStats {
+  std::uint64_t force_ticks = 0, vibration_ticks = 0;
+  std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
+  std::uint64_t disconnects = 0, miss_faults = 0;
+  std::uint64_t recording_overflows = 0;
+  double force_jitter_max_s = 0, force_jitter_mean_s = 0;
+  double vibration_jitter_max_s = 0;
+  double achieved_force_rate_hz = 0, achieved_vibration_rate_hz = 0;
+  std::string priority_status;  ///< what became of the real-time priority request
+};
+
+class RtEngine {
+ public:
+  /// The engine borrows everything; all must outlive it. `actuator`, `force_stream` and
+  /// `vibration_stream` may be null.
+  RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& device,
+           devices::Actuator* actuator, const EngineOptions& options = {},
+           db::TrajectoryStream* force_stream = nullptr,
+           db::TrajectoryStream* vibration_stream = nullptr);
+  ~RtEngine();
+  RtEngine(const RtEngine&) = delete;
+  RtEngine& operator=(const RtEngine&) = delete;
+
+  /// Starts both loops. Time zero of the loops (and of device samples) is this call.
+  void Start();
+  /// Stops both loops, commands zero force, joins.
+  void Stop();
+  /// Runs for `duration` (or until the device reports a disconnect), then stops.
+  void RunFor(std::chrono::duration<double> duration);
+  EngineStats Stats() const;
+  /// Seconds since Start on the loops' clock.
+  double Now() const;
+
+ private:
+  void ForceLoop();
+  void VibrationLoop();
+
+  renderer::HybridRenderer& renderer_;
+  devices::HapticDevice& device_;
+  devices::Actuator* actuator_;
+  EngineOptions options_;
+  db::TrajectoryStream* force_stream_;
+  db::TrajectoryStream* vibration_stream_;
+  std::chrono::steady_clock::time_point t0_;
+  std::atomic<bool> running_{false};
+  std::atomic<bool> device_lost_{false};
+  std::thread force_thread_, vibration_thread_;
+  // Statistics (single writer each).
+  std::atomic<std::uint64_t> force_ticks_{0}, vibration_ticks_{0};
+  std::atomic<std::uint64_t> force_misses_{0}, vibration_misses_{0}, disconnects_{0}, miss_faults_{0};
+  std::atomic<double> force_jitter_max_{0}, force_jitter_sum_{0}, vibration_jitter_max_{0};
+  std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
+  std::string priority_status_ = "not requested";
+};
+
+}  // namespace hapticlab::runner

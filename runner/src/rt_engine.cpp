@@ -1,0 +1,190 @@
+#include "hapticlab/runner/rt_engine.hpp"
+
+#include <pthread.h>
+#include <sched.h>
+#include <time.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+
+namespace hapticlab::runner {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Sleeps until an absolute CLOCK_MONOTONIC deadline (std::chrono::steady_clock's clock on
+// Linux), retrying on signals. No allocation, no locks.
+void SleepUntil(Clock::time_point deadline) noexcept {
+  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
+  timespec ts;
+  ts.tv_sec = static_cast<time_t>(ns / 1000000000);
+  ts.tv_nsec = static_cast<long>(ns % 1000000000);
+  while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
+  }
+}
+
+void AtomicMax(std::atomic<double>& a, double v) noexcept {
+  double cur = a.load(std::memory_order_relaxed);
+  while (v > cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
+  }
+}
+
+std::string RequestFifo(std::thread& t, int priority) {
+  sched_param sp{};
+  sp.sched_priority = priority;
+  const int rc = pthread_setschedparam(t.native_handle(), SCHED_FIFO, &sp);
+  return rc == 0 ? "SCHED_FIFO " + std::to_string(priority)
+                 : std::string("SCHED_FIFO refused: ") + std::strerror(rc) + " (running at normal priority)";
+}
+
+}  // namespace
+
+RtEngine::RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& device,
+                   devices::Actuator* actuator, const EngineOptions& options,
+                   db::TrajectoryStream* force_stream, db::TrajectoryStream* vibration_stream)
+    : renderer_(renderer),
+      device_(device),
+      actuator_(actuator),
+      options_(options),
+      force_stream_(force_stream),
+      vibration_stream_(vibration_stream) {
+  if (force_stream_ && force_stream_->channel_count() != ForceStreamChannels().size())
+    throw std::invalid_argument("force stream must have the ForceStreamChannels() layout");
+  if (vibration_stream_ && vibration_stream_->channel_count() != 1)
+    throw std::invalid_argument("vibration stream must have one channel");
+}
+
+RtEngine::~RtEngine() { Stop(); }
+
+double RtEngine::Now() const {
+  return std::chrono::duration<double>(Clock::now() - t0_).count();
+}
+
+void RtEngine::Start() {
+  if (running_.exchange(true)) return;
+  t0_ = Clock::now();
+  force_thread_ = std::thread([this] { ForceLoop(); });
+  if (renderer_.options().vibration) vibration_thread_ = std::thread([this] { VibrationLoop(); });
+  if (options_.realtime_priority) {
+    priority_status_ = "force: " + RequestFifo(force_thread_, 80);
+    if (vibration_thread_.joinable()) priority_status_ += "; vibration: " + RequestFifo(vibration_thread_, 79);
+  }
+}
+
+void RtEngine::Stop() {
+  if (!running_.exchange(false)) return;
+  if (force_thread_.joinable()) force_thread_.join();
+  if (vibration_thread_.joinable()) vibration_thread_.join();
+  device_.WriteForce(Eigen::Vector3d::Zero());
+}
+
+void RtEngine::RunFor(std::chrono::duration<double> duration) {
+  Start();
+  const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(duration);
+  while (Clock::now() < end && !device_lost_.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  Stop();
+}
+
+void RtEngine::ForceLoop() {
+  if (options_.on_thread_enter) options_.on_thread_enter();
+  const double rate = renderer_.options().force_rate_hz;
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  int consecutive_misses = 0;
+  std::uint64_t k = 0;
+  float rec[15];
+  while (running_.load(std::memory_order_relaxed)) {
+    const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
+    SleepUntil(deadline);
+    const auto woke = Clock::now();
+    const double late_s = std::chrono::duration<double>(woke - deadline).count();
+    const double now_s = std::chrono::duration<double>(woke - t0_).count();
+    force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s, std::memory_order_relaxed);
+    AtomicMax(force_jitter_max_, late_s);
+    if (late_s > 1.0 / rate) {
+      force_misses_.fetch_add(1, std::memory_order_relaxed);
+      ++consecutive_misses;
+    } else {
+      consecutive_misses = 0;
+    }
+    renderer::DeviceSample sample;
+    Eigen::Vector3d command = Eigen::Vector3d::Zero();
+    renderer::ForceCommand cmd;
+    bool fault = false;
+    if (!device_.Read(&sample)) {
+      disconnects_.fetch_add(1, std::memory_order_relaxed);
+      device_lost_.store(true);
+      fault = true;
+    } else if (consecutive_misses >= options_.max_consecutive_misses) {
+      miss_faults_.fetch_add(1, std::memory_order_relaxed);
+      fault = true;
+    } else {
+      cmd = renderer_.ForceTick(sample, now_s);
+      command = cmd.force_N;
+      fault = cmd.fault;
+    }
+    device_.WriteForce(command);
+    force_ticks_.fetch_add(1, std::memory_order_relaxed);
+    force_last_s_.store(now_s, std::memory_order_relaxed);
+    if (force_stream_) {
+      const auto& s = sample.state;
+      const float v[15] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
+                           static_cast<float>(s.p_m.z()),   static_cast<float>(s.v_mps.x()),
+                           static_cast<float>(s.v_mps.y()), static_cast<float>(s.v_mps.z()),
+                           static_cast<float>(cmd.raw.force_N.x()), static_cast<float>(cmd.raw.force_N.y()),
+                           static_cast<float>(cmd.raw.force_N.z()), static_cast<float>(command.x()),
+                           static_cast<float>(command.y()), static_cast<float>(command.z()),
+                           static_cast<float>(cmd.raw.normal_force_N),
+                           static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f};
+      std::memcpy(rec, v, sizeof v);
+      force_stream_->Push(static_cast<double>(k) / rate, rec);
+    }
+  }
+  if (options_.on_thread_exit) options_.on_thread_exit();
+}
+
+void RtEngine::VibrationLoop() {
+  if (options_.on_thread_enter) options_.on_thread_enter();
+  const double rate = renderer_.options().vibration_rate_hz;
+  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  std::uint64_t k = 0;
+  while (running_.load(std::memory_order_relaxed)) {
+    const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
+    SleepUntil(deadline);
+    const auto woke = Clock::now();
+    const double late_s = std::chrono::duration<double>(woke - deadline).count();
+    AtomicMax(vibration_jitter_max_, late_s);
+    if (late_s > 1.0 / rate) vibration_misses_.fetch_add(1, std::memory_order_relaxed);
+    const double a = renderer_.VibrationTick();
+    if (actuator_) actuator_->Write(a);
+    vibration_ticks_.fetch_add(1, std::memory_order_relaxed);
+    vibration_last_s_.store(std::chrono::duration<double>(woke - t0_).count(), std::memory_order_relaxed);
+    if (vibration_stream_) {
+      const float v = static_cast<float>(a);
+      vibration_stream_->Push(static_cast<double>(k) / rate, &v);
+    }
+  }
+  if (options_.on_thread_exit) options_.on_thread_exit();
+}
+
+EngineStats RtEngine::Stats() const {
+  EngineStats s;
+  s.force_ticks = force_ticks_.load();
+  s.vibration_ticks = vibration_ticks_.load();
+  s.force_deadline_misses = force_misses_.load();
+  s.vibration_deadline_misses = vibration_misses_.load();
+  s.disconnects = disconnects_.load();
+  s.miss_faults = miss_faults_.load();
+  s.force_jitter_max_s = force_jitter_max_.load();
+  s.force_jitter_mean_s = s.force_ticks ? force_jitter_sum_.load() / static_cast<double>(s.force_ticks) : 0;
+  s.vibration_jitter_max_s = vibration_jitter_max_.load();
+  const double tf = force_last_s_.load(), tv = vibration_last_s_.load();
+  s.achieved_force_rate_hz = tf > 0 ? static_cast<double>(s.force_ticks) / tf : 0;
+  s.achieved_vibration_rate_hz = tv > 0 ? static_cast<double>(s.vibration_ticks) / tv : 0;
+  if (force_stream_) s.recording_overflows += force_stream_->overflow_count();
+  if (vibration_stream_) s.recording_overflows += vibration_stream_->overflow_count();
+  s.priority_status = priority_status_;
+  return s;
+}
+
+}  // namespace hapticlab::runner

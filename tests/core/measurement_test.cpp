@@ -1,0 +1,63 @@
+#include "hapticlab/core/measurement.hpp"
+
+#include <gtest/gtest.h>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab {
+namespace {
+
+TEST(Measurement, ReadsAndRoundTrips) {
+  const std::string text =
+      "# hapticlab-measurement v1\n# material: Cork\n# speed_mps: 0.04\n"
+      "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N,acc_mps2\n"
+      "0,0,0,-1e-4,0.04,0,0,-0.1,0,0.5,0.25\n"
+      "0.001,4e-5,0,-1e-4,0.04,0,0,-0.1,0,0.5,-0.5\n";
+  const auto m = ParseMeasurementCsv(text, "m.csv");
+  EXPECT_EQ(m.material, "Cork");
+  EXPECT_EQ(m.metadata.at("speed_mps"), "0.04");
+  ASSERT_EQ(m.rows.size(), 2u);
+  EXPECT_TRUE(m.has_acceleration);
+  EXPECT_DOUBLE_EQ(m.rows[1].acc_mps2, -0.5);
+  test::TempDir dir;
+  WriteMeasurementCsv(dir.File("o.csv"), m);
+  const auto back = ReadMeasurementCsv(dir.File("o.csv"));
+  EXPECT_EQ(back.material, "Cork");
+  EXPECT_EQ(back.rows[1].p_m, m.rows[1].p_m);
+  EXPECT_EQ(back.rows[0].f_N, m.rows[0].f_N);
+}
+
+TEST(Measurement, KinematicsOnlyDifferentiatesPositions) {
+  const auto m = ParseMeasurementCsv("# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n1,3,0,0\n",
+                                     "k.csv", {.kinematics_only = true});
+  EXPECT_FALSE(m.has_forces);
+  EXPECT_DOUBLE_EQ(m.rows[1].v_mps.x(), 3.0);
+  EXPECT_DOUBLE_EQ(m.rows[0].v_mps.x(), 2.0);
+}
+
+TEST(Measurement, ErrorsNameFileLineAndColumn) {
+  const std::string head = "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
+  try {
+    ParseMeasurementCsv(head + "0,0,0,0,0,0,0,0,0,0\n0,0,0,0,0,0,0,0,0,0\n", "t.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.csv:4: t_s: time must increase"), std::string::npos) << e.what();
+  }
+  try {
+    ParseMeasurementCsv(head + "0,0,0,nan,0,0,0,0,0,0\n", "n.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("n.csv:3: z_m: value is not finite"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ParseMeasurementCsv("t_s,x_m\n0,0\n", "h.csv"), InputError);  // no v1 tag
+  try {
+    ParseMeasurementCsv("# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0,0,0,0,0,0,0\n", "f.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fx_N: column is missing"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace hapticlab

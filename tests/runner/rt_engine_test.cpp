@@ -1,0 +1,118 @@
+#include "hapticlab/runner/rt_engine.hpp"
+
+#include <gtest/gtest.h>
+
+#include <optional>
+
+#include "../renderer/test_materials.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/devices/replay.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::runner {
+namespace {
+
+// A 0.4 s stroke at 5 cm/s, 0.2 mm below the base top, sampled at 4 kHz.
+std::vector<devices::TrajectorySample> Stroke(double seconds = 0.4) {
+  std::vector<devices::TrajectorySample> s;
+  for (int k = 0; k <= static_cast<int>(seconds * 4000); ++k) {
+    devices::TrajectorySample x;
+    x.t_s = k / 4000.0;
+    x.p_m = {0.05 * x.t_s, 0, -0.2e-3};
+    x.v_mps = {0.05, 0, 0};
+    s.push_back(x);
+  }
+  return s;
+}
+
+thread_local std::optional<test::NoAllocGuard> t_guard;
+
+TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
+  test::TempDir dir;
+  std::int64_t trial;
+  {
+    db::Database d(dir.File("e.db"));
+    const auto st = d.CreateStudy({.name = "e", .protocol_toml = "x", .seed = 1});
+    const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
+    const auto se = d.StartSession({.participant_id = p});
+    trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+  }
+  const auto m = test::TexturedMaterial();
+  renderer::RenderOptions ro;
+  ro.force_rate_hz = 1000;
+  ro.vibration_rate_hz = 10000;
+  ro.max_force_N = 3.0;
+  renderer::HybridRenderer r(m, ro);
+  RtEngine* engine_ptr = nullptr;
+  devices::ReplayDevice dev(Stroke(), [&] { return engine_ptr->Now(); });
+  devices::BufferActuator act(10000, 20000);
+  std::atomic<std::uint64_t> allocations{0};
+  std::atomic<int> threads_checked{0};
+  EngineOptions eo;
+  eo.on_thread_enter = [] { t_guard.emplace(); };
+  eo.on_thread_exit = [&] {
+    allocations += t_guard->count();
+    t_guard.reset();
+    ++threads_checked;
+  };
+  db::TrajectoryWriter writer(dir.File("e.db"));
+  auto* fs = writer.OpenStream(trial, "force", ro.force_rate_hz, ForceStreamChannels());
+  auto* vs = writer.OpenStream(trial, "vibration", ro.vibration_rate_hz, VibrationStreamChannels());
+  RtEngine engine(r, dev, &act, eo, fs, vs);
+  engine_ptr = &engine;
+  engine.RunFor(std::chrono::seconds(5));  // the replay ends after 0.4 s: disconnect stops it
+  writer.CloseStream(fs);
+  writer.CloseStream(vs);
+
+  const auto st = engine.Stats();
+  EXPECT_EQ(threads_checked.load(), 2);
+  EXPECT_EQ(allocations.load(), 0u) << "a loop allocated";
+  EXPECT_GE(st.disconnects, 1u);
+  EXPECT_GT(st.force_ticks, 100u);
+  EXPECT_GT(st.vibration_ticks, 1000u);
+  EXPECT_EQ(st.recording_overflows, 0u);
+  // Every commanded force is within the limit, and the last one (after the disconnect) is 0.
+  ASSERT_FALSE(dev.forces().empty());
+  for (const auto& f : dev.forces()) ASSERT_LE(f.norm(), ro.max_force_N * (1 + 1e-12));
+  EXPECT_EQ(dev.forces().back().norm(), 0.0);
+  // The recording holds what the loops did.
+  db::Database d(dir.File("e.db"));
+  std::size_t force_samples = 0, vib_samples = 0;
+  for (const auto& c : d.TrajectoryChunks(trial)) (c.stream == "force" ? force_samples : vib_samples) += c.sample_count();
+  EXPECT_EQ(force_samples, st.force_ticks);
+  EXPECT_EQ(vib_samples, st.vibration_ticks);
+  std::printf("force %.0f Hz, vibration %.0f Hz, force jitter max %.1f us mean %.1f us, misses %llu/%llu\n",
+              st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
+              st.force_jitter_mean_s * 1e6, static_cast<unsigned long long>(st.force_deadline_misses),
+              static_cast<unsigned long long>(st.vibration_deadline_misses));
+}
+
+// A device whose data never changes its time stamp: the renderer sees it go stale.
+class FrozenDevice : public devices::HapticDevice {
+ public:
+  devices::DeviceCapabilities Capabilities() const override { return {}; }
+  bool Read(renderer::DeviceSample* out) noexcept override {
+    out->state.p_m = {0, 0, -0.5e-3};
+    out->t_s = 0;  // measured once, never again
+    return true;
+  }
+  void WriteForce(const Eigen::Vector3d& f) noexcept override { last = f; ++writes; }
+  Eigen::Vector3d last = Eigen::Vector3d::Ones();
+  std::atomic<int> writes{0};
+};
+
+TEST(RtEngine, StaleDeviceDataDrivesForceToZero) {
+  const auto m = test::TexturedMaterial();
+  renderer::RenderOptions ro;
+  ro.vibration = false;
+  ro.stale_after_s = 0.01;
+  renderer::HybridRenderer r(m, ro);
+  FrozenDevice dev;
+  RtEngine engine(r, dev, nullptr);
+  engine.RunFor(std::chrono::milliseconds(100));
+  EXPECT_GT(r.counters().stale_faults.load(), 0u);
+  EXPECT_EQ(dev.last.norm(), 0.0);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner
