@@ -6,5 +6,6 @@
 namespace hapticlab::cli {
 
 void RegisterExport(CLI::App& app);
+void RegisterModel(CLI::App& app);
 
 }  // namespace hapticlab::cli

@@ -20,8 +20,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   RegisterExport(app);
+  RegisterModel(app);
   AddPlanned(app, "study", "Validate, plan, run, resume and inspect study protocols", "issue #4");
-  AddPlanned(app, "model", "Fit, build, render and check material models", "issues #3, #6, #7");
   AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
   AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
   AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");

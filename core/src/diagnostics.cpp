@@ -5,9 +5,9 @@
 namespace hapticlab {
 
 std::string Diagnostic::ToString() const {
-  std::string s = file.empty() ? std::string("<input>") : file;
+  std::string s = file;
   if (line > 0) s += ":" + std::to_string(line);
-  s += ": ";
+  if (!s.empty()) s += ": ";
   if (!field.empty()) s += field + ": ";
   s += message;
   return s;

@@ -1,0 +1,252 @@
+// hapticlab model: check, render, energy and import material models.
+
+#include <fmt/core.h>
+
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/renderer/energy.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/runner/offline.hpp"
+
+namespace hapticlab::cli {
+namespace {
+
+using renderer::ForceAlgorithm;
+
+// Runs `body` under Guard and turns a non-zero exit into CLI11's exit path.
+void Run(const std::function<int()>& body) {
+  const int rc = Guard(body);
+  if (rc != kExitOk) throw CLI::RuntimeError(rc);
+}
+
+void AddCheck(CLI::App& model) {
+  auto path = std::make_shared<std::string>();
+  auto json = std::make_shared<bool>(false);
+  auto* cmd = model.add_subcommand("check", "Load and validate a material model; print a summary");
+  cmd->add_option("MODEL", *path, "Material model (.toml)")->required();
+  cmd->add_flag("--json", *json, "Print the summary as JSON");
+  cmd->callback([path, json] {
+    Run([&] {
+      const auto m = renderer::LoadMaterial(*path);
+      nlohmann::json j = {{"name", m.name},
+                          {"effects", m.effects},
+                          {"texture", {{"K", m.contact.texture.K}, {"B", m.contact.texture.B}, {"n", m.contact.texture.n}}},
+                          {"friction", {{"kappa_N_per_m", m.friction.kappa_N_per_m}, {"mu_k", m.friction.mu_k},
+                                        {"mu_b_Ns_per_m", m.friction.mu_b_Ns_per_m}}},
+                          {"height_map", {{"width", m.geometry->width()}, {"height", m.geometry->height()},
+                                          {"pitch_m", m.geometry->pitch_m()},
+                                          {"range_m", m.geometry->max_m() - m.geometry->min_m()}}},
+                          {"vibration", {{"cells", m.vibration.cells.size()}, {"order", m.vibration.order()},
+                                         {"sample_rate_hz", m.vibration.sample_rate_hz}}},
+                          {"hybrid_cutoff_hz", m.hybrid_cutoff_hz}};
+      if (*json) fmt::print("{}\n", j.dump(2));
+      else fmt::print("{}: ok\n{}\n", *path, j.dump(2));
+      return kExitOk;
+    });
+  });
+}
+
+void AddRender(CLI::App& model) {
+  struct O {
+    std::string model, trajectory, out, vib_out, algorithm = "fric2";
+    double force_rate = 1000, vib_rate = 10000, max_force = 8;
+    bool no_vibration = false, no_filter = false;
+    std::uint64_t seed = 1;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "render",
+      "Run the real-time ticks offline over a recorded trajectory (measurement CSV v1;\n"
+      "velocities are differentiated when absent, forces are ignored). Writes one row per\n"
+      "trajectory sample: model force, commanded force, normal force, friction, speed, contact,\n"
+      "fault, and the vibration sample at that time.");
+  cmd->add_option("--model", o->model, "Material model (.toml)")->required();
+  cmd->add_option("--trajectory", o->trajectory, "Trajectory (measurement CSV v1)")->required();
+  cmd->add_option("--out", o->out, "Output CSV")->required();
+  cmd->add_option("--vibration-out", o->vib_out, "Also write every vibration sample (CSV t_s,acc_mps2)");
+  cmd->add_option("--algorithm", o->algorithm, "Force algorithm")
+      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))->capture_default_str();
+  cmd->add_option("--vibration-rate", o->vib_rate, "Vibration loop rate [Hz]")->capture_default_str();
+  cmd->add_option("--max-force", o->max_force, "Device force limit [N]")->capture_default_str();
+  cmd->add_flag("--no-vibration", o->no_vibration, "Force only");
+  cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
+  cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
+  cmd->callback([o] {
+    Run([&] {
+      const auto m = renderer::LoadMaterial(o->model);
+      const auto traj = ReadMeasurementCsv(o->trajectory, {.kinematics_only = true});
+      if (traj.rows.size() < 2) throw InputError(o->trajectory, 0, "", "needs at least two samples");
+      renderer::RenderOptions ro;
+      ro.algorithm = renderer::ParseForceAlgorithm(o->algorithm);
+      ro.vibration = !o->no_vibration;
+      ro.hybrid_filter = !o->no_filter;
+      ro.vibration_rate_hz = o->vib_rate;
+      ro.max_force_N = o->max_force;
+      ro.seed = o->seed;
+      // The force loop runs at the trajectory's own rate.
+      ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) / (traj.rows.back().t_s - traj.rows.front().t_s);
+      ro.stale_after_s = 1e9;  // offline: samples are never stale
+      const auto res = runner::RenderOffline(m, ro, traj);
+      FILE* f = std::fopen(o->out.c_str(), "w");
+      if (!f) throw std::runtime_error(o->out + ": cannot write");
+      std::fprintf(f, "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,fault,acc_mps2\n");
+      for (const auto& r : res.rows)
+        std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%.9g\n", r.t_s, r.force_N.x(),
+                     r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(), r.command_N.z(),
+                     r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0, r.fault ? 1 : 0, r.acc_mps2);
+      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+      if (!o->vib_out.empty()) {
+        FILE* v = std::fopen(o->vib_out.c_str(), "w");
+        if (!v) throw std::runtime_error(o->vib_out + ": cannot write");
+        std::fprintf(v, "t_s,acc_mps2\n");
+        for (std::size_t k = 0; k < res.vibration_mps2.size(); ++k)
+          std::fprintf(v, "%.9g,%.9g\n", traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz, res.vibration_mps2[k]);
+        if (std::fclose(v) != 0) throw std::runtime_error(o->vib_out + ": write failed");
+      }
+      fmt::print(stderr, "rendered {} force ticks at {:.0f} Hz and {} vibration samples -> {}\n",
+                 res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(), o->out);
+      return kExitOk;
+    });
+  });
+}
+
+void AddEnergy(CLI::App& model) {
+  struct O {
+    std::string algorithm = "norm", sine, model;
+    double dx = 1e-4, dz = 0, stiffness = 1000, mu = 0;
+    int steps = 20000;
+    bool json = false;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "energy",
+      "Work done by the rendered force field around a closed path on h = A sin(2 pi x / l)\n"
+      "(dissertation Fig. 5.3). norm uses path A: (0,0)->(l/4,0)->(l/4,A)->(0,A)->(0,0), z from\n"
+      "the mean surface, and is compared with eq. (5.2). fric1/fric2/wall use path B: down\n"
+      "dz_max, along dx_max, up, back; the bound of eq. (5.3) is reported. Without --model,\n"
+      "a linear texture layer (K = --stiffness, no damping) with friction --mu is used.\n"
+      "Positive energy is created by the surface (non-passive).");
+  cmd->add_option("--algorithm", o->algorithm, "Force algorithm")
+      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))->capture_default_str();
+  cmd->add_option("--sine", o->sine, "AMPLITUDE_M,WAVELENGTH_M of the test texture")->required();
+  cmd->add_option("--model", o->model, "Take contact and friction parameters from this model");
+  cmd->add_option("--stiffness", o->stiffness, "Texture stiffness K without --model [N/m]")->capture_default_str();
+  cmd->add_option("--mu", o->mu, "Coulomb coefficient without --model")->capture_default_str();
+  cmd->add_option("--dx-max", o->dx, "Path B tangential excursion [m]")->capture_default_str();
+  cmd->add_option("--dz-max", o->dz, "Path B penetration [m] (default: the amplitude)");
+  cmd->add_option("--steps", o->steps, "Integration steps per side")->capture_default_str();
+  cmd->add_flag("--json", o->json, "Print {\"energy_J\", \"closed_form_J\", ...} as JSON");
+  cmd->callback([o] {
+    Run([&] {
+      const auto comma = o->sine.find(',');
+      double a = 0, l = 0;
+      try {
+        if (comma == std::string::npos) throw std::invalid_argument("");
+        a = std::stod(o->sine.substr(0, comma));
+        l = std::stod(o->sine.substr(comma + 1));
+      } catch (const std::exception&) {
+        throw InputError("", 0, "--sine", "expected AMPLITUDE_M,WAVELENGTH_M, got '" + o->sine + "'");
+      }
+      if (!(a > 0) || !(l > 0)) throw InputError("", 0, "--sine", "amplitude and wavelength must be > 0");
+      renderer::MaterialModel m;
+      if (!o->model.empty()) {
+        m = renderer::LoadMaterial(o->model);
+      } else {
+        m.contact.texture = {o->stiffness, 0, 1};
+        m.contact.base = {2 * o->stiffness, 0, 1};
+        m.contact.layer_thickness_m = 1e-3;
+        m.friction = {2000, o->mu, 0};
+      }
+      const auto alg = renderer::ParseForceAlgorithm(o->algorithm);
+      renderer::EnergyPath path;
+      path.kind = alg == ForceAlgorithm::kNorm ? renderer::EnergyPath::Kind::kA : renderer::EnergyPath::Kind::kB;
+      path.dx_max_m = o->dx;
+      path.dz_max_m = o->dz > 0 ? o->dz : a;
+      path.steps = o->steps;
+      const auto r = renderer::ComputeEnergy(m, alg, a, l, path);
+      nlohmann::json j = {{"algorithm", o->algorithm},
+                          {"path", path.kind == renderer::EnergyPath::Kind::kA ? "A" : "B"},
+                          {"energy_J", r.energy_J},
+                          {"normal_energy_J", r.normal_energy_J},
+                          {"tangential_energy_J", r.tangential_energy_J},
+                          {"closed_form_J", nlohmann::json()}};
+      if (path.kind == renderer::EnergyPath::Kind::kA) {
+        if (r.has_closed_form) j["closed_form_J"] = r.closed_form_J;
+      } else {
+        // Path B's closed form covers the normal part only (friction adds to it).
+        if (r.has_closed_form) j["normal_closed_form_J"] = r.closed_form_J;
+        j["bound_J"] = r.bound_J;
+        j["gain_bound_J"] = r.gain_bound_J;
+      }
+      if (o->json) {
+        fmt::print("{}\n", j.dump(2));
+      } else {
+        fmt::print("algorithm {} on path {}: energy {:.6e} J", o->algorithm, j["path"].get<std::string>(), r.energy_J);
+        if (r.has_closed_form && path.kind == renderer::EnergyPath::Kind::kA)
+          fmt::print(" (eq. 5.2: {:.6e} J, difference {:.3f} %)", r.closed_form_J,
+                     100 * (r.energy_J - r.closed_form_J) / r.closed_form_J);
+        fmt::print("\n");
+        if (path.kind == renderer::EnergyPath::Kind::kB)
+          fmt::print("normal part {:.3e} J (closed form {:.3e} J), tangential part {:.3e} J;\n"
+                     "eq. (5.3) scale K mu^2 dx dz = {:.3e} J; gain bound = {:.3e} J\n",
+                     r.normal_energy_J, r.closed_form_J, r.tangential_energy_J, r.bound_J, r.gain_bound_J);
+      }
+      return kExitOk;
+    });
+  });
+}
+
+void AddImportPenn(CLI::App& model) {
+  struct O {
+    std::string xml, out;
+    double cutoff = 100;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "import-penn",
+      "Convert a Penn Haptic Texture Toolkit model set (Models_<name>.xml, from your own copy;\n"
+      "its licence forbids redistribution) into a HapticLab material model. The vibration\n"
+      "bank and mu are imported; contact and geometry are left at flat defaults to be fitted.");
+  cmd->add_option("--xml", o->xml, "Penn model set XML")->required();
+  cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
+  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid cut-off f_c to store [Hz]")->capture_default_str();
+  cmd->callback([o] {
+    Run([&] {
+      auto r = renderer::ImportPennXml(o->xml);
+      r.model.hybrid_cutoff_hz = o->cutoff;
+      r.model.effects = {"coulomb", "vibration-speed", "vibration-force"};
+      FILE* f = std::fopen(o->out.c_str(), "w");
+      if (!f) throw std::runtime_error(o->out + ": cannot write");
+      const std::string text = "# Imported from " + o->xml + " (Penn Haptic Texture Toolkit format).\n" +
+                               renderer::MaterialToToml(r.model);
+      std::fputs(text.c_str(), f);
+      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+      fmt::print("{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e} -> {}\n", o->xml,
+                 r.model.vibration.cells.size(), r.arma ? "ARMA" : "AR", r.model.vibration.order(),
+                 r.model.friction.mu_k, r.max_lsf_reconstruction_error, o->out);
+      return kExitOk;
+    });
+  });
+}
+
+}  // namespace
+
+void RegisterModel(CLI::App& app) {
+  auto* model = app.add_subcommand(
+      "model", "Material models: check, render offline, stability energy, import Penn XML.\n"
+               "(Fitting from measurements lands with the modeling issues.)");
+  model->require_subcommand(1);
+  AddCheck(*model);
+  AddRender(*model);
+  AddEnergy(*model);
+  AddImportPenn(*model);
+}
+
+}  // namespace hapticlab::cli
