@@ -7,5 +7,6 @@ namespace hapticlab::cli {
 
 void RegisterExport(CLI::App& app);
 void RegisterModel(CLI::App& app);
+void RegisterDemo(CLI::App& app);
 
 }  // namespace hapticlab::cli
