@@ -77,6 +77,11 @@ void RtEngine::Stop() {
   if (force_thread_.joinable()) force_thread_.join();
   if (vibration_thread_.joinable()) vibration_thread_.join();
   device_.WriteForce(Eigen::Vector3d::Zero());
+  // Keep the streams' overflow counts: the caller may close the streams after Stop.
+  std::uint64_t overflows = 0;
+  if (force_stream_) overflows += force_stream_->overflow_count();
+  if (vibration_stream_) overflows += vibration_stream_->overflow_count();
+  recording_overflows_at_stop_.store(overflows);
 }
 
 void RtEngine::RunFor(std::chrono::duration<double> duration) {
@@ -181,8 +186,12 @@ EngineStats RtEngine::Stats() const {
   const double tf = force_last_s_.load(), tv = vibration_last_s_.load();
   s.achieved_force_rate_hz = tf > 0 ? static_cast<double>(s.force_ticks) / tf : 0;
   s.achieved_vibration_rate_hz = tv > 0 ? static_cast<double>(s.vibration_ticks) / tv : 0;
-  if (force_stream_) s.recording_overflows += force_stream_->overflow_count();
-  if (vibration_stream_) s.recording_overflows += vibration_stream_->overflow_count();
+  if (running_.load()) {
+    if (force_stream_) s.recording_overflows += force_stream_->overflow_count();
+    if (vibration_stream_) s.recording_overflows += vibration_stream_->overflow_count();
+  } else {
+    s.recording_overflows = recording_overflows_at_stop_.load();
+  }
   s.priority_status = priority_status_;
   return s;
 }

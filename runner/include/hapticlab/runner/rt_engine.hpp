@@ -54,8 +54,8 @@ struct EngineStats {
 
 class RtEngine {
  public:
-  /// The engine borrows everything; all must outlive it. `actuator`, `force_stream` and
-  /// `vibration_stream` may be null.
+  /// The engine borrows everything; all must outlive it (streams at least until Stop).
+  /// `actuator`, `force_stream` and `vibration_stream` may be null.
   RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& device,
            devices::Actuator* actuator, const EngineOptions& options = {},
            db::TrajectoryStream* force_stream = nullptr,
@@ -93,6 +93,7 @@ class RtEngine {
   std::atomic<std::uint64_t> force_misses_{0}, vibration_misses_{0}, disconnects_{0}, miss_faults_{0};
   std::atomic<double> force_jitter_max_{0}, force_jitter_sum_{0}, vibration_jitter_max_{0};
   std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
+  std::atomic<std::uint64_t> recording_overflows_at_stop_{0};
   std::string priority_status_ = "not requested";
 };
 
