@@ -11,6 +11,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/delaunay.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -294,6 +295,20 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
     }
   }
   if (const toml::table* v = doc["vibration"].as_table()) ReadVibration(r, *v, base, &m.vibration, 0);
+  // Scattered cells without a triangulation: compute the Delaunay triangulation.
+  auto& vb = m.vibration;
+  if (vb.cells.size() >= 3 && vb.grid_speeds_mps.empty() && vb.grid_forces_N.empty() && vb.triangles.empty()) {
+    std::vector<double> xs, ys;
+    for (const auto& c : vb.cells) {
+      xs.push_back(c.speed_mps);
+      ys.push_back(c.force_N);
+    }
+    try {
+      vb.triangles = DelaunayTriangulate(xs, ys);
+    } catch (const std::invalid_argument& e) {
+      diag.Add(name, 0, "vibration.cells", e.what());
+    }
+  }
   if (const toml::table* h = doc["hybrid"].as_table()) {
     CheckKnownKeys(r, *h, "hybrid", {"cutoff_hz"});
     if (auto v = r.Number(*h, "hybrid", "cutoff_hz", true)) m.hybrid_cutoff_hz = *v;
@@ -355,7 +370,8 @@ void ValidateMaterial(const MaterialModel& m) {
                   "grid values must be strictly ascending");
     } else if (b.cells.size() > 1 && b.triangles.empty()) {
       d.Add(f, 0, "vibration.triangles",
-            "scattered cells need a triangulation (or give speeds_mps and forces_N for a grid)");
+            "scattered cells need a triangulation: give triangles, a grid, or at least 3 "
+            "non-collinear cells to triangulate");
     }
   }
   d.ThrowIfAny();
