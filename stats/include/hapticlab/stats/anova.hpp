@@ -1,0 +1,61 @@
+#pragma once
+/// @file Repeated-measures ANOVA for fully within-subject designs (one, two or more
+/// factors), as afex::aov_ez computes it: repetitions are averaged per subject x cell, a
+/// subject with a missing cell is dropped, each effect is tested against its own
+/// effect x subject error term.
+///
+/// For an effect with orthonormal contrast matrix P (cells x df1), Z = Y P (subjects x
+/// df1): SS = n |mean(Z)|^2, SS_error = trace of the centred Z'Z, S = cov(Z). Sphericity:
+/// Mauchly's W = det S / (tr S / p)^p with R's p-value (mauchly.test: second-order
+/// correction) and the first-order chi-square (SPSS) beside it; Greenhouse-Geisser
+/// ε = tr(S)^2 / (p tr(S^2)); Huynh-Feldt (Lecoutre) ε = (N p ε_GG − 2) / (p (N − 1 − p ε_GG))
+/// reported uncapped (as R), its p-value using min(1, ε). Where p > N − 1 the covariance is
+/// singular: like car/afex we report no Mauchly test and no ε (fields are NaN,
+/// `sphericity_defined` is false). For p = 1 sphericity holds trivially (W = 1, ε = 1).
+
+#include <string>
+#include <vector>
+
+#include "hapticlab/stats/long_table.hpp"
+
+namespace hapticlab::stats {
+
+struct AnovaEffect {
+  std::string effect;   ///< "A", "B", "A:B"
+  double df1 = 0, df2 = 0;
+  double SS = 0, SS_error = 0, MSE = 0;
+  double F = 0, p = 0;
+  double pes = 0;       ///< partial eta squared SS / (SS + SS_error)
+  bool sphericity_defined = false;
+  double mauchly_W = 0, mauchly_p = 0, mauchly_chi2 = 0, mauchly_p_firstorder = 0;
+  double gg_epsilon = 0, p_gg = 0;
+  double hf_epsilon = 0, p_hf = 0;  ///< hf_epsilon uncapped; p_hf uses min(1, ε)
+};
+
+struct RmAnovaResult {
+  std::vector<std::string> factors;
+  std::vector<std::vector<std::string>> levels;  ///< sorted levels of each factor
+  std::vector<std::string> subjects;             ///< kept subjects, sorted
+  std::vector<std::string> dropped_subjects;     ///< subjects with a missing cell
+  std::vector<AnovaEffect> effects;              ///< main effects in order, then interactions
+  /// Cell means: cells[s][c], cell index c with the last factor fastest.
+  std::vector<std::vector<double>> cells;
+};
+
+/// @param data long table with the subject column and the factor columns as keys
+/// @throws hapticlab::InputError when fewer than 2 subjects remain or a factor has 1 level
+RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
+                      const std::vector<std::string>& within);
+
+/// Sphericity statistics of a one-way within factor from the k x k covariance of its levels
+/// (n − 1 denominator): S is projected on orthonormal contrasts C (k x (k−1)), C'SC, then
+/// treated as above; exposed for tests against published values.
+struct Sphericity {
+  bool defined = false;
+  double W = 0, chi2 = 0, p_firstorder = 0, p = 0, gg = 0, hf = 0;
+};
+/// @param S k x k covariance of the levels
+/// @param n number of subjects
+Sphericity SphericityFromLevelCovariance(const std::vector<std::vector<double>>& S, int n);
+
+}  // namespace hapticlab::stats

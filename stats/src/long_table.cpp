@@ -1,0 +1,103 @@
+#include "hapticlab/stats/long_table.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "hapticlab/core/csv.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::stats {
+
+std::size_t LongTable::Key(const std::string& name) const {
+  for (std::size_t i = 0; i < key_names.size(); ++i)
+    if (key_names[i] == name) return i;
+  throw InputError(source, 0, name, "no such column");
+}
+
+LongTable LongTable::Where(const std::vector<std::pair<std::string, std::string>>& equal) const {
+  std::vector<std::pair<std::size_t, std::string>> cond;
+  for (const auto& [k, v] : equal) cond.emplace_back(Key(k), v);
+  LongTable out;
+  out.source = source;
+  out.key_names = key_names;
+  out.y_name = y_name;
+  out.keys.assign(key_names.size(), {});
+  for (std::size_t r = 0; r < rows(); ++r) {
+    bool ok = true;
+    for (const auto& [c, v] : cond) ok = ok && keys[c][r] == v;
+    if (!ok) continue;
+    for (std::size_t c = 0; c < key_names.size(); ++c) out.keys[c].push_back(keys[c][r]);
+    out.y.push_back(y[r]);
+  }
+  return out;
+}
+
+LongTable LongTable::Average(const std::vector<std::string>& by) const {
+  std::vector<std::size_t> cols;
+  for (const auto& b : by) cols.push_back(Key(b));
+  std::map<std::vector<std::string>, std::pair<double, int>> acc;
+  for (std::size_t r = 0; r < rows(); ++r) {
+    std::vector<std::string> k;
+    for (auto c : cols) k.push_back(keys[c][r]);
+    auto& a = acc[k];
+    a.first += y[r];
+    a.second += 1;
+  }
+  LongTable out;
+  out.source = source;
+  out.key_names = by;
+  out.y_name = y_name;
+  out.keys.assign(by.size(), {});
+  for (const auto& [k, a] : acc) {
+    for (std::size_t c = 0; c < by.size(); ++c) out.keys[c].push_back(k[c]);
+    out.y.push_back(a.first / a.second);
+  }
+  return out;
+}
+
+std::vector<std::string> LongTable::Levels(const std::string& name) const {
+  const auto c = Key(name);
+  std::vector<std::string> v(keys[c]);
+  std::sort(v.begin(), v.end());
+  v.erase(std::unique(v.begin(), v.end()), v.end());
+  return v;
+}
+
+LongTable ReadLongCsv(const std::string& path, const std::string& dv,
+                      const std::vector<std::string>& key_columns) {
+  const CsvTable t = ReadCsv(path);
+  LongTable out;
+  out.source = path;
+  out.y_name = dv;
+  out.key_names = key_columns;
+  const std::size_t cy = t.Require(dv);
+  std::vector<std::size_t> ck;
+  for (const auto& k : key_columns) ck.push_back(t.Require(k));
+  out.keys.assign(key_columns.size(), {});
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    const double v = t.Number(r, cy);
+    if (!std::isfinite(v)) throw InputError(path, t.row_lines[r], dv, "value is not finite");
+    out.y.push_back(v);
+    for (std::size_t c = 0; c < ck.size(); ++c) {
+      const std::string& s = t.rows[r][ck[c]];
+      if (s.empty()) throw InputError(path, t.row_lines[r], key_columns[c], "empty key cell");
+      out.keys[c].push_back(s);
+    }
+  }
+  return out;
+}
+
+std::vector<std::string> SplitList(const std::string& s) {
+  std::vector<std::string> out;
+  std::size_t a = 0;
+  while (a <= s.size()) {
+    const auto b = s.find(',', a);
+    const auto part = s.substr(a, b == std::string::npos ? std::string::npos : b - a);
+    if (!part.empty()) out.push_back(part);
+    if (b == std::string::npos) break;
+    a = b + 1;
+  }
+  return out;
+}
+
+}  // namespace hapticlab::stats
