@@ -32,28 +32,37 @@ MatrixXd Kron(const MatrixXd& a, const MatrixXd& b) {
   return r;
 }
 
-Sphericity FromCov(const MatrixXd& S, int n) {
+// `columns`: the number of columns of the multivariate response (all cells of the design),
+// which R's mauchly.test uses in one term of its correction (see below).
+Sphericity FromCov(const MatrixXd& S, int n, int columns) {
   Sphericity r;
   const auto p = static_cast<int>(S.rows());
   const double nu = n - 1;  // error df of the multivariate model
   if (p == 1) {
-    r.defined = true;
+    r.mauchly_defined = true;
     r.W = 1;
     r.p = r.p_firstorder = 1;
     r.gg = r.hf = 1;
     return r;
   }
-  if (p > n - 1) return r;  // singular error SSP: no test (car/afex)
-  r.defined = true;
   const double tr = S.trace();
   r.gg = tr * tr / (p * (S.array() * S.array()).sum());
   r.hf = (n * p * r.gg - 2) / (p * (n - 1 - p * r.gg));
+  if (p > n - 1) {
+    // Singular error SSP: no Mauchly test (car/afex); epsilons stay defined.
+    r.W = r.p = r.chi2 = r.p_firstorder = std::numeric_limits<double>::quiet_NaN();
+    return r;
+  }
+  r.mauchly_defined = true;
   const double det = S.determinant();
   r.W = det / std::pow(tr / p, p);
   const double logW = std::log(r.W);
   // R's mauchly.test (stats:::mauchly.test.SSD): Anderson's second-order approximation.
+  // R writes `3 * p` with p = ncol(SSD), the response's column count, where the textbook
+  // has the term's df; we follow R (the reference analysts compare with). The first-order
+  // p-value (SPSS) is reported beside it.
   const double rho = 1 - (2.0 * p * p + p + 2) / (6.0 * p * nu);
-  const double w2 = (p + 2.0) * (p - 1) * (p - 2) * (2.0 * p * p * p + 6.0 * p * p + 3 * p + 2) /
+  const double w2 = (p + 2.0) * (p - 1) * (p - 2) * (2.0 * p * p * p + 6.0 * p * p + 3.0 * columns + 2) /
                     (288.0 * std::pow(nu * p * rho, 2));
   const double z = -nu * rho * logW;
   const double f = p * (p + 1) / 2.0 - 1;
@@ -72,7 +81,7 @@ Sphericity SphericityFromLevelCovariance(const std::vector<std::vector<double>>&
   for (Eigen::Index i = 0; i < k; ++i)
     for (Eigen::Index j = 0; j < k; ++j) m(i, j) = S[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
   const MatrixXd c = Helmert(static_cast<int>(k));
-  return FromCov(c.transpose() * m * c, n);
+  return FromCov(c.transpose() * m * c, n, static_cast<int>(k));
 }
 
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
@@ -152,23 +161,17 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     e.p = PfUpper(e.F, e.df1, e.df2);
     e.pes = e.SS / (e.SS + e.SS_error);
     const MatrixXd S = Zc.transpose() * Zc / (n - 1);
-    const Sphericity sp = FromCov(S, n);
-    e.sphericity_defined = sp.defined;
-    const double nan = std::numeric_limits<double>::quiet_NaN();
-    if (sp.defined) {
-      e.mauchly_W = sp.W;
-      e.mauchly_p = sp.p;
-      e.mauchly_chi2 = sp.chi2;
-      e.mauchly_p_firstorder = sp.p_firstorder;
-      e.gg_epsilon = sp.gg;
-      e.hf_epsilon = sp.hf;
-      e.p_gg = PfUpper(e.F, e.df1 * sp.gg, e.df2 * sp.gg);
-      const double hf = std::min(1.0, sp.hf);
-      e.p_hf = PfUpper(e.F, e.df1 * hf, e.df2 * hf);
-    } else {
-      e.mauchly_W = e.mauchly_p = e.mauchly_chi2 = e.mauchly_p_firstorder = nan;
-      e.gg_epsilon = e.hf_epsilon = e.p_gg = e.p_hf = nan;
-    }
+    const Sphericity sp = FromCov(S, n, ncells);
+    e.mauchly_defined = sp.mauchly_defined;
+    e.mauchly_W = sp.W;
+    e.mauchly_p = sp.p;
+    e.mauchly_chi2 = sp.chi2;
+    e.mauchly_p_firstorder = sp.p_firstorder;
+    e.gg_epsilon = sp.gg;
+    e.hf_epsilon = sp.hf;
+    e.p_gg = PfUpper(e.F, e.df1 * sp.gg, e.df2 * sp.gg);
+    const double hf = std::min(1.0, sp.hf);
+    e.p_hf = PfUpper(e.F, e.df1 * hf, e.df2 * hf);
     res.effects.push_back(e);
   }
   return res;

@@ -16,7 +16,11 @@ double Median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-std::vector<double> MidRanks(const std::vector<double>& x) {
+// Mid-ranks of values rounded to 9 decimals (as the rank tests do: averaged scores that are
+// equal in exact arithmetic must tie).
+std::vector<double> MidRanks(const std::vector<double>& raw) {
+  std::vector<double> x(raw.size());
+  for (std::size_t i = 0; i < raw.size(); ++i) x[i] = std::round(raw[i] * 1e9) / 1e9;
   std::vector<std::size_t> o(x.size());
   std::iota(o.begin(), o.end(), 0);
   std::sort(o.begin(), o.end(), [&](auto a, auto b) { return x[a] < x[b]; });

@@ -10,8 +10,10 @@
 /// correction) and the first-order chi-square (SPSS) beside it; Greenhouse-Geisser
 /// ε = tr(S)^2 / (p tr(S^2)); Huynh-Feldt (Lecoutre) ε = (N p ε_GG − 2) / (p (N − 1 − p ε_GG))
 /// reported uncapped (as R), its p-value using min(1, ε). Where p > N − 1 the covariance is
-/// singular: like car/afex we report no Mauchly test and no ε (fields are NaN,
-/// `sphericity_defined` is false). For p = 1 sphericity holds trivially (W = 1, ε = 1).
+/// singular: Mauchly's test does not exist (its fields are NaN and `mauchly_defined` is
+/// false, as car/afex report nothing), but ε is still defined and we report it (as SPSS and
+/// the direct computation in tools/stats_oracle.R's gg_manual do; afex prints uncorrected
+/// df there). For p = 1 sphericity holds trivially (W = 1, ε = 1).
 
 #include <string>
 #include <vector>
@@ -26,7 +28,7 @@ struct AnovaEffect {
   double SS = 0, SS_error = 0, MSE = 0;
   double F = 0, p = 0;
   double pes = 0;       ///< partial eta squared SS / (SS + SS_error)
-  bool sphericity_defined = false;
+  bool mauchly_defined = false;
   double mauchly_W = 0, mauchly_p = 0, mauchly_chi2 = 0, mauchly_p_firstorder = 0;
   double gg_epsilon = 0, p_gg = 0;
   double hf_epsilon = 0, p_hf = 0;  ///< hf_epsilon uncapped; p_hf uses min(1, ε)
@@ -51,7 +53,7 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
 /// (n − 1 denominator): S is projected on orthonormal contrasts C (k x (k−1)), C'SC, then
 /// treated as above; exposed for tests against published values.
 struct Sphericity {
-  bool defined = false;
+  bool mauchly_defined = false;  ///< false when S is singular (p > n − 1); ε is always set
   double W = 0, chi2 = 0, p_firstorder = 0, p = 0, gg = 0, hf = 0;
 };
 /// @param S k x k covariance of the levels
