@@ -84,6 +84,35 @@ Sphericity SphericityFromLevelCovariance(const std::vector<std::vector<double>>&
   return FromCov(c.transpose() * m * c, n, static_cast<int>(k));
 }
 
+OneWayResult OneWayAnova(const LongTable& data, const std::string& factor) {
+  const auto c = data.Key(factor);
+  std::map<std::string, std::vector<double>> groups;
+  for (std::size_t i = 0; i < data.rows(); ++i) groups[data.keys[c][i]].push_back(data.y[i]);
+  const std::size_t k = groups.size();
+  const std::size_t n = data.rows();
+  if (k < 2 || n <= k) throw InputError(data.source, 0, factor, "one-way ANOVA needs >= 2 groups and N > groups");
+  double grand = 0;
+  for (double v : data.y) grand += v;
+  grand /= static_cast<double>(n);
+  OneWayResult r;
+  for (const auto& [g, v] : groups) {
+    double m = 0;
+    for (double x : v) m += x - grand;  // centred first: no cancellation near large offsets
+    m /= static_cast<double>(v.size());
+    r.SS_between += static_cast<double>(v.size()) * m * m;
+    for (double x : v) r.SS_within += (x - grand - m) * (x - grand - m);
+  }
+  r.df_between = static_cast<double>(k - 1);
+  r.df_within = static_cast<double>(n - k);
+  r.MS_between = r.SS_between / r.df_between;
+  r.MS_within = r.SS_within / r.df_within;
+  r.F = r.MS_between / r.MS_within;
+  r.p = PfUpper(r.F, r.df_between, r.df_within);
+  r.r_squared = r.SS_between / (r.SS_between + r.SS_within);
+  r.residual_sd = std::sqrt(r.MS_within);
+  return r;
+}
+
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
                       const std::vector<std::string>& within) {
   if (within.empty()) throw InputError(data.source, 0, "within", "at least one within-subject factor is needed");

@@ -49,6 +49,17 @@ struct RmAnovaResult {
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
                       const std::vector<std::string>& within);
 
+/// One-way between-subjects ANOVA (every row an independent observation). Sums of squares
+/// are formed from centred values (two passes), which keeps NIST StRD's hard cases
+/// (SiRstv, values near 196 with SS_between 0.05) accurate.
+struct OneWayResult {
+  double df_between = 0, df_within = 0;
+  double SS_between = 0, SS_within = 0, MS_between = 0, MS_within = 0;
+  double F = 0, p = 0;
+  double r_squared = 0, residual_sd = 0;
+};
+OneWayResult OneWayAnova(const LongTable& data, const std::string& factor);
+
 /// Sphericity statistics of a one-way within factor from the k x k covariance of its levels
 /// (n − 1 denominator): S is projected on orthonormal contrasts C (k x (k−1)), C'SC, then
 /// treated as above; exposed for tests against published values.

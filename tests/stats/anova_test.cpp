@@ -1,0 +1,114 @@
+// Properties of the ANOVA, Tukey and grouping code beyond the R fixtures.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <random>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/stats/anova.hpp"
+#include "hapticlab/stats/descriptive.hpp"
+#include "hapticlab/stats/distributions.hpp"
+#include "hapticlab/stats/nonparametric.hpp"
+#include "hapticlab/stats/tukey.hpp"
+
+namespace hapticlab::stats {
+namespace {
+
+LongTable Make(const std::vector<std::tuple<std::string, std::string, double>>& rows) {
+  LongTable t;
+  t.key_names = {"subject", "cond"};
+  t.keys.assign(2, {});
+  for (const auto& [s, c, y] : rows) {
+    t.keys[0].push_back(s);
+    t.keys[1].push_back(c);
+    t.y.push_back(y);
+  }
+  return t;
+}
+
+TEST(RmAnova, TwoLevelFactorIsAPairedTTestWithTrivialSphericity) {
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> g(0, 1);
+  std::vector<std::tuple<std::string, std::string, double>> rows;
+  std::vector<double> d;
+  for (int s = 0; s < 12; ++s) {
+    const double base = g(rng), a = base + g(rng), b = base + 0.7 + g(rng);
+    rows.push_back({"S" + std::to_string(s), "a", a});
+    rows.push_back({"S" + std::to_string(s), "b", b});
+    d.push_back(b - a);
+  }
+  const auto r = RmAnova(Make(rows), "subject", {"cond"});
+  const auto& e = r.effects.at(0);
+  const auto desc = Describe(d);
+  const double t = desc.mean / desc.se;
+  EXPECT_NEAR(e.F, t * t, 1e-10);
+  EXPECT_NEAR(e.p, PtTwoSided(t, 11), 1e-12);
+  EXPECT_TRUE(e.mauchly_defined);
+  EXPECT_EQ(e.mauchly_W, 1.0);
+  EXPECT_EQ(e.gg_epsilon, 1.0);
+  EXPECT_EQ(e.hf_epsilon, 1.0);
+  EXPECT_NEAR(e.p_gg, e.p, 1e-15);
+}
+
+TEST(RmAnova, SubjectsWithAMissingCellAreDroppedAndRepetitionsAveraged) {
+  const auto r = RmAnova(Make({{"S1", "a", 1}, {"S1", "a", 3}, {"S1", "b", 4}, {"S1", "c", 5},
+                               {"S2", "a", 2}, {"S2", "b", 2}, {"S2", "c", 7},
+                               {"S3", "a", 1}, {"S3", "b", 6}, {"S3", "c", 2},
+                               {"S4", "a", 9}, {"S4", "b", 1}}),
+                         "subject", {"cond"});
+  EXPECT_EQ(r.subjects, (std::vector<std::string>{"S1", "S2", "S3"}));
+  EXPECT_EQ(r.dropped_subjects, std::vector<std::string>{"S4"});
+  EXPECT_DOUBLE_EQ(r.cells[0][0], 2.0);  // mean of the two repetitions
+}
+
+TEST(RmAnova, ErrorsNameTheProblem) {
+  EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}, {"S1", "b", 2}}), "subject", {"cond"}), InputError);
+  EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}, {"S2", "a", 2}}), "subject", {"cond"}), InputError);
+  EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}}), "subject", {"nope"}), InputError);
+}
+
+TEST(Tukey, EqualGroupsGiveTheClassicalHsd) {
+  // Three groups of 5: q = |diff| / sqrt(MSE / n).
+  const auto t = TukeyBetween(Make({{"1", "x", 1}, {"2", "x", 2}, {"3", "x", 3}, {"4", "x", 2}, {"5", "x", 2},
+                                    {"6", "y", 4}, {"7", "y", 5}, {"8", "y", 6}, {"9", "y", 5}, {"10", "y", 5},
+                                    {"11", "z", 2}, {"12", "z", 3}, {"13", "z", 4}, {"14", "z", 3}, {"15", "z", 3}}),
+                              "cond");
+  EXPECT_DOUBLE_EQ(t.mse, 0.5);
+  ASSERT_EQ(t.pairs.size(), 3u);
+  EXPECT_EQ(t.pairs[0].a, "y");
+  EXPECT_EQ(t.pairs[0].b, "x");
+  EXPECT_DOUBLE_EQ(t.pairs[0].diff, 3.0);
+  EXPECT_NEAR(t.pairs[0].q, 3.0 / std::sqrt(0.5 / 5), 1e-12);
+  EXPECT_NEAR(t.pairs[0].p_adj, PtukeyUpper(t.pairs[0].q, 3, 12), 1e-15);
+  const double half = Qtukey(0.95, 3, 12) * std::sqrt(0.5 / 5);
+  EXPECT_NEAR(t.pairs[0].upr - t.pairs[0].diff, half, 1e-9);
+}
+
+TEST(Grouping, LettersAgainstTheRealRealLimits) {
+  // Upper limit ~78, lower ~35; "good" near the upper, "bad" near the lower, "mid" between
+  // with too few data to differ from either.
+  std::vector<std::tuple<std::string, std::string, double>> rows;
+  std::mt19937_64 rng(9);
+  std::normal_distribution<double> g(0, 5);
+  auto add = [&](const char* c, double mean, int n) {
+    for (int i = 0; i < n; ++i) rows.push_back({"S", c, mean + g(rng)});
+  };
+  add("upper", 78, 40);
+  add("lower", 35, 40);
+  add("good", 77, 40);
+  add("bad", 36, 40);
+  add("mid", 56, 3);
+  add("odd", 56, 40);
+  const auto groups = GroupAgainstLimits(Make(rows), "cond", "upper", "lower");
+  std::map<std::string, std::string> letter;
+  for (const auto& x : groups) letter[x.material] = x.letter;
+  EXPECT_EQ(letter["good"], "A");
+  EXPECT_EQ(letter["bad"], "B");
+  EXPECT_EQ(letter["mid"], "C");
+  EXPECT_EQ(letter["odd"], "D");
+}
+
+}  // namespace
+}  // namespace hapticlab::stats
