@@ -8,5 +8,6 @@ namespace hapticlab::cli {
 void RegisterExport(CLI::App& app);
 void RegisterModel(CLI::App& app);
 void RegisterDemo(CLI::App& app);
+void RegisterStats(CLI::App& app);
 
 }  // namespace hapticlab::cli

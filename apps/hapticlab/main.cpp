@@ -22,11 +22,11 @@ int main(int argc, char** argv) {
   RegisterExport(app);
   RegisterModel(app);
   RegisterDemo(app);
+  RegisterStats(app);
   AddPlanned(app, "study", "Validate, plan, run, resume and inspect study protocols", "issue #4");
   AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
   AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
   AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");
-  AddPlanned(app, "stats", "rmANOVA, Tukey HSD, Kruskal-Wallis, Shapiro-Wilk on CSV", "issue #5");
   AddPlanned(app, "analyze", "Run a study's declared analyses and write the report", "issue #5");
 
   try {

@@ -10,10 +10,11 @@
 namespace hapticlab::stats {
 namespace {
 
-void Fill(TukeyPair& p, int k, double conf) {
+// All pairs of a family share k and df: one TukeyFamily serves them all.
+void Fill(TukeyPair& p, const TukeyFamily& fam, double q_crit) {
   p.q = std::abs(p.diff) / (p.se / std::numbers::sqrt2);
-  p.p_adj = PtukeyUpper(p.q, k, p.df);
-  const double half = Qtukey(conf, k, p.df) / std::numbers::sqrt2 * p.se;
+  p.p_adj = fam.Upper(p.q);
+  const double half = q_crit / std::numbers::sqrt2 * p.se;
   p.lwr = p.diff - half;
   p.upr = p.diff + half;
 }
@@ -43,6 +44,8 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
   r.df = static_cast<double>(data.rows()) - r.k;
   if (!(r.df > 0)) throw InputError(data.source, 0, factor, "no error degrees of freedom left");
   r.mse = ssw / r.df;
+  const TukeyFamily fam(r.k, r.df);
+  const double q_crit = fam.Quantile(conf);
   for (std::size_t i = 0; i < levels.size(); ++i)
     for (std::size_t j = i + 1; j < levels.size(); ++j) {
       const auto& si = sum[levels[i]];
@@ -53,7 +56,7 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
       p.diff = sj.first / sj.second - si.first / si.second;
       p.se = std::sqrt(r.mse * (1.0 / si.second + 1.0 / sj.second));
       p.df = r.df;
-      Fill(p, r.k, conf);
+      Fill(p, fam, q_crit);
       r.pairs.push_back(p);
     }
   return r;
@@ -84,6 +87,8 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   r.mse = main->MSE;
   r.df = multivariate ? static_cast<double>(n) - 1 : main->df2;
   const double cells_per_level = static_cast<double>(nc / kf);
+  const TukeyFamily fam(r.k, r.df);
+  const double q_crit = fam.Quantile(conf);
   for (std::size_t i = 0; i < kf; ++i)
     for (std::size_t j = i + 1; j < kf; ++j) {
       TukeyPair p;
@@ -101,7 +106,7 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
         p.se = std::sqrt(2 * r.mse / (static_cast<double>(n) * cells_per_level));
       }
       p.df = r.df;
-      Fill(p, r.k, conf);
+      Fill(p, fam, q_crit);
       r.pairs.push_back(p);
     }
   return r;

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -150,6 +151,19 @@ TEST(Distributions, LowerAndUpperTukeyTailsAddToOne) {
   for (int k : {3, 7})
     for (double q : {1.0, 3.5, 5.0}) EXPECT_NEAR(PtukeyLower(q, k, 12) + PtukeyUpper(q, k, 12), 1.0, 1e-12);
   EXPECT_NEAR(PtukeyLower(Qtukey(0.95, 4, 20), 4, 20), 0.95, 1e-12);
+}
+
+TEST(Distributions, TabulatedFamilyAgreesWithDirectQuadrature) {
+  for (int k : {2, 3, 10, 50})
+    for (double df : {2.0, 9.0, 297.0, std::numeric_limits<double>::infinity()}) {
+      const TukeyFamily fam(k, df);
+      for (double q : {0.3, 1.5, 3.0, 5.0, 9.0, 16.0}) {
+        SCOPED_TRACE(testing::Message() << "k=" << k << " df=" << df << " q=" << q);
+        EXPECT_NEAR(fam.Lower(q), PtukeyLower(q, k, df), 1e-12);
+        const double up = PtukeyUpper(q, k, df);
+        EXPECT_LE(std::abs(fam.Upper(q) - up), 1e-9 * up + 1e-300);
+      }
+    }
 }
 
 }  // namespace

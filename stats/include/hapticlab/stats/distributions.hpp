@@ -3,6 +3,8 @@
 /// Boost.Math; the studentized range distribution (ptukey/qtukey) is written here because no
 /// maintained C++ library offers it.
 
+#include <memory>
+
 namespace hapticlab::stats {
 
 /// P(F > f) for F(df1, df2); non-integer df allowed (Greenhouse-Geisser corrections).
@@ -30,7 +32,27 @@ double PtukeyLower(double q, int k, double df);
 /// P(Q > q), computed directly (not as 1 − lower), so tiny p-values keep their relative
 /// accuracy (~1e-8 down to 1e-300).
 double PtukeyUpper(double q, int k, double df);
-/// Quantile: the q with P(Q <= q) = p (TOMS 748 root finding on PtukeyLower).
+/// Quantile: the q with P(Q <= q) = p (TOMS 748 root finding, through TukeyFamily).
 double Qtukey(double p, int k, double df);
+
+/// The studentized range distribution for one (k, df), for many evaluations: the range
+/// distribution W(w) and log(1 − W(w)) are tabulated once as Chebyshev interpolants (160
+/// nodes, ~1e-14), so each probability costs one cheap outer integral. Agrees with the
+/// direct functions above to ~1e-13 absolute (lower) and ~1e-10 relative (upper).
+class TukeyFamily {
+ public:
+  TukeyFamily(int k, double df);
+  double Lower(double q) const;   ///< P(Q <= q)
+  double Upper(double q) const;   ///< P(Q > q), relative accuracy kept for tiny p
+  double Quantile(double p) const;
+  int k() const { return k_; }
+  double df() const { return df_; }
+
+ private:
+  struct Tables;
+  int k_;
+  double df_;
+  std::shared_ptr<const Tables> tables_;
+};
 
 }  // namespace hapticlab::stats

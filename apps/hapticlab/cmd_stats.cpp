@@ -1,0 +1,228 @@
+// hapticlab stats: the statistics on any long-format CSV, without a study database.
+
+#include <fmt/core.h>
+
+#include <cmath>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/stats/anova.hpp"
+#include "hapticlab/stats/nonparametric.hpp"
+#include "hapticlab/stats/shapiro.hpp"
+#include "hapticlab/stats/tukey.hpp"
+
+namespace hapticlab::cli {
+namespace {
+
+using nlohmann::json;
+
+// NaN (undefined statistics) becomes JSON null.
+json Num(double v) { return std::isfinite(v) ? json(v) : json(); }
+
+// Options every stats subcommand shares.
+struct Common {
+  std::string csv, dv;
+  std::vector<std::string> where;  // COL=VALUE
+  std::string average_by;          // COLS
+  bool json = false;
+};
+
+void AddCommon(CLI::App* cmd, Common& c) {
+  cmd->add_option("--csv", c.csv, "Long-format CSV (one row per observation)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--dv", c.dv, "Column of the response (numeric)")->required();
+  cmd->add_option("--where", c.where, "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
+  cmd->add_option("--average-by", c.average_by,
+                  "Average the response within each combination of these columns first, e.g.\n"
+                  "subject,method,material to use cell means (repetitions averaged)");
+  cmd->add_flag("--json", c.json, "Print results as JSON");
+}
+
+// Reads the CSV with the needed key columns, applies --where and --average-by.
+stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
+  std::vector<std::pair<std::string, std::string>> cond;
+  for (const auto& w : c.where) {
+    const auto eq = w.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError("", 0, "--where", "expected COL=VALUE, got '" + w + "'");
+    cond.emplace_back(w.substr(0, eq), w.substr(eq + 1));
+    keys.push_back(cond.back().first);
+  }
+  const auto avg = stats::SplitList(c.average_by);
+  keys.insert(keys.end(), avg.begin(), avg.end());
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  auto t = stats::ReadLongCsv(c.csv, c.dv, keys).Where(cond);
+  if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
+  if (!avg.empty()) t = t.Average(avg);
+  return t;
+}
+
+void Run(const std::function<int()>& body) {
+  const int rc = Guard(body);
+  if (rc != kExitOk) throw CLI::RuntimeError(rc);
+}
+
+void AddRmAnova(CLI::App& s) {
+  auto c = std::make_shared<Common>();
+  auto subject = std::make_shared<std::string>();
+  auto within = std::make_shared<std::string>();
+  auto* cmd = s.add_subcommand(
+      "rm-anova",
+      "Repeated-measures ANOVA (one or more within-subject factors), as afex::aov_ez: repetitions\n"
+      "averaged per subject x cell, subjects with a missing cell dropped. Reports F, p, partial\n"
+      "eta squared, Mauchly's W and p (R's), Greenhouse-Geisser and Huynh-Feldt epsilons and p.");
+  AddCommon(cmd, *c);
+  cmd->add_option("--subject", *subject, "Subject column")->required();
+  cmd->add_option("--within", *within, "Within factors, comma-separated (A or A,B)")->required();
+  cmd->callback([=] {
+    Run([&] {
+      const auto factors = stats::SplitList(*within);
+      std::vector<std::string> keys = factors;
+      keys.push_back(*subject);
+      const auto r = stats::RmAnova(Load(*c, keys), *subject, factors);
+      if (c->json) {
+        json effects = json::array();
+        for (const auto& e : r.effects)
+          effects.push_back({{"effect", e.effect}, {"df1", e.df1}, {"df2", e.df2}, {"F", e.F}, {"p", e.p},
+                             {"pes", e.pes}, {"MSE", e.MSE}, {"mauchly_W", Num(e.mauchly_W)},
+                             {"mauchly_p", Num(e.mauchly_p)}, {"mauchly_p_firstorder", Num(e.mauchly_p_firstorder)},
+                             {"gg_epsilon", Num(e.gg_epsilon)}, {"p_gg", Num(e.p_gg)},
+                             {"hf_epsilon", Num(e.hf_epsilon)}, {"p_hf", Num(e.p_hf)}});
+        fmt::print("{}\n", json{{"effects", effects}, {"subjects", r.subjects.size()},
+                                {"dropped_subjects", r.dropped_subjects}}.dump(2));
+        return kExitOk;
+      }
+      fmt::print("{} subjects{}\n", r.subjects.size(),
+                 r.dropped_subjects.empty() ? "" : fmt::format(" ({} dropped for a missing cell)", r.dropped_subjects.size()));
+      fmt::print("{:<24} {:>5} {:>7} {:>10} {:>11} {:>7} {:>9} {:>9} {:>7} {:>10} {:>7} {:>10}\n", "effect", "df1", "df2",
+                 "F", "p", "pes", "Mauchly W", "p", "GG eps", "p GG", "HF eps", "p HF");
+      for (const auto& e : r.effects)
+        fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f} {:>9.4g} {:>9.4g} {:>7.4f} {:>10.4g} {:>7.4f} {:>10.4g}\n",
+                   e.effect, e.df1, e.df2, e.F, e.p, e.pes, e.mauchly_W, e.mauchly_p, e.gg_epsilon, e.p_gg,
+                   e.hf_epsilon, e.p_hf);
+      fmt::print("Mauchly p is R's (second-order); nan: the covariance is singular (df > subjects - 1),\n"
+                 "so no test exists; epsilons are still defined. HF eps is uncapped; its p uses min(1, eps).\n");
+      return kExitOk;
+    });
+  });
+}
+
+void AddTukey(CLI::App& s) {
+  auto c = std::make_shared<Common>();
+  auto factor = std::make_shared<std::string>();
+  auto subject = std::make_shared<std::string>();
+  auto within = std::make_shared<std::string>();
+  auto method = std::make_shared<std::string>("univariate");
+  auto* cmd = s.add_subcommand(
+      "tukey",
+      "Tukey HSD pairwise comparisons. Without --subject: independent groups (TukeyHSD). With\n"
+      "--subject: a within-subject factor, with the pooled error of its effect (--error\n"
+      "univariate, emmeans model=\"univariate\") or per-pair errors (--error multivariate, afex's\n"
+      "emmeans default). diff = mean(a) - mean(b).");
+  AddCommon(cmd, *c);
+  cmd->add_option("--factor", *factor, "Factor to compare")->required();
+  cmd->add_option("--subject", *subject, "Subject column (within-subject comparisons)");
+  cmd->add_option("--within", *within, "All within factors of the design (default: --factor)");
+  cmd->add_option("--error", *method, "Within-subject error term")->check(CLI::IsMember({"univariate", "multivariate"}))
+      ->capture_default_str();
+  cmd->callback([=] {
+    Run([&] {
+      stats::TukeyResult r;
+      if (subject->empty()) {
+        r = stats::TukeyBetween(Load(*c, {*factor}), *factor);
+      } else {
+        auto factors = within->empty() ? std::vector<std::string>{*factor} : stats::SplitList(*within);
+        auto keys = factors;
+        keys.push_back(*subject);
+        const auto a = stats::RmAnova(Load(*c, keys), *subject, factors);
+        r = stats::TukeyWithin(a, *factor, *method == "multivariate");
+      }
+      if (c->json) {
+        json pairs = json::array();
+        for (const auto& p : r.pairs)
+          pairs.push_back({{"a", p.a}, {"b", p.b}, {"diff", p.diff}, {"lwr", p.lwr}, {"upr", p.upr},
+                           {"p_adj", p.p_adj}, {"se", p.se}, {"df", p.df}, {"q", p.q}});
+        fmt::print("{}\n", json{{"method", r.method}, {"factor", r.factor}, {"comparisons", pairs}}.dump(2));
+        return kExitOk;
+      }
+      fmt::print("Tukey HSD ({}), factor {}, k = {}, df = {:.0f}\n", r.method, r.factor, r.k, r.df);
+      fmt::print("{:<30} {:>10} {:>10} {:>10} {:>12}\n", "a - b", "diff", "lwr", "upr", "p adj");
+      for (const auto& p : r.pairs)
+        fmt::print("{:<30} {:>10.4f} {:>10.4f} {:>10.4f} {:>12.4g}\n", p.a + " - " + p.b, p.diff, p.lwr, p.upr, p.p_adj);
+      return kExitOk;
+    });
+  });
+}
+
+void AddKruskal(CLI::App& s) {
+  auto c = std::make_shared<Common>();
+  auto group = std::make_shared<std::string>();
+  auto* cmd = s.add_subcommand("kruskal",
+                               "Kruskal-Wallis with tie correction, then Dunn's test with Bonferroni\n"
+                               "adjustment over all pairs. Values are tied when equal to 9 decimals.");
+  AddCommon(cmd, *c);
+  cmd->add_option("--group", *group, "Grouping column")->required();
+  cmd->callback([=] {
+    Run([&] {
+      const auto k = stats::KruskalWallis(Load(*c, {*group}), *group);
+      if (c->json) {
+        json dunn = json::array();
+        for (const auto& d : k.dunn)
+          dunn.push_back({{"a", d.a}, {"b", d.b}, {"z", d.z}, {"p", d.p}, {"p_adj", d.p_adj}});
+        fmt::print("{}\n", json{{"H", k.H}, {"df", k.df}, {"p", k.p}, {"N", k.N}, {"dunn", dunn}}.dump(2));
+        return kExitOk;
+      }
+      fmt::print("Kruskal-Wallis: H({:.0f}) = {:.4f}, p = {:.4g}, N = {}\n", k.df, k.H, k.p, k.N);
+      fmt::print("{:<30} {:>9} {:>11} {:>11}\n", "Dunn a vs b", "z", "p", "p (Bonf.)");
+      for (const auto& d : k.dunn) fmt::print("{:<30} {:>9.4f} {:>11.4g} {:>11.4g}\n", d.a + " vs " + d.b, d.z, d.p, d.p_adj);
+      return kExitOk;
+    });
+  });
+}
+
+void AddShapiro(CLI::App& s) {
+  auto c = std::make_shared<Common>();
+  auto by = std::make_shared<std::string>();
+  auto* cmd = s.add_subcommand("shapiro", "Shapiro-Wilk normality test (Royston's AS R94, as R), overall or per group");
+  AddCommon(cmd, *c);
+  cmd->add_option("--by", *by, "Test each group of this column separately");
+  cmd->callback([=] {
+    Run([&] {
+      const auto t = Load(*c, by->empty() ? std::vector<std::string>{} : std::vector<std::string>{*by});
+      json groups = json::array();
+      auto one = [&](const std::string& name, const std::vector<double>& y) {
+        const auto r = stats::ShapiroWilk(y);
+        groups.push_back({{"group", name}, {"n", r.n}, {"W", r.W}, {"p", r.p}});
+      };
+      if (by->empty()) one("all", t.y);
+      else
+        for (const auto& g : t.Levels(*by)) one(g, t.Where({{*by, g}}).y);
+      if (c->json) {
+        fmt::print("{}\n", json{{"groups", groups}}.dump(2));
+      } else {
+        for (const auto& g : groups)
+          fmt::print("{:<24} n = {:>5}  W = {:.5f}  p = {:.4g}\n", g["group"].get<std::string>(), g["n"].get<int>(),
+                     g["W"].get<double>(), g["p"].get<double>());
+      }
+      return kExitOk;
+    });
+  });
+}
+
+}  // namespace
+
+void RegisterStats(CLI::App& app) {
+  auto* s = app.add_subcommand("stats",
+                               "Statistics on any long-format CSV (see docs/analysis.md):\n"
+                               "rm-anova, tukey, kruskal, shapiro");
+  s->require_subcommand(1);
+  AddRmAnova(*s);
+  AddTukey(*s);
+  AddKruskal(*s);
+  AddShapiro(*s);
+}
+
+}  // namespace hapticlab::cli
