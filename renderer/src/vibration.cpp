@@ -28,8 +28,6 @@ void Bracket(const std::vector<double>& axis, double v, int* i, double* frac) no
           (axis[static_cast<std::size_t>(k + 1)] - axis[static_cast<std::size_t>(k)]);
 }
 
-std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
-
 }  // namespace
 
 VibrationInterpolator::VibrationInterpolator(const VibrationBank& bank) : bank_(bank) {
@@ -138,45 +136,6 @@ void VibrationInterpolator::Interpolate(double speed_mps, double force_N, bool i
   }
   out->sigma = std::sqrt(var);
   out->gain = gain;
-}
-
-void GaussianNoise::Seed(std::uint64_t seed) noexcept {
-  // splitmix64 expands the seed into the xoshiro state.
-  std::uint64_t x = seed;
-  for (auto& s : s_) {
-    std::uint64_t z = (x += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    s = z ^ (z >> 31);
-  }
-  has_spare_ = false;
-}
-
-std::uint64_t GaussianNoise::NextU64() noexcept {
-  const std::uint64_t result = Rotl(s_[1] * 5, 7) * 9;
-  const std::uint64_t t = s_[1] << 17;
-  s_[2] ^= s_[0];
-  s_[3] ^= s_[1];
-  s_[1] ^= s_[2];
-  s_[0] ^= s_[3];
-  s_[2] ^= t;
-  s_[3] = Rotl(s_[3], 45);
-  return result;
-}
-
-double GaussianNoise::Normal() noexcept {
-  if (has_spare_) {
-    has_spare_ = false;
-    return spare_;
-  }
-  // Box-Muller: bounded work per call (no rejection loop).
-  const double u1 = 1.0 - Uniform();  // (0, 1]
-  const double u2 = Uniform();
-  const double r = std::sqrt(-2.0 * std::log(u1));
-  const double th = 2.0 * std::numbers::pi * u2;
-  spare_ = r * std::sin(th);
-  has_spare_ = true;
-  return r * std::cos(th);
 }
 
 void ArSynth::Reset() noexcept {

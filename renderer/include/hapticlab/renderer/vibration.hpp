@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "hapticlab/core/rng.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
 
@@ -55,21 +56,9 @@ class VibrationInterpolator {
   std::vector<double> lsf_, work_, coeff_, ma_lsf_, ma_coeff_;
 };
 
-/// Deterministic Gaussian noise: xoshiro256** with Box-Muller. Its sequence is the same on
-/// every platform for a seed (std::normal_distribution's is implementation-defined).
-class GaussianNoise {
- public:
-  explicit GaussianNoise(std::uint64_t seed = 1) { Seed(seed); }
-  void Seed(std::uint64_t seed) noexcept;
-  std::uint64_t NextU64() noexcept;
-  double Uniform() noexcept { return static_cast<double>(NextU64() >> 11) * 0x1.0p-53; }
-  double Normal() noexcept;
-
- private:
-  std::array<std::uint64_t, 4> s_{};
-  double spare_ = 0;
-  bool has_spare_ = false;
-};
+/// Deterministic Gaussian noise (hapticlab::Rng: xoshiro256** with Box-Muller): the same
+/// sequence on every platform for a seed.
+using GaussianNoise = Rng;
 
 /// Runs an AR(MA) filter on noise: a[k] = sum c_i a[k-i] + gain (x[k] + sum b_j x[k-j]),
 /// x = sigma * N(0, 1). When the filter becomes
