@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 namespace hapticlab {
@@ -74,7 +75,8 @@ class Rng {
   /// Fisher-Yates shuffle with this generator.
   template <class T>
   void Shuffle(std::vector<T>& v) noexcept {
-    for (std::size_t i = v.size(); i > 1; --i) std::swap(v[i - 1], v[Below(i)]);
+    using std::swap;  // vector<bool> proxies have their own swap
+    for (std::size_t i = v.size(); i > 1; --i) swap(v[i - 1], v[Below(i)]);
   }
 
  private:

@@ -1,0 +1,100 @@
+#pragma once
+/// @file Study protocols (TOML; format in docs/studies.md): what a study shows, in which
+/// order, what participants rate, and which analyses run afterwards. Parsing reports every
+/// problem at once with file, line and key; planning is deterministic from the protocol, the
+/// study seed and the participant index.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hapticlab::protocols {
+
+/// A material of the study: a physical sample and its virtual model.
+struct Material {
+  std::string id;       ///< name used in plans, ratings and reports, e.g. "Denim"
+  std::string sample;   ///< physical sample label the experimenter places
+  std::string model;    ///< virtual model file (relative to the protocol), or "placeholder"
+  std::string profile;  ///< simulated-lab ground truth profile (defaults to id)
+  int line = 0;
+};
+
+/// A rendering method: force algorithm plus vibration and hybrid-filter switches.
+struct Method {
+  std::string name;          ///< e.g. "hybrid", "FF", "LPC"
+  std::string algorithm;     ///< wall | norm | fric1 | fric2 | none
+  bool vibration = true;
+  bool hybrid_filter = true;
+  int line = 0;
+};
+
+enum class PhaseKind { kTraining, kReference, kMain };
+const char* ToString(PhaseKind k);
+
+struct Phase {
+  PhaseKind kind = PhaseKind::kMain;
+  int repetitions = 1;
+  double duration_s = 30;   ///< training: exploration time per sample [s]
+  bool same_pairs = true;   ///< reference: each material against itself (upper limit)
+  int different_pairs = 0;  ///< reference: distinct material pairs (lower limit), drawn by the study seed
+  std::vector<std::pair<std::string, std::string>> explicit_pairs;  ///< or listed
+  int line = 0;
+};
+
+enum class Scheme { kFull, kBlocked, kLatinSquare };
+
+struct Randomization {
+  Scheme scheme = Scheme::kFull;
+  std::string block_by = "method";  ///< blocked / latin-square: "method" or "material"
+  bool no_immediate_repeat = true;  ///< no two consecutive rated trials share a material
+  bool balance_sides = true;        ///< real on the left in half of the trials (±1)
+};
+
+struct Protocol {
+  std::string file;               ///< path it was read from
+  std::string text;               ///< the protocol file exactly (stored with the study)
+  std::string name, description;
+  std::uint64_t seed = 1;         ///< study seed; participants derive theirs from it
+  std::vector<std::string> criteria;
+  double scale_min = 0, scale_max = 100;
+  double stimulus_duration_s = 2.0;  ///< exploration time per stimulus in a rated trial [s]
+  std::string profiles;           ///< simulated-lab profiles file (relative to the protocol)
+  std::vector<Material> materials;
+  std::vector<Method> methods;
+  std::vector<Phase> phases;
+  Randomization randomization;
+  int break_every_trials = 0;     ///< 0: no breaks
+  double break_duration_s = 60;
+  bool masking_noise = false;
+  double masking_level_dB = 70;
+  std::vector<std::string> analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro
+  const Material* FindMaterial(const std::string& id) const;
+  const Method* FindMethod(const std::string& name) const;
+};
+
+/// Reads and validates a protocol. Throws hapticlab::InputError listing every problem.
+Protocol LoadProtocol(const std::string& path);
+Protocol ParseProtocol(const std::string& text, const std::string& file);
+
+/// One trial of a participant's plan.
+struct PlannedTrial {
+  int index = 0;             ///< position in the plan
+  PhaseKind phase = PhaseKind::kMain;
+  std::string material;
+  std::string comparison;    ///< "virtual" (main), the other material (reference), "" (training)
+  std::string method;        ///< main phase only
+  int repetition = 0;
+  std::string left, right;   ///< stimuli on the two squares: "real:<id>" or "virtual:<id>"
+  bool rated = true;         ///< training trials are not rated
+  bool break_before = false; ///< a break precedes this trial
+};
+
+/// The participant's seed: derived from the study seed and the participant index.
+std::uint64_t ParticipantSeed(const Protocol& p, int participant_index);
+
+/// The exact trial list of participant `participant_index` (0-based). Same result on every
+/// machine. @throws hapticlab::InputError when the constraints cannot be met (e.g. no
+/// immediate repeat with too few materials in a block), naming the phase.
+std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index);
+
+}  // namespace hapticlab::protocols

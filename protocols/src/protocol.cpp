@@ -1,0 +1,288 @@
+#include "hapticlab/protocols/protocol.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <toml++/toml.h>
+
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::protocols {
+namespace {
+
+// Typed reads that record every problem (file, line, key) instead of stopping at the first.
+class Reader {
+ public:
+  Reader(std::string file, Diagnostics* d) : file_(std::move(file)), d_(d) {}
+  static int Line(const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; }
+  void Error(const toml::node* n, const std::string& key, const std::string& msg) { d_->Add(file_, Line(n), key, msg); }
+
+  template <class T>
+  std::optional<T> Get(const toml::table& t, const std::string& prefix, const char* key, bool required,
+                       const char* expected) {
+    const toml::node* n = t.get(key);
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    if (!n) {
+      if (required) d_->Add(file_, Line(&t), full, std::string("missing; expected ") + expected);
+      return std::nullopt;
+    }
+    if (auto v = n->value<T>()) return v;
+    Error(n, full, std::string("expected ") + expected);
+    return std::nullopt;
+  }
+  std::vector<std::string> Strings(const toml::table& t, const std::string& prefix, const char* key, bool required) {
+    std::vector<std::string> out;
+    const toml::node* n = t.get(key);
+    const std::string full = prefix.empty() ? key : prefix + "." + key;
+    if (!n) {
+      if (required) d_->Add(file_, Line(&t), full, "missing; expected an array of strings");
+      return out;
+    }
+    const toml::array* a = n->as_array();
+    if (!a) {
+      Error(n, full, "expected an array of strings");
+      return out;
+    }
+    for (const auto& x : *a) {
+      if (auto s = x.value<std::string>()) out.push_back(*s);
+      else Error(&x, full, "expected strings");
+    }
+    return out;
+  }
+  void Known(const toml::table& t, const std::string& prefix, std::initializer_list<const char*> keys) {
+    for (const auto& [k, v] : t) {
+      if (std::none_of(keys.begin(), keys.end(), [&](const char* x) { return k.str() == x; }))
+        Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()), "unknown key (a typo?)");
+    }
+  }
+  Diagnostics& diag() { return *d_; }
+  const std::string& file() const { return file_; }
+
+ private:
+  std::string file_;
+  Diagnostics* d_;
+};
+
+const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
+const std::set<std::string> kAnalyses{"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
+
+}  // namespace
+
+const char* ToString(PhaseKind k) {
+  switch (k) {
+    case PhaseKind::kTraining: return "training";
+    case PhaseKind::kReference: return "reference";
+    case PhaseKind::kMain: return "main";
+  }
+  return "?";
+}
+
+const Material* Protocol::FindMaterial(const std::string& id) const {
+  for (const auto& m : materials)
+    if (m.id == id) return &m;
+  return nullptr;
+}
+const Method* Protocol::FindMethod(const std::string& n) const {
+  for (const auto& m : methods)
+    if (m.name == n) return &m;
+  return nullptr;
+}
+
+Protocol ParseProtocol(const std::string& text, const std::string& file) {
+  toml::table doc;
+  try {
+    doc = toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    throw InputError(file, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+  }
+  Diagnostics diag;
+  Reader r(file, &diag);
+  Protocol p;
+  p.file = file;
+  p.text = text;
+  r.Known(doc, "", {"study", "material", "method", "phase", "randomization", "breaks", "masking_noise", "analysis"});
+
+  // [study]
+  if (const toml::table* s = doc["study"].as_table()) {
+    r.Known(*s, "study", {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles"});
+    p.name = r.Get<std::string>(*s, "study", "name", true, "a string").value_or("");
+    p.description = r.Get<std::string>(*s, "study", "description", false, "a string").value_or("");
+    if (auto seed = r.Get<std::int64_t>(*s, "study", "seed", true, "a non-negative integer")) {
+      if (*seed < 0) r.Error(s->get("seed"), "study.seed", "expected a non-negative integer");
+      p.seed = static_cast<std::uint64_t>(*seed);
+    }
+    p.criteria = r.Strings(*s, "study", "criteria", true);
+    if (p.criteria.empty() && s->contains("criteria")) r.Error(s->get("criteria"), "study.criteria", "needs at least one criterion");
+    if (const toml::node* sc = s->get("scale")) {
+      const toml::array* a = sc->as_array();
+      if (!a || a->size() != 2 || !(*a)[0].value<double>() || !(*a)[1].value<double>() ||
+          !(*(*a)[0].value<double>() < *(*a)[1].value<double>()))
+        r.Error(sc, "study.scale", "expected [min, max] with min < max");
+      else {
+        p.scale_min = *(*a)[0].value<double>();
+        p.scale_max = *(*a)[1].value<double>();
+      }
+    }
+    p.stimulus_duration_s = r.Get<double>(*s, "study", "stimulus_duration_s", false, "a number").value_or(2.0);
+    if (!(p.stimulus_duration_s > 0 && p.stimulus_duration_s <= 600))
+      r.Error(s->get("stimulus_duration_s"), "study.stimulus_duration_s", "expected 0 < seconds <= 600");
+    p.profiles = r.Get<std::string>(*s, "study", "profiles", false, "a file name").value_or("");
+  } else {
+    diag.Add(file, 1, "study", "missing [study] table");
+  }
+
+  // [[material]]
+  std::set<std::string> ids;
+  if (const toml::array* ms = doc["material"].as_array()) {
+    for (std::size_t i = 0; i < ms->size(); ++i) {
+      const std::string pre = fmt::format("material[{}]", i);
+      const toml::table* t = (*ms)[i].as_table();
+      if (!t) {
+        r.Error(&(*ms)[i], pre, "expected a table");
+        continue;
+      }
+      r.Known(*t, pre, {"id", "sample", "model", "profile"});
+      Material m;
+      m.line = Reader::Line(t);
+      m.id = r.Get<std::string>(*t, pre, "id", true, "a string").value_or("");
+      m.sample = r.Get<std::string>(*t, pre, "sample", false, "a string").value_or(m.id);
+      m.model = r.Get<std::string>(*t, pre, "model", false, "a file or \"placeholder\"").value_or("placeholder");
+      m.profile = r.Get<std::string>(*t, pre, "profile", false, "a string").value_or(m.id);
+      if (!m.id.empty() && !ids.insert(m.id).second) r.Error(t->get("id"), pre + ".id", "duplicate material id '" + m.id + "'");
+      p.materials.push_back(m);
+    }
+  }
+  if (p.materials.empty()) diag.Add(file, 0, "material", "at least one [[material]] is needed");
+
+  // [[method]]
+  std::set<std::string> names;
+  if (const toml::array* ms = doc["method"].as_array()) {
+    for (std::size_t i = 0; i < ms->size(); ++i) {
+      const std::string pre = fmt::format("method[{}]", i);
+      const toml::table* t = (*ms)[i].as_table();
+      if (!t) {
+        r.Error(&(*ms)[i], pre, "expected a table");
+        continue;
+      }
+      r.Known(*t, pre, {"name", "algorithm", "vibration", "hybrid_filter"});
+      Method m;
+      m.line = Reader::Line(t);
+      m.name = r.Get<std::string>(*t, pre, "name", true, "a string").value_or("");
+      m.algorithm = r.Get<std::string>(*t, pre, "algorithm", true, "wall, norm, fric1, fric2 or none").value_or("");
+      if (!m.algorithm.empty() && !kAlgorithms.count(m.algorithm))
+        r.Error(t->get("algorithm"), pre + ".algorithm", "expected wall, norm, fric1, fric2 or none, got '" + m.algorithm + "'");
+      m.vibration = r.Get<bool>(*t, pre, "vibration", false, "true or false").value_or(true);
+      m.hybrid_filter = r.Get<bool>(*t, pre, "hybrid_filter", false, "true or false").value_or(true);
+      if (!m.name.empty() && !names.insert(m.name).second) r.Error(t->get("name"), pre + ".name", "duplicate method '" + m.name + "'");
+      p.methods.push_back(m);
+    }
+  }
+
+  // [[phase]]
+  bool has_main = false;
+  if (const toml::array* ps = doc["phase"].as_array()) {
+    for (std::size_t i = 0; i < ps->size(); ++i) {
+      const std::string pre = fmt::format("phase[{}]", i);
+      const toml::table* t = (*ps)[i].as_table();
+      if (!t) {
+        r.Error(&(*ps)[i], pre, "expected a table");
+        continue;
+      }
+      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs"});
+      Phase ph;
+      ph.line = Reader::Line(t);
+      const std::string kind = r.Get<std::string>(*t, pre, "kind", true, "training, reference or main").value_or("main");
+      if (kind == "training") ph.kind = PhaseKind::kTraining;
+      else if (kind == "reference") ph.kind = PhaseKind::kReference;
+      else if (kind == "main") ph.kind = PhaseKind::kMain;
+      else r.Error(t->get("kind"), pre + ".kind", "expected training, reference or main, got '" + kind + "'");
+      has_main = has_main || ph.kind == PhaseKind::kMain;
+      if (auto rep = r.Get<std::int64_t>(*t, pre, "repetitions", false, "an integer 1..100")) {
+        if (*rep < 1 || *rep > 100) r.Error(t->get("repetitions"), pre + ".repetitions", "expected an integer 1..100");
+        else ph.repetitions = static_cast<int>(*rep);
+      }
+      ph.duration_s = r.Get<double>(*t, pre, "duration_s", false, "a number").value_or(30);
+      if (!(ph.duration_s > 0)) r.Error(t->get("duration_s"), pre + ".duration_s", "expected > 0");
+      ph.same_pairs = r.Get<bool>(*t, pre, "same_pairs", false, "true or false").value_or(true);
+      if (const toml::node* dp = t->get("different_pairs")) {
+        if (auto n = dp->value<std::int64_t>()) {
+          const auto nm = static_cast<std::int64_t>(p.materials.size());
+          if (*n < 0 || *n > nm * (nm - 1) / 2)
+            r.Error(dp, pre + ".different_pairs", fmt::format("expected 0..{} (pairs of {} materials)", nm * (nm - 1) / 2, nm));
+          else ph.different_pairs = static_cast<int>(*n);
+        } else if (const toml::array* a = dp->as_array()) {
+          for (const auto& x : *a) {
+            const toml::array* pair = x.as_array();
+            auto a0 = pair && pair->size() == 2 ? (*pair)[0].value<std::string>() : std::nullopt;
+            auto a1 = pair && pair->size() == 2 ? (*pair)[1].value<std::string>() : std::nullopt;
+            if (!a0 || !a1 || !p.FindMaterial(*a0) || !p.FindMaterial(*a1) || *a0 == *a1)
+              r.Error(&x, pre + ".different_pairs", "expected [\"A\", \"B\"] with two different material ids");
+            else ph.explicit_pairs.emplace_back(*a0, *a1);
+          }
+        } else {
+          r.Error(dp, pre + ".different_pairs", "expected a count or a list of [\"A\", \"B\"] pairs");
+        }
+      }
+      p.phases.push_back(ph);
+    }
+  }
+  if (!has_main && !p.methods.empty()) diag.Add(file, 0, "phase", "no [[phase]] with kind = \"main\": the methods are never shown");
+  if (has_main && p.methods.empty()) diag.Add(file, 0, "method", "a main phase needs at least one [[method]]");
+
+  if (const toml::table* t = doc["randomization"].as_table()) {
+    r.Known(*t, "randomization", {"scheme", "block_by", "no_immediate_repeat", "balance_sides"});
+    const std::string scheme = r.Get<std::string>(*t, "randomization", "scheme", false, "full, blocked or latin-square").value_or("full");
+    if (scheme == "full") p.randomization.scheme = Scheme::kFull;
+    else if (scheme == "blocked") p.randomization.scheme = Scheme::kBlocked;
+    else if (scheme == "latin-square") p.randomization.scheme = Scheme::kLatinSquare;
+    else r.Error(t->get("scheme"), "randomization.scheme", "expected full, blocked or latin-square, got '" + scheme + "'");
+    p.randomization.block_by = r.Get<std::string>(*t, "randomization", "block_by", false, "method or material").value_or("method");
+    if (p.randomization.block_by != "method" && p.randomization.block_by != "material")
+      r.Error(t->get("block_by"), "randomization.block_by", "expected method or material");
+    p.randomization.no_immediate_repeat = r.Get<bool>(*t, "randomization", "no_immediate_repeat", false, "true or false").value_or(true);
+    p.randomization.balance_sides = r.Get<bool>(*t, "randomization", "balance_sides", false, "true or false").value_or(true);
+    if (p.randomization.block_by == "material" && p.randomization.no_immediate_repeat &&
+        p.randomization.scheme != Scheme::kFull)
+      r.Error(t->get("block_by"), "randomization.block_by",
+              "blocks by material put the same material on consecutive trials: infeasible with no_immediate_repeat");
+  }
+  if (const toml::table* t = doc["breaks"].as_table()) {
+    r.Known(*t, "breaks", {"every_trials", "duration_s"});
+    p.break_every_trials = static_cast<int>(r.Get<std::int64_t>(*t, "breaks", "every_trials", false, "an integer").value_or(0));
+    if (p.break_every_trials < 0) r.Error(t->get("every_trials"), "breaks.every_trials", "expected >= 0");
+    p.break_duration_s = r.Get<double>(*t, "breaks", "duration_s", false, "a number").value_or(60);
+  }
+  if (const toml::table* t = doc["masking_noise"].as_table()) {
+    r.Known(*t, "masking_noise", {"enabled", "level_dB"});
+    p.masking_noise = r.Get<bool>(*t, "masking_noise", "enabled", false, "true or false").value_or(true);
+    p.masking_level_dB = r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
+  }
+  if (const toml::table* t = doc["analysis"].as_table()) {
+    r.Known(*t, "analysis", {"tests"});
+    p.analyses = r.Strings(*t, "analysis", "tests", false);
+    for (const auto& a : p.analyses)
+      if (!kAnalyses.count(a))
+        r.Error(t->get("tests"), "analysis.tests",
+                "unknown analysis '" + a + "' (expected rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro)");
+  } else {
+    p.analyses = {"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
+  }
+  diag.ThrowIfAny();
+  // Feasibility: plan the first participants now, so an impossible constraint set is an
+  // error before any session starts.
+  for (int i = 0; i < 4; ++i) Plan(p, i);
+  return p;
+}
+
+Protocol LoadProtocol(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path, 0, "", "cannot open protocol");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ParseProtocol(ss.str(), path);
+}
+
+}  // namespace hapticlab::protocols
