@@ -9,5 +9,6 @@ void RegisterExport(CLI::App& app);
 void RegisterModel(CLI::App& app);
 void RegisterDemo(CLI::App& app);
 void RegisterStats(CLI::App& app);
+void RegisterStudy(CLI::App& app);
 
 }  // namespace hapticlab::cli

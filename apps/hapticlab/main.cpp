@@ -23,7 +23,7 @@ int main(int argc, char** argv) {
   RegisterModel(app);
   RegisterDemo(app);
   RegisterStats(app);
-  AddPlanned(app, "study", "Validate, plan, run, resume and inspect study protocols", "issue #4");
+  RegisterStudy(app);
   AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
   AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
   AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");

@@ -67,7 +67,8 @@ Sphericity FromCov(const MatrixXd& S, int n, int columns) {
   const double z = -nu * rho * logW;
   const double f = p * (p + 1) / 2.0 - 1;
   const double pr1 = PchisqUpper(z, f), pr2 = PchisqUpper(z, f + 4);
-  r.p = pr1 + w2 * (pr2 - pr1);
+  // R does not clamp; near-singular covariances can push the approximation past 1.
+  r.p = std::clamp(pr1 + w2 * (pr2 - pr1), 0.0, 1.0);
   r.chi2 = z;
   r.p_firstorder = pr1;
   return r;

@@ -1,0 +1,135 @@
+#pragma once
+/// @file The simulated lab (DESIGN.md §6): ground-truth "real" samples with richer physics
+/// than any fitted model, a simulated participant who strokes like people do, and an
+/// observer who rates similarity from perceptual features of the two interactions.
+///
+/// Real sample (truth): analytic geometry (isotropic and directional components, large-scale
+/// patches, and micro-roughness below a photometric map's resolution), Hunt-Crossley
+/// contact pushing along the true surface normal, friction with a Stribeck peak and a
+/// load exponent, and contact vibration = a resonant noise process whose level grows with
+/// speed and load plus the acceleration the micro-geometry imposes on the stylus.
+/// Placeholder virtual model (the thesis's baseline, derived from the profile until a lab
+/// measures its own): the macro geometry sampled at wavelength/20, Hunt-Crossley, Dahl with
+/// Coulomb + viscous friction, and a 3 x 3 AR bank fitted to the truth's resonance.
+/// Observer: features F = (vibration power in the Pacinian band, force fluctuation,
+/// friction ratio, stiffness, large-scale force pattern), all log-scaled where ratios
+/// matter; for criterion c, similarity = L + (U - L) exp(-d_c^2 / 2) + bias + noise, with d_c
+/// the feature distance in perceptual units. U = 78 and L = 35 are the dissertation's
+/// real-real limits, so identical interactions score near 78, clearly different ones near 35.
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/renderer/hybrid.hpp"
+
+namespace hapticlab::runner {
+
+/// Ground-truth description of a material (a "real sample") for the simulated lab.
+struct MaterialProfile {
+  std::string id;
+  double roughness_m = 20e-6;        ///< RMS of the macro geometry [m]
+  double wavelength_m = 1e-3;        ///< dominant spatial wavelength [m]
+  double anisotropy = 0.3;           ///< 0 isotropic .. 1 directional (weave)
+  double inhomogeneity = 0.3;        ///< 0 homogeneous .. 1 patchy at 10 wavelengths
+  double micro_roughness_m = 0.3e-6; ///< fine roughness no map resolves [m]
+  double stiffness_N_per_m = 800;    ///< texture layer K [N/m^n]
+  double hc_n = 1.2;                 ///< Hunt-Crossley exponent
+  double damping = 2;                ///< Hunt-Crossley B [N s/m^(n+1)]
+  double layer_thickness_m = 1e-3;   ///< texture layer over the stiff base [m]
+  double mu_k = 0.35;                ///< kinetic friction coefficient
+  double stribeck_ratio = 1.3;       ///< static / kinetic friction (truth only)
+  double stribeck_speed_mps = 0.01;  ///< Stribeck decay speed (truth only) [m/s]
+  double load_exponent = 0.9;        ///< friction ∝ f_n^exponent (truth only; models assume 1)
+  double vibration_rms_mps2 = 1.0;   ///< contact vibration at 8 cm/s and 1.2 N [m/s^2]
+  double vibration_peak_hz = 200;    ///< resonance of the contact vibration [Hz]
+  double vibration_q = 2;            ///< its quality factor
+  int line = 0;
+};
+
+/// Observer-model constants (perceptual scales are in the features' units).
+struct ObserverParams {
+  double upper = 78, lower = 35;          ///< dissertation's real-real limits
+  double bias_sd = 4, noise_sd = 7;       ///< per participant x criterion, per rating
+  // Perceptual scales: a feature difference of one scale is one unit of distance d.
+  double scale_vibration = 0.25;          ///< log10 vibration power (x1.8 in RMS)
+  double scale_fluctuation = 0.3;         ///< log10 force fluctuation (x2)
+  double scale_friction = 0.12;           ///< friction ratio
+  double scale_stiffness = 0.25;          ///< log10 stiffness (x1.8)
+  double scale_pattern = 0.4;             ///< log10 large-scale force pattern (x2.5)
+};
+
+/// Profiles file: [[profile]] tables and an optional [observer] table (docs/studies.md).
+struct ProfileSet {
+  std::map<std::string, MaterialProfile> profiles;
+  ObserverParams observer;
+};
+/// @throws hapticlab::InputError listing every problem (file, line, key)
+ProfileSet LoadProfiles(const std::string& path);
+
+/// The thesis-style baseline model of a profile (placeholder until measured).
+renderer::MaterialModel PlaceholderModel(const MaterialProfile& p);
+
+/// Perceptual features of one interaction.
+struct Features {
+  double vibration = 0;    ///< log10 RMS acceleration felt in 40-400 Hz [log10 m/s^2]
+  double fluctuation = 0;  ///< log10 RMS of force fluctuation above 2 Hz [log10 N]
+  double friction = 0;     ///< mean tangential / mean normal force
+  double stiffness = 0;    ///< log10 of normal force per penetration [log10 N/m]
+  double pattern = 0;      ///< log10 RMS of the 0.3-5 Hz normal-force variation [log10 N]
+  double mean_speed_mps = 0, mean_force_N = 0;
+};
+
+/// How a participant explores in one stimulus.
+struct Stroke {
+  double speed_mps = 0.08;   ///< 2-15 cm/s
+  double force_N = 1.2;      ///< target load 0.5-2 N
+  double direction_rad = 0;  ///< stroke direction on the surface
+  double x0_m = 0, y0_m = 0; ///< where on the sample the stroke starts
+  double length_m = 0.04;    ///< back-and-forth excursion
+};
+
+/// Draws a participant's stroke for one trial (2-15 cm/s, 0.5-2 N, random direction).
+Stroke DrawStroke(Rng& rng);
+/// The same participant's stroke on the trial's other stimulus: the same exploration with
+/// about 10 % variation in speed and load, elsewhere on the sample.
+Stroke JitterStroke(const Stroke& s, Rng& rng);
+
+/// The recorded interaction of one stimulus (force at `force_rate_hz`, felt acceleration at
+/// `vibration_rate_hz`).
+struct Interaction {
+  double force_rate_hz = 1000, vibration_rate_hz = 10000;
+  std::vector<float> force;      ///< runner::ForceStreamChannels() layout, 15 per tick
+  std::vector<float> vibration;  ///< felt acceleration [m/s^2]
+  Features features;
+  std::uint64_t faults = 0;
+};
+
+/// Strokes a real sample (truth physics) for `duration_s`.
+Interaction StrokeReal(const MaterialProfile& p, const Stroke& s, double duration_s, std::uint64_t seed);
+/// Strokes a virtual rendering through the renderer's ticks, the hand holding the load.
+Interaction StrokeVirtual(const renderer::MaterialModel& m, const renderer::RenderOptions& o, const Stroke& s,
+                          double duration_s);
+
+/// A simulated participant: per-criterion biases, drawn from the participant's seed. The
+/// per-rating noise comes from the caller's generator (seeded per trial and attempt, so a
+/// re-run trial after a crash is rated reproducibly).
+class Observer {
+ public:
+  Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria);
+  /// Similarity of the two interactions on `criterion` (clamped to [lo, hi]).
+  double Rate(const std::string& criterion, const Features& a, const Features& b, double lo, double hi,
+              Rng& noise) const;
+  /// Time to answer [s] (lognormal around 4 s).
+  static double ResponseTime(Rng& noise);
+  /// Feature distance for a criterion, in perceptual units (exposed for tests and docs).
+  double Distance(const std::string& criterion, const Features& a, const Features& b) const;
+
+ private:
+  ObserverParams p_;
+  std::map<std::string, double> bias_;
+};
+
+}  // namespace hapticlab::runner

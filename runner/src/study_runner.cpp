@@ -1,0 +1,367 @@
+#include "hapticlab/runner/study_runner.hpp"
+
+#include <fmt/format.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/version.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/runner/sim_lab.hpp"
+
+namespace hapticlab::runner {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using protocols::PhaseKind;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError(path, 0, "", "cannot open file");
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+// Everything a session needs besides the database: models, profiles, observer.
+struct Lab {
+  const protocols::Protocol* protocol = nullptr;
+  ProfileSet profiles;
+  std::map<std::string, renderer::MaterialModel> models;  // by material id
+  std::map<std::string, std::string> model_hashes;
+};
+
+Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
+  if (device != "sim")
+    throw InputError("", 0, "--device",
+                     "'" + device + "' is not available in this build; only the simulated lab ('sim') is "
+                     "(hardware back-ends arrive with issue #9)");
+  Lab lab;
+  lab.protocol = &p;
+  const fs::path dir = fs::path(p.file).parent_path();
+  if (p.profiles.empty())
+    throw InputError(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
+  lab.profiles = LoadProfiles((dir / p.profiles).string());
+  Diagnostics d;
+  for (const auto& m : p.materials) {
+    const auto prof = lab.profiles.profiles.find(m.profile);
+    if (prof == lab.profiles.profiles.end()) {
+      d.Add(p.file, m.line, "material.profile", "no profile '" + m.profile + "' in " + p.profiles);
+      continue;
+    }
+    if (m.model == "placeholder") {
+      auto model = PlaceholderModel(prof->second);
+      lab.model_hashes[m.id] = db::HashText(renderer::MaterialToToml(model));
+      lab.models.emplace(m.id, std::move(model));
+    } else {
+      const std::string path = (dir / m.model).string();
+      lab.model_hashes[m.id] = db::HashText(ReadText(path));
+      lab.models.emplace(m.id, renderer::LoadMaterial(path));
+    }
+  }
+  d.ThrowIfAny();
+  return lab;
+}
+
+renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t seed) {
+  renderer::RenderOptions o;
+  o.algorithm = renderer::ParseForceAlgorithm(m.algorithm);
+  o.vibration = m.vibration;
+  o.hybrid_filter = m.hybrid_filter;
+  o.force_rate_hz = 1000;
+  o.vibration_rate_hz = 10000;
+  o.stale_after_s = 1e9;  // the simulated device is never stale
+  o.seed = seed;
+  return o;
+}
+
+struct Outcome {
+  bool fault = false;
+  std::string fault_detail;
+  std::vector<db::Rating> ratings;
+  double stimulus_s = 0;
+};
+
+// Runs one trial in the simulated lab and records the interactions.
+Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
+                   const RunOptions& opt, db::TrajectoryWriter* writer) {
+  const auto& p = *lab.protocol;
+  Outcome out;
+  Rng rng(DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts)));
+  if (t.phase == "training") return out;  // free exploration, not rated
+  const double dur = p.stimulus_duration_s;
+  const Stroke s = DrawStroke(rng);
+  // The two stimuli of the trial, in the order the participant meets them (left, right).
+  auto interact = [&](const std::string& stim, const Stroke& st) {
+    const auto colon = stim.find(':');
+    const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
+    if (kind == "real") return StrokeReal(lab.profiles.profiles.at(p.FindMaterial(id)->profile), st, dur, rng.NextU64());
+    const auto* method = p.FindMethod(t.method);
+    return StrokeVirtual(lab.models.at(id), MethodOptions(*method, rng.NextU64()), st, dur);
+  };
+  const Interaction left = interact(t.left, s);
+  const Interaction right = interact(t.right, JitterStroke(s, rng));
+  out.stimulus_s = 2 * dur;
+  if (opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate) {
+    out.fault = true;
+    out.fault_detail = "simulated device fault (injected): force driven to zero, trial re-queued";
+    return out;
+  }
+  if (left.faults + right.faults > 0) {
+    out.fault = true;
+    out.fault_detail = fmt::format("renderer reported {} faulted ticks", left.faults + right.faults);
+    return out;
+  }
+  if (writer && opt.record != RecordMode::kNone) {
+    for (const auto& [side, in] : {std::pair{"left", &left}, std::pair{"right", &right}}) {
+      auto* fs_ = writer->OpenStream(t.id, std::string(side) + "_force", in->force_rate_hz, ForceStreamChannels());
+      const std::size_t nf = in->force.size() / 15;
+      for (std::size_t i = 0; i < nf; ++i)
+        while (!fs_->Push(static_cast<double>(i) / in->force_rate_hz, &in->force[i * 15])) writer->Flush();
+      writer->CloseStream(fs_);
+      if (opt.record == RecordMode::kAll) {
+        auto* vs = writer->OpenStream(t.id, std::string(side) + "_vibration", in->vibration_rate_hz, VibrationStreamChannels());
+        for (std::size_t i = 0; i < in->vibration.size(); ++i)
+          while (!vs->Push(static_cast<double>(i) / in->vibration_rate_hz, &in->vibration[i])) writer->Flush();
+        writer->CloseStream(vs);
+      }
+    }
+  }
+  for (const auto& c : p.criteria)
+    out.ratings.push_back({c, observer.Rate(c, left.features, right.features, p.scale_min, p.scale_max, rng),
+                           Observer::ResponseTime(rng)});
+  return out;
+}
+
+void Log(const RunOptions& o, const std::string& s) {
+  if (o.log) o.log(s);
+}
+
+// Executes the session's remaining trials. Faulted trials go to the end of their phase.
+RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session, const db::Participant& part,
+                   const RunOptions& opt) {
+  const auto& p = *lab.protocol;
+  const auto t0 = std::chrono::steady_clock::now();
+  RunSummary sum;
+  sum.session_id = session;
+  sum.participant = part.code;
+  const Observer observer(lab.profiles.observer, DeriveSeed(part.seed, 0xABCDEF), p.criteria);
+  db::TrajectoryWriter writer(database.path());
+  auto trials = database.Trials(session);
+  sum.planned = static_cast<int>(trials.size());
+  std::string last_material;
+  for (const auto& t : trials)
+    if (t.status == db::kTrialCompleted) {
+      ++sum.completed;
+      last_material = t.material;  // plan order: the last completed trial precedes the next
+    }
+  const bool constrained = p.randomization.no_immediate_repeat;
+  for (const char* phase : {"training", "reference", "main"}) {
+    std::vector<db::Trial> queue;
+    for (const auto& t : trials)
+      if (t.phase == phase && t.status != db::kTrialCompleted && t.status != db::kTrialFaulted) queue.push_back(t);
+    for (const auto& t : trials)  // faulted before a crash: retried at the phase's end
+      if (t.phase == phase && t.status == db::kTrialFaulted) queue.push_back(t);
+    while (!queue.empty()) {
+      // Keep the no-immediate-repeat constraint for re-queued trials when possible.
+      std::size_t pick = 0;
+      if (constrained && queue[0].material == last_material && std::string(phase) != "training") {
+        for (std::size_t i = 1; i < queue.size(); ++i)
+          if (queue[i].material != last_material) {
+            pick = i;
+            break;
+          }
+        if (pick == 0 && queue.size() > 1)
+          database.LogEvent({.session_id = session, .trial_id = queue[0].id, .kind = "constraint-relaxed",
+                             .detail = "only trials of the same material remain in the phase"});
+      }
+      db::Trial t = queue[pick];
+      queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
+      if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
+        database.LogEvent({.session_id = session, .kind = "abort", .detail = "stopped after the requested number of trials"});
+        database.EndSession(session, "aborted");
+        sum.status = "aborted";
+        sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return sum;
+      }
+      const auto& planned = trials[static_cast<std::size_t>(t.plan_index)];
+      (void)planned;
+      database.StartTrial(t.id);
+      ++t.attempts;
+      ++sum.executed;
+      const Outcome o = ExecuteSim(lab, observer, t, part.seed, opt, &writer);
+      sum.simulated_s += o.stimulus_s;
+      if (o.fault) {
+        ++sum.faults;
+        database.SetTrialStatus(t.id, db::kTrialFaulted);
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault", .detail = o.fault_detail});
+        t.status = db::kTrialFaulted;
+        queue.push_back(t);
+        continue;
+      }
+      database.CompleteTrial(t.id, o.ratings);
+      ++sum.completed;
+      last_material = t.material;
+      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned, t.phase, t.material,
+                           t.method.empty() ? t.comparison : t.method));
+    }
+  }
+  database.EndSession(session, "completed");
+  sum.status = "completed";
+  sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return sum;
+}
+
+// Breaks and phase changes are logged as the plan reaches them.
+void LogPlanEvents(db::Database& database, std::int64_t session, const std::vector<protocols::PlannedTrial>& plan,
+                   const std::vector<std::int64_t>& ids, const protocols::Protocol& p) {
+  for (std::size_t i = 0; i < plan.size(); ++i)
+    if (plan[i].break_before)
+      database.LogEvent({.session_id = session, .trial_id = ids[i], .kind = "break-planned",
+                         .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s)});
+}
+
+}  // namespace
+
+RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
+  const Lab lab = LoadLab(p, opt.device);
+  db::Database database(opt.db_path);
+  const std::string hash = db::HashText(p.text);
+  std::int64_t study_id;
+  if (auto s = database.FindStudy(p.name)) {
+    if (s->protocol_hash != hash)
+      throw InputError(opt.db_path, 0, "study",
+                       "study '" + p.name + "' in this database was run with a different protocol text (hash " +
+                           s->protocol_hash.substr(0, 12) + "); use a new database or restore the protocol");
+    study_id = s->id;
+  } else {
+    study_id = database.CreateStudy({.name = p.name, .protocol_toml = p.text, .protocol_hash = hash, .seed = p.seed});
+  }
+  if (database.FindParticipant(study_id, opt.participant))
+    throw InputError(opt.db_path, 0, "--participant",
+                     "participant " + opt.participant + " already has a session; continue it with 'hapticlab study resume'");
+  const int index = opt.participant_index >= 0 ? opt.participant_index : static_cast<int>(database.Participants(study_id).size());
+  const db::Participant part{.study_id = study_id, .code = opt.participant, .index = index,
+                             .seed = protocols::ParticipantSeed(p, index)};
+  const auto plan = protocols::Plan(p, index);
+  // Provenance: everything needed to reproduce this session.
+  json models = json::object();
+  for (const auto& [id, h] : lab.model_hashes) models[id] = h;
+  json plan_json = json::array();
+  for (const auto& t : plan)
+    plan_json.push_back({{"index", t.index}, {"phase", protocols::ToString(t.phase)}, {"material", t.material},
+                         {"comparison", t.comparison}, {"method", t.method}, {"repetition", t.repetition},
+                         {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
+  const json prov = {{"protocol_hash", hash},
+                     {"protocol_path", fs::absolute(p.file).string()},
+                     {"study_seed", p.seed},
+                     {"participant_index", index},
+                     {"participant_seed", part.seed},
+                     {"software", std::string(kVersion) + "+" + kGitSha},
+                     {"device", opt.device},
+                     {"model_hashes", models},
+                     {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
+  // Participant, session, plan and consent in one transaction: a crash leaves all or none.
+  database.Exec("BEGIN IMMEDIATE");
+  std::int64_t session;
+  std::vector<std::int64_t> ids;
+  try {
+    const auto pid = database.AddParticipant(part);
+    session = database.StartSession({.participant_id = pid,
+                                     .software_version = std::string(kVersion) + "+" + kGitSha,
+                                     .device = opt.device,
+                                     .calibration = opt.device == "sim" ? "simulated (no calibration)" : "",
+                                     .provenance_json = prov.dump(),
+                                     .plan_json = plan_json.dump()});
+    std::vector<db::Trial> rows;
+    for (const auto& t : plan)
+      rows.push_back({.session_id = session, .plan_index = t.index, .phase = protocols::ToString(t.phase),
+                      .material = t.material, .comparison = t.comparison, .method = t.method,
+                      .repetition = t.repetition, .left = t.left, .right = t.right});
+    for (const auto& r : rows) ids.push_back(database.AddTrial(r));
+    database.LogEvent({.session_id = session, .kind = "consent",
+                       .detail = opt.device == "sim" ? "simulated participant" : "consent form signed"});
+    LogPlanEvents(database, session, plan, ids, p);
+    database.Exec("COMMIT");
+  } catch (...) {
+    database.Exec("ROLLBACK");
+    throw;
+  }
+  Log(opt, fmt::format("{}: session {} with {} planned trials", opt.participant, session, plan.size()));
+  db::Participant stored = *database.FindParticipant(study_id, opt.participant);
+  return Execute(database, lab, session, stored, opt);
+}
+
+RunSummary ResumeStudy(const RunOptions& opt) {
+  if (!fs::exists(opt.db_path)) throw InputError(opt.db_path, 0, "--db", "no such database");
+  db::Database database(opt.db_path);
+  for (const auto& st : database.Studies()) {
+    const auto part = database.FindParticipant(st.id, opt.participant);
+    if (!part) continue;
+    const auto sessions = database.Sessions(part->id);
+    if (sessions.empty()) throw InputError(opt.db_path, 0, "--participant", opt.participant + " has no session");
+    const auto& se = sessions.back();
+    if (se.status == "completed")
+      throw InputError(opt.db_path, 0, "--participant", opt.participant + "'s session is already completed");
+    const json prov = json::parse(se.provenance_json);
+    const std::string path = prov.value("protocol_path", "");
+    // The protocol text comes from the database; its folder (for models and profiles) from
+    // where it was run.
+    auto p = protocols::ParseProtocol(st.protocol_toml, path);
+    if (!path.empty() && fs::exists(path) && db::HashText(ReadText(path)) != st.protocol_hash)
+      Log(opt, "note: the protocol file on disk changed since the session began; resuming with the recorded text");
+    RunOptions o = opt;
+    o.device = se.device;
+    const Lab lab = LoadLab(p, o.device);
+    database.Exec(fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
+    int done = 0;
+    for (const auto& t : database.Trials(se.id)) done += t.status == db::kTrialCompleted;
+    database.LogEvent({.session_id = se.id, .kind = "resume",
+                       .detail = fmt::format("resumed with {} of {} trials completed", done, database.Trials(se.id).size())});
+    Log(opt, fmt::format("{}: resuming session {} ({} trials completed)", opt.participant, se.id, done));
+    return Execute(database, lab, se.id, *part, o);
+  }
+  throw InputError(opt.db_path, 0, "--participant", "no participant " + opt.participant + " in this database");
+}
+
+std::vector<ParticipantStatus> StudyStatus(const std::string& db_path, const std::string& participant) {
+  if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
+  db::Database database(db_path, {.create = false, .read_only = true});
+  std::vector<ParticipantStatus> out;
+  for (const auto& st : database.Studies())
+    for (const auto& part : database.Participants(st.id)) {
+      if (!participant.empty() && part.code != participant) continue;
+      ParticipantStatus s;
+      s.code = part.code;
+      std::map<int, int> completions;
+      for (const auto& se : database.Sessions(part.id)) {
+        s.session_status = se.status;
+        for (const auto& t : database.Trials(se.id)) {
+          ++s.planned;
+          if (t.status == db::kTrialCompleted) {
+            ++s.completed;
+            ++completions[t.plan_index];
+          }
+          if (t.status == db::kTrialFaulted) ++s.faulted;
+        }
+      }
+      for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
+      out.push_back(s);
+    }
+  if (!participant.empty() && out.empty())
+    throw InputError(db_path, 0, "--participant", "no participant " + participant + " in this database");
+  return out;
+}
+
+}  // namespace hapticlab::runner
