@@ -354,6 +354,16 @@ std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
   return out;
 }
 
+std::vector<std::int64_t> Database::RatedTrialsInCompletionOrder(std::int64_t session_id) const {
+  Stmt s(db_,
+         "SELECT r.trial_id FROM rating r JOIN trial t ON r.trial_id = t.id WHERE t.session_id = ? "
+         "GROUP BY r.trial_id ORDER BY MIN(r.id)");
+  s.Bind(1, session_id);
+  std::vector<std::int64_t> out;
+  while (s.Step()) out.push_back(s.Int(0));
+  return out;
+}
+
 std::int64_t Database::LogEvent(const Event& e) {
   Stmt s(db_, "INSERT INTO event(session_id, trial_id, kind, detail) VALUES (?,?,?,?)");
   s.Bind(1, e.session_id);

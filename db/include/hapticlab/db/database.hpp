@@ -154,6 +154,8 @@ class Database {
   void CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings);
   std::vector<Trial> Trials(std::int64_t session_id) const;
   std::vector<Rating> Ratings(std::int64_t trial_id) const;
+  /// Rated trials of a session in the order their ratings were committed.
+  std::vector<std::int64_t> RatedTrialsInCompletionOrder(std::int64_t session_id) const;
 
   // Events, models, measurements, trajectories.
   std::int64_t LogEvent(const Event& e);

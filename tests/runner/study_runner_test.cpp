@@ -1,0 +1,204 @@
+// The study runner: crash and resume, fault re-queue, status, and the simulated chapter V.3
+// study's main result.
+
+#include "hapticlab/runner/study_runner.hpp"
+
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <map>
+#include <random>
+#include <thread>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::runner {
+namespace {
+
+std::string SmallProtocol() { return test::DataPath("protocols/small.toml"); }
+
+// Every planned trial of every session exactly once, with all its ratings.
+void ExpectCompleteAndWhole(const std::string& db_path, int criteria) {
+  db::Database d(db_path);
+  EXPECT_EQ(d.IntegrityCheck(), "ok");
+  for (const auto& st : d.Studies())
+    for (const auto& p : d.Participants(st.id))
+      for (const auto& se : d.Sessions(p.id)) {
+        EXPECT_EQ(se.status, "completed") << p.code;
+        std::map<int, int> seen;
+        for (const auto& t : d.Trials(se.id)) {
+          ++seen[t.plan_index];
+          EXPECT_EQ(t.status, db::kTrialCompleted) << p.code << " trial " << t.plan_index;
+          const auto r = d.Ratings(t.id);
+          EXPECT_EQ(r.size(), t.phase == "training" ? 0u : static_cast<std::size_t>(criteria)) << t.plan_index;
+        }
+        for (const auto& [i, n] : seen) EXPECT_EQ(n, 1) << "plan index " << i;
+      }
+}
+
+TEST(StudyRunner, RunsTheSmallStudyAndReportsStatus) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  RunOptions o;
+  o.db_path = dir.File("s.db");
+  o.participant = "P01";
+  o.record = RecordMode::kForce;
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.completed, s.planned);
+  ExpectCompleteAndWhole(o.db_path, 2);
+  const auto st = StudyStatus(o.db_path);
+  ASSERT_EQ(st.size(), 1u);
+  EXPECT_EQ(st[0].completed, s.planned);
+  EXPECT_EQ(st[0].duplicates, 0);
+  // The plan and provenance are stored with the session.
+  db::Database d(o.db_path);
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  EXPECT_NE(se.plan_json.find("\"material\""), std::string::npos);
+  EXPECT_NE(se.provenance_json.find("protocol_hash"), std::string::npos);
+  EXPECT_NE(se.provenance_json.find("model_hashes"), std::string::npos);
+  // A second run of the same code is refused; a name as code too.
+  EXPECT_THROW(RunStudy(p, o), InputError);
+  o.participant = "Alice";
+  EXPECT_THROW(RunStudy(p, o), InputError);
+}
+
+TEST(StudyRunner, AbortThenResumeCompletesEveryTrialOnce) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  RunOptions o;
+  o.db_path = dir.File("a.db");
+  o.participant = "P02";
+  o.record = RecordMode::kNone;
+  o.stop_after_trials = 7;
+  EXPECT_EQ(RunStudy(p, o).status, "aborted");
+  o.stop_after_trials = 5;
+  EXPECT_EQ(ResumeStudy(o).status, "aborted");
+  o.stop_after_trials = -1;
+  EXPECT_EQ(ResumeStudy(o).status, "completed");
+  ExpectCompleteAndWhole(o.db_path, 2);
+  EXPECT_THROW(ResumeStudy(o), InputError);  // nothing left to resume
+}
+
+TEST(StudyRunner, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  RunOptions o;
+  o.db_path = dir.File("f.db");
+  o.participant = "P03";
+  o.record = RecordMode::kNone;
+  o.fault_rate = 0.25;
+  const auto s = RunStudy(p, o);
+  EXPECT_GT(s.faults, 0);
+  EXPECT_EQ(s.completed, s.planned);
+  ExpectCompleteAndWhole(o.db_path, 2);
+  // Execution order (completion time) never puts one material twice in a row among rated
+  // trials unless the runner logged that it had to.
+  db::Database d(o.db_path);
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  int relaxed = 0, faults = 0;
+  for (const auto& e : d.Events(se.id)) {
+    relaxed += e.kind == "constraint-relaxed";
+    faults += e.kind == "device-fault";
+  }
+  EXPECT_EQ(faults, s.faults);
+  std::map<std::int64_t, std::string> material;
+  for (const auto& t : d.Trials(se.id)) material[t.id] = t.material;
+  const auto order = d.RatedTrialsInCompletionOrder(se.id);
+  ASSERT_EQ(order.size(), material.size() - 4);  // all but the 4 training trials
+  int repeats = 0;
+  for (std::size_t i = 1; i < order.size(); ++i) repeats += material[order[i]] == material[order[i - 1]];
+  EXPECT_LE(repeats, relaxed);
+}
+
+TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
+  test::TempDir dir;
+  const std::string db = dir.File("k.db");
+  // A longer variant of the small study (about 3 s of work), so kills land mid-run.
+  std::string text = test::ReadFile(SmallProtocol());
+  text.replace(text.find("stimulus_duration_s = 0.5"), 25, "stimulus_duration_s = 3.0");
+  text.replace(text.find("repetitions = 2"), 15, "repetitions = 4");
+  text.replace(text.find("profiles = \"profiles.toml\""), 26,
+               "profiles = \"" + test::DataPath("protocols/profiles.toml") + "\"");
+  const std::string protocol = dir.File("crash.toml");
+  test::WriteFile(protocol, text);
+  const std::string cli = HL_CLI_PATH;
+  std::mt19937_64 rng(77);  // fixed seed: reproducible kill moments
+  std::uniform_int_distribution<int> delay_ms(15, 150);
+  bool started = false, done = false;
+  int kills = 0;
+  for (int round = 0; round < 200 && !done; ++round) {
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      if (!started)
+        execl(cli.c_str(), cli.c_str(), "study", "run", protocol.c_str(), "--db", db.c_str(), "--participant",
+              "P09", "--quiet", "--record", "all", static_cast<char*>(nullptr));
+      else
+        execl(cli.c_str(), cli.c_str(), "study", "resume", "--db", db.c_str(), "--participant", "P09", "--quiet",
+              "--record", "all", static_cast<char*>(nullptr));
+      _exit(127);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
+    int status = 0;
+    if (waitpid(pid, &status, WNOHANG) == 0) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      ++kills;
+    }
+    // A run killed before its session was stored is simply started again.
+    {
+      db::Database d(db);
+      started = !d.Studies().empty() && d.FindParticipant(d.Studies()[0].id, "P09").has_value();
+      if (started) {
+        const auto st = StudyStatus(db, "P09");
+        done = st[0].session_status == "completed";
+      }
+    }
+  }
+  std::printf("%d kills before the session completed\n", kills);
+  ASSERT_TRUE(done) << "did not finish";
+  EXPECT_GE(kills, 3) << "the kills should land mid-run";
+  ExpectCompleteAndWhole(db, 2);
+  EXPECT_EQ(StudyStatus(db, "P09")[0].duplicates, 0);
+}
+
+TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
+  // 20 simulated participants on the chapter V.3 protocol: hybrid rendering is rated more
+  // similar to the real samples in roughness than force-only and vibration-only, because
+  // only it reproduces both the force fluctuation and the vibration the real samples give.
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml");
+  RunOptions o;
+  o.db_path = dir.File("ch5.db");
+  o.record = RecordMode::kNone;
+  for (int i = 1; i <= 20; ++i) {
+    o.participant = "S" + std::to_string(i);
+    ASSERT_EQ(RunStudy(p, o).status, "completed");
+  }
+  db::Database d(o.db_path);
+  std::map<std::string, std::pair<double, int>> rough;
+  for (const auto& st : d.Studies())
+    for (const auto& part : d.Participants(st.id))
+      for (const auto& se : d.Sessions(part.id))
+        for (const auto& t : d.Trials(se.id))
+          for (const auto& r : d.Ratings(t.id))
+            if (t.phase == "main" && r.criterion == "roughness") {
+              rough[t.method].first += r.score;
+              rough[t.method].second += 1;
+            }
+  const double hybrid = rough["Hybrid"].first / rough["Hybrid"].second;
+  const double ff = rough["FF"].first / rough["FF"].second;
+  const double lpc = rough["LPC"].first / rough["LPC"].second;
+  std::printf("roughness similarity: Hybrid %.1f, FF %.1f, LPC %.1f\n", hybrid, ff, lpc);
+  EXPECT_GT(hybrid, ff);
+  EXPECT_GT(hybrid, lpc);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner
