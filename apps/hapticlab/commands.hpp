@@ -10,5 +10,6 @@ void RegisterModel(CLI::App& app);
 void RegisterDemo(CLI::App& app);
 void RegisterStats(CLI::App& app);
 void RegisterStudy(CLI::App& app);
+void RegisterAnalyze(CLI::App& app);
 
 }  // namespace hapticlab::cli

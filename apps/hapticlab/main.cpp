@@ -24,10 +24,10 @@ int main(int argc, char** argv) {
   RegisterDemo(app);
   RegisterStats(app);
   RegisterStudy(app);
+  RegisterAnalyze(app);
   AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
   AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
   AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");
-  AddPlanned(app, "analyze", "Run a study's declared analyses and write the report", "issue #5");
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,45 @@
+// hapticlab analyze: the protocol's analyses on a study database, as a report.
+
+#include <fmt/core.h>
+#include <fmt/ranges.h>
+
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "hapticlab/stats/report.hpp"
+
+namespace hapticlab::cli {
+
+void RegisterAnalyze(CLI::App& app) {
+  struct O {
+    std::string db, out;
+    bool no_figures = false, json = false;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = app.add_subcommand(
+      "analyze",
+      "Run the analyses each study's protocol declares on its database and write a report:\n"
+      "report.md, CSV tables (aggregates, rmANOVA, Tukey, grouping) and figures (SVG and PNG):\n"
+      "bar charts with 95% CI and Tukey asterisks, per-material bars with A/B/C letters\n"
+      "against the real-real limits, box plots (docs/analysis.md).");
+  cmd->add_option("--db", o->db, "Study database")->required();
+  cmd->add_option("--out", o->out, "Report folder (created when missing)")->required();
+  cmd->add_flag("--no-figures", o->no_figures, "Tables only");
+  cmd->add_flag("--json", o->json, "Print the written files as JSON");
+  cmd->callback([o] {
+    const int rc = Guard([&] {
+      const auto r = stats::Analyze(o->db, {.out_dir = o->out, .figures = !o->no_figures});
+      if (o->json) {
+        fmt::print("{}\n", nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(2));
+      } else {
+        fmt::print("report: {} ({} files, studies: {})\n", r.markdown, r.files.size(), fmt::join(r.studies, ", "));
+      }
+      return kExitOk;
+    });
+    if (rc != kExitOk) throw CLI::RuntimeError(rc);
+  });
+}
+
+}  // namespace hapticlab::cli

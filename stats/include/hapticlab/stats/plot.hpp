@@ -1,0 +1,44 @@
+#pragma once
+/// @file Report figures through PLplot (cairo devices): bar charts with error bars and
+/// significance marks like the dissertation's Figs. 4.5, 5.7 and 5.8, and box plots. Every
+/// figure is written as both SVG and PNG.
+
+#include <string>
+#include <vector>
+
+namespace hapticlab::stats {
+
+/// One bar series (e.g. a method) over the groups (e.g. materials).
+struct BarSeries {
+  std::string name;
+  std::vector<double> mean;   ///< one per group (NaN: no bar)
+  std::vector<double> err;    ///< half-length of the error bar (SE or CI half-width)
+};
+
+struct BarChart {
+  std::string title, y_label, error_label;  ///< error_label e.g. "95% CI"
+  std::vector<std::string> groups;
+  std::vector<BarSeries> series;
+  std::vector<std::string> group_marks;     ///< text above each group (letters), optional
+  /// Significance brackets between series within a single-group chart: (i, j, "**").
+  struct Mark {
+    int a, b;
+    std::string stars;
+  };
+  std::vector<Mark> marks;
+  double y_min = 0, y_max = 100;
+};
+
+/// Writes `<base>.svg` and `<base>.png`. Returns the two paths.
+std::vector<std::string> DrawBarChart(const BarChart& chart, const std::string& base);
+
+struct BoxPlot {
+  std::string title, y_label;
+  std::vector<std::string> groups;
+  std::vector<std::vector<double>> samples;  ///< one sample per group
+  double y_min = 0, y_max = 100;
+};
+/// Tukey box plots (hinges, 1.5 IQR whiskers, outliers as points); `<base>.svg/.png`.
+std::vector<std::string> DrawBoxPlot(const BoxPlot& plot, const std::string& base);
+
+}  // namespace hapticlab::stats

@@ -1,0 +1,348 @@
+#include "hapticlab/stats/report.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/stats/anova.hpp"
+#include "hapticlab/stats/descriptive.hpp"
+#include "hapticlab/stats/distributions.hpp"
+#include "hapticlab/stats/nonparametric.hpp"
+#include "hapticlab/stats/plot.hpp"
+#include "hapticlab/stats/shapiro.hpp"
+#include "hapticlab/stats/tukey.hpp"
+
+namespace hapticlab::stats {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string P(double p) { return p < 0.001 ? "< 0.001" : fmt::format("{:.3f}", p); }
+std::string Stars(double p) { return p < 0.01 ? "**" : p < 0.05 ? "*" : ""; }
+std::string Safe(const std::string& s) {
+  std::string o;
+  for (char c : s) o += std::isalnum(static_cast<unsigned char>(c)) || c == '-' ? c : '_';
+  return o;
+}
+
+class Writer {
+ public:
+  explicit Writer(std::string dir) : dir_(std::move(dir)) {}
+  std::ofstream Open(const std::string& name) {
+    const std::string path = (fs::path(dir_) / name).string();
+    files_.push_back(path);
+    std::ofstream f(path);
+    if (!f) throw std::runtime_error(path + ": cannot write");
+    return f;
+  }
+  void Add(const std::vector<std::string>& f) { files_.insert(files_.end(), f.begin(), f.end()); }
+  const std::string& dir() const { return dir_; }
+  std::vector<std::string> files_;
+
+ private:
+  std::string dir_;
+};
+
+// Mean and 95 % CI half-width of participant means (the error bars of Figs. 5.7/5.8).
+std::pair<double, double> MeanCi(const LongTable& t) {
+  const auto per = t.Average({"participant"});
+  if (per.rows() == 0) return {NAN, NAN};
+  const auto d = Describe(per.y);
+  return {d.mean, d.n > 1 ? d.ci95_hi - d.mean : NAN};
+}
+
+}  // namespace
+
+LongTable RatingsFromDatabase(const std::string& db_path) {
+  if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
+  db::Database d(db_path, {.create = false, .read_only = true});
+  LongTable t;
+  t.source = db_path;
+  t.y_name = "score";
+  t.key_names = {"study", "participant", "phase", "material", "comparison", "method", "repetition", "criterion"};
+  t.keys.assign(t.key_names.size(), {});
+  for (const auto& st : d.Studies())
+    for (const auto& p : d.Participants(st.id))
+      for (const auto& se : d.Sessions(p.id))
+        for (const auto& tr : d.Trials(se.id))
+          for (const auto& r : d.Ratings(tr.id)) {
+            const std::string row[] = {st.name, p.code, tr.phase, tr.material, tr.comparison, tr.method,
+                                       std::to_string(tr.repetition), r.criterion};
+            for (std::size_t c = 0; c < t.key_names.size(); ++c) t.keys[c].push_back(row[c]);
+            t.y.push_back(r.score);
+          }
+  return t;
+}
+
+ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
+  const LongTable all = RatingsFromDatabase(db_path);
+  if (all.rows() == 0) throw InputError(db_path, 0, "", "the database holds no ratings yet");
+  fs::create_directories(o.out_dir);
+  Writer w(o.out_dir);
+  ReportResult res;
+  db::Database d(db_path, {.create = false, .read_only = true});
+  auto md = w.Open("report.md");
+  md << "# HapticLab analysis report\n\nDatabase: `" << db_path << "`\n\n"
+     << "Scores are similarity ratings on the protocol's scale. Repetitions are averaged per participant x cell "
+        "before repeated-measures ANOVA (as afex does). Tukey comparisons of a within-subject factor use the pooled "
+        "error of its effect (emmeans `model = \"univariate\"`). Error bars are 95 % confidence intervals of "
+        "participant means. Outliers (1.5 IQR, Tukey's hinges) are counted, not removed.\n";
+  for (const auto& st : d.Studies()) {
+    const auto proto = protocols::ParseProtocol(st.protocol_toml, "(protocol of " + st.name + ")");
+    const std::set<std::string> tests(proto.analyses.begin(), proto.analyses.end());
+    const auto study = all.Where({{"study", st.name}});
+    if (study.rows() == 0) continue;
+    res.studies.push_back(st.name);
+    const std::string sid = Safe(st.name);
+    md << "\n## Study `" << st.name << "`\n\n" << proto.description << "\n\n"
+       << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows() << "\n";
+    const auto main = study.Where({{"phase", "main"}});
+    const auto ref = study.Where({{"phase", "reference"}});
+    const auto methods = main.rows() ? main.Levels("method") : std::vector<std::string>{};
+    const auto materials = main.rows() ? main.Levels("material") : std::vector<std::string>{};
+    // Aggregated score tables for every criterion (Tables 4.1, 5.4, 5.5).
+    auto agg = w.Open(sid + "_aggregate.csv");
+    agg << "criterion,material,method,mean,sd,n,ratio_to_upper\n";
+    for (const auto& crit : proto.criteria) {
+      const auto cm = main.Where({{"criterion", crit}});
+      md << "\n### " << crit << "\n";
+      // Real-real limits from the reference phase.
+      double upper = NAN, lower = NAN;
+      LongTable same, diff;
+      if (ref.rows()) {
+        const auto rc = ref.Where({{"criterion", crit}});
+        same = rc;
+        same.keys.assign(rc.key_names.size(), {});
+        same.y.clear();
+        diff = same;
+        for (std::size_t i = 0; i < rc.rows(); ++i) {
+          auto& dst = rc.keys[rc.Key("material")][i] == rc.keys[rc.Key("comparison")][i] ? same : diff;
+          for (std::size_t c = 0; c < rc.key_names.size(); ++c) dst.keys[c].push_back(rc.keys[c][i]);
+          dst.y.push_back(rc.y[i]);
+        }
+        if (same.rows()) upper = Describe(same.y).mean;
+        if (diff.rows()) lower = Describe(diff.y).mean;
+        md << fmt::format("\nReal-real limits: upper {:.2f} (same material, n = {}), lower {:.2f} (different "
+                          "materials, n = {}).\n",
+                          upper, same.rows(), lower, diff.rows());
+      }
+      if (cm.rows() == 0) continue;
+      // Aggregate table.
+      if (tests.count("aggregate")) {
+        md << "\nMean similarity (material x method)" << (std::isfinite(upper) ? "; in parentheses the ratio to the upper limit" : "")
+           << ":\n\n| material |";
+        for (const auto& me : methods) md << " " << me << " |";
+        md << "\n|---|";
+        for (std::size_t i = 0; i < methods.size(); ++i) md << "---|";
+        md << "\n";
+        for (const auto& ma : materials) {
+          md << "| " << ma << " |";
+          for (const auto& me : methods) {
+            const auto cell = cm.Where({{"material", ma}, {"method", me}});
+            if (cell.rows() == 0) {
+              md << " |";
+              continue;
+            }
+            const auto ds = Describe(cell.y);
+            const double ratio = std::isfinite(upper) ? ds.mean / upper : NAN;
+            md << fmt::format(" {:.2f}{} |", ds.mean, std::isfinite(ratio) ? fmt::format(" ({:.2f})", ratio) : "");
+            agg << fmt::format("{},{},{},{:.6f},{:.6f},{},{}\n", crit, ma, me, ds.mean, ds.sd, ds.n,
+                               std::isfinite(ratio) ? fmt::format("{:.6f}", ratio) : "");
+          }
+          md << "\n";
+        }
+      }
+      // Repeated-measures ANOVA (Tables 5.2, 5.3).
+      std::vector<std::string> within;
+      if (methods.size() >= 2) within.push_back("method");
+      if (materials.size() >= 2) within.push_back("material");
+      const auto cells = cm.Average({"participant", "method", "material"});
+      if (tests.count("rm-anova") && !within.empty() && cm.Levels("participant").size() >= 2) {
+        const auto a = RmAnova(cm, "participant", within);
+        auto csv = w.Open(fmt::format("{}_{}_rmanova.csv", sid, Safe(crit)));
+        csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf\n";
+        md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
+           << (a.dropped_subjects.empty() ? "" : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
+           << "):\n\n| factor | df | F | p | partial eta^2 | GG eps | p (GG) |\n|---|---|---|---|---|---|---|\n";
+        for (const auto& e : a.effects) {
+          md << fmt::format("| {}{} | {:.0f}, {:.0f} | {:.3f} | {} | {:.3f} | {:.3f} | {} |\n", e.effect,
+                            e.p < 0.05 ? "*" : "", e.df1, e.df2, e.F, P(e.p), e.pes, e.gg_epsilon, P(e.p_gg));
+          csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", e.effect, e.df1,
+                             e.df2, e.F, e.p, e.pes, std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
+                             std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "", e.gg_epsilon, e.p_gg,
+                             e.hf_epsilon, e.p_hf);
+        }
+        md << "\nSignificant factors (p < 0.05) are marked by *.\n";
+        // Tukey on method + the bar chart of Figs. 5.7/5.8.
+        if (methods.size() >= 2 && tests.count("tukey")) {
+          const auto tk = TukeyWithin(a, "method", false);
+          auto tcsv = w.Open(fmt::format("{}_{}_tukey.csv", sid, Safe(crit)));
+          tcsv << "a,b,diff,lwr,upr,p_adj\n";
+          md << "\nTukey HSD on method (univariate error of the method effect, df = " << tk.df << "):\n\n"
+             << "| pair | diff | 95 % CI | p adj |\n|---|---|---|---|\n";
+          BarChart bc;
+          bc.title = fmt::format("{}: {} similarity", st.name, crit);
+          bc.y_label = crit + " similarity";
+          bc.error_label = "95% CI";
+          bc.groups = {""};
+          for (const auto& me : methods) {
+            const auto [m, ci] = MeanCi(cm.Where({{"method", me}}));
+            bc.series.push_back({me, {m}, {ci}});
+          }
+          for (const auto& pr : tk.pairs) {
+            md << fmt::format("| {} - {} | {:.2f} | [{:.2f}, {:.2f}] | {}{} |\n", pr.a, pr.b, pr.diff, pr.lwr, pr.upr,
+                              P(pr.p_adj), Stars(pr.p_adj));
+            tcsv << fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", pr.a, pr.b, pr.diff, pr.lwr, pr.upr, pr.p_adj);
+            if (pr.p_adj < 0.05) {
+              const auto ia = std::find(methods.begin(), methods.end(), pr.a) - methods.begin();
+              const auto ib = std::find(methods.begin(), methods.end(), pr.b) - methods.begin();
+              bc.marks.push_back({static_cast<int>(std::min(ia, ib)), static_cast<int>(std::max(ia, ib)), Stars(pr.p_adj)});
+            }
+          }
+          if (o.figures) {
+            const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_methods", sid, Safe(crit))).string();
+            w.Add(DrawBarChart(bc, base));
+            md << "\n![" << crit << " by method](" << fs::path(base).filename().string() << ".png)\n"
+               << "\n(* p < 0.05, ** p < 0.01, Tukey HSD.)\n";
+          }
+        }
+      }
+      // Per-material bars by method (Figs. 4.8, 5.8) and box plots.
+      if (o.figures) {
+        BarChart bm;
+        bm.title = fmt::format("{}: {} similarity by material", st.name, crit);
+        bm.y_label = crit + " similarity";
+        bm.error_label = "95% CI";
+        bm.groups = materials;
+        for (const auto& me : methods) {
+          BarSeries s{me, {}, {}};
+          for (const auto& ma : materials) {
+            const auto [m, ci] = MeanCi(cm.Where({{"material", ma}, {"method", me}}));
+            s.mean.push_back(m);
+            s.err.push_back(ci);
+          }
+          bm.series.push_back(s);
+        }
+        // Letters against the real-real limits (Fig. 4.5).
+        if (tests.count("grouping") && same.rows() && diff.rows() && methods.size() == 1) {
+          LongTable g = cm;
+          for (std::size_t i = 0; i < same.rows(); ++i) {
+            for (std::size_t c = 0; c < g.key_names.size(); ++c)
+              g.keys[c].push_back(g.key_names[c] == "material" ? "upper limit" : same.keys[c][i]);
+            g.y.push_back(same.y[i]);
+          }
+          for (std::size_t i = 0; i < diff.rows(); ++i) {
+            for (std::size_t c = 0; c < g.key_names.size(); ++c)
+              g.keys[c].push_back(g.key_names[c] == "material" ? "lower limit" : diff.keys[c][i]);
+            g.y.push_back(diff.y[i]);
+          }
+          const auto kw = KruskalWallis(g, "material");
+          const auto letters = GroupAgainstLimits(g, "material", "upper limit", "lower limit");
+          md << fmt::format("\nKruskal-Wallis over materials and limits: H({:.0f}) = {:.2f}, p = {}. Dunn-Bonferroni "
+                            "letters: A differs from the lower limit only, B from the upper only, C from neither, D "
+                            "from both.\n\n| material | letter | p adj vs upper | p adj vs lower |\n|---|---|---|---|\n",
+                            kw.df, kw.H, P(kw.p));
+          auto lcsv = w.Open(fmt::format("{}_{}_grouping.csv", sid, Safe(crit)));
+          lcsv << "material,letter,p_adj_vs_upper,p_adj_vs_lower\n";
+          for (const auto& l : letters) {
+            md << fmt::format("| {} | {} | {} | {} |\n", l.material, l.letter, P(l.p_adj_vs_upper), P(l.p_adj_vs_lower));
+            lcsv << fmt::format("{},{},{:.10g},{:.10g}\n", l.material, l.letter, l.p_adj_vs_upper, l.p_adj_vs_lower);
+            const auto it = std::find(bm.groups.begin(), bm.groups.end(), l.material);
+            if (it != bm.groups.end()) {
+              bm.group_marks.resize(bm.groups.size());
+              bm.group_marks[static_cast<std::size_t>(it - bm.groups.begin())] = l.letter;
+            }
+          }
+          bm.groups.push_back("lower limit");
+          bm.groups.push_back("upper limit");
+          for (auto& s : bm.series) {
+            s.mean.push_back(lower);
+            s.err.push_back(Describe(diff.y).se);
+            s.mean.push_back(upper);
+            s.err.push_back(Describe(same.y).se);
+          }
+          bm.error_label = "95% CI (limits: SE)";
+        } else if (tests.count("kruskal") && methods.size() >= 2) {
+          const auto kw = KruskalWallis(cells.Where({}), "method");
+          md << fmt::format("\nKruskal-Wallis on cell means by method: H({:.0f}) = {:.2f}, p = {}.\n", kw.df, kw.H, P(kw.p));
+        }
+        const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();
+        w.Add(DrawBarChart(bm, base));
+        md << "\n![" << crit << " by material](" << fs::path(base).filename().string() << ".png)\n";
+        BoxPlot bp;
+        bp.title = fmt::format("{}: {} ratings", st.name, crit);
+        bp.y_label = crit + " similarity";
+        for (const auto& me : methods) {
+          bp.groups.push_back(me);
+          bp.samples.push_back(cm.Where({{"method", me}}).y);
+        }
+        const auto bbase = (fs::path(w.dir()) / fmt::format("{}_{}_box", sid, Safe(crit))).string();
+        w.Add(DrawBoxPlot(bp, bbase));
+        md << "\n![" << crit << " box plot](" << fs::path(bbase).filename().string() << ".png)\n";
+      }
+      // Normality and outliers per method.
+      if (tests.count("shapiro")) {
+        md << "\n| method | Shapiro-Wilk W (cell means) | p | boxplot outliers (raw) |\n|---|---|---|---|\n";
+        for (const auto& me : methods) {
+          const auto c = cells.Where({{"method", me}});
+          const auto raw = cm.Where({{"method", me}});
+          std::string wcell = "n/a", pcell = "n/a";
+          if (c.rows() >= 3 && c.rows() <= 5000) {
+            try {
+              const auto s = ShapiroWilk(c.y);
+              wcell = fmt::format("{:.4f}", s.W);
+              pcell = P(s.p);
+            } catch (const std::invalid_argument&) {
+            }
+          }
+          md << fmt::format("| {} | {} | {} | {} of {} |\n", me, wcell, pcell, Outliers(raw.y, QuartileRule::kHinges).outliers.size(),
+                            raw.rows());
+        }
+      }
+    }
+    // Correlation of overall similarity with the criteria (Table 4.2), on trial ratings.
+    if (tests.count("correlation") && std::count(proto.criteria.begin(), proto.criteria.end(), "overall") &&
+        proto.criteria.size() >= 2) {
+      std::map<std::tuple<std::string, std::string, std::string, std::string, std::string>, std::map<std::string, double>> trials;
+      for (std::size_t i = 0; i < main.rows(); ++i)
+        trials[{main.keys[1][i], main.keys[3][i], main.keys[4][i], main.keys[5][i], main.keys[6][i]}][main.keys[7][i]] = main.y[i];
+      std::map<std::string, std::vector<double>> col;
+      for (const auto& [k, m] : trials) {
+        if (m.size() != proto.criteria.size()) continue;
+        double mn = 1e300, mx = -1e300, sum = 0;
+        for (const auto& c : proto.criteria) {
+          col[c].push_back(m.at(c));
+          if (c == "overall") continue;
+          mn = std::min(mn, m.at(c));
+          mx = std::max(mx, m.at(c));
+          sum += m.at(c);
+        }
+        col["min"].push_back(mn);
+        col["max"].push_back(mx);
+        col["mean"].push_back(sum / static_cast<double>(proto.criteria.size() - 1));
+      }
+      if (col["overall"].size() >= 3) {
+        md << "\n### Correlation of overall similarity (Table 4.2)\n\n| with | Pearson r | p |\n|---|---|---|\n";
+        for (const auto& [name, v] : col) {
+          if (name == "overall") continue;
+          const auto c = Pearson(col["overall"], v);
+          md << fmt::format("| {} | {:.3f} | {} |\n", name, c.r, P(c.p));
+        }
+      }
+    }
+  }
+  md.close();
+  res.markdown = (fs::path(o.out_dir) / "report.md").string();
+  res.files = w.files_;
+  return res;
+}
+
+}  // namespace hapticlab::stats
