@@ -17,7 +17,7 @@ namespace hapticlab::cli {
 void RegisterExport(CLI::App& app) {
   struct Opts {
     std::string db, format = "csv", out;
-    bool json = false;
+    bool json = false, no_trajectories = false;
   };
   auto o = std::make_shared<Opts>();
   auto* cmd = app.add_subcommand(
@@ -29,12 +29,14 @@ void RegisterExport(CLI::App& app) {
       ->check(CLI::IsMember({"csv"}));
   cmd->add_option("--out", o->out, "Directory to write (created when missing)")->required();
   cmd->add_flag("--json", o->json, "Print the written files and row counts as JSON");
+  cmd->add_flag("--no-trajectories", o->no_trajectories,
+                "Only ratings, trials and events (trajectory CSVs can be hundreds of MB)");
   cmd->callback([o] {
     const int rc = Guard([&] {
       if (!std::filesystem::exists(o->db))
         throw InputError(o->db, 0, "--db", "no such file");
       db::Database database(o->db, {.create = false, .read_only = true});
-      const auto files = db::ExportCsv(database, o->out);
+      const auto files = db::ExportCsv(database, o->out, !o->no_trajectories);
       if (o->json) {
         nlohmann::json j = nlohmann::json::array();
         for (const auto& f : files) j.push_back({{"path", f.path}, {"rows", f.rows}});

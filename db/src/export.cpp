@@ -48,7 +48,7 @@ constexpr const char* kTrialJoin =
 
 }  // namespace
 
-std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir) {
+std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir, bool trajectories) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(out_dir, ec);
@@ -104,7 +104,7 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
                q.Text(6)});
     files.push_back(out.Close());
   }
-  {
+  if (trajectories) {
     // One file per (stream, channel layout); a second layout of one stream name gets a suffix.
     std::map<std::pair<std::string, std::string>, std::unique_ptr<CsvOut>> outs;
     std::map<std::string, int> layouts_per_stream;

@@ -46,8 +46,10 @@ Sphericity FromCov(const MatrixXd& S, int n, int columns) {
     return r;
   }
   const double tr = S.trace();
-  r.gg = tr * tr / (p * (S.array() * S.array()).sum());
-  r.hf = (n * p * r.gg - 2) / (p * (n - 1 - p * r.gg));
+  const double ss = (S.array() * S.array()).sum();
+  // No variability at all (e.g. identical ratings): nothing to correct.
+  r.gg = ss > 0 ? tr * tr / (p * ss) : 1.0;
+  r.hf = ss > 0 ? (n * p * r.gg - 2) / (p * (n - 1 - p * r.gg)) : 1.0;
   if (p > n - 1) {
     // Singular error SSP: no Mauchly test (car/afex); epsilons stay defined.
     r.W = r.p = r.chi2 = r.p_firstorder = std::numeric_limits<double>::quiet_NaN();
@@ -200,7 +202,10 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     e.gg_epsilon = sp.gg;
     e.hf_epsilon = sp.hf;
     e.p_gg = PfUpper(e.F, e.df1 * sp.gg, e.df2 * sp.gg);
-    const double hf = std::min(1.0, sp.hf);
+    // Used epsilon: min(1, eps) as R; with very few subjects the Huynh-Feldt formula can fall
+    // below the theoretical floor 1/df1 (even below 0), where R returns NaN: we floor it.
+    // (n = 2 makes it 0/0: then Greenhouse-Geisser is used.)
+    const double hf = std::clamp(std::isfinite(sp.hf) ? sp.hf : sp.gg, 1.0 / e.df1, 1.0);
     e.p_hf = PfUpper(e.F, e.df1 * hf, e.df2 * hf);
     res.effects.push_back(e);
   }

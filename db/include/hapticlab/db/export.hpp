@@ -22,6 +22,7 @@ struct ExportedFile {
 ///   the stream's channels). Floats are printed with 9 significant digits, so float32
 ///   samples round-trip exactly.
 /// Throws std::runtime_error naming the file on I/O failure.
-std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir);
+/// @param trajectories false: ratings, trials and events only (trajectories stay in the db)
+std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir, bool trajectories = true);
 
 }  // namespace hapticlab::db

@@ -9,7 +9,8 @@
 /// Mauchly's W = det S / (tr S / p)^p with R's p-value (mauchly.test: second-order
 /// correction) and the first-order chi-square (SPSS) beside it; Greenhouse-Geisser
 /// ε = tr(S)^2 / (p tr(S^2)); Huynh-Feldt (Lecoutre) ε = (N p ε_GG − 2) / (p (N − 1 − p ε_GG))
-/// reported uncapped (as R), its p-value using min(1, ε). Where p > N − 1 the covariance is
+/// reported uncapped (as R), its p-value using min(1, ε) (floored at 1/df1, where tiny
+/// samples push the formula below it and R returns NaN). Where p > N − 1 the covariance is
 /// singular: Mauchly's test does not exist (its fields are NaN and `mauchly_defined` is
 /// false, as car/afex report nothing), but ε is still defined and we report it (as SPSS and
 /// the direct computation in tools/stats_oracle.R's gg_manual do; afex prints uncorrected

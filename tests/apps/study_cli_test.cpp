@@ -1,0 +1,99 @@
+// hapticlab study / analyze / demo through the command line.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <nlohmann/json.hpp>
+
+#include "hapticlab/core/csv.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab {
+namespace {
+
+using nlohmann::json;
+
+std::string Cli() { return HL_CLI_PATH; }
+std::string Small() { return test::DataPath("protocols/small.toml"); }
+
+TEST(StudyCli, ValidateAndPlan) {
+  std::string out;
+  EXPECT_EQ(test::RunCommand(Cli() + " study validate " + Small(), &out), 0) << out;
+  EXPECT_NE(out.find("ok"), std::string::npos);
+  std::string a, b;
+  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --participant 5 --json", &a), 0) << a;
+  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --participant 5 --json", &b), 0);
+  EXPECT_EQ(a, b);  // deterministic
+  EXPECT_EQ(json::parse(a)["trials"].size(), 26u);
+  test::TempDir dir;
+  std::string bad = test::ReadFile(Small());
+  const std::string from = "algorithm = \"fric2\"";
+  bad.replace(bad.find(from), from.size(), "algorithm = \"fric3\"");
+  test::WriteFile(dir.File("bad.toml"), bad);
+  EXPECT_EQ(test::RunCommand(Cli() + " study validate " + dir.File("bad.toml"), &out), 2);
+  EXPECT_NE(out.find("bad.toml:"), std::string::npos) << out;
+  EXPECT_NE(out.find("method[0].algorithm"), std::string::npos) << out;
+}
+
+TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
+  test::TempDir dir;
+  const std::string db = dir.File("s.db");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet --stop-after 9", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --json", &out), 0) << out;
+  auto st = json::parse(out)["participants"][0];
+  EXPECT_EQ(st["code"], "P01");
+  EXPECT_EQ(st["completed"], 9);
+  EXPECT_EQ(st["planned"], 26);
+  EXPECT_EQ(st["duplicates"], 0);
+  for (const char* k : {"code", "planned", "completed", "faulted", "duplicates"}) EXPECT_TRUE(st.contains(k)) << k;
+  ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P02 --quiet", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P03 --quiet", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out), 0) << out;
+  EXPECT_EQ(json::parse(out)["participants"][0]["completed"], 26);
+  // Running an existing participant again, or with a name, is refused with exit code 2.
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet", &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant Alice --quiet", &out), 2);
+  EXPECT_NE(out.find("pseudonymous"), std::string::npos) << out;
+  // The analysis report.
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
+  const auto r = json::parse(out);
+  EXPECT_TRUE(std::filesystem::exists(r["report"].get<std::string>()));
+  int png = 0, svg = 0;
+  for (const auto& f : r["files"]) {
+    const std::string p = f;
+    if (p.ends_with(".png") || p.ends_with(".svg")) {
+      ASSERT_GT(std::filesystem::file_size(p), 1000u) << p;
+    }
+    png += p.ends_with(".png");
+    svg += p.ends_with(".svg");
+  }
+  EXPECT_GT(png, 0);
+  EXPECT_EQ(png, svg);
+  const auto md = test::ReadFile(r["report"].get<std::string>());
+  EXPECT_NE(md.find("Repeated-measures ANOVA"), std::string::npos);
+  EXPECT_NE(md.find("Tukey HSD on method"), std::string::npos);
+  EXPECT_NE(md.find("Real-real limits"), std::string::npos);
+  const auto agg = ReadCsv(dir.File("rep/test-small_aggregate.csv"));
+  EXPECT_EQ(agg.rows.size(), 2u * 4u * 2u);  // criteria x materials x methods
+  // Export round trip of the ratings count.
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out), 0) << out;
+  const auto ratings = ReadCsv(dir.File("x/ratings.csv"));
+  EXPECT_EQ(ratings.rows.size(), 3u * 22u * 2u);  // participants x rated trials x criteria
+}
+
+TEST(StudyCli, DemoRunsEndToEnd) {
+  test::TempDir dir;
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " demo --participants 2 --out " + dir.File("d"), &out), 0) << out;
+  EXPECT_NE(out.find("report:"), std::string::npos) << out;
+  EXPECT_NE(out.find("real-time engine check"), std::string::npos) << out;
+  bool report = false;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(dir.File("d")))
+    report = report || e.path().filename() == "report.md";
+  EXPECT_TRUE(report);
+}
+
+}  // namespace
+}  // namespace hapticlab
