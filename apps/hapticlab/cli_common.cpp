@@ -25,6 +25,11 @@ int Guard(const std::function<int()>& body) {
   }
 }
 
+void RunGuarded(const std::function<int()>& body) {
+  const int rc = Guard(body);
+  if (rc != kExitOk) throw CLI::RuntimeError(rc);
+}
+
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,
                 const std::string& issue) {
   auto* cmd = parent.add_subcommand(name, description + " [not in this build yet: " + issue + "]");

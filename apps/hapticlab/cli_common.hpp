@@ -17,6 +17,9 @@ inline constexpr int kExitBadInput = 2;  ///< bad usage or bad input (message na
 /// InputError and std::invalid_argument -> 2, anything else -> 1.
 int Guard(const std::function<int()>& body);
 
+/// Guard for CLI11 callbacks: runs `body` and turns a non-zero exit into CLI11's exit path.
+void RunGuarded(const std::function<int()>& body);
+
 /// Registers a command group whose work lands with a later issue; running it explains that.
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,
                 const std::string& issue);

@@ -29,7 +29,7 @@ void RegisterAnalyze(CLI::App& app) {
   cmd->add_flag("--no-figures", o->no_figures, "Tables only");
   cmd->add_flag("--json", o->json, "Print the written files as JSON");
   cmd->callback([o] {
-    const int rc = Guard([&] {
+    RunGuarded([&] {
       const auto r = stats::Analyze(o->db, {.out_dir = o->out, .figures = !o->no_figures});
       if (o->json) {
         fmt::print("{}\n", nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(2));
@@ -38,7 +38,6 @@ void RegisterAnalyze(CLI::App& app) {
       }
       return kExitOk;
     });
-    if (rc != kExitOk) throw CLI::RuntimeError(rc);
   });
 }
 

@@ -96,7 +96,7 @@ void RegisterDemo(CLI::App& app) {
                   "the others: keeps the database near 30 MB), 'all', 'force', 'none'")
       ->check(CLI::IsMember({"first", "all", "force", "none"}))->capture_default_str();
   cmd->callback([o] {
-    const int rc = Guard([&] {
+    RunGuarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
       const fs::path dir = fs::path(o->out.empty() ? "demo-out" : o->out) / UtcStamp();
       fs::create_directories(dir);
@@ -128,7 +128,6 @@ void RegisterDemo(CLI::App& app) {
       fmt::print("Models are placeholders derived from studies/shin2019/profiles.toml (docs/studies.md).\n");
       return kExitOk;
     });
-    if (rc != kExitOk) throw CLI::RuntimeError(rc);
   });
 }
 

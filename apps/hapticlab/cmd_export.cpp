@@ -32,7 +32,7 @@ void RegisterExport(CLI::App& app) {
   cmd->add_flag("--no-trajectories", o->no_trajectories,
                 "Only ratings, trials and events (trajectory CSVs can be hundreds of MB)");
   cmd->callback([o] {
-    const int rc = Guard([&] {
+    RunGuarded([&] {
       if (!std::filesystem::exists(o->db))
         throw InputError(o->db, 0, "--db", "no such file");
       db::Database database(o->db, {.create = false, .read_only = true});
@@ -46,7 +46,6 @@ void RegisterExport(CLI::App& app) {
       }
       return kExitOk;
     });
-    if (rc != kExitOk) throw CLI::RuntimeError(rc);
   });
 }
 

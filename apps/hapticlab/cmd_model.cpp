@@ -20,12 +20,6 @@ namespace {
 
 using renderer::ForceAlgorithm;
 
-// Runs `body` under Guard and turns a non-zero exit into CLI11's exit path.
-void Run(const std::function<int()>& body) {
-  const int rc = Guard(body);
-  if (rc != kExitOk) throw CLI::RuntimeError(rc);
-}
-
 void AddCheck(CLI::App& model) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
@@ -33,7 +27,7 @@ void AddCheck(CLI::App& model) {
   cmd->add_option("MODEL", *path, "Material model (.toml)")->required();
   cmd->add_flag("--json", *json, "Print the summary as JSON");
   cmd->callback([path, json] {
-    Run([&] {
+    RunGuarded([&] {
       const auto m = renderer::LoadMaterial(*path);
       nlohmann::json j = {{"name", m.name},
                           {"effects", m.effects},
@@ -79,7 +73,7 @@ void AddRender(CLI::App& model) {
   cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
   cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
   cmd->callback([o] {
-    Run([&] {
+    RunGuarded([&] {
       const auto m = renderer::LoadMaterial(o->model);
       const auto traj = ReadMeasurementCsv(o->trajectory, {.kinematics_only = true});
       if (traj.rows.size() < 2) throw InputError(o->trajectory, 0, "", "needs at least two samples");
@@ -144,7 +138,7 @@ void AddEnergy(CLI::App& model) {
   cmd->add_option("--steps", o->steps, "Integration steps per side")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print {\"energy_J\", \"closed_form_J\", ...} as JSON");
   cmd->callback([o] {
-    Run([&] {
+    RunGuarded([&] {
       const auto comma = o->sine.find(',');
       double a = 0, l = 0;
       try {
@@ -218,7 +212,7 @@ void AddImportPenn(CLI::App& model) {
   cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
   cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid cut-off f_c to store [Hz]")->capture_default_str();
   cmd->callback([o] {
-    Run([&] {
+    RunGuarded([&] {
       auto r = renderer::ImportPennXml(o->xml);
       r.model.hybrid_cutoff_hz = o->cutoff;
       r.model.effects = {"coulomb", "vibration-speed", "vibration-force"};

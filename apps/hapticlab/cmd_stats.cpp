@@ -60,11 +60,6 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
   return t;
 }
 
-void Run(const std::function<int()>& body) {
-  const int rc = Guard(body);
-  if (rc != kExitOk) throw CLI::RuntimeError(rc);
-}
-
 void AddRmAnova(CLI::App& s) {
   auto c = std::make_shared<Common>();
   auto subject = std::make_shared<std::string>();
@@ -78,7 +73,7 @@ void AddRmAnova(CLI::App& s) {
   cmd->add_option("--subject", *subject, "Subject column")->required();
   cmd->add_option("--within", *within, "Within factors, comma-separated (A or A,B)")->required();
   cmd->callback([=] {
-    Run([&] {
+    RunGuarded([&] {
       const auto factors = stats::SplitList(*within);
       std::vector<std::string> keys = factors;
       keys.push_back(*subject);
@@ -129,7 +124,7 @@ void AddTukey(CLI::App& s) {
   cmd->add_option("--error", *method, "Within-subject error term")->check(CLI::IsMember({"univariate", "multivariate"}))
       ->capture_default_str();
   cmd->callback([=] {
-    Run([&] {
+    RunGuarded([&] {
       stats::TukeyResult r;
       if (subject->empty()) {
         r = stats::TukeyBetween(Load(*c, {*factor}), *factor);
@@ -166,7 +161,7 @@ void AddKruskal(CLI::App& s) {
   AddCommon(cmd, *c);
   cmd->add_option("--group", *group, "Grouping column")->required();
   cmd->callback([=] {
-    Run([&] {
+    RunGuarded([&] {
       const auto k = stats::KruskalWallis(Load(*c, {*group}), *group);
       if (c->json) {
         json dunn = json::array();
@@ -190,7 +185,7 @@ void AddShapiro(CLI::App& s) {
   AddCommon(cmd, *c);
   cmd->add_option("--by", *by, "Test each group of this column separately");
   cmd->callback([=] {
-    Run([&] {
+    RunGuarded([&] {
       const auto t = Load(*c, by->empty() ? std::vector<std::string>{} : std::vector<std::string>{*by});
       json groups = json::array();
       auto one = [&](const std::string& name, const std::vector<double>& y) {

@@ -16,11 +16,6 @@ namespace {
 
 using nlohmann::json;
 
-void Run(const std::function<int()>& body) {
-  const int rc = Guard(body);
-  if (rc != kExitOk) throw CLI::RuntimeError(rc);
-}
-
 runner::RecordMode ParseRecord(const std::string& s) {
   if (s == "none") return runner::RecordMode::kNone;
   if (s == "force") return runner::RecordMode::kForce;
@@ -50,7 +45,7 @@ void RegisterStudy(CLI::App& app) {
     auto* cmd = study->add_subcommand("validate", "Check a protocol; every problem is listed with file, line and key");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
     cmd->callback([path] {
-      Run([&] {
+      RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
         int rated = 0;
         for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
@@ -69,7 +64,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--participant", *index, "Participant index (0-based)")->capture_default_str()->check(CLI::NonNegativeNumber);
     cmd->add_flag("--json", *as_json, "Print the plan as JSON");
     cmd->callback([=] {
-      Run([&] {
+      RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
         const auto plan = protocols::Plan(p, *index);
         if (*as_json) {
@@ -121,7 +116,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_flag("--json", a->json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
-      Run([&] {
+      RunGuarded([&] {
         if (a->ui) throw InputError("", 0, "--ui", "the screens arrive with issue #9; run without --ui");
         const auto p = protocols::LoadProtocol(a->protocol);
         runner::RunOptions o;
@@ -149,7 +144,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_flag("--json", a->json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
-      Run([&] {
+      RunGuarded([&] {
         runner::RunOptions o;
         o.db_path = a->db;
         o.participant = a->participant;
@@ -168,7 +163,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--participant", a->participant, "Only this participant");
     cmd->add_flag("--json", a->json, "Print {\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
     cmd->callback([a] {
-      Run([&] {
+      RunGuarded([&] {
         const auto st = runner::StudyStatus(a->db, a->participant);
         if (a->json) {
           json ps = json::array();

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 
 namespace hapticlab {
 namespace {
@@ -114,13 +115,7 @@ CsvTable ParseCsv(const std::string& text, const std::string& name) {
   return t;
 }
 
-CsvTable ReadCsv(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "", "cannot open file");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ParseCsv(ss.str(), path);
-}
+CsvTable ReadCsv(const std::string& path) { return ParseCsv(ReadTextFile(path, "CSV file"), path); }
 
 std::string CsvEscape(const std::string& cell) {
   if (cell.find_first_of(",\"\n\r") == std::string::npos) return cell;

@@ -7,6 +7,7 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 
 namespace hapticlab {
 
@@ -59,11 +60,7 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
 }
 
 Measurement ReadMeasurementCsv(const std::string& path, const MeasurementReadOptions& o) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "", "cannot open measurement");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ParseMeasurementCsv(ss.str(), path, o);
+  return ParseMeasurementCsv(ReadTextFile(path, "measurement"), path, o);
 }
 
 void WriteMeasurementCsv(const std::string& path, const Measurement& m) {

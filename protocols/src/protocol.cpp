@@ -9,6 +9,7 @@
 #include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 
 namespace hapticlab::protocols {
 namespace {
@@ -277,12 +278,6 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   return p;
 }
 
-Protocol LoadProtocol(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "", "cannot open protocol");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ParseProtocol(ss.str(), path);
-}
+Protocol LoadProtocol(const std::string& path) { return ParseProtocol(ReadTextFile(path, "protocol"), path); }
 
 }  // namespace hapticlab::protocols

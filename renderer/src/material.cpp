@@ -10,6 +10,7 @@
 #include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/delaunay.hpp"
 
@@ -319,11 +320,7 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
 }
 
 MaterialModel LoadMaterial(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "", "cannot open material model");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ParseMaterial(ss.str(), path);
+  return ParseMaterial(ReadTextFile(path, "material model"), path);
 }
 
 void ValidateMaterial(const MaterialModel& m) {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/database.hpp"
@@ -25,14 +26,6 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using protocols::PhaseKind;
-
-std::string ReadText(const std::string& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "", "cannot open file");
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
-}
 
 // Everything a session needs besides the database: models, profiles, observer.
 struct Lab {
@@ -66,7 +59,7 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       lab.models.emplace(m.id, std::move(model));
     } else {
       const std::string path = (dir / m.model).string();
-      lab.model_hashes[m.id] = db::HashText(ReadText(path));
+      lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
       lab.models.emplace(m.id, renderer::LoadMaterial(path));
     }
   }
@@ -319,7 +312,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
-    if (!path.empty() && fs::exists(path) && db::HashText(ReadText(path)) != st.protocol_hash)
+    if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
       Log(opt, "note: the protocol file on disk changed since the session began; resuming with the recorded text");
     RunOptions o = opt;
     o.device = se.device;
