@@ -129,10 +129,13 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
   test::WriteFile(protocol, text);
   const std::string cli = HL_CLI_PATH;
   std::mt19937_64 rng(77);  // fixed seed: reproducible kill moments
-  std::uniform_int_distribution<int> delay_ms(15, 150);
+  // Kill moments are drawn up to `max_ms`, which doubles after a round without progress
+  // (a slow start, e.g. under a sanitizer, must not starve the run).
+  int max_ms = 150;
   bool started = false, done = false;
-  int kills = 0;
+  int kills = 0, last_completed = -1;
   for (int round = 0; round < 200 && !done; ++round) {
+    std::uniform_int_distribution<int> delay_ms(10, max_ms);
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
@@ -155,10 +158,14 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
     {
       db::Database d(db);
       started = !d.Studies().empty() && d.FindParticipant(d.Studies()[0].id, "P09").has_value();
+      int completed = 0;
       if (started) {
         const auto st = StudyStatus(db, "P09");
         done = st[0].session_status == "completed";
+        completed = st[0].completed;
       }
+      if (completed <= last_completed && max_ms < 8000) max_ms *= 2;
+      last_completed = std::max(last_completed, completed);
     }
   }
   std::printf("%d kills before the session completed\n", kills);
