@@ -13,6 +13,7 @@
 #include "hapticlab/renderer/energy.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/runner/offline.hpp"
 
 namespace hapticlab::cli {
@@ -230,17 +231,171 @@ void AddImportPenn(CLI::App& model) {
   });
 }
 
+std::vector<double> ParseList(const std::string& s, const char* opt) {
+  std::vector<double> out;
+  std::size_t a = 0;
+  while (a <= s.size()) {
+    const auto b = s.find(',', a);
+    const std::string part = s.substr(a, b == std::string::npos ? std::string::npos : b - a);
+    try {
+      if (!part.empty()) out.push_back(std::stod(part));
+    } catch (const std::exception&) {
+      throw InputError("", 0, opt, "expected comma-separated numbers, got '" + s + "'");
+    }
+    if (b == std::string::npos) break;
+    a = b + 1;
+  }
+  return out;
+}
+
+struct VibArgs {
+  std::string recordings, out, order = "auto", criterion = "aic";
+  double rate = 2000, band_lo = 20;
+};
+
+void AddVibOptions(CLI::App* cmd, VibArgs& a) {
+  cmd->add_option("--recordings", a.recordings,
+                  "Folder of measurement CSV v1 files with acc_mps2, one per (speed, force) condition")
+      ->required();
+  cmd->add_option("--rate", a.rate, "Model sample rate [Hz] (2000 in the thesis)")->capture_default_str();
+  cmd->add_option("--order", a.order, "AR order: a number, or auto (information criterion)")->capture_default_str();
+  cmd->add_option("--criterion", a.criterion, "Order criterion")->check(CLI::IsMember({"aic", "bic"}))->capture_default_str();
+  cmd->add_option("--band-low", a.band_lo, "High-pass of the band limit [Hz]")->capture_default_str();
+}
+
+modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
+  modeling::VibrationFitOptions o;
+  o.model_rate_hz = a.rate;
+  o.band_lo_hz = a.band_lo;
+  o.criterion = a.criterion == "bic" ? modeling::OrderCriterion::kBic : modeling::OrderCriterion::kAic;
+  if (a.order != "auto") {
+    try {
+      o.order = std::stoi(a.order);
+    } catch (const std::exception&) {
+      throw InputError("", 0, "--order", "expected a number or auto, got '" + a.order + "'");
+    }
+    if (o.order < 1 || o.order > 64) throw InputError("", 0, "--order", "expected 1..64");
+  }
+  return o;
+}
+
+void AddFitVibration(CLI::App& model) {
+  auto a = std::make_shared<VibArgs>();
+  auto* cmd = model.add_subcommand(
+      "fit-vibration",
+      "Fit the AR bank over (speed, force) from contact-acceleration recordings: resample to\n"
+      "the model rate, band-limit, Levinson-Durbin per condition with one order for the bank.\n"
+      "Writes a TOML file holding a [vibration] table; reference it from a material model\n"
+      "with [vibration] file = \"BANK.toml\" (docs/modeling-vibration.md).");
+  AddVibOptions(cmd, *a);
+  cmd->add_option("-o,--out", a->out, "Bank file to write (.toml)")->required();
+  cmd->callback([a] {
+    RunGuarded([&] {
+      const auto recs = modeling::LoadRecordings(a->recordings);
+      const auto bank = modeling::FitVibrationBank(recs, VibOptions(*a));
+      renderer::MaterialModel holder;
+      holder.vibration = bank;
+      std::string text = renderer::MaterialToToml(holder);
+      text = text.substr(text.find("[vibration]"));  // the bank alone
+      FILE* f = std::fopen(a->out.c_str(), "w");
+      if (!f) throw std::runtime_error(a->out + ": cannot write");
+      std::fputs(("# AR bank fitted by hapticlab model fit-vibration from " + a->recordings + "\n").c_str(), f);
+      std::fputs(text.c_str(), f);
+      if (std::fclose(f) != 0) throw std::runtime_error(a->out + ": write failed");
+      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(), bank.cells.size(),
+                 bank.grid_speeds_mps.empty() ? "triangulated" : "grid", bank.order(), bank.sample_rate_hz, a->out);
+      return kExitOk;
+    });
+  });
+}
+
+void AddCvVibration(CLI::App& model) {
+  auto a = std::make_shared<VibArgs>();
+  auto ts = std::make_shared<std::string>("0.04,0.08,0.12");
+  auto tf = std::make_shared<std::string>("0.54,1.18,1.91");
+  auto json_out = std::make_shared<bool>(false);
+  auto seed = std::make_shared<std::uint64_t>(1);
+  auto* cmd = model.add_subcommand(
+      "cv-vibration",
+      "Cross-validation as dissertation ch. III.4: fit on the training speeds x forces, then\n"
+      "E_s (eq. 3.1) of the renderer's interpolated synthesis at every recorded condition.");
+  AddVibOptions(cmd, *a);
+  cmd->add_option("--train-speeds", *ts, "Training speeds [m/s], comma-separated")->capture_default_str();
+  cmd->add_option("--train-forces", *tf, "Training forces [N], comma-separated")->capture_default_str();
+  cmd->add_option("--seed", *seed, "Synthesis seed")->capture_default_str();
+  cmd->add_flag("--json", *json_out, "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
+  cmd->callback([=] {
+    RunGuarded([&] {
+      const auto recs = modeling::LoadRecordings(a->recordings);
+      const auto cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"),
+                                              VibOptions(*a), *seed);
+      if (*json_out) {
+        nlohmann::json rows = nlohmann::json::array();
+        for (const auto& r : cv.rows)
+          rows.push_back({{"speed_mps", r.speed_mps}, {"force_N", r.force_N}, {"split", r.train ? "train" : "test"}, {"es", r.es}});
+        fmt::print("{}\n", nlohmann::json{{"conditions", rows}, {"mean_es_train", cv.mean_es_train},
+                                          {"mean_es_test", cv.mean_es_test}, {"order", cv.order}}.dump(2));
+        return kExitOk;
+      }
+      fmt::print("{:>10} {:>9} {:>6} {:>7}\n", "speed m/s", "force N", "split", "E_s");
+      for (const auto& r : cv.rows)
+        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N, r.train ? "train" : "test", r.es);
+      fmt::print("mean E_s: training {:.3f}, held-out {:.3f} (AR order {})\n", cv.mean_es_train, cv.mean_es_test, cv.order);
+      return kExitOk;
+    });
+  });
+}
+
+void AddCutoff(CLI::App& model) {
+  auto file = std::make_shared<std::string>();
+  auto lo = std::make_shared<double>(50), hi = std::make_shared<double>(150), step = std::make_shared<double>(10);
+  auto json_out = std::make_shared<bool>(false);
+  auto* cmd = model.add_subcommand(
+      "cutoff",
+      "Stationarity cut-off (dissertation ch. III.5): the smallest high-pass cut-off in the range\n"
+      "whose filtered recording rejects a unit root (augmented Dickey-Fuller, 5 %). It becomes\n"
+      "the material's hybrid filter f_c.");
+  cmd->add_option("--recording", *file, "Measurement CSV v1 with acc_mps2")->required();
+  cmd->add_option("--from", *lo, "Lowest cut-off [Hz]")->capture_default_str();
+  cmd->add_option("--to", *hi, "Highest cut-off [Hz]")->capture_default_str();
+  cmd->add_option("--step", *step, "Step [Hz]")->capture_default_str();
+  cmd->add_flag("--json", *json_out, "Print the result and every cut-off tried as JSON");
+  cmd->callback([=] {
+    RunGuarded([&] {
+      const auto r = modeling::LoadRecording(*file);
+      const auto c = modeling::StationarityCutoff(r.acc, r.rate_hz, *lo, *hi, *step);
+      if (*json_out) {
+        nlohmann::json tried = nlohmann::json::array();
+        for (const auto& [fc, adf] : c.tried)
+          tried.push_back({{"cutoff_hz", fc}, {"adf", adf.statistic}, {"critical_5pct", adf.critical_5pct},
+                           {"lags", adf.lags}, {"stationary", adf.rejects_unit_root}});
+        fmt::print("{}\n", nlohmann::json{{"found", c.found}, {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz) : nlohmann::json()},
+                                          {"tried", tried}}.dump(2));
+      } else if (c.found) {
+        fmt::print("f_c = {:.1f} Hz (ADF {:.2f} < {:.2f} at 5 %)\n", c.cutoff_hz, c.tried.back().second.statistic,
+                   c.tried.back().second.critical_5pct);
+      } else {
+        fmt::print("no cut-off in {:.0f}-{:.0f} Hz makes the recording stationary\n", *lo, *hi);
+      }
+      return c.found ? kExitOk : kExitFailure;
+    });
+  });
+}
+
 }  // namespace
 
 void RegisterModel(CLI::App& app) {
   auto* model = app.add_subcommand(
-      "model", "Material models: check, render offline, stability energy, import Penn XML.\n"
-               "(Fitting from measurements lands with the modeling issues.)");
+      "model", "Material models: check, render offline, stability energy, import Penn XML,\n"
+               "fit and cross-validate vibration banks, find the stationarity cut-off.");
   model->require_subcommand(1);
   AddCheck(*model);
   AddRender(*model);
   AddEnergy(*model);
   AddImportPenn(*model);
+  AddFitVibration(*model);
+  AddCvVibration(*model);
+  AddCutoff(*model);
 }
 
 }  // namespace hapticlab::cli

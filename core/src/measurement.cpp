@@ -32,6 +32,7 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
   const auto ca = t.Find("acc_mps2");
   m.has_acceleration = ca.has_value();
   m.rows.resize(t.rows.size());
+  m.row_lines = t.row_lines;
   auto num = [&](std::size_t r, std::size_t c) {
     const double v = t.Number(r, c);
     if (!std::isfinite(v)) throw InputError(name, t.row_lines[r], t.header[c], "value is not finite");

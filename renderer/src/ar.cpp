@@ -12,11 +12,12 @@ constexpr double kPi = std::numbers::pi;
 
 // g(w) = e^{j w (p+1)/2} A(e^{jw}). Zeros of Re g are roots of P, zeros of Im g roots of Q.
 std::complex<double> G(std::span<const double> c, double w) {
+  // A(e^{jw}) = 1 - sum c_i z^i with z = e^{-jw}, by Horner: one sin/cos per frequency.
   const std::size_t p = c.size();
-  std::complex<double> a(1.0, 0.0);
-  for (std::size_t i = 0; i < p; ++i)
-    a -= c[i] * std::polar(1.0, -w * static_cast<double>(i + 1));
-  return a * std::polar(1.0, w * static_cast<double>(p + 1) / 2.0);
+  const std::complex<double> z = std::polar(1.0, -w);
+  std::complex<double> h(0.0, 0.0);
+  for (std::size_t i = p; i-- > 0;) h = (h + c[i]) * z;
+  return (1.0 - h) * std::polar(1.0, w * static_cast<double>(p + 1) / 2.0);
 }
 
 // Bisection on one component of g between a and b (sign change known).

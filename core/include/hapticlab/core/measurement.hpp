@@ -32,6 +32,7 @@ struct Measurement {
   bool has_forces = true;
   bool has_acceleration = false;
   std::vector<MeasurementRow> rows;
+  std::vector<int> row_lines;  ///< 1-based source line of each row (for messages)
 };
 
 /// Options for reading a measurement.

@@ -1,0 +1,59 @@
+// Vibration modeling throughput (both cores): fitting the AR banks of 100 materials x 25 conditions x 10 s
+// recorded at 10 kHz (resample to 2 kHz, band-limit, Levinson-Durbin with the bank's order
+// chosen by AIC up to 30). One material's 25 recordings are synthesized once and fitted 100
+// times (the fit, not the synthesis, is measured).
+//
+//   build/bench/modeling_bench
+
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/vibration.hpp"
+
+namespace {
+
+using namespace hapticlab;
+
+std::vector<modeling::Recording> Recordings() {
+  std::vector<modeling::Recording> recs;
+  const double fs = 10000;
+  int k = 0;
+  for (double v : {0.04, 0.06, 0.08, 0.10, 0.12})
+    for (double f : {0.54, 0.89, 1.18, 1.40, 1.91}) {
+      renderer::ArFilter fl;
+      const double w = 2 * std::numbers::pi * (150 + 1000 * v) / fs, r = 0.98 - 0.01 * f;
+      fl.order = 2;
+      fl.c[0] = 2 * r * std::cos(w);
+      fl.c[1] = -r * r;
+      fl.sigma = std::sqrt(v * f);
+      fl.active = true;
+      renderer::ArSynth s(static_cast<std::uint64_t>(++k));
+      modeling::Recording rec{"mem", v, f, fs, std::vector<double>(100000)};
+      for (auto& a : rec.acc) a = s.Step(fl);
+      recs.push_back(std::move(rec));
+    }
+  return recs;
+}
+
+void Fit(benchmark::State& state, modeling::ResampleQuality q) {
+  const auto recs = Recordings();
+  modeling::VibrationFitOptions o;
+  o.resample = q;
+  for (auto _ : state) {
+    for (int m = 0; m < 100; ++m) benchmark::DoNotOptimize(modeling::FitVibrationBank(recs, o).cells.data());
+  }
+  state.counters["conditions_per_s"] = benchmark::Counter(2500.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+}
+// The default (medium-quality resampling, 90 % bandwidth) and the fastest converter (80 %).
+void FitHundredMaterialsMedium(benchmark::State& s) { Fit(s, modeling::ResampleQuality::kMedium); }
+void FitHundredMaterialsFastest(benchmark::State& s) { Fit(s, modeling::ResampleQuality::kFastest); }
+BENCHMARK(FitHundredMaterialsMedium)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+BENCHMARK(FitHundredMaterialsFastest)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

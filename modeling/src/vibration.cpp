@@ -1,0 +1,436 @@
+#include "hapticlab/modeling/vibration.hpp"
+
+#include <fftw3.h>
+#include <fmt/format.h>
+#include <samplerate.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <atomic>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <numbers>
+#include <set>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/biquad.hpp"
+#include "hapticlab/renderer/delaunay.hpp"
+#include "hapticlab/renderer/vibration.hpp"
+
+namespace hapticlab::modeling {
+namespace {
+
+std::mutex g_fftw_mu;  // FFTW's planner is not thread-safe
+
+double MetaNumber(const Measurement& m, const char* key, double def) {
+  const auto it = m.metadata.find(key);
+  if (it == m.metadata.end()) return def;
+  char* end = nullptr;
+  const double v = std::strtod(it->second.c_str(), &end);
+  if (end == it->second.c_str() || !std::isfinite(v))
+    throw InputError(m.file, 0, key, "metadata is not a number: '" + it->second + "'");
+  return v;
+}
+
+}  // namespace
+
+Recording LoadRecording(const std::string& path) {
+  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
+  if (!m.has_acceleration) throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
+  if (m.rows.size() < 256) throw InputError(path, 0, "", "too short: at least 256 samples are needed");
+  Recording r;
+  r.file = path;
+  // Sample rate and uniform sampling.
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
+  std::vector<double> sorted(dt);
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  const double med = sorted[sorted.size() / 2];
+  r.rate_hz = MetaNumber(m, "rate_hz", 1.0 / med);
+  for (std::size_t i = 0; i < dt.size(); ++i)
+    if (dt[i] > 1.5 / r.rate_hz)
+      throw InputError(path, m.row_lines[i + 1], "t_s",
+                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)", dt[i], 1.0 / r.rate_hz));
+  double lo = 1e300, hi = -1e300;
+  for (const auto& row : m.rows) {
+    r.acc.push_back(row.acc_mps2);
+    lo = std::min(lo, row.acc_mps2);
+    hi = std::max(hi, row.acc_mps2);
+  }
+  // Clipping: a long run of samples pinned at the extreme value.
+  for (const double ext : {lo, hi}) {
+    int run = 0, worst = 0;
+    for (double a : r.acc) {
+      run = a == ext ? run + 1 : 0;
+      worst = std::max(worst, run);
+    }
+    int count = 0;
+    for (double a : r.acc) count += a == ext;
+    if (count >= 20 && hi > lo)
+      throw InputError(path, 0, "acc_mps2",
+                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped", count, ext));
+  }
+  // Condition: metadata, or steady per-row kinematics and force.
+  const bool meta = m.metadata.count("speed_mps") && m.metadata.count("force_N");
+  if (meta) {
+    r.speed_mps = MetaNumber(m, "speed_mps", 0);
+    r.force_N = MetaNumber(m, "force_N", 0);
+  } else {
+    if (!m.has_forces) throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
+    std::vector<double> v, f;
+    for (const auto& row : m.rows) {
+      v.push_back(row.v_mps.head<2>().norm());
+      f.push_back(std::abs(row.f_N.z()));
+    }
+    auto mean_cv = [](const std::vector<double>& x) {
+      double s = 0, s2 = 0;
+      for (double a : x) s += a;
+      const double mean = s / static_cast<double>(x.size());
+      for (double a : x) s2 += (a - mean) * (a - mean);
+      return std::pair{mean, std::sqrt(s2 / static_cast<double>(x.size())) / std::max(mean, 1e-12)};
+    };
+    const auto [vm, vcv] = mean_cv(v);
+    const auto [fm, fcv] = mean_cv(f);
+    if (vcv > 0.25 || fcv > 0.25)
+      throw InputError(path, 0, vcv > 0.25 ? "speed" : "force",
+                       "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' and "
+                       "'# force_N:' metadata or cut the file to its steady part");
+    r.speed_mps = vm;
+    r.force_N = fm;
+  }
+  if (!(r.speed_mps > 0) || !(r.force_N > 0))
+    throw InputError(path, 0, "speed_mps", "speed and force of the condition must be positive");
+  return r;
+}
+
+std::vector<Recording> LoadRecordings(const std::string& dir) {
+  namespace fs = std::filesystem;
+  if (!fs::is_directory(dir)) throw InputError(dir, 0, "--recordings", "not a folder");
+  std::vector<std::string> files;
+  for (const auto& e : fs::directory_iterator(dir))
+    if (e.path().extension() == ".csv") files.push_back(e.path().string());
+  std::sort(files.begin(), files.end());
+  if (files.empty()) throw InputError(dir, 0, "--recordings", "no .csv recordings in the folder");
+  std::vector<Recording> out;
+  Diagnostics d;
+  for (const auto& f : files) {
+    try {
+      out.push_back(LoadRecording(f));
+    } catch (const InputError& e) {
+      for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
+    }
+  }
+  d.ThrowIfAny();
+  return out;
+}
+
+std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz, ResampleQuality q) {
+  if (!(from_hz > 0) || !(to_hz > 0)) throw std::invalid_argument("resample rates must be positive");
+  if (from_hz == to_hz) return x;
+  const double ratio = to_hz / from_hz;
+  std::vector<float> in(x.begin(), x.end());
+  std::vector<float> out(static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * ratio)) + 16);
+  SRC_DATA d{};
+  d.data_in = in.data();
+  d.data_out = out.data();
+  d.input_frames = static_cast<long>(in.size());
+  d.output_frames = static_cast<long>(out.size());
+  d.src_ratio = ratio;
+  const int type = q == ResampleQuality::kBest ? SRC_SINC_BEST_QUALITY
+                   : q == ResampleQuality::kFastest ? SRC_SINC_FASTEST
+                                                    : SRC_SINC_MEDIUM_QUALITY;
+  const int err = src_simple(&d, type, 1);
+  if (err) throw std::runtime_error(std::string("libsamplerate: ") + src_strerror(err));
+  return {out.begin(), out.begin() + d.output_frames_gen};
+}
+
+std::vector<double> BandLimit(const std::vector<double>& x, double fs, double lo, double hi) {
+  std::vector<renderer::BiquadCoeffs> stages;
+  if (lo > 0) stages.insert(stages.end(), 2, renderer::BiquadCoeffs::ButterworthHighPass(lo, fs));
+  if (hi > 0 && hi < 0.5 * fs) stages.insert(stages.end(), 2, renderer::BiquadCoeffs::ButterworthLowPass(hi, fs));
+  std::vector<double> y(x);
+  for (int pass = 0; pass < 2; ++pass) {  // forward, then backward: zero phase
+    for (const auto& c : stages) {
+      renderer::Biquad b(c);
+      for (auto& v : y) v = b.Step(v);
+    }
+    std::reverse(y.begin(), y.end());
+  }
+  return y;
+}
+
+namespace {
+
+// Levinson-Durbin on the biased autocorrelation of x for orders 1..pmax: every order's
+// coefficients, prediction-error variance and criterion in one pass.
+std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCriterion criterion) {
+  const int n = static_cast<int>(x.size());
+  if (pmax < 1 || pmax > renderer::kMaxArOrder) throw std::invalid_argument("AR order must be 1..64");
+  if (n < 4 * pmax) throw std::invalid_argument(fmt::format("{} samples are too few for order {}", n, pmax));
+  double mean = 0;
+  for (double v : x) mean += v;
+  mean /= n;
+  std::vector<double> xc(x.size());
+  for (std::size_t i = 0; i < x.size(); ++i) xc[i] = x[i] - mean;
+  // Biased autocorrelation: the Toeplitz matrix is positive definite, so every reflection
+  // coefficient has |k| < 1 and every fit is minimum phase.
+  std::vector<double> r(static_cast<std::size_t>(pmax) + 1, 0.0);
+  for (int lag = 0; lag <= pmax; ++lag) {
+    double s = 0;
+    for (int i = lag; i < n; ++i) s += xc[static_cast<std::size_t>(i)] * xc[static_cast<std::size_t>(i - lag)];
+    r[static_cast<std::size_t>(lag)] = s / n;
+  }
+  if (!(r[0] > 0)) throw std::invalid_argument("the recording is constant");
+  std::vector<double> a(static_cast<std::size_t>(pmax) + 1, 0.0), prev;
+  double err = r[0];
+  std::vector<ArFit> out;
+  for (int m = 1; m <= pmax; ++m) {
+    double acc = r[static_cast<std::size_t>(m)];
+    for (int i = 1; i < m; ++i) acc -= a[static_cast<std::size_t>(i)] * r[static_cast<std::size_t>(m - i)];
+    const double k = acc / err;
+    prev = a;
+    a[static_cast<std::size_t>(m)] = k;
+    for (int i = 1; i < m; ++i) a[static_cast<std::size_t>(i)] = prev[static_cast<std::size_t>(i)] - k * prev[static_cast<std::size_t>(m - i)];
+    err *= 1 - k * k;
+    ArFit f;
+    f.coeffs.assign(a.begin() + 1, a.begin() + m + 1);
+    f.variance = err;
+    f.order = m;
+    f.criterion = n * std::log(err) + (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(static_cast<double>(n)));
+    out.push_back(std::move(f));
+  }
+  return out;
+}
+
+}  // namespace
+
+ArFit FitAr(const std::vector<double>& x, int order, int max_order, OrderCriterion criterion) {
+  const auto all = LevinsonAll(x, order > 0 ? order : max_order, criterion);
+  if (order > 0) return all.back();
+  return *std::min_element(all.begin(), all.end(), [](const ArFit& a, const ArFit& b) { return a.criterion < b.criterion; });
+}
+
+double SpectralError(const std::vector<double>& a, const std::vector<double>& b, int segment) {
+  if (segment < 16 || static_cast<std::size_t>(segment) > std::min(a.size(), b.size()))
+    throw std::invalid_argument("E_s: both signals need at least one segment of samples");
+  const auto n = static_cast<std::size_t>(segment);
+  std::vector<double> w(n);
+  for (std::size_t i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+  double* in = fftw_alloc_real(n);
+  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
+  fftw_plan plan;
+  {
+    std::lock_guard lock(g_fftw_mu);
+    plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in, out, FFTW_ESTIMATE);
+  }
+  auto welch = [&](const std::vector<double>& x) {
+    std::vector<double> p(n / 2 + 1, 0.0);
+    int segs = 0;
+    for (std::size_t s = 0; s + n <= x.size(); s += n / 2, ++segs) {
+      for (std::size_t i = 0; i < n; ++i) in[i] = w[i] * x[s + i];
+      fftw_execute(plan);
+      for (std::size_t k = 0; k < p.size(); ++k) p[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
+    }
+    for (auto& v : p) v = std::sqrt(v / segs);
+    return p;
+  };
+  const auto ma = welch(a), mb = welch(b);
+  {
+    std::lock_guard lock(g_fftw_mu);
+    fftw_destroy_plan(plan);
+  }
+  fftw_free(in);
+  fftw_free(out);
+  double num = 0, den = 0;
+  for (std::size_t k = 0; k < ma.size(); ++k) {
+    num += (ma[k] - mb[k]) * (ma[k] - mb[k]);
+    den += ma[k] * ma[k];
+  }
+  if (!(den > 0)) throw std::invalid_argument("E_s: the measured signal has no energy");
+  return std::sqrt(num / den);
+}
+
+AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
+  const int T = static_cast<int>(y.size());
+  if (T < 50) throw std::invalid_argument("ADF needs at least 50 samples");
+  if (max_lags < 0) max_lags = static_cast<int>(std::floor(12 * std::pow(T / 100.0, 0.25)));
+  std::vector<double> dy(static_cast<std::size_t>(T - 1));
+  for (int t = 1; t < T; ++t) dy[static_cast<std::size_t>(t - 1)] = y[static_cast<std::size_t>(t)] - y[static_cast<std::size_t>(t - 1)];
+  // Every lag order is fitted on the same sample (t = max_lags + 1 .. T - 1) so AICs compare.
+  const int n = T - 1 - max_lags;
+  AdfResult best;
+  double best_aic = std::numeric_limits<double>::infinity();
+  for (int p = 0; p <= max_lags; ++p) {
+    Eigen::MatrixXd X(n, 2 + p);
+    Eigen::VectorXd z(n);
+    for (int i = 0; i < n; ++i) {
+      const int t = max_lags + 1 + i;  // index into y; dy[t-1] = y[t] - y[t-1]
+      z(i) = dy[static_cast<std::size_t>(t - 1)];
+      X(i, 0) = 1.0;
+      X(i, 1) = y[static_cast<std::size_t>(t - 1)];
+      for (int j = 1; j <= p; ++j) X(i, 1 + j) = dy[static_cast<std::size_t>(t - 1 - j)];
+    }
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
+    const Eigen::VectorXd beta = qr.solve(z);
+    const Eigen::VectorXd res = z - X * beta;
+    const double rss = res.squaredNorm();
+    const double aic = n * std::log(rss / n) + 2.0 * (2 + p);
+    if (aic < best_aic) {
+      best_aic = aic;
+      const double s2 = rss / (n - 2 - p);
+      const Eigen::MatrixXd cov = (X.transpose() * X).inverse() * s2;
+      best.statistic = beta(1) / std::sqrt(cov(1, 1));
+      best.lags = p;
+    }
+  }
+  // MacKinnon (2010), Table 2, constant and no trend, 5 %: beta_inf, beta_1, beta_2.
+  const double nobs = n;
+  best.critical_5pct = -2.86154 - 2.8903 / nobs - 4.234 / (nobs * nobs);
+  best.rejects_unit_root = best.statistic < best.critical_5pct;
+  return best;
+}
+
+CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double lo, double hi, double step,
+                                std::size_t max_samples) {
+  if (!(lo > 0) || !(hi >= lo) || !(step > 0) || !(hi < 0.5 * fs))
+    throw std::invalid_argument("cut-off range must satisfy 0 < lo <= hi < fs/2 and step > 0");
+  CutoffResult r;
+  const std::vector<double> part(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(std::min(x.size(), max_samples)));
+  for (double fc = lo; fc <= hi + 1e-9; fc += step) {
+    const auto adf = AugmentedDickeyFuller(BandLimit(part, fs, fc, 0));
+    r.tried.emplace_back(fc, adf);
+    if (adf.rejects_unit_root) {
+      r.found = true;
+      r.cutoff_hz = fc;
+      break;
+    }
+  }
+  return r;
+}
+
+std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o) {
+  const auto y = Resample(r.acc, r.rate_hz, o.model_rate_hz, o.resample);
+  return BandLimit(y, o.model_rate_hz, o.band_lo_hz, 0.475 * o.model_rate_hz);
+}
+
+renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, const VibrationFitOptions& o) {
+  if (recs.empty()) throw std::invalid_argument("no recordings to fit");
+  // Every recording's fits of every order in one Levinson pass each.
+  // (in parallel over recordings: each is independent; the first error is rethrown).
+  const int pmax = o.order > 0 ? o.order : o.max_order;
+  std::vector<std::vector<ArFit>> fits(recs.size());
+  {
+    const unsigned hw = o.threads > 0 ? static_cast<unsigned>(o.threads) : std::max(1u, std::thread::hardware_concurrency());
+    std::atomic<std::size_t> next{0};
+    std::exception_ptr error;
+    std::mutex error_mu;
+    auto work = [&] {
+      for (std::size_t i; (i = next.fetch_add(1)) < recs.size();) {
+        try {
+          fits[i] = LevinsonAll(Preprocess(recs[i], o), pmax, o.criterion);
+        } catch (...) {
+          std::lock_guard lock(error_mu);
+          if (!error) error = std::current_exception();
+        }
+      }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 1; t < std::min<std::size_t>(hw, recs.size()); ++t) pool.emplace_back(work);
+    work();
+    for (auto& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
+  }
+  // One order for the whole bank (LSF interpolation needs equal orders): the criterion's
+  // choice summed over the recordings.
+  int order = o.order;
+  if (order == 0) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int p = 1; p <= pmax; ++p) {
+      double total = 0;
+      for (const auto& f : fits) total += f[static_cast<std::size_t>(p - 1)].criterion;
+      if (total < best) {
+        best = total;
+        order = p;
+      }
+    }
+  }
+  renderer::VibrationBank b;
+  b.sample_rate_hz = o.model_rate_hz;
+  std::set<double> speeds, forces;
+  for (const auto& r : recs) {
+    speeds.insert(r.speed_mps);
+    forces.insert(r.force_N);
+  }
+  std::map<std::pair<double, double>, std::size_t> at;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    if (!at.emplace(std::pair{recs[i].speed_mps, recs[i].force_N}, i).second)
+      throw InputError(recs[i].file, 0, "speed_mps", "two recordings share this (speed, force) condition");
+  }
+  auto cell = [&](std::size_t i) {
+    const ArFit& fit = fits[i][static_cast<std::size_t>(order - 1)];
+    renderer::ArCell c;
+    c.speed_mps = recs[i].speed_mps;
+    c.force_N = recs[i].force_N;
+    c.coeffs = fit.coeffs;
+    c.variance = fit.variance;
+    c.lsf = renderer::ArToLsf(c.coeffs);
+    return c;
+  };
+  if (speeds.size() * forces.size() == recs.size()) {  // a full grid
+    b.grid_speeds_mps.assign(speeds.begin(), speeds.end());
+    b.grid_forces_N.assign(forces.begin(), forces.end());
+    for (double v : speeds)
+      for (double f : forces) b.cells.push_back(cell(at.at({v, f})));
+  } else {
+    std::vector<double> xs, ys;
+    for (std::size_t i = 0; i < recs.size(); ++i) {
+      b.cells.push_back(cell(i));
+      xs.push_back(recs[i].speed_mps);
+      ys.push_back(recs[i].force_N);
+    }
+    if (recs.size() >= 3) b.triangles = renderer::DelaunayTriangulate(xs, ys);
+  }
+  return b;
+}
+
+CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
+                       const VibrationFitOptions& o, std::uint64_t seed) {
+  auto near = [](const std::vector<double>& set, double x) {
+    return std::any_of(set.begin(), set.end(), [&](double s) { return std::abs(s - x) <= 1e-6 * std::max(1.0, std::abs(s)); });
+  };
+  std::vector<Recording> train;
+  for (const auto& r : recs)
+    if (near(tv, r.speed_mps) && near(tf, r.force_N)) train.push_back(r);
+  if (train.size() < 3) throw InputError("", 0, "--train-speeds", "fewer than 3 recordings at the training conditions");
+  const auto bank = FitVibrationBank(train, o);
+  renderer::VibrationInterpolator interp(bank);
+  CvResult res;
+  res.order = bank.order();
+  int ntr = 0, nte = 0;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const auto& r = recs[i];
+    const auto measured = Preprocess(r, o);
+    renderer::ArFilter f;
+    interp.Interpolate(r.speed_mps, r.force_N, true, &f);
+    f.active = true;  // synthesize even below the renderer's 1 cm/s switch-off
+    renderer::ArSynth synth(seed + i);
+    std::vector<double> s(measured.size());
+    for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
+    for (auto& v : s) v = synth.Step(f);
+    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s)};
+    (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
+    (row.train ? ntr : nte)++;
+    res.rows.push_back(row);
+  }
+  if (ntr) res.mean_es_train /= ntr;
+  if (nte) res.mean_es_test /= nte;
+  return res;
+}
+
+}  // namespace hapticlab::modeling
