@@ -11,7 +11,7 @@ namespace {
 std::string Cli() { return HL_CLI_PATH; }
 
 TEST(Cli, EveryCommandGroupHasHelp) {
-  for (const char* group : {"study", "model", "model render", "model energy", "model check", "model import-penn", "compare", "diagnose", "fit", "stats", "stats rm-anova", "stats tukey", "stats kruskal", "stats shapiro", "analyze", "study validate", "study plan", "study run", "study resume", "study status",
+  for (const char* group : {"study", "model", "model render", "model energy", "model check", "model import-penn", "model fit-vibration", "model cv-vibration", "model cutoff", "compare", "diagnose", "fit", "stats", "stats rm-anova", "stats tukey", "stats kruskal", "stats shapiro", "analyze", "study validate", "study plan", "study run", "study resume", "study status",
                             "export", "demo"}) {
     std::string out;
     EXPECT_EQ(test::RunCommand(Cli() + " " + group + " --help", &out), 0) << group << ": " << out;

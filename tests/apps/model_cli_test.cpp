@@ -4,6 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <filesystem>
+
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -101,6 +103,59 @@ TEST(ModelCli, ImportPennWritesALoadableModel) {
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["vibration"]["cells"], 1);
   EXPECT_DOUBLE_EQ(j["friction"]["mu_k"].get<double>(), 0.3);
+}
+
+}  // namespace
+}  // namespace hapticlab
+
+namespace hapticlab {
+namespace {
+
+// A 3 x 3 grid of recordings of a known resonant process (short, for the command line).
+void WriteGrid(const std::string& dir) {
+  int k = 0;
+  for (double v : {0.04, 0.08, 0.12})
+    for (double f : {0.54, 1.18, 1.91}) {
+      std::string s = "# hapticlab-measurement v1\n# speed_mps: " + std::to_string(v) + "\n# force_N: " + std::to_string(f) +
+                      "\nt_s,x_m,y_m,z_m,acc_mps2\n";
+      double a1 = 0, a2 = 0;
+      std::uint64_t state = 12345 + static_cast<std::uint64_t>(k);
+      for (int i = 0; i < 6000; ++i) {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        const double e = static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5;
+        const double a = 1.6 * a1 - 0.9 * a2 + (0.5 + v) * e;
+        a2 = a1;
+        a1 = a;
+        s += std::to_string(i / 2000.0) + ",0,0,0," + std::to_string(a) + "\n";
+      }
+      test::WriteFile(dir + "/r" + std::to_string(k++) + ".csv", s);
+    }
+}
+
+TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
+  test::TempDir dir;
+  std::filesystem::create_directory(dir.File("rec"));
+  WriteGrid(dir.File("rec"));
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") + " -o " + dir.File("bank.toml") +
+                                 " --order 4", &out), 0) << out;
+  // The bank plugs into a material model through [vibration] file = ...
+  test::WriteFile(dir.File("m.toml"), "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
+                                      "mu_k = 0.2\n[vibration]\nfile = \"bank.toml\"\n");
+  ASSERT_EQ(test::RunCommand(Cli() + " model check --json " + dir.File("m.toml"), &out), 0) << out;
+  const auto j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["vibration"]["cells"], 9);
+  EXPECT_EQ(j["vibration"]["order"], 4);
+  ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --order 4 --json", &out), 0) << out;
+  const auto cv = nlohmann::json::parse(out);
+  EXPECT_EQ(cv["conditions"].size(), 9u);
+  for (const char* k : {"speed_mps", "force_N", "split", "es"}) EXPECT_TRUE(cv["conditions"][0].contains(k)) << k;
+  EXPECT_TRUE(cv.contains("mean_es_train"));
+  ASSERT_EQ(test::RunCommand(Cli() + " model cutoff --recording " + dir.File("rec/r0.csv") + " --json", &out), 0) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["cutoff_hz"], 50.0);  // already stationary at the first cut-off
+  // A folder without recordings is bad input.
+  std::filesystem::create_directory(dir.File("empty"));
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("empty") + " -o " + dir.File("b.toml"), &out), 2);
 }
 
 }  // namespace
