@@ -14,6 +14,8 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
 #include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/stats/plot.hpp"
+#include <filesystem>
 #include "hapticlab/runner/offline.hpp"
 
 namespace hapticlab::cli {
@@ -315,20 +317,38 @@ void AddCvVibration(CLI::App& model) {
   auto tf = std::make_shared<std::string>("0.54,1.18,1.91");
   auto json_out = std::make_shared<bool>(false);
   auto seed = std::make_shared<std::uint64_t>(1);
+  auto plots = std::make_shared<std::string>();
   auto* cmd = model.add_subcommand(
       "cv-vibration",
       "Cross-validation as dissertation ch. III.4: fit on the training speeds x forces, then\n"
-      "E_s (eq. 3.1) of the renderer's interpolated synthesis at every recorded condition.");
+      "E_s (eq. 3.1) of the renderer's interpolated synthesis at every recorded condition;\n"
+      "--plots draws measured vs synthesized spectra like Figs. 3.5/3.6.");
   AddVibOptions(cmd, *a);
   cmd->add_option("--train-speeds", *ts, "Training speeds [m/s], comma-separated")->capture_default_str();
   cmd->add_option("--train-forces", *tf, "Training forces [N], comma-separated")->capture_default_str();
   cmd->add_option("--seed", *seed, "Synthesis seed")->capture_default_str();
+  cmd->add_option("--plots", *plots, "Write measured vs synthesized spectra per condition here (SVG and PNG)");
   cmd->add_flag("--json", *json_out, "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
   cmd->callback([=] {
     RunGuarded([&] {
       const auto recs = modeling::LoadRecordings(a->recordings);
       const auto cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"),
                                               VibOptions(*a), *seed);
+      if (!plots->empty()) {
+        std::filesystem::create_directories(*plots);
+        for (const auto& r : cv.rows) {
+          stats::LinePlot lp;
+          lp.title = fmt::format("{:.0f} mm/s, {:.2f} N ({}), E_s = {:.3f}", r.speed_mps * 1e3, r.force_N,
+                                 r.train ? "training" : "held out", r.es);
+          lp.x_label = "frequency [Hz]";
+          lp.y_label = "|A(f)|";
+          lp.log_y = true;
+          for (std::size_t k = 0; k < r.measured_spectrum.size(); ++k)
+            lp.x.push_back(static_cast<double>(k) * VibOptions(*a).model_rate_hz / (2.0 * static_cast<double>(r.measured_spectrum.size() - 1)));
+          lp.series = {{"measured", r.measured_spectrum}, {"synthesized", r.synthesized_spectrum}};
+          stats::DrawLinePlot(lp, (std::filesystem::path(*plots) / fmt::format("spectrum_v{:.0f}_f{:.0f}", r.speed_mps * 1e3, r.force_N * 100)).string());
+        }
+      }
       if (*json_out) {
         nlohmann::json rows = nlohmann::json::array();
         for (const auto& r : cv.rows)
@@ -340,7 +360,9 @@ void AddCvVibration(CLI::App& model) {
       fmt::print("{:>10} {:>9} {:>6} {:>7}\n", "speed m/s", "force N", "split", "E_s");
       for (const auto& r : cv.rows)
         fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N, r.train ? "train" : "test", r.es);
-      fmt::print("mean E_s: training {:.3f}, held-out {:.3f} (AR order {})\n", cv.mean_es_train, cv.mean_es_test, cv.order);
+      const bool any_test = std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
+      fmt::print("mean E_s: training {:.3f}, held-out {} (AR order {})\n", cv.mean_es_train,
+                 any_test ? fmt::format("{:.3f}", cv.mean_es_test) : std::string("n/a (no held-out conditions)"), cv.order);
       return kExitOk;
     });
   });

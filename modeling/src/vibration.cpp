@@ -2,7 +2,7 @@
 
 #include <fftw3.h>
 #include <fmt/format.h>
-#include <samplerate.h>
+#include <soxr.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -109,6 +109,54 @@ Recording LoadRecording(const std::string& path) {
   return r;
 }
 
+std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s) {
+  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
+  if (m.metadata.count("speed_mps") && m.metadata.count("force_N")) return {LoadRecording(path)};
+  if (!m.has_acceleration) throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
+  if (!m.has_forces) throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
+  if (m.rows.size() < 256) throw InputError(path, 0, "", "too short: at least 256 samples are needed");
+  const double rate = MetaNumber(m, "rate_hz", (static_cast<double>(m.rows.size()) - 1) / (m.rows.back().t_s - m.rows.front().t_s));
+  const auto block = std::max<std::size_t>(16, static_cast<std::size_t>(0.25 * rate));
+  struct Block {
+    std::size_t begin, end;
+    double v, f;
+  };
+  std::vector<Block> blocks;
+  for (std::size_t b = 0; b + block <= m.rows.size(); b += block) {
+    double v = 0, f = 0;
+    for (std::size_t i = b; i < b + block; ++i) {
+      v += m.rows[i].v_mps.head<2>().norm();
+      f += std::abs(m.rows[i].f_N.z());
+    }
+    blocks.push_back({b, b + block, v / static_cast<double>(block), f / static_cast<double>(block)});
+  }
+  std::vector<Recording> out;
+  for (std::size_t g = 0; g < blocks.size();) {
+    std::size_t e = g + 1;
+    auto close = [](double a, double ref) { return std::abs(a - ref) <= 0.15 * std::max(ref, 1e-9); };
+    while (e < blocks.size() && close(blocks[e].v, blocks[g].v) && close(blocks[e].f, blocks[g].f)) ++e;
+    const double dur = static_cast<double>(blocks[e - 1].end - blocks[g].begin) / rate;
+    if (dur >= min_s && blocks[g].v > 0 && blocks[g].f > 0) {
+      Recording r;
+      r.file = fmt::format("{} [{:.2f}-{:.2f} s]", path, m.rows[blocks[g].begin].t_s, m.rows[blocks[e - 1].end - 1].t_s);
+      r.rate_hz = rate;
+      double v = 0, f = 0;
+      for (std::size_t i = blocks[g].begin; i < blocks[e - 1].end; ++i) {
+        r.acc.push_back(m.rows[i].acc_mps2);
+        v += m.rows[i].v_mps.head<2>().norm();
+        f += std::abs(m.rows[i].f_N.z());
+      }
+      r.speed_mps = v / static_cast<double>(r.acc.size());
+      r.force_N = f / static_cast<double>(r.acc.size());
+      out.push_back(std::move(r));
+    }
+    g = e;
+  }
+  if (out.empty())
+    throw InputError(path, 0, "speed", fmt::format("no steady part of at least {:.1f} s (speed and force within 15 %)", min_s));
+  return out;
+}
+
 std::vector<Recording> LoadRecordings(const std::string& dir) {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir)) throw InputError(dir, 0, "--recordings", "not a folder");
@@ -121,7 +169,7 @@ std::vector<Recording> LoadRecordings(const std::string& dir) {
   Diagnostics d;
   for (const auto& f : files) {
     try {
-      out.push_back(LoadRecording(f));
+      for (auto& r : LoadRecordingSegments(f)) out.push_back(std::move(r));
     } catch (const InputError& e) {
       for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
     }
@@ -133,21 +181,16 @@ std::vector<Recording> LoadRecordings(const std::string& dir) {
 std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz, ResampleQuality q) {
   if (!(from_hz > 0) || !(to_hz > 0)) throw std::invalid_argument("resample rates must be positive");
   if (from_hz == to_hz) return x;
-  const double ratio = to_hz / from_hz;
-  std::vector<float> in(x.begin(), x.end());
-  std::vector<float> out(static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * ratio)) + 16);
-  SRC_DATA d{};
-  d.data_in = in.data();
-  d.data_out = out.data();
-  d.input_frames = static_cast<long>(in.size());
-  d.output_frames = static_cast<long>(out.size());
-  d.src_ratio = ratio;
-  const int type = q == ResampleQuality::kBest ? SRC_SINC_BEST_QUALITY
-                   : q == ResampleQuality::kFastest ? SRC_SINC_FASTEST
-                                                    : SRC_SINC_MEDIUM_QUALITY;
-  const int err = src_simple(&d, type, 1);
-  if (err) throw std::runtime_error(std::string("libsamplerate: ") + src_strerror(err));
-  return {out.begin(), out.begin() + d.output_frames_gen};
+  std::vector<double> out(static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * to_hz / from_hz)) + 16);
+  const unsigned long recipe = q == ResampleQuality::kBest ? SOXR_VHQ : q == ResampleQuality::kFastest ? SOXR_MQ : SOXR_HQ;
+  const soxr_io_spec_t io = soxr_io_spec(SOXR_FLOAT64_I, SOXR_FLOAT64_I);
+  const soxr_quality_spec_t qs = soxr_quality_spec(recipe, 0);
+  std::size_t done = 0;
+  const soxr_error_t err = soxr_oneshot(from_hz, to_hz, 1, x.data(), x.size(), nullptr, out.data(), out.size(), &done,
+                                        &io, &qs, nullptr);
+  if (err) throw std::runtime_error(std::string("soxr: ") + err);
+  out.resize(done);
+  return out;
 }
 
 std::vector<double> BandLimit(const std::vector<double>& x, double fs, double lo, double hi) {
@@ -216,9 +259,9 @@ ArFit FitAr(const std::vector<double>& x, int order, int max_order, OrderCriteri
   return *std::min_element(all.begin(), all.end(), [](const ArFit& a, const ArFit& b) { return a.criterion < b.criterion; });
 }
 
-double SpectralError(const std::vector<double>& a, const std::vector<double>& b, int segment) {
-  if (segment < 16 || static_cast<std::size_t>(segment) > std::min(a.size(), b.size()))
-    throw std::invalid_argument("E_s: both signals need at least one segment of samples");
+std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment) {
+  if (segment < 16 || static_cast<std::size_t>(segment) > x.size())
+    throw std::invalid_argument("spectrum: the signal needs at least one segment of samples");
   const auto n = static_cast<std::size_t>(segment);
   std::vector<double> w(n);
   for (std::size_t i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
@@ -229,24 +272,25 @@ double SpectralError(const std::vector<double>& a, const std::vector<double>& b,
     std::lock_guard lock(g_fftw_mu);
     plan = fftw_plan_dft_r2c_1d(static_cast<int>(n), in, out, FFTW_ESTIMATE);
   }
-  auto welch = [&](const std::vector<double>& x) {
-    std::vector<double> p(n / 2 + 1, 0.0);
-    int segs = 0;
-    for (std::size_t s = 0; s + n <= x.size(); s += n / 2, ++segs) {
-      for (std::size_t i = 0; i < n; ++i) in[i] = w[i] * x[s + i];
-      fftw_execute(plan);
-      for (std::size_t k = 0; k < p.size(); ++k) p[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
-    }
-    for (auto& v : p) v = std::sqrt(v / segs);
-    return p;
-  };
-  const auto ma = welch(a), mb = welch(b);
+  std::vector<double> p(n / 2 + 1, 0.0);
+  int segs = 0;
+  for (std::size_t s0 = 0; s0 + n <= x.size(); s0 += n / 2, ++segs) {
+    for (std::size_t i = 0; i < n; ++i) in[i] = w[i] * x[s0 + i];
+    fftw_execute(plan);
+    for (std::size_t k = 0; k < p.size(); ++k) p[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
+  }
   {
     std::lock_guard lock(g_fftw_mu);
     fftw_destroy_plan(plan);
   }
   fftw_free(in);
   fftw_free(out);
+  for (auto& v : p) v = std::sqrt(v / segs);
+  return p;
+}
+
+double SpectralError(const std::vector<double>& a, const std::vector<double>& b, int segment) {
+  const auto ma = WelchMagnitude(a, segment), mb = WelchMagnitude(b, segment);
   double num = 0, den = 0;
   for (std::size_t k = 0; k < ma.size(); ++k) {
     num += (ma[k] - mb[k]) * (ma[k] - mb[k]);
@@ -423,7 +467,8 @@ CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<dou
     std::vector<double> s(measured.size());
     for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
     for (auto& v : s) v = synth.Step(f);
-    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s)};
+    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s),
+              WelchMagnitude(measured), WelchMagnitude(s)};
     (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
     (row.train ? ntr : nte)++;
     res.rows.push_back(row);

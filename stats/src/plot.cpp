@@ -152,6 +152,40 @@ std::vector<std::string> DrawBarChart(const BarChart& c, const std::string& base
   return Both(base, 900, 520, [&] { DrawBars(c); });
 }
 
+std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base) {
+  if (l.x.empty() || l.series.empty()) throw std::invalid_argument("line plot without data");
+  return Both(base, 800, 480, [&] {
+    std::vector<std::vector<PLFLT>> ys;
+    double lo = 1e300, hi = -1e300;
+    for (const auto& [name, y] : l.series) {
+      std::vector<PLFLT> v;
+      for (double a : y) v.push_back(l.log_y ? std::log10(std::max(a, 1e-12)) : a);
+      for (double a : v) {
+        lo = std::min(lo, a);
+        hi = std::max(hi, a);
+      }
+      ys.push_back(std::move(v));
+    }
+    if (!(hi > lo)) hi = lo + 1;
+    plcol0(15);
+    plschr(0, 0.8);
+    plvpor(0.1, 0.97, 0.12, 0.9);
+    plwind(l.x.front(), l.x.back(), lo, hi + 0.1 * (hi - lo));
+    plbox("bcnst", 0, 0, "bcnstv", 0, 0);
+    pllab(l.x_label.c_str(), (l.log_y ? "log10 " + l.y_label : l.y_label).c_str(), l.title.c_str());
+    std::vector<PLFLT> x(l.x.begin(), l.x.end());
+    for (std::size_t s = 0; s < ys.size(); ++s) {
+      plcol0(1 + static_cast<int>(s % 8));
+      plline(static_cast<PLINT>(x.size()), x.data(), ys[s].data());
+      const double ly = hi + 0.05 * (hi - lo) - 0.06 * (hi - lo) * static_cast<double>(s);
+      const double lx = l.x.front() + 0.65 * (l.x.back() - l.x.front());
+      pljoin(lx, ly, lx + 0.05 * (l.x.back() - l.x.front()), ly);
+      plcol0(15);
+      plptex(lx + 0.06 * (l.x.back() - l.x.front()), ly, 1, 0, 0, l.series[s].first.c_str());
+    }
+  });
+}
+
 std::vector<std::string> DrawBoxPlot(const BoxPlot& b, const std::string& base) {
   if (b.groups.size() != b.samples.size() || b.groups.empty()) throw std::invalid_argument("box plot without data");
   return Both(base, 700, 480, [&] { DrawBoxes(b); });

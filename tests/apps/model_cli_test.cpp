@@ -146,7 +146,10 @@ TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["vibration"]["cells"], 9);
   EXPECT_EQ(j["vibration"]["order"], 4);
-  ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --order 4 --json", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --order 4 --json --plots " +
+                                 dir.File("plots"), &out), 0) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.File("plots/spectrum_v80_f118.png")));
+  EXPECT_GT(std::filesystem::file_size(dir.File("plots/spectrum_v80_f118.svg")), 1000u);
   const auto cv = nlohmann::json::parse(out);
   EXPECT_EQ(cv["conditions"].size(), 9u);
   for (const char* k : {"speed_mps", "force_N", "split", "es"}) EXPECT_TRUE(cv["conditions"][0].contains(k)) << k;

@@ -27,13 +27,20 @@ struct Recording {
 /// 1.5 sample periods is an error naming its line). Clipping (20 or more samples at the
 /// extreme value) is an error. @throws InputError naming file, line and field.
 Recording LoadRecording(const std::string& path);
-/// Every `*.csv` in a folder, sorted by name. @throws InputError when there is none.
+/// A recording without condition metadata, cut into its steady parts: 0.25 s blocks are
+/// grouped while their mean speed and force stay within 15 % of the group's first block;
+/// every group of at least `min_s` seconds becomes one condition. With metadata, the whole
+/// file is one condition (as LoadRecording).
+std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s = 1.0);
+/// Every `*.csv` in a folder, sorted by name (files without metadata are segmented).
+/// @throws InputError when there is none, listing every bad file.
 std::vector<Recording> LoadRecordings(const std::string& dir);
 
-/// libsamplerate's sinc converters: best (97 % bandwidth), medium (90 %), fastest (80 %).
+/// The SoX resampler's recipes: best = very high quality (175 dB), medium = high quality
+/// (20-bit, the default), fastest = medium quality (16-bit).
 enum class ResampleQuality { kBest, kMedium, kFastest };
-/// Rational resampling with libsamplerate's band-limited sinc interpolator (Secret Rabbit
-/// Code), medium quality by default.
+/// Rational resampling with the SoX resampler library (libsoxr): linear-phase polyphase
+/// filtering, delay compensated.
 std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz,
                              ResampleQuality q = ResampleQuality::kMedium);
 /// Band-limits to [lo_hz, hi_hz]: 4th-order Butterworth high-pass and low-pass (two biquads
@@ -60,6 +67,10 @@ ArFit FitAr(const std::vector<double>& x, int order, int max_order = 30,
 /// square root of the averaged power. Bins from DC to Nyquist; computed with FFTW.
 double SpectralError(const std::vector<double>& measured, const std::vector<double>& synthesized,
                      int segment = 512);
+
+/// The smoothed magnitude spectrum E_s compares: Welch average of Hann-windowed segments,
+/// sqrt of the averaged power, bins 0..segment/2 (bin k at k rate / segment Hz).
+std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment = 512);
 
 struct AdfResult {
   double statistic = 0;     ///< t statistic of gamma in dy = a + gamma y[-1] + sum d_i dy[-i]
@@ -101,6 +112,7 @@ struct CvRow {
   double speed_mps = 0, force_N = 0;
   bool train = false;
   double es = 0;
+  std::vector<double> measured_spectrum, synthesized_spectrum;  ///< WelchMagnitude of each
 };
 struct CvResult {
   std::vector<CvRow> rows;

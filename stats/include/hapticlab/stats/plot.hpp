@@ -41,4 +41,14 @@ struct BoxPlot {
 /// Tukey box plots (hinges, 1.5 IQR whiskers, outliers as points); `<base>.svg/.png`.
 std::vector<std::string> DrawBoxPlot(const BoxPlot& plot, const std::string& base);
 
+/// Curves over a common x axis (e.g. measured and synthesized spectra, Figs. 3.5/3.6).
+struct LinePlot {
+  std::string title, x_label, y_label;
+  std::vector<double> x;
+  std::vector<std::pair<std::string, std::vector<double>>> series;  ///< name, y per x
+  bool log_y = false;  ///< plot log10(y) (labelled as such)
+};
+/// `<base>.svg` and `<base>.png`.
+std::vector<std::string> DrawLinePlot(const LinePlot& plot, const std::string& base);
+
 }  // namespace hapticlab::stats
