@@ -163,7 +163,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       r.Error(&(*cells)[i], prefix, "expected a table");
       continue;
     }
-    CheckKnownKeys(r, *c, prefix, {"speed_mps", "force_N", "ar", "variance", "ma", "gain"});
+    CheckKnownKeys(r, *c, prefix, {"speed_mps", "force_N", "ar", "lsf", "variance", "ma", "gain"});
     ArCell cell;
     cell.speed_mps = r.Number(*c, prefix, "speed_mps", true).value_or(0);
     cell.force_N = r.Number(*c, prefix, "force_N", true).value_or(0);
@@ -179,6 +179,13 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
                    "unstable AR filter (a root of A(z) on or outside the unit circle)");
     } else {
       cell.lsf = ArToLsf(cell.coeffs);
+      // Stored LSFs (written by fit-vibration) must describe the same filter.
+      const auto stored = r.Numbers(*c, prefix, "lsf", false);
+      if (!stored.empty()) {
+        bool same = stored.size() == cell.lsf.size();
+        for (std::size_t k = 0; same && k < stored.size(); ++k) same = std::abs(stored[k] - cell.lsf[k]) < 1e-6;
+        if (!same) r.diag().Add(r.file(), line, prefix + ".lsf", "does not match the AR coefficients of the cell");
+      }
     }
     cell.ma = r.Numbers(*c, prefix, "ma", false);
     cell.gain = r.Number(*c, prefix, "gain", false).value_or(1.0);
@@ -419,6 +426,7 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
       s += fmt::format("\n[[vibration.cells]]\nspeed_mps = {:.17g}\nforce_N = {:.17g}\nvariance = {:.17g}\n",
                        c.speed_mps, c.force_N, c.variance);
       s += "ar = " + list(c.coeffs) + "\n";
+      if (!c.lsf.empty()) s += "lsf = " + list(c.lsf) + "  # rad/sample, derived from ar\n";
       if (!c.ma.empty()) s += "ma = " + list(c.ma) + fmt::format("\ngain = {:.17g}\n", c.gain);
     }
   }
