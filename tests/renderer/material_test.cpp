@@ -102,6 +102,17 @@ TEST(Material, ReportsEveryProblemWithLineAndKey) {
   }
 }
 
+TEST(Material, StoredLsfsMustMatchTheCoefficients) {
+  std::string text = kGood;
+  text.replace(text.find("ar = [0.5, -0.2]"), 16, "ar = [0.5, -0.2]\nlsf = [0.1, 0.2]");
+  try {
+    ParseMaterial(text, "l.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vibration.cells[0].lsf: does not match"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Material, SyntaxErrorsNameTheLine) {
   try {
     ParseMaterial("name = \"x\"\n[contact\n", "syn.toml");
