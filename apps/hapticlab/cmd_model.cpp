@@ -13,6 +13,7 @@
 #include "hapticlab/renderer/energy.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/modeling/contact.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include <filesystem>
@@ -404,6 +405,64 @@ void AddCutoff(CLI::App& model) {
   });
 }
 
+void AddFitContact(CLI::App& model) {
+  struct O {
+    std::string measurement, pokes, out;
+    bool json = false;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "fit-contact",
+      "Identify friction (Dahl: Algorithm 1, then a Ceres batch refinement) from strokes and\n"
+      "stiffness (Hunt-Crossley K, B, n by Ceres, samples above 2 N discarded) from pokes, on a\n"
+      "flat sample with its surface at z = 0 (dissertation ch. IV.3). Pokes are the samples\n"
+      "without sliding in --measurement, or a separate --pokes file. Writes the [contact] and\n"
+      "[friction] tables of a material model.");
+  cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")->required();
+  cmd->add_option("--pokes", o->pokes, "Pokes in a separate measurement CSV v1");
+  cmd->add_option("-o,--out", o->out, "TOML with [contact] and [friction] to write")->required();
+  cmd->add_flag("--json", o->json, "Print {\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b}} with uncertainties");
+  cmd->callback([o] {
+    RunGuarded([&] {
+      const auto m = ReadMeasurementCsv(o->measurement);
+      Measurement strokes, pokes;
+      modeling::SplitStrokesAndPokes(m, &strokes, &pokes);
+      if (!o->pokes.empty()) pokes = ReadMeasurementCsv(o->pokes);
+      const auto d = modeling::FitDahl(strokes);
+      const auto h = modeling::FitHuntCrossley(pokes);
+      FILE* f = std::fopen(o->out.c_str(), "w");
+      if (!f) throw std::runtime_error(o->out + ": cannot write");
+      std::fputs(fmt::format("# Fitted by hapticlab model fit-contact from {} (SI units).\n"
+                             "[contact]\ntexture_K = {:.10g}  # +- {:.3g}\ntexture_B = {:.10g}  # +- {:.3g}\n"
+                             "texture_n = {:.10g}  # +- {:.3g}\n\n[friction]\nkappa_N_per_m = {:.10g}  # +- {:.3g}\n"
+                             "mu_k = {:.10g}  # +- {:.3g}\nmu_b_Ns_per_m = {:.10g}  # +- {:.3g}\n",
+                             o->measurement, h.K.value, h.K.sd, h.B.value, h.B.sd, h.n.value, h.n.sd, d.kappa_N_per_m.value,
+                             d.kappa_N_per_m.sd, d.mu_k.value, d.mu_k.sd, d.mu_b_Ns_per_m.value, d.mu_b_Ns_per_m.sd)
+                     .c_str(),
+                 f);
+      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+      if (o->json) {
+        auto est = [](const modeling::Estimate& e) { return nlohmann::json{{"value", e.value}, {"sd", e.sd}}; };
+        fmt::print("{}\n", nlohmann::json{
+                               {"hunt_crossley", {{"K", h.K.value}, {"B", h.B.value}, {"n", h.n.value}}},
+                               {"dahl", {{"kappa", d.kappa_N_per_m.value}, {"mu_k", d.mu_k.value}, {"mu_b", d.mu_b_Ns_per_m.value}}},
+                               {"uncertainty", {{"K", est(h.K)}, {"B", est(h.B)}, {"n", est(h.n)}, {"kappa", est(d.kappa_N_per_m)},
+                                                {"mu_k", est(d.mu_k)}, {"mu_b", est(d.mu_b_Ns_per_m)}}},
+                               {"residual_rms_N", {{"hunt_crossley", h.rms_residual_N}, {"dahl", d.rms_residual_N}}},
+                               {"algorithm1", {{"passes", d.algorithm1_passes}, {"converged", d.algorithm1_converged}}}}
+                               .dump(2));
+      } else {
+        fmt::print("Hunt-Crossley ({} samples <= 2 N): K = {:.4g} +- {:.2g}, B = {:.4g} +- {:.2g}, n = {:.4f} +- {:.2g}; rms {:.4f} N\n",
+                   h.samples, h.K.value, h.K.sd, h.B.value, h.B.sd, h.n.value, h.n.sd, h.rms_residual_N);
+        fmt::print("Dahl (Algorithm 1: {} passes{}): kappa = {:.4g} +- {:.2g} N/m, mu_k = {:.4f} +- {:.2g}, mu_b = {:.4f} +- {:.2g} N s/m; rms {:.4f} N\n",
+                   d.algorithm1_passes, d.algorithm1_converged ? "" : ", not converged", d.kappa_N_per_m.value,
+                   d.kappa_N_per_m.sd, d.mu_k.value, d.mu_k.sd, d.mu_b_Ns_per_m.value, d.mu_b_Ns_per_m.sd, d.rms_residual_N);
+      }
+      return kExitOk;
+    });
+  });
+}
+
 }  // namespace
 
 void RegisterModel(CLI::App& app) {
@@ -418,6 +477,7 @@ void RegisterModel(CLI::App& app) {
   AddFitVibration(*model);
   AddCvVibration(*model);
   AddCutoff(*model);
+  AddFitContact(*model);
 }
 
 }  // namespace hapticlab::cli
