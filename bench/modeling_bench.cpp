@@ -11,6 +11,7 @@
 #include <numbers>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/modeling/photometric.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/renderer/vibration.hpp"
 
@@ -53,6 +54,25 @@ void FitHundredMaterialsMedium(benchmark::State& s) { Fit(s, modeling::ResampleQ
 void FitHundredMaterialsFastest(benchmark::State& s) { Fit(s, modeling::ResampleQuality::kFastest); }
 BENCHMARK(FitHundredMaterialsMedium)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 BENCHMARK(FitHundredMaterialsFastest)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
+
+// Photometric stereo: 30 images of 1024 x 1024 (the dome) -> normals and height map.
+void Photometric30x1024(benchmark::State& state) {
+  const int n = 1024;
+  const auto lights = modeling::DomePreset();
+  modeling::ImageStack st;
+  st.width = st.height = n;
+  for (const auto& l : lights) {
+    std::vector<float> img(static_cast<std::size_t>(n) * n);
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const Eigen::Vector3d nn = Eigen::Vector3d(-0.2 * std::cos(0.05 * j), 0.1 * std::sin(0.03 * i), 1).normalized();
+        img[static_cast<std::size_t>(i) * n + static_cast<std::size_t>(j)] = static_cast<float>(0.8 * std::max(0.0, l.direction.dot(nn)));
+      }
+    st.images.push_back(std::move(img));
+  }
+  for (auto _ : state) benchmark::DoNotOptimize(modeling::PhotometricStereo(st, lights, {}).height_m.data());
+}
+BENCHMARK(Photometric30x1024)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
 }  // namespace
 

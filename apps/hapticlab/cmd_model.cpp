@@ -9,11 +9,16 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/measurement.hpp"
+#include <unistd.h>
 #include "hapticlab/renderer/energy.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
 #include "hapticlab/modeling/contact.hpp"
+#include "hapticlab/modeling/photometric.hpp"
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 #include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include <filesystem>
@@ -28,6 +33,7 @@ void AddCheck(CLI::App& model) {
   auto path = std::make_shared<std::string>();
   auto json = std::make_shared<bool>(false);
   auto* cmd = model.add_subcommand("check", "Load and validate a material model; print a summary");
+  cmd->alias("show");
   cmd->add_option("MODEL", *path, "Material model (.toml)")->required();
   cmd->add_flag("--json", *json, "Print the summary as JSON");
   cmd->callback([path, json] {
@@ -463,6 +469,123 @@ void AddFitContact(CLI::App& model) {
   });
 }
 
+void AddPhotometric(CLI::App& model) {
+  struct O {
+    std::string images, lights = "dome", reference, out, csv, tiff, normals;
+    double pitch = 0;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "photometric",
+      "Height map from photographs under known lights (photometric stereo, ch. IV.2): albedo and\n"
+      "normals by alternating least squares on the Lambertian model with shadow/specular\n"
+      "rejection, integrated by Frankot-Chellappa. Writes HEIGHT.f32 (the renderer's raw\n"
+      "float32 metres) and HEIGHT.f32.toml (its [geometry] table for `model build`).");
+  cmd->add_option("--images", o->images, "Folder of the images (8/16-bit PNG or TIFF)")->required();
+  cmd->add_option("--lights", o->lights,
+                  "Lights file (file,elevation_deg,azimuth_deg or file,lx,ly,lz), or 'dome' for the\n"
+                  "dissertation's 30-light dome with images light_00.png ... light_29.png")->capture_default_str();
+  cmd->add_option("--reference", o->reference, "Folder of white-reference images (same names) for the radiance maps");
+  cmd->add_option("--pitch-m", o->pitch, "Pixel pitch on the sample [m]")->required()->check(CLI::PositiveNumber);
+  cmd->add_option("-o,--out", o->out, "Height map to write (.f32)")->required();
+  cmd->add_option("--csv", o->csv, "Also write heights [m] as CSV (one image row per line)");
+  cmd->add_option("--tiff", o->tiff, "Also write heights [m] as a 32-bit float TIFF");
+  cmd->add_option("--normals", o->normals, "Also write the normals as an RGB PNG");
+  cmd->callback([o] {
+    RunGuarded([&] {
+      const auto lights = modeling::LoadLights(o->lights);
+      const auto images = modeling::ReadImages(o->images, lights);
+      modeling::ImageStack ref;
+      if (!o->reference.empty()) ref = modeling::ReadImages(o->reference, lights);
+      const bool tty = isatty(2);
+      auto progress = [&](double f) {
+        if (tty) fmt::print(stderr, "\rphotometric stereo [{:<40}] {:3.0f} %", std::string(static_cast<std::size_t>(40 * f), '#'), 100 * f);
+      };
+      const auto r = modeling::PhotometricStereo(images, lights, {.pitch_m = o->pitch},
+                                                 o->reference.empty() ? nullptr : &ref, progress);
+      if (tty) fmt::print(stderr, "\n");
+      float lo = *std::min_element(r.height_m.begin(), r.height_m.end());
+      std::vector<float> h(r.height_m);
+      for (auto& v : h) v -= lo;  // heights above the lowest point
+      renderer::HeightMap(r.width, r.height, o->pitch, h).SaveRawF32(o->out);
+      {
+        FILE* g = std::fopen((o->out + ".toml").c_str(), "w");
+        if (!g) throw std::runtime_error(o->out + ".toml: cannot write");
+        std::fputs(fmt::format("[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = {}\npitch_m = {:.10g}\n",
+                               std::filesystem::path(o->out).filename().string(), r.width, r.height, o->pitch).c_str(), g);
+        std::fclose(g);
+      }
+      if (!o->csv.empty()) {
+        FILE* c = std::fopen(o->csv.c_str(), "w");
+        if (!c) throw std::runtime_error(o->csv + ": cannot write");
+        for (int i = 0; i < r.height; ++i)
+          for (int j = 0; j < r.width; ++j)
+            std::fprintf(c, "%.9g%c", h[static_cast<std::size_t>(i * r.width + j)], j + 1 == r.width ? '\n' : ',');
+        std::fclose(c);
+      }
+      if (!o->tiff.empty()) {
+        cv::Mat m(r.height, r.width, CV_32F, h.data());
+        if (!cv::imwrite(o->tiff, m)) throw std::runtime_error(o->tiff + ": cannot write TIFF");
+      }
+      if (!o->normals.empty()) {
+        cv::Mat m(r.height, r.width, CV_8UC3);
+        for (int i = 0; i < r.height; ++i)
+          for (int j = 0; j < r.width; ++j) {
+            const auto& n = r.normals[static_cast<std::size_t>(i * r.width + j)];
+            m.at<cv::Vec3b>(i, j) = cv::Vec3b(static_cast<unsigned char>(127.5 * (n.z() + 1)), static_cast<unsigned char>(127.5 * (n.y() + 1)),
+                                              static_cast<unsigned char>(127.5 * (n.x() + 1)));  // BGR
+          }
+        if (!cv::imwrite(o->normals, m)) throw std::runtime_error(o->normals + ": cannot write PNG");
+      }
+      fmt::print("{}x{} height map, range {:.3g} m -> {} (+ {}.toml)\n", r.width, r.height,
+                 *std::max_element(h.begin(), h.end()), o->out, o->out);
+      return kExitOk;
+    });
+  });
+}
+
+void AddBuild(CLI::App& model) {
+  struct O {
+    std::string name, height, contact, vibration, out;
+    double cutoff = 100;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "build", "Assemble a complete material model from a height map (its .f32.toml from `model photometric`),\n"
+               "a contact fit (`model fit-contact`) and a vibration bank (`model fit-vibration`).");
+  cmd->add_option("--name", o->name, "Material name")->required();
+  cmd->add_option("--height", o->height, "Geometry TOML written beside the height map (HEIGHT.f32.toml)")->required();
+  cmd->add_option("--contact", o->contact, "CONTACT.toml from fit-contact")->required();
+  cmd->add_option("--vibration", o->vibration, "BANK.toml from fit-vibration")->required();
+  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid filter cut-off f_c [Hz] (see `model cutoff`)")->capture_default_str();
+  cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
+  cmd->callback([o] {
+    RunGuarded([&] {
+      namespace fs = std::filesystem;
+      const auto outdir = fs::absolute(o->out).parent_path();
+      auto rel = [&](const std::string& p) { return fs::relative(fs::absolute(p), outdir).string(); };
+      // The geometry table points at the .f32 next to it: re-point it relative to the model.
+      std::string geometry = ReadTextFile(o->height, "geometry table");
+      const auto f32 = (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();
+      const auto pos = geometry.find("file = ");
+      if (pos == std::string::npos) throw InputError(o->height, 0, "geometry.file", "missing");
+      geometry.replace(pos, geometry.find('\n', pos) - pos, "file = \"" + rel(f32) + "\"");
+      const std::string text = fmt::format(
+          "name = \"{}\"\neffects = [\"coulomb\", \"viscous\", \"dahl\", \"hc-damping\", \"vibration-speed\", "
+          "\"vibration-force\"]\n\n{}\n{}\n[hybrid]\ncutoff_hz = {:.10g}\n\n[vibration]\nfile = \"{}\"\n",
+          o->name, ReadTextFile(o->contact, "contact fit"), geometry, o->cutoff, rel(o->vibration));
+      FILE* f = std::fopen(o->out.c_str(), "w");
+      if (!f) throw std::runtime_error(o->out + ": cannot write");
+      std::fputs(text.c_str(), f);
+      std::fclose(f);
+      const auto m = renderer::LoadMaterial(o->out);  // validates the assembled model
+      fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz)\n", o->out, m.name, m.geometry->width(),
+                 m.geometry->height(), m.vibration.cells.size(), m.hybrid_cutoff_hz);
+      return kExitOk;
+    });
+  });
+}
+
 }  // namespace
 
 void RegisterModel(CLI::App& app) {
@@ -478,6 +601,8 @@ void RegisterModel(CLI::App& app) {
   AddCvVibration(*model);
   AddCutoff(*model);
   AddFitContact(*model);
+  AddPhotometric(*model);
+  AddBuild(*model);
 }
 
 }  // namespace hapticlab::cli

@@ -10,6 +10,11 @@
 #include <numbers>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+#include <filesystem>
+#include <opencv2/imgcodecs.hpp>
 
 namespace hapticlab::modeling {
 namespace {
@@ -123,6 +128,21 @@ TEST(Photometric, RoughSurfaceAndThreeShadowedLights) {
   EXPECT_LT(e.height_rms_fraction, 0.05);
 }
 
+TEST(Photometric, PlateauWithSmoothStepsRecovered) {
+  // A raised plateau (steps up and down, 40 µm, edges 4 pixels wide): periodic, integrable.
+  const double H = 40e-6, w = 4 * kPitch, a = kN * kPitch * 0.3, b = kN * kPitch * 0.7;
+  auto step = [&](double x) { return 0.5 * (std::tanh((x - a) / w) - std::tanh((x - b) / w)); };
+  auto dstep = [&](double x) {
+    return 0.5 / w * (1 / std::pow(std::cosh((x - a) / w), 2) - 1 / std::pow(std::cosh((x - b) / w), 2));
+  };
+  const auto f = Make([&](double x, double) { return H * step(x); }, [&](double x, double) { return Eigen::Vector2d(H * dstep(x), 0); });
+  const auto L = DomePreset();
+  const auto e = Compare(f, PhotometricStereo(Render(f, L, 0.01, 4), L, {.pitch_m = kPitch}));
+  std::printf("plateau: mean normal error %.3f deg, height RMS %.2f %%\n", e.mean_angle_deg, 100 * e.height_rms_fraction);
+  EXPECT_LT(e.mean_angle_deg, 2.0);
+  EXPECT_LT(e.height_rms_fraction, 0.05);
+}
+
 TEST(Photometric, SphereNormalsAreExact) {
   // A spherical cap: the classic case with known normals (height not periodic: normals only).
   const double R = kN * kPitch * 0.6, c = kN * kPitch / 2;
@@ -140,6 +160,41 @@ TEST(Photometric, SphereNormalsAreExact) {
       worst = std::max(worst, std::acos(std::clamp(static_cast<double>(f.n[k].dot(r.normals[k])), -1.0, 1.0)) * 180 / kPi);
     }
   EXPECT_LT(worst, 0.5);
+}
+
+TEST(Photometric, CommandLineFromPngsToABuiltModel) {
+  test::TempDir dir;
+  const double A = 20e-6, l = kN * kPitch / 4;
+  const auto f = Make([&](double x, double) { return A * std::sin(2 * kPi * x / l); },
+                      [&](double x, double) { return Eigen::Vector2d(A * 2 * kPi / l * std::cos(2 * kPi * x / l), 0); });
+  const auto L = DomePreset();
+  const auto imgs = Render(f, L, 0.0, 7);
+  std::filesystem::create_directory(dir.File("img"));
+  for (std::size_t j = 0; j < L.size(); ++j) {
+    cv::Mat m(kN, kN, CV_16U);
+    for (int i = 0; i < kN * kN; ++i) m.at<std::uint16_t>(i / kN, i % kN) = static_cast<std::uint16_t>(65535 * imgs.images[j][static_cast<std::size_t>(i)]);
+    ASSERT_TRUE(cv::imwrite(dir.File("img/" + L[j].file), m));
+  }
+  std::string out;
+  ASSERT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " + dir.File("img") +
+                                 " --lights dome --pitch-m 2e-5 -o " + dir.File("h.f32") + " --csv " + dir.File("h.csv") +
+                                 " --normals " + dir.File("n.png"), &out), 0) << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.File("n.png")));
+  test::WriteFile(dir.File("contact.toml"), "[contact]\ntexture_K = 900.0\n\n[friction]\nkappa_N_per_m = 2000.0\nmu_k = 0.3\n");
+  test::WriteFile(dir.File("bank.toml"), "[vibration]\nsample_rate_hz = 2000.0\n[[vibration.cells]]\nspeed_mps = 0.08\n"
+                                         "force_N = 1.0\nar = [0.5]\nvariance = 1.0\n");
+  ASSERT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model build --name Sine --height " + dir.File("h.f32.toml") +
+                                 " --contact " + dir.File("contact.toml") + " --vibration " + dir.File("bank.toml") + " -o " +
+                                 dir.File("model.toml"), &out), 0) << out;
+  const auto m = renderer::LoadMaterial(dir.File("model.toml"));
+  EXPECT_EQ(m.geometry->width(), kN);
+  EXPECT_NEAR(m.geometry->max_m() - m.geometry->min_m(), 2 * A, 0.05 * 2 * A);  // 16-bit images, no noise
+  EXPECT_DOUBLE_EQ(m.friction.mu_k, 0.3);
+  // A missing image is named.
+  std::filesystem::remove(dir.File("img/light_07.png"));
+  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " + dir.File("img") +
+                                 " --lights dome --pitch-m 2e-5 -o " + dir.File("h2.f32"), &out), 2);
+  EXPECT_NE(out.find("light_07.png"), std::string::npos) << out;
 }
 
 }  // namespace
