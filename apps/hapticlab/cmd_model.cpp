@@ -471,7 +471,7 @@ void AddFitContact(CLI::App& model) {
 
 void AddPhotometric(CLI::App& model) {
   struct O {
-    std::string images, lights = "dome", reference, out, csv, tiff, normals;
+    std::string images, lights = "dome", reference, out, csv, tiff, normals, integration = "frankot-chellappa";
     double pitch = 0;
   };
   auto o = std::make_shared<O>();
@@ -487,6 +487,8 @@ void AddPhotometric(CLI::App& model) {
                   "dissertation's 30-light dome with images light_00.png ... light_29.png")->capture_default_str();
   cmd->add_option("--reference", o->reference, "Folder of white-reference images (same names) for the radiance maps");
   cmd->add_option("--pitch-m", o->pitch, "Pixel pitch on the sample [m]")->required()->check(CLI::PositiveNumber);
+  cmd->add_option("--integration", o->integration, "frankot-chellappa (periodic, FFT) or poisson (Neumann, DCT)")
+      ->check(CLI::IsMember({"frankot-chellappa", "poisson"}))->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Height map to write (.f32)")->required();
   cmd->add_option("--csv", o->csv, "Also write heights [m] as CSV (one image row per line)");
   cmd->add_option("--tiff", o->tiff, "Also write heights [m] as a 32-bit float TIFF");
@@ -501,7 +503,10 @@ void AddPhotometric(CLI::App& model) {
       auto progress = [&](double f) {
         if (tty) fmt::print(stderr, "\rphotometric stereo [{:<40}] {:3.0f} %", std::string(static_cast<std::size_t>(40 * f), '#'), 100 * f);
       };
-      const auto r = modeling::PhotometricStereo(images, lights, {.pitch_m = o->pitch},
+      const auto r = modeling::PhotometricStereo(images, lights,
+                                                 {.pitch_m = o->pitch,
+                                                  .integration = o->integration == "poisson" ? modeling::Integration::kPoisson
+                                                                                              : modeling::Integration::kFrankotChellappa},
                                                  o->reference.empty() ? nullptr : &ref, progress);
       if (tty) fmt::print(stderr, "\n");
       float lo = *std::min_element(r.height_m.begin(), r.height_m.end());

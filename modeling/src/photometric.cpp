@@ -155,7 +155,8 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     r.albedo[i] = static_cast<float>(a);
     if (a > 0 && b[i].z() > 0) r.normals[i] = (b[i] / a).cast<float>();
   }
-  r.height_m = IntegrateNormals(r.normals, r.width, r.height, o.pitch_m);
+  r.height_m = o.integration == Integration::kPoisson ? IntegrateNormalsPoisson(r.normals, r.width, r.height, o.pitch_m)
+                                                      : IntegrateNormals(r.normals, r.width, r.height, o.pitch_m);
   return r;
 }
 
@@ -198,6 +199,49 @@ std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& nrm, int
   const double norm = static_cast<double>(w) * static_cast<double>(h);
   for (std::size_t i = 0; i < out.size(); ++i) hgt[i] = static_cast<float>(out[i] / norm * pitch);
   return hgt;
+}
+
+std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& nrm, int w, int h, double pitch) {
+  // Divergence of the gradient field with backward differences (zero gradient outside), the
+  // discrete Laplacian with Neumann boundary diagonalised by the DCT-II [Simchony,
+  // Chellappa, Shao 1990, doi:10.1109/34.55103].
+  const auto W = static_cast<std::size_t>(w), H = static_cast<std::size_t>(h);
+  std::vector<double> p(W * H), q(W * H), f(W * H), z(W * H);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double nz = std::max(static_cast<double>(nrm[i].z()), 1e-3);
+    p[i] = -nrm[i].x() / nz;
+    q[i] = -nrm[i].y() / nz;
+  }
+  for (std::size_t i = 0; i < H; ++i)
+    for (std::size_t j = 0; j < W; ++j) {
+      const std::size_t k = i * W + j;
+      const double px = (j + 1 < W ? p[k] : 0.0) - (j > 0 ? p[k - 1] : 0.0);
+      const double qy = (i + 1 < H ? q[k] : 0.0) - (i > 0 ? q[k - W] : 0.0);
+      f[k] = px + qy;
+    }
+  static std::mutex mu;
+  fftw_plan fwd, inv;
+  {
+    std::lock_guard lock(mu);
+    fwd = fftw_plan_r2r_2d(h, w, f.data(), z.data(), FFTW_REDFT10, FFTW_REDFT10, FFTW_ESTIMATE);
+    inv = fftw_plan_r2r_2d(h, w, z.data(), f.data(), FFTW_REDFT01, FFTW_REDFT01, FFTW_ESTIMATE);
+  }
+  fftw_execute(fwd);
+  for (std::size_t i = 0; i < H; ++i)
+    for (std::size_t j = 0; j < W; ++j) {
+      const double lam = 2 * std::cos(kPi * static_cast<double>(j) / w) + 2 * std::cos(kPi * static_cast<double>(i) / h) - 4;
+      z[i * W + j] = (i == 0 && j == 0) ? 0.0 : z[i * W + j] / lam;
+    }
+  fftw_execute(inv);
+  {
+    std::lock_guard lock(mu);
+    fftw_destroy_plan(fwd);
+    fftw_destroy_plan(inv);
+  }
+  std::vector<float> out(W * H);
+  const double norm = 4.0 * static_cast<double>(W) * static_cast<double>(H);
+  for (std::size_t i = 0; i < out.size(); ++i) out[i] = static_cast<float>(f[i] / norm * pitch);
+  return out;
 }
 
 }  // namespace hapticlab::modeling

@@ -34,8 +34,15 @@ struct ImageStack {
 /// @throws InputError naming the file on unreadable images or size mismatches.
 ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights);
 
+/// How normals become heights.
+enum class Integration {
+  kFrankotChellappa,  ///< FFT, periodic boundary (best for textures that tile)
+  kPoisson,           ///< DCT Poisson solve, Neumann boundary (no periodicity assumed)
+};
+
 struct PhotometricOptions {
   double pitch_m = 20e-6;         ///< pixel pitch on the sample [m]
+  Integration integration = Integration::kFrankotChellappa;
   double shadow_fraction = 0.05;  ///< intensities below this fraction of the pixel's maximum are shadows
   double specular_fraction = 0.1; ///< the brightest fraction of a pixel's lights is dropped when >= 6 remain
   int iterations = 3;             ///< alternations between normals and per-light intensities
@@ -60,5 +67,8 @@ PhotometricResult PhotometricStereo(const ImageStack& images, const std::vector<
 /// Frankot-Chellappa: the height whose gradient is closest (least squares, periodic
 /// boundary) to (p, q) = (dh/dx, dh/dy) in height units per pixel; scaled by pitch_m.
 std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& normals, int width, int height, double pitch_m);
+/// The same by a Poisson solve with Neumann boundary (DCT, FFTW): lap z = div (p, q).
+std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& normals, int width, int height,
+                                           double pitch_m);
 
 }  // namespace hapticlab::modeling
