@@ -255,7 +255,7 @@ Interaction StrokeReal(const MaterialProfile& p, const Stroke& s, double duratio
   out.vibration.reserve(n * static_cast<std::size_t>(per));
   std::vector<double> pen;
   pen.reserve(n);
-  double fn_prev = 0, vz = 0;
+  double vz = 0;
   for (std::size_t k = 0; k < n; ++k) {
     const double t = static_cast<double>(k) * dt;
     double x, y, vx, vy;
@@ -298,9 +298,7 @@ Interaction StrokeReal(const MaterialProfile& p, const Stroke& s, double duratio
       out.vibration.push_back(static_cast<float>(a + (contact ? micro_dd * speed * speed : 0.0) + a_force));
     }
     vz = hand.Step(fn, dt);
-    fn_prev = fn;
   }
-  (void)fn_prev;
   out.features = Extract(out, pen);
   return out;
 }

@@ -188,8 +188,6 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         return sum;
       }
-      const auto& planned = trials[static_cast<std::size_t>(t.plan_index)];
-      (void)planned;
       database.StartTrial(t.id);
       ++t.attempts;
       ++sum.executed;

@@ -271,7 +271,7 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
           }
           bm.error_label = "95% CI (limits: SE)";
         } else if (tests.count("kruskal") && methods.size() >= 2) {
-          const auto kw = KruskalWallis(cells.Where({}), "method");
+          const auto kw = KruskalWallis(cells, "method");
           md << fmt::format("\nKruskal-Wallis on cell means by method: H({:.0f}) = {:.2f}, p = {}.\n", kw.df, kw.H, P(kw.p));
         }
         const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <functional>
 #include <map>
 #include <random>
 #include <thread>
@@ -175,33 +176,64 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
   EXPECT_EQ(StudyStatus(db, "P09")[0].duplicates, 0);
 }
 
-TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
-  // 20 simulated participants on the chapter V.3 protocol: hybrid rendering is rated more
-  // similar to the real samples in roughness than force-only and vibration-only, because
-  // only it reproduces both the force fluctuation and the vibration the real samples give.
-  test::TempDir dir;
-  const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml");
+// Runs `n` simulated participants S1..Sn of a shipped study protocol into `db_path`, then
+// returns the mean score per key over the ratings for which `key` returns a non-empty key.
+std::map<std::string, double> SimulateAndAverage(
+    const std::string& study, int n, const std::string& db_path,
+    const std::function<std::string(const db::Trial&, const db::Rating&)>& key) {
+  const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/shin2019/" + study);
   RunOptions o;
-  o.db_path = dir.File("ch5.db");
+  o.db_path = db_path;
   o.record = RecordMode::kNone;
-  for (int i = 1; i <= 20; ++i) {
+  for (int i = 1; i <= n; ++i) {
     o.participant = "S" + std::to_string(i);
-    ASSERT_EQ(RunStudy(p, o).status, "completed");
+    EXPECT_EQ(RunStudy(p, o).status, "completed") << o.participant;
   }
-  db::Database d(o.db_path);
-  std::map<std::string, std::pair<double, int>> rough;
+  db::Database d(db_path);
+  std::map<std::string, std::pair<double, int>> sums;
   for (const auto& st : d.Studies())
     for (const auto& part : d.Participants(st.id))
       for (const auto& se : d.Sessions(part.id))
         for (const auto& t : d.Trials(se.id))
           for (const auto& r : d.Ratings(t.id))
-            if (t.phase == "main" && r.criterion == "roughness") {
-              rough[t.method].first += r.score;
-              rough[t.method].second += 1;
+            if (const std::string k = key(t, r); !k.empty()) {
+              sums[k].first += r.score;
+              sums[k].second += 1;
             }
-  const double hybrid = rough["Hybrid"].first / rough["Hybrid"].second;
-  const double ff = rough["FF"].first / rough["FF"].second;
-  const double lpc = rough["LPC"].first / rough["LPC"].second;
+  std::map<std::string, double> means;
+  for (const auto& [k, s] : sums) means[k] = s.first / s.second;
+  return means;
+}
+
+TEST(StudyRunner, SimulatedChapter4RealRealPairsSpanTheThesisLimits) {
+  // 10 simulated participants on the chapter IV.5 protocol's reference phase: a material
+  // against itself is rated near the observer's upper limit U = 78 (the thesis's real-real
+  // ceiling), different materials well below it. Catches a broken perceptual distance (same
+  // pairs not at the top) or a broken similarity map (no separation).
+  test::TempDir dir;
+  const auto m = SimulateAndAverage("ch4-realism.toml", 10, dir.File("ch4.db"),
+                                    [](const db::Trial& t, const db::Rating&) -> std::string {
+                                      if (t.phase != "reference") return "";
+                                      return t.material == t.comparison ? "same" : "different";
+                                    });
+  ASSERT_EQ(m.count("same"), 1u);
+  ASSERT_EQ(m.count("different"), 1u);
+  std::printf("real-real similarity: same material %.1f, different materials %.1f\n", m.at("same"), m.at("different"));
+  EXPECT_GT(m.at("same"), 72.0);
+  EXPECT_LT(m.at("same"), 84.0);
+  EXPECT_LT(m.at("different"), m.at("same") - 10.0);
+}
+
+TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
+  // 20 simulated participants on the chapter V.3 protocol: hybrid rendering is rated more
+  // similar to the real samples in roughness than force-only and vibration-only, because
+  // only it reproduces both the force fluctuation and the vibration the real samples give.
+  test::TempDir dir;
+  const auto rough = SimulateAndAverage("ch5-hybrid-realism.toml", 20, dir.File("ch5.db"),
+                                        [](const db::Trial& t, const db::Rating& r) -> std::string {
+                                          return t.phase == "main" && r.criterion == "roughness" ? t.method : "";
+                                        });
+  const double hybrid = rough.at("Hybrid"), ff = rough.at("FF"), lpc = rough.at("LPC");
   std::printf("roughness similarity: Hybrid %.1f, FF %.1f, LPC %.1f\n", hybrid, ff, lpc);
   EXPECT_GT(hybrid, ff);
   EXPECT_GT(hybrid, lpc);
