@@ -236,7 +236,7 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
   MaterialModel m;
   m.source_path = name;
   CheckKnownKeys(r, doc, "", {"name", "effects", "contact", "friction", "geometry", "vibration",
-                              "hybrid", "notes"});
+                              "hybrid", "notes", "workbench"});
   m.name = r.String(doc, "", "name", true).value_or("");
   if (const toml::node* e = doc.get("effects")) {
     if (const toml::array* arr = e->as_array()) {

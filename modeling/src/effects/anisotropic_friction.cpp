@@ -1,0 +1,52 @@
+// anisotropic-friction: the friction coefficient depends on the direction of motion.
+#include <numbers>
+
+#include "effect_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+using namespace detail;
+
+class AnisotropicFriction final : public Effect {
+ public:
+  std::string_view name() const override { return "anisotropic-friction"; }
+  Channel channel() const override { return Channel::kFriction; }
+  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
+  std::string_view description() const override {
+    return "Anisotropic friction: the coefficient depends on the direction of motion phi, "
+           "mu(phi) = mu_k (1 + a1 cos phi + b1 sin phi + a2 cos 2phi + b2 sin 2phi). The second "
+           "harmonic describes grain, grooves or weave (along differs from across); the first "
+           "describes a nap or scales that are smoother one way than the other.";
+  }
+  std::vector<ParamSpec> Params(const Replay&) const override {
+    return {{"a1", "1", 0, -0.9, 0.9, 0.1, true, "cos phi"},
+            {"b1", "1", 0, -0.9, 0.9, 0.1, true, "sin phi"},
+            {"a2", "1", 0, -0.9, 0.9, 0.1, true, "cos 2 phi"},
+            {"b2", "1", 0, -0.9, 0.9, 0.1, true, "sin 2 phi"}};
+  }
+  void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
+    const double f = 1 + p[0] * std::cos(s.dir_rad) + p[1] * std::sin(s.dir_rad) + p[2] * std::cos(2 * s.dir_rad) +
+                     p[3] * std::sin(2 * s.dir_rad);
+    t.mu_scale *= std::max(f, 0.05);
+  }
+  std::string Evidence(const Replay& r, const Residuals& res) const override {
+    std::vector<double> edges;
+    for (int k = 0; k <= 8; ++k) edges.push_back(-std::numbers::pi + k * std::numbers::pi / 4);
+    edges.back() += 1e-9;
+    const auto b = BinMeans(
+        r.s.size(), [&](std::size_t i) { return r.s[i].fn_N > 0.05 ? res.friction_N[i] / r.s[i].fn_N : 0; },
+        [&](std::size_t i) { return r.s[i].dir_rad; }, [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; },
+        edges);
+    const int hi = b.ArgMax(), lo = b.ArgMin();
+    if (hi < 0) return "too few sliding samples to judge";
+    const auto deg = [&](int j) { return (b.lo[j] + b.hi[j]) / 2 * 180 / std::numbers::pi; };
+    return fmt::format("friction-ratio residual ranges from {:+.3f} (moving toward {:.0f} deg) to {:+.3f} (toward {:.0f} "
+                       "deg): {}",
+                       b.mean[lo], deg(lo), b.mean[hi], deg(hi),
+                       b.mean[hi] - b.mean[lo] > 0.02 ? "friction depends on the direction of motion"
+                                                      : "little dependence on direction");
+  }
+};
+}  // namespace
+std::unique_ptr<Effect> MakeAnisotropicFriction() { return std::make_unique<AnisotropicFriction>(); }
+}  // namespace hapticlab::modeling::wb

@@ -1,0 +1,58 @@
+// base-layer: a stiffer base under a thin compliant layer (eq. 4.15's base).
+#include "effect_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+using namespace detail;
+
+double Quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
+  std::nth_element(v.begin(), v.begin() + k, v.end());
+  return v[k];
+}
+
+class BaseLayer final : public Effect {
+ public:
+  std::string_view name() const override { return "base-layer"; }
+  Channel channel() const override { return Channel::kNormal; }
+  std::string_view description() const override {
+    return "Stiff base under a thin layer: once the tool has pressed through a compliant layer of "
+           "thickness t it meets a stiffer base, f += K_b max(0, d - t) (the base of dissertation "
+           "eqs. 4.14-4.15; paper on wood, fabric on foam on a plate, a coating on metal). The "
+           "force-penetration curve has a knee at d = t rather than a smooth curvature.";
+  }
+  std::vector<ParamSpec> Params(const Replay& r) const override {
+    std::vector<double> d;
+    for (const auto& s : r.s)
+      if (s.contact) d.push_back(s.d_m);
+    return {{"K_b", "N/m", 500, 0, 1e6, 1000, true, "base stiffness"},
+            {"t", "m", Quantile(d, 0.6), 0, 0.01, 1e-3, true, "layer thickness"}};
+  }
+  void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {
+    t.extra_N += p[0] * std::max(0.0, s.d_m - p[1]);
+  }
+  std::string Evidence(const Replay& r, const Residuals& res) const override {
+    double dmax = 0;
+    for (const auto& s : r.s)
+      if (s.contact) dmax = std::max(dmax, s.d_m);
+    std::vector<double> e;
+    for (int k = 0; k <= 8; ++k) e.push_back(dmax * k / 8);
+    e.back() += 1e-12;
+    const auto b = BinMeans(
+        r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].d_m; },
+        [&](std::size_t i) { return r.s[i].contact; }, e);
+    const int hi = b.Last();
+    if (hi < 2) return "too narrow a range of penetration to judge";
+    // The deepest bin's excess over the trend of the shallower half.
+    const int mid = hi / 2;
+    return fmt::format("normal-force residual is {} around {:.2f} mm and {} at the deepest {:.2f} mm: {}", Mn(b.mean[mid]),
+                       (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500,
+                       b.mean[hi] > b.mean[mid] + 0.01 ? "the contact gets stiffer beyond some depth, a base under the "
+                                                         "layer is felt"
+                                                       : "no stiffening at depth");
+  }
+};
+}  // namespace
+std::unique_ptr<Effect> MakeBaseLayer() { return std::make_unique<BaseLayer>(); }
+}  // namespace hapticlab::modeling::wb

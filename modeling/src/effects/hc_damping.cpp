@@ -1,0 +1,34 @@
+// hc-damping: Hunt-Crossley damping of the contact, the B d^n d_dot term of eq. 4.11.
+#include "effect_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+using namespace detail;
+
+class HcDamping final : public Effect {
+ public:
+  std::string_view name() const override { return "hc-damping"; }
+  Channel channel() const override { return Channel::kNormal; }
+  std::string_view description() const override {
+    return "Hunt-Crossley damping: the normal force depends on the penetration rate as well as on "
+           "the depth, f = (K + B d_dot) (d / 1 mm)^n (dissertation eq. 4.11), so pressing in meets "
+           "more force than releasing at the same depth and the loop dissipates energy. Damping "
+           "scales with depth, so there is no force jump at first contact.";
+  }
+  std::vector<ParamSpec> Params(const Replay&) const override {
+    return {{"B1mm", "N s/m", 0, 0, 1e5, 10, true, "damping at 1 mm penetration"}};
+  }
+  void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.B = p[0]; }
+  std::string Evidence(const Replay& r, const Residuals& res) const override {
+    const double c = Correlation(
+        r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].ddot_mps; },
+        [&](std::size_t i) { return r.s[i].contact; });
+    return fmt::format("normal-force residual correlates with the penetration rate (r = {:+.2f}): {}", c,
+                       c > 0.2 ? "pressing in meets more force than releasing at the same depth, a rate-dependent "
+                                 "(damping) force is missing"
+                               : "little rate dependence");
+  }
+};
+}  // namespace
+std::unique_ptr<Effect> MakeHcDamping() { return std::make_unique<HcDamping>(); }
+}  // namespace hapticlab::modeling::wb

@@ -1,0 +1,43 @@
+// stribeck: friction higher at low sliding speed than at high speed.
+#include "effect_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+using namespace detail;
+
+class Stribeck final : public Effect {
+ public:
+  std::string_view name() const override { return "stribeck"; }
+  Channel channel() const override { return Channel::kFriction; }
+  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
+  std::string_view description() const override {
+    return "Stribeck effect: static and low-speed friction exceed kinetic friction, decaying to "
+           "the Coulomb level over a characteristic speed v_s: f_C = f_n (mu_k + dmu_s "
+           "exp(-(v / v_s)^2)). It comes from boundary lubrication and junction growth at rest, "
+           "and is felt as stick at the start of a stroke.";
+  }
+  std::vector<ParamSpec> Params(const Replay&) const override {
+    return {{"dmu_s", "1", 0.05, 0, 3, 0.1, true, "static minus kinetic coefficient"},
+            {"v_s", "m/s", 0.005, 2e-4, 0.1, 0.005, true, "Stribeck speed"}};
+  }
+  void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
+    const double u = s.speed_mps / p[1];
+    t.mu_add += p[0] * std::exp(-u * u);
+  }
+  std::string Evidence(const Replay& r, const Residuals& res) const override {
+    const auto b = BinMeans(
+        r.s.size(), [&](std::size_t i) { return r.s[i].fn_N > 0.05 ? res.friction_N[i] / r.s[i].fn_N : 0; },
+        [&](std::size_t i) { return r.s[i].speed_mps; }, [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= 0.5e-3; },
+        {0.0005, 0.002, 0.005, 0.01, 0.02, 0.05, 1});
+    const int lo = b.First(10), hi = b.Last();
+    if (lo < 0 || hi < 0) return "too few slow sliding samples to judge";
+    const bool pattern = b.mean[lo] > b.mean[hi] + 0.01;
+    return fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} mm/s and {:+.3f} at {:.0f}-{:.0f} mm/s{}",
+                       b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3, std::min(b.hi[hi], 0.2) * 1e3,
+                       pattern ? ": positive at low speed and decaying with speed, static friction exceeds kinetic"
+                               : ": no excess friction at low speed");
+  }
+};
+}  // namespace
+std::unique_ptr<Effect> MakeStribeck() { return std::make_unique<Stribeck>(); }
+}  // namespace hapticlab::modeling::wb

@@ -1,0 +1,38 @@
+// viscous: friction growing linearly with sliding speed, eq. 4.7's mu_b term.
+#include "effect_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+using namespace detail;
+
+class Viscous final : public Effect {
+ public:
+  std::string_view name() const override { return "viscous"; }
+  Channel channel() const override { return Channel::kFriction; }
+  std::string_view description() const override {
+    return "Viscous friction: a tangential force mu_b v proportional to the sliding velocity, from "
+           "lubricant films, soft coatings or the damping of a compliant surface layer (the mu_b "
+           "term of dissertation eq. 4.7). It shows as friction that keeps rising with speed.";
+  }
+  std::vector<ParamSpec> Params(const Replay&) const override {
+    return {{"mu_b", "N s/m", 0.0, 0, 1000, 1, true, "viscous coefficient"}};
+  }
+  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.mu_b = p[0]; }
+  std::string Evidence(const Replay& r, const Residuals& res) const override {
+    const auto use = [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; };
+    const double c = Correlation(
+        r.s.size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.s[i].speed_mps; }, use);
+    const auto b = BinMeans(
+        r.s.size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.s[i].speed_mps; }, use,
+        {0.003, 0.01, 0.03, 0.06, 0.1, 0.15, 1});
+    const int lo = b.First(), hi = b.Last();
+    if (lo < 0) return "too few sliding samples to judge";
+    return fmt::format("friction residual goes from {} at {:.0f}-{:.0f} mm/s to {} at {:.0f}-{:.0f} mm/s (correlation "
+                       "with speed {:+.2f}): friction {} with sliding speed",
+                       Mn(b.mean[lo]), b.lo[lo] * 1e3, b.hi[lo] * 1e3, Mn(b.mean[hi]), b.lo[hi] * 1e3,
+                       std::min(b.hi[hi], 0.2) * 1e3, c, c > 0 ? "rises" : "does not rise");
+  }
+};
+}  // namespace
+std::unique_ptr<Effect> MakeViscous() { return std::make_unique<Viscous>(); }
+}  // namespace hapticlab::modeling::wb

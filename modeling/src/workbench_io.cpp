@@ -1,0 +1,306 @@
+// Workbench model files: a renderer material TOML plus a [workbench] table with every
+// effect's parameters and the vibration coefficients.
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <toml++/toml.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <set>
+#include <sstream>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/material.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+constexpr double kMm = 1e-3;
+constexpr int kBankOrder = 16;
+
+double Get(const Model& m, const std::string& e, const std::string& p, double def) {
+  const auto it = m.params.find(e);
+  if (it == m.params.end()) return def;
+  const auto jt = it->second.find(p);
+  return jt == it->second.end() ? def : jt->second;
+}
+
+// Autocorrelation of a piecewise-constant band spectrum (power per bin as the workbench
+// measures it) at `fs`, then Levinson-Durbin: the AR model whose spectrum matches it.
+renderer::ArCell BandsToAr(const std::vector<double>& edges, const std::vector<double>& power, double fs) {
+  const int M = 4096;  // frequency grid over [0, fs/2]
+  std::vector<double> S(M + 1);
+  for (int j = 0; j <= M; ++j) {
+    const double f = 0.5 * fs * j / M;
+    // Outside the analysed bands the outermost band continues: a cliff would cost the
+    // all-pole fit its resolution where it matters.
+    double p = f < edges.front() ? power.front() : power.back();
+    for (std::size_t b = 0; b + 1 < edges.size(); ++b)
+      if (f >= edges[b] && f < edges[b + 1]) p = power[b];
+    S[j] = p;
+  }
+  std::vector<double> R(kBankOrder + 1);
+  for (int k = 0; k <= kBankOrder; ++k) {
+    double s = 0;
+    for (int j = 0; j <= M; ++j) {
+      const double w = (j == 0 || j == M) ? 0.5 : 1.0;
+      s += w * S[j] * std::cos(std::numbers::pi * j * k / M);
+    }
+    R[k] = s / M;
+  }
+  std::vector<double> a(kBankOrder + 1, 0), tmp;
+  a[0] = 1;
+  double err = R[0];
+  for (int m = 1; m <= kBankOrder; ++m) {
+    double acc = R[m];
+    for (int i = 1; i < m; ++i) acc += a[i] * R[m - i];
+    const double k = -acc / err;
+    tmp = a;
+    for (int i = 1; i < m; ++i) a[i] = tmp[i] + k * tmp[m - i];
+    a[m] = k;
+    err *= 1 - k * k;
+  }
+  renderer::ArCell c;
+  for (int i = 1; i <= kBankOrder; ++i) c.coeffs.push_back(-a[i]);
+  c.variance = err;
+  return c;
+}
+
+}  // namespace
+
+void SaveModel(const Model& m, const std::string& path, const Replay* r) {
+  renderer::MaterialModel mm;
+  mm.name = m.name.empty() ? std::filesystem::path(path).stem().string() : m.name;
+  mm.effects = m.effects;
+  const double n = m.Has("hc-exponent") ? Get(m, "hc-exponent", "n", 1) : 1;
+  const double scale = std::pow(kMm, n);
+  mm.contact.texture.K = Get(m, "core", "K1mm_N", 1) / scale;
+  mm.contact.texture.B = m.Has("hc-damping") ? Get(m, "hc-damping", "B1mm", 0) / scale : 0;
+  mm.contact.texture.n = n;
+  mm.contact.base_model = renderer::BaseModel::kLinear;
+  if (m.Has("base-layer")) {
+    mm.contact.base = {Get(m, "base-layer", "K_b", 0), 0, 1};
+    mm.contact.layer_thickness_m = Get(m, "base-layer", "t", 0);
+  } else {
+    // No base was felt: the layer is thicker than any measured penetration.
+    mm.contact.base = {0, 0, 1};
+    mm.contact.layer_thickness_m = 0.005;
+  }
+  mm.friction.mu_k = m.Has("coulomb") ? Get(m, "coulomb", "mu_k", 0) : 0;
+  mm.friction.kappa_N_per_m = m.Has("dahl") ? Get(m, "dahl", "kappa", 2000) : 1e6;
+  mm.friction.mu_b_Ns_per_m = m.Has("viscous") ? Get(m, "viscous", "mu_b", 0) : 0;
+  if (m.HasVibration() && r && r->has_vibration) {
+    // AR bank on the grid of the speed and force knots, direction averaged out.
+    Model g = m;
+    std::vector<double> speeds{0.05}, forces{1.0};
+    if (m.Has("vibration-speed")) {
+      speeds.clear();
+      for (int k = 0;; ++k) {
+        const auto it = m.params.at("vibration-speed").find(fmt::format("knot{}", k));
+        if (it == m.params.at("vibration-speed").end()) break;
+        speeds.push_back(std::exp(it->second));
+      }
+    }
+    if (m.Has("vibration-force")) {
+      forces.clear();
+      for (int k = 0;; ++k) {
+        const auto it = m.params.at("vibration-force").find(fmt::format("knot{}", k));
+        if (it == m.params.at("vibration-force").end()) break;
+        forces.push_back(std::exp(it->second));
+      }
+    }
+    Replay grid = *r;
+    grid.windows.clear();
+    for (const double v : speeds)
+      for (const double f : forces) {
+        Replay::Window w{};
+        w.speed_mps = v;
+        w.force_N = f;
+        w.band_power.assign(r->band_lo_hz.size(), 1);
+        grid.windows.push_back(w);
+      }
+    const auto p = Predict(g, grid);
+    mm.vibration.sample_rate_hz = r->acc_rate_hz;
+    mm.vibration.grid_speeds_mps = speeds;
+    mm.vibration.grid_forces_N = forces;
+    for (std::size_t k = 0; k < grid.windows.size(); ++k) {
+      auto c = BandsToAr(m.band_edges_hz, p.band_power[k], r->acc_rate_hz);
+      c.speed_mps = grid.windows[k].speed_mps;
+      c.force_N = grid.windows[k].force_N;
+      mm.vibration.cells.push_back(std::move(c));
+    }
+    if (speeds.size() < 2 || forces.size() < 2) {
+      // The renderer's grid needs two values per axis: repeat the single one a step away.
+      auto widen = [](std::vector<double>& v) {
+        if (v.size() == 1) v.push_back(v[0] * 2);
+      };
+      const auto cells = mm.vibration.cells;
+      const std::size_t ns = speeds.size(), nf = forces.size();
+      widen(mm.vibration.grid_speeds_mps);
+      widen(mm.vibration.grid_forces_N);
+      mm.vibration.cells.clear();
+      for (std::size_t i = 0; i < mm.vibration.grid_speeds_mps.size(); ++i)
+        for (std::size_t j = 0; j < mm.vibration.grid_forces_N.size(); ++j) {
+          auto c = cells[std::min(i, ns - 1) * nf + std::min(j, nf - 1)];
+          c.speed_mps = mm.vibration.grid_speeds_mps[i];
+          c.force_N = mm.vibration.grid_forces_N[j];
+          mm.vibration.cells.push_back(c);
+        }
+    }
+  }
+  std::string s = "# Written by the HapticLab workbench. [contact], [friction] and [vibration] are what the\n"
+                  "# renderer plays; [workbench] holds every effect's parameters (docs/workbench.md).\n";
+  s += renderer::MaterialToToml(mm);
+  s += "\n[workbench]\nversion = 1\n";
+  if (!m.band_edges_hz.empty()) {
+    s += "band_edges_hz = [";
+    for (std::size_t i = 0; i < m.band_edges_hz.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", m.band_edges_hz[i]);
+    s += "]\n";
+  }
+  for (const auto& [e, ps] : m.params) {
+    if (e != "core" && !m.Has(e)) continue;
+    s += fmt::format("\n[workbench.params.{}]\n", e);
+    for (const auto& [k, v] : ps) s += fmt::format("{} = {:.17g}\n", k, v);
+  }
+  if (!m.coef.empty()) {
+    s += "\n[workbench.coef]  # ln band power: intercepts (core) and bands x columns per effect\n";
+    for (const auto& [e, v] : m.coef) {
+      s += fmt::format("{} = [", e);
+      for (std::size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);
+      s += "]\n";
+    }
+  }
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  f << s;
+  f.close();
+  if (!f) throw std::runtime_error(path + ": write failed");
+  // The file must load in the renderer as well as here.
+  renderer::LoadMaterial(path);
+}
+
+Model LoadModel(const std::string& path) {
+  const auto mm = renderer::LoadMaterial(path);  // validates the renderer's part
+  toml::table doc;
+  try {
+    doc = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+  }
+  Diagnostics diag;
+  auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
+  Model m;
+  m.name = mm.name;
+  const toml::node* effects_node = doc.get("effects");
+  for (std::size_t i = 0; i < mm.effects.size(); ++i) {
+    const auto& e = mm.effects[i];
+    const toml::node* at = effects_node && effects_node->as_array() ? effects_node->as_array()->get(i) : effects_node;
+    if (!FindEffect(e)) {
+      std::string list;
+      for (const auto& c : Catalogue()) list += (list.empty() ? "" : ", ") + std::string(c->name());
+      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, list));
+      continue;
+    }
+    m.effects.push_back(e);
+  }
+  const toml::table* wb = doc["workbench"].as_table();
+  if (!wb) {
+    // A renderer material: its contact and friction tables are the baseline's parameters.
+    if (m.effects.empty()) {
+      m.effects = {"coulomb", "dahl"};
+      if (mm.friction.mu_b_Ns_per_m > 0) m.effects.push_back("viscous");
+      if (mm.contact.texture.B > 0) m.effects.push_back("hc-damping");
+      if (mm.contact.texture.n != 1) m.effects.push_back("hc-exponent");
+    }
+    const double scale = std::pow(kMm, mm.contact.texture.n);
+    m.params["core"]["K1mm_N"] = mm.contact.texture.K * scale;
+    m.params["hc-damping"]["B1mm"] = mm.contact.texture.B * scale;
+    m.params["hc-exponent"]["n"] = mm.contact.texture.n;
+    m.params["coulomb"]["mu_k"] = mm.friction.mu_k;
+    m.params["dahl"]["kappa"] = mm.friction.kappa_N_per_m;
+    m.params["viscous"]["mu_b"] = mm.friction.mu_b_Ns_per_m;
+    for (const auto& e : m.effects)
+      if (!m.params.count(e))
+        diag.Add(path, line(effects_node), "effects",
+                 fmt::format("effect '{}' has no parameters in a renderer material; fit it with 'hapticlab fit --add {}'", e,
+                             e));
+    for (auto it = m.params.begin(); it != m.params.end();)
+      it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
+    diag.ThrowIfAny();
+    return m;
+  }
+  if (const auto* v = (*wb)["version"].as_integer(); !v || v->get() != 1)
+    diag.Add(path, line(wb), "workbench.version", "expected version = 1");
+  if (const auto* a = (*wb)["band_edges_hz"].as_array()) {
+    for (const auto& x : *a) {
+      const auto d = x.value<double>();
+      if (!d || (!m.band_edges_hz.empty() && *d <= m.band_edges_hz.back()))
+        diag.Add(path, line(&x), "workbench.band_edges_hz", "expected ascending numbers [Hz]");
+      else
+        m.band_edges_hz.push_back(*d);
+    }
+  }
+  if (const auto* ps = (*wb)["params"].as_table()) {
+    for (const auto& [k, v] : *ps) {
+      const std::string e(k.str());
+      if (e != "core" && !m.Has(e)) {
+        diag.Add(path, line(&v), "workbench.params." + e, "parameters of an effect not listed in effects = [...]");
+        continue;
+      }
+      const toml::table* t = v.as_table();
+      if (!t) {
+        diag.Add(path, line(&v), "workbench.params." + e, "expected a table of numbers");
+        continue;
+      }
+      std::set<std::string> known;
+      if (e == "core") known.insert("K1mm_N");
+      else
+        for (const auto& spec : FindEffect(e)->Params(Replay{})) known.insert(spec.name);
+      for (const auto& [pk, pv] : *t) {
+        const auto d = pv.value<double>();
+        if (!known.count(std::string(pk.str())))
+          diag.Add(path, line(&pv), fmt::format("workbench.params.{}.{}", e, pk.str()),
+                   fmt::format("unknown parameter; {} has: {}", e, fmt::join(known, ", ")));
+        else if (!d || !std::isfinite(*d))
+          diag.Add(path, line(&pv), fmt::format("workbench.params.{}.{}", e, pk.str()), "expected a finite number");
+        else
+          m.params[e][std::string(pk.str())] = *d;
+      }
+    }
+  }
+  if (!m.params.count("core") || !m.params["core"].count("K1mm_N"))
+    diag.Add(path, line(wb), "workbench.params.core.K1mm_N", "missing: the normal force at 1 mm penetration [N]");
+  for (const auto& e : m.effects)
+    if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
+      diag.Add(path, line(wb), "workbench.params." + e, "missing: every listed effect needs its parameters");
+  if (const auto* cs = (*wb)["coef"].as_table()) {
+    const std::size_t nb = m.band_edges_hz.empty() ? 0 : m.band_edges_hz.size() - 1;
+    for (const auto& [k, v] : *cs) {
+      const std::string e(k.str());
+      const auto* a = v.as_array();
+      std::vector<double> c;
+      if (a)
+        for (const auto& x : *a)
+          if (auto d = x.value<double>()) c.push_back(*d);
+      const Effect* ef = FindEffect(e);
+      const bool per_band = e == "core" || e == "range_lo" || e == "range_hi";
+      const std::size_t want = per_band ? nb : (ef ? nb * static_cast<std::size_t>(ef->VibrationColumns()) : 0);
+      if (!a || c.size() != a->size() || c.size() != want || (!per_band && !m.Has(e)))
+        diag.Add(path, line(&v), "workbench.coef." + e,
+                 fmt::format("expected {} numbers (bands x columns) for a listed vibration effect", want));
+      else
+        m.coef[e] = std::move(c);
+    }
+  }
+  diag.ThrowIfAny();
+  return m;
+}
+
+}  // namespace hapticlab::modeling::wb
