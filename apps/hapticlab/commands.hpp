@@ -11,5 +11,6 @@ void RegisterDemo(CLI::App& app);
 void RegisterStats(CLI::App& app);
 void RegisterStudy(CLI::App& app);
 void RegisterAnalyze(CLI::App& app);
+void RegisterWorkbench(CLI::App& app);
 
 }  // namespace hapticlab::cli

@@ -25,9 +25,7 @@ int main(int argc, char** argv) {
   RegisterStats(app);
   RegisterStudy(app);
   RegisterAnalyze(app);
-  AddPlanned(app, "compare", "Compare a material model with a measurement, by regime", "issue #8");
-  AddPlanned(app, "diagnose", "Rank missing physical effects by held-out error reduction", "issue #8");
-  AddPlanned(app, "fit", "Fit a model plus added effects to a measurement", "issue #8");
+  RegisterWorkbench(app);
 
   try {
     app.parse(argc, argv);

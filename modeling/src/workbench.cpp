@@ -766,7 +766,7 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
   }
   std::vector<Candidate> out(cands.size());
   std::vector<Prediction> preds(cands.size());
-  std::atomic<std::size_t> next{0};
+  std::atomic<std::size_t> next{0}, done{0};
   auto work = [&] {
     for (std::size_t k; (k = next++) < cands.size();) {
       const Effect* e = cands[k];
@@ -812,6 +812,7 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
         c.params["max_coefficient_dB"] = mx * 10 / std::log(10.0);
       }
       c.evidence = e->Evidence(r, res);
+      if (o.progress) o.progress(c.effect, static_cast<int>(++done), static_cast<int>(cands.size()));
     }
   };
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());

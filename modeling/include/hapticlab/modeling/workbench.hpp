@@ -15,6 +15,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <string>
@@ -225,6 +226,8 @@ struct DiagnoseOptions {
   double min_relative_reduction = 0.02;  ///< of the channel's held-out error
   double min_t = 3.0;                    ///< paired t over held-out blocks
   int threads = 0;                       ///< candidates fitted in parallel; 0: all cores
+  /// Called after each candidate (effect, done, total), from the worker threads.
+  std::function<void(const std::string&, int, int)> progress;
 };
 Diagnosis Diagnose(const Model& m, const Replay& r, const DiagnoseOptions& o = {});
 

@@ -1,0 +1,87 @@
+// hapticlab measurement / fit / diagnose / compare / effects through the command line: the
+// worked example of docs/workbench.md on a short simulated measurement.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab {
+namespace {
+
+std::string Cli() { return HL_CLI_PATH; }
+
+nlohmann::json Json(const std::string& cmd) {
+  std::string out;
+  EXPECT_EQ(test::RunCommand(cmd, &out), 0) << cmd << "\n" << out;
+  return nlohmann::json::parse(out);
+}
+
+TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
+  test::TempDir dir;
+  const auto meas = dir.File("meas.csv");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " measurement simulate --add load-dependent-friction --duration 60 --seed 3 -o " + meas,
+                             &out),
+            0)
+      << out;
+  const auto check = Json(Cli() + " measurement check --json " + meas);
+  EXPECT_NEAR(check["rate_hz"].get<double>(), 2000, 1e-6);
+  EXPECT_EQ(check["gaps"], 0);
+  EXPECT_TRUE(check["has_acceleration"].get<bool>());
+
+  const auto base = dir.File("base.toml");
+  const auto fit = Json(Cli() + " fit --json --measurement " + meas + " -o " + base);
+  EXPECT_TRUE(std::filesystem::exists(base));
+  EXPECT_EQ(fit["effects"].size(), 7u);
+
+  const auto dx = Json(Cli() + " diagnose --json --model " + base + " --measurement " + meas);
+  ASSERT_FALSE(dx["candidates"].empty());
+  const auto& top = dx["candidates"][0];
+  EXPECT_EQ(top["effect"], "load-dependent-friction") << dx.dump(2);
+  EXPECT_TRUE(top["supported"].get<bool>());
+  EXPECT_LT(top["params"]["alpha"].get<double>(), 1.0);  // the truth's friction grows like f_n^0.7
+  EXPECT_GT(top["error_reduction"].get<double>(), 0);
+  for (std::size_t i = 1; i < dx["candidates"].size(); ++i)
+    EXPECT_LE(dx["candidates"][i]["error_reduction"].get<double>(), dx["candidates"][i - 1]["error_reduction"].get<double>());
+  EXPECT_NEAR(dx["baseline_error"].get<double>(), top["error_after"].get<double>() + top["error_reduction"].get<double>(), 1e-12);
+
+  const auto better = dir.File("better.toml");
+  const auto fit2 = Json(Cli() + " fit --json --measurement " + meas + " --model " + base +
+                         " --add load-dependent-friction -o " + better);
+  EXPECT_LT(fit2["held_out"]["after"]["channels"]["friction"].get<double>(),
+            0.5 * fit2["held_out"]["before"]["channels"]["friction"].get<double>());
+
+  const auto plots = dir.File("plots");
+  const auto cmp = Json(Cli() + " compare --json --model " + better + " --measurement " + meas + " --plots " + plots);
+  EXPECT_GT(cmp["error"].get<double>(), 0);
+  for (const char* dim : {"regime", "speed", "load", "direction", "position", "time", "band"})
+    EXPECT_TRUE(cmp["breakdown"].contains(dim)) << dim;
+  EXPECT_TRUE(std::filesystem::exists(plots + "/residual_load_friction_ratio.png"));
+  EXPECT_TRUE(std::filesystem::exists(plots + "/trace_friction.svg"));
+  // The renderer plays the fitted model.
+  EXPECT_EQ(test::RunCommand(Cli() + " model check " + better, &out), 0) << out;
+}
+
+TEST(WorkbenchCli, BadInputIsReportedWithFileLineAndColumn) {
+  test::TempDir dir;
+  const auto meas = dir.File("m.csv");
+  test::WriteFile(meas,
+                  "# hapticlab-measurement v1\n# material: x\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n"
+                  "0,0,0,-0.001,0.01,0,0,-0.3,0,1\n0.001,0.00001,0,-0.001,0.01,0,0,-0.3,zero,1\n");
+  std::string out;
+  EXPECT_EQ(test::RunCommand(Cli() + " measurement check " + meas, &out), 2);
+  EXPECT_NE(out.find("m.csv:5"), std::string::npos) << out;
+  EXPECT_NE(out.find("fy_N"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " fit --measurement " + meas + " --add no-such-effect -o " + dir.File("o.toml"), &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " measurement simulate --add no-such-effect -o " + dir.File("s.csv"), &out), 2);
+  EXPECT_NE(out.find("stribeck"), std::string::npos) << "lists the catalogue: " << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " effects", &out), 0);
+  EXPECT_NE(out.find("position-dependent-friction"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hapticlab
