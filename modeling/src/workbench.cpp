@@ -194,7 +194,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   std::vector<double> dt;
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
   std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  const double rate = 1.0 / dt[dt.size() / 2];
+  double rate = 1.0 / dt[dt.size() / 2];
+  if (std::abs(rate - std::round(rate)) < 1e-6 * rate) rate = std::round(rate);  // time stamps' rounding
   const int stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
   r.rate_hz = rate / stride;
   const double t0 = m.rows.front().t_s;

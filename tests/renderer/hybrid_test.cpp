@@ -119,10 +119,15 @@ TEST(Hybrid, VibrationFollowsContactAndIsHighPassed) {
 TEST(Hybrid, ForceAndVibrationTicksRunOnTwoThreads) {
   const auto m = test::TexturedMaterial();
   HybridRenderer r(m, RenderOptions{});
-  std::atomic<bool> done{false};
+  std::atomic<bool> done{false}, started{false};
   std::thread vib([&] {
-    while (!done.load()) ASSERT_TRUE(std::isfinite(r.VibrationTick()));
+    while (!done.load()) {
+      ASSERT_TRUE(std::isfinite(r.VibrationTick()));
+      started = true;
+    }
   });
+  // On a loaded machine the thread may start late; the ticks must overlap, so wait for it.
+  while (!started.load()) std::this_thread::yield();
   for (int k = 0; k < 20000; ++k) r.ForceTick(Sample(k * 5e-5, 0.2e-3, 0.05, k * 1e-3), k * 1e-3);
   done = true;
   vib.join();
