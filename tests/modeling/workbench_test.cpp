@@ -362,3 +362,34 @@ TEST(WorkbenchMeasurement, SummaryReportsRateRangesAndGaps) {
 
 }  // namespace
 }  // namespace hapticlab::modeling::wb
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+// A smooth stiffening (n = 1.8) can be mimicked by a knee (a base under a layer): both reduce
+// the normal-force error and change the prediction alike, so they are reported together.
+TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
+  TruthParams t;
+  t.duration_s = 60;
+  t.effects = Without(BaselineEffects(), {"hc-exponent"});
+  t.effects.push_back("hc-exponent");
+  t.n = 1.8;
+  const auto sim = Simulate(t);
+  const auto r = PrepareReplay(sim.m);
+  Model m;
+  AddEffects(&m, Without(BaselineEffects(), {"hc-exponent"}), r);
+  const auto dx = Diagnose(m, r);
+  const Candidate *exp = nullptr, *knee = nullptr;
+  for (const auto& c : dx.candidates) {
+    if (c.effect == "hc-exponent") exp = &c;
+    if (c.effect == "base-layer") knee = &c;
+  }
+  ASSERT_TRUE(exp && knee);
+  EXPECT_EQ(dx.candidates.front().effect, "hc-exponent");
+  ASSERT_TRUE(knee->supported) << knee->evidence;
+  EXPECT_NE(std::find(exp->confounded_with.begin(), exp->confounded_with.end(), "base-layer"), exp->confounded_with.end());
+  EXPECT_NE(knee->evidence.find("confounded with hc-exponent"), std::string::npos) << knee->evidence;
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling::wb
