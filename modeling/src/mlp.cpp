@@ -68,18 +68,71 @@ double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, 
   return 0.5 * err * err;
 }
 
+double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<Eigen::Index>& rows,
+                          Eigen::VectorXd* grad) const {
+  const std::size_t L = layers_.size() - 1;
+  const auto B = static_cast<Eigen::Index>(rows.size());
+  std::vector<Eigen::MatrixXd> act(L + 1);
+  act[0].resize(layers_[0], B);
+  Eigen::VectorXd target(B);
+  for (Eigen::Index k = 0; k < B; ++k) {
+    act[0].col(k) = X.row(rows[static_cast<std::size_t>(k)]).transpose();
+    target(k) = y(rows[static_cast<std::size_t>(k)]);
+  }
+  for (std::size_t l = 0; l < L; ++l) {
+    const int in = layers_[l], out = layers_[l + 1];
+    const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
+    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    act[l + 1].noalias() = W * act[l];
+    act[l + 1].colwise() += b;
+    if (l + 1 < L) act[l + 1] = act[l + 1].array().tanh().matrix();
+  }
+  const Eigen::RowVectorXd err = act[L].row(0) - target.transpose();
+  const double loss = 0.5 * err.squaredNorm() / static_cast<double>(B);
+  grad->setZero(params_.size());
+  Eigen::MatrixXd delta = err / static_cast<double>(B);  // 1 x B: dLoss/dz of the output
+  for (std::size_t l = L; l-- > 0;) {
+    const int in = layers_[l], out = layers_[l + 1];
+    Eigen::Map<Eigen::MatrixXd> gW(grad->data() + offset_[l], out, in);
+    Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    gW.noalias() = delta * act[l].transpose();
+    gb = delta.rowwise().sum();
+    if (l > 0) {
+      const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
+      Eigen::MatrixXd back = W.transpose() * delta;
+      delta = back.array() * (1 - act[l].array().square());
+    }
+  }
+  return loss;
+}
+
+Eigen::VectorXd Mlp::PredictRows(const Eigen::MatrixXd& X) const {
+  Eigen::MatrixXd a = X.transpose();
+  const std::size_t L = layers_.size() - 1;
+  for (std::size_t l = 0; l < L; ++l) {
+    const int in = layers_[l], out = layers_[l + 1];
+    const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
+    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    Eigen::MatrixXd z = W * a;
+    z.colwise() += b;
+    a = l + 1 < L ? Eigen::MatrixXd(z.array().tanh()) : z;
+  }
+  return a.row(0).transpose();
+}
+
 MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const MlpTrainOptions& o) {
   const Eigen::Index n = X.rows();
   const auto nval = static_cast<Eigen::Index>(std::floor(o.validation_fraction * static_cast<double>(n)));
   const Eigen::Index ntr = n - nval;
   if (ntr < o.batch) throw std::invalid_argument("too few samples for one mini-batch");
   auto mse = [&](Eigen::Index from, Eigen::Index to) {
-    double s = 0;
-    for (Eigen::Index i = from; i < to; ++i) s += std::pow(Predict(X.row(i).transpose()) - y(i), 2);
-    return to > from ? s / static_cast<double>(to - from) : 0.0;
+    if (to <= from) return 0.0;
+    const Eigen::VectorXd p = PredictRows(X.middleRows(from, to - from));
+    return (p - y.segment(from, to - from)).squaredNorm() / static_cast<double>(to - from);
   };
   Rng rng(o.seed);
-  Eigen::VectorXd m = Eigen::VectorXd::Zero(params_.size()), v = m, g(params_.size()), gi(params_.size());
+  Eigen::VectorXd m = Eigen::VectorXd::Zero(params_.size()), v = m, g(params_.size());
+  std::vector<Eigen::Index> batch_rows;
   std::vector<Eigen::Index> order(static_cast<std::size_t>(ntr));
   std::iota(order.begin(), order.end(), 0);
   MlpTrainSummary s;
@@ -90,13 +143,8 @@ MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, c
   for (int epoch = 1; epoch <= o.max_epochs; ++epoch) {
     rng.Shuffle(order);
     for (Eigen::Index start = 0; start + o.batch <= ntr; start += o.batch) {
-      g.setZero();
-      for (int k = 0; k < o.batch; ++k) {
-        const Eigen::Index i = order[static_cast<std::size_t>(start + k)];
-        Gradient(X.row(i).transpose(), y(i), &gi);
-        g += gi;
-      }
-      g /= o.batch;
+      batch_rows.assign(order.begin() + start, order.begin() + start + o.batch);
+      BatchGradient(X, y, batch_rows, &g);
       ++step;
       m = o.beta1 * m + (1 - o.beta1) * g;
       v = o.beta2 * v + (1 - o.beta2) * g.cwiseProduct(g);
@@ -105,6 +153,7 @@ MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, c
     }
     s.epochs = epoch;
     const double val = nval > 0 ? mse(ntr, n) : mse(0, ntr);
+    if (o.progress) o.progress(epoch, val);
     if (val < best) {
       best = val;
       best_params = params_;

@@ -19,7 +19,12 @@ HybridRenderer::HybridRenderer(const MaterialModel& m, const RenderOptions& o)
     for (auto& f : force_lp_) f.SetCoeffs(lp);
     vib_hp_.SetCoeffs(BiquadCoeffs::ButterworthHighPass(cutoff_hz_, o.vibration_rate_hz));
   }
-  if (o.vibration && !m.vibration.empty()) {
+  if (o.vibration && m.neural) {
+    if (m.neural->sample_rate_hz > o.vibration_rate_hz)
+      throw std::invalid_argument("the neural model's rate exceeds the vibration loop's rate");
+    neural_ = std::make_unique<NeuralSynth>(m.neural, o.seed);
+    step_ = m.neural->sample_rate_hz / o.vibration_rate_hz;
+  } else if (o.vibration && !m.vibration.empty()) {
     if (m.vibration.sample_rate_hz > o.vibration_rate_hz)
       throw std::invalid_argument("the vibration bank's rate exceeds the vibration loop's rate");
     step_ = m.vibration.sample_rate_hz / o.vibration_rate_hz;
@@ -70,9 +75,12 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
   ArFilter& slot = filter_box_.WriteSlot();
   if (options_.vibration) {
     interp_.Interpolate(cmd.raw.tangential_speed_mps, cmd.raw.normal_force_N, cmd.raw.in_contact, &slot);
+    if (neural_) slot.active = cmd.raw.in_contact;  // the neural synth applies its own minimum speed
   } else {
     slot.active = false;
   }
+  slot.speed_mps = cmd.raw.tangential_speed_mps;
+  slot.force_N = cmd.raw.normal_force_N;
   filter_box_.Publish();
   return cmd;
 }
@@ -85,7 +93,7 @@ double HybridRenderer::VibrationTick() noexcept {
   while (phase_ >= 1.0) {
     phase_ -= 1.0;
     prev_ = next_;
-    next_ = synth_.Step(f);
+    next_ = neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f);
   }
   double a = prev_ + (next_ - prev_) * phase_;
   if (!f.active) {

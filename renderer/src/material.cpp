@@ -236,7 +236,7 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
   MaterialModel m;
   m.source_path = name;
   CheckKnownKeys(r, doc, "", {"name", "effects", "contact", "friction", "geometry", "vibration",
-                              "hybrid", "notes", "workbench"});
+                              "hybrid", "notes", "workbench", "neural"});
   m.name = r.String(doc, "", "name", true).value_or("");
   if (const toml::node* e = doc.get("effects")) {
     if (const toml::array* arr = e->as_array()) {
@@ -315,6 +315,19 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       vb.triangles = DelaunayTriangulate(xs, ys);
     } catch (const std::invalid_argument& e) {
       diag.Add(name, 0, "vibration.cells", e.what());
+    }
+  }
+  if (const toml::table* nt = doc["neural"].as_table()) {
+    CheckKnownKeys(r, *nt, "neural", {"file"});
+    if (const auto file = r.String(*nt, "neural", "file", true)) {
+      m.neural_file = *file;
+      const auto p = std::filesystem::path(*file).is_absolute() ? std::filesystem::path(*file) : base / *file;
+      try {
+        m.neural = std::make_shared<NeuralModel>(LoadNeuralModel(p.string()));
+      } catch (const InputError& e) {
+        for (const auto& x : e.diagnostics()) diag.Add(x.file, x.line, x.field, x.message);
+        diag.Add(name, r.Line(nt->get("file")), "neural.file", "the neural model could not be loaded");
+      }
     }
   }
   if (const toml::table* h = doc["hybrid"].as_table()) {
@@ -402,6 +415,7 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
     s += "[geometry]\nkind = \"flat\"\n\n";
   }
   s += fmt::format("[hybrid]\ncutoff_hz = {:.17g}\n", m.hybrid_cutoff_hz);
+  if (!m.neural_file.empty()) s += fmt::format("\n[neural]\nfile = \"{}\"\n", m.neural_file);
   const auto& b = m.vibration;
   if (!b.empty()) {
     s += fmt::format("\n[vibration]\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",

@@ -70,3 +70,34 @@ TEST(Mlp, LearnsANonlinearArProcessBetterThanALinearFit) {
 
 }  // namespace
 }  // namespace hapticlab::modeling
+
+namespace hapticlab::modeling {
+namespace {
+
+TEST(Mlp, BatchGradientIsTheMeanOfSampleGradients) {
+  Mlp net({6, 9, 5, 1}, 4);
+  Rng rng(3);
+  for (Eigen::Index i = 0; i < net.params().size(); ++i) net.params()(i) += 0.2 * rng.Normal();
+  Eigen::MatrixXd X(20, 6);
+  Eigen::VectorXd y(20);
+  for (Eigen::Index i = 0; i < 20; ++i) {
+    for (int j = 0; j < 6; ++j) X(i, j) = rng.Normal();
+    y(i) = rng.Normal();
+  }
+  const std::vector<Eigen::Index> rows = {3, 7, 7, 0, 19, 11};
+  Eigen::VectorXd g, gi, mean = Eigen::VectorXd::Zero(net.params().size());
+  double loss = 0;
+  for (const auto r : rows) {
+    loss += net.Gradient(X.row(r).transpose(), y(r), &gi);
+    mean += gi;
+  }
+  mean /= static_cast<double>(rows.size());
+  const double bl = net.BatchGradient(X, y, rows, &g);
+  EXPECT_NEAR(bl, loss / static_cast<double>(rows.size()), 1e-12);
+  EXPECT_LT((g - mean).cwiseAbs().maxCoeff(), 1e-12);
+  const Eigen::VectorXd p = net.PredictRows(X);
+  for (Eigen::Index i = 0; i < 20; ++i) EXPECT_NEAR(p(i), net.Predict(X.row(i).transpose()), 1e-12);
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling

@@ -5,6 +5,7 @@
 /// network framework is packaged in Debian that earns its weight for networks this small.
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -18,6 +19,8 @@ struct MlpTrainOptions {
   double beta1 = 0.9, beta2 = 0.999, epsilon = 1e-8;
   double validation_fraction = 0.2;  ///< the last part of the data, held out for early stopping
   int patience = 15;                 ///< epochs without validation improvement before stopping
+  /// Called after every epoch (epoch, validation MSE); may be empty.
+  std::function<void(int, double)> progress;
   std::uint64_t seed = 1;            ///< initialisation and shuffling
 };
 
@@ -34,6 +37,12 @@ class Mlp {
   double Predict(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// Loss 0.5 (f(x) - target)^2 and its gradient with respect to every parameter.
   double Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, Eigen::VectorXd* grad) const;
+  /// Mean loss over the given rows of X and its gradient (matrix form: one pass per layer for
+  /// the whole mini-batch). Equals the mean of Gradient over the rows.
+  double BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<Eigen::Index>& rows,
+                       Eigen::VectorXd* grad) const;
+  /// Predictions for every row of X.
+  Eigen::VectorXd PredictRows(const Eigen::MatrixXd& X) const;
   /// Trains on rows of X (n x inputs) against y with Adam; restores the best validation weights.
   MlpTrainSummary Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const MlpTrainOptions& o);
   Eigen::VectorXd& params() { return params_; }

@@ -10,10 +10,12 @@
 
 #include <atomic>
 #include <cstdint>
+#include <memory>
 
 #include "hapticlab/core/triple_buffer.hpp"
 #include "hapticlab/renderer/biquad.hpp"
 #include "hapticlab/renderer/force.hpp"
+#include "hapticlab/renderer/neural.hpp"
 #include "hapticlab/renderer/vibration.hpp"
 
 namespace hapticlab::renderer {
@@ -79,6 +81,7 @@ class HybridRenderer {
   TripleBuffer<ArFilter> filter_box_;
   // vibration-thread state
   ArSynth synth_;
+  std::unique_ptr<NeuralSynth> neural_;  // the material's neural model, when it has one
   Biquad vib_hp_;
   double phase_ = 1.0;   // fraction of a model-rate period elapsed
   double step_ = 0.2;    // model rate / vibration rate

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "hapticlab/renderer/height_map.hpp"
+#include "hapticlab/renderer/neural.hpp"
 
 namespace hapticlab::renderer {
 
@@ -73,6 +74,10 @@ struct MaterialModel {
   std::shared_ptr<const HeightMap> geometry = std::make_shared<HeightMap>(HeightMap::Flat());
   VibrationBank vibration;
   double hybrid_cutoff_hz = 100;           ///< f_c of the hybrid filter [Hz] (ch. III.5, V.1.4)
+  /// Optional neural vibration model (ch. III.3), from `[neural] file = "..."`; when present
+  /// the renderer synthesizes with it instead of the AR bank.
+  std::shared_ptr<const NeuralModel> neural;
+  std::string neural_file;                 ///< as written in the file (relative to it)
 };
 
 /// Loads and validates a material model TOML file (format in docs/renderer.md). Relative

@@ -22,6 +22,7 @@ struct ArFilter {
   double gain = 1;    ///< excitation gain (dimensionless)
   double sigma = 0;   ///< residual standard deviation [m/s^2]
   bool active = false;///< false: out of contact or slower than the bank's minimum speed
+  double speed_mps = 0, force_N = 0;  ///< the condition (for the neural model's inputs)
 };
 
 /// Weights of the bank's cells at one (speed, force) point: up to four cells (grid) or three

@@ -1,0 +1,57 @@
+#pragma once
+/// @file Training the neural texture model (dissertation ch. III.3): frequency-decomposed MLPs,
+/// unified (Γ_U) or decomposed (Γ_D), from the same recordings and preprocessing as the LPC
+/// bank, and the ch. III.4 cross-validation on the same E_s table (Fig. 3.7). Synthesis is in
+/// renderer/neural.hpp.
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "hapticlab/modeling/mlp.hpp"
+#include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/neural.hpp"
+
+namespace hapticlab::modeling {
+
+struct NeuralFitOptions {
+  renderer::NeuralTopology topology = renderer::NeuralTopology::kUnified;
+  std::vector<renderer::NeuralBand> bands = renderer::DefaultNeuralBands();  ///< layout only
+  std::vector<int> hidden_large = {30, 25, 15, 5};  ///< Γ_U (every band) and Γ_D band 1 (thesis)
+  std::vector<int> hidden_small = {30, 15, 5};      ///< Γ_D bands 2-4 (thesis)
+  MlpTrainOptions train{.max_epochs = 40, .batch = 64, .learning_rate = 2e-3, .patience = 6};
+  VibrationFitOptions preprocess;  ///< resampling to the model rate and band limit (as LPC)
+  double min_speed_mps = 0.01;
+  /// SD of noise added to the training histories (units of the band's RMS). An exactly
+  /// band-limited signal is almost perfectly predictable from 50 past samples, and a
+  /// predictor trained on clean histories free-runs into a limit cycle; trained on noisy
+  /// histories it stays a noise-driven process with the band's spectrum. 0.3 was chosen on
+  /// the synthetic textures of tests/modeling/neural_test.cpp (0.1: limit cycles; 0.3-0.5: E_s
+  /// 0.26-0.32).
+  double input_noise = 0.3;
+  int threads = 0;                 ///< networks trained in parallel; 0: all cores
+  /// Called when a network finishes: (what, done, total); from worker threads.
+  std::function<void(const std::string&, int, int)> progress;
+};
+
+/// Trains the model on recordings at the conditions of a full speed x force grid (the
+/// thesis's design). Band b's signal is the preprocessed recording band-passed to the band
+/// (zero-phase Butterworth) and decimated by γ_b, in units of its RMS over all recordings;
+/// each network learns y[m] from y[m-1..m-M] (Γ_U: and v, f scaled to [-1, 1]); the last
+/// 20 % of every recording is the early-stopping validation set. Sigma per band and cell is
+/// the one-step residual RMS. Seeded by options.train.seed.
+/// @throws InputError when the recordings do not form a full grid (listing what is missing).
+renderer::NeuralModel FitNeural(const std::vector<Recording>& recordings, const NeuralFitOptions& o);
+
+/// Ch. III.4 cross-validation for the neural model: fit on the recordings at the training
+/// speeds x forces, synthesize every recording's condition with renderer::NeuralSynth
+/// (seeded), E_s against the preprocessed recording. Same rows as CrossValidate.
+CvResult CrossValidateNeural(const std::vector<Recording>& recordings, const std::vector<double>& train_speeds_mps,
+                             const std::vector<double>& train_forces_N, const NeuralFitOptions& o, std::uint64_t seed = 1);
+
+/// Synthesizes `n` samples at the model rate for a condition (after `settle` samples).
+std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double speed_mps, double force_N, std::size_t n,
+                                     std::uint64_t seed, std::size_t settle = 4000);
+
+}  // namespace hapticlab::modeling

@@ -1,0 +1,299 @@
+#include "hapticlab/modeling/neural.hpp"
+
+#include <fftw3.h>
+#include <fmt/format.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <thread>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/rng.hpp"
+
+namespace hapticlab::modeling {
+namespace {
+
+bool Near(double a, double b) { return std::abs(a - b) <= 1e-6 * std::max(1.0, std::abs(b)); }
+
+std::vector<double> Unique(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  std::vector<double> u;
+  for (const double x : v)
+    if (u.empty() || !Near(x, u.back())) u.push_back(x);
+  return u;
+}
+
+int Index(const std::vector<double>& g, double x) {
+  for (std::size_t i = 0; i < g.size(); ++i)
+    if (Near(x, g[i])) return static_cast<int>(i);
+  return -1;
+}
+
+// Ideal (FFT) band-pass: the bands of a recording sum exactly to it, and each is limited to
+// [lo, hi) so that decimation by γ with hi <= rate / (2 γ) does not alias (a Butterworth
+// band-pass's skirts would fold back into the band).
+std::vector<double> BandSplit(const std::vector<double>& x, double fs, double lo, double hi) {
+  const int n = static_cast<int>(x.size());
+  if (n < 2) return x;
+  std::vector<double> in(x), out(x.size());
+  std::vector<fftw_complex> spec(static_cast<std::size_t>(n / 2 + 1));
+  static std::mutex plan_mutex;  // FFTW's planner is not thread-safe
+  fftw_plan fwd, inv;
+  {
+    std::lock_guard<std::mutex> lock(plan_mutex);
+    fwd = fftw_plan_dft_r2c_1d(n, in.data(), spec.data(), FFTW_ESTIMATE);
+    inv = fftw_plan_dft_c2r_1d(n, spec.data(), out.data(), FFTW_ESTIMATE);
+  }
+  fftw_execute(fwd);
+  for (int k = 0; k <= n / 2; ++k) {
+    const double f = k * fs / n;
+    if (f < lo || f >= hi) spec[static_cast<std::size_t>(k)][0] = spec[static_cast<std::size_t>(k)][1] = 0;
+  }
+  fftw_execute(inv);
+  {
+    std::lock_guard<std::mutex> lock(plan_mutex);
+    fftw_destroy_plan(fwd);
+    fftw_destroy_plan(inv);
+  }
+  for (auto& v : out) v /= n;
+  return out;
+}
+
+}  // namespace
+
+renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const NeuralFitOptions& o) {
+  renderer::NeuralModel m;
+  m.topology = o.topology;
+  m.sample_rate_hz = o.preprocess.model_rate_hz;
+  m.min_speed_mps = o.min_speed_mps;
+  std::vector<double> vs, fs;
+  for (const auto& r : recs) vs.push_back(r.speed_mps), fs.push_back(r.force_N);
+  m.speeds_mps = Unique(vs);
+  m.forces_N = Unique(fs);
+  const std::size_t nv = m.speeds_mps.size(), nf = m.forces_N.size(), cells = nv * nf;
+  // The recordings must form a full grid, one per cell.
+  std::vector<int> cell_of(recs.size());
+  std::vector<int> rec_of(cells, -1);
+  Diagnostics d;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const int c = Index(m.speeds_mps, recs[i].speed_mps) * static_cast<int>(nf) + Index(m.forces_N, recs[i].force_N);
+    cell_of[i] = c;
+    if (rec_of[static_cast<std::size_t>(c)] >= 0)
+      d.Add(recs[i].file, 0, "speed_mps", fmt::format("a second recording at {} m/s, {} N", recs[i].speed_mps, recs[i].force_N));
+    rec_of[static_cast<std::size_t>(c)] = static_cast<int>(i);
+  }
+  for (std::size_t c = 0; c < cells; ++c)
+    if (rec_of[c] < 0)
+      d.Add("", 0, "recordings",
+            fmt::format("the neural model needs a full speed x force grid: no recording at {} m/s, {} N",
+                        m.speeds_mps[c / nf], m.forces_N[c % nf]));
+  d.ThrowIfAny();
+
+  std::vector<std::vector<double>> pre(recs.size());
+  for (std::size_t i = 0; i < recs.size(); ++i) pre[i] = Preprocess(recs[i], o.preprocess);
+
+  const bool unified = o.topology == renderer::NeuralTopology::kUnified;
+  m.bands = o.bands;
+  // Band signals (decimated) per recording, and each band's scale.
+  std::vector<std::vector<std::vector<double>>> sig(m.bands.size());
+  for (std::size_t b = 0; b < m.bands.size(); ++b) {
+    auto& band = m.bands[b];
+    band.nets.clear();
+    double ss = 0, n = 0;
+    for (std::size_t i = 0; i < recs.size(); ++i) {
+      const auto full = BandSplit(pre[i], m.sample_rate_hz, band.lo_hz, band.hi_hz);
+      std::vector<double> dec;
+      for (std::size_t k = 0; k < full.size(); k += static_cast<std::size_t>(band.decimation)) dec.push_back(full[k]);
+      for (const double x : dec) ss += x * x, n += 1;
+      sig[b].push_back(std::move(dec));
+    }
+    band.scale = n > 0 && ss > 0 ? std::sqrt(ss / n) : 1.0;
+    for (auto& s : sig[b])
+      for (auto& x : s) x /= band.scale;
+    band.sigma.assign(cells, 0.0);
+    band.nets.resize(unified ? 1 : cells);
+  }
+
+  // One job per network: (band, cell) for Γ_D, (band) for Γ_U.
+  struct Job {
+    std::size_t band;
+    int cell;  // -1: unified
+  };
+  std::vector<Job> jobs;
+  for (std::size_t b = 0; b < m.bands.size(); ++b) {
+    if (unified) jobs.push_back({b, -1});
+    else
+      for (std::size_t c = 0; c < cells; ++c) jobs.push_back({b, static_cast<int>(c)});
+  }
+  auto rows_of = [&](const Job& j, std::size_t i, bool validation) {
+    // Pairs of recording i: training rows are the first 80 %, validation the last 20 %.
+    const auto& x = sig[j.band][i];
+    const int M = m.bands[j.band].history;
+    const std::size_t first = static_cast<std::size_t>(M), n = x.size() > first ? x.size() - first : 0;
+    const std::size_t cut = first + n - static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(n)));
+    return validation ? std::make_pair(cut, x.size()) : std::make_pair(first, cut);
+  };
+  std::atomic<std::size_t> next{0}, done{0};
+  std::exception_ptr error;
+  std::mutex err_mu;
+  auto work = [&] {
+    for (std::size_t k; (k = next++) < jobs.size();) {
+      try {
+        const Job& j = jobs[k];
+        auto& band = m.bands[j.band];
+        const int M = band.history;
+        const int inputs = M + (unified ? 2 : 0);
+        std::vector<std::size_t> use;
+        for (std::size_t i = 0; i < recs.size(); ++i)
+          if (unified || cell_of[i] == j.cell) use.push_back(i);
+        // Rows: every used recording's training part, then every validation part.
+        Eigen::Index total = 0;
+        for (const bool val : {false, true})
+          for (const auto i : use) {
+            const auto [a, b] = rows_of(j, i, val);
+            total += static_cast<Eigen::Index>(b - a);
+          }
+        Eigen::MatrixXd X(total, inputs);
+        Eigen::VectorXd y(total);
+        Eigen::Index r = 0, nval = 0;
+        for (const bool val : {false, true})
+          for (const auto i : use) {
+            const auto& x = sig[j.band][i];
+            const auto [a, b] = rows_of(j, i, val);
+            for (std::size_t t = a; t < b; ++t, ++r) {
+              for (int q = 0; q < M; ++q) X(r, q) = x[t - 1 - static_cast<std::size_t>(q)];
+              if (unified) {
+                X(r, M) = m.NormSpeed(recs[i].speed_mps);
+                X(r, M + 1) = m.NormForce(recs[i].force_N);
+              }
+              y(r) = x[t];
+            }
+            if (val) nval += static_cast<Eigen::Index>(b - a);
+          }
+        // Input noise (see NeuralFitOptions::input_noise).
+        const double in_noise = o.input_noise;
+        if (in_noise > 0) {
+          Rng nr(o.train.seed + 31 * k);
+          for (Eigen::Index rr = 0; rr < total; ++rr)
+            for (int q = 0; q < M; ++q) X(rr, q) += in_noise * nr.Normal();
+        }
+        std::vector<int> layers{inputs};
+        const auto& hidden = (unified || j.band == 0) ? o.hidden_large : o.hidden_small;
+        layers.insert(layers.end(), hidden.begin(), hidden.end());
+        layers.push_back(1);
+        Mlp net(layers, o.train.seed + 1000 * k);
+        MlpTrainOptions to = o.train;
+        to.validation_fraction = total > 0 ? static_cast<double>(nval) / static_cast<double>(total) : 0.2;
+        to.seed = o.train.seed + k;
+        to.progress = nullptr;
+        net.Train(X, y, to);
+        // Residual RMS per cell (one-step prediction on every row of the cell's recording).
+        const Eigen::VectorXd p = net.PredictRows(X);
+        std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
+        r = 0;
+        for (const bool val : {false, true})
+          for (const auto i : use) {
+            const auto [a, b] = rows_of(j, i, val);
+            for (std::size_t t = a; t < b; ++t, ++r) {
+              const auto c = static_cast<std::size_t>(cell_of[i]);
+              se[c] += (p(r) - y(r)) * (p(r) - y(r));
+              cnt[c] += 1;
+            }
+          }
+        renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size())};
+        for (std::size_t c = 0; c < cells; ++c)
+          if (cnt[c] > 0) band.sigma[c] = std::sqrt(se[c] / cnt[c]);
+        // Calibrate sigma: a trained predictor shrinks toward zero, so free-running synthesis
+        // driven by the one-step residual would have too little power. Scale sigma until the
+        // free-running band signal has the recording's RMS (three fixed-point passes).
+        for (const auto i : use) {
+          const auto c = static_cast<std::size_t>(cell_of[i]);
+          double target = 0;
+          for (const double x : sig[j.band][i]) target += x * x;
+          target = std::sqrt(target / static_cast<double>(std::max<std::size_t>(1, sig[j.band][i].size())));
+          Rng rng(o.train.seed + 7919 * k + c);
+          Eigen::VectorXd in = Eigen::VectorXd::Zero(inputs);
+          if (unified) {
+            in(M) = m.NormSpeed(recs[i].speed_mps);
+            in(M + 1) = m.NormForce(recs[i].force_N);
+          }
+          for (int pass = 0; pass < 3 && target > 0; ++pass) {
+            in.head(M).setZero();
+            double ss = 0;
+            const int warm = 300, steps = 3000;
+            for (int t = 0; t < warm + steps; ++t) {
+              double yv = net.Predict(in) + band.sigma[c] * rng.Normal();
+              yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
+              for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
+              in(0) = yv;
+              if (t >= warm) ss += yv * yv;
+            }
+            const double got = std::sqrt(ss / steps);
+            if (!(got > 0)) break;
+            band.sigma[c] *= std::clamp(target / got, 0.25, 4.0);
+          }
+        }
+        band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
+        if (o.progress)
+          o.progress(unified ? fmt::format("band {}", j.band + 1)
+                             : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1, m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
+                                           m.forces_N[static_cast<std::size_t>(j.cell) % nf]),
+                     static_cast<int>(++done), static_cast<int>(jobs.size()));
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(err_mu);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  renderer::ValidateNeuralModel(m);
+  return m;
+}
+
+std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double v, double f, std::size_t n, std::uint64_t seed,
+                                     std::size_t settle) {
+  renderer::NeuralSynth s(std::make_shared<renderer::NeuralModel>(m), seed);
+  const double vs = std::max(v, m.min_speed_mps);
+  for (std::size_t k = 0; k < settle; ++k) s.Step(vs, f, true);
+  std::vector<double> out(n);
+  for (auto& x : out) x = s.Step(vs, f, true);
+  return out;
+}
+
+CvResult CrossValidateNeural(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
+                             const NeuralFitOptions& o, std::uint64_t seed) {
+  auto near = [](const std::vector<double>& set, double x) {
+    return std::any_of(set.begin(), set.end(), [&](double s) { return Near(x, s); });
+  };
+  std::vector<Recording> train;
+  for (const auto& r : recs)
+    if (near(tv, r.speed_mps) && near(tf, r.force_N)) train.push_back(r);
+  if (train.size() < 3) throw InputError("", 0, "--train-speeds", "fewer than 3 recordings at the training conditions");
+  const auto model = FitNeural(train, o);
+  CvResult res;
+  int ntr = 0, nte = 0;
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    const auto& r = recs[i];
+    const auto measured = Preprocess(r, o.preprocess);
+    const auto s = SynthesizeNeural(model, r.speed_mps, r.force_N, measured.size(), seed + i);
+    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s),
+              WelchMagnitude(measured), WelchMagnitude(s)};
+    (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
+    (row.train ? ntr : nte)++;
+    res.rows.push_back(row);
+  }
+  if (ntr) res.mean_es_train /= ntr;
+  if (nte) res.mean_es_test /= nte;
+  return res;
+}
+
+}  // namespace hapticlab::modeling

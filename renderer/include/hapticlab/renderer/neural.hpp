@@ -1,0 +1,106 @@
+#pragma once
+/// @file Neural texture vibration (dissertation ch. III.3, Fig. 3.3): frequency-decomposed
+/// MLP predictors of the next acceleration sample from decimated history, unified (Γ_U: one
+/// network per band with speed and load as two extra inputs) or decomposed (Γ_D: one network
+/// per band and per (speed, force) cell of a grid, outputs interpolated bilinearly between
+/// the four neighbours, ch. III.3.5).
+///
+/// Free-running synthesis. A predictor fed its own output converges to a fixed point or a
+/// limit cycle; a texture's vibration is a random process. Each band therefore runs as a
+/// nonlinear autoregression driven by noise: y[m] = NN(y[m-1..m-M], v, f) + sigma e[m],
+/// e ~ N(0, 1), with sigma the network's one-step residual standard deviation on its training
+/// data (per cell, interpolated like the outputs). This is the nonlinear counterpart of the
+/// LPC model's excitation; sigma is then calibrated so that free-running synthesis at each
+/// training cell has the band power of the recording (the network's shrinkage toward zero
+/// would otherwise lower it). The output path high-passes each band at its lower edge,
+/// upsamples it by γ with a windowed-sinc polyphase interpolator (8 taps per phase; a band's
+/// content reaches its decimated Nyquist frequency, where linear interpolation would lose up
+/// to 60 % of the amplitude) and sums the bands. Latency: 4 decimated samples per band
+/// (20 ms for band 1, none for band 4).
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/renderer/biquad.hpp"
+
+namespace hapticlab::renderer {
+
+/// A trained MLP: tanh hidden layers, linear scalar output. Parameters per layer l: W_l
+/// (out x in, column-major) then b_l (out).
+struct NeuralNet {
+  std::vector<int> layers;     ///< sizes from input to output (output 1)
+  std::vector<double> params;
+  std::size_t ParamCount() const;
+};
+
+/// One band of Fig. 3.3.
+struct NeuralBand {
+  double lo_hz = 20, hi_hz = 100;  ///< the band
+  int decimation = 10;             ///< γ: the band runs at sample_rate / γ
+  int history = 50;                ///< M: past decimated samples fed to the network
+  double scale = 1;                ///< band signal standard deviation [m/s^2]; nets work in units of it
+  std::vector<NeuralNet> nets;     ///< Γ_U: one; Γ_D: one per grid cell (speed-major)
+  std::vector<double> sigma;       ///< residual SD per grid cell (units of `scale`)
+};
+
+enum class NeuralTopology { kUnified, kDecomposed };
+
+struct NeuralModel {
+  NeuralTopology topology = NeuralTopology::kUnified;
+  double sample_rate_hz = 2000;            ///< model rate [Hz]
+  double min_speed_mps = 0.01;             ///< off below this speed (as the AR bank)
+  std::vector<double> speeds_mps, forces_N;  ///< the training grid (ascending)
+  std::vector<NeuralBand> bands;
+  /// Γ_U condition inputs: v and f mapped linearly from [lo, hi] of the grid to [-1, 1].
+  double NormSpeed(double v) const;
+  double NormForce(double f) const;
+};
+
+/// The thesis's four bands with γ = 10, 5, 2, 1 (sample rate / γ keeps each band below its
+/// Nyquist frequency; the text's "γ = 10 for all networks" would alias bands 2-4).
+std::vector<NeuralBand> DefaultNeuralBands();
+
+/// Validates sizes (layer chains, one net or one per cell, sigma per cell). Throws
+/// std::invalid_argument naming the problem.
+void ValidateNeuralModel(const NeuralModel& m);
+
+/// Reads/writes a neural model file (TOML; docs/modeling-neural.md).
+/// @throws hapticlab::InputError with file, line and key.
+NeuralModel LoadNeuralModel(const std::string& path);
+void SaveNeuralModel(const NeuralModel& m, const std::string& path);
+
+/// Synthesis at the model rate. Every buffer is sized in the constructor; Step is noexcept
+/// and allocation-free (the vibration loop calls it).
+class NeuralSynth {
+ public:
+  NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t seed);
+  /// The next model-rate sample [m/s^2] at the current speed and normal force; zero (and the
+  /// state cleared) when inactive or slower than the model's minimum speed.
+  double Step(double speed_mps, double force_N, bool active) noexcept;
+  void Reset() noexcept;
+  /// One network evaluation of band b, cell c on an input vector (for tests).
+  double Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept;
+
+ private:
+  static constexpr int kTaps = 8;  // interpolator taps per phase
+  struct BandState {
+    std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
+    std::vector<double> input;    // M (+2) network input
+    int head = 0, phase = 0;
+    Biquad hp;                    // output path: high-pass at lo (decimated rate)
+    std::vector<double> taps;     // polyphase interpolator: taps[p * kTaps + j]
+    std::array<double, 2 * kTaps> out{};  // newest-first high-passed decimated outputs (doubled ring)
+    int out_head = 0;
+  };
+  std::shared_ptr<const NeuralModel> m_;
+  std::vector<BandState> bands_;
+  std::vector<double> act_a_, act_b_;  // activations
+  Rng noise_;
+  bool running_ = false;
+};
+
+}  // namespace hapticlab::renderer

@@ -1,0 +1,339 @@
+#include "hapticlab/renderer/neural.hpp"
+
+#include <fmt/format.h>
+
+#include <toml++/toml.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <numbers>
+#include <stdexcept>
+
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::renderer {
+namespace {
+
+// Bilinear weights on the grid (clamped at the edges): up to four cells, speed-major index.
+int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, double v, double f, int* cell, double* w) {
+  auto axis = [](const std::vector<double>& g, double x, int* i0, double* t) {
+    if (g.size() < 2 || x <= g.front()) {
+      *i0 = 0;
+      *t = 0;
+      return;
+    }
+    if (x >= g.back()) {
+      *i0 = static_cast<int>(g.size()) - 2;
+      *t = 1;
+      return;
+    }
+    int i = 0;
+    while (x > g[static_cast<std::size_t>(i) + 1]) ++i;
+    *i0 = i;
+    *t = (x - g[static_cast<std::size_t>(i)]) / (g[static_cast<std::size_t>(i) + 1] - g[static_cast<std::size_t>(i)]);
+  };
+  int iv, jf;
+  double tv, tf;
+  axis(vs, v, &iv, &tv);
+  axis(fs, f, &jf, &tf);
+  const int nf = static_cast<int>(fs.size());
+  const int n1 = vs.size() > 1 ? 2 : 1, n2 = fs.size() > 1 ? 2 : 1;
+  int k = 0;
+  for (int a = 0; a < n1; ++a)
+    for (int b = 0; b < n2; ++b) {
+      const double wt = (n1 > 1 ? (a ? tv : 1 - tv) : 1.0) * (n2 > 1 ? (b ? tf : 1 - tf) : 1.0);
+      if (wt <= 0) continue;
+      cell[k] = (iv + a) * nf + (jf + b);
+      w[k++] = wt;
+    }
+  return k;
+}
+
+// Allocation-free forward pass; `a` and `b` hold at least the widest layer.
+double Forward(const NeuralNet& n, const double* in, double* a, double* b) {
+  const double* x = in;
+  double* dst = a;
+  std::size_t off = 0;
+  const std::size_t L = n.layers.size() - 1;
+  for (std::size_t l = 0; l < L; ++l) {
+    const int ni = n.layers[l], no = n.layers[l + 1];
+    const Eigen::Map<const Eigen::MatrixXd> W(n.params.data() + off, no, ni);
+    const Eigen::Map<const Eigen::VectorXd> bias(n.params.data() + off + static_cast<std::size_t>(no * ni), no);
+    const Eigen::Map<const Eigen::VectorXd> xin(x, ni);
+    Eigen::Map<Eigen::VectorXd> out(dst, no);
+    out.noalias() = W * xin;
+    out += bias;
+    if (l + 1 < L) out = out.array().tanh().matrix();
+    off += static_cast<std::size_t>(no) * static_cast<std::size_t>(ni + 1);
+    x = dst;
+    dst = dst == a ? b : a;
+  }
+  return x[0];
+}
+
+}  // namespace
+
+std::size_t NeuralNet::ParamCount() const {
+  std::size_t n = 0;
+  for (std::size_t l = 0; l + 1 < layers.size(); ++l)
+    n += static_cast<std::size_t>(layers[l + 1]) * static_cast<std::size_t>(layers[l] + 1);
+  return n;
+}
+
+double NeuralModel::NormSpeed(double v) const {
+  const double lo = speeds_mps.front(), hi = speeds_mps.back();
+  return hi > lo ? 2 * (v - lo) / (hi - lo) - 1 : 0;
+}
+double NeuralModel::NormForce(double f) const {
+  const double lo = forces_N.front(), hi = forces_N.back();
+  return hi > lo ? 2 * (f - lo) / (hi - lo) - 1 : 0;
+}
+
+std::vector<NeuralBand> DefaultNeuralBands() {
+  std::vector<NeuralBand> b(4);
+  const double lo[] = {20, 100, 200, 500}, hi[] = {100, 200, 500, 1000};
+  const int g[] = {10, 5, 2, 1};
+  for (int i = 0; i < 4; ++i) {
+    b[static_cast<std::size_t>(i)].lo_hz = lo[i];
+    b[static_cast<std::size_t>(i)].hi_hz = hi[i];
+    b[static_cast<std::size_t>(i)].decimation = g[i];
+    b[static_cast<std::size_t>(i)].history = 50;
+  }
+  return b;
+}
+
+void ValidateNeuralModel(const NeuralModel& m) {
+  if (m.speeds_mps.empty() || m.forces_N.empty()) throw std::invalid_argument("neural model: empty speed or force grid");
+  for (const auto* g : {&m.speeds_mps, &m.forces_N})
+    for (std::size_t i = 1; i < g->size(); ++i)
+      if (!((*g)[i] > (*g)[i - 1])) throw std::invalid_argument("neural model: grid values must be strictly ascending");
+  if (!(m.sample_rate_hz > 0)) throw std::invalid_argument("neural model: sample_rate_hz must be positive");
+  if (m.bands.empty()) throw std::invalid_argument("neural model: no bands");
+  const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
+  for (std::size_t b = 0; b < m.bands.size(); ++b) {
+    const auto& band = m.bands[b];
+    const std::string where = fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
+    if (band.decimation < 1 || band.history < 1) throw std::invalid_argument(where + ": decimation and history must be >= 1");
+    if (band.hi_hz > 0.5 * m.sample_rate_hz / band.decimation + 1e-9)
+      throw std::invalid_argument(where + ": the band's upper edge exceeds the Nyquist frequency of its decimated rate");
+    const std::size_t want = m.topology == NeuralTopology::kUnified ? 1 : cells;
+    if (band.nets.size() != want) throw std::invalid_argument(fmt::format("{}: {} networks, expected {}", where, band.nets.size(), want));
+    if (band.sigma.size() != cells) throw std::invalid_argument(fmt::format("{}: {} sigma values, expected {}", where, band.sigma.size(), cells));
+    const int inputs = band.history + (m.topology == NeuralTopology::kUnified ? 2 : 0);
+    for (const auto& n : band.nets) {
+      if (n.layers.size() < 2 || n.layers.front() != inputs || n.layers.back() != 1)
+        throw std::invalid_argument(fmt::format("{}: layers must run from {} inputs to 1 output", where, inputs));
+      if (n.params.size() != n.ParamCount())
+        throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
+      for (const double p : n.params)
+        if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
+    }
+    if (!(band.scale > 0)) throw std::invalid_argument(where + ": scale must be positive");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
+  ValidateNeuralModel(m);
+  auto list = [](const auto& v) {
+    std::string s = "[";
+    for (std::size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", static_cast<double>(v[i]));
+    return s + "]";
+  };
+  std::string s = "# HapticLab neural texture model (dissertation ch. III.3; docs/modeling-neural.md)\n";
+  s += fmt::format("topology = \"{}\"\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
+                   m.topology == NeuralTopology::kUnified ? "unified" : "decomposed", m.sample_rate_hz, m.min_speed_mps);
+  s += "speeds_mps = " + list(m.speeds_mps) + "\nforces_N = " + list(m.forces_N) + "\n";
+  for (const auto& b : m.bands) {
+    s += fmt::format("\n[[band]]\nlo_hz = {:.17g}\nhi_hz = {:.17g}\ndecimation = {}\nhistory = {}\nscale = {:.17g}\n", b.lo_hz,
+                     b.hi_hz, b.decimation, b.history, b.scale);
+    s += "layers = " + list(b.nets.front().layers) + "\nsigma = " + list(b.sigma) + "\nnets = [\n";
+    for (const auto& n : b.nets) s += "  " + list(n.params) + ",\n";
+    s += "]\n";
+  }
+  std::ofstream f(path);
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  f << s;
+  f.close();
+  if (!f) throw std::runtime_error(path + ": write failed");
+}
+
+NeuralModel LoadNeuralModel(const std::string& path) {
+  toml::table doc;
+  try {
+    doc = toml::parse_file(path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+  }
+  Diagnostics d;
+  auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
+  auto numbers = [&](const toml::node* n, const std::string& key, std::vector<double>* out) {
+    const auto* a = n ? n->as_array() : nullptr;
+    if (!a) {
+      d.Add(path, line(n), key, "expected an array of numbers");
+      return;
+    }
+    for (const auto& x : *a) {
+      const auto v = x.value<double>();
+      if (!v) {
+        d.Add(path, line(&x), key, "expected numbers");
+        return;
+      }
+      out->push_back(*v);
+    }
+  };
+  NeuralModel m;
+  const auto topo = doc["topology"].value<std::string>();
+  if (topo == "unified") m.topology = NeuralTopology::kUnified;
+  else if (topo == "decomposed") m.topology = NeuralTopology::kDecomposed;
+  else d.Add(path, line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
+  m.sample_rate_hz = doc["sample_rate_hz"].value_or(0.0);
+  m.min_speed_mps = doc["min_speed_mps"].value_or(0.01);
+  numbers(doc.get("speeds_mps"), "speeds_mps", &m.speeds_mps);
+  numbers(doc.get("forces_N"), "forces_N", &m.forces_N);
+  const auto* bands = doc["band"].as_array();
+  if (!bands) d.Add(path, 0, "band", "expected [[band]] tables");
+  for (std::size_t i = 0; bands && i < bands->size(); ++i) {
+    const auto* t = bands->get(i)->as_table();
+    const std::string k = fmt::format("band[{}]", i + 1);
+    if (!t) {
+      d.Add(path, line(bands->get(i)), k, "expected a table");
+      continue;
+    }
+    NeuralBand b;
+    b.lo_hz = (*t)["lo_hz"].value_or(0.0);
+    b.hi_hz = (*t)["hi_hz"].value_or(0.0);
+    b.decimation = static_cast<int>((*t)["decimation"].value_or(int64_t{0}));
+    b.history = static_cast<int>((*t)["history"].value_or(int64_t{0}));
+    b.scale = (*t)["scale"].value_or(0.0);
+    std::vector<double> layers;
+    numbers(t->get("layers"), k + ".layers", &layers);
+    numbers(t->get("sigma"), k + ".sigma", &b.sigma);
+    const auto* nets = (*t)["nets"].as_array();
+    if (!nets) d.Add(path, line(t), k + ".nets", "expected an array of parameter arrays");
+    for (std::size_t j = 0; nets && j < nets->size(); ++j) {
+      NeuralNet n;
+      for (const double x : layers) n.layers.push_back(static_cast<int>(x));
+      numbers(nets->get(j), fmt::format("{}.nets[{}]", k, j + 1), &n.params);
+      b.nets.push_back(std::move(n));
+    }
+    m.bands.push_back(std::move(b));
+  }
+  d.ThrowIfAny();
+  try {
+    ValidateNeuralModel(m);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path, 0, "band", e.what());
+  }
+  return m;
+}
+
+// ---------------------------------------------------------------------------------------------
+NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t seed) : m_(std::move(model)), noise_(seed) {
+  ValidateNeuralModel(*m_);
+  std::size_t widest = 1;
+  for (const auto& b : m_->bands) {
+    BandState s;
+    s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
+    s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
+    const double rate = m_->sample_rate_hz / b.decimation;
+    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(b.lo_hz, rate));
+    // Interpolation filter for upsampling by γ: Hann-windowed sinc with its cut-off at the
+    // decimated Nyquist frequency, kTaps * γ long, split into γ phases.
+    const int g = b.decimation, len = kTaps * g;
+    s.taps.assign(static_cast<std::size_t>(len), 0.0);
+    const double centre = 0.5 * (len - 1);
+    for (int p = 0; p < g; ++p)
+      for (int j = 0; j < kTaps; ++j) {
+        const int n = p + j * g;  // tap index within the full filter
+        const double t = (n - centre) / g;
+        const double sinc = std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
+        const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * (n + 0.5) / len);
+        s.taps[static_cast<std::size_t>(p * kTaps + j)] = sinc * w;
+      }
+    // Unit DC gain per phase.
+    for (int p = 0; p < g; ++p) {
+      double sum = 0;
+      for (int j = 0; j < kTaps; ++j) sum += s.taps[static_cast<std::size_t>(p * kTaps + j)];
+      for (int j = 0; j < kTaps; ++j) s.taps[static_cast<std::size_t>(p * kTaps + j)] /= sum;
+    }
+    for (const auto& n : b.nets)
+      for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
+    bands_.push_back(std::move(s));
+  }
+  act_a_.assign(widest, 0.0);
+  act_b_.assign(widest, 0.0);
+}
+
+void NeuralSynth::Reset() noexcept {
+  for (auto& s : bands_) {
+    std::fill(s.hist.begin(), s.hist.end(), 0.0);
+    s.head = s.phase = 0;
+    s.hp.Reset();
+    s.out.fill(0.0);
+    s.out_head = 0;
+  }
+  running_ = false;
+}
+
+double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept {
+  return Forward(m_->bands[band].nets[cell], input, act_a_.data(), act_b_.data());
+}
+
+double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
+  const NeuralModel& m = *m_;
+  if (!active || !(speed_mps >= m.min_speed_mps) || !std::isfinite(force_N)) {
+    if (running_) Reset();
+    return 0;
+  }
+  running_ = true;
+  int cell[4];
+  double w[4];
+  const int nw = GridWeights(m.speeds_mps, m.forces_N, speed_mps, force_N, cell, w);
+  const bool unified = m.topology == NeuralTopology::kUnified;
+  double sum = 0;
+  for (std::size_t b = 0; b < bands_.size(); ++b) {
+    const NeuralBand& band = m.bands[b];
+    BandState& s = bands_[b];
+    const auto M = static_cast<std::size_t>(band.history);
+    if (s.phase == 0) {
+      std::copy(s.hist.begin() + s.head, s.hist.begin() + s.head + static_cast<std::ptrdiff_t>(M), s.input.begin());
+      if (unified) {
+        s.input[M] = m.NormSpeed(speed_mps);
+        s.input[M + 1] = m.NormForce(force_N);
+      }
+      double y = 0, sig = 0;
+      if (unified) y = Forward(band.nets[0], s.input.data(), act_a_.data(), act_b_.data());
+      for (int k = 0; k < nw; ++k) {
+        const auto c = static_cast<std::size_t>(cell[k]);
+        if (!unified) y += w[k] * Forward(band.nets[c], s.input.data(), act_a_.data(), act_b_.data());
+        sig += w[k] * band.sigma[c];
+      }
+      y += sig * noise_.Normal();
+      if (!std::isfinite(y)) y = 0;
+      y = std::clamp(y, -10.0, 10.0);  // keep the feedback inside the trained range
+      s.head = s.head == 0 ? static_cast<int>(M) - 1 : s.head - 1;
+      s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
+      const double h = s.hp.Step(y);
+      s.out_head = s.out_head == 0 ? kTaps - 1 : s.out_head - 1;
+      s.out[static_cast<std::size_t>(s.out_head)] = s.out[static_cast<std::size_t>(s.out_head + kTaps)] = h;
+    }
+    double out;
+    if (band.decimation == 1) {
+      out = s.out[static_cast<std::size_t>(s.out_head)];
+    } else {
+      // y[m γ + p] = sum_j x[m - j] h[p + j γ]: phase p of the polyphase filter.
+      const double* x = s.out.data() + s.out_head;
+      const double* t = s.taps.data() + static_cast<std::size_t>(s.phase) * kTaps;
+      out = 0;
+      for (int j = 0; j < kTaps; ++j) out += x[j] * t[j];
+    }
+    s.phase = (s.phase + 1) % band.decimation;
+    sum += band.scale * out;
+  }
+  return std::isfinite(sum) ? sum : 0.0;
+}
+
+}  // namespace hapticlab::renderer
