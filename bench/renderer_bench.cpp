@@ -6,15 +6,24 @@
 //    updated by a force tick every 10 samples (a 1 kHz force loop under a 10 kHz vibration
 //    loop); the force tick's own cost is excluded with manual timing.
 //
+//  - NeuralSample{Unified,Decomposed}: one model-rate (2 kHz) sample of the neural model
+//    (ch. III.3) with the thesis's network sizes (4 bands, M = 50, 30-25-15-5 / 30-15-5);
+//    Γ_D on a 3 x 3 grid interpolates four networks per band.
+//  - VibrationTickNeural{Unified,Decomposed}: one 10 kHz vibration-loop tick of the hybrid
+//    renderer playing the neural model (a model sample every 5 ticks, high-pass included).
+//
 //   build/bench/renderer_bench [--benchmark_repetitions=5 --benchmark_report_aggregates_only=true]
 
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <cmath>
+#include <memory>
 #include <random>
 
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/renderer/neural.hpp"
 
 namespace {
 
@@ -105,6 +114,69 @@ void VibrationFilterUpdateAr20(benchmark::State& state) {
   }
 }
 BENCHMARK(VibrationFilterUpdateAr20);
+
+// A neural model with the thesis's sizes and random (Glorot) weights: the cost does not depend
+// on the trained values.
+std::shared_ptr<NeuralModel> BenchNeural(NeuralTopology t) {
+  auto m = std::make_shared<NeuralModel>();
+  m->topology = t;
+  m->speeds_mps = {0.04, 0.08, 0.12};
+  m->forces_N = {0.54, 1.18, 1.91};
+  m->bands = DefaultNeuralBands();
+  std::mt19937_64 rng(3);
+  for (std::size_t b = 0; b < m->bands.size(); ++b) {
+    auto& band = m->bands[b];
+    const bool large = t == NeuralTopology::kUnified || b == 0;
+    std::vector<int> layers{band.history + (t == NeuralTopology::kUnified ? 2 : 0)};
+    for (const int h : large ? std::vector<int>{30, 25, 15, 5} : std::vector<int>{30, 15, 5}) layers.push_back(h);
+    layers.push_back(1);
+    const std::size_t nets = t == NeuralTopology::kUnified ? 1 : 9;
+    for (std::size_t k = 0; k < nets; ++k) {
+      NeuralNet n{layers, {}};
+      for (std::size_t l = 0; l + 1 < layers.size(); ++l) {
+        const double a = std::sqrt(6.0 / (layers[l] + layers[l + 1]));
+        std::uniform_real_distribution<double> u(-a, a);
+        for (int i = 0; i < layers[l + 1] * layers[l]; ++i) n.params.push_back(u(rng));
+        for (int i = 0; i < layers[l + 1]; ++i) n.params.push_back(0.0);
+      }
+      band.nets.push_back(std::move(n));
+    }
+    band.sigma.assign(9, 0.3);
+    band.scale = 1;
+  }
+  return m;
+}
+
+void NeuralSample(benchmark::State& state, NeuralTopology t) {
+  NeuralSynth s(BenchNeural(t), 1);
+  double v = 0.05;
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(s.Step(v, 1.0, true));
+    v = v > 0.11 ? 0.05 : v + 1e-6;
+  }
+}
+BENCHMARK_CAPTURE(NeuralSample, Unified, NeuralTopology::kUnified);
+BENCHMARK_CAPTURE(NeuralSample, Decomposed, NeuralTopology::kDecomposed);
+
+void VibrationTickNeural(benchmark::State& state, NeuralTopology t) {
+  auto m = BenchMaterial(64, 20);
+  m.neural = BenchNeural(t);
+  RenderOptions o;
+  HybridRenderer r(m, o);
+  std::int64_t k = 0;
+  for (auto _ : state) {
+    if (k % 10 == 0) {
+      state.PauseTiming();
+      const auto s = Stroke(k / 10, o.force_rate_hz);
+      r.ForceTick(s, s.t_s);
+      state.ResumeTiming();
+    }
+    benchmark::DoNotOptimize(r.VibrationTick());
+    ++k;
+  }
+}
+BENCHMARK_CAPTURE(VibrationTickNeural, Unified, NeuralTopology::kUnified);
+BENCHMARK_CAPTURE(VibrationTickNeural, Decomposed, NeuralTopology::kDecomposed);
 
 }  // namespace
 

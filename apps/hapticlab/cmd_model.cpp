@@ -20,6 +20,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/core.hpp>
 #include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/modeling/neural.hpp"
+#include <mutex>
 #include "hapticlab/stats/plot.hpp"
 #include <filesystem>
 #include "hapticlab/runner/offline.hpp"
@@ -318,6 +320,59 @@ void AddFitVibration(CLI::App& model) {
   });
 }
 
+void AddFitNeural(CLI::App& model) {
+  struct O {
+    VibArgs a;
+    std::string topology = "unified";
+    int epochs = 40;
+    double input_noise = 0.3;
+    std::uint64_t seed = 1;
+    int threads = 0;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = model.add_subcommand(
+      "fit-neural",
+      "Train the neural texture model (dissertation ch. III.3, Fig. 3.3) from recordings on a full\n"
+      "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 10, 5,\n"
+      "2, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
+      "30-25-15-5; Γ_D: one per band and grid cell, 30-25-15-5 for band 1 and 30-15-5 for the\n"
+      "others), Adam with mini-batches and early stopping. Writes a neural model file; reference\n"
+      "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");
+  cmd->add_option("--recordings", o->a.recordings, "Folder of measurement CSV v1 files with acc_mps2, one per condition")
+      ->required();
+  cmd->add_option("--topology", o->topology, "unified (Γ_U) or decomposed (Γ_D)")
+      ->check(CLI::IsMember({"unified", "decomposed"}))
+      ->capture_default_str();
+  cmd->add_option("-o,--out", o->a.out, "Neural model file to write (.toml)")->required();
+  cmd->add_option("--rate", o->a.rate, "Model sample rate [Hz]")->capture_default_str();
+  cmd->add_option("--epochs", o->epochs, "Maximum training epochs per network")->capture_default_str()->check(CLI::Range(1, 10000));
+  cmd->add_option("--input-noise", o->input_noise, "Noise on training histories (units of the band RMS)")->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Initialisation, shuffling and noise seed")->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Networks trained in parallel (0: all cores)")->capture_default_str();
+  cmd->callback([o] {
+    RunGuarded([&] {
+      const auto recs = modeling::LoadRecordings(o->a.recordings);
+      modeling::NeuralFitOptions no;
+      no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified : renderer::NeuralTopology::kDecomposed;
+      no.preprocess = VibOptions(o->a);
+      no.train.max_epochs = o->epochs;
+      no.train.seed = o->seed;
+      no.input_noise = o->input_noise;
+      no.threads = o->threads;
+      std::mutex mu;
+      no.progress = [&](const std::string& what, int done, int total) {
+        std::lock_guard<std::mutex> lock(mu);
+        fmt::print(stderr, "fit-neural: {}/{} networks trained ({})\n", done, total, what);
+      };
+      const auto m = modeling::FitNeural(recs, no);
+      renderer::SaveNeuralModel(m, o->a.out);
+      fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}\n", recs.size(), m.speeds_mps.size(),
+                 m.forces_N.size(), o->topology, m.bands.size(), o->a.out);
+      return kExitOk;
+    });
+  });
+}
+
 void AddCvVibration(CLI::App& model) {
   auto a = std::make_shared<VibArgs>();
   auto ts = std::make_shared<std::string>("0.04,0.08,0.12");
@@ -325,6 +380,8 @@ void AddCvVibration(CLI::App& model) {
   auto json_out = std::make_shared<bool>(false);
   auto seed = std::make_shared<std::uint64_t>(1);
   auto plots = std::make_shared<std::string>();
+  auto kind = std::make_shared<std::string>("lpc");
+  auto epochs = std::make_shared<int>(40);
   auto* cmd = model.add_subcommand(
       "cv-vibration",
       "Cross-validation as dissertation ch. III.4: fit on the training speeds x forces, then\n"
@@ -336,11 +393,26 @@ void AddCvVibration(CLI::App& model) {
   cmd->add_option("--seed", *seed, "Synthesis seed")->capture_default_str();
   cmd->add_option("--plots", *plots, "Write measured vs synthesized spectra per condition here (SVG and PNG)");
   cmd->add_flag("--json", *json_out, "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
+  cmd->add_option("--model-kind", *kind,
+                  "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
+                  "Fig. 3.7: run all three on the same recordings for one E_s table)")
+      ->check(CLI::IsMember({"lpc", "neural-unified", "neural-decomposed"}))
+      ->capture_default_str();
+  cmd->add_option("--epochs", *epochs, "Neural models: maximum training epochs")->capture_default_str()->check(CLI::Range(1, 10000));
   cmd->callback([=] {
     RunGuarded([&] {
       const auto recs = modeling::LoadRecordings(a->recordings);
-      const auto cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"),
-                                              VibOptions(*a), *seed);
+      modeling::CvResult cv;
+      if (*kind == "lpc") {
+        cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"), VibOptions(*a), *seed);
+      } else {
+        modeling::NeuralFitOptions no;
+        no.topology = *kind == "neural-unified" ? renderer::NeuralTopology::kUnified : renderer::NeuralTopology::kDecomposed;
+        no.preprocess = VibOptions(*a);
+        no.train.max_epochs = *epochs;
+        no.train.seed = *seed;
+        cv = modeling::CrossValidateNeural(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"), no, *seed);
+      }
       if (!plots->empty()) {
         std::filesystem::create_directories(*plots);
         for (const auto& r : cv.rows) {
@@ -360,7 +432,7 @@ void AddCvVibration(CLI::App& model) {
         nlohmann::json rows = nlohmann::json::array();
         for (const auto& r : cv.rows)
           rows.push_back({{"speed_mps", r.speed_mps}, {"force_N", r.force_N}, {"split", r.train ? "train" : "test"}, {"es", r.es}});
-        fmt::print("{}\n", nlohmann::json{{"conditions", rows}, {"mean_es_train", cv.mean_es_train},
+        fmt::print("{}\n", nlohmann::json{{"model_kind", *kind}, {"conditions", rows}, {"mean_es_train", cv.mean_es_train},
                                           {"mean_es_test", cv.mean_es_test}, {"order", cv.order}}.dump(2));
         return kExitOk;
       }
@@ -368,8 +440,9 @@ void AddCvVibration(CLI::App& model) {
       for (const auto& r : cv.rows)
         fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N, r.train ? "train" : "test", r.es);
       const bool any_test = std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
-      fmt::print("mean E_s: training {:.3f}, held-out {} (AR order {})\n", cv.mean_es_train,
-                 any_test ? fmt::format("{:.3f}", cv.mean_es_test) : std::string("n/a (no held-out conditions)"), cv.order);
+      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}\n", *kind, cv.mean_es_train,
+                 any_test ? fmt::format("{:.3f}", cv.mean_es_test) : std::string("n/a (no held-out conditions)"),
+                 *kind == "lpc" ? fmt::format(" (AR order {})", cv.order) : std::string());
       return kExitOk;
     });
   });
@@ -603,6 +676,7 @@ void RegisterModel(CLI::App& app) {
   AddEnergy(*model);
   AddImportPenn(*model);
   AddFitVibration(*model);
+  AddFitNeural(*model);
   AddCvVibration(*model);
   AddCutoff(*model);
   AddFitContact(*model);

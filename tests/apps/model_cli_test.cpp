@@ -161,5 +161,42 @@ TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
   EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("empty") + " -o " + dir.File("b.toml"), &out), 2);
 }
 
+TEST(ModelCli, FitNeuralAndCrossValidateEveryModelKind) {
+  test::TempDir dir;
+  std::filesystem::create_directory(dir.File("rec"));
+  WriteGrid(dir.File("rec"));
+  std::string out;
+  for (const char* topo : {"unified", "decomposed"}) {
+    const auto file = dir.File(std::string("n_") + topo + ".toml");
+    ASSERT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") + " --topology " + topo +
+                                   " --epochs 2 -o " + file,
+                               &out),
+              0)
+        << out;
+    EXPECT_NE(out.find("networks trained"), std::string::npos) << "progress: " << out;
+    test::WriteFile(dir.File("m.toml"), "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
+                                        "mu_k = 0.2\n[neural]\nfile = \"" + std::string("n_") + topo + ".toml\"\n");
+    EXPECT_EQ(test::RunCommand(Cli() + " model check " + dir.File("m.toml"), &out), 0) << out;
+  }
+  // One E_s table for the three kinds (Fig. 3.7): same conditions, same keys.
+  for (const char* kind : {"lpc", "neural-unified", "neural-decomposed"}) {
+    ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind " + kind +
+                                   " --epochs 2 --train-speeds 0.04,0.12 --train-forces 0.54,1.91 --json",
+                               &out),
+              0)
+        << out;
+    const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+    EXPECT_EQ(j["model_kind"], kind);
+    EXPECT_EQ(j["conditions"].size(), 9u);
+    EXPECT_TRUE(j["mean_es_test"].get<double>() > 0);
+  }
+  EXPECT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind nn", &out), 2);
+  // A grid with a hole cannot train Γ_D.
+  std::filesystem::remove(dir.File("rec/r4.csv"));
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") + " --epochs 1 -o " + dir.File("x.toml"), &out),
+            2);
+  EXPECT_NE(out.find("full speed x force grid"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace hapticlab
