@@ -40,4 +40,25 @@ class Actuator {
   virtual void Write(double acc_mps2) noexcept = 0;
 };
 
+/// A participant's rating input (a knob or slider box): polled by the UI thread.
+struct RatingEvent {
+  bool valid = false;
+  double position = 0;   ///< 0..1 along the slider's travel
+  bool confirm = false;  ///< the confirm button is down
+};
+class RatingInput {
+ public:
+  virtual ~RatingInput() = default;
+  /// The newest state, without blocking; valid = false when nothing arrived.
+  virtual RatingEvent Poll() = 0;
+};
+
+/// Masking noise on the participant's headphones (ch. IV.5.1, V.2.1).
+class MaskingNoise {
+ public:
+  virtual ~MaskingNoise() = default;
+  /// Level as RMS in full-scale units (0..1); 0 silences it.
+  virtual void SetNoiseLevel(double rms_fs) noexcept = 0;
+};
+
 }  // namespace hapticlab::devices

@@ -1,0 +1,81 @@
+#pragma once
+/// @file The `audio` back-end: the vibrotactile actuator (a voice coil such as the Haptuator,
+/// through an audio amplifier) and the masking noise on the participant's headphones, both
+/// on one sound device through PortAudio. The vibration loop writes acceleration samples at
+/// its own rate into a lock-free queue; the audio callback upsamples them to the device's
+/// rate, maps channels, adds white noise on the headphone channels, and counts underflows
+/// and clipping. The host API is behind AudioStream so tests drive the callback themselves.
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/spsc_queue.hpp"
+#include "hapticlab/devices/device.hpp"
+
+namespace hapticlab::devices {
+
+struct AudioConfig {
+  std::string device;                   ///< PortAudio device name (substring); empty: the default output
+  double sample_rate_hz = 48000;        ///< the sound device's rate
+  double input_rate_hz = 10000;         ///< rate of the samples the vibration loop writes
+  double latency_s = 0.005;             ///< suggested output latency
+  int channels = 2;
+  std::vector<int> actuator_channels{0};  ///< channels that carry the actuator signal
+  std::vector<int> noise_channels{1};     ///< headphone channels that carry white noise
+  double full_scale_mps2 = 50;          ///< acceleration at full scale (amplifier and actuator calibration)
+  double noise_rms_fs = 0.1;            ///< masking noise level (RMS, full-scale units)
+  double queue_s = 0.05;                ///< buffer between the vibration loop and the callback
+  std::uint64_t seed = 1;               ///< noise seed (recorded with the session)
+};
+/// Checks channel indices, rates and levels; throws std::invalid_argument naming the field.
+void ValidateAudioConfig(const AudioConfig& c);
+
+/// The host API seam: starts a stream that calls `render` with interleaved float frames.
+class AudioStream {
+ public:
+  using Render = std::function<void(float* interleaved, unsigned long frames)>;
+  virtual ~AudioStream() = default;
+  virtual void Start(const AudioConfig& c, Render render) = 0;
+  virtual void Stop() = 0;
+  virtual std::string Describe() const = 0;  ///< device and actual latency, for provenance
+};
+/// PortAudio output stream. @throws std::runtime_error when the device cannot be opened.
+std::unique_ptr<AudioStream> OpenPortAudio();
+/// The output devices PortAudio sees ("index: name (channels, default rate)").
+std::vector<std::string> ListAudioDevices();
+
+class AudioOutput final : public Actuator, public MaskingNoise {
+ public:
+  AudioOutput(const AudioConfig& c, std::unique_ptr<AudioStream> stream);
+  ~AudioOutput() override;
+  double SampleRateHz() const override { return c_.input_rate_hz; }
+  /// Vibration loop: queue one sample [m/s^2]; a full queue drops it (counted).
+  void Write(double acc_mps2) noexcept override;
+  void SetNoiseLevel(double rms_fs) noexcept override { noise_rms_.store(rms_fs, std::memory_order_relaxed); }
+  void Start();
+  void Stop();
+  /// The audio callback's body (public for tests): fills `frames` interleaved frames.
+  void Render(float* out, unsigned long frames) noexcept;
+
+  std::uint64_t underflows() const { return underflows_.load(); }  ///< output samples with no input
+  std::uint64_t overflows() const { return overflows_.load(); }    ///< input samples dropped
+  std::uint64_t clipped() const { return clipped_.load(); }        ///< output samples beyond full scale
+
+ private:
+  AudioConfig c_;
+  std::unique_ptr<AudioStream> stream_;
+  SpscQueue<float> queue_;
+  std::atomic<double> noise_rms_;
+  Rng noise_;
+  double phase_ = 0, prev_ = 0, cur_ = 0, step_;  // one input sample of latency (interpolation)
+  std::vector<char> is_actuator_, is_noise_;
+  std::atomic<std::uint64_t> underflows_{0}, overflows_{0}, clipped_{0};
+  bool started_ = false;
+};
+
+}  // namespace hapticlab::devices

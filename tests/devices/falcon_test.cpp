@@ -1,0 +1,257 @@
+// The Falcon back-end without a device: packets against fixtures, the firmware-load state
+// machine against a scripted fake of the bootloader, kinematics, and the HapticDevice.
+
+#include "hapticlab/devices/falcon.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <deque>
+#include <fstream>
+#include <sstream>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::devices::falcon {
+namespace {
+
+std::vector<std::uint8_t> Hex(const std::string& path) {
+  std::ifstream f(path);
+  std::vector<std::uint8_t> out;
+  std::string line;
+  while (std::getline(f, line)) {
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream s(line);
+    std::string b;
+    while (s >> b) out.push_back(static_cast<std::uint8_t>(std::stoi(b, nullptr, 16)));
+  }
+  return out;
+}
+
+// A scripted Falcon: the FTDI link plus the bootloader and the SDK firmware's packet loop.
+class FakeFalcon : public UsbTransport {
+ public:
+  std::vector<std::pair<int, int>> controls;  // (request, value)
+  std::vector<std::uint8_t> uploaded;
+  int drop_handshakes = 0;         // ignore this many handshake messages
+  int corrupt_echo_at = -1;        // corrupt the echo of this upload byte (once)
+  bool dead = false;               // never answers
+  bool firmware_runs = true;       // answers status packets after loading
+  std::array<std::int16_t, 3> encoders{0, 0, 0};
+  std::vector<std::array<std::int16_t, 3>> motors;  // commands seen in normal mode
+
+  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t, unsigned) override {
+    EXPECT_EQ(type, 0x40);
+    controls.emplace_back(req, value);
+    if (req == ftdi::kBaudRate) baud_ = value;
+    if (req == ftdi::kModemCtrl && value == ftdi::kDtrHigh) dtr_ = true;
+    if (req == ftdi::kModemCtrl && value == ftdi::kDtrLow) dtr_ = false;
+    return 0;
+  }
+  int BulkWrite(const std::uint8_t* d, int n, unsigned) override {
+    if (dead) return n;
+    if (baud_ == ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 && d[2] == 0x0d) {
+      if (drop_handshakes > 0) {
+        --drop_handshakes;
+        return n;
+      }
+      Reply({0x0a, 0x44, 0x2c, 0x0d});
+    } else if (baud_ == ftdi::kBaud140000 && !loading_ && n == 1 && d[0] == 'A') {
+      loading_ = true;
+      Reply({'A'});
+    } else if (baud_ == ftdi::kBaud140000 && loading_) {
+      std::vector<std::uint8_t> echo(d, d + n);
+      for (int i = 0; i < n; ++i) {
+        if (static_cast<int>(uploaded.size()) == corrupt_echo_at) {
+          echo[static_cast<std::size_t>(i)] ^= 0xff;
+          corrupt_echo_at = -1;
+        }
+        uploaded.push_back(d[i]);
+      }
+      Reply(echo);
+    } else if (baud_ == ftdi::kBaudNormal && n == 16 && firmware_runs) {
+      Status st;
+      // Record the motor command, answer with the encoders.
+      std::array<std::int16_t, 3> m{};
+      for (int k = 0; k < 3; ++k) {
+        std::uint16_t v = 0;
+        for (int j = 0; j < 4; ++j) v = static_cast<std::uint16_t>(v | (d[1 + 4 * k + j] - 0x41) << (4 * j));
+        m[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(v);
+      }
+      motors.push_back(m);
+      Command c;
+      c.motor = encoders;  // same wire format both ways
+      const auto p = EncodeCommand(c);
+      Reply(std::vector<std::uint8_t>(p.begin(), p.end()));
+    }
+    return n;
+  }
+  int BulkRead(std::uint8_t* d, int n, unsigned) override {
+    d[0] = 0x31;  // FTDI modem status bytes
+    d[1] = 0x60;
+    if (replies_.empty()) return 2;
+    auto r = replies_.front();
+    const int k = std::min(static_cast<int>(r.size()), n - 2);
+    std::memcpy(d + 2, r.data(), static_cast<std::size_t>(k));
+    if (k < static_cast<int>(r.size())) replies_.front().erase(r.begin(), r.begin() + k);
+    else replies_.pop_front();
+    return k + 2;
+  }
+
+ private:
+  void Reply(std::vector<std::uint8_t> r) { replies_.push_back(std::move(r)); }
+  std::deque<std::vector<std::uint8_t>> replies_;
+  std::uint16_t baud_ = 0;
+  bool dtr_ = false, loading_ = false;
+};
+
+std::vector<std::uint8_t> Firmware(std::size_t n) {
+  std::vector<std::uint8_t> fw(n);
+  for (std::size_t i = 0; i < n; ++i) fw[i] = static_cast<std::uint8_t>((i * 37 + 11) & 0xff);
+  return fw;
+}
+
+TEST(Falcon, PacketsEncodeAndDecodeAgainstFixtures) {
+  Command c;
+  c.motor = {291, -2, -32768};
+  c.leds = 0x04;
+  c.homing = true;
+  const auto p = EncodeCommand(c);
+  const std::uint8_t want[16] = {'<', 0x44, 0x43, 0x42, 0x41, 0x4f, 0x50, 0x50, 0x50, 0x41, 0x41, 0x41, 0x49, 0x46, 0x41, '>'};
+  EXPECT_EQ(std::memcmp(p.data(), want, 16), 0);
+  const auto stream = Hex(std::string(HL_TEST_DATA_DIR) + "/falcon/status_stream.hex");
+  ASSERT_EQ(stream.size(), 52u);
+  Status st;
+  int malformed = 0;
+  ASSERT_TRUE(DecodeStatus(stream.data(), stream.size(), &st, &malformed));
+  EXPECT_EQ(st.encoder[0], 291);
+  EXPECT_EQ(st.encoder[1], -2);
+  EXPECT_EQ(st.encoder[2], -32768);
+  EXPECT_EQ(st.homing, 0b101 & 0x7);
+  EXPECT_EQ(st.buttons, 0b0011);
+  EXPECT_EQ(malformed, 1);
+  EXPECT_FALSE(DecodeStatus(stream.data(), 20, &st));  // only the broken ones
+}
+
+TEST(Falcon, FirmwareLoadFollowsTheRecordedSequence) {
+  FakeFalcon usb;
+  usb.drop_handshakes = 7;  // the bootloader often needs a few tries
+  const auto fw = Firmware(1000);
+  const auto r = LoadFirmware(usb, fw);
+  ASSERT_TRUE(r.ok) << r.error;
+  EXPECT_EQ(r.attempts, 1);
+  EXPECT_EQ(usb.uploaded, fw);
+  // The control sequence is the recorded one.
+  std::ifstream f(std::string(HL_TEST_DATA_DIR) + "/falcon/setup_sequence.txt");
+  std::vector<std::pair<int, int>> want;
+  std::string line;
+  while (std::getline(f, line))
+    if (!line.empty() && line[0] != '#') {
+      std::istringstream s(line);
+      int a, b;
+      s >> a >> b;
+      want.emplace_back(a, b);
+    }
+  EXPECT_EQ(usb.controls, want);
+  const std::vector<LoadState> trace = {LoadState::kPurge,  LoadState::kLineSetup,  LoadState::kHandshake, LoadState::kBootloader,
+                                        LoadState::kUpload, LoadState::kNormalMode, LoadState::kVerify,    LoadState::kDone};
+  EXPECT_EQ(r.trace, trace);
+}
+
+TEST(Falcon, FirmwareLoadRetriesAndNamesTheFailingState) {
+  {
+    FakeFalcon usb;
+    usb.corrupt_echo_at = 500;  // line noise in the first attempt
+    const auto r = LoadFirmware(usb, Firmware(1000));
+    EXPECT_TRUE(r.ok) << r.error;
+    EXPECT_EQ(r.attempts, 2);
+  }
+  {
+    FakeFalcon usb;
+    usb.dead = true;  // unpowered: the bootloader never answers
+    const auto r = LoadFirmware(usb, Firmware(100), {.attempts = 2, .handshake_tries = 5});
+    EXPECT_FALSE(r.ok);
+    EXPECT_EQ(r.attempts, 2);
+    EXPECT_EQ(r.failed_in, LoadState::kHandshake);
+    EXPECT_NE(r.error.find("bootloader handshake"), std::string::npos) << r.error;
+    EXPECT_NE(r.error.find("after 2 attempts"), std::string::npos) << r.error;
+  }
+  {
+    FakeFalcon usb;
+    usb.firmware_runs = false;  // wrong firmware: loads, then never speaks
+    const auto r = LoadFirmware(usb, Firmware(100), {.attempts = 1, .verify_tries = 4});
+    EXPECT_FALSE(r.ok);
+    EXPECT_EQ(r.failed_in, LoadState::kVerify);
+  }
+  test::TempDir dir;
+  EXPECT_THROW(ReadFirmwareFile(dir.File("missing.bin")), InputError);
+}
+
+TEST(Falcon, KinematicsRoundTripAndVirtualWork) {
+  EXPECT_NEAR(EncoderToAngle(0), 35.0 * 3.14159265358979 / 180, 1e-12);
+  int checked = 0;
+  for (double x = -0.03; x <= 0.03 + 1e-9; x += 0.015)
+    for (double y = -0.03; y <= 0.03 + 1e-9; y += 0.015)
+      for (double z = 0.11; z <= 0.15 + 1e-9; z += 0.01) {
+        const Eigen::Vector3d p(x, y, z);
+        Eigen::Vector3d th, back;
+        ASSERT_TRUE(InverseKinematics(p, &th)) << p.transpose();
+        ASSERT_TRUE(ForwardKinematics(th, Eigen::Vector3d(0, 0, 0.13), &back)) << p.transpose();
+        EXPECT_LT((back - p).norm(), 1e-8) << p.transpose();
+        // tau . dtheta = f . dp for a small displacement.
+        const Eigen::Vector3d f(1.0, -2.0, 0.5), dp(1e-6, 2e-6, -1e-6);
+        Eigen::Vector3d tau, th2;
+        ASSERT_TRUE(ForceToTorque(p, f, &tau));
+        ASSERT_TRUE(InverseKinematics(p + dp, &th2));
+        EXPECT_NEAR(tau.dot(th2 - th), f.dot(dp), 1e-3 * std::abs(f.dot(dp)));
+        ++checked;
+      }
+  EXPECT_EQ(checked, 125);
+  Eigen::Vector3d th;
+  EXPECT_FALSE(InverseKinematics(Eigen::Vector3d(0.5, 0, 0.13), &th));  // far outside
+}
+
+TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
+  auto fake = std::make_unique<FakeFalcon>();
+  FakeFalcon* usb = fake.get();
+  usb->drop_handshakes = 0;
+  ASSERT_TRUE(LoadFirmware(*usb, Firmware(64)).ok);
+  usb->motors.clear();
+  // Encoders of a known position (quantized): the device must report the FK of those angles.
+  const Eigen::Vector3d p0(0.01, -0.02, 0.125);
+  Eigen::Vector3d th;
+  ASSERT_TRUE(InverseKinematics(p0, &th));
+  const double per_count = EncoderToAngle(1) - EncoderToAngle(0);
+  for (int k = 0; k < 3; ++k)
+    usb->encoders[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(std::lround((th[k] - EncoderToAngle(0)) / per_count));
+  double t = 0;
+  FalconDevice dev(std::move(fake), [&] { return t; });
+  renderer::DeviceSample s;
+  ASSERT_TRUE(dev.Read(&s));
+  EXPECT_LT((s.state.p_m - p0).norm(), 2e-4) << "within the encoder quantization";
+  const Eigen::Vector3d q(EncoderToAngle(usb->encoders[0]), EncoderToAngle(usb->encoders[1]), EncoderToAngle(usb->encoders[2]));
+  Eigen::Vector3d fk;
+  ASSERT_TRUE(ForwardKinematics(q, p0, &fk));
+  EXPECT_LT((s.state.p_m - fk).norm(), 1e-9);
+  // A force command becomes motor efforts -J^-T f * scale on the next exchange.
+  dev.WriteForce(Eigen::Vector3d(0, 0, 2.0));
+  t = 0.001;
+  ASSERT_TRUE(dev.Read(&s));
+  Eigen::Vector3d tau;
+  ASSERT_TRUE(ForceToTorque(s.state.p_m, Eigen::Vector3d(0, 0, 2.0), &tau));
+  ASSERT_EQ(usb->motors.size(), 2u);
+  for (int k = 0; k < 3; ++k) EXPECT_NEAR(usb->motors[1][static_cast<std::size_t>(k)], -tau[k] * 10000, 1.0);
+  // Non-finite force: zero effort.
+  dev.WriteForce(Eigen::Vector3d(std::nan(""), 0, 0));
+  ASSERT_TRUE(dev.Read(&s));
+  EXPECT_EQ(usb->motors.back(), (std::array<std::int16_t, 3>{0, 0, 0}));
+  // Unplugged: reads fail and the device reports itself lost.
+  usb->firmware_runs = false;
+  for (int k = 0; k < 5; ++k) EXPECT_FALSE(dev.Read(&s));
+  EXPECT_TRUE(dev.lost());
+  EXPECT_EQ(dev.Capabilities().name, "falcon");
+}
+
+}  // namespace
+}  // namespace hapticlab::devices::falcon
