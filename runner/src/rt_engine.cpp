@@ -48,7 +48,10 @@ RtEngine::RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& de
       actuator_(actuator),
       options_(options),
       force_stream_(force_stream),
-      vibration_stream_(vibration_stream) {
+      vibration_stream_(vibration_stream),
+      watchdog_(WatchdogOptions{.stale_after_s = renderer.options().stale_after_s,
+                                .max_consecutive_misses = options.max_consecutive_misses,
+                                .max_force_N = renderer.options().max_force_N}) {
   if (force_stream_ && force_stream_->channel_count() != ForceStreamChannels().size())
     throw std::invalid_argument("force stream must have the ForceStreamChannels() layout");
   if (vibration_stream_ && vibration_stream_->channel_count() != 1)
@@ -95,7 +98,6 @@ void RtEngine::ForceLoop() {
   if (options_.on_thread_enter) options_.on_thread_enter();
   const double rate = renderer_.options().force_rate_hz;
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
-  int consecutive_misses = 0;
   std::uint64_t k = 0;
   float rec[15];
   while (running_.load(std::memory_order_relaxed)) {
@@ -106,27 +108,20 @@ void RtEngine::ForceLoop() {
     const double now_s = std::chrono::duration<double>(woke - t0_).count();
     force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s, std::memory_order_relaxed);
     AtomicMax(force_jitter_max_, late_s);
-    if (late_s > 1.0 / rate) {
-      force_misses_.fetch_add(1, std::memory_order_relaxed);
-      ++consecutive_misses;
-    } else {
-      consecutive_misses = 0;
-    }
+    if (late_s > 1.0 / rate) force_misses_.fetch_add(1, std::memory_order_relaxed);
     renderer::DeviceSample sample;
-    Eigen::Vector3d command = Eigen::Vector3d::Zero();
     renderer::ForceCommand cmd;
-    bool fault = false;
-    if (!device_.Read(&sample)) {
+    const bool read_ok = device_.Read(&sample);
+    if (read_ok) cmd = renderer_.ForceTick(sample, now_s);
+    // The watchdog has the last word: zero force on any fault, this very tick.
+    const Eigen::Vector3d command =
+        watchdog_.Check(read_ok, sample, now_s, late_s, 1.0 / rate, read_ok ? cmd.force_N : Eigen::Vector3d::Zero());
+    const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault;
+    if (!read_ok) {
       disconnects_.fetch_add(1, std::memory_order_relaxed);
       device_lost_.store(true);
-      fault = true;
-    } else if (consecutive_misses >= options_.max_consecutive_misses) {
+    } else if (watchdog_.last() == FaultKind::kDeadlineMiss) {
       miss_faults_.fetch_add(1, std::memory_order_relaxed);
-      fault = true;
-    } else {
-      cmd = renderer_.ForceTick(sample, now_s);
-      command = cmd.force_N;
-      fault = cmd.fault;
     }
     device_.WriteForce(command);
     force_ticks_.fetch_add(1, std::memory_order_relaxed);
@@ -180,6 +175,9 @@ EngineStats RtEngine::Stats() const {
   s.vibration_deadline_misses = vibration_misses_.load();
   s.disconnects = disconnects_.load();
   s.miss_faults = miss_faults_.load();
+  s.nan_faults = watchdog_.count(FaultKind::kNaN);
+  s.stale_faults = watchdog_.count(FaultKind::kStale);
+  s.bad_commands = watchdog_.count(FaultKind::kBadCommand);
   s.force_jitter_max_s = force_jitter_max_.load();
   s.force_jitter_mean_s = s.force_ticks ? force_jitter_sum_.load() / static_cast<double>(s.force_ticks) : 0;
   s.vibration_jitter_max_s = vibration_jitter_max_.load();

@@ -3,9 +3,10 @@
 /// each waking at absolute deadlines, sharing state only through the renderer's lock-free
 /// hand-off, and recording through the db writer's SPSC streams.
 ///
-/// Safety: a device read failure (disconnect, no data) or `max_consecutive_misses` late
-/// force ticks in a row command zero force on that tick and count a fault; the renderer
-/// itself zeroes NaN and stale data and clamps to the device limit.
+/// Safety: the Watchdog (watchdog.hpp) checks every force tick: a device read failure
+/// (disconnect), NaN or stale data, `max_consecutive_misses` late ticks in a row, or a bad
+/// command give zero force on that tick, latch the trial as faulted and queue an event; the
+/// renderer itself also zeroes NaN and stale data and clamps to the device limit.
 
 #include <atomic>
 #include <chrono>
@@ -17,6 +18,7 @@
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/runner/watchdog.hpp"
 
 namespace hapticlab::runner {
 
@@ -44,7 +46,7 @@ struct EngineOptions {
 struct EngineStats {
   std::uint64_t force_ticks = 0, vibration_ticks = 0;
   std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
-  std::uint64_t disconnects = 0, miss_faults = 0;
+  std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0, bad_commands = 0;
   std::uint64_t recording_overflows = 0;
   double force_jitter_max_s = 0, force_jitter_mean_s = 0;
   double vibration_jitter_max_s = 0;
@@ -71,6 +73,9 @@ class RtEngine {
   /// Runs for `duration` (or until the device reports a disconnect), then stops.
   void RunFor(std::chrono::duration<double> duration);
   EngineStats Stats() const;
+  /// The force loop's watchdog: tripped() tells whether the trial faulted; PopEvent drains its
+  /// events (call from a non-real-time thread).
+  Watchdog& watchdog() { return watchdog_; }
   /// Seconds since Start on the loops' clock.
   double Now() const;
 
@@ -95,6 +100,7 @@ class RtEngine {
   std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
   std::atomic<std::uint64_t> recording_overflows_at_stop_{0};
   std::string priority_status_ = "not requested";
+  Watchdog watchdog_;
 };
 
 }  // namespace hapticlab::runner
