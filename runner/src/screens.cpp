@@ -1,0 +1,201 @@
+#include "hapticlab/runner/screens.hpp"
+
+#include <fmt/format.h>
+#include <imgui.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+
+namespace hapticlab::runner::ui {
+namespace {
+
+constexpr ImU32 kWhite = IM_COL32(255, 255, 255, 255);
+constexpr ImU32 kTrack = IM_COL32(150, 150, 150, 255);
+constexpr ImU32 kHandle = IM_COL32(80, 170, 255, 255);
+
+void Record(Drawn* d, const std::string& id, ImVec2 a, ImVec2 b) {
+  if (d) d->push_back({id, a.x, a.y, b.x, b.y});
+}
+
+void FullWindow(const char* name, ImU32 bg) {
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(io.DisplaySize);
+  ImGui::PushStyleColor(ImGuiCol_WindowBg, bg);
+  ImGui::Begin(name, nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::PopStyleColor();
+}
+
+// A rating scale with no default position: a track the participant clicks or drags on; the
+// handle appears only once a value is set.
+bool RatingScale(const std::string& id, std::optional<double>* value, double lo, double hi, float width, Drawn* drawn) {
+  const ImVec2 p = ImGui::GetCursorScreenPos();
+  const float h = 28;
+  ImGui::InvisibleButton(id.c_str(), ImVec2(width, h));
+  bool changed = false;
+  if (ImGui::IsItemActive()) {
+    const float t = std::clamp((ImGui::GetIO().MousePos.x - p.x) / width, 0.f, 1.f);
+    *value = lo + (hi - lo) * t;
+    changed = true;
+  }
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  const float y = p.y + h / 2;
+  dl->AddLine(ImVec2(p.x, y), ImVec2(p.x + width, y), kTrack, 3);
+  for (int k = 0; k <= 10; ++k) {
+    const float x = p.x + width * static_cast<float>(k) / 10;
+    dl->AddLine(ImVec2(x, y - (k % 5 ? 4.f : 8.f)), ImVec2(x, y + (k % 5 ? 4.f : 8.f)), kTrack, 2);
+  }
+  if (*value) {
+    const float x = p.x + width * static_cast<float>((**value - lo) / (hi - lo));
+    dl->AddCircleFilled(ImVec2(x, y), 9, kHandle);
+  }
+  Record(drawn, "scale:" + id, p, ImVec2(p.x + width, p.y + h));
+  return changed;
+}
+
+void TextRecorded(Drawn* d, const std::string& id, const std::string& text) {
+  const ImVec2 p = ImGui::GetCursorScreenPos();
+  ImGui::TextUnformatted(text.c_str());
+  const ImVec2 sz = ImGui::CalcTextSize(text.c_str());
+  Record(d, id, p, ImVec2(p.x + sz.x, p.y + sz.y));
+}
+
+}  // namespace
+
+const DrawnItem* Find(const Drawn& d, const std::string& id) {
+  for (const auto& x : d)
+    if (x.id == id) return &x;
+  return nullptr;
+}
+
+ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
+  ParticipantAction act;
+  act.ratings = v.ratings;
+  act.ratings.resize(v.criteria.size());
+  FullWindow("participant", IM_COL32(20, 20, 24, 255));
+  const ImVec2 size = ImGui::GetIO().DisplaySize;
+  ImDrawList* dl = ImGui::GetWindowDrawList();
+  if (v.mode == ParticipantView::Mode::kBreak || v.mode == ParticipantView::Mode::kMessage) {
+    const std::string text = v.mode == ParticipantView::Mode::kBreak
+                                 ? fmt::format("Break. Please rest your hand.\nThe study continues in {:.0f} s.", std::ceil(v.break_remaining_s))
+                                 : v.message;
+    ImGui::SetWindowFontScale(2.0f);
+    const ImVec2 ts = ImGui::CalcTextSize(text.c_str());
+    ImGui::SetCursorPos(ImVec2((size.x - ts.x) / 2, (size.y - ts.y) / 2));
+    TextRecorded(drawn, v.mode == ParticipantView::Mode::kBreak ? "break" : "message", text);
+    ImGui::SetWindowFontScale(1.0f);
+    ImGui::End();
+    return act;
+  }
+  // The scene: the upper part of the window (all of it while the stimulus is explored).
+  const float scene_h = v.mode == ParticipantView::Mode::kRating ? size.y * 0.55f : size.y;
+  const Eigen::Vector2d span = v.workspace_max_m - v.workspace_min_m;
+  const float scale = std::min(size.x * 0.9f / static_cast<float>(span.x()), scene_h * 0.9f / static_cast<float>(span.y()));
+  const ImVec2 origin((size.x - scale * static_cast<float>(span.x())) / 2, (scene_h - scale * static_cast<float>(span.y())) / 2);
+  auto to_px = [&](const Eigen::Vector2d& m) {
+    // y of the device (away from the participant) goes up on the screen.
+    return ImVec2(origin.x + scale * static_cast<float>(m.x() - v.workspace_min_m.x()),
+                  origin.y + scale * static_cast<float>(v.workspace_max_m.y() - m.y()));
+  };
+  const float half = 0.5f * scale * static_cast<float>(v.square_size_m);
+  for (const auto& [id, c] : {std::pair{"left-square", v.left_square_m}, std::pair{"right-square", v.right_square_m}}) {
+    const ImVec2 m = to_px(c);
+    dl->AddRectFilled(ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half), kWhite);
+    Record(drawn, id, ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half));
+  }
+  // The sphere cursor: shaded disc, darker when pressing into the surface (z < 0).
+  const ImVec2 cp = to_px(v.stylus_m.head<2>());
+  const float r = std::max(6.f, 0.006f * scale);
+  const float press = std::clamp(static_cast<float>(-v.stylus_m.z() / 0.002), 0.f, 1.f);
+  const auto shade = [&](float k) {
+    return IM_COL32(static_cast<int>((255 - 90 * press) * k), static_cast<int>((140 - 60 * press) * k), static_cast<int>(30 * k), 255);
+  };
+  dl->AddCircleFilled(cp, r, shade(0.75f), 32);
+  dl->AddCircleFilled(ImVec2(cp.x - r * 0.25f, cp.y - r * 0.25f), r * 0.6f, shade(1.0f), 32);
+  Record(drawn, "cursor", ImVec2(cp.x - r, cp.y - r), ImVec2(cp.x + r, cp.y + r));
+
+  if (v.mode == ParticipantView::Mode::kRating) {
+    const float width = std::min(700.f, size.x * 0.6f);
+    const float x0 = (size.x - width) / 2;
+    ImGui::SetCursorPos(ImVec2(x0, scene_h + 10));
+    TextRecorded(drawn, "prompt", "How similar are the two samples? Click on each scale, then confirm.");
+    for (std::size_t i = 0; i < v.criteria.size(); ++i) {
+      ImGui::SetCursorPosX(x0);
+      TextRecorded(drawn, "label:" + v.criteria[i], v.criteria[i]);
+      ImGui::SetCursorPosX(x0);
+      RatingScale(v.criteria[i], &act.ratings[i], v.scale_min, v.scale_max, width, drawn);
+      ImGui::SetCursorPosX(x0);
+      TextRecorded(drawn, "low:" + v.criteria[i], v.scale_low);
+      ImGui::SameLine(x0 + width - ImGui::CalcTextSize(v.scale_high.c_str()).x);
+      TextRecorded(drawn, "high:" + v.criteria[i], v.scale_high);
+    }
+    const bool all = std::all_of(act.ratings.begin(), act.ratings.end(), [](const auto& x) { return x.has_value(); });
+    ImGui::SetCursorPosX(x0 + width / 2 - 60);
+    if (!all) ImGui::BeginDisabled();
+    const ImVec2 bp = ImGui::GetCursorScreenPos();
+    if (ImGui::Button("Confirm", ImVec2(120, 36)) && all) act.confirmed = true;
+    Record(drawn, "confirm", bp, ImVec2(bp.x + 120, bp.y + 36));
+    if (!all) ImGui::EndDisabled();
+  }
+  if (v.trials > 0) {
+    ImGui::SetCursorPos(ImVec2(10, size.y - 24));
+    TextRecorded(drawn, "trial", fmt::format("{} / {}", v.trial, v.trials));
+  }
+  ImGui::End();
+  return act;
+}
+
+ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
+  ConsoleAction act;
+  FullWindow("console", IM_COL32(32, 34, 40, 255));
+  TextRecorded(drawn, "title", fmt::format("Study {}   participant {}", v.study, v.participant));
+  const ImVec2 pp = ImGui::GetCursorScreenPos();
+  const float frac = v.total > 0 ? static_cast<float>(v.done) / static_cast<float>(v.total) : 0.f;
+  ImGui::PushStyleColor(ImGuiCol_PlotHistogram, IM_COL32(60, 180, 90, 255));
+  ImGui::ProgressBar(frac, ImVec2(-1, 24), fmt::format("{} of {} trials", v.done, v.total).c_str());
+  ImGui::PopStyleColor();
+  Record(drawn, "progress", pp, ImVec2(pp.x + ImGui::GetContentRegionAvail().x, pp.y + 24));
+  TextRecorded(drawn, "phase", "Phase: " + v.phase + (v.paused ? "   [PAUSED]" : ""));
+  TextRecorded(drawn, "current", "Now: " + v.current);
+  ImGui::PushStyleColor(ImGuiCol_Text, IM_COL32(255, 210, 80, 255));
+  TextRecorded(drawn, "next", "Place next: " + v.next_placement);
+  ImGui::PopStyleColor();
+  ImGui::Separator();
+  auto trace = [&](const char* id, const char* label, const std::vector<float>& x) {
+    const ImVec2 p = ImGui::GetCursorScreenPos();
+    const float w = ImGui::GetContentRegionAvail().x;
+    const std::string overlay = x.empty() ? std::string("no data") : fmt::format("{} {:.3f}", label, x.back());
+    static const float kNone = 0;
+    ImGui::PlotLines(fmt::format("##{}", id).c_str(), x.empty() ? &kNone : x.data(), x.empty() ? 1 : static_cast<int>(x.size()), 0,
+                     overlay.c_str(), FLT_MAX, FLT_MAX, ImVec2(w, 70));
+    Record(drawn, id, p, ImVec2(p.x + w, p.y + 70));
+  };
+  trace("trace:force", "force [N]", v.force_N);
+  trace("trace:speed", "speed [m/s]", v.speed_mps);
+  trace("trace:acc", "acceleration [m/s^2]", v.acc_mps2);
+  ImGui::Separator();
+  const ImVec2 bp = ImGui::GetCursorScreenPos();
+  if (v.paused) act.resume = ImGui::Button("Resume", ImVec2(110, 30));
+  else act.pause = ImGui::Button("Pause", ImVec2(110, 30));
+  ImGui::SameLine();
+  act.take_break = ImGui::Button("Break", ImVec2(110, 30));
+  ImGui::SameLine();
+  ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
+  act.abort = ImGui::Button("Abort", ImVec2(110, 30));
+  ImGui::PopStyleColor();
+  Record(drawn, "buttons", bp, ImVec2(bp.x + 350, bp.y + 30));
+  ImGui::Separator();
+  TextRecorded(drawn, "device", "Device: " + v.device_status);
+  std::string faults;
+  for (const auto& [k, n] : v.faults) faults += fmt::format("{}{} {}", faults.empty() ? "" : ", ", k, n);
+  TextRecorded(drawn, "faults", "Faults: " + (faults.empty() ? std::string("none") : faults));
+  ImGui::Separator();
+  for (std::size_t i = v.log.size() > 8 ? v.log.size() - 8 : 0; i < v.log.size(); ++i) ImGui::TextUnformatted(v.log[i].c_str());
+  ImGui::End();
+  return act;
+}
+
+}  // namespace hapticlab::runner::ui

@@ -1,0 +1,123 @@
+#include "hapticlab/runner/ui_windows.hpp"
+
+#include <GLFW/glfw3.h>
+#include <backends/imgui_impl_opengl2.h>
+#include <imgui.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <stdexcept>
+
+namespace hapticlab::runner::ui {
+
+struct Windows::Win {
+  GLFWwindow* w = nullptr;
+  ImGuiContext* ctx = nullptr;
+  int fb_w = 0, fb_h = 0;
+  std::vector<unsigned char> pixels;  // last frame, RGB, bottom row first
+  double last_time = 0;
+};
+
+namespace {
+int glfw_users = 0;
+}
+
+Windows::Windows(const WindowOptions& o) {
+  if (glfw_users++ == 0 && !glfwInit()) {
+    glfw_users = 0;
+    throw std::runtime_error("GLFW cannot start: no display (set DISPLAY or run under xvfb-run)");
+  }
+  const char* titles[2] = {"HapticLab - participant", "HapticLab - experimenter console"};
+  for (int i = 0; i < 2; ++i) {
+    glfwWindowHint(GLFW_VISIBLE, o.visible ? GLFW_TRUE : GLFW_FALSE);
+    GLFWmonitor* monitor = nullptr;
+    if (i == 0 && o.participant_fullscreen) {
+      int n = 0;
+      GLFWmonitor** ms = glfwGetMonitors(&n);
+      monitor = n > 0 ? ms[n - 1] : nullptr;
+    }
+    auto win = std::make_unique<Win>();
+    win->w = glfwCreateWindow(o.width, o.height, titles[i], monitor, nullptr);
+    if (!win->w) throw std::runtime_error("GLFW cannot open a window (OpenGL 2 context)");
+    glfwMakeContextCurrent(win->w);
+    glfwSwapInterval(1);
+    win->ctx = ImGui::CreateContext();
+    ImGui::SetCurrentContext(win->ctx);
+    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the study
+    ImGui::StyleColorsDark();
+    ImGui_ImplOpenGL2_Init();
+    win->last_time = glfwGetTime();
+    wins_.push_back(std::move(win));
+  }
+}
+
+Windows::~Windows() {
+  for (auto& w : wins_) {
+    glfwMakeContextCurrent(w->w);
+    ImGui::SetCurrentContext(w->ctx);
+    ImGui_ImplOpenGL2_Shutdown();
+    ImGui::DestroyContext(w->ctx);
+    glfwDestroyWindow(w->w);
+  }
+  if (--glfw_users == 0) glfwTerminate();
+}
+
+bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa, ConsoleAction* ca,
+                    Drawn* pd, Drawn* cd) {
+  glfwPollEvents();
+  bool open = true;
+  for (std::size_t i = 0; i < wins_.size(); ++i) {
+    Win& w = *wins_[i];
+    if (glfwWindowShouldClose(w.w)) open = false;
+    glfwMakeContextCurrent(w.w);
+    ImGui::SetCurrentContext(w.ctx);
+    ImGuiIO& io = ImGui::GetIO();
+    glfwGetFramebufferSize(w.w, &w.fb_w, &w.fb_h);
+    int ww = 0, wh = 0;
+    glfwGetWindowSize(w.w, &ww, &wh);
+    io.DisplaySize = ImVec2(static_cast<float>(ww), static_cast<float>(wh));
+    if (ww > 0 && wh > 0)
+      io.DisplayFramebufferScale = ImVec2(static_cast<float>(w.fb_w) / static_cast<float>(ww), static_cast<float>(w.fb_h) / static_cast<float>(wh));
+    const double now = glfwGetTime();
+    io.DeltaTime = static_cast<float>(std::max(1e-4, now - w.last_time));
+    w.last_time = now;
+    double mx = 0, my = 0;
+    glfwGetCursorPos(w.w, &mx, &my);
+    io.MousePos = glfwGetWindowAttrib(w.w, GLFW_HOVERED) ? ImVec2(static_cast<float>(mx), static_cast<float>(my)) : ImVec2(-FLT_MAX, -FLT_MAX);
+    for (int b = 0; b < 3; ++b) io.MouseDown[b] = glfwGetMouseButton(w.w, b) == GLFW_PRESS;
+    ImGui_ImplOpenGL2_NewFrame();
+    ImGui::NewFrame();
+    if (i == 0) {
+      const auto a = DrawParticipant(pv, pd);
+      if (pa) *pa = a;
+    } else {
+      const auto a = DrawConsole(cv, cd);
+      if (ca) *ca = a;
+    }
+    ImGui::Render();
+    glViewport(0, 0, w.fb_w, w.fb_h);
+    glClearColor(0, 0, 0, 1);
+    glClear(GL_COLOR_BUFFER_BIT);
+    ImGui_ImplOpenGL2_RenderDrawData(ImGui::GetDrawData());
+    w.pixels.resize(static_cast<std::size_t>(w.fb_w) * static_cast<std::size_t>(w.fb_h) * 3);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadBuffer(GL_BACK);
+    glReadPixels(0, 0, w.fb_w, w.fb_h, GL_RGB, GL_UNSIGNED_BYTE, w.pixels.data());
+    glfwSwapBuffers(w.w);
+  }
+  return open;
+}
+
+void Windows::SaveScreenshot(int window, const std::string& path) const {
+  const Win& w = *wins_.at(static_cast<std::size_t>(window));
+  if (w.pixels.empty()) throw std::runtime_error("no frame drawn yet");
+  cv::Mat rgb(w.fb_h, w.fb_w, CV_8UC3, const_cast<unsigned char*>(w.pixels.data()));
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  cv::flip(bgr, bgr, 0);  // OpenGL's first row is the bottom
+  if (!cv::imwrite(path, bgr)) throw std::runtime_error(path + ": cannot write the screenshot");
+}
+
+}  // namespace hapticlab::runner::ui

@@ -1,0 +1,128 @@
+// The participant window's and the console's logic, headless (an ImGui frame without a GPU):
+// scales have no default position, confirm needs every criterion, clicks set values, the
+// console's buttons report.
+
+#include "hapticlab/runner/screens.hpp"
+
+#include <gtest/gtest.h>
+#include <imgui.h>
+
+namespace hapticlab::runner::ui {
+namespace {
+
+class Headless : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ctx_ = ImGui::CreateContext();
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;
+    io.DisplaySize = ImVec2(1280, 800);
+    io.DeltaTime = 1.f / 60;
+    unsigned char* px;
+    int w, h;
+    io.Fonts->GetTexDataAsRGBA32(&px, &w, &h);  // builds the font atlas; no texture upload needed
+  }
+  void TearDown() override { ImGui::DestroyContext(ctx_); }
+  // One frame with the mouse at (x, y), button down or up.
+  ParticipantAction Frame(const ParticipantView& v, float x, float y, bool down, Drawn* d = nullptr) {
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(x, y);
+    io.MouseDown[0] = down;
+    ImGui::NewFrame();
+    const auto a = DrawParticipant(v, d);
+    ImGui::Render();
+    return a;
+  }
+  ParticipantAction Click(ParticipantView& v, float x, float y) {
+    Frame(v, x, y, false);
+    auto a = Frame(v, x, y, true);
+    v.ratings = a.ratings;
+    a = Frame(v, x, y, false);
+    v.ratings = a.ratings;
+    return a;
+  }
+  ImGuiContext* ctx_ = nullptr;
+};
+
+TEST_F(Headless, RatingNeedsEveryCriterionAndStartsWithoutAValue) {
+  ParticipantView v;
+  v.mode = ParticipantView::Mode::kRating;
+  v.criteria = {"roughness", "overall similarity"};
+  Drawn d;
+  auto a = Frame(v, -1, -1, false, &d);
+  ASSERT_EQ(a.ratings.size(), 2u);
+  EXPECT_FALSE(a.ratings[0] || a.ratings[1]) << "no default position";
+  const auto* s1 = Find(d, "scale:roughness");
+  const auto* s2 = Find(d, "scale:overall similarity");
+  const auto* confirm = Find(d, "confirm");
+  ASSERT_TRUE(s1 && s2 && confirm && Find(d, "label:roughness") && Find(d, "left-square") && Find(d, "cursor"));
+  // Confirm is inert before every scale is set.
+  a = Click(v, confirm->cx(), confirm->cy());
+  EXPECT_FALSE(a.confirmed);
+  a = Click(v, s1->x0 + 0.75f * (s1->x1 - s1->x0), s1->cy());
+  ASSERT_TRUE(a.ratings[0].has_value());
+  EXPECT_NEAR(*a.ratings[0], 75, 0.5);
+  EXPECT_FALSE(a.ratings[1].has_value());
+  a = Click(v, confirm->cx(), confirm->cy());
+  EXPECT_FALSE(a.confirmed);
+  a = Click(v, s2->x0 + 0.2f * (s2->x1 - s2->x0), s2->cy());
+  EXPECT_NEAR(*a.ratings[1], 20, 0.5);
+  a = Click(v, confirm->cx(), confirm->cy());
+  EXPECT_TRUE(a.confirmed);
+  EXPECT_NEAR(*a.ratings[0], 75, 0.5) << "values survive the confirm";
+}
+
+TEST_F(Headless, SceneMapsTheWorkspaceAndBreaksShowACountdown) {
+  ParticipantView v;
+  v.left_square_m = {-0.03, 0};
+  v.right_square_m = {0.03, 0};
+  v.stylus_m = {0.03, 0.0, -0.001};  // on the right sample
+  Drawn d;
+  Frame(v, -1, -1, false, &d);
+  const auto *l = Find(d, "left-square"), *r = Find(d, "right-square"), *c = Find(d, "cursor");
+  ASSERT_TRUE(l && r && c);
+  EXPECT_LT(l->cx(), 640);
+  EXPECT_GT(r->cx(), 640);
+  EXPECT_NEAR(c->cx(), r->cx(), 1.0);
+  EXPECT_NEAR(c->cy(), r->cy(), 1.0);
+  EXPECT_NEAR(l->cy(), 400, 1.0) << "y = 0 is the middle of the full-window scene";
+  v.mode = ParticipantView::Mode::kBreak;
+  v.break_remaining_s = 41.2;
+  d.clear();
+  Frame(v, -1, -1, false, &d);
+  EXPECT_TRUE(Find(d, "break"));
+  EXPECT_FALSE(Find(d, "left-square"));
+}
+
+TEST_F(Headless, ConsoleButtonsReport) {
+  ConsoleView v;
+  v.study = "ch5";
+  v.participant = "P01";
+  v.done = 3;
+  v.total = 10;
+  v.force_N = {0.1f, 0.5f, 1.0f};
+  v.faults = {{"stale", 2}};
+  auto frame = [&](float x, float y, bool down, Drawn* d) {
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(x, y);
+    io.MouseDown[0] = down;
+    ImGui::NewFrame();
+    const auto a = DrawConsole(v, d);
+    ImGui::Render();
+    return a;
+  };
+  Drawn d;
+  frame(-1, -1, false, &d);
+  const auto* b = Find(d, "buttons");
+  ASSERT_TRUE(b && Find(d, "progress") && Find(d, "trace:force") && Find(d, "faults"));
+  // Abort is the third button (110 px each, default spacing).
+  const float ax = b->x0 + 2 * 110 + 2 * ImGui::GetStyle().ItemSpacing.x + 50, ay = b->cy();
+  frame(ax, ay, false, nullptr);
+  frame(ax, ay, true, nullptr);
+  const auto a = frame(ax, ay, false, nullptr);
+  EXPECT_TRUE(a.abort);
+  EXPECT_FALSE(a.pause);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner::ui
