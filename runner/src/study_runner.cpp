@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <set>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -80,6 +81,7 @@ renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t 
 }
 
 struct Outcome {
+  bool aborted = false;  // the experimenter aborted in the UI
   bool fault = false;
   std::string fault_detail;
   std::vector<db::Rating> ratings;
@@ -87,8 +89,42 @@ struct Outcome {
 };
 
 // Runs one trial in the simulated lab and records the interactions.
+// Plays a simulated interaction's stylus path to the UI in (scaled) real time.
+bool PlayToUi(SessionUi& ui, const TrialScreen& screen, int side, const Interaction& in, double duration_s, double speed) {
+  const std::size_t n = in.force.size() / 15;
+  if (n == 0) return true;
+  const auto t0 = std::chrono::steady_clock::now();
+  for (;;) {
+    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed;
+    if (t >= duration_s) return true;
+    const auto i = std::min(n - 1, static_cast<std::size_t>(t * in.force_rate_hz));
+    const Eigen::Vector3d p(in.force[i * 15], in.force[i * 15 + 1], in.force[i * 15 + 2]);
+    if (!ui.Stimulus(screen, side, p, duration_s - t)) return false;
+  }
+}
+
+TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index, int total) {
+  TrialScreen s;
+  s.index = index;
+  s.total = total;
+  s.phase = t.phase;
+  s.left = t.left;
+  s.right = t.right;
+  s.method = t.method;
+  auto what = [](const std::string& stim) {
+    const auto colon = stim.find(':');
+    const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
+    return kind == "real" ? "the real " + id + " sample" : "virtual (" + id + ")";
+  };
+  s.placement = fmt::format("left: {}; right: {}", what(t.left), what(t.right));
+  s.criteria = p.criteria;
+  s.scale_min = p.scale_min;
+  s.scale_max = p.scale_max;
+  return s;
+}
+
 Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
-                   const RunOptions& opt, db::TrajectoryWriter* writer) {
+                   const RunOptions& opt, db::TrajectoryWriter* writer, const TrialScreen& screen) {
   const auto& p = *lab.protocol;
   Outcome out;
   Rng rng(DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts)));
@@ -131,6 +167,24 @@ Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t,
       }
     }
   }
+  if (opt.ui) {
+    // The participant at the screen rates; the simulated strokes are what the screen shows.
+    if (!PlayToUi(*opt.ui, screen, 0, left, dur, opt.ui_playback_speed) ||
+        !PlayToUi(*opt.ui, screen, 1, right, dur, opt.ui_playback_speed)) {
+      out.aborted = true;
+      return out;
+    }
+    const auto shown = std::chrono::steady_clock::now();
+    const auto r = opt.ui->Rate(screen);
+    if (!r || r->size() != p.criteria.size()) {
+      out.aborted = true;
+      return out;
+    }
+    const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
+    for (std::size_t i = 0; i < p.criteria.size(); ++i)
+      out.ratings.push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+    return out;
+  }
   for (const auto& c : p.criteria)
     out.ratings.push_back({c, observer.Rate(c, left.features, right.features, p.scale_min, p.scale_max, rng),
                            Observer::ResponseTime(rng)});
@@ -160,6 +214,9 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       last_material = t.material;  // plan order: the last completed trial precedes the next
     }
   const bool constrained = p.randomization.no_immediate_repeat;
+  std::set<std::int64_t> break_before;  // trials the plan puts a break before
+  for (const auto& e : database.Events(session))
+    if (e.kind == "break-planned" && e.trial_id) break_before.insert(*e.trial_id);
   for (const char* phase : {"training", "reference", "main"}) {
     std::vector<db::Trial> queue;
     for (const auto& t : trials)
@@ -188,15 +245,38 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         return sum;
       }
+      const bool requested = opt.ui && opt.ui->TakeBreakNow();
+      if (opt.ui && (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "break",
+                           .detail = fmt::format("{:.0f} s break ({})", p.break_duration_s,
+                                                 requested ? "requested by the experimenter" : "planned")});
+        if (!opt.ui->Break(p.break_duration_s)) {
+          database.LogEvent({.session_id = session, .kind = "abort", .detail = "the experimenter aborted during a break"});
+          database.EndSession(session, "aborted");
+          sum.status = "aborted";
+          sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          return sum;
+        }
+      }
       database.StartTrial(t.id);
       ++t.attempts;
       ++sum.executed;
-      const Outcome o = ExecuteSim(lab, observer, t, part.seed, opt, &writer);
+      const Outcome o = ExecuteSim(lab, observer, t, part.seed, opt, &writer,
+                                   ScreenOf(p, t, sum.completed + 1, sum.planned));
       sum.simulated_s += o.stimulus_s;
+      if (o.aborted) {
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "abort",
+                           .detail = "the experimenter aborted in the console; 'study resume' continues with this trial"});
+        database.EndSession(session, "aborted");
+        sum.status = "aborted";
+        sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return sum;
+      }
       if (o.fault) {
         ++sum.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault", .detail = o.fault_detail});
+        if (opt.ui) opt.ui->Event(fmt::format("trial {}: {} (re-queued)", t.plan_index + 1, o.fault_detail));
         t.status = db::kTrialFaulted;
         queue.push_back(t);
         continue;

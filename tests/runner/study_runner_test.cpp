@@ -10,7 +10,9 @@
 
 #include <chrono>
 #include <functional>
+#include <cmath>
 #include <map>
+#include <utility>
 #include <random>
 #include <thread>
 
@@ -84,6 +86,73 @@ TEST(StudyRunner, AbortThenResumeCompletesEveryTrialOnce) {
   EXPECT_EQ(ResumeStudy(o).status, "completed");
   ExpectCompleteAndWhole(o.db_path, 2);
   EXPECT_THROW(ResumeStudy(o), InputError);  // nothing left to resume
+}
+
+// A user interface driven by a script: the participant's ratings come from it, the
+// experimenter aborts from it; the session then resumes where it stopped.
+class ScriptedUi : public SessionUi {
+ public:
+  int stimulus_frames = 0, rated = 0, breaks = 0, abort_at_trial = -1, break_request_at = -1;
+  std::vector<int> sides_seen;
+  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p, double remaining) override {
+    ++stimulus_frames;
+    EXPECT_TRUE(p.allFinite());
+    EXPECT_GE(remaining, 0);
+    EXPECT_FALSE(t.placement.empty());
+    if (sides_seen.empty() || sides_seen.back() != side) sides_seen.push_back(side);
+    return t.index != abort_at_trial;
+  }
+  std::optional<std::vector<double>> Rate(const TrialScreen& t) override {
+    ++rated;
+    std::vector<double> r;
+    for (std::size_t i = 0; i < t.criteria.size(); ++i) r.push_back(10.0 * static_cast<double>(t.index % 10) + static_cast<double>(i));
+    return r;
+  }
+  bool Break(double) override {
+    ++breaks;
+    return true;
+  }
+  bool TakeBreakNow() override { return rated == break_request_at && !std::exchange(requested_, true); }
+
+ private:
+  bool requested_ = false;
+};
+
+TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  ui.abort_at_trial = 12;
+  ui.break_request_at = 2;
+  RunOptions o;
+  o.db_path = dir.File("ui.db");
+  o.participant = "P05";
+  o.record = RecordMode::kNone;
+  o.ui = &ui;
+  o.ui_playback_speed = 200;  // the sim's strokes, played fast
+  EXPECT_EQ(RunStudy(p, o).status, "aborted");
+  EXPECT_GT(ui.stimulus_frames, 0);
+  EXPECT_GE(ui.breaks, 1) << "the experimenter's break request";
+  ASSERT_GE(ui.sides_seen.size(), 2u);
+  EXPECT_EQ(ui.sides_seen[0], 0);
+  EXPECT_EQ(ui.sides_seen[1], 1);
+  db::Database d(o.db_path);
+  bool abort_logged = false, break_logged = false;
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  for (const auto& e : d.Events(se.id)) {
+    abort_logged |= e.kind == "abort" && e.detail.find("console") != std::string::npos;
+    break_logged |= e.kind == "break" && e.detail.find("requested by the experimenter") != std::string::npos;
+  }
+  EXPECT_TRUE(abort_logged);
+  EXPECT_TRUE(break_logged);
+  // Ratings stored are the participant's, exactly.
+  for (const auto& t : d.Trials(se.id)) {
+    if (t.status != db::kTrialCompleted || t.phase == "training") continue;
+    for (const auto& r : d.Ratings(t.id)) EXPECT_EQ(std::fmod(r.score, 10.0), r.criterion == p.criteria[0] ? 0.0 : 1.0) << r.criterion << " " << r.score;
+  }
+  ui.abort_at_trial = -1;
+  EXPECT_EQ(ResumeStudy(o).status, "completed");
+  ExpectCompleteAndWhole(o.db_path, 2);
 }
 
 TEST(StudyRunner, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {

@@ -11,7 +11,10 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
+
+#include <Eigen/Core>
 #include <vector>
 
 #include "hapticlab/protocols/protocol.hpp"
@@ -20,6 +23,35 @@ namespace hapticlab::runner {
 
 /// What to record of each trial's interactions.
 enum class RecordMode { kNone, kForce, kAll };
+
+/// What a user interface shows of a trial (hapticlab study run --ui).
+struct TrialScreen {
+  int index = 0, total = 0;           ///< 1-based position in the session, trials planned
+  std::string phase, left, right, method, placement;  ///< placement: what the experimenter puts where
+  std::vector<std::string> criteria;
+  double scale_min = 0, scale_max = 100;
+  std::string scale_low = "very different", scale_high = "identical";
+};
+
+/// Hooks a user interface into a session: the runner calls it from its own (main) thread.
+/// A GLFW implementation is runner/session_ui.hpp; tests script it.
+class SessionUi {
+ public:
+  virtual ~SessionUi() = default;
+  /// One frame while the participant explores side 0 (left) or 1 (right): the stylus [m,
+  /// relative to that sample's centre] and the stimulus time left. false: the experimenter
+  /// aborted.
+  virtual bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) = 0;
+  /// Blocks until the participant confirms a rating per criterion (in the protocol's scale),
+  /// or the experimenter aborts (nullopt).
+  virtual std::optional<std::vector<double>> Rate(const TrialScreen& t) = 0;
+  /// Blocks through a break with a countdown. false: aborted.
+  virtual bool Break(double seconds) = 0;
+  /// A line for the console's log (faults, resume, ...).
+  virtual void Event(const std::string&) {}
+  /// Polled before each trial: the experimenter asked for a break (cleared by reading).
+  virtual bool TakeBreakNow() { return false; }
+};
 
 struct RunOptions {
   std::string db_path;
@@ -30,6 +62,10 @@ struct RunOptions {
   int stop_after_trials = -1;    ///< abort the session after this many trials (tests; -1: run all)
   double fault_rate = 0;         ///< sim: probability that a trial's device faults (tests)
   std::function<void(const std::string&)> log;  ///< progress lines (may be empty)
+  /// Participant and console windows: ratings come from the participant; the stimulus is
+  /// shown (sim: the simulated strokes, played in real time). Borrowed; may be null.
+  SessionUi* ui = nullptr;
+  double ui_playback_speed = 1.0;  ///< sim with a UI: stimulus playback speed-up
 };
 
 struct RunSummary {

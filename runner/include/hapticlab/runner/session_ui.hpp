@@ -1,0 +1,40 @@
+#pragma once
+/// @file SessionUi on the two windows (ui_windows.hpp): the participant explores and rates, the
+/// experimenter watches the console and can pause, call a break or abort.
+
+#include <deque>
+#include <memory>
+#include <string>
+
+#include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/runner/ui_windows.hpp"
+
+namespace hapticlab::runner::ui {
+
+class WindowSessionUi final : public SessionUi {
+ public:
+  /// @throws std::runtime_error without a display
+  WindowSessionUi(const std::string& study, const std::string& participant, const std::string& device_status,
+                  const WindowOptions& o = {});
+  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) override;
+  std::optional<std::vector<double>> Rate(const TrialScreen& t) override;
+  bool Break(double seconds) override;
+  void Event(const std::string& line) override;
+  bool TakeBreakNow() override {
+    const bool b = break_requested_;
+    break_requested_ = false;
+    return b;
+  }
+
+ private:
+  // One frame of both windows; handles pause (blocks while paused), a requested break and
+  // closing the windows (abort). Returns false on abort.
+  bool Frame(ParticipantAction* pa = nullptr);
+  void Show(const TrialScreen& t);
+  Windows win_;
+  ParticipantView pv_;
+  ConsoleView cv_;
+  bool break_requested_ = false;
+};
+
+}  // namespace hapticlab::runner::ui
