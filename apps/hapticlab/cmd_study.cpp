@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -9,12 +10,88 @@
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/devices/audio.hpp"
+#include "hapticlab/devices/falcon.hpp"
+#include "hapticlab/runner/session_ui.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 
 namespace hapticlab::cli {
 namespace {
 
 using nlohmann::json;
+
+struct RunArgs {
+  std::string protocol, db, participant, device = "sim", record = "all";
+  int index = -1, stop_after = -1;
+  double fault_rate = 0;
+  bool ui = false, json = false, quiet = false;
+  // Hardware and screens.
+  std::string firmware, actuator = "none", audio_device, sample_layout = "-0.03,0,0.03,0";
+  double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
+  bool fullscreen = false;
+};
+
+// Opens the hardware and the windows a run asks for and keeps them alive for the session.
+class Rig {
+ public:
+  Rig(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
+    o->device = a.device;
+    if (a.device == "dhd" || a.device == "openhaptics")
+      throw InputError("", 0, "--device",
+                       "'" + a.device + "' is compiled only when its vendor SDK is found at build time, and this build "
+                       "has none (docs/hardware.md: adding a device back-end)");
+    std::string status = "sim (the simulated lab)";
+    if (a.device == "falcon") {
+      if (a.firmware.empty()) throw InputError("", 0, "--firmware", "the Falcon needs its firmware file (docs/hardware.md)");
+      const auto fw = devices::falcon::ReadFirmwareFile(a.firmware);
+      if (devices::falcon::CountDevices() == 0)
+        throw std::runtime_error("no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48); check the cable, power "
+                                 "and the udev rule in docs/hardware.md");
+      auto usb = devices::falcon::OpenLibusb(0);
+      fmt::print(stderr, "falcon: loading firmware {} ({} bytes)...\n", a.firmware, fw.size());
+      const auto r = devices::falcon::LoadFirmware(*usb, fw);
+      if (!r.ok) throw std::runtime_error("falcon: " + r.error);
+      fmt::print(stderr, "falcon: firmware running (attempt {})\n", r.attempts);
+      falcon_ = std::make_unique<devices::falcon::FalconDevice>(std::move(usb));
+      rig_.device = falcon_.get();
+      status = "falcon, firmware " + a.firmware;
+    }
+    if (a.actuator == "audio") {
+      devices::AudioConfig c;
+      c.device = a.audio_device;
+      c.full_scale_mps2 = a.full_scale_mps2;
+      c.noise_rms_fs = 0;  // on only while the protocol asks for it
+      audio_ = std::make_unique<devices::AudioOutput>(c, devices::OpenPortAudio());
+      audio_->Start();
+      rig_.actuator = audio_.get();
+      rig_.noise = audio_.get();
+      rig_.noise_rms_fs = a.noise_rms;
+      status += "; audio actuator and masking noise";
+    }
+    double xl, yl, xr, yr;
+    if (std::sscanf(a.sample_layout.c_str(), "%lf,%lf,%lf,%lf", &xl, &yl, &xr, &yr) != 4)
+      throw InputError("", 0, "--samples", "expected xl,yl,xr,yr in metres, got '" + a.sample_layout + "'");
+    rig_.left_sample_m = {xl, yl};
+    rig_.right_sample_m = {xr, yr};
+    rig_.description = status;
+    if (a.device != "sim") o->rig = &rig_;
+    if (a.device != "sim" && !a.ui)
+      throw InputError("", 0, "--ui", "a hardware session takes its ratings from the participant window: add --ui");
+    if (a.ui) {
+      runner::ui::WindowOptions wo;
+      wo.participant_fullscreen = a.fullscreen;
+      ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo);
+      o->ui = ui_.get();
+      o->ui_playback_speed = a.ui_speed;
+    }
+  }
+
+ private:
+  runner::HardwareRig rig_;
+  std::unique_ptr<devices::falcon::FalconDevice> falcon_;
+  std::unique_ptr<devices::AudioOutput> audio_;
+  std::unique_ptr<runner::ui::WindowSessionUi> ui_;
+};
 
 runner::RecordMode ParseRecord(const std::string& s) {
   if (s == "none") return runner::RecordMode::kNone;
@@ -89,11 +166,28 @@ void RegisterStudy(CLI::App& app) {
       });
     });
   }
-  struct RunArgs {
-    std::string protocol, db, participant, device = "sim", record = "all";
-    int index = -1, stop_after = -1;
-    double fault_rate = 0;
-    bool ui = false, json = false, quiet = false;
+
+  // Adds the device/actuator/screen options shared by run and resume.
+  auto hardware_options = [](CLI::App* cmd, RunArgs& a) {
+    cmd->add_option("--device", a.device,
+                    "Haptic device back-end: sim (the simulated lab), falcon (Novint Falcon over libusb; needs "
+                    "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
+        ->check(CLI::IsMember({"sim", "falcon", "dhd", "openhaptics"}))
+        ->capture_default_str();
+    cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
+    cmd->add_option("--actuator", a.actuator, "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
+        ->check(CLI::IsMember({"audio", "none"}))
+        ->capture_default_str();
+    cmd->add_option("--audio-device", a.audio_device, "PortAudio output device (name substring; default: the default output)");
+    cmd->add_option("--full-scale", a.full_scale_mps2, "Acceleration at the sound card's full scale [m/s^2] (calibration)")
+        ->capture_default_str();
+    cmd->add_option("--noise-rms", a.noise_rms, "Masking noise level (RMS, full-scale units) when the protocol asks for it")
+        ->capture_default_str()->check(CLI::Range(0.0, 0.5));
+    cmd->add_option("--samples", a.sample_layout, "Sample centres in the device frame: xl,yl,xr,yr [m]")->capture_default_str();
+    cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
+    cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
+    cmd->add_option("--ui-speed", a.ui_speed, "Sim with --ui: play the simulated strokes this much faster")
+        ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
   };
   {
     auto a = std::make_shared<RunArgs>();
@@ -105,21 +199,19 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
     cmd->add_option("--index", a->index, "Plan index of the participant (default: the next free one)");
-    cmd->add_option("--device", a->device, "Device back-end")->check(CLI::IsMember({"sim", "falcon", "dhd", "openhaptics"}))
-        ->capture_default_str();
+    hardware_options(cmd, *a);
     cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
         ->capture_default_str();
     cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
     cmd->add_option("--inject-faults", a->fault_rate, "Sim: probability of a device fault per trial")
         ->check(CLI::Range(0.0, 0.9));
-    cmd->add_flag("--ui", a->ui, "Participant and experimenter windows (issue #9; not in this build)");
     cmd->add_flag("--json", a->json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
       RunGuarded([&] {
-        if (a->ui) throw InputError("", 0, "--ui", "the screens arrive with issue #9; run without --ui");
         const auto p = protocols::LoadProtocol(a->protocol);
         runner::RunOptions o;
+        Rig rig(*a, p.name, a->participant, &o);
         o.db_path = a->db;
         o.participant = a->participant;
         o.participant_index = a->index;
@@ -141,11 +233,13 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
         ->capture_default_str();
     cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
+    hardware_options(cmd, *a);
     cmd->add_flag("--json", a->json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
       RunGuarded([&] {
         runner::RunOptions o;
+        Rig rig(*a, "resume", a->participant, &o);
         o.db_path = a->db;
         o.participant = a->participant;
         o.record = ParseRecord(a->record);

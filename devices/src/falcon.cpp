@@ -376,7 +376,7 @@ std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path) {
 // ---------------------------------------------------------------------------------------------
 FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock, const FalconOptions& o)
     : usb_(std::move(usb)), clock_(std::move(clock)), o_(o) {
-  if (!usb_ || !clock_) throw std::invalid_argument("falcon: transport and clock are required");
+  if (!usb_) throw std::invalid_argument("falcon: a transport is required");
 }
 
 DeviceCapabilities FalconDevice::Capabilities() const {
@@ -419,7 +419,7 @@ bool FalconDevice::Read(renderer::DeviceSample* out) noexcept {
   const Eigen::Vector3d theta(EncoderToAngle(st.encoder[0]), EncoderToAngle(st.encoder[1]), EncoderToAngle(st.encoder[2]));
   Eigen::Vector3d p;
   if (!ForwardKinematics(theta, p_m_, &p)) return false;
-  const double t = clock_();
+  const double t = clock_ ? clock_() : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   if (have_p_ && t > t_s_) {
     const double dt = t - t_s_, a = 1 - std::exp(-2 * kPi * o_.velocity_cutoff_hz * dt);
     v_mps_ += a * ((p - p_m_) / dt - v_mps_);

@@ -64,9 +64,19 @@ double RtEngine::Now() const {
   return std::chrono::duration<double>(Clock::now() - t0_).count();
 }
 
+renderer::DeviceSample RtEngine::LastSample() {
+  const Snapshot& s = last_sample_.Read();
+  renderer::DeviceSample out;
+  out.state.p_m = {s.p[0], s.p[1], s.p[2]};
+  out.state.v_mps = {s.v[0], s.v[1], s.v[2]};
+  out.t_s = s.t;
+  return out;
+}
+
 void RtEngine::Start() {
   if (running_.exchange(true)) return;
   t0_ = Clock::now();
+  device_.SetTimeBase(t0_);
   force_thread_ = std::thread([this] { ForceLoop(); });
   if (renderer_.options().vibration) vibration_thread_ = std::thread([this] { VibrationLoop(); });
   if (options_.realtime_priority) {
@@ -112,6 +122,12 @@ void RtEngine::ForceLoop() {
     renderer::DeviceSample sample;
     renderer::ForceCommand cmd;
     const bool read_ok = device_.Read(&sample);
+    if (read_ok) {
+      auto& snap = last_sample_.WriteSlot();
+      for (int i = 0; i < 3; ++i) snap.p[i] = sample.state.p_m[i], snap.v[i] = sample.state.v_mps[i];
+      snap.t = sample.t_s;
+      last_sample_.Publish();
+    }
     if (read_ok) cmd = renderer_.ForceTick(sample, now_s);
     // The watchdog has the last word: zero force on any fault, this very tick.
     const Eigen::Vector3d command =

@@ -1,8 +1,10 @@
 #include "hapticlab/runner/study_runner.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <chrono>
+#include <thread>
 #include <set>
 #include <filesystem>
 #include <fstream>
@@ -37,19 +39,22 @@ struct Lab {
 };
 
 Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
-  if (device != "sim")
-    throw InputError("", 0, "--device",
-                     "'" + device + "' is not available in this build; only the simulated lab ('sim') is "
-                     "(hardware back-ends arrive with issue #9)");
+  const bool sim = device == "sim";
   Lab lab;
   lab.protocol = &p;
   const fs::path dir = fs::path(p.file).parent_path();
-  if (p.profiles.empty())
+  if (p.profiles.empty() && sim)
     throw InputError(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
-  lab.profiles = LoadProfiles((dir / p.profiles).string());
+  if (!p.profiles.empty()) lab.profiles = LoadProfiles((dir / p.profiles).string());
   Diagnostics d;
   for (const auto& m : p.materials) {
     const auto prof = lab.profiles.profiles.find(m.profile);
+    if (m.model != "placeholder" && !sim) {  // hardware: the fitted model is all it needs
+      const std::string path = (dir / m.model).string();
+      lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
+      lab.models.emplace(m.id, renderer::LoadMaterial(path));
+      continue;
+    }
     if (prof == lab.profiles.profiles.end()) {
       d.Add(p.file, m.line, "material.profile", "no profile '" + m.profile + "' in " + p.profiles);
       continue;
@@ -191,6 +196,90 @@ Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t,
   return out;
 }
 
+// Runs one trial on hardware: each side for the stimulus duration through the real-time
+// engine (virtual: the method's renderer; real: zero force, the stylus only records), the
+// participant's ratings from the UI. A watchdog fault in either side faults the trial.
+Outcome ExecuteHardware(const Lab& lab, const db::Trial& t, const RunOptions& opt, db::TrajectoryWriter* writer,
+                        const TrialScreen& screen, db::Database& database, std::int64_t session, std::uint64_t seed) {
+  const auto& p = *lab.protocol;
+  Outcome out;
+  if (t.phase == "training") return out;
+  HardwareRig& rig = *opt.rig;
+  const double dur = p.stimulus_duration_s;
+  std::vector<std::string> faults;
+  for (int side = 0; side < 2; ++side) {
+    const std::string& stim = side == 0 ? t.left : t.right;
+    const auto colon = stim.find(':');
+    const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
+    renderer::RenderOptions ro;
+    const renderer::MaterialModel* model = &lab.models.at(id);
+    if (kind == "real") {
+      // The real sample under the stylus: the device only measures; its force is held at zero.
+      ro.vibration = false;
+      ro.max_force_N = 1e-9;
+    } else {
+      ro = MethodOptions(*p.FindMethod(t.method), DeriveSeed(seed, static_cast<std::uint64_t>(side)));
+      ro.stale_after_s = 0.005;
+      ro.max_force_N = std::min(ro.max_force_N, rig.device->Capabilities().max_force_N);
+    }
+    renderer::HybridRenderer r(*model, ro);
+    db::TrajectoryStream *fs_ = nullptr, *vs = nullptr;
+    const std::string name = side == 0 ? "left" : "right";
+    if (writer && opt.record != RecordMode::kNone)
+      fs_ = writer->OpenStream(t.id, name + "_force", ro.force_rate_hz, ForceStreamChannels());
+    if (writer && opt.record == RecordMode::kAll && ro.vibration && rig.actuator)
+      vs = writer->OpenStream(t.id, name + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
+    RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, {}, fs_, vs);
+    engine.Start();
+    const auto t0 = std::chrono::steady_clock::now();
+    const Eigen::Vector2d centre = side == 0 ? rig.left_sample_m : rig.right_sample_m;
+    bool go_on = true;
+    for (;;) {
+      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (el >= dur) break;
+      const auto s = engine.LastSample();
+      const Eigen::Vector3d rel(s.state.p_m.x() - centre.x(), s.state.p_m.y() - centre.y(), s.state.p_m.z());
+      if (opt.ui && !opt.ui->Stimulus(screen, side, rel, dur - el)) {
+        go_on = false;
+        break;
+      }
+      if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    engine.Stop();
+    if (fs_) writer->CloseStream(fs_);
+    if (vs) writer->CloseStream(vs);
+    FaultEvent e;
+    while (engine.watchdog().PopEvent(&e))
+      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
+                         .detail = fmt::format("{} at {:.3f} s ({} side, tick {})", FaultName(e.kind), e.t_s, name, e.tick)});
+    if (engine.watchdog().tripped()) {
+      const auto st = engine.Stats();
+      faults.push_back(fmt::format("{} side: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", name, st.disconnects,
+                                   st.nan_faults, st.stale_faults, st.miss_faults));
+    }
+    if (!go_on) {
+      out.aborted = true;
+      return out;
+    }
+    out.stimulus_s += dur;
+  }
+  if (!faults.empty()) {
+    out.fault = true;
+    out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) + "; force was zeroed, trial re-queued";
+    return out;
+  }
+  const auto shown = std::chrono::steady_clock::now();
+  const auto r = opt.ui->Rate(screen);
+  if (!r || r->size() != p.criteria.size()) {
+    out.aborted = true;
+    return out;
+  }
+  const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
+  for (std::size_t i = 0; i < p.criteria.size(); ++i)
+    out.ratings.push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+  return out;
+}
+
 void Log(const RunOptions& o, const std::string& s) {
   if (o.log) o.log(s);
 }
@@ -204,6 +293,20 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
   sum.session_id = session;
   sum.participant = part.code;
   const Observer observer(lab.profiles.observer, DeriveSeed(part.seed, 0xABCDEF), p.criteria);
+  if (opt.device != "sim") {
+    if (!opt.rig || !opt.rig->device || !opt.ui)
+      throw InputError("", 0, "--device",
+                       "a hardware session needs an opened device and the participant window (--ui) for the ratings");
+    database.LogEvent({.session_id = session, .kind = "device", .detail = opt.rig->description});
+  }
+  // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
+  struct Noise {
+    devices::MaskingNoise* n;
+    ~Noise() {
+      if (n) n->SetNoiseLevel(0);
+    }
+  } noise{p.masking_noise && opt.rig ? opt.rig->noise : nullptr};
+  if (noise.n) noise.n->SetNoiseLevel(opt.rig->noise_rms_fs);
   db::TrajectoryWriter writer(database.path());
   auto trials = database.Trials(session);
   sum.planned = static_cast<int>(trials.size());
@@ -261,8 +364,12 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       database.StartTrial(t.id);
       ++t.attempts;
       ++sum.executed;
-      const Outcome o = ExecuteSim(lab, observer, t, part.seed, opt, &writer,
-                                   ScreenOf(p, t, sum.completed + 1, sum.planned));
+      const auto screen = ScreenOf(p, t, sum.completed + 1, sum.planned);
+      const Outcome o = opt.device == "sim"
+                            ? ExecuteSim(lab, observer, t, part.seed, opt, &writer, screen)
+                            : ExecuteHardware(lab, t, opt, &writer, screen, database, session,
+                                              DeriveSeed(part.seed, static_cast<std::uint64_t>(t.plan_index) * 64 +
+                                                                        static_cast<std::uint64_t>(t.attempts)));
       sum.simulated_s += o.stimulus_s;
       if (o.aborted) {
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "abort",

@@ -83,6 +83,36 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
   EXPECT_EQ(ratings.rows.size(), 3u * 22u * 2u);  // participants x rated trials x criteria
 }
 
+TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
+  test::TempDir dir;
+  std::string out;
+  // No display: a clear error, and no database created.
+  EXPECT_EQ(test::RunCommand("env -u DISPLAY " + Cli() + " study run " + Small() + " --db " + dir.File("a.db") +
+                                 " --participant P01 --ui",
+                             &out),
+            1);
+  EXPECT_NE(out.find("no display"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("a.db")));
+  // Hardware without its inputs: named errors.
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") + " --participant P01 --device falcon --ui",
+                             &out),
+            2);
+  EXPECT_NE(out.find("--firmware"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") + " --participant P01 --device dhd", &out), 2);
+  EXPECT_NE(out.find("SDK"), std::string::npos) << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("b.db")));
+  // With a display (Xvfb), the windows open and the session runs (the first trials are
+  // unrated training, so no one needs to click).
+  if (test::RunCommand("command -v xvfb-run") == 0) {
+    ASSERT_EQ(test::RunCommand("xvfb-run -a " + Cli() + " study run " + Small() + " --db " + dir.File("c.db") +
+                                   " --participant P01 --ui --stop-after 3 --quiet",
+                               &out),
+              0)
+        << out;
+    EXPECT_TRUE(std::filesystem::exists(dir.File("c.db")));
+  }
+}
+
 TEST(StudyCli, DemoRunsEndToEnd) {
   test::TempDir dir;
   std::string out;

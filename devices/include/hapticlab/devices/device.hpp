@@ -3,6 +3,7 @@
 /// actuator. Back-ends (sim, falcon, audio, ...) implement them; the real-time loops call
 /// only the noexcept methods below.
 
+#include <chrono>
 #include <string>
 
 #include <Eigen/Core>
@@ -30,6 +31,8 @@ class HapticDevice {
   virtual bool Read(renderer::DeviceSample* out) noexcept = 0;
   /// Commands a force on the tool [N] (already clamped by the renderer).
   virtual void WriteForce(const Eigen::Vector3d& force_N) noexcept = 0;
+  /// The loops' time zero: samples are stamped in seconds since it (RtEngine::Start calls this).
+  virtual void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept { (void)t0; }
 };
 
 /// A vibrotactile actuator driven with acceleration samples [m/s^2] at a fixed rate.

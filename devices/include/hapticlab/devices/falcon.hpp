@@ -135,8 +135,9 @@ struct FalconOptions {
 /// force command, reads the status, runs the kinematics.
 class FalconDevice final : public HapticDevice {
  public:
-  /// @param clock seconds on the loops' time base (RtEngine::Now); stamps every sample
-  FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock, const FalconOptions& o = {});
+  /// @param clock seconds on the loops' time base; empty: seconds since SetTimeBase (the engine's)
+  FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock = {}, const FalconOptions& o = {});
+  void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
   DeviceCapabilities Capabilities() const override;
   bool Read(renderer::DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
@@ -149,6 +150,7 @@ class FalconDevice final : public HapticDevice {
  private:
   std::unique_ptr<UsbTransport> usb_;
   std::function<double()> clock_;
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
   FalconOptions o_;
   Command cmd_;
   Status status_;

@@ -15,6 +15,7 @@
 #include <string>
 #include <thread>
 
+#include "hapticlab/core/triple_buffer.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
@@ -76,6 +77,8 @@ class RtEngine {
   /// The force loop's watchdog: tripped() tells whether the trial faulted; PopEvent drains its
   /// events (call from a non-real-time thread).
   Watchdog& watchdog() { return watchdog_; }
+  /// The newest device sample the force loop read (for screens; one reader thread).
+  renderer::DeviceSample LastSample();
   /// Seconds since Start on the loops' clock.
   double Now() const;
 
@@ -101,6 +104,10 @@ class RtEngine {
   std::atomic<std::uint64_t> recording_overflows_at_stop_{0};
   std::string priority_status_ = "not requested";
   Watchdog watchdog_;
+  struct Snapshot {
+    double p[3], v[3], t;
+  };
+  TripleBuffer<Snapshot> last_sample_;
 };
 
 }  // namespace hapticlab::runner

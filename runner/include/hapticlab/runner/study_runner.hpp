@@ -17,6 +17,7 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include "hapticlab/devices/device.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 
 namespace hapticlab::runner {
@@ -53,6 +54,17 @@ class SessionUi {
   virtual bool TakeBreakNow() { return false; }
 };
 
+/// The hardware a session runs on when the device is not "sim": borrowed, opened by the caller
+/// (hapticlab study run --device falcon ...). Ratings then come from the SessionUi.
+struct HardwareRig {
+  devices::HapticDevice* device = nullptr;   ///< required
+  devices::Actuator* actuator = nullptr;     ///< the vibrotactile actuator (may be null: no vibration)
+  devices::MaskingNoise* noise = nullptr;    ///< headphones (may be null)
+  double noise_rms_fs = 0.1;                 ///< masking level when the protocol asks for noise
+  Eigen::Vector2d left_sample_m{-0.03, 0}, right_sample_m{0.03, 0};  ///< sample centres in the device frame
+  std::string description;                   ///< recorded in the session's provenance
+};
+
 struct RunOptions {
   std::string db_path;
   std::string participant;       ///< pseudonymous code, e.g. "P07"
@@ -66,6 +78,7 @@ struct RunOptions {
   /// shown (sim: the simulated strokes, played in real time). Borrowed; may be null.
   SessionUi* ui = nullptr;
   double ui_playback_speed = 1.0;  ///< sim with a UI: stimulus playback speed-up
+  HardwareRig* rig = nullptr;      ///< required when device != "sim"
 };
 
 struct RunSummary {
