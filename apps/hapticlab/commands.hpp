@@ -12,5 +12,6 @@ void RegisterStats(CLI::App& app);
 void RegisterStudy(CLI::App& app);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
+void RegisterDevice(CLI::App& app);
 
 }  // namespace hapticlab::cli

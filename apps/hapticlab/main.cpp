@@ -26,6 +26,7 @@ int main(int argc, char** argv) {
   RegisterStudy(app);
   RegisterAnalyze(app);
   RegisterWorkbench(app);
+  RegisterDevice(app);
 
   try {
     app.parse(argc, argv);

@@ -3,7 +3,11 @@
 #include <fmt/format.h>
 #include <portaudio.h>
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <mutex>
 #include <stdexcept>
@@ -99,7 +103,16 @@ int pa_users = 0;
 void PaAcquire() {
   std::lock_guard<std::mutex> lock(pa_mutex);
   if (pa_users++ == 0) {
+    // PortAudio probes ALSA and JACK, which print pages of diagnostics on machines without
+    // a sound card or a JACK server; hide stderr during the probe (errors still come back
+    // through PaError).
+    std::fflush(stderr);
+    const int saved = dup(2), null = open("/dev/null", O_WRONLY);
+    if (saved >= 0 && null >= 0) dup2(null, 2);
     const PaError e = Pa_Initialize();
+    if (saved >= 0 && null >= 0) dup2(saved, 2);
+    if (saved >= 0) close(saved);
+    if (null >= 0) close(null);
     if (e != paNoError) {
       pa_users = 0;
       throw std::runtime_error(std::string("PortAudio: ") + Pa_GetErrorText(e));
