@@ -12,6 +12,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/devices/audio.hpp"
 #include "hapticlab/devices/falcon.hpp"
+#include "hapticlab/devices/hid_rating.hpp"
 #include "hapticlab/runner/session_ui.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 
@@ -26,7 +27,7 @@ struct RunArgs {
   double fault_rate = 0;
   bool ui = false, json = false, quiet = false;
   // Hardware and screens.
-  std::string firmware, actuator = "none", audio_device, sample_layout = "-0.03,0,0.03,0";
+  std::string firmware, actuator = "none", audio_device, sample_layout = "-0.03,0,0.03,0", rating_box, rating_layout;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
 };
@@ -77,10 +78,20 @@ class Rig {
     if (a.device != "sim") o->rig = &rig_;
     if (a.device != "sim" && !a.ui)
       throw InputError("", 0, "--ui", "a hardware session takes its ratings from the participant window: add --ui");
+    if (!a.rating_box.empty()) {
+      unsigned vid = 0, pid = 0;
+      if (std::sscanf(a.rating_box.c_str(), "%x:%x", &vid, &pid) != 2)
+        throw InputError("", 0, "--rating-box", "expected VID:PID in hex, got '" + a.rating_box + "'");
+      if (a.rating_layout.empty()) throw InputError("", 0, "--rating-layout", "the rating box needs its report layout");
+      if (!a.ui) throw InputError("", 0, "--rating-box", "the rating box feeds the participant window: add --ui");
+      box_ = devices::OpenHidRating(static_cast<std::uint16_t>(vid), static_cast<std::uint16_t>(pid),
+                                    devices::LoadHidLayout(a.rating_layout));
+      status += "; rating box " + a.rating_box;
+    }
     if (a.ui) {
       runner::ui::WindowOptions wo;
       wo.participant_fullscreen = a.fullscreen;
-      ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo);
+      ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo, box_.get());
       o->ui = ui_.get();
       o->ui_playback_speed = a.ui_speed;
     }
@@ -90,6 +101,7 @@ class Rig {
   runner::HardwareRig rig_;
   std::unique_ptr<devices::falcon::FalconDevice> falcon_;
   std::unique_ptr<devices::AudioOutput> audio_;
+  std::unique_ptr<devices::RatingInput> box_;
   std::unique_ptr<runner::ui::WindowSessionUi> ui_;
 };
 
@@ -184,6 +196,8 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--noise-rms", a.noise_rms, "Masking noise level (RMS, full-scale units) when the protocol asks for it")
         ->capture_default_str()->check(CLI::Range(0.0, 0.5));
     cmd->add_option("--samples", a.sample_layout, "Sample centres in the device frame: xl,yl,xr,yr [m]")->capture_default_str();
+    cmd->add_option("--rating-box", a.rating_box, "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
+    cmd->add_option("--rating-layout", a.rating_layout, "TOML layout of the box's reports (docs/hardware.md)");
     cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
     cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
     cmd->add_option("--ui-speed", a.ui_speed, "Sim with --ui: play the simulated strokes this much faster")

@@ -2,14 +2,16 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <thread>
 
 namespace hapticlab::runner::ui {
 
 WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& participant, const std::string& device_status,
-                                 const WindowOptions& o)
-    : win_(o) {
+                                 const WindowOptions& o, devices::RatingInput* box)
+    : win_(o), box_(box) {
   cv_.study = study;
   cv_.participant = participant;
   cv_.device_status = device_status;
@@ -75,11 +77,31 @@ std::optional<std::vector<double>> WindowSessionUi::Rate(const TrialScreen& t) {
   Show(t);
   pv_.mode = ParticipantView::Mode::kRating;
   pv_.ratings.assign(t.criteria.size(), std::nullopt);  // no default position
+  focus_ = 0;
+  box_pos_ = -1;
   for (;;) {
     ParticipantAction a;
     if (!Frame(&a)) return std::nullopt;
     pv_.ratings = a.ratings;
+    if (box_) {
+      // The rating box: turning the knob sets the focused scale; a press moves the focus to
+      // the next scale, and on the last one (every scale set) confirms.
+      const auto e = box_->Poll();
+      if (e.valid && !pv_.ratings.empty()) {
+        const bool moved = box_pos_ < 0 || std::abs(e.position - box_pos_) > 0.005;
+        const bool press = e.confirm && !box_button_;
+        box_pos_ = e.position;
+        box_button_ = e.confirm;
+        if (moved) pv_.ratings[focus_] = t.scale_min + e.position * (t.scale_max - t.scale_min);
+        const bool all = std::all_of(pv_.ratings.begin(), pv_.ratings.end(), [](const auto& x) { return x.has_value(); });
+        if (press && pv_.ratings[focus_]) {
+          if (focus_ + 1 < pv_.ratings.size()) ++focus_;
+          else if (all) a.confirmed = true;
+        }
+      }
+    }
     if (a.confirmed) {
+      a.ratings = pv_.ratings;
       std::vector<double> r;
       for (const auto& x : a.ratings) r.push_back(*x);
       cv_.log.push_back(fmt::format("trial {} rated", t.index));

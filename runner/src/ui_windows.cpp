@@ -8,6 +8,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <cstdlib>
 #include <stdexcept>
 
 namespace hapticlab::runner::ui {
@@ -21,13 +22,16 @@ struct Windows::Win {
 };
 
 namespace {
-int glfw_users = 0;
+// GLFW is initialised once per process and terminated at exit: re-initialising it after
+// glfwTerminate fails on some X servers.
+bool glfw_ready = false;
 }
 
 Windows::Windows(const WindowOptions& o) {
-  if (glfw_users++ == 0 && !glfwInit()) {
-    glfw_users = 0;
-    throw std::runtime_error("GLFW cannot start: no display (set DISPLAY or run under xvfb-run)");
+  if (!glfw_ready) {
+    if (!glfwInit()) throw std::runtime_error("GLFW cannot start: no display (set DISPLAY or run under xvfb-run)");
+    glfw_ready = true;
+    std::atexit(glfwTerminate);
   }
   const char* titles[2] = {"HapticLab - participant", "HapticLab - experimenter console"};
   for (int i = 0; i < 2; ++i) {
@@ -61,7 +65,6 @@ Windows::~Windows() {
     ImGui::DestroyContext(w->ctx);
     glfwDestroyWindow(w->w);
   }
-  if (--glfw_users == 0) glfwTerminate();
 }
 
 bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa, ConsoleAction* ca,

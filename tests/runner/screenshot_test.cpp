@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
+#include "hapticlab/runner/session_ui.hpp"
 #include "hapticlab/runner/ui_windows.hpp"
 
 namespace hapticlab::runner::ui {
@@ -96,6 +98,33 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   const auto g1 = c.at<cv::Vec3b>(static_cast<int>(pr->cy()), static_cast<int>(pr->x1 - 5));
   EXPECT_GT(g0[1], 150);
   EXPECT_LT(g1[1], 150);
+}
+
+// A rating box scripted report by report: knob to 0.3, press, knob to 0.8, press.
+class ScriptedBox : public devices::RatingInput {
+ public:
+  devices::RatingEvent Poll() override {
+    static const devices::RatingEvent script[] = {
+        {true, 0.3, false}, {true, 0.3, true}, {true, 0.3, false}, {true, 0.8, false}, {true, 0.8, true}, {true, 0.8, false}};
+    return k_ < std::size(script) ? script[k_++] : devices::RatingEvent{};
+  }
+
+ private:
+  std::size_t k_ = 0;
+};
+
+TEST(Screenshot, RatingBoxDrivesTheParticipantWindow) {
+  ScriptedBox box;
+  WindowSessionUi ui("s", "P01", "test", {.width = 800, .height = 600}, &box);
+  TrialScreen t;
+  t.index = 1;
+  t.total = 1;
+  t.criteria = {"roughness", "overall"};
+  const auto r = ui.Rate(t);
+  ASSERT_TRUE(r.has_value());
+  ASSERT_EQ(r->size(), 2u);
+  EXPECT_NEAR((*r)[0], 30, 1e-9);
+  EXPECT_NEAR((*r)[1], 80, 1e-9);
 }
 
 }  // namespace

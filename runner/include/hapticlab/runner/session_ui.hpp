@@ -6,6 +6,7 @@
 #include <memory>
 #include <string>
 
+#include "hapticlab/devices/device.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/runner/ui_windows.hpp"
 
@@ -14,8 +15,10 @@ namespace hapticlab::runner::ui {
 class WindowSessionUi final : public SessionUi {
  public:
   /// @throws std::runtime_error without a display
+  /// @param box optional rating box: turning its knob sets the focused scale (the first at the
+  ///        start), a press moves to the next one and, on the last with all set, confirms.
   WindowSessionUi(const std::string& study, const std::string& participant, const std::string& device_status,
-                  const WindowOptions& o = {});
+                  const WindowOptions& o = {}, devices::RatingInput* box = nullptr);
   bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) override;
   std::optional<std::vector<double>> Rate(const TrialScreen& t) override;
   bool Break(double seconds) override;
@@ -35,6 +38,10 @@ class WindowSessionUi final : public SessionUi {
   ParticipantView pv_;
   ConsoleView cv_;
   bool break_requested_ = false;
+  devices::RatingInput* box_ = nullptr;
+  bool box_button_ = false;  // last state, for edges
+  double box_pos_ = -1;      // last knob position; -1: none yet
+  std::size_t focus_ = 0;    // the scale the knob sets
 };
 
 }  // namespace hapticlab::runner::ui
