@@ -13,6 +13,7 @@
 #include "hapticlab/devices/audio.hpp"
 #include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/devices/hid_rating.hpp"
+#include "hapticlab/devices/vendor.hpp"
 #include "hapticlab/runner/session_ui.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 
@@ -37,11 +38,16 @@ class Rig {
  public:
   Rig(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
     o->device = a.device;
-    if (a.device == "dhd" || a.device == "openhaptics")
+    if ((a.device == "dhd" && !devices::HaveDhd()) || (a.device == "openhaptics" && !devices::HaveOpenHaptics()))
       throw InputError("", 0, "--device",
                        "'" + a.device + "' is compiled only when its vendor SDK is found at build time, and this build "
-                       "has none (docs/hardware.md: adding a device back-end)");
+                       "has none (docs/hardware.md)");
     std::string status = "sim (the simulated lab)";
+    if (a.device == "dhd" || a.device == "openhaptics") {
+      vendor_ = a.device == "dhd" ? devices::OpenDhd() : devices::OpenOpenHaptics();
+      rig_.device = vendor_.get();
+      status = vendor_->Capabilities().name;
+    }
     if (a.device == "falcon") {
       if (a.firmware.empty()) throw InputError("", 0, "--firmware", "the Falcon needs its firmware file (docs/hardware.md)");
       const auto fw = devices::falcon::ReadFirmwareFile(a.firmware);
@@ -100,6 +106,7 @@ class Rig {
  private:
   runner::HardwareRig rig_;
   std::unique_ptr<devices::falcon::FalconDevice> falcon_;
+  std::unique_ptr<devices::HapticDevice> vendor_;
   std::unique_ptr<devices::AudioOutput> audio_;
   std::unique_ptr<devices::RatingInput> box_;
   std::unique_ptr<runner::ui::WindowSessionUi> ui_;
