@@ -83,8 +83,8 @@ void ForceTickFric2Hybrid2048(benchmark::State& state) {
 }
 BENCHMARK(ForceTickFric2Hybrid2048);
 
-void VibrationSampleAr20(benchmark::State& state) {
-  const auto m = BenchMaterial(64, 20);
+// Vibration ticks at 10 kHz with a force tick (untimed) every 10th, as a 1 kHz loop gives.
+void VibrationTicks(benchmark::State& state, const MaterialModel& m) {
   RenderOptions o;
   HybridRenderer r(m, o);
   std::int64_t k = 0;
@@ -99,6 +99,7 @@ void VibrationSampleAr20(benchmark::State& state) {
     ++k;
   }
 }
+void VibrationSampleAr20(benchmark::State& state) { VibrationTicks(state, BenchMaterial(64, 20)); }
 BENCHMARK(VibrationSampleAr20);
 
 // The LSF -> AR filter update alone (runs once per force tick, inside ForceTick above).
@@ -161,19 +162,7 @@ BENCHMARK_CAPTURE(NeuralSample, Decomposed, NeuralTopology::kDecomposed);
 void VibrationTickNeural(benchmark::State& state, NeuralTopology t) {
   auto m = BenchMaterial(64, 20);
   m.neural = BenchNeural(t);
-  RenderOptions o;
-  HybridRenderer r(m, o);
-  std::int64_t k = 0;
-  for (auto _ : state) {
-    if (k % 10 == 0) {
-      state.PauseTiming();
-      const auto s = Stroke(k / 10, o.force_rate_hz);
-      r.ForceTick(s, s.t_s);
-      state.ResumeTiming();
-    }
-    benchmark::DoNotOptimize(r.VibrationTick());
-    ++k;
-  }
+  VibrationTicks(state, m);
 }
 BENCHMARK_CAPTURE(VibrationTickNeural, Unified, NeuralTopology::kUnified);
 BENCHMARK_CAPTURE(VibrationTickNeural, Decomposed, NeuralTopology::kDecomposed);

@@ -108,6 +108,18 @@ bool PlayToUi(SessionUi& ui, const TrialScreen& screen, int side, const Interact
   }
 }
 
+// The participant's ratings from the UI, clamped to the scale, with the response time from
+// the rating screen's appearance; false when the experimenter aborted.
+bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protocol& p, std::vector<db::Rating>* out) {
+  const auto shown = std::chrono::steady_clock::now();
+  const auto r = ui.Rate(screen);
+  if (!r || r->size() != p.criteria.size()) return false;
+  const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
+  for (std::size_t i = 0; i < p.criteria.size(); ++i)
+    out->push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+  return true;
+}
+
 TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index, int total) {
   TrialScreen s;
   s.index = index;
@@ -179,15 +191,7 @@ Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t,
       out.aborted = true;
       return out;
     }
-    const auto shown = std::chrono::steady_clock::now();
-    const auto r = opt.ui->Rate(screen);
-    if (!r || r->size() != p.criteria.size()) {
-      out.aborted = true;
-      return out;
-    }
-    const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
-    for (std::size_t i = 0; i < p.criteria.size(); ++i)
-      out.ratings.push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+    out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
     return out;
   }
   for (const auto& c : p.criteria)
@@ -268,15 +272,7 @@ Outcome ExecuteHardware(const Lab& lab, const db::Trial& t, const RunOptions& op
     out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) + "; force was zeroed, trial re-queued";
     return out;
   }
-  const auto shown = std::chrono::steady_clock::now();
-  const auto r = opt.ui->Rate(screen);
-  if (!r || r->size() != p.criteria.size()) {
-    out.aborted = true;
-    return out;
-  }
-  const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
-  for (std::size_t i = 0; i < p.criteria.size(); ++i)
-    out.ratings.push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+  out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
   return out;
 }
 

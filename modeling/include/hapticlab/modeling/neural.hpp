@@ -27,8 +27,7 @@ struct NeuralFitOptions {
   /// band-limited signal is almost perfectly predictable from 50 past samples, and a
   /// predictor trained on clean histories free-runs into a limit cycle; trained on noisy
   /// histories it stays a noise-driven process with the band's spectrum. 0.3 was chosen on
-  /// the synthetic textures of tests/modeling/neural_test.cpp (0.1: limit cycles; 0.3-0.5: E_s
-  /// 0.26-0.32).
+  /// the synthetic textures of tests/modeling/neural_test.cpp (NeuralFig37 runs with it).
   double input_noise = 0.3;
   int threads = 0;                 ///< networks trained in parallel; 0: all cores
   /// Called when a network finishes: (what, done, total); from worker threads.
