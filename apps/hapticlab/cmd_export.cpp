@@ -33,9 +33,8 @@ void RegisterExport(CLI::App& app) {
                 "Only ratings, trials and events (trajectory CSVs can be hundreds of MB)");
   cmd->callback([o] {
     RunGuarded([&] {
-      if (!std::filesystem::exists(o->db))
-        throw InputError(o->db, 0, "--db", "no such file");
-      db::Database database(o->db, {.create = false, .read_only = true});
+      // quick_check first: a damaged record is refused, never exported.
+      const db::Database database = db::OpenForReading(o->db);
       const auto files = db::ExportCsv(database, o->out, !o->no_trajectories);
       if (o->json) {
         nlohmann::json j = nlohmann::json::array();

@@ -85,7 +85,8 @@ double CsvTable::Number(std::size_t row, std::size_t column) const {
 CsvTable ParseCsv(const std::string& text, const std::string& name) {
   CsvTable t;
   t.file = name;
-  std::istringstream in(text);
+  // A UTF-8 byte-order mark (spreadsheet exports) is not part of the first column's name.
+  std::istringstream in(text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? text.substr(3) : text);
   std::string line;
   int lineno = 0;
   while (std::getline(in, line)) {

@@ -1,9 +1,19 @@
 #include "hapticlab/db/database.hpp"
 
+#include <fcntl.h>
 #include <openssl/evp.h>
 #include <sqlite3.h>
+#include <sys/file.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cerrno>
 #include <cstring>
 #include <stdexcept>
 #include <utility>
@@ -54,6 +64,7 @@ Trial ReadTrial(const Stmt& s) {
   t.right = s.Text(9);
   t.status = s.Text(10);
   t.attempts = static_cast<int>(s.Int(11));
+  t.completed_attempt = s.IsNull(12) ? 0 : static_cast<int>(s.Int(12));
   return t;
 }
 
@@ -67,6 +78,26 @@ bool IsPseudonymousCode(const std::string& code) {
     else if (!std::isalpha(c) && c != '-' && c != '_') return false;
   }
   return digit;
+}
+
+Database OpenForReading(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    throw InputError(path, 0, "--db", "no such database file");
+  std::string report;
+  try {
+    Database d(path, {.create = false, .read_only = true});
+    report = d.QuickCheck();
+    if (report == "ok") return d;
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    report = e.what();
+  }
+  if (report.size() > 400) report = report.substr(0, 400) + "...";
+  throw InputError(path, 0, "",
+                   "the database is damaged (SQLite quick_check failed), refused: restore it "
+                   "from a backup; details: " + report);
 }
 
 std::string HashText(const std::string& text) {
@@ -83,7 +114,29 @@ std::string HashText(const std::string& text) {
   return s;
 }
 
+namespace {
+
+// A writer maps the -shm file; one that was made read-only or truncated by someone else
+// would fault with SIGBUS inside SQLite, so it is refused here with a message.
+void CheckSharedMemoryFile(const std::string& path) {
+  const std::string shm = path + "-shm";
+  struct stat st {};
+  if (::stat(shm.c_str(), &st) != 0) return;  // none: SQLite creates it
+  if ((st.st_mode & 0222) == 0 || ::access(shm.c_str(), W_OK) != 0)
+    throw InputError(shm, 0, "--db",
+                     "the database's shared-memory file is read-only; make it writable (and the "
+                     "-wal file) or, when no HapticLab process uses the database, delete it");
+  if (st.st_size % 32768 != 0)
+    throw InputError(shm, 0, "--db",
+                     "the database's shared-memory file is truncated (" +
+                         std::to_string(st.st_size) +
+                         " bytes); when no HapticLab process uses the database, delete it");
+}
+
+}  // namespace
+
 Database::Database(const std::string& path, const OpenOptions& options) : path_(path) {
+  if (!options.read_only) CheckSharedMemoryFile(path);
   int flags = options.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (options.create && !options.read_only) flags |= SQLITE_OPEN_CREATE;
   if (sqlite3_open_v2(path.c_str(), &db_, flags | SQLITE_OPEN_NOMUTEX, nullptr) != SQLITE_OK) {
@@ -146,13 +199,21 @@ int Database::SchemaVersion() const {
 void Database::Migrate(int target) {
   if (target < 0 || target > kSchemaVersion)
     throw std::invalid_argument("schema version " + std::to_string(target) + " does not exist");
+  auto refuse_newer = [&](int v) {
+    if (v > kSchemaVersion)
+      throw std::runtime_error(path_ + ": schema version " + std::to_string(v) +
+                               " is newer than this build supports (" +
+                               std::to_string(kSchemaVersion) + "); upgrade HapticLab");
+  };
+  const int seen = SchemaVersion();
+  refuse_newer(seen);
+  if (seen >= target) return;
+  // Every pending migration in one write transaction: a second process opening the same new
+  // file waits for it (busy timeout), then reads the version again and finds nothing to do.
+  Transaction tx(db_);
   const int current = SchemaVersion();
-  if (current > kSchemaVersion)
-    throw std::runtime_error(path_ + ": schema version " + std::to_string(current) +
-                             " is newer than this build supports (" +
-                             std::to_string(kSchemaVersion) + "); upgrade HapticLab");
+  refuse_newer(current);
   for (int k = current + 1; k <= target; ++k) {
-    Transaction tx(db_);
     if (k == 1) {
       ExecSql(db_,
               "CREATE TABLE schema_version (version INTEGER NOT NULL, applied_at TEXT NOT NULL "
@@ -161,8 +222,41 @@ void Database::Migrate(int target) {
     ExecSql(db_, internal::MigrationSql(k));
     Stmt ins(db_, "INSERT INTO schema_version(version) VALUES (?)");
     ins.Bind(1, k).Run();
-    tx.Commit();
   }
+  tx.Commit();
+}
+
+std::string Database::QuickCheck() const {
+  Stmt s(db_, "PRAGMA quick_check");
+  std::string out;
+  while (s.Step()) out += (out.empty() ? "" : "\n") + s.Text(0);
+  return out;
+}
+
+std::vector<std::string> Database::VerifyTrajectories() const {
+  std::vector<std::string> out;
+  {
+    Stmt q(db_,
+           "SELECT t.id, s.stream, s.samples_written, (SELECT coalesce(sum(c.sample_count), 0) "
+           "FROM trajectory_chunk c WHERE c.trial_id = t.id AND c.attempt = t.completed_attempt "
+           "AND c.stream = s.stream) FROM trial t JOIN trajectory_stream s ON s.trial_id = t.id "
+           "AND s.attempt = t.completed_attempt WHERE t.status = 'completed' ORDER BY t.id, s.stream");
+    while (q.Step())
+      if (q.Int(2) != q.Int(3))
+        out.push_back(fmt::format("trial {} stream {}: {} samples stored, {} at completion",
+                                  q.Int(0), q.Text(1), q.Int(3), q.Int(2)));
+  }
+  Stmt q(db_,
+         "SELECT c.trial_id, c.stream, sum(c.sample_count) FROM trajectory_chunk c JOIN trial t "
+         "ON t.id = c.trial_id AND c.attempt = t.completed_attempt WHERE t.status = 'completed' "
+         "AND EXISTS (SELECT 1 FROM trajectory_stream s WHERE s.trial_id = t.id AND s.attempt = "
+         "t.completed_attempt) AND NOT EXISTS (SELECT 1 FROM trajectory_stream s WHERE "
+         "s.trial_id = t.id AND s.attempt = t.completed_attempt AND s.stream = c.stream) "
+         "GROUP BY c.trial_id, c.stream ORDER BY c.trial_id, c.stream");
+  while (q.Step())
+    out.push_back(fmt::format("trial {} stream {}: {} samples stored that no check covers",
+                              q.Int(0), q.Text(1), q.Int(2)));
+  return out;
 }
 
 std::string Database::IntegrityCheck() const {
@@ -299,7 +393,7 @@ std::vector<std::int64_t> Database::AddTrials(const std::vector<Trial>& trials) 
   return ids;
 }
 
-void Database::StartTrial(std::int64_t trial_id) {
+int Database::StartTrial(std::int64_t trial_id) {
   Stmt s(db_,
          "UPDATE trial SET status='running', attempts=attempts+1, "
          "started_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=? AND status<>'completed'");
@@ -307,6 +401,14 @@ void Database::StartTrial(std::int64_t trial_id) {
   if (sqlite3_changes(db_) != 1)
     throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
                              " does not exist or is already completed");
+  return CurrentAttempt(trial_id);
+}
+
+int Database::CurrentAttempt(std::int64_t trial_id) const {
+  Stmt s(db_, "SELECT attempts FROM trial WHERE id=?");
+  s.Bind(1, trial_id);
+  if (!s.Step()) throw std::runtime_error(path_ + ": no trial " + std::to_string(trial_id));
+  return static_cast<int>(s.Int(0));
 }
 
 void Database::SetTrialStatus(std::int64_t trial_id, const std::string& status) {
@@ -316,8 +418,58 @@ void Database::SetTrialStatus(std::int64_t trial_id, const std::string& status) 
     throw std::runtime_error(path_ + ": no trial " + std::to_string(trial_id));
 }
 
-void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings) {
+void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings,
+                             const std::vector<StreamReport>& streams) {
   Transaction tx(db_);
+  const int attempt = CurrentAttempt(trial_id);
+  // Every recorded stream of this attempt must be whole and stored exactly once.
+  if (!streams.empty()) {
+    std::vector<std::string> problems;
+    std::vector<std::pair<std::string, std::int64_t>> stored;  // stream, samples in chunks
+    {
+      Stmt q(db_,
+             "SELECT stream, sum(sample_count) FROM trajectory_chunk WHERE trial_id=? AND "
+             "attempt=? GROUP BY stream ORDER BY stream");
+      q.Bind(1, trial_id).Bind(2, attempt);
+      while (q.Step()) stored.emplace_back(q.Text(0), q.Int(1));
+    }
+    auto stored_of = [&](const std::string& name) -> std::int64_t {
+      for (const auto& [n, c] : stored)
+        if (n == name) return c;
+      return 0;
+    };
+    std::vector<std::string> reported;
+    for (const auto& r : streams) {
+      if (r.trial_id != trial_id || r.attempt != attempt) continue;
+      reported.push_back(r.stream);
+      const auto kept = r.samples_offered - std::min(r.samples_dropped, r.samples_offered);
+      const auto in_db = stored_of(r.stream);
+      if (r.samples_written != kept || static_cast<std::uint64_t>(in_db) != r.samples_written)
+        problems.push_back(fmt::format(
+            "stream {}: {} samples queued, {} committed by the writer, {} stored{}", r.stream,
+            kept, r.samples_written, in_db, r.error.empty() ? "" : " (" + r.error + ")"));
+    }
+    for (const auto& [n, c] : stored)
+      if (std::find(reported.begin(), reported.end(), n) == reported.end())
+        problems.push_back(fmt::format("stream {}: {} samples stored that no stream of attempt {} "
+                                       "reported (another process wrote this trial)",
+                                       n, c, attempt));
+    if (!problems.empty())
+      throw TrajectoryIncomplete(fmt::format("{}: trial {} attempt {}: trajectories not whole: {}",
+                                             path_, trial_id, attempt, fmt::join(problems, "; ")));
+    Stmt ins(db_,
+             "INSERT INTO trajectory_stream(trial_id, attempt, stream, rate_hz, samples_offered, "
+             "samples_dropped, samples_written) VALUES (?,?,?,?,?,?,?)");
+    for (const auto& r : streams) {
+      if (r.trial_id != trial_id || r.attempt != attempt) continue;
+      ins.Bind(1, trial_id).Bind(2, attempt).Bind(3, r.stream).Bind(4, r.rate_hz)
+          .Bind(5, static_cast<std::int64_t>(r.samples_offered))
+          .Bind(6, static_cast<std::int64_t>(r.samples_dropped))
+          .Bind(7, static_cast<std::int64_t>(r.samples_written));
+      ins.Run();
+      ins.Reset();
+    }
+  }
   Stmt ins(db_, "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (?,?,?,?)");
   for (const auto& r : ratings) {
     ins.Bind(1, trial_id).Bind(2, r.criterion).Bind(3, r.score).Bind(4, r.response_time_s);
@@ -326,8 +478,8 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
   }
   // The completion marker commits with the ratings; a completed trial cannot be completed again.
   Stmt done(db_,
-            "UPDATE trial SET status='completed', completed_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') "
-            "WHERE id=? AND status<>'completed'");
+            "UPDATE trial SET status='completed', completed_attempt=attempts, "
+            "completed_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=? AND status<>'completed'");
   done.Bind(1, trial_id).Run();
   if (sqlite3_changes(db_) != 1)
     throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
@@ -335,10 +487,32 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
   tx.Commit();
 }
 
+std::vector<StreamReport> Database::StreamChecks(std::int64_t trial_id) const {
+  Stmt s(db_,
+         "SELECT c.trial_id, c.attempt, c.stream, c.rate_hz, c.samples_offered, c.samples_dropped, "
+         "c.samples_written FROM trajectory_stream c JOIN trial t ON t.id = c.trial_id "
+         "WHERE c.trial_id=? AND c.attempt = t.completed_attempt ORDER BY c.stream");
+  s.Bind(1, trial_id);
+  std::vector<StreamReport> out;
+  while (s.Step()) {
+    StreamReport r;
+    r.trial_id = s.Int(0);
+    r.attempt = static_cast<int>(s.Int(1));
+    r.stream = s.Text(2);
+    r.rate_hz = s.Real(3);
+    r.samples_offered = static_cast<std::uint64_t>(s.Int(4));
+    r.samples_dropped = static_cast<std::uint64_t>(s.Int(5));
+    r.samples_written = static_cast<std::uint64_t>(s.Int(6));
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
 std::vector<Trial> Database::Trials(std::int64_t session_id) const {
   Stmt s(db_,
          "SELECT id, session_id, plan_index, phase, material, comparison, method, repetition, "
-         "left_stimulus, right_stimulus, status, attempts FROM trial WHERE session_id=? "
+         "left_stimulus, right_stimulus, status, attempts, completed_attempt FROM trial "
+         "WHERE session_id=? "
          "ORDER BY plan_index, id");
   s.Bind(1, session_id);
   std::vector<Trial> out;
@@ -350,7 +524,15 @@ std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
   Stmt s(db_, "SELECT criterion, score, response_time_s FROM rating WHERE trial_id=? ORDER BY id");
   s.Bind(1, trial_id);
   std::vector<Rating> out;
-  while (s.Step()) out.push_back({s.Text(0), s.Real(1), s.Real(2)});
+  while (s.Step()) {
+    // SQLite stores any type in a REAL column; text or NULL is damage, never a score of 0.
+    for (int col : {1, 2})
+      if (!s.IsNumber(col) || !std::isfinite(s.Real(col)))
+        throw InputError(path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
+                         fmt::format("trial {} criterion '{}': '{}' is not a finite number",
+                                     trial_id, s.Text(0), s.IsNull(col) ? "NULL" : s.Text(col)));
+    out.push_back({s.Text(0), s.Real(1), s.Real(2)});
+  }
   return out;
 }
 
@@ -405,23 +587,31 @@ std::int64_t Database::SaveMeasurement(const std::string& material, const std::s
 }
 
 void Database::InsertTrajectoryChunk(const TrajectoryChunk& c) {
+  HL_THROW_UNLESS(c.attempt >= 0, "trajectory chunk attempt must not be negative");
   HL_THROW_UNLESS(!c.channels.empty(), "trajectory chunk needs at least one channel");
   HL_THROW_UNLESS(c.samples.size() % c.channels.size() == 0,
                   "trajectory chunk sample count is not a multiple of its channel count");
   HL_THROW_UNLESS(c.rate_hz > 0, "trajectory chunk rate must be positive");
   Stmt s(db_,
          "INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, "
-         "sample_count, samples) VALUES (?,?,?,?,?,?,?)");
+         "sample_count, samples, attempt) VALUES (?,?,?,?,?,?,?,?)");
   s.Bind(1, c.trial_id).Bind(2, c.stream).Bind(3, c.start_time_s).Bind(4, c.rate_hz)
       .Bind(5, JoinChannels(c.channels)).Bind(6, static_cast<std::int64_t>(c.sample_count()))
-      .BindBlob(7, c.samples.data(), c.samples.size() * sizeof(float)).Run();
+      .BindBlob(7, c.samples.data(), c.samples.size() * sizeof(float)).Bind(8, c.attempt).Run();
 }
 
 std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id) const {
+  Stmt a(db_, "SELECT coalesce(completed_attempt, attempts) FROM trial WHERE id=?");
+  a.Bind(1, trial_id);
+  if (!a.Step()) return {};
+  return TrajectoryChunks(trial_id, static_cast<int>(a.Int(0)));
+}
+
+std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id, int attempt) const {
   Stmt s(db_,
-         "SELECT trial_id, stream, start_time_s, rate_hz, channels, sample_count, samples FROM "
-         "trajectory_chunk WHERE trial_id=? ORDER BY stream, start_time_s, id");
-  s.Bind(1, trial_id);
+         "SELECT trial_id, stream, start_time_s, rate_hz, channels, sample_count, samples, attempt "
+         "FROM trajectory_chunk WHERE trial_id=? AND attempt=? ORDER BY stream, start_time_s, id");
+  s.Bind(1, trial_id).Bind(2, attempt);
   std::vector<TrajectoryChunk> out;
   while (s.Step()) {
     TrajectoryChunk c;
@@ -430,12 +620,65 @@ std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id) c
     c.start_time_s = s.Real(2);
     c.rate_hz = s.Real(3);
     c.channels = SplitChannels(s.Text(4));
+    c.attempt = static_cast<int>(s.Int(7));
     const auto bytes = static_cast<std::size_t>(s.BlobBytes(6));
+    // A blob that does not match its row's sample and channel counts is damage, not data.
+    if (c.channels.empty() || s.Int(5) < 0 ||
+        bytes != static_cast<std::size_t>(s.Int(5)) * c.channels.size() * sizeof(float))
+      throw std::runtime_error(fmt::format(
+          "{}: trajectory chunk of trial {} stream {} is damaged ({} bytes for {} samples of {} "
+          "channels)", path_, trial_id, c.stream, bytes, s.Int(5), c.channels.size()));
     c.samples.resize(bytes / sizeof(float));
     if (bytes) std::memcpy(c.samples.data(), s.Blob(6), bytes);
     out.push_back(std::move(c));
   }
   return out;
+}
+
+}  // namespace hapticlab::db
+
+namespace hapticlab::db {
+
+WriterLease::WriterLease(const std::string& db_path) {
+  fd_ = ::open(db_path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0644);
+  if (fd_ < 0)
+    throw InputError(db_path, 0, "--db", std::string("cannot open: ") + std::strerror(errno));
+  if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+    const int err = errno;
+    ::close(fd_);
+    fd_ = -1;
+    std::string holder = "another process";
+    if (err == EWOULDBLOCK) {
+      try {
+        Database d(db_path, {.create = false, .read_only = true, .busy_timeout_ms = 2000});
+        Stmt q(d.handle(), "SELECT pid, host, since FROM writer_lease WHERE id = 1");
+        if (q.Step())
+          holder = fmt::format("process {} on host {} (since {})", q.Int(0), q.Text(1), q.Text(2));
+      } catch (const std::exception&) {
+        // An older schema or a database being created: the generic message stands.
+      }
+      throw InputError(db_path, 0, "--db",
+                       holder + " is writing this study database; one writer at a time: wait "
+                       "for it to finish, or stop it, then resume");
+    }
+    throw InputError(db_path, 0, "--db", std::string("cannot lock: ") + std::strerror(err));
+  }
+  // Name the holder for the next one who tries.
+  try {
+    Database d(db_path);
+    char host[256] = {};
+    if (::gethostname(host, sizeof host - 1) != 0) std::strcpy(host, "unknown");
+    Stmt s(d.handle(), "INSERT OR REPLACE INTO writer_lease(id, pid, host) VALUES (1, ?, ?)");
+    s.Bind(1, static_cast<std::int64_t>(::getpid())).Bind(2, std::string(host)).Run();
+  } catch (...) {
+    ::close(fd_);
+    fd_ = -1;
+    throw;
+  }
+}
+
+WriterLease::~WriterLease() {
+  if (fd_ >= 0) ::close(fd_);  // releases the flock
 }
 
 }  // namespace hapticlab::db

@@ -8,7 +8,10 @@
 #include <map>
 #include <stdexcept>
 
+#include <fmt/ranges.h>
+
 #include "hapticlab/core/csv.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 #include "sqlite_util.hpp"
 
 namespace hapticlab::db {
@@ -105,13 +108,21 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
     files.push_back(out.Close());
   }
   if (trajectories) {
+    // Only completed trials' completing attempts, and only when their stored sample-count
+    // checks still hold.
+    if (const auto problems = db.VerifyTrajectories(); !problems.empty())
+      throw InputError(db.path(), 0, "trajectory_chunk",
+                       fmt::format("trajectories do not match the sample counts stored at "
+                                   "completion, export refused: {}",
+                                   fmt::join(problems, "; ")));
     // One file per (stream, channel layout); a second layout of one stream name gets a suffix.
     std::map<std::pair<std::string, std::string>, std::unique_ptr<CsvOut>> outs;
     std::map<std::string, int> layouts_per_stream;
     Stmt q(h, (std::string("SELECT st.name, p.code, t.id, c.stream, c.channels, c.start_time_s, "
                            "c.rate_hz, c.sample_count, c.samples") +
-               kTrialJoin + "JOIN trajectory_chunk c ON c.trial_id = t.id "
-                            "ORDER BY c.stream, t.id, c.start_time_s, c.id")
+               kTrialJoin +
+               "JOIN trajectory_chunk c ON c.trial_id = t.id AND c.attempt = t.completed_attempt "
+               "WHERE t.status = 'completed' ORDER BY c.stream, t.id, c.start_time_s, c.id")
                   .c_str());
     std::vector<float> buf;
     while (q.Step()) {
@@ -138,8 +149,15 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
       }
       const double t0 = q.Real(5);
       const double rate = q.Real(6);
-      const auto n = static_cast<std::size_t>(q.Int(7));
       const auto nc = channels.size();
+      const std::int64_t count = q.Int(7);
+      if (count < 0 || static_cast<std::size_t>(q.BlobBytes(8)) !=
+                           static_cast<std::size_t>(count) * nc * sizeof(float))
+        throw InputError(db.path(), 0, "trajectory_chunk",
+                         fmt::format("trial {} stream {}: a chunk's samples do not match its "
+                                     "sample count ({} bytes for {} samples of {} channels)",
+                                     q.Int(2), stream, q.BlobBytes(8), count, nc));
+      const auto n = static_cast<std::size_t>(count);
       buf.resize(n * nc);
       if (!buf.empty()) std::memcpy(buf.data(), q.Blob(8), buf.size() * sizeof(float));
       std::vector<std::string> row(4 + nc);

@@ -105,6 +105,51 @@ CREATE TABLE measurement (
 );
 ALTER TABLE session ADD COLUMN plan_json TEXT NOT NULL DEFAULT '[]';
 )sql",
+    // v4: trajectory chunks carry the attempt that wrote them; a completed trial names its
+    // completing attempt; a per-stream sample-count check is stored at completion; the
+    // one-writer lease. Repair of older files: chunks of a trial started once belong to that
+    // attempt; chunks of a completed trial started more than once are its completing
+    // attempt's only when every stream's chunks run forward in time in the order they were
+    // written (no stream restarted, so no second attempt wrote it); all others stay
+    // attempt 0 (unattributed: kept, never exported or analysed) and get an event.
+    R"sql(
+ALTER TABLE trajectory_chunk ADD COLUMN attempt INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE trial ADD COLUMN completed_attempt INTEGER;
+CREATE INDEX chunk_by_attempt ON trajectory_chunk(trial_id, attempt, stream, start_time_s);
+CREATE TABLE trajectory_stream (
+  id INTEGER PRIMARY KEY,
+  trial_id INTEGER NOT NULL REFERENCES trial(id),
+  attempt INTEGER NOT NULL,
+  stream TEXT NOT NULL,
+  rate_hz REAL NOT NULL,
+  samples_offered INTEGER NOT NULL,
+  samples_dropped INTEGER NOT NULL,
+  samples_written INTEGER NOT NULL,
+  UNIQUE (trial_id, attempt, stream)
+);
+CREATE TABLE writer_lease (
+  id INTEGER PRIMARY KEY CHECK (id = 1),
+  pid INTEGER NOT NULL,
+  host TEXT NOT NULL,
+  since TEXT NOT NULL DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+);
+UPDATE trial SET completed_attempt = attempts WHERE status = 'completed';
+UPDATE trajectory_chunk SET attempt = 1
+  WHERE trial_id IN (SELECT id FROM trial WHERE attempts = 1);
+UPDATE trajectory_chunk SET attempt = (SELECT t.attempts FROM trial t WHERE t.id = trial_id)
+  WHERE attempt = 0 AND trial_id IN (
+    SELECT t.id FROM trial t WHERE t.status = 'completed' AND t.attempts > 1 AND NOT EXISTS (
+      SELECT 1 FROM trajectory_chunk a JOIN trajectory_chunk b
+        ON b.trial_id = a.trial_id AND b.stream = a.stream AND b.id > a.id
+       AND b.start_time_s <= a.start_time_s
+      WHERE a.trial_id = t.id));
+INSERT INTO event(session_id, trial_id, kind, detail)
+  SELECT t.session_id, t.id, 'trajectory-unattributed',
+         'schema v4 migration: ' || count(*) || ' trajectory chunks of this trial could not be ' ||
+         'assigned to one attempt; they are kept with attempt 0 and never exported'
+  FROM trial t JOIN trajectory_chunk c ON c.trial_id = t.id
+  WHERE c.attempt = 0 AND t.attempts > 0 GROUP BY t.id;
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

@@ -4,10 +4,36 @@
 
 namespace hapticlab::db::internal {
 
+std::string Explain(int code) {
+  switch (code & 0xff) {
+    case SQLITE_CORRUPT:
+    case SQLITE_NOTADB:
+      return "the database file is damaged or not a database; restore it from a backup (or "
+             "try 'sqlite3 FILE .recover' on a copy)";
+    case SQLITE_BUSY:
+    case SQLITE_LOCKED:
+      return "another process held the database locked for longer than the busy timeout";
+    case SQLITE_FULL:
+      return "the disk is full; free space and resume";
+    case SQLITE_READONLY:
+      return "the database (or its -wal/-shm file, or its folder) is not writable";
+    case SQLITE_CANTOPEN:
+      return "the database (or its -wal/-shm file) cannot be opened";
+    case SQLITE_IOERR:
+      return "an I/O error occurred on the database file";
+    case SQLITE_NOMEM:
+      return "out of memory";
+    default:
+      return "";
+  }
+}
+
 void ThrowSqlite(sqlite3* db, const std::string& what) {
   const char* file = db ? sqlite3_db_filename(db, "main") : nullptr;
-  throw std::runtime_error((file && *file ? std::string(file) + ": " : std::string()) + what +
-                           ": " + (db ? sqlite3_errmsg(db) : "no connection"));
+  const std::string plain = db ? Explain(sqlite3_extended_errcode(db)) : "";
+  throw std::runtime_error((file && *file ? std::string(file) + ": " : std::string()) +
+                           (plain.empty() ? what : plain + " (" + what + ")") + ": " +
+                           (db ? sqlite3_errmsg(db) : "no connection"));
 }
 
 Stmt::Stmt(sqlite3* db, const char* sql) : db_(db) {
@@ -70,11 +96,13 @@ void Transaction::Commit() {
 
 void ExecSql(sqlite3* db, const char* sql) {
   char* err = nullptr;
-  if (sqlite3_exec(db, sql, nullptr, nullptr, &err) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db, sql, nullptr, nullptr, &err); rc != SQLITE_OK) {
     std::string msg = err ? err : "unknown error";
     sqlite3_free(err);
-    throw std::runtime_error(std::string(sqlite3_db_filename(db, "main")) + ": " + msg +
-                             " (in: " + std::string(sql).substr(0, 80) + ")");
+    const std::string plain = Explain(sqlite3_extended_errcode(db));
+    throw std::runtime_error(std::string(sqlite3_db_filename(db, "main")) + ": " +
+                             (plain.empty() ? "" : plain + ": ") + msg + " (in: " +
+                             std::string(sql).substr(0, 80) + ")");
   }
 }
 

@@ -8,6 +8,8 @@
 
 namespace hapticlab::db::internal {
 
+// A plain-language explanation of an SQLite result code ("" when it has none).
+std::string Explain(int code);
 [[noreturn]] void ThrowSqlite(sqlite3* db, const std::string& what);
 
 // A prepared statement; binds are 1-based as in SQLite.
@@ -34,6 +36,10 @@ class Stmt {
   double Real(int col) const { return sqlite3_column_double(s_, col); }
   std::string Text(int col) const;
   bool IsNull(int col) const { return sqlite3_column_type(s_, col) == SQLITE_NULL; }
+  bool IsNumber(int col) const {
+    const int t = sqlite3_column_type(s_, col);
+    return t == SQLITE_INTEGER || t == SQLITE_FLOAT;
+  }
   const void* Blob(int col) const { return sqlite3_column_blob(s_, col); }
   int BlobBytes(int col) const { return sqlite3_column_bytes(s_, col); }
 

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 
 namespace hapticlab::devices {
 
@@ -43,7 +44,7 @@ RatingEvent ParseHidReport(const HidReportLayout& L, const std::uint8_t* d, std:
 HidReportLayout LoadHidLayout(const std::string& path) {
   toml::table t;
   try {
-    t = toml::parse_file(path);
+    t = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& err) {
     throw InputError(path, static_cast<int>(err.source().begin.line), "", std::string(err.description()));
   }

@@ -359,6 +359,13 @@ CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double 
 }
 
 std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o) {
+  // Resource limit derived from the input: at most 8x upsampling, so the work and memory
+  // stay proportional to the recording (a --rate of 1e9 would otherwise ask for gigabytes).
+  constexpr double kMaxUpsampling = 8;
+  if (!(o.model_rate_hz > 0) || !(o.model_rate_hz <= kMaxUpsampling * r.rate_hz))
+    throw InputError(r.file, 0, "--rate",
+                     fmt::format("model rate {} Hz must be in (0, {}] Hz (at most {}x the recording's {} Hz)",
+                                 o.model_rate_hz, kMaxUpsampling * r.rate_hz, kMaxUpsampling, r.rate_hz));
   const auto y = Resample(r.acc, r.rate_hz, o.model_rate_hz, o.resample);
   return BandLimit(y, o.model_rate_hz, o.band_lo_hz, 0.475 * o.model_rate_hz);
 }

@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
@@ -190,7 +191,7 @@ Model LoadModel(const std::string& path) {
   const auto mm = renderer::LoadMaterial(path);  // validates the renderer's part
   toml::table doc;
   try {
-    doc = toml::parse_file(path);
+    doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
     throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
   }

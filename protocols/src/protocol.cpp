@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cctype>
 #include <fstream>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <toml++/toml.h>
@@ -92,7 +94,34 @@ const Method* Protocol::FindMethod(const std::string& n) const {
   return nullptr;
 }
 
+bool ValidCodePattern(const std::string& pattern, std::string* why) {
+  // Bounded: std::regex compiles and matches recursively.
+  if (pattern.empty() || pattern.size() > 128) {
+    if (why) *why = "expected a regular expression of 1..128 characters";
+    return false;
+  }
+  try {
+    const std::regex re(pattern, std::regex::ECMAScript);
+  } catch (const std::regex_error& e) {
+    if (why) *why = std::string("not a valid regular expression: ") + e.what();
+    return false;
+  }
+  return true;
+}
+
+void CheckParticipantCode(const Protocol& p, const std::string& code) {
+  const std::string rule = "a pseudonymous code matching " + p.participant_code +
+                           " (e.g. P07; 'hapticlab participant new' hands out the next free one), never a name, "
+                           "birth date or phone number";
+  // The code must be short and plain before the pattern is even tried.
+  bool plain = !code.empty() && code.size() <= 32;
+  for (unsigned char c : code) plain = plain && (std::isalnum(c) || c == '-' || c == '_');
+  if (!plain || !std::regex_match(code, std::regex(p.participant_code, std::regex::ECMAScript)))
+    throw InputError(p.file, 0, "--participant", "'" + code + "' is not " + rule);
+}
+
 Protocol ParseProtocol(const std::string& text, const std::string& file) {
+  CheckTomlLimits(text, file);
   toml::table doc;
   try {
     doc = toml::parse(text, file);
@@ -108,7 +137,8 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
 
   // [study]
   if (const toml::table* s = doc["study"].as_table()) {
-    r.Known(*s, "study", {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles"});
+    r.Known(*s, "study", {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles",
+                           "participant_code"});
     p.name = r.Get<std::string>(*s, "study", "name", true, "a string").value_or("");
     p.description = r.Get<std::string>(*s, "study", "description", false, "a string").value_or("");
     if (auto seed = r.Get<std::int64_t>(*s, "study", "seed", true, "a non-negative integer")) {
@@ -131,6 +161,11 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     if (!(p.stimulus_duration_s > 0 && p.stimulus_duration_s <= 600))
       r.Error(s->get("stimulus_duration_s"), "study.stimulus_duration_s", "expected 0 < seconds <= 600");
     p.profiles = r.Get<std::string>(*s, "study", "profiles", false, "a file name").value_or("");
+    if (auto pat = r.Get<std::string>(*s, "study", "participant_code", false, "a regular expression")) {
+      std::string why;
+      if (!ValidCodePattern(*pat, &why)) r.Error(s->get("participant_code"), "study.participant_code", why);
+      else p.participant_code = *pat;
+    }
   } else {
     diag.Add(file, 1, "study", "missing [study] table");
   }
@@ -252,8 +287,10 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   }
   if (const toml::table* t = doc["breaks"].as_table()) {
     r.Known(*t, "breaks", {"every_trials", "duration_s"});
-    p.break_every_trials = static_cast<int>(r.Get<std::int64_t>(*t, "breaks", "every_trials", false, "an integer").value_or(0));
-    if (p.break_every_trials < 0) r.Error(t->get("every_trials"), "breaks.every_trials", "expected >= 0");
+    // Range-checked before the narrowing cast (4294967296 must not wrap to 0, "no breaks").
+    const auto every = r.Get<std::int64_t>(*t, "breaks", "every_trials", false, "an integer").value_or(0);
+    if (every < 0 || every > 10000) r.Error(t->get("every_trials"), "breaks.every_trials", "expected an integer 0..10000 (0: no breaks)");
+    else p.break_every_trials = static_cast<int>(every);
     p.break_duration_s = r.Get<double>(*t, "breaks", "duration_s", false, "a number").value_or(60);
   }
   if (const toml::table* t = doc["masking_noise"].as_table()) {

@@ -123,7 +123,7 @@ void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::p
   }
   toml::table doc;
   try {
-    doc = toml::parse_file(path.string());
+    doc = toml::parse(ReadTomlFile(path.string()), path.string());
   } catch (const toml::parse_error& e) {
     r.diag().Add(path.string(), static_cast<int>(e.source().begin.line), "",
                  std::string(e.description()));
@@ -223,6 +223,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
 }  // namespace
 
 MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
+  CheckTomlLimits(text, name);
   toml::table doc;
   try {
     doc = toml::parse(text, name);
@@ -282,7 +283,15 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto h = r.Number(*g, "geometry", "height", true);
       const auto p = r.Number(*g, "geometry", "pitch_m", true);
       if (p && *p <= 0) r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be > 0");
-      if (file && w && h && p && *p > 0) {
+      // Range-checked before the narrowing cast; the file's size is checked by LoadRawF32.
+      constexpr double kMaxSide = 1 << 20;  // samples along one side
+      bool sides_ok = true;
+      for (const auto& [key, v] : {std::pair{"width", w}, std::pair{"height", h}})
+        if (v && !(*v >= 1 && *v <= kMaxSide && *v == std::floor(*v))) {
+          r.Error(g->get(key), std::string("geometry.") + key, "must be a whole number of samples in 1..1048576");
+          sides_ok = false;
+        }
+      if (file && w && h && p && *p > 0 && sides_ok) {
         try {
           m.geometry = std::make_shared<HeightMap>(HeightMap::LoadRawF32(
               (base / *file).string(), static_cast<int>(*w), static_cast<int>(*h), *p));

@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -165,7 +166,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
 NeuralModel LoadNeuralModel(const std::string& path) {
   toml::table doc;
   try {
-    doc = toml::parse_file(path);
+    doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
     throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
   }

@@ -64,6 +64,10 @@ class XmlReader {
   std::vector<std::size_t> line_starts_;
 };
 
+// A count or index read as a double, range-checked before the narrowing cast (a value
+// outside +-1e6 becomes -1, which every caller reports as out of range).
+int ToInt(double x) { return x >= -1e6 && x <= 1e6 ? static_cast<int>(x) : -1; }
+
 }  // namespace
 
 PennImport ImportPennXml(const std::string& path) {
@@ -82,8 +86,9 @@ PennImport ImportPennXml(const std::string& path) {
   XmlReader r(path, &diag, text);
   if (!res) {
     pugi::xml_node dummy;
-    throw InputError(path, 0, "", std::string("not well-formed XML: ") + res.description() +
-                                      " at byte " + std::to_string(res.offset));
+    const auto at = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, res.offset));
+    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(std::min(at, text.size())), '\n'));
+    throw InputError(path, line, "", std::string("not well-formed XML: ") + res.description());
   }
   const pugi::xml_node set = doc.child("modelSet");
   if (!set) throw InputError(path, 1, "modelSet", "root element <modelSet> is missing");
@@ -96,9 +101,9 @@ PennImport ImportPennXml(const std::string& path) {
   m.friction.mu_k = r.Number(set, "mu", true);
   VibrationBank& bank = m.vibration;
   bank.sample_rate_hz = r.Number(set, "SampleRate", true, 0);
-  const int num_mod = static_cast<int>(r.Number(set, "numMod", true));
-  const int num_ar = static_cast<int>(r.Number(set, "numARCoeff", true));
-  const int num_ma = static_cast<int>(r.Number(set, "numMACoeff", false, 0));
+  const int num_mod = ToInt(r.Number(set, "numMod", true));
+  const int num_ar = ToInt(r.Number(set, "numARCoeff", true));
+  const int num_ma = ToInt(r.Number(set, "numMACoeff", false, 0));
   out.arma = num_ma > 0;
   const auto speeds_mmps = r.Values(set, "speedList", true);
   const auto forces = r.Values(set, "forceList", true);
@@ -112,15 +117,16 @@ PennImport ImportPennXml(const std::string& path) {
     bool ok = true;
     for (const auto& v : tri.children("value")) {
       const double x = r.Parse(v, "tri");
-      if (k < 3) t[static_cast<std::size_t>(k)] = static_cast<int>(x) - 1;  // 1-based in the file
-      ok = ok && x >= 1 && x <= num_mod && x == std::floor(x);
+      const bool in_range = x >= 1 && x <= num_mod && x == std::floor(x);
+      if (k < 3 && in_range) t[static_cast<std::size_t>(k)] = static_cast<int>(x) - 1;  // 1-based in the file
+      ok = ok && in_range;
       ++k;
     }
     if (k != 3 || !ok) r.Error(tri, "tri", fmt::format("expected three 1-based model indices in 1..{}", num_mod));
     else bank.triangles.push_back(t);
   }
   for (const auto& model : set.children("model")) {
-    const int idx = static_cast<int>(r.Number(model, "modNum", true)) - 1;
+    const int idx = ToInt(r.Number(model, "modNum", true)) - 1;
     ArCell cell;
     if (idx >= 0 && idx < static_cast<int>(speeds_mmps.size()) && idx < static_cast<int>(forces.size())) {
       cell.speed_mps = speeds_mmps[static_cast<std::size_t>(idx)] * 1e-3;

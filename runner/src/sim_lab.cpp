@@ -11,6 +11,7 @@
 #include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/biquad.hpp"
 
@@ -389,7 +390,7 @@ renderer::MaterialModel PlaceholderModel(const MaterialProfile& p) {
 ProfileSet LoadProfiles(const std::string& path) {
   toml::table doc;
   try {
-    doc = toml::parse_file(path);
+    doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
     throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
   }

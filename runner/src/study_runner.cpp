@@ -304,6 +304,8 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
   } noise{p.masking_noise && opt.rig ? opt.rig->noise : nullptr};
   if (noise.n) noise.n->SetNoiseLevel(opt.rig->noise_rms_fs);
   db::TrajectoryWriter writer(database.path());
+  constexpr int kMaxTrajectoryFaults = 3;  // in a row: the disk or the database is the problem
+  int trajectory_faults = 0;
   auto trials = database.Trials(session);
   sum.planned = static_cast<int>(trials.size());
   std::string last_material;
@@ -384,7 +386,25 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         queue.push_back(t);
         continue;
       }
-      database.CompleteTrial(t.id, o.ratings);
+      // The ratings commit only with every trajectory stream of this attempt whole.
+      try {
+        database.CompleteTrial(t.id, o.ratings, writer.TakeReports(t.id));
+        trajectory_faults = 0;
+      } catch (const db::TrajectoryIncomplete& e) {
+        ++sum.faults;
+        database.SetTrialStatus(t.id, db::kTrialFaulted);
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "trajectory-fault", .detail = e.what()});
+        if (opt.ui) opt.ui->Event(fmt::format("trial {}: trajectories not stored (re-queued)", t.plan_index + 1));
+        if (++trajectory_faults >= kMaxTrajectoryFaults) {
+          database.EndSession(session, "aborted");
+          throw std::runtime_error(fmt::format("{} trials in a row could not store their trajectories; last: {}; "
+                                               "fix the cause, then 'hapticlab study resume'",
+                                               trajectory_faults, e.what()));
+        }
+        t.status = db::kTrialFaulted;
+        queue.push_back(t);
+        continue;
+      }
       ++sum.completed;
       last_material = t.material;
       Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned, t.phase, t.material,
@@ -409,7 +429,9 @@ void LogPlanEvents(db::Database& database, std::int64_t session, const std::vect
 }  // namespace
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
+  protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
   const Lab lab = LoadLab(p, opt.device);
+  const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);
   std::int64_t study_id;
@@ -438,7 +460,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                          {"comparison", t.comparison}, {"method", t.method}, {"repetition", t.repetition},
                          {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
   const json prov = {{"protocol_hash", hash},
-                     {"protocol_path", fs::absolute(p.file).string()},
+                     // Relative to the database's folder (an absolute path would carry a user name).
+                     {"protocol_path", fs::absolute(p.file).lexically_relative(fs::absolute(opt.db_path).parent_path()).string()},
                      {"study_seed", p.seed},
                      {"participant_index", index},
                      {"participant_seed", part.seed},
@@ -479,6 +502,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
 
 RunSummary ResumeStudy(const RunOptions& opt) {
   if (!fs::exists(opt.db_path)) throw InputError(opt.db_path, 0, "--db", "no such database");
+  const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   for (const auto& st : database.Studies()) {
     const auto part = database.FindParticipant(st.id, opt.participant);
@@ -489,7 +513,10 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     if (se.status == "completed")
       throw InputError(opt.db_path, 0, "--participant", opt.participant + "'s session is already completed");
     const json prov = json::parse(se.provenance_json);
-    const std::string path = prov.value("protocol_path", "");
+    // Stored relative to the database's folder (older sessions: absolute).
+    const std::string stored = prov.value("protocol_path", "");
+    const std::string path =
+        stored.empty() ? stored : (fs::absolute(opt.db_path).parent_path() / stored).lexically_normal().string();
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);

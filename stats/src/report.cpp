@@ -62,23 +62,32 @@ std::pair<double, double> MeanCi(const LongTable& t) {
 }  // namespace
 
 LongTable RatingsFromDatabase(const std::string& db_path) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
-  db::Database d(db_path, {.create = false, .read_only = true});
+  // quick_check first: a damaged record is refused, never analysed.
+  const db::Database d = db::OpenForReading(db_path);
   LongTable t;
   t.source = db_path;
   t.y_name = "score";
   t.key_names = {"study", "participant", "phase", "material", "comparison", "method", "repetition", "criterion"};
   t.keys.assign(t.key_names.size(), {});
-  for (const auto& st : d.Studies())
+  for (const auto& st : d.Studies()) {
+    // Scores are checked against the scale of the protocol the study ran.
+    const auto proto = protocols::ParseProtocol(st.protocol_toml, db_path + " (protocol of " + st.name + ")");
     for (const auto& p : d.Participants(st.id))
       for (const auto& se : d.Sessions(p.id))
         for (const auto& tr : d.Trials(se.id))
           for (const auto& r : d.Ratings(tr.id)) {
+            if (r.score < proto.scale_min || r.score > proto.scale_max || r.response_time_s < 0)
+              throw InputError(db_path, 0, "rating.score",
+                               fmt::format("study '{}' trial {} criterion '{}': score {} (response time {} s) is "
+                                           "outside the protocol's scale [{}, {}] or negative",
+                                           st.name, tr.id, r.criterion, r.score, r.response_time_s, proto.scale_min,
+                                           proto.scale_max));
             const std::string row[] = {st.name, p.code, tr.phase, tr.material, tr.comparison, tr.method,
                                        std::to_string(tr.repetition), r.criterion};
             for (std::size_t c = 0; c < t.key_names.size(); ++c) t.keys[c].push_back(row[c]);
             t.y.push_back(r.score);
           }
+  }
   return t;
 }
 

@@ -1,11 +1,31 @@
 #pragma once
 /// @file Small file helpers shared by the readers of user input.
 
+#include <cstddef>
 #include <string>
+#include <string_view>
 
 namespace hapticlab {
 
-/// Whole file as text. @throws InputError naming the file ("cannot open <what>").
-std::string ReadTextFile(const std::string& path, const std::string& what = "file");
+/// Whole file as text. @throws InputError naming the file ("cannot open <what>", or larger
+/// than `max_bytes`).
+std::string ReadTextFile(const std::string& path, const std::string& what = "file",
+                         std::size_t max_bytes = std::size_t{256} << 20);
+
+/// Limits every TOML reader enforces before toml++ parses a text (docs/studies.md, "Input
+/// limits"). toml++ recurses per dotted key part and per nesting level, so a hostile file
+/// (`a.a.a....` with 50,000 parts) would otherwise overflow the stack.
+inline constexpr std::size_t kTomlMaxBytes = std::size_t{64} << 20;  ///< whole document
+inline constexpr int kTomlMaxKeyParts = 32;       ///< dotted parts in one key or table header
+inline constexpr std::size_t kTomlMaxKeyBytes = 1024;  ///< one key, all its parts and dots
+inline constexpr int kTomlMaxNesting = 32;        ///< nested arrays and inline tables
+
+/// Checks a TOML text against the limits above with a small lexer (strings, comments,
+/// keys, brackets); it never recurses. @throws InputError naming `file`, the line and the key
+/// when a limit is exceeded. Text that is not valid TOML is left for toml++ to report.
+void CheckTomlLimits(std::string_view text, const std::string& file);
+
+/// ReadTextFile, then CheckTomlLimits: the text of a TOML file safe to hand to toml++.
+std::string ReadTomlFile(const std::string& path, const std::string& what = "file");
 
 }  // namespace hapticlab

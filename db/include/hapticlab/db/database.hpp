@@ -11,7 +11,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 3;
+inline constexpr int kSchemaVersion = 4;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -66,6 +66,7 @@ struct Trial {
   std::string right;            ///< stimulus on the right square
   std::string status = kTrialPlanned;
   int attempts = 0;             ///< how many times the trial was started
+  int completed_attempt = 0;    ///< the attempt whose data the trial holds (0 until completed)
 };
 
 /// One rating of one criterion in one trial.
@@ -94,7 +95,29 @@ struct TrajectoryChunk {
   double rate_hz = 0;               ///< sample rate [Hz]
   std::vector<std::string> channels;///< channel names with units, e.g. "fx_N"
   std::vector<float> samples;
+  int attempt = 0;                  ///< the trial's attempt that recorded it (1-based; 0: before
+                                    ///< the trial was started, or unattributed by migration)
   std::size_t sample_count() const { return channels.empty() ? 0 : samples.size() / channels.size(); }
+};
+
+/// What one trajectory stream of one trial attempt delivered, as the writer counted it.
+/// Whole when samples_written == samples_offered - samples_dropped and no error is left.
+struct StreamReport {
+  std::int64_t trial_id = 0;
+  int attempt = 0;
+  std::string stream;
+  double rate_hz = 0;                  ///< [Hz]
+  std::uint64_t samples_offered = 0;   ///< Push calls by the producer
+  std::uint64_t samples_dropped = 0;   ///< refused because the queue was full (time gaps)
+  std::uint64_t samples_written = 0;   ///< committed to the database
+  std::string error;                   ///< first write error met by this stream ("" when none)
+};
+
+/// Thrown by CompleteTrial when a trial's trajectories are not whole: the trial is not
+/// completed (nothing of the completion is stored) and the caller faults and re-queues it.
+class TrajectoryIncomplete : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 /// True when `code` is a pseudonymous participant code: 1-32 characters of letters, digits,
@@ -146,12 +169,24 @@ class Database {
   std::int64_t AddTrial(const Trial& t);
   /// Adds many trials in one transaction (a session's plan). Returns their ids.
   std::vector<std::int64_t> AddTrials(const std::vector<Trial>& trials);
-  /// Marks a trial running and counts the attempt.
-  void StartTrial(std::int64_t trial_id);
+  /// Marks a trial running and counts the attempt. Returns the attempt number (1-based);
+  /// trajectory streams opened for the trial from now on are tagged with it.
+  int StartTrial(std::int64_t trial_id);
+  /// The trial's current attempt (its attempts counter; 0 before it was started).
+  int CurrentAttempt(std::int64_t trial_id) const;
   void SetTrialStatus(std::int64_t trial_id, const std::string& status);
   /// Stores every rating of the trial and marks it completed, in one transaction: after a
   /// crash either all of them and the completion marker are present, or none.
-  void CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings);
+  /// The trial's current attempt becomes its completing attempt. `streams` are the writer's
+  /// reports of the trial's streams (TrajectoryWriter::TakeReports); for each report of the
+  /// current attempt the check (offered - dropped == written == samples stored in chunks) is
+  /// verified and stored in `trajectory_stream`, and the attempt must hold no chunks of any
+  /// other stream. With no reports (nothing recorded) no trajectory check is made.
+  /// @throws TrajectoryIncomplete (and stores nothing) when a stream is not whole
+  void CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& ratings,
+                     const std::vector<StreamReport>& streams = {});
+  /// The stored sample-count checks of a trial's completing attempt.
+  std::vector<StreamReport> StreamChecks(std::int64_t trial_id) const;
   std::vector<Trial> Trials(std::int64_t session_id) const;
   std::vector<Rating> Ratings(std::int64_t trial_id) const;
   /// Rated trials of a session in the order their ratings were committed.
@@ -164,7 +199,18 @@ class Database {
   std::int64_t SaveMeasurement(const std::string& material, const std::string& csv_text,
                                const std::string& metadata_json);
   void InsertTrajectoryChunk(const TrajectoryChunk& c);
+  /// Chunks of the trial's completing attempt when it is completed, else of its current
+  /// attempt (possibly partial). Chunks of other attempts are never mixed in.
   std::vector<TrajectoryChunk> TrajectoryChunks(std::int64_t trial_id) const;
+  /// Chunks of one attempt of a trial.
+  std::vector<TrajectoryChunk> TrajectoryChunks(std::int64_t trial_id, int attempt) const;
+  /// "ok" when SQLite's quick_check passes, else its report (cheaper than IntegrityCheck).
+  std::string QuickCheck() const;
+  /// Every completed trial's completing attempt against its stored sample-count checks:
+  /// each checked stream's chunks hold exactly the samples written at completion, and no
+  /// other stream has chunks in that attempt. Returns one line per problem (empty: whole).
+  /// Exports call it before reading trajectories.
+  std::vector<std::string> VerifyTrajectories() const;
 
   /// Raw handle for module-internal use (export, writer).
   sqlite3* handle() const { return db_; }
@@ -175,6 +221,31 @@ class Database {
   std::string path_;
   sqlite3* db_ = nullptr;
 };
+
+/// The one-writer lease of a study database: an advisory lock (flock) on the database file,
+/// held for the object's life, plus a `writer_lease` row naming the process id and host so
+/// a second writer is told who holds it. The lock is released by the kernel when the process
+/// ends, even on SIGKILL. Take it before opening any Database on the file and release it
+/// after every connection of this process to the file is closed (so closing its descriptor
+/// cannot drop SQLite's own locks).
+class WriterLease {
+ public:
+  /// Creates the file when missing (an empty file is a new database).
+  /// @throws InputError naming the file and the holder when another process holds the lease
+  explicit WriterLease(const std::string& db_path);
+  ~WriterLease();
+  WriterLease(const WriterLease&) = delete;
+  WriterLease& operator=(const WriterLease&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+/// Opens a study database for reading after checking it: the file exists and SQLite's
+/// quick_check passes. For analysis and export, which must never run on a damaged record.
+/// @throws InputError naming the file (exit 2) when it is missing, not a HapticLab database,
+///         newer than this build, or damaged
+Database OpenForReading(const std::string& path);
 
 /// Hex SHA-256 digest of a text (OpenSSL), for provenance of protocols and models.
 std::string HashText(const std::string& text);

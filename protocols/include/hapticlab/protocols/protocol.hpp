@@ -67,10 +67,20 @@ struct Protocol {
   double break_duration_s = 60;
   bool masking_noise = false;
   double masking_level_dB = 70;
+  /// Participant codes must match this ECMAScript regular expression (`[study]
+  /// participant_code`); the default allows 1-3 capital letters and 2-4 digits (P07, AB123).
+  std::string participant_code = "^[A-Z]{1,3}[0-9]{2,4}$";
   std::vector<std::string> analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro
   const Material* FindMaterial(const std::string& id) const;
   const Method* FindMethod(const std::string& name) const;
 };
+
+/// True when `pattern` is usable as a participant code pattern (1..128 characters, a valid
+/// ECMAScript regular expression); else `why` says what is wrong.
+bool ValidCodePattern(const std::string& pattern, std::string* why);
+/// Refuses (InputError naming the protocol and --participant) a code that is not 1-32 letters,
+/// digits, '-' or '_' matching the protocol's participant_code pattern.
+void CheckParticipantCode(const Protocol& p, const std::string& code);
 
 /// Reads and validates a protocol. Throws hapticlab::InputError listing every problem.
 Protocol LoadProtocol(const std::string& path);
