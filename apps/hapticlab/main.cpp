@@ -3,12 +3,17 @@
 #include <CLI/CLI.hpp>
 #include <fmt/core.h>
 
+#include <csignal>
+
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace hapticlab::cli;
+  // A file-size limit (ulimit -f) must end in a clear error from the failed write (EFBIG),
+  // like a full disk, not in SIGXFSZ killing the process mid-session.
+  std::signal(SIGXFSZ, SIG_IGN);
   CLI::App app{
       "HapticLab: model real textures, render them on a force-feedback device plus a\n"
       "vibrotactile actuator, run psychophysical studies comparing real and virtual\n"

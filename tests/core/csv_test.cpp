@@ -41,3 +41,19 @@ TEST(Csv, EscapeRoundTrips) {
 
 }  // namespace
 }  // namespace hapticlab
+
+namespace hapticlab {
+namespace {
+
+TEST(Csv, AUtf8ByteOrderMarkIsNotPartOfTheFirstColumn) {
+  // Spreadsheet exports start with EF BB BF; the first column must still be found by name.
+  const auto t = ParseCsv("\xEF\xBB\xBFt_s,acc_mps2\n0,1.5\n", "bom.csv");
+  EXPECT_EQ(t.header[0], "t_s");
+  EXPECT_EQ(t.Require("t_s"), 0u);
+  EXPECT_DOUBLE_EQ(t.Number(0, t.Require("acc_mps2")), 1.5);
+  const auto m = ParseCsv("\xEF\xBB\xBF# material: Denim\nt_s\n0\n", "bom2.csv");
+  EXPECT_EQ(m.metadata.at("material"), "Denim");
+}
+
+}  // namespace
+}  // namespace hapticlab

@@ -139,5 +139,135 @@ TEST(Database, StoresModelsMeasurementsEventsAndChunks) {
   EXPECT_EQ(HashText("abc"), "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
 }
 
+// A v3 file as older builds left it: chunks without attempts, one trial with two attempts'
+// chunks mixed (a failed attempt, then a completed one restarting every stream's time).
+TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
+  test::TempDir dir;
+  const std::string path = dir.File("old.db");
+  {
+    Database old(path, {.migrate_to = 3});
+    Populate(old, 3);  // trial 1: never started, one rating
+    old.Exec("INSERT INTO trial(session_id, plan_index, phase, material, status, attempts) VALUES "
+             "(1,1,'main','A','completed',1), (1,2,'main','B','completed',2), (1,3,'main','C','completed',2)");
+    auto chunk = [&](int trial, double t0) {
+      old.Exec("INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, sample_count, "
+               "samples) VALUES (" + std::to_string(trial) + ",'force'," + std::to_string(t0) +
+               ",1000,'fz_N',1,x'0000803f')");
+    };
+    chunk(2, 0);
+    chunk(2, 1);  // trial 2: one attempt, two chunks
+    chunk(3, 0);
+    chunk(3, 1);
+    chunk(3, 0);  // trial 3: the time restarts, a second attempt wrote again: mixed
+    chunk(4, 0);
+    chunk(4, 1);  // trial 4: two attempts, but only one wrote (no restart)
+  }
+  Database db(path);
+  ASSERT_EQ(db.SchemaVersion(), kSchemaVersion);
+  EXPECT_EQ(db.TrajectoryChunks(2).size(), 2u);
+  EXPECT_EQ(db.TrajectoryChunks(2)[0].attempt, 1);
+  EXPECT_TRUE(db.TrajectoryChunks(3).empty());      // never read with the trial again
+  EXPECT_EQ(db.TrajectoryChunks(3, 0).size(), 3u);  // but kept
+  EXPECT_EQ(db.TrajectoryChunks(4).size(), 2u);
+  EXPECT_EQ(db.TrajectoryChunks(4)[0].attempt, 2);
+  int unattributed = 0;
+  for (const auto& e : db.Events(1)) unattributed += e.kind == "trajectory-unattributed" && e.trial_id == 3;
+  EXPECT_EQ(unattributed, 1);
+  EXPECT_EQ(db.IntegrityCheck(), "ok");
+}
+
+TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
+  test::TempDir dir;
+  Database db(dir.File("a.db"));
+  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
+  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
+  const auto se = db.StartSession({.participant_id = p});
+  const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+  EXPECT_EQ(db.StartTrial(t), 1);
+  EXPECT_EQ(db.StartTrial(t), 2);
+  // Attempt 1 left a chunk behind; attempt 2 wrote 3 samples of "force".
+  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {9, 9}, .attempt = 1});
+  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {1, 2, 3}, .attempt = 2});
+  StreamReport ok{.trial_id = t, .attempt = 2, .stream = "force", .rate_hz = 1000,
+                  .samples_offered = 4, .samples_dropped = 1, .samples_written = 3};
+  StreamReport lost = ok;
+  lost.samples_dropped = 0;  // 4 queued, 3 written: one chunk lost
+  EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {lost}), TrajectoryIncomplete);
+  StreamReport missing{.trial_id = t, .attempt = 2, .stream = "vibration", .rate_hz = 10000,
+                       .samples_offered = 5, .samples_written = 5};  // writer says 5, db has none
+  EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {ok, missing}), TrajectoryIncomplete);
+  EXPECT_TRUE(db.Ratings(t).empty());
+  EXPECT_NE(db.Trials(se)[0].status, kTrialCompleted);
+  // A report of an earlier attempt is ignored; the unreported stream "force" then fails.
+  StreamReport old = ok;
+  old.attempt = 1;
+  EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {old}), TrajectoryIncomplete);
+  db.CompleteTrial(t, {{"overall", 50, 1}}, {ok, old});
+  ASSERT_EQ(db.Trials(se)[0].completed_attempt, 2);
+  ASSERT_EQ(db.TrajectoryChunks(t).size(), 1u);
+  EXPECT_EQ(db.TrajectoryChunks(t)[0].samples, (std::vector<float>{1, 2, 3}));
+  ASSERT_EQ(db.StreamChecks(t).size(), 1u);
+  EXPECT_EQ(db.StreamChecks(t)[0].samples_written, 3u);
+  EXPECT_TRUE(db.VerifyTrajectories().empty());
+  // Damage after completion is found: a chunk deleted, or a stream added.
+  db.Exec("DELETE FROM trajectory_chunk WHERE attempt = 2");
+  ASSERT_EQ(db.VerifyTrajectories().size(), 1u);
+  EXPECT_NE(db.VerifyTrajectories()[0].find("stream force"), std::string::npos);
+  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {1, 2, 3}, .attempt = 2});
+  db.InsertTrajectoryChunk({.trial_id = t, .stream = "extra", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {1}, .attempt = 2});
+  ASSERT_EQ(db.VerifyTrajectories().size(), 1u);
+  EXPECT_NE(db.VerifyTrajectories()[0].find("stream extra"), std::string::npos);
+}
+
+TEST(Database, ScoresThatAreNotFiniteNumbersAreRefusedOnRead) {
+  test::TempDir dir;
+  Database db(dir.File("a.db"));
+  Populate(db, kSchemaVersion);
+  EXPECT_EQ(db.Ratings(1).size(), 1u);
+  for (const char* bad : {"'abc'", "NULL", "9e999"}) {
+    SCOPED_TRACE(bad);
+    db.Exec(std::string("UPDATE rating SET score = ") + bad);
+    try {
+      db.Ratings(1);
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("rating.score"), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(dir.File("a.db")), std::string::npos) << e.what();
+    }
+  }
+}
+
+TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  {
+    Database db(path);
+    Populate(db, kSchemaVersion);
+    for (int i = 0; i < 200; ++i)
+      db.Exec("INSERT INTO event(session_id, kind, detail) VALUES (1, 'x', '" + std::string(400, 'e') + "')");
+    db.Exec("PRAGMA wal_checkpoint(TRUNCATE)");
+  }
+  EXPECT_NO_THROW(OpenForReading(path));
+  EXPECT_THROW(OpenForReading(dir.File("missing.db")), InputError);
+  // Overwrite pages in the middle of the file.
+  {
+    std::string bytes = test::ReadFile(path);
+    ASSERT_GT(bytes.size(), 40000u);
+    for (std::size_t i = 20000; i < 36000; ++i) bytes[i] = static_cast<char>(i * 7);
+    test::WriteFile(path, bytes);
+  }
+  try {
+    OpenForReading(path);
+    ADD_FAILURE() << "a damaged file was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("damaged"), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace hapticlab::db

@@ -119,6 +119,8 @@ TEST(Plan, LatinSquareBalancesBlockOrderAcrossParticipants) {
 }
 
 TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
+  std::string deep_key = "a";
+  for (int i = 0; i < 40; ++i) deep_key += ".a";
   struct Case {
     std::string from, to, expect;
   };
@@ -138,6 +140,12 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
       {"scheme = \"full\"", "scheme = \"blocked\"\nblock_by = \"material\"", "infeasible with no_immediate_repeat"},
       {"every_trials = 8", "every_trials = 8\nduraton_s = 3", "breaks.duraton_s: unknown key"},
       {"[study]", "[studdy]", "studdy: unknown key"},
+      // Range-checked before narrowing: 2^32 must not wrap to 0 ("no breaks").
+      {"every_trials = 8", "every_trials = 4294967296", "breaks.every_trials: expected an integer 0..10000"},
+      {"every_trials = 8", "every_trials = -1", "breaks.every_trials: expected an integer 0..10000"},
+      {"seed = 42", "seed = 42\nparticipant_code = \"([A-Z\"", "study.participant_code: not a valid regular expression"},
+      // Input limits before toml++ parses (its recursion would overflow the stack).
+      {"seed = 42", "seed = 42\n" + deep_key + " = 1", "more than 32 dotted parts"},
   };
   for (const auto& c : cases) {
     std::string text = Small();
@@ -153,6 +161,26 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
       EXPECT_NE(msg.find("bad.toml:"), std::string::npos) << msg;
     }
   }
+}
+
+TEST(Protocol, ParticipantCodesFollowThePatternAndAreNeverNames) {
+  const auto p = ParseProtocol(Small(), "small.toml");
+  for (const char* ok : {"P07", "AB123", "SIM01", "X9999"}) EXPECT_NO_THROW(CheckParticipantCode(p, ok)) << ok;
+  for (const char* bad : {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "0151-2345678", "+491512345678",
+                          "P7", "p07", "P07 ", "", "P00000"}) {
+    try {
+      CheckParticipantCode(p, bad);
+      ADD_FAILURE() << "accepted " << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("--participant"), std::string::npos) << e.what();
+    }
+  }
+  // A protocol may declare its own pattern.
+  std::string text = Small();
+  text.replace(text.find("seed = 42"), 9, "seed = 42\nparticipant_code = \"^lab2-[0-9]{3}$\"");
+  const auto q = ParseProtocol(text, "q.toml");
+  EXPECT_NO_THROW(CheckParticipantCode(q, "lab2-014"));
+  EXPECT_THROW(CheckParticipantCode(q, "P07"), InputError);
 }
 
 TEST(Protocol, ReportsAllProblemsAtOnce) {

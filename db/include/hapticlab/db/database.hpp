@@ -147,7 +147,8 @@ class Database {
   const std::string& path() const { return path_; }
   /// Schema version stored in the file.
   int SchemaVersion() const;
-  /// Applies forward migrations up to `target`. Each runs in its own transaction.
+  /// Applies forward migrations up to `target`, all in one write transaction (a second
+  /// process opening the same file waits for it, then finds nothing to do).
   void Migrate(int target = kSchemaVersion);
   /// "ok" when SQLite's integrity check passes, else its report.
   std::string IntegrityCheck() const;
