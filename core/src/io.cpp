@@ -1,7 +1,6 @@
 #include "hapticlab/core/io.hpp"
 
 #include <fstream>
-#include <sstream>
 #include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -12,16 +11,17 @@ std::string ReadTextFile(const std::string& path, const std::string& what,
                          std::size_t max_bytes) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, 0, "", "cannot open " + what);
-  f.seekg(0, std::ios::end);
-  const auto size = f.tellg();
-  if (size > 0 && static_cast<std::size_t>(size) > max_bytes)
-    throw InputError(path, 0, "",
-                     what + " is " + std::to_string(static_cast<long long>(size)) +
-                         " bytes, more than the " + std::to_string(max_bytes) + " allowed");
-  f.seekg(0, std::ios::beg);
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  return ss.str();
+  // Read in blocks and stop past the limit: the size a file claims is not trusted (a path
+  // may name /dev/zero or a pipe).
+  std::string text;
+  char buf[1 << 16];
+  while (f.read(buf, sizeof buf) || f.gcount() > 0) {
+    text.append(buf, static_cast<std::size_t>(f.gcount()));
+    if (text.size() > max_bytes)
+      throw InputError(path, 0, "",
+                       what + " is larger than the " + std::to_string(max_bytes) + " bytes allowed");
+  }
+  return text;
 }
 
 namespace {

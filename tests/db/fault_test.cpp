@@ -104,7 +104,9 @@ void Resume(const std::string& path, std::int64_t session) {
   Database db(path);
   TrajectoryWriter w(path);
   for (const auto& t : db.Trials(session))
-    if (t.status != kTrialCompleted) ASSERT_TRUE(RunAttempt(db, w, t.id)) << "trial " << t.id;
+    if (t.status != kTrialCompleted) {
+      ASSERT_TRUE(RunAttempt(db, w, t.id)) << "trial " << t.id;
+    }
 }
 
 TEST(Fault, FullDiskFaultsTrialsAndResumeCompletesThemWhole) {
