@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -25,7 +26,7 @@ using nlohmann::json;
 
 std::string Cli() { return HL_CLI_PATH; }
 std::string Small() { return test::DataPath("protocols/small.toml"); }
-std::string Run(const std::string& db, const std::string& code) {
+std::string RunCmd(const std::string& db, const std::string& code) {
   return Cli() + " study run " + Small() + " --db " + db + " --participant " + code + " --quiet";
 }
 
@@ -65,9 +66,10 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
   test::TempDir dir;
   const std::string db = dir.File("s.db");
   std::string out;
-  // The run's files may not grow past 3 MiB (ulimit -f counts KiB): as a full disk, writes
-  // fail with EFBIG. The run must stop with a message, not a signal.
-  const int rc = test::RunCommand("bash -c 'ulimit -f 3072; exec " + Run(db, "P01") + "'", &out);
+  // The run's files may not grow past 1 MiB (ulimit -f counts KiB; a full run writes about
+  // 2.4 MB): as on a full disk, writes fail (EFBIG). The run must stop with a message, not a
+  // signal.
+  const int rc = test::RunCommand("bash -c 'ulimit -f 1024; exec " + RunCmd(db, "P01") + "'", &out);
   ASSERT_NE(rc, 0) << "the size limit never bit: the test tests nothing\n" << out;
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find(db), std::string::npos) << out;
@@ -86,8 +88,8 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   std::mt19937_64 rng(20261122);  // fixed seed: the kill moments are reproducible
   std::uniform_int_distribution<int> delay_ms(150, 900);
   int killed = 0;
-  for (int round = 0; round < 4; ++round) {
-    const std::string cmd = round == 0 ? Run(db, "P01")
+  for (int round = 0; round < 3; ++round) {
+    const std::string cmd = round == 0 ? RunCmd(db, "P01")
                                        : Cli() + " study resume --db " + db + " --participant P01 --quiet";
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
@@ -104,8 +106,9 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   }
   std::string out;
   if (test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) == 0 &&
-      json::parse(out)["participants"][0]["session_status"] != "completed")
+      json::parse(out)["participants"][0]["session_status"] != "completed") {
     ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
+  }
   EXPECT_GT(killed, 0) << "no run was killed: the test tests nothing";
   ExpectEveryTrialWhole(db, 1);
 }
@@ -116,11 +119,11 @@ TEST(FaultCli, ASecondWriterIsRefusedNamingTheHolder) {
   std::string out;
   {
     const db::WriterLease lease(db);  // this test process is "the other run"
-    EXPECT_EQ(test::RunCommand(Run(db, "P01"), &out), 2) << out;
+    EXPECT_EQ(test::RunCommand(RunCmd(db, "P01"), &out), 2) << out;
     EXPECT_NE(out.find("process " + std::to_string(getpid())), std::string::npos) << out;
     EXPECT_NE(out.find(db), std::string::npos) << out;
   }
-  EXPECT_EQ(test::RunCommand(Run(db, "P01") + " --stop-after 2", &out), 0) << out;
+  EXPECT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 2", &out), 0) << out;
 }
 
 TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
@@ -128,14 +131,14 @@ TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
   const std::string db = dir.File("p.db");
   std::string out;
   for (const char* bad : {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "015123456789"}) {
-    EXPECT_EQ(test::RunCommand(Run(db, bad), &out), 2) << bad;
+    EXPECT_EQ(test::RunCommand(RunCmd(db, bad), &out), 2) << bad;
     EXPECT_NE(out.find("pseudonymous"), std::string::npos) << out;
   }
   EXPECT_FALSE(std::filesystem::exists(db)) << "a refused code left a database behind";
   ASSERT_EQ(test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0) << out;
   EXPECT_EQ(out, "P01\n");
-  ASSERT_EQ(test::RunCommand(Run(db, "P01") + " --stop-after 1", &out), 0) << out;
-  EXPECT_EQ(test::RunCommand(Run(db, "JohnSmith1985"), &out), 2);
+  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 1", &out), 0) << out;
+  EXPECT_EQ(test::RunCommand(RunCmd(db, "JohnSmith1985"), &out), 2);
   ASSERT_EQ(test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0) << out;
   EXPECT_EQ(out, "P02\n");
   db::Database d(db, {.create = false, .read_only = true});
@@ -153,8 +156,7 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
   test::TempDir dir;
   const std::string db = dir.File("a.db");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Run(db, "P01"), &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Run(db, "P02"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 10", &out), 0) << out;
   std::filesystem::copy_file(db, dir.File("scores.db"));
   std::filesystem::copy_file(db, dir.File("chunks.db"));
   // A score that is text, or outside the protocol's 0..100 scale, is refused, never analysed.
@@ -177,7 +179,7 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
     for (std::size_t i = 100000; i < 180000; ++i) bytes[i] = static_cast<char>(i * 13);
     test::WriteFile(db, bytes);
   }
-  for (const std::string cmd : {" analyze --db " + db + " --out " + dir.File("r2"), " export --db " + db + " --out " + dir.File("y")}) {
+  for (const std::string& cmd : {" analyze --db " + db + " --out " + dir.File("r2"), " export --db " + db + " --out " + dir.File("y")}) {
     EXPECT_EQ(test::RunCommand(Cli() + cmd, &out), 2) << cmd;
     EXPECT_NE(out.find("damaged"), std::string::npos) << out;
     EXPECT_NE(out.find(db), std::string::npos) << out;
@@ -202,7 +204,8 @@ TEST(FaultCli, InputsThatCrashedEarlierBuildsGiveExit2NamingTheFile) {
   // fit-vibration with a model rate far above the recording's: refused, not 4.5 GB.
   std::filesystem::create_directory(dir.File("rec"));
   std::string rec = "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,x_m,y_m,z_m,acc_mps2\n";
-  for (int i = 0; i < 4000; ++i) rec += std::to_string(i / 2000.0) + ",0,0,0," + std::to_string((i * 7919 % 200) / 100.0 - 1) + "\n";
+  for (int i = 0; i < 4000; ++i)
+    rec += std::to_string(i / 2000.0) + ",0,0,0," + std::to_string(std::sin(0.7 * i) + 0.3 * std::sin(2.3 * i)) + "\n";
   test::WriteFile(dir.File("rec/r0.csv"), rec);
   EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") + " -o " + dir.File("b.toml") +
                                  " --rate 1e9 --order 4", &out), 2);
