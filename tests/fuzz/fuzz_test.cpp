@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <random>
@@ -104,7 +105,9 @@ void Fuzz(Target target, const std::vector<std::string>& corpus, int runs, std::
     if (rng() % 4 == 0) input = Mutate(input, rng);  // stack mutations now and then
     target(input, dir.path());
   }
-  RecordProperty("inputs", static_cast<int>(corpus.size()) + runs);
+  ::testing::Test::RecordProperty("inputs", static_cast<int>(corpus.size()) + runs);
+  std::printf("%s: %d inputs\n", ::testing::UnitTest::GetInstance()->current_test_info()->name(),
+              static_cast<int>(corpus.size()) + runs);
 }
 
 // Budgets (mutants per reader) keep the whole suite to about 20-40 s under ASan at -O0.
