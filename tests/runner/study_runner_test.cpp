@@ -255,7 +255,7 @@ std::map<std::string, double> SimulateAndAverage(
   o.db_path = db_path;
   o.record = RecordMode::kNone;
   for (int i = 1; i <= n; ++i) {
-    o.participant = "S" + std::to_string(i);
+    o.participant = (i < 10 ? "S0" : "S") + std::to_string(i);  // the default code pattern: S01
     EXPECT_EQ(RunStudy(p, o).status, "completed") << o.participant;
   }
   db::Database d(db_path);
