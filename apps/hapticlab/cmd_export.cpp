@@ -23,7 +23,10 @@ void RegisterExport(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "export",
       "Write a study database as tidy long-format CSV tables (ratings, trials, events, one\n"
-      "file per trajectory stream) that R's read.csv and pandas.read_csv read directly.");
+      "file per trajectory stream) that R's read.csv and pandas.read_csv read directly.\n"
+      "A damaged database (SQLite quick_check) is refused; trajectories are those of each\n"
+      "completed trial's completing attempt, checked against the sample counts stored at\n"
+      "completion (a mismatch refuses the export, exit 2).");
   cmd->add_option("--db", o->db, "Study database (SQLite) to read")->required();
   cmd->add_option("--format", o->format, "Output format (only csv)")
       ->check(CLI::IsMember({"csv"}));

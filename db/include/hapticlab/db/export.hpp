@@ -19,9 +19,11 @@ struct ExportedFile {
 /// - `trials.csv`: one row per trial with status and attempts;
 /// - `events.csv`: one row per event;
 /// - `trajectory_<stream>.csv`: one row per sample (study, participant, trial_id, t_s, then
-///   the stream's channels). Floats are printed with 9 significant digits, so float32
-///   samples round-trip exactly.
-/// Throws std::runtime_error naming the file on I/O failure.
+///   the stream's channels) of each completed trial's completing attempt only. Floats are
+///   printed with 9 significant digits, so float32 samples round-trip exactly.
+/// Throws std::runtime_error naming the file on I/O failure, and InputError (naming the
+/// database) when a trial's chunks no longer match the sample counts stored at its
+/// completion (Database::VerifyTrajectories) or a chunk's blob does not match its counts.
 /// @param trajectories false: ratings, trials and events only (trajectories stay in the db)
 std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir, bool trajectories = true);
 
