@@ -203,36 +203,6 @@ TEST(Fault, LockHeldByAnotherProcessFaultsTheAttemptNotTheData) {
   ExpectWhole(path, session, 2);
 }
 
-TEST(Fault, CommitFailureIsRetriedSoNothingIsLost) {
-  // A lock released before the stream closes: the failed chunks are committed on a retry.
-  test::TempDir dir;
-  const std::string path = dir.File("retry.db");
-  std::int64_t session = 0;
-  std::vector<std::int64_t> ids;
-  {
-    Database db(path);
-    session = MakeSession(db);
-    ids = Plan(db, session, 1);
-  }
-  Database db(path);
-  TrajectoryWriter w(path, {.chunk_samples = 10, .busy_timeout_ms = 20});
-  db.StartTrial(ids[0]);
-  auto* s = w.OpenStream(ids[0], "left_force", kRate, {"a"});
-  Database locker(path);
-  locker.Exec("BEGIN EXCLUSIVE");
-  const float v = 1;
-  for (int i = 0; i < 50; ++i) ASSERT_TRUE(s->Push(i / kRate, &v));
-  // Wait (no time limit asserted) until the writer has met the lock at least once.
-  while (w.error().empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
-  locker.Exec("COMMIT");
-  const auto rep = w.CloseStream(s);
-  EXPECT_EQ(rep.samples_written, 50u);
-  EXPECT_NO_THROW(db.CompleteTrial(ids[0], {{"roughness", 50, 1}}, w.TakeReports(ids[0])));
-  std::uint64_t n = 0;
-  for (const auto& c : db.TrajectoryChunks(ids[0])) n += c.sample_count();
-  EXPECT_EQ(n, 50u);
-}
-
 // Child: runs the plan's trials until killed.
 [[noreturn]] void RunUntilKilled(const std::string& path, std::int64_t session) {
   try {

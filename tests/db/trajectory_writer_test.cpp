@@ -129,5 +129,29 @@ TEST(TrajectoryWriter, DestructorWritesEverythingQueued) {
   EXPECT_EQ(total, 50u);
 }
 
+TEST(TrajectoryWriter, AFailedCommitIsRetriedSoNothingIsLost) {
+  // A lock released before the stream closes: the failed chunks are committed on a retry.
+  Fixture f;
+  const std::string& path = f.path;
+  const std::vector<std::int64_t> ids = {f.trial};
+  Database db(path);
+  TrajectoryWriter w(path, {.chunk_samples = 10, .busy_timeout_ms = 20});
+  db.StartTrial(ids[0]);
+  auto* s = w.OpenStream(ids[0], "left_force", 1000.0, {"a"});
+  Database locker(path);
+  locker.Exec("BEGIN EXCLUSIVE");
+  const float v = 1;
+  for (int i = 0; i < 50; ++i) ASSERT_TRUE(s->Push(i / 1000.0, &v));
+  // Wait (no time limit asserted) until the writer has met the lock at least once.
+  while (w.error().empty()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  locker.Exec("COMMIT");
+  const auto rep = w.CloseStream(s);
+  EXPECT_EQ(rep.samples_written, 50u);
+  EXPECT_NO_THROW(db.CompleteTrial(ids[0], {{"roughness", 50, 1}}, w.TakeReports(ids[0])));
+  std::uint64_t n = 0;
+  for (const auto& c : db.TrajectoryChunks(ids[0])) n += c.sample_count();
+  EXPECT_EQ(n, 50u);
+}
+
 }  // namespace
 }  // namespace hapticlab::db
