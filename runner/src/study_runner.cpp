@@ -461,7 +461,9 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                          {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
   const json prov = {{"protocol_hash", hash},
                      // Relative to the database's folder (an absolute path would carry a user name).
-                     {"protocol_path", fs::absolute(p.file).lexically_relative(fs::absolute(opt.db_path).parent_path()).string()},
+                     {"protocol_path", fs::weakly_canonical(fs::absolute(p.file))
+                                           .lexically_relative(fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path())
+                                           .string()},
                      {"study_seed", p.seed},
                      {"participant_index", index},
                      {"participant_seed", part.seed},
