@@ -50,19 +50,22 @@ HidReportLayout LoadHidLayout(const std::string& path) {
   }
   Diagnostics d;
   HidReportLayout L;
-  auto num = [&](const char* k, auto* out) {
+  // Range-checked before the conversion (an offset outside a 64-byte report would index
+  // past the buffer).
+  auto num = [&](const char* k, auto* out, double lo, double hi) {
     if (const auto* n = t.get(k)) {
-      if (auto v = n->value<double>()) *out = static_cast<std::remove_pointer_t<decltype(out)>>(*v);
-      else d.Add(path, static_cast<int>(n->source().begin.line), k, "expected a number");
+      const auto v = n->value<double>();
+      if (v && *v >= lo && *v <= hi) *out = static_cast<std::remove_pointer_t<decltype(out)>>(*v);
+      else d.Add(path, static_cast<int>(n->source().begin.line), k, fmt::format("expected a number in {}..{}", lo, hi));
     }
   };
-  num("report_id", &L.report_id);
-  num("position_offset", &L.position_offset);
-  num("position_bytes", &L.position_bytes);
-  num("raw_min", &L.raw_min);
-  num("raw_max", &L.raw_max);
-  num("button_offset", &L.button_offset);
-  num("button_bit", &L.button_bit);
+  num("report_id", &L.report_id, -1, 255);
+  num("position_offset", &L.position_offset, 0, 62);
+  num("position_bytes", &L.position_bytes, 1, 2);
+  num("raw_min", &L.raw_min, -1e9, 1e9);
+  num("raw_max", &L.raw_max, -1e9, 1e9);
+  num("button_offset", &L.button_offset, -1, 63);
+  num("button_bit", &L.button_bit, 0, 7);
   if (auto v = t["little_endian"].value<bool>()) L.little_endian = *v;
   if (auto v = t["signed"].value<bool>()) L.is_signed = *v;
   for (const auto& [k, v] : t) {

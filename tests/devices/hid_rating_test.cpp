@@ -75,5 +75,20 @@ TEST(HidRating, LayoutFilesAreCheckedWithFileLineAndKey) {
   }
 }
 
+TEST(HidRating, OffsetsOutsideAReportAreRefusedBeforeTheyIndexIt) {
+  // -1 or 1e10 used to be cast to int unchecked and then index a 64-byte report.
+  test::TempDir dir;
+  for (const char* bad : {"position_offset = -1\n", "position_offset = 1e10\n", "button_offset = 64\n", "report_id = 4294967296\n"}) {
+    SCOPED_TRACE(bad);
+    test::WriteFile(dir.File("o.toml"), bad);
+    try {
+      LoadHidLayout(dir.File("o.toml"));
+      ADD_FAILURE() << "accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("o.toml:1:"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace hapticlab::devices
