@@ -6,6 +6,7 @@
 #include <map>
 
 #include "hapticlab/core/csv.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -60,6 +61,41 @@ TEST(Export, TablesRoundTripThroughCsv) {
     EXPECT_NEAR(traj.Number(i, traj.Require("t_s")), 0.5 + 0.001 * static_cast<double>(i), 1e-12);
     EXPECT_EQ(static_cast<float>(traj.Number(i, traj.Require("x_m"))), samples[i * 3]);
     EXPECT_EQ(static_cast<float>(traj.Number(i, traj.Require("fz_N"))), samples[i * 3 + 2]);
+  }
+}
+
+TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
+  test::TempDir dir;
+  Database db(dir.File("e.db"));
+  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 3});
+  const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
+  const auto se = db.StartSession({.participant_id = p});
+  const auto ids = db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
+                                 {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
+  db.StartTrial(ids[0]);  // attempt 1: interrupted after one chunk
+  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {7, 7, 7}, .attempt = 1});
+  db.StartTrial(ids[0]);  // attempt 2 completes
+  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {1, 2}, .attempt = 2});
+  db.CompleteTrial(ids[0], {{"overall", 50, 1}},
+                   {{.trial_id = ids[0], .attempt = 2, .stream = "force", .rate_hz = 1000, .samples_offered = 2,
+                     .samples_written = 2}});
+  db.StartTrial(ids[1]);  // started, never completed: not exported
+  db.InsertTrajectoryChunk({.trial_id = ids[1], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
+                            .samples = {9}, .attempt = 1});
+  ExportCsv(db, dir.File("out"));
+  const auto traj = ReadCsv(dir.File("out/trajectory_force.csv"));
+  ASSERT_EQ(traj.rows.size(), 2u);
+  EXPECT_EQ(traj.Number(0, traj.Require("fz_N")), 1);
+  EXPECT_EQ(traj.Number(1, traj.Require("fz_N")), 2);
+  // A blob shorter than its row's sample count is damage: refused, never read past its end.
+  db.Exec("UPDATE trajectory_chunk SET samples = x'0000' WHERE attempt = 2");
+  try {
+    ExportCsv(db, dir.File("out2"));
+    ADD_FAILURE() << "a damaged chunk was exported";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("e.db"), std::string::npos) << e.what();
   }
 }
 
