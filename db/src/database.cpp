@@ -117,8 +117,15 @@ std::string HashText(const std::string& text) {
 namespace {
 
 // A writer maps the -shm file; one that was made read-only or truncated by someone else
-// would fault with SIGBUS inside SQLite, so it is refused here with a message.
+// would fault with SIGBUS inside SQLite, so it is refused here with a message, as is a
+// read-only -wal (mode bits too: as root, access() would allow what the owner forbade).
 void CheckSharedMemoryFile(const std::string& path) {
+  const std::string wal = path + "-wal";
+  struct stat ws {};
+  if (::stat(wal.c_str(), &ws) == 0 && ((ws.st_mode & 0222) == 0 || ::access(wal.c_str(), W_OK) != 0))
+    throw InputError(wal, 0, "--db",
+                     "the database's write-ahead log is read-only; make it (and the -shm file) "
+                     "writable: it may hold committed trials that are not yet in the database file");
   const std::string shm = path + "-shm";
   struct stat st {};
   if (::stat(shm.c_str(), &st) != 0) return;  // none: SQLite creates it

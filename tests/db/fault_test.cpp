@@ -274,6 +274,33 @@ TEST(Fault, ReadOnlyOrTruncatedSharedMemoryFileIsRefusedNotSigbus) {
   EXPECT_THROW(Database second(path), InputError);
 }
 
+TEST(Fault, ReadOnlyWalIsRefusedAndNothingCommittedIsLost) {
+  test::TempDir dir;
+  const std::string path = dir.File("wal.db");
+  std::int64_t session = 0;
+  Database first(path);  // keeps -wal and -shm in place
+  session = MakeSession(first);
+  Plan(first, session, 2);
+  {
+    TrajectoryWriter w(path);
+    ASSERT_TRUE(RunAttempt(first, w, first.Trials(session)[0].id));
+  }
+  const std::string wal = path + "-wal";
+  ASSERT_TRUE(std::filesystem::exists(wal));
+  ASSERT_EQ(chmod(wal.c_str(), 0444), 0);
+  try {
+    Database second(path);
+    ADD_FAILURE() << "a read-only -wal was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(wal), std::string::npos) << e.what();
+  }
+  // Reading still works, and the completed trial is whole once the log is writable again.
+  EXPECT_EQ(OpenForReading(path).Trials(session)[0].status, kTrialCompleted);
+  ASSERT_EQ(chmod(wal.c_str(), 0644), 0);
+  Resume(path, session);
+  ExpectWhole(path, session, 2);
+}
+
 TEST(Fault, OneWriterPerDatabaseNamesTheHolder) {
   test::TempDir dir;
   const std::string path = dir.File("lease.db");
