@@ -15,7 +15,8 @@
 namespace hapticlab::cli {
 
 void RegisterParticipant(CLI::App& app) {
-  auto* part = app.add_subcommand("participant", "Participant codes (pseudonymous by construction; docs/studies.md)");
+  auto* part = app.add_subcommand(
+      "participant", "Participant codes (pseudonymous by construction; docs/studies.md)");
   part->require_subcommand(1);
   struct O {
     std::string protocol, db, prefix = "P";
@@ -50,7 +51,8 @@ void RegisterParticipant(CLI::App& app) {
         return kExitOk;
       }
       throw InputError(o->protocol, 0, "--prefix",
-                       "no free code '" + o->prefix + "NN' matches the protocol's participant_code pattern " +
+                       "no free code '" + o->prefix +
+                           "NN' matches the protocol's participant_code pattern " +
                            p.participant_code);
     });
   });

@@ -7,8 +7,7 @@
 
 namespace hapticlab {
 
-std::string ReadTextFile(const std::string& path, const std::string& what,
-                         std::size_t max_bytes) {
+std::string ReadTextFile(const std::string& path, const std::string& what, std::size_t max_bytes) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, 0, "", "cannot open " + what);
   // Read in blocks and stop past the limit: the size a file claims is not trusted (a path
@@ -18,8 +17,9 @@ std::string ReadTextFile(const std::string& path, const std::string& what,
   while (f.read(buf, sizeof buf) || f.gcount() > 0) {
     text.append(buf, static_cast<std::size_t>(f.gcount()));
     if (text.size() > max_bytes)
-      throw InputError(path, 0, "",
-                       what + " is larger than the " + std::to_string(max_bytes) + " bytes allowed");
+      throw InputError(
+          path, 0, "",
+          what + " is larger than the " + std::to_string(max_bytes) + " bytes allowed");
   }
   return text;
 }

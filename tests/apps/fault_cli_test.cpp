@@ -73,13 +73,16 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
   ASSERT_NE(rc, 0) << "the size limit never bit: the test tests nothing\n" << out;
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find(db), std::string::npos) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0)
+      << out;
   ExpectEveryTrialWhole(db, 1);
   ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --json", &out), 0) << out;
   const auto st = json::parse(out)["participants"][0];
   EXPECT_EQ(st["completed"], st["planned"]);
   EXPECT_EQ(st["duplicates"], 0);
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x"), &out), 0)
+      << out;
 }
 
 TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
@@ -89,12 +92,14 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   std::uniform_int_distribution<int> delay_ms(150, 900);
   int killed = 0;
   for (int round = 0; round < 3; ++round) {
-    const std::string cmd = round == 0 ? RunCmd(db, "P01")
-                                       : Cli() + " study resume --db " + db + " --participant P01 --quiet";
+    const std::string cmd = round == 0
+                                ? RunCmd(db, "P01")
+                                : Cli() + " study resume --db " + db + " --participant P01 --quiet";
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
-      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(), static_cast<char*>(nullptr));
+      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(),
+            static_cast<char*>(nullptr));
       _exit(127);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
@@ -105,9 +110,13 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0) break;  // finished before the kill
   }
   std::string out;
-  if (test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) == 0 &&
+  if (test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) ==
+          0 &&
       json::parse(out)["participants"][0]["session_status"] != "completed") {
-    ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
+    ASSERT_EQ(
+        test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out),
+        0)
+        << out;
   }
   EXPECT_GT(killed, 0) << "no run was killed: the test tests nothing";
   ExpectEveryTrialWhole(db, 1);
@@ -130,22 +139,28 @@ TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
   test::TempDir dir;
   const std::string db = dir.File("p.db");
   std::string out;
-  for (const char* bad : {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "015123456789"}) {
+  for (const char* bad :
+       {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "015123456789"}) {
     EXPECT_EQ(test::RunCommand(RunCmd(db, bad), &out), 2) << bad;
     EXPECT_NE(out.find("pseudonymous"), std::string::npos) << out;
   }
   EXPECT_FALSE(std::filesystem::exists(db)) << "a refused code left a database behind";
-  ASSERT_EQ(test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0)
+      << out;
   EXPECT_EQ(out, "P01\n");
   ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 1", &out), 0) << out;
   EXPECT_EQ(test::RunCommand(RunCmd(db, "JohnSmith1985"), &out), 2);
-  ASSERT_EQ(test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0)
+      << out;
   EXPECT_EQ(out, "P02\n");
   db::Database d(db, {.create = false, .read_only = true});
   ASSERT_EQ(d.Studies().size(), 1u);
   ASSERT_EQ(d.Participants(d.Studies()[0].id).size(), 1u);
   // Provenance names the protocol relative to the database's folder: no home folder in it.
-  const auto prov = json::parse(d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0].provenance_json);
+  const auto prov =
+      json::parse(d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0].provenance_json);
   const std::string path = prov["protocol_path"];
   EXPECT_FALSE(path.empty());
   EXPECT_NE(path.front(), '/') << path;
@@ -162,14 +177,21 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
   // A score that is text, or outside the protocol's 0..100 scale, is refused, never analysed.
   for (const char* bad : {"'abc'", "x'41'", "-500", "1e308"}) {
     SCOPED_TRACE(bad);
-    db::Database(dir.File("scores.db")).Exec(std::string("UPDATE rating SET score = ") + bad + " WHERE id = 7");
-    EXPECT_EQ(test::RunCommand(Cli() + " analyze --db " + dir.File("scores.db") + " --out " + dir.File("r") + " --no-figures", &out), 2);
+    db::Database(dir.File("scores.db"))
+        .Exec(std::string("UPDATE rating SET score = ") + bad + " WHERE id = 7");
+    EXPECT_EQ(test::RunCommand(Cli() + " analyze --db " + dir.File("scores.db") + " --out " +
+                                   dir.File("r") + " --no-figures",
+                               &out),
+              2);
     EXPECT_NE(out.find("scores.db"), std::string::npos) << out;
     EXPECT_NE(out.find("rating.score"), std::string::npos) << out;
   }
   // A chunk deleted after completion: export refuses instead of writing a short trajectory.
-  db::Database(dir.File("chunks.db")).Exec("DELETE FROM trajectory_chunk WHERE id = (SELECT max(id) FROM trajectory_chunk)");
-  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + dir.File("chunks.db") + " --out " + dir.File("x"), &out), 2);
+  db::Database(dir.File("chunks.db"))
+      .Exec("DELETE FROM trajectory_chunk WHERE id = (SELECT max(id) FROM trajectory_chunk)");
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " export --db " + dir.File("chunks.db") + " --out " + dir.File("x"), &out),
+            2);
   EXPECT_NE(out.find("export refused"), std::string::npos) << out;
   // Damaged pages: quick_check fails, both commands refuse with a clear message.
   {
@@ -179,7 +201,8 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
     for (std::size_t i = 100000; i < 180000; ++i) bytes[i] = static_cast<char>(i * 13);
     test::WriteFile(db, bytes);
   }
-  for (const std::string& cmd : {" analyze --db " + db + " --out " + dir.File("r2"), " export --db " + db + " --out " + dir.File("y")}) {
+  for (const std::string& cmd : {" analyze --db " + db + " --out " + dir.File("r2"),
+                                 " export --db " + db + " --out " + dir.File("y")}) {
     EXPECT_EQ(test::RunCommand(Cli() + cmd, &out), 2) << cmd;
     EXPECT_NE(out.find("damaged"), std::string::npos) << out;
     EXPECT_NE(out.find(db), std::string::npos) << out;
@@ -203,12 +226,16 @@ TEST(FaultCli, InputsThatCrashedEarlierBuildsGiveExit2NamingTheFile) {
   EXPECT_NE(out.find("m.toml:2:"), std::string::npos) << out.substr(0, 300);
   // fit-vibration with a model rate far above the recording's: refused, not 4.5 GB.
   std::filesystem::create_directory(dir.File("rec"));
-  std::string rec = "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,x_m,y_m,z_m,acc_mps2\n";
+  std::string rec =
+      "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,x_m,y_m,z_m,acc_mps2\n";
   for (int i = 0; i < 4000; ++i)
-    rec += std::to_string(i / 2000.0) + ",0,0,0," + std::to_string(std::sin(0.7 * i) + 0.3 * std::sin(2.3 * i)) + "\n";
+    rec += std::to_string(i / 2000.0) + ",0,0,0," +
+           std::to_string(std::sin(0.7 * i) + 0.3 * std::sin(2.3 * i)) + "\n";
   test::WriteFile(dir.File("rec/r0.csv"), rec);
-  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") + " -o " + dir.File("b.toml") +
-                                 " --rate 1e9 --order 4", &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") +
+                                 " -o " + dir.File("b.toml") + " --rate 1e9 --order 4",
+                             &out),
+            2);
   EXPECT_NE(out.find("r0.csv"), std::string::npos) << out;
   EXPECT_NE(out.find("--rate"), std::string::npos) << out;
 }

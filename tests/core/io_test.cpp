@@ -31,28 +31,46 @@ TEST(TomlLimits, DeepDottedKeysAreRefusedWithFileLineAndKey) {
   const std::string msg = Refusal("[study]\nname = \"x\"\n\na" + Repeat(".a", 50000) + " = 1\n");
   EXPECT_NE(msg.find("x.toml:4:"), std::string::npos) << msg;
   EXPECT_NE(msg.find("more than 32 dotted parts"), std::string::npos) << msg;
-  EXPECT_NE(Refusal("[a" + Repeat(".a", 40) + "]\n").find("dotted parts"), std::string::npos);        // table header
-  EXPECT_NE(Refusal("[[a" + Repeat(".a", 40) + "]]\n").find("dotted parts"), std::string::npos);      // array of tables
-  EXPECT_NE(Refusal("t = { x = 1, a" + Repeat(".a", 40) + " = 2 }\n").find("dotted parts"), std::string::npos);
+  EXPECT_NE(Refusal("[a" + Repeat(".a", 40) + "]\n").find("dotted parts"),
+            std::string::npos);  // table header
+  EXPECT_NE(Refusal("[[a" + Repeat(".a", 40) + "]]\n").find("dotted parts"),
+            std::string::npos);  // array of tables
+  EXPECT_NE(Refusal("t = { x = 1, a" + Repeat(".a", 40) + " = 2 }\n").find("dotted parts"),
+            std::string::npos);
   EXPECT_EQ(Refusal("a" + Repeat(".a", 31) + " = 1\n"), "");  // 32 parts: the limit itself
 }
 
 TEST(TomlLimits, LongKeysAndDeepNestingAreRefused) {
   EXPECT_NE(Refusal(std::string(2000, 'k') + " = 1\n").find("longer than 1024"), std::string::npos);
-  EXPECT_NE(Refusal("\"" + std::string(2000, 'k') + "\" = 1\n").find("longer than 1024"), std::string::npos);
-  EXPECT_NE(Refusal("a = " + Repeat("[", 40) + Repeat("]", 40) + "\n").find("nest deeper than 32"), std::string::npos);
-  EXPECT_NE(Refusal("a = " + Repeat("{b = ", 40) + "1" + Repeat("}", 40) + "\n").find("nest deeper"), std::string::npos);
+  EXPECT_NE(Refusal("\"" + std::string(2000, 'k') + "\" = 1\n").find("longer than 1024"),
+            std::string::npos);
+  EXPECT_NE(Refusal("a = " + Repeat("[", 40) + Repeat("]", 40) + "\n").find("nest deeper than 32"),
+            std::string::npos);
+  EXPECT_NE(
+      Refusal("a = " + Repeat("{b = ", 40) + "1" + Repeat("}", 40) + "\n").find("nest deeper"),
+      std::string::npos);
   EXPECT_EQ(Refusal("a = " + Repeat("[", 32) + Repeat("]", 32) + "\n"), "");
 }
 
 TEST(TomlLimits, StringsCommentsAndNumbersDoNotCount) {
   // Dots and brackets inside values, strings and comments are not keys or nesting.
-  const std::string ok = "name = \"" + Repeat("a.", 100) + "[[[[\"\n"
-                         "lit = '" + Repeat("{.", 100) + "'\n"
-                         "ml = \"\"\"\n" + Repeat("x.y.z [ { \\\" \n", 50) + "\"\"\"\n"
-                         "mll = '''\n" + Repeat("a.b.c [[ ''\n", 50) + "'''\n"
-                         "v = [" + Repeat("1.5, ", 2000) + "2.5]\n"
-                         "# a" + Repeat(".a", 100) + " [[[[[[[[\n"
+  const std::string ok = "name = \"" + Repeat("a.", 100) +
+                         "[[[[\"\n"
+                         "lit = '" +
+                         Repeat("{.", 100) +
+                         "'\n"
+                         "ml = \"\"\"\n" +
+                         Repeat("x.y.z [ { \\\" \n", 50) +
+                         "\"\"\"\n"
+                         "mll = '''\n" +
+                         Repeat("a.b.c [[ ''\n", 50) +
+                         "'''\n"
+                         "v = [" +
+                         Repeat("1.5, ", 2000) +
+                         "2.5]\n"
+                         "# a" +
+                         Repeat(".a", 100) +
+                         " [[[[[[[[\n"
                          "\"quoted.key.with.dots\" = 1\n"
                          "m = [\n  [1.0, 2.0],\n  [3.0, 4.0],\n]\n"
                          "t = { x = 1.5, y = \"a.b.c\" }\n";

@@ -25,8 +25,8 @@
 namespace hapticlab::db {
 namespace {
 
-constexpr double kRate = 1000;              // stream rate [Hz]
-constexpr std::uint64_t kSamples = 3000;    // per stream and attempt (3 s at 1 kHz)
+constexpr double kRate = 1000;            // stream rate [Hz]
+constexpr std::uint64_t kSamples = 3000;  // per stream and attempt (3 s at 1 kHz)
 constexpr int kChannels = 4;
 const std::vector<std::string> kStreams = {"left_force", "right_force"};
 
@@ -84,7 +84,8 @@ void ExpectWhole(const std::string& path, std::int64_t session, int planned) {
         ASSERT_EQ(c.samples[i * kChannels + 1], static_cast<float>(t.completed_attempt));
         // Sample k sits at time k / rate.
         ASSERT_EQ(c.samples[i * kChannels + 2],
-                  static_cast<float>(std::llround((c.start_time_s + static_cast<double>(i) / kRate) * kRate)));
+                  static_cast<float>(
+                      std::llround((c.start_time_s + static_cast<double>(i) / kRate) * kRate)));
       }
     }
     for (const auto& s : kStreams) EXPECT_EQ(n[s], kSamples) << "trial " << t.id << " " << s;
@@ -95,7 +96,8 @@ void ExpectWhole(const std::string& path, std::int64_t session, int planned) {
 
 std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n) {
   std::vector<Trial> t;
-  for (int i = 0; i < n; ++i) t.push_back({.session_id = session, .plan_index = i, .phase = "main", .material = "m"});
+  for (int i = 0; i < n; ++i)
+    t.push_back({.session_id = session, .plan_index = i, .phase = "main", .material = "m"});
   return db.AddTrials(t);
 }
 
@@ -195,7 +197,8 @@ TEST(Fault, LockHeldByAnotherProcessFaultsTheAttemptNotTheData) {
     int status = 0;
     waitpid(pid, &status, 0);
     // Completing with the incomplete report is refused and stores nothing.
-    EXPECT_THROW(db.CompleteTrial(ids[0], {{"roughness", 50, 1}}, w.TakeReports(ids[0])), TrajectoryIncomplete);
+    EXPECT_THROW(db.CompleteTrial(ids[0], {{"roughness", 50, 1}}, w.TakeReports(ids[0])),
+                 TrajectoryIncomplete);
     EXPECT_TRUE(db.Ratings(ids[0]).empty());
     db.SetTrialStatus(ids[0], kTrialFaulted);
   }
@@ -240,7 +243,8 @@ TEST(Fault, SigkillWhileTrajectoriesAreWrittenNeverMixesAttempts) {
     killed += WIFSIGNALED(status);
     Database db(path);
     for (const auto& t : db.Trials(session))
-      interrupted_rounds += t.status == kTrialRunning && !db.TrajectoryChunks(t.id, t.attempts).empty();
+      interrupted_rounds +=
+          t.status == kTrialRunning && !db.TrajectoryChunks(t.id, t.attempts).empty();
   }
   EXPECT_GT(killed, 0) << "no child was killed mid-run: the test tests nothing";
   Resume(path, session);
@@ -249,7 +253,8 @@ TEST(Fault, SigkillWhileTrajectoriesAreWrittenNeverMixesAttempts) {
   Database db(path);
   int interrupted = 0;
   for (const auto& t : db.Trials(session))
-    for (int a = 1; a < t.completed_attempt; ++a) interrupted += !db.TrajectoryChunks(t.id, a).empty();
+    for (int a = 1; a < t.completed_attempt; ++a)
+      interrupted += !db.TrajectoryChunks(t.id, a).empty();
   EXPECT_GT(interrupted, 0) << "no interrupted attempt left chunks: the test tests nothing";
 }
 
@@ -324,7 +329,8 @@ TEST(Fault, OneWriterPerDatabaseNamesTheHolder) {
     WriterLease second(path);
     ADD_FAILURE() << "two writers held the lease";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("process " + std::to_string(pid)), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("process " + std::to_string(pid)), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
   }
   ASSERT_EQ(write(to_child[1], &c, 1), 1);

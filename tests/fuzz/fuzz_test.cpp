@@ -28,10 +28,51 @@ using Target = int (*)(std::string_view, const std::string&);
 
 // Tokens the mutator splices in: syntax of the formats and numbers at the edges of ranges.
 const std::vector<std::string> kDictionary = {
-    "[", "]", "[[", "]]", "{", "}", "=", ",", ".", "\"", "'", "\"\"\"", "'''", "#", "\n", "\r\n", "\\",
-    "\xEF\xBB\xBF", "<", ">", "</", "/>", "<value>", "</value>", "<tri>", "<model>", "&amp;", "<![CDATA[",
-    "0", "-1", "1e10", "1e308", "-1e308", "4294967295", "4294967296", "9223372036854775807",
-    "-9223372036854775808", "nan", "inf", "-inf", "0x7fffffff", "1e-320", "true", "false", "\"\"",
+    "[",
+    "]",
+    "[[",
+    "]]",
+    "{",
+    "}",
+    "=",
+    ",",
+    ".",
+    "\"",
+    "'",
+    "\"\"\"",
+    "'''",
+    "#",
+    "\n",
+    "\r\n",
+    "\\",
+    "\xEF\xBB\xBF",
+    "<",
+    ">",
+    "</",
+    "/>",
+    "<value>",
+    "</value>",
+    "<tri>",
+    "<model>",
+    "&amp;",
+    "<![CDATA[",
+    "0",
+    "-1",
+    "1e10",
+    "1e308",
+    "-1e308",
+    "4294967295",
+    "4294967296",
+    "9223372036854775807",
+    "-9223372036854775808",
+    "nan",
+    "inf",
+    "-inf",
+    "0x7fffffff",
+    "1e-320",
+    "true",
+    "false",
+    "\"\"",
 };
 
 std::string Mutate(const std::string& in, std::mt19937_64& rng) {
@@ -64,7 +105,8 @@ std::string Mutate(const std::string& in, std::mt19937_64& rng) {
       case 6: {  // replace a token with an edge-of-range number
         const auto at = pick(s.size() + 1);
         const auto end = s.find_first_of(" \n,<]", at);
-        s.replace(at, (end == std::string::npos ? s.size() : end) - at, kDictionary[28 + pick(kDictionary.size() - 28)]);
+        s.replace(at, (end == std::string::npos ? s.size() : end) - at,
+                  kDictionary[28 + pick(kDictionary.size() - 28)]);
         break;
       }
       default: {  // a long run of one token (limits: dotted keys, nesting, long lines)
@@ -123,15 +165,24 @@ TEST(Fuzz, StudyDatabase) {
   const std::string path = dir.File("seed.db");
   {
     db::Database d(path);
-    const auto st = d.CreateStudy({.name = "f", .protocol_toml = "[study]\nname = \"f\"\n", .seed = 1});
+    const auto st =
+        d.CreateStudy({.name = "f", .protocol_toml = "[study]\nname = \"f\"\n", .seed = 1});
     const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
     const auto se = d.StartSession({.participant_id = p});
     const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
     d.StartTrial(t);
-    d.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"a", "b"},
-                             .samples = {1, 2, 3, 4}, .attempt = 1});
+    d.InsertTrajectoryChunk({.trial_id = t,
+                             .stream = "force",
+                             .rate_hz = 1000,
+                             .channels = {"a", "b"},
+                             .samples = {1, 2, 3, 4},
+                             .attempt = 1});
     d.CompleteTrial(t, {{"overall", 50, 1}},
-                    {{.trial_id = t, .attempt = 1, .stream = "force", .rate_hz = 1000, .samples_offered = 2,
+                    {{.trial_id = t,
+                      .attempt = 1,
+                      .stream = "force",
+                      .rate_hz = 1000,
+                      .samples_offered = 2,
                       .samples_written = 2}});
     d.Exec("PRAGMA journal_mode = DELETE");  // one self-contained file
   }

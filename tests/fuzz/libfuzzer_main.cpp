@@ -14,5 +14,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::filesystem::create_directories(d);
     return d.string();
   }();
-  return hapticlab::fuzz::HL_FUZZ_TARGET(std::string_view(reinterpret_cast<const char*>(data), size), dir);
+  return hapticlab::fuzz::HL_FUZZ_TARGET(
+      std::string_view(reinterpret_cast<const char*>(data), size), dir);
 }

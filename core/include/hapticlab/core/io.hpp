@@ -16,9 +16,9 @@ std::string ReadTextFile(const std::string& path, const std::string& what = "fil
 /// limits"). toml++ recurses per dotted key part and per nesting level, so a hostile file
 /// (`a.a.a....` with 50,000 parts) would otherwise overflow the stack.
 inline constexpr std::size_t kTomlMaxBytes = std::size_t{64} << 20;  ///< whole document
-inline constexpr int kTomlMaxKeyParts = 32;       ///< dotted parts in one key or table header
+inline constexpr int kTomlMaxKeyParts = 32;            ///< dotted parts in one key or table header
 inline constexpr std::size_t kTomlMaxKeyBytes = 1024;  ///< one key, all its parts and dots
-inline constexpr int kTomlMaxNesting = 32;        ///< nested arrays and inline tables
+inline constexpr int kTomlMaxNesting = 32;             ///< nested arrays and inline tables
 
 /// Checks a TOML text against the limits above with a small lexer (strings, comments,
 /// keys, brackets); it never recurses. @throws InputError naming `file`, the line and the key
