@@ -518,7 +518,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     // Stored relative to the database's folder (older sessions: absolute).
     const std::string stored = prov.value("protocol_path", "");
     const std::string path =
-        stored.empty() ? stored : (fs::absolute(opt.db_path).parent_path() / stored).lexically_normal().string();
+        stored.empty() ? stored
+                       : (fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path() / stored).lexically_normal().string();
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
