@@ -580,7 +580,9 @@ void WriteNormals(const std::string& path, const modeling::PhotometricResult& r,
         m.at<cv::Vec3b>(i, j) = cv::Vec3b(q(n.z()), q(n.y()), q(n.x()));
       }
     }
-  if (!cv::imwrite(path, m)) throw std::runtime_error(path + ": cannot write");
+  // Uncompressed: OpenCV 4.6 writes 3-channel float TIFF as lossy LogLuv (SGILOG) by default.
+  const std::vector<int> params = tiff ? std::vector<int>{cv::IMWRITE_TIFF_COMPRESSION, 1} : std::vector<int>{};
+  if (!cv::imwrite(path, m, params)) throw std::runtime_error(path + ": cannot write");
 }
 
 // Albedo: TIFF as float (|b|, relative to the mean light), PNG as 16-bit scaled so that the

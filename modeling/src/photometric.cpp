@@ -61,8 +61,8 @@ bool RobustPixel(const float* I, std::uint8_t* use, const std::vector<Eigen::Vec
       return false;
     }
     const double bn = b->norm();
-    int count = 0, worst = -1, dark_in = 0, back = 0;
-    double worst_t = thr;
+    int count = 0, worst_hi = -1, worst_lo = -1, dark_in = 0, back = 0;
+    double hi_t = thr, lo_t = -thr;
     for (std::size_t j = 0; j < m; ++j) {
       const double d = L[j].norm() * bn;  // the pixel's brightness under light j, facing it
       const double e = (static_cast<double>(I[j]) - L[j].dot(*b)) / d;
@@ -72,10 +72,14 @@ bool RobustPixel(const float* I, std::uint8_t* use, const std::vector<Eigen::Vec
       if (use[j]) {
         ++count;
         t = e / std::sqrt(std::max(1 - h, 1e-3));
-        if (dark) ++dark_in;
-        else if (std::abs(t) > worst_t) {
-          worst_t = std::abs(t);
-          worst = static_cast<int>(j);
+        if (dark) {
+          ++dark_in;
+        } else if (t > hi_t) {
+          hi_t = t;
+          worst_hi = static_cast<int>(j);
+        } else if (t < lo_t) {
+          lo_t = t;
+          worst_lo = static_cast<int>(j);
         }
       } else {
         t = e / std::sqrt(1 + h);
@@ -86,8 +90,10 @@ bool RobustPixel(const float* I, std::uint8_t* use, const std::vector<Eigen::Vec
     if (dark_in > 0) {
       for (std::size_t j = 0; j < m; ++j)
         if (use[j] && t_out[j] == -1e30) use[j] = 0;
-    } else if (worst >= 0 && count > p.min_lights) {
-      use[worst] = 0;
+    } else if ((worst_hi >= 0 || worst_lo >= 0) && count > p.min_lights) {
+      // Too bright first: a highlight left in drags the fit up, so that good readings look
+      // too dark; what is too dark once the highlights are out is a partial shadow.
+      use[worst_hi >= 0 ? worst_hi : worst_lo] = 0;
     } else if (back > 0) {
       for (std::size_t j = 0; j < m; ++j)
         if (!use[j] && t_out[j] != -1e30 && std::abs(t_out[j]) <= thr) use[j] = 1;
@@ -106,10 +112,11 @@ double RobustSd(std::vector<float>& v) {
   return 1.4826 * static_cast<double>(*mid);
 }
 
-// Sum of |curl| of the normals' gradient field over 2x2 cells inside the mask, as given and
-// with the y component mirrored; cells with a steep normal (n_z < 0.3) are skipped.
-std::pair<double, double> CurlSums(const std::vector<Eigen::Vector3f>& n, const std::vector<std::uint8_t>& mask, int w, int h) {
-  double given = 0, mirrored = 0;
+// Median |curl| of the normals' gradient field over 2x2 cells inside the mask, as given and
+// with the y component mirrored (medians: a few badly solved pixels do not decide); cells
+// with a steep normal (n_z < 0.3) are skipped.
+std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n, const std::vector<std::uint8_t>& mask, int w, int h) {
+  std::vector<float> given, mirrored;
   const auto W = static_cast<std::size_t>(w);
   auto grad = [&](std::size_t k) {
     return Eigen::Vector2d(-static_cast<double>(n[k].x()) / static_cast<double>(n[k].z()),
@@ -124,10 +131,11 @@ std::pair<double, double> CurlSums(const std::vector<Eigen::Vector3f>& n, const 
       const auto g00 = grad(k[0]), g01 = grad(k[1]), g10 = grad(k[2]), g11 = grad(k[3]);
       const double qx = 0.5 * (g01.y() + g11.y() - g00.y() - g10.y());
       const double py = 0.5 * (g10.x() + g11.x() - g00.x() - g01.x());
-      given += std::abs(qx - py);
-      mirrored += std::abs(qx + py);
+      given.push_back(static_cast<float>(std::abs(qx - py)));
+      mirrored.push_back(static_cast<float>(std::abs(qx + py)));
     }
-  return {given, mirrored};
+  // RobustSd is 1.4826 x the median; the factor cancels in the ratio.
+  return {RobustSd(given), RobustSd(mirrored)};
 }
 
 }  // namespace
@@ -205,13 +213,15 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     }
     rp.sigma = std::max(RobustSd(sample), o.noise_floor);
   }
-  // One pass over the pixels: robust (or fixed-set) fit with the current light scales.
-  auto pixel_pass = [&](double p0, double p1) {
+  // One pass over every `step`-th pixel: robust (or fixed-set) fit with the current light
+  // scales, then the robust SD re-estimated from the kept residuals.
+  auto pixel_pass = [&](std::size_t step, double p0, double p1) {
     sample.clear();
-    for (std::size_t k = 0; k < nin; ++k) {
+    const std::size_t every = std::max<std::size_t>(1, stride / step);
+    for (std::size_t k = 0; k < nin; k += step) {
       if (o.rejection == Rejection::kResidual) {
         solved[k] = RobustPixel(&inten[k * m], &use[k * m], L, rp, &b[k], t.data()) ? 1 : 0;
-        if (solved[k] && k % stride == 0)
+        if (solved[k] && (k / step) % every == 0)
           for (std::size_t j = 0; j < m; ++j)
             if (use[k * m + j]) sample.push_back(static_cast<float>(std::abs(t[j])));
       } else {
@@ -223,28 +233,43 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     }
     if (o.rejection == Rejection::kResidual && !sample.empty()) rp.sigma = std::max(RobustSd(sample), o.noise_floor);
   };
-  const double steps = o.iterations + 1.0;
+  // Alternations on a subsample of at most kAlsPixels pixels (the m light scales need far
+  // fewer readings than there are), until no scale changes by more than kAlsTolerance.
+  constexpr std::size_t kAlsPixels = 1000;
+  constexpr double kAlsTolerance = 1e-6;
+  constexpr double kScalePrior = 1e-3;
+  const std::size_t als_step = std::max<std::size_t>(1, nin / kAlsPixels);
+  r.alternations = 0;
   for (int it = 0; it < o.iterations; ++it) {
-    pixel_pass(it / steps, (it + 0.9) / steps);
+    pixel_pass(als_step, 0, 0);
     // Per light: s_j = argmin sum_i (I_ij - s_j l_j . b_i)^2 over the pixels using it, mean 1.
+    std::vector<double> s_new(m, 1.0);
     double mean = 0;
     for (std::size_t j = 0; j < m; ++j) {
       double num = 0, den = 0;
-      for (std::size_t k = 0; k < nin; ++k) {
+      for (std::size_t k = 0; k < nin; k += als_step) {
         if (!use[k * m + j] || !solved[k]) continue;
         const double pred = lights[j].direction.dot(b[k]);
         num += pred * inten[k * m + j];
         den += pred * pred;
       }
-      r.light_scale[j] = den > 0 ? num / den : 1.0;
-      mean += r.light_scale[j];
+      // A weak prior towards the mean (weight kScalePrior of the data): where the data
+      // cannot tell a light's intensity from the normals (a nearly flat sample), it stays.
+      s_new[j] = den > 0 ? (num + kScalePrior * den) / (den * (1 + kScalePrior)) : 1.0;
+      mean += s_new[j];
     }
     mean /= static_cast<double>(m);
-    for (auto& s : r.light_scale) s /= mean;
+    double change = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+      change = std::max(change, std::abs(s_new[j] / mean - r.light_scale[j]));
+      r.light_scale[j] = s_new[j] / mean;
+    }
     set_lights();
-    if (progress) progress((it + 1.0) / steps);
+    ++r.alternations;
+    if (progress) progress(0.5 * (it + 1.0) / o.iterations);
+    if (change < kAlsTolerance) break;
   }
-  pixel_pass(o.iterations / steps, 0.95);  // the final fit with the final light scales
+  pixel_pass(1, 0.5, 0.95);  // every pixel with the final light scales
   r.residual_sd = rp.sigma;
   std::size_t bright = 0, dark = 0;
   for (std::size_t k = 0; k < nin; ++k) {
@@ -272,7 +297,7 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
   const double readings = std::max<double>(1, static_cast<double>(nin - r.unsolved_pixels) * static_cast<double>(m));
   r.dropped_bright = static_cast<double>(bright) / readings;
   r.dropped_dark = static_cast<double>(dark) / readings;
-  const auto [given, mirrored] = CurlSums(r.normals, r.mask, r.width, r.height);
+  const auto [given, mirrored] = CurlMedians(r.normals, r.mask, r.width, r.height);
   r.mirrored_curl_ratio = mirrored > 0 ? given / mirrored : 1.0;
   r.axis_flip_suspected = r.mirrored_curl_ratio > kAxisFlipRatio;
   if (!irregular) {

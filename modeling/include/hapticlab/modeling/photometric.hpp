@@ -96,7 +96,7 @@ struct PhotometricOptions {
   double noise_floor = 1e-3;      ///< residual rule: least residual SD, as a fraction of s_j |b|
   int min_lights = 4;             ///< residual rule: outlier rejection never leaves fewer lights
   double specular_fraction = 0.1; ///< brightest rule only: the brightest fraction dropped when >= 6 remain
-  int iterations = 3;             ///< alternations between normals and per-light intensities
+  int iterations = 100;           ///< most alternations between normals and per-light intensities
   /// Pixels to solve: empty = all, else width * height values, non-zero = inside. Outside
   /// pixels are neither solved nor integrated; an irregular mask needs Integration::kPoisson.
   std::vector<std::uint8_t> mask;
@@ -110,6 +110,7 @@ struct PhotometricResult {
   std::vector<std::uint8_t> mask;       ///< the pixels solved (1) or not (0)
   std::vector<double> light_scale;      ///< estimated relative intensity of each light (mean 1)
   std::vector<double> light_use;        ///< fraction of the mask's pixels that used each light
+  int alternations = 0;                 ///< alternations run (they stop when no light scale changes by 1e-6)
   std::size_t unsolved_pixels = 0;      ///< inside pixels with fewer than 3 usable lights (normal +z)
   double residual_sd = 0;               ///< robust SD of the kept residuals / (s_j |b|), dimensionless
   double dropped_bright = 0;            ///< fraction of inside (pixel, light) readings dropped as too bright
