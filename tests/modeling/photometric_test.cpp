@@ -311,6 +311,7 @@ TEST(Photometric, ResidualRejectionHandlesHighlightsShadowsAndMask) {
   const auto s = MakeSphere(96, 40, 0.9);
   const auto L = TwelveLights();
   PhotometricOptions o{.pitch_m = kPitch, .integration = Integration::kPoisson};
+  o.mask = s.mask;
   const auto plain = RenderSphere(s, L, 0.0, 0.0, 11);
   const auto shiny = RenderSphere(s, L, 0.6, 40.0, 11);  // the same noise
   const auto noise_only = PhotometricStereo(plain, L, o);
