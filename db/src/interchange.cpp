@@ -74,12 +74,13 @@ std::string Alnum(const std::string& s) {
   return out;
 }
 
-double ParseUtc(const std::string& iso) {
+std::optional<std::int64_t> ParseUtcMicros(const std::string& iso) {
   int y = 0, mo = 0, d = 0, h = 0, mi = 0;
   double sec = 0;
   char z = 0;
-  if (std::sscanf(iso.c_str(), "%d-%d-%dT%d:%d:%lf%c", &y, &mo, &d, &h, &mi, &sec, &z) != 7 || z != 'Z')
-    return std::numeric_limits<double>::quiet_NaN();
+  if (std::sscanf(iso.c_str(), "%d-%d-%dT%d:%d:%lf%c", &y, &mo, &d, &h, &mi, &sec, &z) != 7 || z != 'Z' ||
+      !(sec >= 0 && sec < 61))
+    return std::nullopt;
   std::tm tm{};
   tm.tm_year = y - 1900;
   tm.tm_mon = mo - 1;
@@ -87,7 +88,7 @@ double ParseUtc(const std::string& iso) {
   tm.tm_hour = h;
   tm.tm_min = mi;
   tm.tm_sec = 0;
-  return static_cast<double>(timegm(&tm)) + sec;
+  return static_cast<std::int64_t>(timegm(&tm)) * 1000000 + std::llround(sec * 1e6);
 }
 
 double StreamRecording::end_s() const {
@@ -111,21 +112,22 @@ std::string Side(const std::string& stream) { return stream.substr(0, stream.fin
 int SideRank(const std::string& side) { return side == "left" ? 0 : side == "right" ? 1 : 2; }
 
 void PlaceOnClock(const Database& db, SessionRecord* s) {
-  const double session_start = ParseUtc(s->session.started_at);
-  if (std::isnan(session_start))
+  const auto session_start = ParseUtcMicros(s->session.started_at);
+  if (!session_start)
     throw std::runtime_error(db.path() + ": session " + std::to_string(s->session.id) +
                              ": started_at '" + s->session.started_at + "' is not an ISO-8601 UTC stamp");
   // The trials' start stamps are not in the typed API's Trial; read them here.
+  auto since_start = [&](const std::string& stamp) {
+    const auto us = ParseUtcMicros(stamp);
+    return us ? static_cast<double>(*us - *session_start) * 1e-6 : 0.0;
+  };
   std::map<std::int64_t, double> starts;
   {
     Stmt q(db.handle(), "SELECT id, coalesce(started_at,'') FROM trial WHERE session_id=?");
     q.Bind(1, s->session.id);
-    while (q.Step()) starts[q.Int(0)] = ParseUtc(q.Text(1)) - session_start;
+    while (q.Step()) starts[q.Int(0)] = since_start(q.Text(1));
   }
-  for (auto& t : s->trials) {
-    const double w = starts[t.trial.id];
-    t.wall_start_s = std::isnan(w) ? 0 : w;
-  }
+  for (auto& t : s->trials) t.wall_start_s = starts[t.trial.id];
   std::stable_sort(s->trials.begin(), s->trials.end(), [](const TrialRecord& a, const TrialRecord& b) {
     return a.wall_start_s != b.wall_start_s ? a.wall_start_s < b.wall_start_s
                                             : a.trial.plan_index < b.trial.plan_index;
@@ -152,8 +154,7 @@ void PlaceOnClock(const Database& db, SessionRecord* s) {
     free_from = t.origin_s + t.stimulus_s + respond;
   }
   for (const auto& e : s->events) {
-    double w = ParseUtc(e.created_at) - session_start;
-    if (std::isnan(w)) w = 0;
+    const double w = since_start(e.created_at);
     double shift = 0;
     for (const auto& t : s->trials)
       if (t.wall_start_s <= w) shift = t.origin_s - t.wall_start_s;

@@ -3,7 +3,9 @@
 // trials with their ratings and recordings, read through the Database API, the session
 // clock, and the meaning of the channel names.
 
+#include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -21,9 +23,10 @@ ChannelMeaning DescribeChannel(const std::string& name);
 /// Letters and digits of `s` only (BIDS labels).
 std::string Alnum(const std::string& s);
 
-/// Seconds since 1970 of an ISO-8601 UTC stamp as the database writes them
-/// ("2026-11-22T17:42:55.123Z"); NaN when empty or not of that form.
-double ParseUtc(const std::string& iso);
+/// Microseconds since 1970 of an ISO-8601 UTC stamp as the database writes them
+/// ("2026-11-22T17:42:55.123Z"); nullopt when empty or not of that form. Integers, so that
+/// differences of stamps are exact (seconds since 1970 as a double lose 0.2 us).
+std::optional<std::int64_t> ParseUtcMicros(const std::string& iso);
 
 /// One trajectory stream of one trial: its chunks in time order.
 struct StreamRecording {

@@ -338,7 +338,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   d.Exec("UPDATE session SET started_at='2026-01-01T10:00:00.000Z'");
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", ids[0]));
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.500Z' WHERE id={}", ids[1]));
-  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:01:00.000Z' WHERE id={}", ids[2]));
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:01:00.123Z' WHERE id={}", ids[2]));
   d.LogEvent({.session_id = se, .kind = "break", .detail = "after trial 2"});
   d.Exec("UPDATE event SET created_at='2026-01-01T10:00:02.000Z' WHERE kind='break'");
 
@@ -351,8 +351,9 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   for (const auto& s : x.streams) by[s.info.name] = &s;
   const auto& left = *by.at("left_force");
   ASSERT_EQ(left.time_stamps.size(), 45u);
-  // Trial starts: 1.0 (its stamp), 1.0 + 0.3 + 1.5 = 2.8 (its stamp, 1.5, would overlap), 60.0.
-  const double starts[] = {1.0, 2.8, 60.0};
+  // Trial starts: 1.0 (its stamp), 1.0 + 0.3 + 1.5 = 2.8 (its stamp, 1.5, would overlap),
+  // 60.123 (to the microsecond: stamps are subtracted as integers).
+  const double starts[] = {1.0, 2.8, 60.123};
   for (int k = 0; k < 3; ++k) {
     const std::size_t o = static_cast<std::size_t>(k) * 15;
     EXPECT_NEAR(left.time_stamps[o], starts[k], 1e-9) << k;
