@@ -35,8 +35,10 @@ void RegisterExport(CLI::App& app) {
       "Only pseudonymous participant codes are written; no names or local paths.");
   cmd->add_option("--db", o->db, "Study database (SQLite) to read")->required();
   cmd->add_option("--format", o->format, "Output format: csv, bids or xdf")
-      ->check(CLI::IsMember({"csv", "bids", "xdf"}))->capture_default_str();
-  cmd->add_option("--out", o->out, "Directory to write (created when missing), or FILE.xdf for --format xdf")
+      ->check(CLI::IsMember({"csv", "bids", "xdf"}))
+      ->capture_default_str();
+  cmd->add_option("--out", o->out,
+                  "Directory to write (created when missing), or FILE.xdf for --format xdf")
       ->required();
   cmd->add_option("--participant", o->participant, "xdf: only this participant's sessions");
   cmd->add_flag("--json", o->json, "Print the written files and row (sample) counts as JSON");
@@ -44,8 +46,7 @@ void RegisterExport(CLI::App& app) {
                 "csv: only ratings, trials and events (trajectory CSVs can be hundreds of MB)");
   cmd->callback([o] {
     RunGuarded([&] {
-      if (!std::filesystem::exists(o->db))
-        throw InputError(o->db, 0, "--db", "no such file");
+      if (!std::filesystem::exists(o->db)) throw InputError(o->db, 0, "--db", "no such file");
       if (!o->participant.empty() && o->format != "xdf")
         throw InputError("", 0, "--participant", "only --format xdf selects participants");
       if (o->no_trajectories && o->format != "csv")

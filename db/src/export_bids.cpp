@@ -24,9 +24,9 @@ namespace hapticlab::db {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::ordered_json;
 using internal::Alnum;
 using internal::SessionRecord;
+using nlohmann::ordered_json;
 
 void WriteText(const fs::path& p, const std::string& text) {
   std::ofstream f(p, std::ios::binary | std::ios::trunc);
@@ -59,7 +59,8 @@ class GzOut {
   GzOut(const GzOut&) = delete;
   GzOut& operator=(const GzOut&) = delete;
   void Write(const std::string& s) {
-    if (!s.empty() && gzwrite(f_, s.data(), static_cast<unsigned>(s.size())) != static_cast<int>(s.size()))
+    if (!s.empty() &&
+        gzwrite(f_, s.data(), static_cast<unsigned>(s.size())) != static_cast<int>(s.size()))
       throw std::runtime_error(path_ + ": write failed");
   }
   void Close() {
@@ -91,22 +92,30 @@ ordered_json BehSidecar(const SessionRecord& s) {
   ordered_json j;
   j["TaskName"] = s.study.name;
   j["TaskDescription"] =
-      "Psychophysical haptic texture study: the participant strokes two stimuli (left, then right) with a "
+      "Psychophysical haptic texture study: the participant strokes two stimuli (left, then right) "
+      "with a "
       "stylus and rates them on the protocol's criteria.";
-  j["trial"] = {{"Description", "the trial's position in the participant's resolved plan (0-based); "
-                                "physio recordings of the trial carry run-<trial + 1>"}};
+  j["trial"] = {{"Description",
+                 "the trial's position in the participant's resolved plan (0-based); "
+                 "physio recordings of the trial carry run-<trial + 1>"}};
   j["phase"] = {{"Description", "study phase"},
-                {"Levels", {{"training", "familiarisation"}, {"reference", "real-real pairs"}, {"main", "rated comparisons"}}}};
+                {"Levels",
+                 {{"training", "familiarisation"},
+                  {"reference", "real-real pairs"},
+                  {"main", "rated comparisons"}}}};
   j["material"] = {{"Description", "material shown (real sample id or virtual model)"}};
-  j["comparison"] = {{"Description", "the other stimulus: 'virtual', or a material for real-real pairs"}};
+  j["comparison"] = {
+      {"Description", "the other stimulus: 'virtual', or a material for real-real pairs"}};
   j["method"] = {{"Description", "rendering method (n/a for real-real pairs)"}};
   j["repetition"] = {{"Description", "0-based repetition of the design cell"}};
   j["left"] = {{"Description", "stimulus on the left square, kind:id"}};
   j["right"] = {{"Description", "stimulus on the right square, kind:id"}};
   j["attempts"] = {{"Description", "how many times the trial was started (faults re-queue it)"}};
   j["criterion"] = {{"Description", "rating criterion"}};
-  j["score"] = {{"Description", "rating on the protocol's scale (0-100 by default)"}, {"Units", "arbitrary"}};
-  j["response_time"] = {{"Description", "from the end of the second stimulus to confirmation"}, {"Units", "s"}};
+  j["score"] = {{"Description", "rating on the protocol's scale (0-100 by default)"},
+                {"Units", "arbitrary"}};
+  j["response_time"] = {{"Description", "from the end of the second stimulus to confirmation"},
+                        {"Units", "s"}};
   j["HapticLab"] = {{"study", s.study.name},
                     {"protocol_sha256", s.study.protocol_hash},
                     {"session_status", s.session.status},
@@ -116,8 +125,8 @@ ordered_json BehSidecar(const SessionRecord& s) {
   return j;
 }
 
-std::size_t WritePhysio(const internal::StreamRecording& r, const fs::path& tsv_gz, const fs::path& json,
-                        const SessionRecord& s) {
+std::size_t WritePhysio(const internal::StreamRecording& r, const fs::path& tsv_gz,
+                        const fs::path& json, const SessionRecord& s) {
   ordered_json j;
   j["SamplingFrequency"] = r.rate_hz;
   j["StartTime"] = r.chunks.empty() ? 0.0 : r.chunks.front().start_time_s;
@@ -127,7 +136,8 @@ std::size_t WritePhysio(const internal::StreamRecording& r, const fs::path& tsv_
     j[c] = {{"Description", m.description}, {"Units", m.unit}};
   }
   j["RecordingDescription"] =
-      "stream '" + r.stream + "' of the trial; StartTime is the first sample's time after the onset of this "
+      "stream '" + r.stream +
+      "' of the trial; StartTime is the first sample's time after the onset of this "
       "stimulus [s]";
   j["SoftwareVersions"] = s.session.software_version;
   j["Manufacturer"] = "HapticLab";
@@ -186,7 +196,8 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
       if (!fresh)
         throw InputError(db.path(), 0, "participant.code",
                          "participants " + it->second + " and " + p.code + " (study " + st.name +
-                             ") map to one BIDS label sub-" + label + "; export the studies separately");
+                             ") map to one BIDS label sub-" + label +
+                             "; export the studies separately");
       label_of[st.name + "\n" + p.code] = label;
       participant_rows.push_back({"sub-" + label, p.code, st.name, std::to_string(p.index)});
     }
@@ -209,7 +220,8 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
   }
   {
     std::string t = "participant_id\tcode\tstudy\tplan_index\n";
-    for (const auto& r : participant_rows) t += Cell(r[0]) + "\t" + Cell(r[1]) + "\t" + Cell(r[2]) + "\t" + r[3] + "\n";
+    for (const auto& r : participant_rows)
+      t += Cell(r[0]) + "\t" + Cell(r[1]) + "\t" + Cell(r[2]) + "\t" + r[3] + "\n";
     WriteText(root / "participants.tsv", t);
     files.push_back({(root / "participants.tsv").string(), participant_rows.size()});
     ordered_json j;
@@ -223,7 +235,8 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
   {
     std::string hashes = "file\tsha256\tsource\n";
     for (const auto& st : db.Studies()) {
-      const std::string name = "protocol-" + (Alnum(st.name).empty() ? std::to_string(st.id) : Alnum(st.name)) + ".toml";
+      const std::string name =
+          "protocol-" + (Alnum(st.name).empty() ? std::to_string(st.id) : Alnum(st.name)) + ".toml";
       WriteText(root / "code" / name, st.protocol_toml);
       hashes += "code/" + name + "\t" + st.protocol_hash + "\tstudy protocol as run\n";
     }
@@ -234,17 +247,21 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
       any_model = true;
       const std::string name = Alnum(q.Text(0)) + "-" + q.Text(1).substr(0, 12) + ".toml";
       WriteText(root / "code" / "models" / name, q.Text(2));
-      hashes += "code/models/" + name + "\t" + q.Text(1) + "\tmaterial model stored in the database\n";
+      hashes +=
+          "code/models/" + name + "\t" + q.Text(1) + "\tmaterial model stored in the database\n";
     }
     // Models a session used but whose text the database does not hold: their hash only.
     std::set<std::string> listed;
     for (const auto& s : sessions) {
       const auto prov = nlohmann::json::parse(s.session.provenance_json, nullptr, false);
-      if (prov.is_discarded() || !prov.contains("model_hashes") || !prov["model_hashes"].is_object()) continue;
+      if (prov.is_discarded() || !prov.contains("model_hashes") ||
+          !prov["model_hashes"].is_object())
+        continue;
       for (const auto& [id, h] : prov["model_hashes"].items()) {
         const std::string line = "n/a\t" + h.get<std::string>() + "\tmaterial model '" + id +
                                  "' (hash from the session provenance; text not stored)\n";
-        if (listed.insert(line).second && hashes.find(h.get<std::string>()) == std::string::npos) hashes += line;
+        if (listed.insert(line).second && hashes.find(h.get<std::string>()) == std::string::npos)
+          hashes += line;
       }
     }
     WriteText(root / "code" / "hashes.tsv", hashes);
@@ -254,25 +271,29 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
   for (const auto& s : sessions) {
     const std::string sub = "sub-" + label_of.at(s.study.name + "\n" + s.participant.code);
     const std::string ses = "ses-" + std::to_string(s.number);
-    const std::string task = "task-" + (Alnum(s.study.name).empty() ? std::string("study") : Alnum(s.study.name));
+    const std::string task =
+        "task-" + (Alnum(s.study.name).empty() ? std::string("study") : Alnum(s.study.name));
     const fs::path dir = root / sub / ses / "beh";
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
     const std::string stem = sub + "_" + ses + "_" + task;
     std::string beh =
-        "trial\tphase\tmaterial\tcomparison\tmethod\trepetition\tleft\tright\tattempts\tcriterion\tscore\tresponse_time\n";
+        "trial\tphase\tmaterial\tcomparison\tmethod\trepetition\tleft\tright\tattempts\tcriterion\t"
+        "score\tresponse_time\n";
     std::size_t rows = 0;
     // Rows in plan order, as the CSV export.
     std::vector<const internal::TrialRecord*> by_plan;
     for (const auto& t : s.trials) by_plan.push_back(&t);
-    std::stable_sort(by_plan.begin(), by_plan.end(),
-                     [](const auto* a, const auto* b) { return a->trial.plan_index < b->trial.plan_index; });
+    std::stable_sort(by_plan.begin(), by_plan.end(), [](const auto* a, const auto* b) {
+      return a->trial.plan_index < b->trial.plan_index;
+    });
     for (const auto* t : by_plan) {
       const auto& x = t->trial;
       for (const auto& r : t->ratings) {
-        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index, Cell(x.phase),
-                           Cell(x.material), Cell(x.comparison), Cell(x.method), x.repetition, Cell(x.left),
-                           Cell(x.right), x.attempts, Cell(r.criterion), Num(r.score), Num(r.response_time_s));
+        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index,
+                           Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
+                           x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
+                           Num(r.score), Num(r.response_time_s));
         ++rows;
       }
     }
@@ -281,8 +302,8 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
     files.push_back({(dir / (stem + "_beh.tsv")).string(), rows});
     for (const auto* t : by_plan)
       for (const auto& r : t->streams) {
-        const std::string name =
-            stem + "_run-" + std::to_string(t->trial.plan_index + 1) + "_recording-" + Alnum(r.stream) + "_physio";
+        const std::string name = stem + "_run-" + std::to_string(t->trial.plan_index + 1) +
+                                 "_recording-" + Alnum(r.stream) + "_physio";
         const fs::path gz = dir / (name + ".tsv.gz");
         files.push_back({gz.string(), WritePhysio(r, gz, dir / (name + ".json"), s)});
       }

@@ -55,19 +55,24 @@ struct DataStream {
 std::string CommonDesc(const SessionRecord& s) {
   return "<hapticlab>" + Tag("study", s.study.name) + Tag("participant", s.participant.code) +
          Tag("session", std::to_string(s.number)) + Tag("device", s.session.device) +
-         Tag("software_version", s.session.software_version) + Tag("protocol_sha256", s.study.protocol_hash) +
+         Tag("software_version", s.session.software_version) +
+         Tag("protocol_sha256", s.study.protocol_hash) +
          Tag("clock",
-             "seconds since the session's start; a trial starts at its recorded start time, or where the "
-             "previous trial's stimuli and ratings end when later (simulated sessions run faster than real "
+             "seconds since the session's start; a trial starts at its recorded start time, or "
+             "where the "
+             "previous trial's stimuli and ratings end when later (simulated sessions run faster "
+             "than real "
              "time); the right stimulus follows the left") +
          "</hapticlab>";
 }
 
-std::string Header(const std::string& name, const std::string& type, std::size_t channels, double rate_hz,
-                   const std::string& format, const std::string& source_id, const std::string& desc) {
+std::string Header(const std::string& name, const std::string& type, std::size_t channels,
+                   double rate_hz, const std::string& format, const std::string& source_id,
+                   const std::string& desc) {
   return Tag("name", name) + Tag("type", type) + Tag("channel_count", std::to_string(channels)) +
          Tag("nominal_srate", rate_hz > 0 ? Num(rate_hz) : "0") + Tag("channel_format", format) +
-         Tag("source_id", source_id) + Tag("version", "1.1") + Tag("created_at", "0") + "<desc>" + desc + "</desc>";
+         Tag("source_id", source_id) + Tag("version", "1.1") + Tag("created_at", "0") + "<desc>" +
+         desc + "</desc>";
 }
 
 std::string Footer(double first_s, double last_s, std::size_t n) {
@@ -77,7 +82,8 @@ std::string Footer(double first_s, double last_s, std::size_t n) {
 
 std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
   internal::XdfWriter w(path);
-  const std::string source = "hapticlab:" + s.study.name + ":" + s.participant.code + ":ses-" + std::to_string(s.number);
+  const std::string source =
+      "hapticlab:" + s.study.name + ":" + s.participant.code + ":ses-" + std::to_string(s.number);
   // One XDF stream per (stream name, rate, channel layout), in order of first appearance.
   std::vector<DataStream> streams;
   auto find = [&](const internal::StreamRecording& r) -> DataStream& {
@@ -108,10 +114,13 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
   }
   const auto events_id = static_cast<std::uint32_t>(streams.size() + 1);
   const auto ratings_id = events_id + 1;
-  const std::string marker_ch = "<channels><channel><label>marker</label><type>Marker</type>"
-                                "<description>a JSON object per marker</description></channel></channels>";
-  w.StreamHeader(events_id, Header("events", "Markers", 1, 0, "string", source + ":events", marker_ch + CommonDesc(s)));
-  w.StreamHeader(ratings_id, Header("ratings", "Markers", 1, 0, "string", source + ":ratings", marker_ch + CommonDesc(s)));
+  const std::string marker_ch =
+      "<channels><channel><label>marker</label><type>Marker</type>"
+      "<description>a JSON object per marker</description></channel></channels>";
+  w.StreamHeader(events_id, Header("events", "Markers", 1, 0, "string", source + ":events",
+                                   marker_ch + CommonDesc(s)));
+  w.StreamHeader(ratings_id, Header("ratings", "Markers", 1, 0, "string", source + ":ratings",
+                                    marker_ch + CommonDesc(s)));
 
   std::size_t written = 0;
   for (const auto& t : s.trials)
@@ -145,7 +154,7 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
                                                    {"right", x.right},
                                                    {"attempts", x.attempts},
                                                    {"stimulus_s", t.stimulus_s}}
-                                            .dump());
+                                        .dump());
   }
   for (std::size_t i = 0; i < s.events.size(); ++i) {
     const auto& e = s.events[i];
@@ -154,7 +163,8 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
       if (e.trial_id && *e.trial_id == t.trial.id) j["plan_index"] = t.trial.plan_index;
     events.emplace_back(s.event_time_s[i], j.dump());
   }
-  std::stable_sort(events.begin(), events.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(events.begin(), events.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<std::pair<double, std::string>> ratings;
   for (const auto& t : s.trials)
     for (const auto& r : t.ratings)
@@ -164,7 +174,8 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
                                           {"score", r.score},
                                           {"response_time_s", r.response_time_s}}
                                .dump());
-  std::stable_sort(ratings.begin(), ratings.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  std::stable_sort(ratings.begin(), ratings.end(),
+                   [](const auto& a, const auto& b) { return a.first < b.first; });
   for (const auto& [id, list] : {std::pair{events_id, &events}, std::pair{ratings_id, &ratings}}) {
     std::vector<std::string> v;
     std::vector<double> ts;
@@ -184,15 +195,17 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
 
 }  // namespace
 
-std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out, const std::string& participant) {
+std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
+                                    const std::string& participant) {
   const auto sessions = internal::LoadSessions(db, participant);
   std::vector<ExportedFile> files;
   if (out.ends_with(".xdf")) {
     if (sessions.size() != 1)
-      throw InputError(out, 0, "--out",
-                       fmt::format("a file name holds one session and the selection has {}; name a directory, "
-                                   "or choose one with --participant",
-                                   sessions.size()));
+      throw InputError(
+          out, 0, "--out",
+          fmt::format("a file name holds one session and the selection has {}; name a directory, "
+                      "or choose one with --participant",
+                      sessions.size()));
     files.push_back({out, WriteSession(sessions[0], out)});
     return files;
   }
@@ -200,9 +213,10 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out, 
   fs::create_directories(out, ec);
   if (ec) throw std::runtime_error(out + ": cannot create directory: " + ec.message());
   for (const auto& s : sessions) {
-    const std::string path = (fs::path(out) / fmt::format("sub-{}_ses-{}_task-{}.xdf", s.participant.code, s.number,
-                                                          internal::Alnum(s.study.name)))
-                                 .string();
+    const std::string path =
+        (fs::path(out) / fmt::format("sub-{}_ses-{}_task-{}.xdf", s.participant.code, s.number,
+                                     internal::Alnum(s.study.name)))
+            .string();
     files.push_back({path, WriteSession(s, path)});
   }
   return files;

@@ -1,5 +1,3 @@
-#include "interchange_internal.hpp"
-
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -9,6 +7,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "interchange_internal.hpp"
 #include "sqlite_util.hpp"
 
 namespace hapticlab::db::internal {
@@ -20,9 +19,12 @@ struct Suffix {
   const char* quantity;
 };
 // Longest first: "_mps2" before "_mps".
-constexpr Suffix kSuffixes[] = {{"_mps2", "m/s^2", "acceleration"}, {"_mps", "m/s", "velocity"},
-                                {"_N", "N", "force"},               {"_m", "m", "position"},
-                                {"_s", "s", "time"},                {"_Hz", "Hz", "frequency"}};
+constexpr Suffix kSuffixes[] = {{"_mps2", "m/s^2", "acceleration"},
+                                {"_mps", "m/s", "velocity"},
+                                {"_N", "N", "force"},
+                                {"_m", "m", "position"},
+                                {"_s", "s", "time"},
+                                {"_Hz", "Hz", "frequency"}};
 
 // Meanings of the runner's channel names (runner::ForceStreamChannels and
 // VibrationStreamChannels); other names get a generic sentence from their unit suffix.
@@ -42,8 +44,10 @@ std::string KnownMeaning(const std::string& name) {
       {"cmd_fz_N", "force commanded to the device, z axis (after clamp and watchdog)"},
       {"normal_N", "normal (contact) force between stylus and surface"},
       {"speed_mps", "tangential speed of the stylus over the surface"},
-      {"fault", "1 when the tick was faulted (watchdog or renderer) and the force was zeroed, else 0"},
-      {"acc_mps2", "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"},
+      {"fault",
+       "1 when the tick was faulted (watchdog or renderer) and the force was zeroed, else 0"},
+      {"acc_mps2",
+       "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"},
   };
   const auto it = k.find(name);
   return it == k.end() ? std::string() : it->second;
@@ -78,8 +82,8 @@ std::optional<std::int64_t> ParseUtcMicros(const std::string& iso) {
   int y = 0, mo = 0, d = 0, h = 0, mi = 0;
   double sec = 0;
   char z = 0;
-  if (std::sscanf(iso.c_str(), "%d-%d-%dT%d:%d:%lf%c", &y, &mo, &d, &h, &mi, &sec, &z) != 7 || z != 'Z' ||
-      !(sec >= 0 && sec < 61))
+  if (std::sscanf(iso.c_str(), "%d-%d-%dT%d:%d:%lf%c", &y, &mo, &d, &h, &mi, &sec, &z) != 7 ||
+      z != 'Z' || !(sec >= 0 && sec < 61))
     return std::nullopt;
   std::tm tm{};
   tm.tm_year = y - 1900;
@@ -115,7 +119,8 @@ void PlaceOnClock(const Database& db, SessionRecord* s) {
   const auto session_start = ParseUtcMicros(s->session.started_at);
   if (!session_start)
     throw std::runtime_error(db.path() + ": session " + std::to_string(s->session.id) +
-                             ": started_at '" + s->session.started_at + "' is not an ISO-8601 UTC stamp");
+                             ": started_at '" + s->session.started_at +
+                             "' is not an ISO-8601 UTC stamp");
   // The trials' start stamps are not in the typed API's Trial; read them here.
   auto since_start = [&](const std::string& stamp) {
     const auto us = ParseUtcMicros(stamp);
@@ -128,10 +133,11 @@ void PlaceOnClock(const Database& db, SessionRecord* s) {
     while (q.Step()) starts[q.Int(0)] = since_start(q.Text(1));
   }
   for (auto& t : s->trials) t.wall_start_s = starts[t.trial.id];
-  std::stable_sort(s->trials.begin(), s->trials.end(), [](const TrialRecord& a, const TrialRecord& b) {
-    return a.wall_start_s != b.wall_start_s ? a.wall_start_s < b.wall_start_s
-                                            : a.trial.plan_index < b.trial.plan_index;
-  });
+  std::stable_sort(
+      s->trials.begin(), s->trials.end(), [](const TrialRecord& a, const TrialRecord& b) {
+        return a.wall_start_s != b.wall_start_s ? a.wall_start_s < b.wall_start_s
+                                                : a.trial.plan_index < b.trial.plan_index;
+      });
   double free_from = 0;  // where the previous trial's stimuli and ratings end
   for (auto& t : s->trials) {
     t.origin_s = std::max(t.wall_start_s, free_from);
@@ -186,12 +192,13 @@ std::vector<SessionRecord> LoadSessions(const Database& db, const std::string& p
           // Chunks come ordered by stream, then time.
           for (auto& c : db.TrajectoryChunks(t.id)) {
             if (r.streams.empty() || r.streams.back().stream != c.stream) {
-              r.streams.push_back({.stream = c.stream, .rate_hz = c.rate_hz, .channels = c.channels});
+              r.streams.push_back(
+                  {.stream = c.stream, .rate_hz = c.rate_hz, .channels = c.channels});
             }
             auto& rec = r.streams.back();
             if (rec.rate_hz != c.rate_hz || rec.channels != c.channels)
-              throw std::runtime_error(db.path() + ": trial " + std::to_string(t.id) + ", stream " + c.stream +
-                                       ": chunks disagree on rate or channels");
+              throw std::runtime_error(db.path() + ": trial " + std::to_string(t.id) + ", stream " +
+                                       c.stream + ": chunks disagree on rate or channels");
             rec.chunks.push_back(std::move(c));
           }
           s.trials.push_back(std::move(r));
@@ -202,7 +209,9 @@ std::vector<SessionRecord> LoadSessions(const Database& db, const std::string& p
       }
     }
   }
-  if (!found) throw InputError(db.path(), 0, "--participant", "no participant " + participant + " in this database");
+  if (!found)
+    throw InputError(db.path(), 0, "--participant",
+                     "no participant " + participant + " in this database");
   return out;
 }
 

@@ -44,9 +44,10 @@ struct TrialRecord {
   Trial trial;
   std::vector<Rating> ratings;
   std::vector<StreamRecording> streams;  ///< sorted by stream name
-  double wall_start_s = 0;  ///< when the (completing attempt of the) trial started, session-relative
-  double origin_s = 0;      ///< where its first stimulus begins on the session clock
-  double stimulus_s = 0;    ///< both stimuli, back to back (left then right)
+  double wall_start_s =
+      0;                  ///< when the (completing attempt of the) trial started, session-relative
+  double origin_s = 0;    ///< where its first stimulus begins on the session clock
+  double stimulus_s = 0;  ///< both stimuli, back to back (left then right)
   std::map<std::string, double> offset_s;  ///< per stream: its zero relative to origin_s
 };
 
@@ -55,10 +56,10 @@ struct SessionRecord {
   Study study;
   Participant participant;
   Session session;
-  int number = 1;                     ///< 1-based among the participant's sessions
-  std::vector<TrialRecord> trials;    ///< completed trials, in the order they ran
+  int number = 1;                   ///< 1-based among the participant's sessions
+  std::vector<TrialRecord> trials;  ///< completed trials, in the order they ran
   std::vector<Event> events;
-  std::vector<double> event_time_s;   ///< each event on the session clock
+  std::vector<double> event_time_s;  ///< each event on the session clock
 };
 
 /// Every session (of `participant` when not empty), in study, participant, session order.

@@ -34,18 +34,30 @@ std::string XmlEscape(const std::string& s) {
   o.reserve(s.size());
   for (const char c : s) {
     switch (c) {
-      case '&': o += "&amp;"; break;
-      case '<': o += "&lt;"; break;
-      case '>': o += "&gt;"; break;
-      case '"': o += "&quot;"; break;
-      case '\'': o += "&apos;"; break;
-      default: o += c;
+      case '&':
+        o += "&amp;";
+        break;
+      case '<':
+        o += "&lt;";
+        break;
+      case '>':
+        o += "&gt;";
+        break;
+      case '"':
+        o += "&quot;";
+        break;
+      case '\'':
+        o += "&apos;";
+        break;
+      default:
+        o += c;
     }
   }
   return o;
 }
 
-XdfWriter::XdfWriter(const std::string& path) : path_(path), f_(path, std::ios::binary | std::ios::trunc) {
+XdfWriter::XdfWriter(const std::string& path)
+    : path_(path), f_(path, std::ios::binary | std::ios::trunc) {
   if (!f_) throw std::runtime_error(path + ": cannot write");
   f_.write("XDF:", 4);
   Chunk(1, "<?xml version=\"1.0\"?><info><version>1.0</version></info>");
@@ -67,8 +79,8 @@ void XdfWriter::StreamHeader(std::uint32_t id, const std::string& info_xml) {
   Chunk(2, c);
 }
 
-void XdfWriter::FloatSamples(std::uint32_t id, std::size_t channels, const float* samples, std::size_t count,
-                             double t0_s) {
+void XdfWriter::FloatSamples(std::uint32_t id, std::size_t channels, const float* samples,
+                             std::size_t count, double t0_s) {
   if (count == 0) return;
   std::string c;
   c.reserve(16 + count * (1 + channels * sizeof(float)) + 8);
@@ -89,7 +101,8 @@ void XdfWriter::FloatSamples(std::uint32_t id, std::size_t channels, const float
 void XdfWriter::StringSamples(std::uint32_t id, const std::vector<std::string>& values,
                               const std::vector<double>& t_s) {
   if (values.empty()) return;
-  if (values.size() != t_s.size()) throw std::invalid_argument("XdfWriter::StringSamples: one timestamp per value");
+  if (values.size() != t_s.size())
+    throw std::invalid_argument("XdfWriter::StringSamples: one timestamp per value");
   std::string c;
   Put<std::uint32_t>(&c, id);
   PutVarLen(&c, values.size());

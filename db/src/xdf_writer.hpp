@@ -20,7 +20,8 @@
 
 namespace hapticlab::db::internal {
 
-static_assert(std::endian::native == std::endian::little, "the XDF writer assumes a little-endian host");
+static_assert(std::endian::native == std::endian::little,
+              "the XDF writer assumes a little-endian host");
 
 /// Escapes &, <, >, " and ' for XML text.
 std::string XmlEscape(const std::string& s);
@@ -38,7 +39,8 @@ class XdfWriter {
   void FloatSamples(std::uint32_t id, std::size_t channels, const float* samples, std::size_t count,
                     double t0_s);
   /// One-channel string samples, each with its own timestamp.
-  void StringSamples(std::uint32_t id, const std::vector<std::string>& values, const std::vector<double>& t_s);
+  void StringSamples(std::uint32_t id, const std::vector<std::string>& values,
+                     const std::vector<double>& t_s);
   void StreamFooter(std::uint32_t id, const std::string& info_xml);
   /// Flushes and closes; throws naming the file on failure.
   void Close();

@@ -29,7 +29,9 @@ using nlohmann::json;
 
 // The CLI runs without this test's ASAN_OPTIONS (which only work around libxdf, below).
 std::string Cli() { return std::string("env -u ASAN_OPTIONS ") + HL_CLI_PATH; }
-std::string Validator() { return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator"; }
+std::string Validator() {
+  return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator";
+}
 
 // The unit a channel name's suffix states (STYLE.md §4), written out independently of the
 // exporter's table.
@@ -49,7 +51,7 @@ struct Expected {
   };
   std::vector<TrialData> trials;  // completed trials
   std::vector<db::Event> events;
-  std::map<std::string, std::size_t> samples;   // per stream
+  std::map<std::string, std::size_t> samples;  // per stream
   std::map<std::string, double> rate_hz;
   std::map<std::string, std::vector<std::string>> channels;
   std::size_t ratings = 0;
@@ -62,10 +64,11 @@ class Interchange : public ::testing::Test {
     db_ = dir_->File("study.db");
     std::string out;
     // Stop after 12 trials: training, reference and main trials, a few seconds of recording.
-    ASSERT_EQ(test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " + db_ +
-                                   " --participant P01 --record all --stop-after 12 --quiet",
-                               &out),
-              0)
+    ASSERT_EQ(
+        test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
+                             db_ + " --participant P01 --record all --stop-after 12 --quiet",
+                         &out),
+        0)
         << out;
     db::Database d(db_, {.create = false, .read_only = true});
     const auto st = d.Studies().at(0);
@@ -111,14 +114,18 @@ TEST_F(Interchange, XdfReadBackByLibxdf) {
   CheckRecorded(*exp_);
   const std::string path = dir_->File("P01.xdf");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db_ + " --format xdf --participant P01 --out " + path, &out), 0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db_ + " --format xdf --participant P01 --out " + path, &out),
+      0)
       << out;
   Xdf x;
   ASSERT_EQ(x.load_xdf(path), 0);
   // A stream per recorded stream, plus events and ratings.
   ASSERT_EQ(x.streams.size(), exp_->samples.size() + 2);
   std::map<std::string, int> index;
-  for (std::size_t i = 0; i < x.streams.size(); ++i) index[x.streams[i].info.name] = static_cast<int>(i);
+  for (std::size_t i = 0; i < x.streams.size(); ++i)
+    index[x.streams[i].info.name] = static_cast<int>(i);
   ASSERT_TRUE(index.count("events") && index.count("ratings"));
 
   // Trial starts from the event markers: plan index -> time on the session clock.
@@ -128,12 +135,14 @@ TEST_F(Interchange, XdfReadBackByLibxdf) {
   for (const auto& [ev, stream] : x.eventMap) {
     const auto j = json::parse(ev.first);
     if (stream == index["events"]) {
-      if (j["marker"] == "trial_start") trial_start[j["plan_index"].get<int>()] = ev.second;
-      else logged_events += j["marker"] == "event";
+      if (j["marker"] == "trial_start")
+        trial_start[j["plan_index"].get<int>()] = ev.second;
+      else
+        logged_events += j["marker"] == "event";
     } else {
       ASSERT_EQ(stream, index["ratings"]);
-      rating_marker[{j["plan_index"].get<int>(), j["criterion"].get<std::string>()}] = {j["score"].get<double>(),
-                                                                                     ev.second};
+      rating_marker[{j["plan_index"].get<int>(), j["criterion"].get<std::string>()}] = {
+          j["score"].get<double>(), ev.second};
     }
   }
   EXPECT_EQ(trial_start.size(), exp_->trials.size());
@@ -184,9 +193,11 @@ TEST_F(Interchange, XdfReadBackByLibxdf) {
         const std::size_t nc = c.channels.size();
         ASSERT_LE(at + c.sample_count(), s.time_stamps.size());
         for (std::size_t i = 0; i < c.sample_count(); ++i) {
-          ASSERT_NEAR(s.time_stamps[at + i], first + static_cast<double>(i) / c.rate_hz, 1e-6) << name << " " << i;
+          ASSERT_NEAR(s.time_stamps[at + i], first + static_cast<double>(i) / c.rate_hz, 1e-6)
+              << name << " " << i;
           for (std::size_t k = 0; k < nc; ++k)
-            ASSERT_EQ(s.time_series[k][at + i], c.samples[i * nc + k]) << name << " sample " << i << " channel " << k;
+            ASSERT_EQ(s.time_series[k][at + i], c.samples[i * nc + k])
+                << name << " sample " << i << " channel " << k;
         }
       }
     }
@@ -206,17 +217,28 @@ TEST_F(Interchange, XdfBadOutputIsRefusedWithTheField) {
   // Another participant in the same database: a single file cannot hold two sessions.
   const std::string db2 = dir_->File("two.db");
   fs::copy_file(db_, db2);
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " + db2 +
-                                 " --participant P02 --record none --stop-after 1 --quiet",
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
+                           db2 + " --participant P02 --record none --stop-after 1 --quiet",
+                       &out),
+      0)
+      << out;
+  EXPECT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db2 + " --format xdf --out " + dir_->File("both.xdf"), &out),
+      2);
+  EXPECT_NE(out.find("--out"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + db2 +
+                                 " --format xdf --participant P09 --out " + dir_->File("x.xdf"),
+                             &out),
+            2);
+  EXPECT_NE(out.find("--participant"), std::string::npos) << out;
+  // A directory gets one file per session.
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db2 + " --format xdf --json --out " +
+                                 dir_->File("xdfdir"),
                              &out),
             0)
       << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + db2 + " --format xdf --out " + dir_->File("both.xdf"), &out), 2);
-  EXPECT_NE(out.find("--out"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + db2 + " --format xdf --participant P09 --out " + dir_->File("x.xdf"), &out), 2);
-  EXPECT_NE(out.find("--participant"), std::string::npos) << out;
-  // A directory gets one file per session.
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db2 + " --format xdf --json --out " + dir_->File("xdfdir"), &out), 0) << out;
   EXPECT_EQ(json::parse(out)["files"].size(), 2u);
 }
 
@@ -244,16 +266,21 @@ json Validate(const std::string& dataset) {
 
 TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
   // The validator is part of the project's set-up; without it this test fails, never skips.
-  ASSERT_TRUE(fs::exists(Validator())) << Validator() << " is missing: run scripts/setup (it installs the pinned "
+  ASSERT_TRUE(fs::exists(Validator())) << Validator()
+                                       << " is missing: run scripts/setup (it installs the pinned "
                                           "bids-validator with npm ci)";
   CheckRecorded(*exp_);
   const std::string ds = dir_->File("bids");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db_ + " --format bids --json --out " + ds, &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " export --db " + db_ + " --format bids --json --out " + ds, &out),
+      0)
+      << out;
   const auto report = Validate(ds);
   ASSERT_TRUE(report.contains("issues")) << report.dump(2);
   EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
-  for (const auto& w : report["issues"]["warnings"]) std::cout << "validator warning: " << w["key"] << "\n";
+  for (const auto& w : report["issues"]["warnings"])
+    std::cout << "validator warning: " << w["key"] << "\n";
   EXPECT_EQ(report["summary"]["subjects"], json::array({"P01"}));
   EXPECT_EQ(report["summary"]["tasks"], json::array({"test-small"}));
 
@@ -267,12 +294,14 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
       std::string label;
       for (char c : name)
         if (std::isalnum(static_cast<unsigned char>(c))) label += c;
-      const std::string stem = "sub-P01_ses-1_task-testsmall_run-" + std::to_string(t.trial.plan_index + 1) +
-                               "_recording-" + label + "_physio";
+      const std::string stem = "sub-P01_ses-1_task-testsmall_run-" +
+                               std::to_string(t.trial.plan_index + 1) + "_recording-" + label +
+                               "_physio";
       const auto side = json::parse(test::ReadFile((beh / (stem + ".json")).string()));
       EXPECT_EQ(side["SamplingFrequency"].get<double>(), chunks.front().rate_hz);
       EXPECT_EQ(side["Columns"].get<std::vector<std::string>>(), chunks.front().channels);
-      for (const auto& c : chunks.front().channels) EXPECT_EQ(side[c]["Units"], ExpectedUnit(c)) << c;
+      for (const auto& c : chunks.front().channels)
+        EXPECT_EQ(side[c]["Units"], ExpectedUnit(c)) << c;
       std::istringstream rows(Gunzip((beh / (stem + ".tsv.gz")).string()));
       std::string line;
       std::size_t n = 0;
@@ -283,7 +312,8 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
           for (std::size_t k = 0; k < c.channels.size(); ++k) {
             std::string cell;
             std::getline(cells, cell, '\t');
-            ASSERT_EQ(std::strtof(cell.c_str(), nullptr), c.samples[i * c.channels.size() + k]) << stem << " row " << n;
+            ASSERT_EQ(std::strtof(cell.c_str(), nullptr), c.samples[i * c.channels.size() + k])
+                << stem << " row " << n;
           }
         }
       EXPECT_FALSE(std::getline(rows, line)) << stem << ": more rows than samples";
@@ -296,12 +326,14 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
   EXPECT_NE(hashes.find(db::HashText(protocol)), std::string::npos);
   for (const auto& e : fs::recursive_directory_iterator(ds)) {
     if (e.is_regular_file() && !e.path().string().ends_with(".gz")) {
-      EXPECT_EQ(test::ReadFile(e.path().string()).find(HL_SOURCE_DIR), std::string::npos) << e.path();
+      EXPECT_EQ(test::ReadFile(e.path().string()).find(HL_SOURCE_DIR), std::string::npos)
+          << e.path();
     }
   }
 
   // The validator does look at our physio sidecars: without SamplingFrequency it reports an error.
-  const fs::path first = beh / ("sub-P01_ses-1_task-testsmall_run-" + std::to_string(exp_->trials.back().trial.plan_index + 1) +
+  const fs::path first = beh / ("sub-P01_ses-1_task-testsmall_run-" +
+                                std::to_string(exp_->trials.back().trial.plan_index + 1) +
                                 "_recording-leftforce_physio.json");
   auto j = json::parse(test::ReadFile(first.string()));
   j.erase("SamplingFrequency");
@@ -317,12 +349,35 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
 TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   test::TempDir dir;
   db::Database d(dir.File("g.db"));
-  const auto st = d.CreateStudy({.name = "gap study", .protocol_toml = "# protocol", .protocol_hash = db::HashText("# protocol")});
+  const auto st = d.CreateStudy({.name = "gap study",
+                                 .protocol_toml = "# protocol",
+                                 .protocol_hash = db::HashText("# protocol")});
   const auto p = d.AddParticipant({.study_id = st, .code = "P07"});
   const auto se = d.StartSession({.participant_id = p});
-  const auto ids = d.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork", .comparison = "virtual", .method = "FF", .left = "real:Cork", .right = "virtual:Cork"},
-                                {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim", .comparison = "virtual", .method = "FF", .left = "virtual:Denim", .right = "real:Denim"},
-                                {.session_id = se, .plan_index = 2, .phase = "main", .material = "Towel", .comparison = "virtual", .method = "FF", .left = "real:Towel", .right = "virtual:Towel"}});
+  const auto ids = d.AddTrials({{.session_id = se,
+                                 .plan_index = 0,
+                                 .phase = "main",
+                                 .material = "Cork",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "real:Cork",
+                                 .right = "virtual:Cork"},
+                                {.session_id = se,
+                                 .plan_index = 1,
+                                 .phase = "main",
+                                 .material = "Denim",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "virtual:Denim",
+                                 .right = "real:Denim"},
+                                {.session_id = se,
+                                 .plan_index = 2,
+                                 .phase = "main",
+                                 .material = "Towel",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "real:Towel",
+                                 .right = "virtual:Towel"}});
   auto ramp = [](std::size_t n, float base) {
     std::vector<float> v;
     for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);
@@ -331,9 +386,24 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   for (const auto id : ids) {
     d.StartTrial(id);
     // 100 Hz, one channel: left 10 samples, 5 dropped, 5 more; right 10 samples.
-    d.InsertTrajectoryChunk({.trial_id = id, .stream = "left_force", .start_time_s = 0, .rate_hz = 100, .channels = {"fz_N"}, .samples = ramp(10, 1)});
-    d.InsertTrajectoryChunk({.trial_id = id, .stream = "left_force", .start_time_s = 0.15, .rate_hz = 100, .channels = {"fz_N"}, .samples = ramp(5, 9)});
-    d.InsertTrajectoryChunk({.trial_id = id, .stream = "right_force", .start_time_s = 0, .rate_hz = 100, .channels = {"fz_N"}, .samples = ramp(10, 20)});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 1)});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0.15,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(5, 9)});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "right_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 20)});
     d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
   }
   d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
@@ -364,15 +434,20 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
     EXPECT_NEAR(left.time_stamps[o + 9], starts[k] + 0.09, 1e-9) << k;
     EXPECT_NEAR(left.time_stamps[o + 10], starts[k] + 0.15, 1e-9) << k;  // after the gap
     EXPECT_EQ(left.time_series[0][o + 10], 9.0f);
-    EXPECT_NEAR(by.at("right_force")->time_stamps[static_cast<std::size_t>(k) * 10], starts[k] + 0.2, 1e-9) << k;
+    EXPECT_NEAR(by.at("right_force")->time_stamps[static_cast<std::size_t>(k) * 10],
+                starts[k] + 0.2, 1e-9)
+        << k;
   }
   std::vector<double> trial_marks, rating_marks;
   double break_at = -1;
   for (const auto& [ev, stream] : x.eventMap) {
     const auto j = json::parse(ev.first);
-    if (x.streams[static_cast<std::size_t>(stream)].info.name == "ratings") rating_marks.push_back(ev.second);
-    else if (j["marker"] == "trial_start") trial_marks.push_back(ev.second);
-    else if (j["kind"] == "break") break_at = ev.second;
+    if (x.streams[static_cast<std::size_t>(stream)].info.name == "ratings")
+      rating_marks.push_back(ev.second);
+    else if (j["marker"] == "trial_start")
+      trial_marks.push_back(ev.second);
+    else if (j["kind"] == "break")
+      break_at = ev.second;
   }
   ASSERT_EQ(trial_marks.size(), 3u);
   ASSERT_EQ(rating_marks.size(), 3u);
@@ -387,8 +462,12 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   ASSERT_TRUE(fs::exists(Validator())) << "run scripts/setup";
   const std::string ds = dir.File("bids");
   db::ExportBids(d, ds);
-  const auto rows = Gunzip(ds + "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-1_recording-leftforce_physio.tsv.gz");
-  EXPECT_EQ(rows, "1\n1.25\n1.5\n1.75\n2\n2.25\n2.5\n2.75\n3\n3.25\nn/a\nn/a\nn/a\nn/a\nn/a\n9\n9.25\n9.5\n9.75\n10\n");
+  const auto rows = Gunzip(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-1_recording-leftforce_physio.tsv.gz");
+  EXPECT_EQ(rows,
+            "1\n1.25\n1.5\n1.75\n2\n2.25\n2.5\n2.75\n3\n3.25\nn/a\nn/a\nn/a\nn/a\nn/"
+            "a\n9\n9.25\n9.5\n9.75\n10\n");
   const std::string model_hash = db::HashText("[material]\nname = \"Cork\"\n");
   const std::string model_file = ds + "/code/models/Corkv1-" + model_hash.substr(0, 12) + ".toml";
   ASSERT_TRUE(fs::exists(model_file));

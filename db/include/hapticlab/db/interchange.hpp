@@ -18,7 +18,8 @@ namespace hapticlab::db {
 ///   only: `sub-<code without '-' and '_'>` and the code itself);
 /// - per participant and session `sub-X/ses-N/beh/sub-X_ses-N_task-T_beh.tsv` + `.json`:
 ///   one row per rating with the trial's conditions;
-/// - per completed trial and recorded stream `..._run-<plan index + 1>_recording-<stream>_physio.tsv.gz`
+/// - per completed trial and recorded stream `..._run-<plan index +
+/// 1>_recording-<stream>_physio.tsv.gz`
 ///   + `.json` (SamplingFrequency, StartTime, Columns, each column's Units and Description);
 ///   samples missing inside a recording (a gap between two chunks) are written as `n/a`;
 /// - `code/`: each study's protocol and the material models as stored, with `hashes.tsv`
