@@ -406,6 +406,17 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                              .samples = ramp(10, 20)});
     d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
   }
+  // A fourth trial that recorded samples and then faulted: not exported.
+  const auto faulted =
+      d.AddTrial({.session_id = se, .plan_index = 3, .phase = "main", .material = "Acryl"});
+  d.StartTrial(faulted);
+  d.InsertTrajectoryChunk({.trial_id = faulted,
+                           .stream = "left_force",
+                           .start_time_s = 0,
+                           .rate_hz = 100,
+                           .channels = {"fz_N"},
+                           .samples = ramp(7, 50)});
+  d.SetTrialStatus(faulted, db::kTrialFaulted);
   d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
   // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of
   // stimuli + 1.5 s of rating), trial 3 a minute in; an event 2.0 s in.
@@ -424,7 +435,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   std::map<std::string, const Xdf::Stream*> by;
   for (const auto& s : x.streams) by[s.info.name] = &s;
   const auto& left = *by.at("left_force");
-  ASSERT_EQ(left.time_stamps.size(), 45u);
+  ASSERT_EQ(left.time_stamps.size(), 45u);  // the faulted trial's 7 samples are not there
   // Trial starts: 1.0 (its stamp), 1.0 + 0.3 + 1.5 = 2.8 (its stamp, 1.5, would overlap),
   // 60.123 (to the microsecond: stamps are subtracted as integers).
   const double starts[] = {1.0, 2.8, 60.123};
@@ -471,6 +482,12 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   const std::string model_hash = db::HashText("[material]\nname = \"Cork\"\n");
   const std::string model_file = ds + "/code/models/Corkv1-" + model_hash.substr(0, 12) + ".toml";
   ASSERT_TRUE(fs::exists(model_file));
+  EXPECT_TRUE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-3_recording-leftforce_physio.tsv.gz"));
+  EXPECT_FALSE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-4_recording-leftforce_physio.tsv.gz"));
   EXPECT_EQ(db::HashText(test::ReadFile(model_file)), model_hash);
   EXPECT_NE(test::ReadFile(ds + "/code/hashes.tsv").find(model_hash), std::string::npos);
   const auto report = Validate(ds);
