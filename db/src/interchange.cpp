@@ -3,7 +3,6 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
-#include <limits>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
