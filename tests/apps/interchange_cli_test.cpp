@@ -1,0 +1,499 @@
+// hapticlab export --format xdf / bids, checked by readers this project did not write:
+// libxdf (Debian's libxdf-dev) loads the XDF file, the official bids-validator (npm,
+// installed by scripts/setup into tools/bids-validator) checks the BIDS dataset. Both on a
+// database the study runner records through the CLI, as the demo does (the small test
+// protocol, one simulated participant, every trajectory stream recorded).
+
+#include <fmt/format.h>
+#include <gtest/gtest.h>
+#include <xdf.h>
+#include <zlib.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/db/interchange.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab {
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// The CLI runs without this test's ASAN_OPTIONS (which only work around libxdf, below).
+std::string Cli() { return std::string("env -u ASAN_OPTIONS ") + HL_CLI_PATH; }
+std::string Validator() {
+  return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator";
+}
+
+// The unit a channel name's suffix states (STYLE.md §4), written out independently of the
+// exporter's table.
+std::string ExpectedUnit(const std::string& name) {
+  for (const auto& [suffix, unit] : std::vector<std::pair<std::string, std::string>>{
+           {"_mps2", "m/s^2"}, {"_mps", "m/s"}, {"_N", "N"}, {"_m", "m"}})
+    if (name.ends_with(suffix)) return unit;
+  return "n/a";
+}
+
+// What the database holds for P01, read through the db API.
+struct Expected {
+  struct TrialData {
+    db::Trial trial;
+    std::vector<db::Rating> ratings;
+    std::map<std::string, std::vector<db::TrajectoryChunk>> chunks;  // by stream
+  };
+  std::vector<TrialData> trials;  // completed trials
+  std::vector<db::Event> events;
+  std::map<std::string, std::size_t> samples;  // per stream
+  std::map<std::string, double> rate_hz;
+  std::map<std::string, std::vector<std::string>> channels;
+  std::size_t ratings = 0;
+};
+
+class Interchange : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir;
+    db_ = dir_->File("study.db");
+    std::string out;
+    // Stop after 12 trials: training, reference and main trials, a few seconds of recording.
+    ASSERT_EQ(
+        test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
+                             db_ + " --participant P01 --record all --stop-after 12 --quiet",
+                         &out),
+        0)
+        << out;
+    db::Database d(db_, {.create = false, .read_only = true});
+    const auto st = d.Studies().at(0);
+    const auto p = *d.FindParticipant(st.id, "P01");
+    const auto se = d.Sessions(p.id).at(0);
+    exp_ = new Expected;
+    for (const auto& t : d.Trials(se.id)) {
+      if (t.status != db::kTrialCompleted) continue;
+      Expected::TrialData td{t, d.Ratings(t.id), {}};
+      exp_->ratings += td.ratings.size();
+      for (auto& c : d.TrajectoryChunks(t.id)) {
+        exp_->samples[c.stream] += c.sample_count();
+        exp_->rate_hz[c.stream] = c.rate_hz;
+        exp_->channels[c.stream] = c.channels;
+        td.chunks[c.stream].push_back(std::move(c));
+      }
+      exp_->trials.push_back(std::move(td));
+    }
+    exp_->events = d.Events(se.id);
+  }
+  static void TearDownTestSuite() {
+    delete exp_;
+    delete dir_;
+  }
+  static test::TempDir* dir_;
+  static std::string db_;
+  static Expected* exp_;
+};
+test::TempDir* Interchange::dir_ = nullptr;
+std::string Interchange::db_;
+Expected* Interchange::exp_ = nullptr;
+
+// The recorded database has what the exports need (each test runs in its own process and
+// records its own: about a second in a release build).
+void CheckRecorded(const Expected& e) {
+  ASSERT_GE(e.trials.size(), 10u);
+  EXPECT_GT(e.ratings, 0u);
+  EXPECT_EQ(e.samples.size(), 4u);  // left/right x force/vibration
+  for (const auto& [s, n] : e.samples) EXPECT_GT(n, 0u) << s;
+}
+
+TEST_F(Interchange, XdfReadBackByLibxdf) {
+  CheckRecorded(*exp_);
+  const std::string path = dir_->File("P01.xdf");
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db_ + " --format xdf --participant P01 --out " + path, &out),
+      0)
+      << out;
+  Xdf x;
+  ASSERT_EQ(x.load_xdf(path), 0);
+  // A stream per recorded stream, plus events and ratings.
+  ASSERT_EQ(x.streams.size(), exp_->samples.size() + 2);
+  std::map<std::string, int> index;
+  for (std::size_t i = 0; i < x.streams.size(); ++i)
+    index[x.streams[i].info.name] = static_cast<int>(i);
+  ASSERT_TRUE(index.count("events") && index.count("ratings"));
+
+  // Trial starts from the event markers: plan index -> time on the session clock.
+  std::map<int, double> trial_start;
+  std::size_t logged_events = 0;
+  std::map<std::pair<int, std::string>, std::pair<double, double>> rating_marker;  // -> (score, t)
+  for (const auto& [ev, stream] : x.eventMap) {
+    const auto j = json::parse(ev.first);
+    if (stream == index["events"]) {
+      if (j["marker"] == "trial_start")
+        trial_start[j["plan_index"].get<int>()] = ev.second;
+      else
+        logged_events += j["marker"] == "event";
+    } else {
+      ASSERT_EQ(stream, index["ratings"]);
+      rating_marker[{j["plan_index"].get<int>(), j["criterion"].get<std::string>()}] = {
+          j["score"].get<double>(), ev.second};
+    }
+  }
+  EXPECT_EQ(trial_start.size(), exp_->trials.size());
+  EXPECT_EQ(logged_events, exp_->events.size());
+  EXPECT_EQ(rating_marker.size(), exp_->ratings);
+
+  for (const auto& [name, n] : exp_->samples) {
+    SCOPED_TRACE(name);
+    ASSERT_TRUE(index.count(name));
+    const auto& s = x.streams[static_cast<std::size_t>(index[name])];
+    EXPECT_EQ(s.info.channel_format, "float32");
+    EXPECT_EQ(s.info.nominal_srate, exp_->rate_hz[name]);
+    EXPECT_EQ(s.info.sample_count, static_cast<int>(n));  // footer
+    ASSERT_EQ(s.time_stamps.size(), n);
+    const auto& ch = exp_->channels[name];
+    ASSERT_EQ(s.info.channel_count, static_cast<int>(ch.size()));
+    ASSERT_EQ(s.info.channels.size(), ch.size());
+    ASSERT_EQ(s.time_series.size(), ch.size());
+    for (std::size_t c = 0; c < ch.size(); ++c) {
+      EXPECT_EQ(s.info.channels[c].at("label"), ch[c]);
+      EXPECT_EQ(s.info.channels[c].at("unit"), ExpectedUnit(ch[c]));
+    }
+    // One clock: no stream runs backwards, so trials do not overlap.
+    EXPECT_TRUE(std::is_sorted(s.time_stamps.begin(), s.time_stamps.end()));
+  }
+
+  // Values and times per trial, against the database.
+  for (const auto& t : exp_->trials) {
+    SCOPED_TRACE("plan index " + std::to_string(t.trial.plan_index));
+    ASSERT_TRUE(trial_start.count(t.trial.plan_index));
+    const double t0 = trial_start[t.trial.plan_index];
+    double left_len = 0, right_len = 0;
+    for (const auto& [name, chunks] : t.chunks)
+      for (const auto& c : chunks) {
+        auto& len = name.starts_with("left") ? left_len : right_len;
+        len = std::max(len, c.start_time_s + static_cast<double>(c.sample_count()) / c.rate_hz);
+      }
+    for (const auto& [name, chunks] : t.chunks) {
+      const auto& s = x.streams[static_cast<std::size_t>(index[name])];
+      // The right stimulus follows the left one.
+      const double zero = t0 + (name.starts_with("left") ? 0.0 : left_len);
+      for (const auto& c : chunks) {
+        const double first = zero + c.start_time_s;
+        const auto it = std::lower_bound(s.time_stamps.begin(), s.time_stamps.end(), first - 1e-9);
+        ASSERT_NE(it, s.time_stamps.end());
+        const auto at = static_cast<std::size_t>(it - s.time_stamps.begin());
+        ASSERT_NEAR(*it, first, 1e-9) << name;
+        const std::size_t nc = c.channels.size();
+        ASSERT_LE(at + c.sample_count(), s.time_stamps.size());
+        for (std::size_t i = 0; i < c.sample_count(); ++i) {
+          ASSERT_NEAR(s.time_stamps[at + i], first + static_cast<double>(i) / c.rate_hz, 1e-6)
+              << name << " " << i;
+          for (std::size_t k = 0; k < nc; ++k)
+            ASSERT_EQ(s.time_series[k][at + i], c.samples[i * nc + k])
+                << name << " sample " << i << " channel " << k;
+        }
+      }
+    }
+    for (const auto& r : t.ratings) {
+      const auto m = rating_marker.find({t.trial.plan_index, r.criterion});
+      ASSERT_NE(m, rating_marker.end()) << r.criterion;
+      EXPECT_EQ(m->second.first, r.score);
+      EXPECT_NEAR(m->second.second, t0 + left_len + right_len + r.response_time_s, 1e-9);
+    }
+  }
+  // Pseudonymous: no local path in the file.
+  EXPECT_EQ(test::ReadFile(path).find(HL_SOURCE_DIR), std::string::npos);
+}
+
+TEST_F(Interchange, XdfBadOutputIsRefusedWithTheField) {
+  std::string out;
+  // Another participant in the same database: a single file cannot hold two sessions.
+  const std::string db2 = dir_->File("two.db");
+  fs::copy_file(db_, db2);
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
+                           db2 + " --participant P02 --record none --stop-after 1 --quiet",
+                       &out),
+      0)
+      << out;
+  EXPECT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db2 + " --format xdf --out " + dir_->File("both.xdf"), &out),
+      2);
+  EXPECT_NE(out.find("--out"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + db2 +
+                                 " --format xdf --participant P09 --out " + dir_->File("x.xdf"),
+                             &out),
+            2);
+  EXPECT_NE(out.find("--participant"), std::string::npos) << out;
+  // A directory gets one file per session.
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db2 + " --format xdf --json --out " +
+                                 dir_->File("xdfdir"),
+                             &out),
+            0)
+      << out;
+  EXPECT_EQ(json::parse(out)["files"].size(), 2u);
+}
+
+std::string Gunzip(const std::string& path) {
+  gzFile f = gzopen(path.c_str(), "rb");
+  if (!f) return "";
+  std::string s;
+  char buf[65536];
+  int n;
+  while ((n = gzread(f, buf, sizeof buf)) > 0) s.append(buf, static_cast<std::size_t>(n));
+  gzclose(f);
+  return s;
+}
+
+// Runs the validator; its JSON report (stdout) goes to a file, its Node warnings aside.
+json Validate(const std::string& dataset) {
+  std::string out;
+  const std::string report = dataset + ".validator.json";
+  // Exit status 1 means "errors found"; the JSON report says which.
+  test::RunCommand("(" + Validator() + " " + dataset + " --json > " + report + ")", &out);
+  auto j = json::parse(test::ReadFile(report), nullptr, false);
+  if (j.is_discarded()) return json{{"unparsed", test::ReadFile(report)}, {"stderr", out}};
+  return j;
+}
+
+TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
+  // The validator is part of the project's set-up; without it this test fails, never skips.
+  ASSERT_TRUE(fs::exists(Validator())) << Validator()
+                                       << " is missing: run scripts/setup (it installs the pinned "
+                                          "bids-validator with npm ci)";
+  CheckRecorded(*exp_);
+  const std::string ds = dir_->File("bids");
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " export --db " + db_ + " --format bids --json --out " + ds, &out),
+      0)
+      << out;
+  const auto report = Validate(ds);
+  ASSERT_TRUE(report.contains("issues")) << report.dump(2);
+  EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
+  for (const auto& w : report["issues"]["warnings"])
+    std::cout << "validator warning: " << w["key"] << "\n";
+  EXPECT_EQ(report["summary"]["subjects"], json::array({"P01"}));
+  EXPECT_EQ(report["summary"]["tasks"], json::array({"test-small"}));
+
+  // Our own look at the contents: one beh row per rating, each physio file as in the db.
+  const fs::path beh = fs::path(ds) / "sub-P01" / "ses-1" / "beh";
+  const auto tsv = test::ReadFile((beh / "sub-P01_ses-1_task-testsmall_beh.tsv").string());
+  EXPECT_EQ(static_cast<std::size_t>(std::count(tsv.begin(), tsv.end(), '\n')), exp_->ratings + 1);
+  std::size_t physio = 0;
+  for (const auto& t : exp_->trials)
+    for (const auto& [name, chunks] : t.chunks) {
+      std::string label;
+      for (char c : name)
+        if (std::isalnum(static_cast<unsigned char>(c))) label += c;
+      const std::string stem = "sub-P01_ses-1_task-testsmall_run-" +
+                               std::to_string(t.trial.plan_index + 1) + "_recording-" + label +
+                               "_physio";
+      const auto side = json::parse(test::ReadFile((beh / (stem + ".json")).string()));
+      EXPECT_EQ(side["SamplingFrequency"].get<double>(), chunks.front().rate_hz);
+      EXPECT_EQ(side["Columns"].get<std::vector<std::string>>(), chunks.front().channels);
+      for (const auto& c : chunks.front().channels)
+        EXPECT_EQ(side[c]["Units"], ExpectedUnit(c)) << c;
+      std::istringstream rows(Gunzip((beh / (stem + ".tsv.gz")).string()));
+      std::string line;
+      std::size_t n = 0;
+      for (const auto& c : chunks)
+        for (std::size_t i = 0; i < c.sample_count(); ++i, ++n) {
+          ASSERT_TRUE(std::getline(rows, line)) << stem;
+          std::istringstream cells(line);
+          for (std::size_t k = 0; k < c.channels.size(); ++k) {
+            std::string cell;
+            std::getline(cells, cell, '\t');
+            ASSERT_EQ(std::strtof(cell.c_str(), nullptr), c.samples[i * c.channels.size() + k])
+                << stem << " row " << n;
+          }
+        }
+      EXPECT_FALSE(std::getline(rows, line)) << stem << ": more rows than samples";
+      ++physio;
+    }
+  EXPECT_GT(physio, 0u);
+  // Protocol with its recorded hash; no local paths anywhere.
+  const auto hashes = test::ReadFile(ds + "/code/hashes.tsv");
+  const auto protocol = test::ReadFile(ds + "/code/protocol-testsmall.toml");
+  EXPECT_NE(hashes.find(db::HashText(protocol)), std::string::npos);
+  for (const auto& e : fs::recursive_directory_iterator(ds)) {
+    if (e.is_regular_file() && !e.path().string().ends_with(".gz")) {
+      EXPECT_EQ(test::ReadFile(e.path().string()).find(HL_SOURCE_DIR), std::string::npos)
+          << e.path();
+    }
+  }
+
+  // The validator does look at our physio sidecars: without SamplingFrequency it reports an error.
+  const fs::path first = beh / ("sub-P01_ses-1_task-testsmall_run-" +
+                                std::to_string(exp_->trials.back().trial.plan_index + 1) +
+                                "_recording-leftforce_physio.json");
+  auto j = json::parse(test::ReadFile(first.string()));
+  j.erase("SamplingFrequency");
+  test::WriteFile(first.string(), j.dump());
+  const auto broken = Validate(ds);
+  ASSERT_TRUE(broken.contains("issues")) << broken.dump(2);
+  EXPECT_GT(broken["issues"]["errors"].size(), 0u);
+}
+
+// A record made through the db API with fixed time stamps: a dropped-sample gap inside a
+// recording, a stored material model, trials whose stamps overlap (as in a simulated
+// session) and one that starts later (as on hardware).
+TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
+  test::TempDir dir;
+  db::Database d(dir.File("g.db"));
+  const auto st = d.CreateStudy({.name = "gap study",
+                                 .protocol_toml = "# protocol",
+                                 .protocol_hash = db::HashText("# protocol")});
+  const auto p = d.AddParticipant({.study_id = st, .code = "P07"});
+  const auto se = d.StartSession({.participant_id = p});
+  const auto ids = d.AddTrials({{.session_id = se,
+                                 .plan_index = 0,
+                                 .phase = "main",
+                                 .material = "Cork",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "real:Cork",
+                                 .right = "virtual:Cork"},
+                                {.session_id = se,
+                                 .plan_index = 1,
+                                 .phase = "main",
+                                 .material = "Denim",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "virtual:Denim",
+                                 .right = "real:Denim"},
+                                {.session_id = se,
+                                 .plan_index = 2,
+                                 .phase = "main",
+                                 .material = "Towel",
+                                 .comparison = "virtual",
+                                 .method = "FF",
+                                 .left = "real:Towel",
+                                 .right = "virtual:Towel"}});
+  auto ramp = [](std::size_t n, float base) {
+    std::vector<float> v;
+    for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);
+    return v;
+  };
+  for (const auto id : ids) {
+    d.StartTrial(id);
+    // 100 Hz, one channel: left 10 samples, 5 dropped, 5 more; right 10 samples.
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 1)});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0.15,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(5, 9)});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "right_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 20)});
+    d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
+  }
+  // A fourth trial that recorded samples and then faulted: not exported.
+  const auto faulted =
+      d.AddTrial({.session_id = se, .plan_index = 3, .phase = "main", .material = "Acryl"});
+  d.StartTrial(faulted);
+  d.InsertTrajectoryChunk({.trial_id = faulted,
+                           .stream = "left_force",
+                           .start_time_s = 0,
+                           .rate_hz = 100,
+                           .channels = {"fz_N"},
+                           .samples = ramp(7, 50)});
+  d.SetTrialStatus(faulted, db::kTrialFaulted);
+  d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
+  // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of
+  // stimuli + 1.5 s of rating), trial 3 a minute in; an event 2.0 s in.
+  d.Exec("UPDATE session SET started_at='2026-01-01T10:00:00.000Z'");
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", ids[0]));
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.500Z' WHERE id={}", ids[1]));
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:01:00.123Z' WHERE id={}", ids[2]));
+  d.LogEvent({.session_id = se, .kind = "break", .detail = "after trial 2"});
+  d.Exec("UPDATE event SET created_at='2026-01-01T10:00:02.000Z' WHERE kind='break'");
+
+  // XDF through libxdf.
+  db::ExportXdf(d, dir.File("g.xdf"));
+  Xdf x;
+  ASSERT_EQ(x.load_xdf(dir.File("g.xdf")), 0);
+  ASSERT_EQ(x.streams.size(), 4u);
+  std::map<std::string, const Xdf::Stream*> by;
+  for (const auto& s : x.streams) by[s.info.name] = &s;
+  const auto& left = *by.at("left_force");
+  ASSERT_EQ(left.time_stamps.size(), 45u);  // the faulted trial's 7 samples are not there
+  // Trial starts: 1.0 (its stamp), 1.0 + 0.3 + 1.5 = 2.8 (its stamp, 1.5, would overlap),
+  // 60.123 (to the microsecond: stamps are subtracted as integers).
+  const double starts[] = {1.0, 2.8, 60.123};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t o = static_cast<std::size_t>(k) * 15;
+    EXPECT_NEAR(left.time_stamps[o], starts[k], 1e-9) << k;
+    EXPECT_NEAR(left.time_stamps[o + 9], starts[k] + 0.09, 1e-9) << k;
+    EXPECT_NEAR(left.time_stamps[o + 10], starts[k] + 0.15, 1e-9) << k;  // after the gap
+    EXPECT_EQ(left.time_series[0][o + 10], 9.0f);
+    EXPECT_NEAR(by.at("right_force")->time_stamps[static_cast<std::size_t>(k) * 10],
+                starts[k] + 0.2, 1e-9)
+        << k;
+  }
+  std::vector<double> trial_marks, rating_marks;
+  double break_at = -1;
+  for (const auto& [ev, stream] : x.eventMap) {
+    const auto j = json::parse(ev.first);
+    if (x.streams[static_cast<std::size_t>(stream)].info.name == "ratings")
+      rating_marks.push_back(ev.second);
+    else if (j["marker"] == "trial_start")
+      trial_marks.push_back(ev.second);
+    else if (j["kind"] == "break")
+      break_at = ev.second;
+  }
+  ASSERT_EQ(trial_marks.size(), 3u);
+  ASSERT_EQ(rating_marks.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(trial_marks[static_cast<std::size_t>(k)], starts[k], 1e-9);
+    EXPECT_NEAR(rating_marks[static_cast<std::size_t>(k)], starts[k] + 0.3 + 1.5, 1e-9);
+  }
+  // The event 0.5 s after trial 2's stamp keeps that offset from trial 2's start.
+  EXPECT_NEAR(break_at, 2.8 + 0.5, 1e-9);
+
+  // BIDS: the gap as n/a rows, the stored model with its hash, and the validator's approval.
+  ASSERT_TRUE(fs::exists(Validator())) << "run scripts/setup";
+  const std::string ds = dir.File("bids");
+  db::ExportBids(d, ds);
+  const auto rows = Gunzip(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-1_recording-leftforce_physio.tsv.gz");
+  EXPECT_EQ(rows,
+            "1\n1.25\n1.5\n1.75\n2\n2.25\n2.5\n2.75\n3\n3.25\nn/a\nn/a\nn/a\nn/a\nn/"
+            "a\n9\n9.25\n9.5\n9.75\n10\n");
+  const std::string model_hash = db::HashText("[material]\nname = \"Cork\"\n");
+  const std::string model_file = ds + "/code/models/Corkv1-" + model_hash.substr(0, 12) + ".toml";
+  ASSERT_TRUE(fs::exists(model_file));
+  EXPECT_TRUE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-3_recording-leftforce_physio.tsv.gz"));
+  EXPECT_FALSE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-4_recording-leftforce_physio.tsv.gz"));
+  EXPECT_EQ(db::HashText(test::ReadFile(model_file)), model_hash);
+  EXPECT_NE(test::ReadFile(ds + "/code/hashes.tsv").find(model_hash), std::string::npos);
+  const auto report = Validate(ds);
+  ASSERT_TRUE(report.contains("issues")) << report.dump(2);
+  EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
+}
+
+}  // namespace
+}  // namespace hapticlab
