@@ -253,8 +253,12 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       }
       if (!a.missing_rows.empty()) {
         why += why.empty() ? "" : "; ";
-        why += "missing " + (data.y_name.empty() ? std::string("response") : data.y_name) + " in " +
-               std::to_string(a.missing_rows.size()) + " row(s)";
+        why += "missing " + (data.y_name.empty() ? std::string("response") : data.y_name);
+        for (std::size_t i = 0; i < a.missing_rows.size(); ++i) {
+          const std::size_t r = a.missing_rows[i];
+          why += (i ? ", " : " at ") +
+                 (r < data.lines.size() ? data.source + ":" + std::to_string(data.lines[r]) : "row " + std::to_string(r + 1));
+        }
       }
       res.dropped_subjects.push_back(s);
       res.dropped_reasons.push_back(why);
@@ -366,6 +370,7 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       if (wmask == 0) {
         // Between-subjects term: no sphericity question (afex prints nothing).
         const double nan = std::numeric_limits<double>::quiet_NaN();
+        e.between_only = true;
         e.mauchly_defined = false;
         e.mauchly_W = e.mauchly_p = e.mauchly_chi2 = e.mauchly_p_firstorder = nan;
         e.gg_epsilon = e.hf_epsilon = 1;

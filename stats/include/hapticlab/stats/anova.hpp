@@ -35,6 +35,7 @@ namespace hapticlab::stats {
 
 struct AnovaEffect {
   std::string effect;   ///< "A", "B", "A:B"
+  bool between_only = false;  ///< a between-subjects term (no sphericity statistics: ε = 1, Mauchly NaN)
   double df1 = 0, df2 = 0;
   double SS = 0, SS_error = 0, MSE = 0;
   double F = 0, p = 0;
