@@ -232,15 +232,17 @@ int main(int argc, char** argv) {
   for (std::size_t i = shard; i < points.size(); i += nshards) {
     P p = points[i];
     p.q = p.q < 0 ? -p.q : FindQ(p.k, p.df, p.q, nd);
-    const L ua = Upper(static_cast<L>(p.q), p.k, p.df, la), ub = Upper(static_cast<L>(p.q), p.k, p.df, lb);
+    char q[64];
+    std::snprintf(q, sizeof q, "%.6g", p.q);
+    // The reference is for the decimal q as written (not its nearest double).
+    const L ql = strtold(q, nullptr);
+    const L ua = Upper(ql, p.k, p.df, la), ub = Upper(ql, p.k, p.df, lb);
     const L rel = Abs(ua - ub) / ub;
     const int digits = rel > 0 ? static_cast<int>(Min(L(19), -log10l(rel))) : 19;
     if (digits < 16) {
       std::fprintf(stderr, "k=%d df=%g q=%.6g: only %d digits, skipped\n", p.k, p.df, p.q, digits);
       continue;
     }
-    char q[64];
-    std::snprintf(q, sizeof q, "%.6g", p.q);
     std::printf("%d,%s,%s,%s,%s,%d\n", p.k, std::isinf(p.df) ? "Inf" : std::to_string(static_cast<int>(p.df)).c_str(), q,
                 Str(Q(ub), 19).c_str(), Str(Q(1 - ub), 19).c_str(), digits);
     std::fflush(stdout);
