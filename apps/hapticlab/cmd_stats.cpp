@@ -2,6 +2,7 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -28,6 +29,7 @@ struct Common {
   std::vector<std::string> where;  // COL=VALUE
   std::string average_by;          // COLS
   bool json = false;
+  bool allow_missing = false;      // rm-anova/tukey --within: --missing drop-subject
 };
 
 void AddCommon(CLI::App* cmd, Common& c) {
@@ -54,52 +56,96 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
   keys.insert(keys.end(), avg.begin(), avg.end());
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  auto t = stats::ReadLongCsv(c.csv, c.dv, keys).Where(cond);
+  auto t = stats::ReadLongCsv(c.csv, c.dv, keys, c.allow_missing).Where(cond);
   if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
   if (!avg.empty()) t = t.Average(avg);
   return t;
+}
+
+// --missing for the ANOVA commands: a missing (empty or NA) response is an error, or drops
+// its subject (named), as afex does.
+void AddMissing(CLI::App* cmd, const std::shared_ptr<Common>& c) {
+  auto* o = cmd->add_option_function<std::string>(
+      "--missing", [c](const std::string& v) { c->allow_missing = v == "drop-subject"; },
+      "An empty or NA response: 'error' (default; names file, line and column) or 'drop-subject'\n"
+      "(its cell counts as unobserved, so the subject is dropped and named, as afex does)");
+  o->check(CLI::IsMember({"error", "drop-subject"}));
+}
+
+// Names every dropped subject and why (text output).
+void PrintDropped(const stats::RmAnovaResult& r) {
+  for (std::size_t i = 0; i < r.dropped_subjects.size(); ++i)
+    fmt::print("dropped {}: {}\n", r.dropped_subjects[i], r.dropped_reasons[i]);
+}
+
+json DroppedJson(const stats::RmAnovaResult& r) {
+  json d = json::array();
+  for (std::size_t i = 0; i < r.dropped_subjects.size(); ++i)
+    d.push_back({{"subject", r.dropped_subjects[i]}, {"reason", r.dropped_reasons[i]}});
+  return d;
 }
 
 void AddRmAnova(CLI::App& s) {
   auto c = std::make_shared<Common>();
   auto subject = std::make_shared<std::string>();
   auto within = std::make_shared<std::string>();
+  auto between = std::make_shared<std::string>();
   auto* cmd = s.add_subcommand(
       "rm-anova",
-      "Repeated-measures ANOVA (one or more within-subject factors), as afex::aov_ez: repetitions\n"
-      "averaged per subject x cell, subjects with a missing cell dropped. Reports F, p, partial\n"
-      "eta squared, Mauchly's W and p (R's), Greenhouse-Geisser and Huynh-Feldt epsilons and p.");
+      "Repeated-measures or mixed ANOVA (within-subject factors, optionally crossed with\n"
+      "between-subject factors), as afex::aov_ez with type 3 sums of squares: repetitions\n"
+      "averaged per subject x cell, subjects with a missing cell dropped and named. Reports F, p,\n"
+      "partial eta squared, and for within terms Mauchly's W and p (R's), Greenhouse-Geisser and\n"
+      "Huynh-Feldt epsilons and p.");
   AddCommon(cmd, *c);
+  AddMissing(cmd, c);
   cmd->add_option("--subject", *subject, "Subject column")->required();
-  cmd->add_option("--within", *within, "Within factors, comma-separated (A or A,B)")->required();
+  cmd->add_option("--within", *within, "Within factors, comma-separated (A or A,B)");
+  cmd->add_option("--between", *between,
+                  "Between-subject factors, comma-separated (e.g. group): each subject has one level");
   cmd->callback([=] {
     RunGuarded([&] {
       const auto factors = stats::SplitList(*within);
+      const auto groups = stats::SplitList(*between);
+      if (factors.empty() && groups.empty())
+        throw InputError(c->csv, 0, "--within", "give --within and/or --between factors");
       std::vector<std::string> keys = factors;
+      keys.insert(keys.end(), groups.begin(), groups.end());
       keys.push_back(*subject);
-      const auto r = stats::RmAnova(Load(*c, keys), *subject, factors);
+      const auto r = stats::RmAnova(Load(*c, keys), *subject, factors, groups);
       if (c->json) {
         json effects = json::array();
         for (const auto& e : r.effects)
           effects.push_back({{"effect", e.effect}, {"df1", e.df1}, {"df2", e.df2}, {"F", e.F}, {"p", e.p},
-                             {"pes", e.pes}, {"MSE", e.MSE}, {"mauchly_W", Num(e.mauchly_W)},
+                             {"pes", e.pes}, {"SS", e.SS}, {"SS_error", e.SS_error}, {"MSE", e.MSE},
+                             {"mauchly_W", Num(e.mauchly_W)},
                              {"mauchly_p", Num(e.mauchly_p)}, {"mauchly_p_firstorder", Num(e.mauchly_p_firstorder)},
                              {"gg_epsilon", Num(e.gg_epsilon)}, {"p_gg", Num(e.p_gg)},
-                             {"hf_epsilon", Num(e.hf_epsilon)}, {"p_hf", Num(e.p_hf)}});
+                             {"hf_epsilon", Num(e.hf_epsilon)}, {"p_hf", Num(e.p_hf)},
+                             {"between_only", e.between_only}});
         fmt::print("{}\n", json{{"effects", effects}, {"subjects", r.subjects.size()},
-                                {"dropped_subjects", r.dropped_subjects}}.dump(2));
+                                {"dropped_subjects", r.dropped_subjects}, {"dropped", DroppedJson(r)}}.dump(2));
         return kExitOk;
       }
       fmt::print("{} subjects{}\n", r.subjects.size(),
                  r.dropped_subjects.empty() ? "" : fmt::format(" ({} dropped for a missing cell)", r.dropped_subjects.size()));
+      PrintDropped(r);
       fmt::print("{:<24} {:>5} {:>7} {:>10} {:>11} {:>7} {:>9} {:>9} {:>7} {:>10} {:>7} {:>10}\n", "effect", "df1", "df2",
                  "F", "p", "pes", "Mauchly W", "p", "GG eps", "p GG", "HF eps", "p HF");
-      for (const auto& e : r.effects)
+      for (const auto& e : r.effects) {
+        if (e.between_only) {  // between-subjects term: no sphericity question
+          fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f}\n", e.effect, e.df1, e.df2, e.F, e.p, e.pes);
+          continue;
+        }
         fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f} {:>9.4g} {:>9.4g} {:>7.4f} {:>10.4g} {:>7.4f} {:>10.4g}\n",
                    e.effect, e.df1, e.df2, e.F, e.p, e.pes, e.mauchly_W, e.mauchly_p, e.gg_epsilon, e.p_gg,
                    e.hf_epsilon, e.p_hf);
-      fmt::print("Mauchly p is R's (second-order); nan: the covariance is singular (df > subjects - 1),\n"
+      }
+      fmt::print("Mauchly p is R's (second-order); nan: the covariance is singular (df > error df),\n"
                  "so no test exists; epsilons are still defined. HF eps is uncapped; its p uses min(1, eps).\n");
+      if (!groups.empty())
+        fmt::print("Type 3 sums of squares (sum-to-zero contrasts), as afex; error df {:.0f} = subjects - between cells.\n",
+                   r.error_df);
       return kExitOk;
     });
   });
@@ -116,23 +162,35 @@ void AddTukey(CLI::App& s) {
       "Tukey HSD pairwise comparisons. Without --subject: independent groups (TukeyHSD). With\n"
       "--subject: a within-subject factor, with the pooled error of its effect (--error\n"
       "univariate, emmeans model=\"univariate\") or per-pair errors (--error multivariate, afex's\n"
-      "emmeans default). diff = mean(a) - mean(b).");
+      "emmeans default). With --between: a mixed design; marginal means average the between\n"
+      "cells equally (emmeans). diff = mean(a) - mean(b).");
   AddCommon(cmd, *c);
   cmd->add_option("--factor", *factor, "Factor to compare")->required();
   cmd->add_option("--subject", *subject, "Subject column (within-subject comparisons)");
   cmd->add_option("--within", *within, "All within factors of the design (default: --factor)");
+  auto between = std::make_shared<std::string>();
+  cmd->add_option("--between", *between,
+                  "Between-subject factors of a mixed design (with --subject); --factor may be one of them");
+  AddMissing(cmd, c);
   cmd->add_option("--error", *method, "Within-subject error term")->check(CLI::IsMember({"univariate", "multivariate"}))
       ->capture_default_str();
   cmd->callback([=] {
     RunGuarded([&] {
       stats::TukeyResult r;
+      stats::RmAnovaResult a;
       if (subject->empty()) {
+        if (!between->empty()) throw InputError(c->csv, 0, "--between", "needs --subject (a mixed design)");
         r = stats::TukeyBetween(Load(*c, {*factor}), *factor);
       } else {
-        auto factors = within->empty() ? std::vector<std::string>{*factor} : stats::SplitList(*within);
+        const auto groups = stats::SplitList(*between);
+        const bool factor_between = std::find(groups.begin(), groups.end(), *factor) != groups.end();
+        auto factors = !within->empty() ? stats::SplitList(*within)
+                       : factor_between  ? std::vector<std::string>{}
+                                         : std::vector<std::string>{*factor};
         auto keys = factors;
+        keys.insert(keys.end(), groups.begin(), groups.end());
         keys.push_back(*subject);
-        const auto a = stats::RmAnova(Load(*c, keys), *subject, factors);
+        a = stats::RmAnova(Load(*c, keys), *subject, factors, groups);
         r = stats::TukeyWithin(a, *factor, *method == "multivariate");
       }
       if (c->json) {
@@ -140,9 +198,14 @@ void AddTukey(CLI::App& s) {
         for (const auto& p : r.pairs)
           pairs.push_back({{"a", p.a}, {"b", p.b}, {"diff", p.diff}, {"lwr", p.lwr}, {"upr", p.upr},
                            {"p_adj", p.p_adj}, {"se", p.se}, {"df", p.df}, {"q", p.q}});
-        fmt::print("{}\n", json{{"method", r.method}, {"factor", r.factor}, {"comparisons", pairs}}.dump(2));
+        fmt::print("{}\n", json{{"method", r.method}, {"factor", r.factor}, {"comparisons", pairs},
+                                {"dropped_subjects", a.dropped_subjects}, {"dropped", DroppedJson(a)}}.dump(2));
         return kExitOk;
       }
+      if (!subject->empty())
+        fmt::print("{} subjects{}\n", a.subjects.size(),
+                   a.dropped_subjects.empty() ? "" : fmt::format(" ({} dropped for a missing cell)", a.dropped_subjects.size()));
+      PrintDropped(a);
       fmt::print("Tukey HSD ({}), factor {}, k = {}, df = {:.0f}\n", r.method, r.factor, r.k, r.df);
       fmt::print("{:<30} {:>10} {:>10} {:>10} {:>12}\n", "a - b", "diff", "lwr", "upr", "p adj");
       for (const auto& p : r.pairs)
@@ -209,15 +272,20 @@ void AddShapiro(CLI::App& s) {
 
 }  // namespace
 
+void AddStatsCommands(CLI::App& group) {
+  AddRmAnova(group);
+  AddTukey(group);
+  AddKruskal(group);
+  AddShapiro(group);
+}
+
 void RegisterStats(CLI::App& app) {
   auto* s = app.add_subcommand("stats",
                                "Statistics on any long-format CSV (see docs/analysis.md):\n"
-                               "rm-anova, tukey, kruskal, shapiro");
+                               "rm-anova, tukey, kruskal, shapiro. The same commands, with a fast start\n"
+                               "(no GUI, device or modeling libraries loaded): hapticlab-stats COMMAND");
   s->require_subcommand(1);
-  AddRmAnova(*s);
-  AddTukey(*s);
-  AddKruskal(*s);
-  AddShapiro(*s);
+  AddStatsCommands(*s);
 }
 
 }  // namespace hapticlab::cli

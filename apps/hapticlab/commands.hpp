@@ -9,6 +9,9 @@ void RegisterExport(CLI::App& app);
 void RegisterModel(CLI::App& app);
 void RegisterDemo(CLI::App& app);
 void RegisterStats(CLI::App& app);
+/// The stats commands (rm-anova, tukey, ...) as subcommands of `group`: `hapticlab stats`
+/// and the lean `hapticlab-stats` binary share them.
+void AddStatsCommands(CLI::App& group);
 void RegisterStudy(CLI::App& app);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);

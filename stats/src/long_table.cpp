@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
@@ -28,6 +29,7 @@ LongTable LongTable::Where(const std::vector<std::pair<std::string, std::string>
     if (!ok) continue;
     for (std::size_t c = 0; c < key_names.size(); ++c) out.keys[c].push_back(keys[c][r]);
     out.y.push_back(y[r]);
+    if (r < lines.size()) out.lines.push_back(lines[r]);
   }
   return out;
 }
@@ -69,7 +71,7 @@ std::vector<std::string> LongTable::Levels(const std::string& name) const {
 }
 
 LongTable ReadLongCsv(const std::string& path, const std::string& dv,
-                      const std::vector<std::string>& key_columns) {
+                      const std::vector<std::string>& key_columns, bool allow_missing) {
   const CsvTable t = ReadCsv(path);
   LongTable out;
   out.source = path;
@@ -80,9 +82,15 @@ LongTable ReadLongCsv(const std::string& path, const std::string& dv,
   for (const auto& k : key_columns) ck.push_back(t.Require(k));
   out.keys.assign(key_columns.size(), {});
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
-    const double v = t.Number(r, cy);
-    if (!std::isfinite(v)) throw InputError(path, t.row_lines[r], dv, "value is not finite");
-    out.y.push_back(v);
+    const std::string& raw = t.rows[r][cy];
+    if (allow_missing && (raw.empty() || raw == "NA")) {
+      out.y.push_back(std::numeric_limits<double>::quiet_NaN());
+    } else {
+      const double v = t.Number(r, cy);
+      if (!std::isfinite(v)) throw InputError(path, t.row_lines[r], dv, "value is not finite");
+      out.y.push_back(v);
+    }
+    out.lines.push_back(static_cast<std::size_t>(t.row_lines[r]));
     for (std::size_t c = 0; c < ck.size(); ++c) {
       const std::string& s = t.rows[r][ck[c]];
       if (s.empty()) throw InputError(path, t.row_lines[r], key_columns[c], "empty key cell");

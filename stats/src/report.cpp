@@ -180,7 +180,12 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf\n";
         md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
            << (a.dropped_subjects.empty() ? "" : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
-           << "):\n\n| factor | df | F | p | partial eta^2 | GG eps | p (GG) |\n|---|---|---|---|---|---|---|\n";
+           << "):\n\n";
+        // Every dropped participant named, with the cells it lacks.
+        for (std::size_t i = 0; i < a.dropped_subjects.size(); ++i)
+          md << "- dropped " << a.dropped_subjects[i] << ": " << a.dropped_reasons[i] << "\n";
+        if (!a.dropped_subjects.empty()) md << "\n";
+        md << "| factor | df | F | p | partial eta^2 | GG eps | p (GG) |\n|---|---|---|---|---|---|---|\n";
         for (const auto& e : a.effects) {
           md << fmt::format("| {}{} | {:.0f}, {:.0f} | {:.3f} | {} | {:.3f} | {:.3f} | {} |\n", e.effect,
                             e.p < 0.05 ? "*" : "", e.df1, e.df2, e.F, P(e.p), e.pes, e.gg_epsilon, P(e.p_gg));

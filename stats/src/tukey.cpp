@@ -64,15 +64,89 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
 
 TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool multivariate, double conf) {
   TukeyResult r;
-  r.method = multivariate ? "multivariate" : "univariate";
   r.factor = factor;
+  const std::size_t n = a.subjects.size(), nc = a.cells.empty() ? 0 : a.cells[0].size();
+  const std::size_t ng = a.group_sizes.empty() ? 1 : a.group_sizes.size();
+  auto group_of = [&](std::size_t s) {
+    return a.subject_group.empty() ? std::size_t{0} : static_cast<std::size_t>(a.subject_group[s]);
+  };
+  auto size_of = [&](std::size_t g) {
+    return a.group_sizes.empty() ? static_cast<double>(n) : static_cast<double>(a.group_sizes[g]);
+  };
+  const double nu = a.error_df > 0 ? a.error_df : static_cast<double>(n) - 1;
+  // Unweighted mean over the between cells of a per-subject quantity v (emmeans averages the
+  // between cells equally), and the residual variance of v around its cell means.
+  auto unweighted = [&](const std::vector<double>& v, double* resid_var) {
+    std::vector<double> sum(ng, 0.0);
+    for (std::size_t s = 0; s < n; ++s) sum[group_of(s)] += v[s];
+    double mean = 0;
+    for (std::size_t g = 0; g < ng; ++g) mean += sum[g] / size_of(g);
+    if (resid_var) {
+      double ss = 0;
+      for (std::size_t s = 0; s < n; ++s) ss += std::pow(v[s] - sum[group_of(s)] / size_of(group_of(s)), 2);
+      *resid_var = ss / nu;
+    }
+    return mean / static_cast<double>(ng);
+  };
+  // (1/G^2) sum_g 1/n_g: the variance factor of an unweighted mean over the between cells.
+  double inv_n = 0;
+  for (std::size_t g = 0; g < ng; ++g) inv_n += 1.0 / size_of(g);
+  inv_n /= static_cast<double>(ng * ng);
+
+  std::size_t bf = 0;
+  while (bf < a.between.size() && a.between[bf] != factor) ++bf;
+  if (bf < a.between.size()) {
+    // Between factor: each subject's mean over all cells; level means average the between
+    // cells of the level equally; per-cell error from the subjects around their cell means.
+    r.method = "between-subjects (mixed ANOVA)";
+    const auto& levels = a.between_levels[bf];
+    r.k = static_cast<int>(levels.size());
+    std::vector<double> m(n, 0.0);
+    for (std::size_t s = 0; s < n; ++s) {
+      for (double v : a.cells[s]) m[s] += v;
+      m[s] /= static_cast<double>(nc);
+    }
+    std::vector<double> mu(ng, 0.0);
+    for (std::size_t s = 0; s < n; ++s) mu[group_of(s)] += m[s];
+    double ss = 0;
+    for (std::size_t g = 0; g < ng; ++g) mu[g] /= size_of(g);
+    for (std::size_t s = 0; s < n; ++s) ss += std::pow(m[s] - mu[group_of(s)], 2);
+    r.mse = ss / nu;
+    r.df = nu;
+    std::size_t stride = 1;
+    for (std::size_t g = bf + 1; g < a.between.size(); ++g) stride *= a.between_levels[g].size();
+    const std::size_t kf = levels.size();
+    auto level_of = [&](std::size_t g) { return (g / stride) % kf; };
+    const double per_level = static_cast<double>(ng / kf);
+    const TukeyFamily fam(r.k, r.df);
+    const double q_crit = fam.Quantile(conf);
+    for (std::size_t i = 0; i < kf; ++i)
+      for (std::size_t j = i + 1; j < kf; ++j) {
+        TukeyPair p;
+        p.a = levels[j];
+        p.b = levels[i];
+        double est = 0, var = 0;
+        for (std::size_t g = 0; g < ng; ++g) {
+          const double c = level_of(g) == j ? 1 / per_level : level_of(g) == i ? -1 / per_level : 0.0;
+          est += c * mu[g];
+          var += c * c / size_of(g);
+        }
+        p.diff = est;
+        p.se = std::sqrt(r.mse * var);
+        p.df = r.df;
+        Fill(p, fam, q_crit);
+        r.pairs.push_back(p);
+      }
+    return r;
+  }
+
+  r.method = multivariate ? "multivariate" : "univariate";
   std::size_t f = 0;
   while (f < a.factors.size() && a.factors[f] != factor) ++f;
-  if (f == a.factors.size()) throw InputError("", 0, factor, "not a within factor of this ANOVA");
+  if (f == a.factors.size()) throw InputError("", 0, factor, "not a factor of this ANOVA");
   const auto& levels = a.levels[f];
   r.k = static_cast<int>(levels.size());
   // Subject marginal means of each level (averaged over the other factors' cells).
-  const std::size_t n = a.subjects.size(), nc = a.cells.empty() ? 0 : a.cells[0].size();
   std::size_t stride = 1;
   for (std::size_t g = f + 1; g < a.factors.size(); ++g) stride *= a.levels[g].size();
   const std::size_t kf = levels.size();
@@ -85,7 +159,7 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   for (const auto& e : a.effects)
     if (e.effect == factor) main = &e;
   r.mse = main->MSE;
-  r.df = multivariate ? static_cast<double>(n) - 1 : main->df2;
+  r.df = multivariate ? nu : main->df2;
   const double cells_per_level = static_cast<double>(nc / kf);
   const TukeyFamily fam(r.k, r.df);
   const double q_crit = fam.Quantile(conf);
@@ -94,17 +168,11 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
       TukeyPair p;
       p.a = levels[j];
       p.b = levels[i];
-      double mean = 0;
-      for (std::size_t s = 0; s < n; ++s) mean += m[s][j] - m[s][i];
-      mean /= static_cast<double>(n);
-      p.diff = mean;
-      if (multivariate) {
-        double ss = 0;
-        for (std::size_t s = 0; s < n; ++s) ss += std::pow(m[s][j] - m[s][i] - mean, 2);
-        p.se = std::sqrt(ss / (static_cast<double>(n) - 1) / static_cast<double>(n));
-      } else {
-        p.se = std::sqrt(2 * r.mse / (static_cast<double>(n) * cells_per_level));
-      }
+      std::vector<double> d(n);
+      for (std::size_t s = 0; s < n; ++s) d[s] = m[s][j] - m[s][i];
+      double var = 0;
+      p.diff = unweighted(d, &var);
+      p.se = multivariate ? std::sqrt(var * inv_n) : std::sqrt(2 * r.mse / cells_per_level * inv_n);
       p.df = r.df;
       Fill(p, fam, q_crit);
       r.pairs.push_back(p);

@@ -71,5 +71,82 @@ TEST(StatsCli, BadInputExitsWithTwoAndNamesIt) {
   EXPECT_NE(out.find("bad.csv:3: score"), std::string::npos) << out;
 }
 
+std::string Mixed() { return test::DataPath("stats/mixed_2x3.csv"); }
+
+json MixedRef() {
+  std::ifstream f(test::DataPath("stats/mixed_anova.json"));
+  return json::parse(f)["a"];
+}
+
+TEST(StatsCli, MixedAnovaWithBetweenAgreesWithAfexAndNamesTheDroppedSubject) {
+  const auto j = Stats("rm-anova --csv " + Mixed() + " --dv score --subject subject --within method --between group");
+  const auto ref = MixedRef()["anova"];
+  ASSERT_EQ(j["effects"].size(), ref.size());
+  for (std::size_t i = 0; i < ref.size(); ++i) {
+    EXPECT_EQ(j["effects"][i]["effect"], ref[i]["effect"]);
+    EXPECT_NEAR(j["effects"][i]["F"].get<double>(), ref[i]["F"].get<double>(), 1e-10 * ref[i]["F"].get<double>());
+  }
+  EXPECT_TRUE(j["effects"][0]["between_only"].get<bool>());
+  EXPECT_EQ(j["dropped"][0]["subject"], "S17");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " stats rm-anova --csv " + Mixed() +
+                                 " --dv score --subject subject --within method --between group",
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("dropped S17: no rating for method=visual"), std::string::npos) << out;
+  // Tukey on the within factor names the dropped subject in its text output too.
+  ASSERT_EQ(test::RunCommand(Cli() + " stats tukey --csv " + Mixed() + " --dv score --subject subject --factor method", &out), 0)
+      << out;
+  EXPECT_NE(out.find("dropped S17: no rating for method=visual"), std::string::npos) << out;
+  // Tukey on the between factor of the mixed design (emmeans: expert - novice).
+  const auto t = Stats("tukey --csv " + Mixed() + " --dv score --subject subject --within method --between group --factor group");
+  ASSERT_EQ(t["comparisons"].size(), 1u);
+  const auto tr = MixedRef()["tukey_group"][0];
+  EXPECT_EQ(t["comparisons"][0]["a"], "novice");  // a - b = novice - expert = -(expert - novice)
+  EXPECT_NEAR(t["comparisons"][0]["diff"].get<double>(), -tr["estimate"].get<double>(), 1e-10);
+  EXPECT_NEAR(t["comparisons"][0]["se"].get<double>(), tr["SE"].get<double>(), 1e-10);
+}
+
+TEST(StatsCli, ABetweenFactorGivenAsWithinExitsWithTwoAndSaysSo) {
+  std::string out;
+  EXPECT_EQ(test::RunCommand(Cli() + " stats rm-anova --csv " + Mixed() +
+                                 " --dv score --subject subject --within group,method",
+                             &out),
+            2);
+  EXPECT_NE(out.find("'group' is a between-subjects factor"), std::string::npos) << out;
+  EXPECT_NE(out.find("--between group"), std::string::npos) << out;
+}
+
+TEST(StatsCli, MissingScoresAreAnErrorOrDropTheirSubjectByName) {
+  test::TempDir dir;
+  test::WriteFile(dir.File("na.csv"),
+                  "subject,cond,score\nS1,a,1\nS1,b,3\nS2,a,2\nS2,b,NA\nS3,a,4\nS3,b,7\nS4,a,1\nS4,b,2\n");
+  std::string out;
+  const std::string cmd = Cli() + " stats rm-anova --csv " + dir.File("na.csv") + " --dv score --subject subject --within cond";
+  EXPECT_EQ(test::RunCommand(cmd, &out), 2);
+  EXPECT_NE(out.find("na.csv:5: score"), std::string::npos) << out;
+  ASSERT_EQ(test::RunCommand(cmd + " --missing drop-subject", &out), 0) << out;
+  EXPECT_NE(out.find("dropped S2: missing score at " + dir.File("na.csv") + ":5"), std::string::npos) << out;
+  EXPECT_NE(out.find("3 subjects"), std::string::npos) << out;
+}
+
+// The lean binary runs the same commands with the same output, and its start-up loads none of
+// the heavy libraries of the full CLI.
+TEST(StatsCli, LeanBinaryGivesTheSameAnswersWithoutTheHeavyLibraries) {
+  const std::string args = " rm-anova --csv " + Mixed() + " --dv score --subject subject --within method --between group --json";
+  std::string full, lean;
+  ASSERT_EQ(test::RunCommand(Cli() + " stats" + args, &full), 0) << full;
+  ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + args, &lean), 0) << lean;
+  EXPECT_EQ(full, lean);
+  std::string needed;
+  ASSERT_EQ(test::RunCommand("readelf -d " + std::string(HL_STATS_CLI_PATH) + " | grep NEEDED", &needed), 0) << needed;
+  for (const char* lib : {"opencv", "ceres", "portaudio", "glfw", "plplot", "sqlite", "GL", "usb", "hidapi", "fftw", "ssl", "crypto"})
+    EXPECT_EQ(needed.find(lib), std::string::npos) << lib << " in\n" << needed;
+  std::string heavy;
+  ASSERT_EQ(test::RunCommand("readelf -d " + Cli() + " | grep NEEDED", &heavy), 0);
+  EXPECT_NE(heavy.find("opencv"), std::string::npos) << "the check above would not notice: " << heavy;
+}
+
 }  // namespace
 }  // namespace hapticlab

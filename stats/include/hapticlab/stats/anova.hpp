@@ -1,8 +1,18 @@
 #pragma once
-/// @file Repeated-measures ANOVA for fully within-subject designs (one, two or more
-/// factors), as afex::aov_ez computes it: repetitions are averaged per subject x cell, a
-/// subject with a missing cell is dropped, each effect is tested against its own
-/// effect x subject error term.
+/// @file Repeated-measures and mixed ANOVA (within-subject factors, optionally crossed with
+/// between-subject factors), as afex::aov_ez computes it (type 3 sums of squares):
+/// repetitions are averaged per subject x cell, a subject with a missing cell is dropped
+/// (and named), each within effect is tested against its own effect x subject error term.
+///
+/// With between factors, the subjects' cell means Y (subjects x cells) are regressed on the
+/// between design X (intercept and sum-to-zero coded main effects and interactions of the
+/// between factors, full factorial, as car::Anova with contr.sum). For a within term with
+/// orthonormal contrasts P (the intercept term: P = 1/sqrt(cells)) and a between term T with
+/// coefficient rows L: Z = Y P, B = (X'X)^-1 X'Z, E = Z - X B,
+/// SS = tr[(L B)' (L (X'X)^-1 L')^-1 (L B)], SS_error = tr(E'E), df1 = cols(P) rows(L),
+/// df2 = cols(P) (N - rank X). Sphericity statistics use S = E'E / (N - rank X) with error
+/// df N - rank X (car: Huynh-Feldt ((ν + 1) p ε_GG − 2) / (p (ν − p ε_GG))). Without between
+/// factors this is the plain repeated-measures ANOVA below (X = 1, ν = N − 1).
 ///
 /// For an effect with orthonormal contrast matrix P (cells x df1), Z = Y P (subjects x
 /// df1): SS = n |mean(Z)|^2, SS_error = trace of the centred Z'Z, S = cov(Z). Sphericity:
@@ -25,6 +35,7 @@ namespace hapticlab::stats {
 
 struct AnovaEffect {
   std::string effect;   ///< "A", "B", "A:B"
+  bool between_only = false;  ///< a between-subjects term (no sphericity statistics: ε = 1, Mauchly NaN)
   double df1 = 0, df2 = 0;
   double SS = 0, SS_error = 0, MSE = 0;
   double F = 0, p = 0;
@@ -36,19 +47,38 @@ struct AnovaEffect {
 };
 
 struct RmAnovaResult {
-  std::vector<std::string> factors;
-  std::vector<std::vector<std::string>> levels;  ///< sorted levels of each factor
+  std::vector<std::string> factors;              ///< within factors
+  std::vector<std::vector<std::string>> levels;  ///< sorted levels of each within factor
+  std::vector<std::string> between;              ///< between factors (empty: repeated measures only)
+  std::vector<std::vector<std::string>> between_levels;  ///< sorted levels of each between factor
   std::vector<std::string> subjects;             ///< kept subjects, sorted
+  /// Between cell of each kept subject (index over the between factors' level combinations,
+  /// last factor fastest); all 0 without between factors.
+  std::vector<int> subject_group;
+  std::vector<int> group_sizes;                  ///< kept subjects per between cell
   std::vector<std::string> dropped_subjects;     ///< subjects with a missing cell
-  std::vector<AnovaEffect> effects;              ///< main effects in order, then interactions
+  /// Why each dropped subject went, parallel to dropped_subjects: the missing cells, e.g.
+  /// "no rating for method=visual" (or the file line of a missing score).
+  std::vector<std::string> dropped_reasons;
+  double error_df = 0;                           ///< N − rank X (N − 1 without between factors)
+  /// Effects in afex's order: between terms, then each within term followed by its
+  /// interactions with the between terms ("group:method").
+  std::vector<AnovaEffect> effects;
   /// Cell means: cells[s][c], cell index c with the last factor fastest.
   std::vector<std::vector<double>> cells;
 };
 
-/// @param data long table with the subject column and the factor columns as keys
-/// @throws hapticlab::InputError when fewer than 2 subjects remain or a factor has 1 level
+/// @param data long table with the subject column and the factor columns as keys; a NaN
+///        response (a missing score read with ReadLongCsv's allow_missing) leaves its cell
+///        unobserved, so its subject is dropped (and named) as afex does
+/// @param between between-subject factors (each subject must have exactly one level)
+/// @throws hapticlab::InputError when fewer than 2 subjects remain, a factor has 1 level, a
+///         within factor is constant within every subject (it is between-subjects: the
+///         message says to give it with --between), a between factor varies within a
+///         subject, or a between cell has no subject left
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
-                      const std::vector<std::string>& within);
+                      const std::vector<std::string>& within,
+                      const std::vector<std::string>& between = {});
 
 /// One-way between-subjects ANOVA (every row an independent observation). Sums of squares
 /// are formed from centred values (two passes), which keeps NIST StRD's hard cases

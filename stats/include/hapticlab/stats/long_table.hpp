@@ -14,8 +14,9 @@ struct LongTable {
   std::string source;                      ///< file name, for messages
   std::vector<std::string> key_names;
   std::vector<std::vector<std::string>> keys;
-  std::vector<double> y;
+  std::vector<double> y;                   ///< NaN: a missing response (allow_missing)
   std::string y_name;
+  std::vector<std::size_t> lines;          ///< source line of each row (empty when built in code)
 
   std::size_t rows() const { return y.size(); }
   /// Index of a key column; throws InputError naming the source and the column.
@@ -31,9 +32,11 @@ struct LongTable {
 
 /// Reads a CSV: `dv` must be numeric in every kept row; `key_columns` are kept as text.
 /// Empty or non-numeric responses are errors naming file, line and column (missing data is
-/// never silently dropped).
+/// never silently dropped). With `allow_missing`, an empty or `NA` response is read as NaN
+/// (for the ANOVA, which drops and names the subject, as afex does); anything else
+/// non-numeric is still an error.
 LongTable ReadLongCsv(const std::string& path, const std::string& dv,
-                      const std::vector<std::string>& key_columns);
+                      const std::vector<std::string>& key_columns, bool allow_missing = false);
 
 /// Splits "a,b,c" into {"a","b","c"} (empty parts dropped).
 std::vector<std::string> SplitList(const std::string& s);

@@ -38,7 +38,16 @@ struct TukeyResult {
 /// Independent groups of `factor` (every row one observation).
 TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, double conf = 0.95);
 
-/// Within-subject factor of an rmANOVA result (averaged over the other factors).
+/// A factor of an rmANOVA or mixed ANOVA result (averaged over the other factors), as emmeans
+/// compares it on an afex object: marginal means average the between cells equally.
+/// - within factor, univariate: SE^2 = 2 MSE / (cells per level) * (1/G^2) sum_g 1/n_g with
+///   the effect's MSE and df (G between cells of n_g subjects; 2 MSE / (n cells) without
+///   between factors);
+/// - within factor, multivariate: per pair, the subjects' differences d regressed on the
+///   between cells: SE^2 = s_d^2 (1/G^2) sum_g 1/n_g, df = N − G (N − 1 without between);
+/// - between factor (`method` "between-subjects (mixed ANOVA)"): each subject's mean over all
+///   cells, the pooled variance around the between-cell means, df = N − G (the multivariate
+///   flag does not matter: both of emmeans' models give this).
 /// @param multivariate false: pooled effect error (emmeans univariate); true: per-pair error
 TukeyResult TukeyWithin(const RmAnovaResult& anova, const std::string& factor, bool multivariate,
                         double conf = 0.95);
