@@ -80,6 +80,7 @@ TEST(PsychometricBootstrap, CoversTrueParametersInAtLeast90PercentOfSeeds) {
   o.shape = Shape::kWeibull;
   o.guess = 0.5;
   int thr_in = 0, slope_in = 0, usable = 0;
+  std::vector<double> estimates, widths;
   for (int seed = 0; seed < kSeeds; ++seed) {
     Rng rng(DeriveSeed(2024, static_cast<std::uint64_t>(seed)));
     PsychometricData d;
@@ -95,12 +96,22 @@ TEST(PsychometricBootstrap, CoversTrueParametersInAtLeast90PercentOfSeeds) {
     if (!fit.usable) continue;
     ++usable;
     const auto b = BootstrapPsychometric(d, o, fit, kReplicates, DeriveSeed(77, static_cast<std::uint64_t>(seed)));
+    estimates.push_back(fit.params.threshold);
+    widths.push_back(b.threshold.hi - b.threshold.lo);
     thr_in += b.threshold.lo <= truth.threshold && truth.threshold <= b.threshold.hi;
     slope_in += b.slope.lo <= truth.slope && truth.slope <= b.slope.hi;
   }
   EXPECT_EQ(usable, kSeeds);
   EXPECT_GE(thr_in, 0.9 * kSeeds) << thr_in << " of " << kSeeds;
   EXPECT_GE(slope_in, 0.9 * kSeeds) << slope_in << " of " << kSeeds;
+  // Not covering by being wide: a 95 % interval spans about 3.9 sampling SDs of the estimate;
+  // the mean width must lie within [2, 6] SDs (the SD estimated from the 40 fits, +-11 %).
+  double mean = 0, var = 0, width = 0;
+  for (double e : estimates) mean += e / kSeeds;
+  for (double e : estimates) var += (e - mean) * (e - mean) / (kSeeds - 1);
+  for (double w : widths) width += w / kSeeds;
+  EXPECT_GT(width, 2 * std::sqrt(var));
+  EXPECT_LT(width, 6 * std::sqrt(var));
 }
 
 TEST(PsychometricFit, RecoversLapseWhenFree) {
