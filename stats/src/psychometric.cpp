@@ -197,14 +197,15 @@ PsychometricFit FitPsychometric(const PsychometricData& d, const PsychometricFit
 
 PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d, const PsychometricFitOptions& o,
                                             const PsychometricFit& fit, int replicates, std::uint64_t seed,
-                                            double level) {
+                                            double level, double jnd_performance) {
   if (!fit.usable) throw std::invalid_argument("bootstrap: the fit is not usable: " + fit.message);
   if (replicates < 2 || !(level > 0 && level < 1))
     throw std::invalid_argument("bootstrap: needs >= 2 replicates and 0 < level < 1");
   PsychometricBootstrap out;
   out.level = level;
+  out.jnd = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   Rng rng(seed);
-  std::vector<double> thr, slope;
+  std::vector<double> thr, slope, jnd;
   PsychometricData sim = d;
   for (int r = 0; r < replicates; ++r) {
     for (std::size_t i = 0; i < d.x.size(); ++i) {
@@ -220,6 +221,11 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d, const Psy
     }
     thr.push_back(f.params.threshold);
     slope.push_back(f.params.slope);
+    if (jnd_performance > o.guess && jnd_performance < 1) {
+      // A replicate whose lapse leaves the performance unreachable counts as infinitely far.
+      const auto x = psychophysics::StimulusAt(o.shape, f.params, jnd_performance);
+      jnd.push_back(x ? *x : std::numeric_limits<double>::infinity());
+    }
   }
   out.replicates = static_cast<int>(thr.size());
   if (thr.size() < 2) return out;
@@ -234,6 +240,7 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d, const Psy
   const double tail = (1 - level) / 2;
   out.threshold = {quantile(thr, tail), quantile(thr, 1 - tail)};
   out.slope = {quantile(slope, tail), quantile(slope, 1 - tail)};
+  out.jnd = jnd.empty() ? out.jnd : BootstrapInterval{quantile(jnd, tail), quantile(jnd, 1 - tail)};
   return out;
 }
 

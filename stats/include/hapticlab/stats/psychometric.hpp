@@ -55,14 +55,16 @@ struct PsychometricBootstrap {
   int failed = 0;              ///< refits that did not converge (left out)
   double level = 0.95;
   BootstrapInterval threshold, slope;  ///< percentile intervals
+  BootstrapInterval jnd;  ///< of StimulusAt(jnd_performance) when one was asked for, else NaN
 };
 
 /// Parametric bootstrap: `replicates` data sets drawn from the fitted function at the same
 /// stimuli and trial counts, each refitted with the same options; percentile intervals at
-/// `level`. Deterministic for a seed.
+/// `level`; with `jnd_performance` in (guess, 1) also of the stimulus at that performance.
+/// Deterministic for a seed.
 PsychometricBootstrap BootstrapPsychometric(const PsychometricData& data, const PsychometricFitOptions& options,
                                             const PsychometricFit& fit, int replicates, std::uint64_t seed,
-                                            double level = 0.95);
+                                            double level = 0.95, double jnd_performance = -1);
 
 /// Pools trials with equal x (sorted by x): for binned plots and compact fits.
 PsychometricData PoolByStimulus(const PsychometricData& d);
