@@ -8,9 +8,12 @@ namespace hapticlab::psychophysics {
 
 const char* ToString(Shape s) {
   switch (s) {
-    case Shape::kLogistic: return "logistic";
-    case Shape::kWeibull: return "weibull";
-    case Shape::kNormal: return "normal";
+    case Shape::kLogistic:
+      return "logistic";
+    case Shape::kWeibull:
+      return "weibull";
+    case Shape::kNormal:
+      return "normal";
   }
   return "?";
 }
@@ -24,9 +27,12 @@ std::optional<Shape> ParseShape(const std::string& s) {
 
 const char* ToString(Task t) {
   switch (t) {
-    case Task::kYesNo: return "yes-no";
-    case Task::k2Afc: return "2afc";
-    case Task::k3Afc: return "3afc";
+    case Task::kYesNo:
+      return "yes-no";
+    case Task::k2Afc:
+      return "2afc";
+    case Task::k3Afc:
+      return "3afc";
   }
   return "?";
 }
@@ -51,9 +57,12 @@ double Predictor(Shape s, double x) {
 
 double CoreOfEta(Shape s, double eta) {
   switch (s) {
-    case Shape::kLogistic: return 1.0 / (1.0 + std::exp(-eta));
-    case Shape::kNormal: return 0.5 * std::erfc(-eta / std::numbers::sqrt2);
-    case Shape::kWeibull: return -std::expm1(-std::exp(eta));
+    case Shape::kLogistic:
+      return 1.0 / (1.0 + std::exp(-eta));
+    case Shape::kNormal:
+      return 0.5 * std::erfc(-eta / std::numbers::sqrt2);
+    case Shape::kWeibull:
+      return -std::expm1(-std::exp(eta));
   }
   return 0;
 }
@@ -64,7 +73,8 @@ double CoreDensityOfEta(Shape s, double eta) {
       const double F = 1.0 / (1.0 + std::exp(-eta));
       return F * (1 - F);
     }
-    case Shape::kNormal: return std::exp(-0.5 * eta * eta) / std::sqrt(2 * std::numbers::pi);
+    case Shape::kNormal:
+      return std::exp(-0.5 * eta * eta) / std::sqrt(2 * std::numbers::pi);
     case Shape::kWeibull: {
       if (!std::isfinite(eta)) return 0;
       const double e = std::exp(eta);
@@ -76,8 +86,10 @@ double CoreDensityOfEta(Shape s, double eta) {
 
 double EtaOfCore(Shape s, double F) {
   switch (s) {
-    case Shape::kLogistic: return std::log(F / (1 - F));
-    case Shape::kWeibull: return std::log(-std::log1p(-F));
+    case Shape::kLogistic:
+      return std::log(F / (1 - F));
+    case Shape::kWeibull:
+      return std::log(-std::log1p(-F));
     case Shape::kNormal: {
       // Newton on Phi(eta) = F from a logistic start; Phi is smooth and monotone.
       double eta = std::log(F / (1 - F)) / 1.702;  // logistic approximation of Phi

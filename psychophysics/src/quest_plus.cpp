@@ -15,11 +15,15 @@ bool QuestPlusConfig::IsValid(std::string* why) const {
   };
   if (stimuli.empty() || thresholds.empty() || slopes.empty() || lapses.empty())
     w = "stimuli, thresholds, slopes and lapses must each have at least one value";
-  else if (!finite(stimuli) || !finite(thresholds) || !finite(slopes) || !finite(lapses)) w = "values must be finite";
-  else if (!(guess >= 0 && guess < 1)) w = "guess rate must be in [0, 1)";
-  else if (std::any_of(lapses.begin(), lapses.end(), [&](double l) { return !(l >= 0 && l < 1 - guess); }))
+  else if (!finite(stimuli) || !finite(thresholds) || !finite(slopes) || !finite(lapses))
+    w = "values must be finite";
+  else if (!(guess >= 0 && guess < 1))
+    w = "guess rate must be in [0, 1)";
+  else if (std::any_of(lapses.begin(), lapses.end(),
+                       [&](double l) { return !(l >= 0 && l < 1 - guess); }))
     w = "lapse rates must be in [0, 1 - guess)";
-  else if (std::any_of(slopes.begin(), slopes.end(), [](double b) { return !(b > 0); })) w = "slopes must be > 0";
+  else if (std::any_of(slopes.begin(), slopes.end(), [](double b) { return !(b > 0); }))
+    w = "slopes must be > 0";
   else if (shape == Shape::kWeibull &&
            (std::any_of(stimuli.begin(), stimuli.end(), [](double x) { return !(x > 0); }) ||
             std::any_of(thresholds.begin(), thresholds.end(), [](double x) { return !(x > 0); })))
@@ -41,7 +45,8 @@ QuestPlus::QuestPlus(QuestPlusConfig c) : c_(std::move(c)) {
     }
 }
 
-QuestPlus QuestPlus::Replay(const QuestPlusConfig& c, const std::vector<std::pair<double, bool>>& trials) {
+QuestPlus QuestPlus::Replay(const QuestPlusConfig& c,
+                            const std::vector<std::pair<double, bool>>& trials) {
   QuestPlus q(c);
   for (const auto& [x, r] : trials) q.Update(q.StimulusIndex(x), r);
   return q;
@@ -66,7 +71,8 @@ void QuestPlus::Update(std::size_t j, bool positive) {
     post_[k] *= L;
     sum += post_[k];
   }
-  if (!(sum > 0)) throw std::invalid_argument("QUEST+: the answer has zero probability under every grid point");
+  if (!(sum > 0))
+    throw std::invalid_argument("QUEST+: the answer has zero probability under every grid point");
   for (auto& p : post_) p /= sum;
   ++trials_;
 }
@@ -111,7 +117,8 @@ QuestPlusPoint QuestPlus::Mean() const {
 }
 
 QuestPlusPoint QuestPlus::Mode() const {
-  return Point(static_cast<std::size_t>(std::max_element(post_.begin(), post_.end()) - post_.begin()));
+  return Point(
+      static_cast<std::size_t>(std::max_element(post_.begin(), post_.end()) - post_.begin()));
 }
 
 std::vector<double> QuestPlus::ThresholdMarginal() const {

@@ -6,8 +6,8 @@ double PositiveProbability(const SimulatedObserverParams& o, Task task, double x
   return Psi(o.shape, x, {o.threshold, o.slope, GuessRate(task, o.false_alarm), o.lapse});
 }
 
-ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x, int comparison_interval,
-                               Rng& rng) {
+ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x,
+                               int comparison_interval, Rng& rng) {
   ObserverAnswer a;
   a.positive = rng.Uniform() < PositiveProbability(o, task, x);
   if (task == Task::kYesNo) {

@@ -13,20 +13,26 @@ namespace hapticlab::psychophysics {
 
 bool StaircaseConfig::IsValid(std::string* why) const {
   std::string w;
-  if (up < 1 || down < 1) w = "up and down must be >= 1";
-  else if (step_sizes.empty() || std::any_of(step_sizes.begin(), step_sizes.end(), [](double s) { return !(s > 0); }))
+  if (up < 1 || down < 1)
+    w = "up and down must be >= 1";
+  else if (step_sizes.empty() ||
+           std::any_of(step_sizes.begin(), step_sizes.end(), [](double s) { return !(s > 0); }))
     w = "step sizes must be > 0";
-  else if (start_levels.empty()) w = "needs at least one start level (one per interleaved track)";
-  else if (!(min_level < max_level)) w = "min_level must be below max_level";
+  else if (start_levels.empty())
+    w = "needs at least one start level (one per interleaved track)";
+  else if (!(min_level < max_level))
+    w = "min_level must be below max_level";
   else if (std::any_of(start_levels.begin(), start_levels.end(),
                        [&](double l) { return !(l >= min_level && l <= max_level); }))
     w = "start levels must lie within [min_level, max_level]";
   else if (step_type == StepType::kLog &&
-           (!(min_level > 0) ||
-            std::any_of(start_levels.begin(), start_levels.end(), [](double l) { return !(l > 0); })))
+           (!(min_level > 0) || std::any_of(start_levels.begin(), start_levels.end(),
+                                            [](double l) { return !(l > 0); })))
     w = "logarithmic steps need levels > 0 (set min_level > 0)";
-  else if (max_reversals < 1 || max_trials < 1) w = "max_reversals and max_trials must be >= 1";
-  else if (discard_reversals < 0) w = "discard_reversals must be >= 0";
+  else if (max_reversals < 1 || max_trials < 1)
+    w = "max_reversals and max_trials must be >= 1";
+  else if (discard_reversals < 0)
+    w = "discard_reversals must be >= 0";
   if (why) *why = w;
   return w.empty();
 }
@@ -50,15 +56,18 @@ void Step(const StaircaseConfig& c, TrackState& t, bool positive) {
     t.direction = move;
     const auto k = std::min(t.reversal_levels.size(), c.step_sizes.size() - 1);
     const double step = c.step_sizes[k];
-    const double next = c.step_type == StepType::kLinear ? t.level + move * step : t.level * std::pow(10.0, move * step);
+    const double next = c.step_type == StepType::kLinear ? t.level + move * step
+                                                         : t.level * std::pow(10.0, move * step);
     t.level = std::clamp(next, c.min_level, c.max_level);
   }
-  t.done = static_cast<int>(t.reversal_levels.size()) >= c.max_reversals || t.trials >= c.max_trials;
+  t.done =
+      static_cast<int>(t.reversal_levels.size()) >= c.max_reversals || t.trials >= c.max_trials;
 }
 
 }  // namespace
 
-std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c, const std::vector<StaircaseTrial>& trials) {
+std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c,
+                                        const std::vector<StaircaseTrial>& trials) {
   std::string why;
   if (!c.IsValid(&why)) throw std::invalid_argument("staircase: " + why);
   std::vector<TrackState> tracks(c.start_levels.size());
@@ -66,18 +75,22 @@ std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c, const std::vec
   for (std::size_t i = 0; i < trials.size(); ++i) {
     const auto& r = trials[i];
     if (r.track < 0 || r.track >= static_cast<int>(tracks.size()))
-      throw std::invalid_argument(fmt::format("staircase: trial {} names track {} of {}", i, r.track, tracks.size()));
+      throw std::invalid_argument(
+          fmt::format("staircase: trial {} names track {} of {}", i, r.track, tracks.size()));
     TrackState& t = tracks[static_cast<std::size_t>(r.track)];
-    if (t.done) throw std::invalid_argument(fmt::format("staircase: trial {} continues a stopped track", i));
+    if (t.done)
+      throw std::invalid_argument(fmt::format("staircase: trial {} continues a stopped track", i));
     if (std::abs(r.level - t.level) > 1e-9 * std::max(1.0, std::abs(t.level)))
-      throw std::invalid_argument(fmt::format("staircase: trial {} was recorded at level {} but the rules give {}", i,
-                                              r.level, t.level));
+      throw std::invalid_argument(
+          fmt::format("staircase: trial {} was recorded at level {} but the rules give {}", i,
+                      r.level, t.level));
     Step(c, t, r.positive);
   }
   return tracks;
 }
 
-NextStaircaseTrial NextTrial(const StaircaseConfig& c, const std::vector<StaircaseTrial>& trials, std::uint64_t seed) {
+NextStaircaseTrial NextTrial(const StaircaseConfig& c, const std::vector<StaircaseTrial>& trials,
+                             std::uint64_t seed) {
   const auto tracks = ReplayStaircase(c, trials);
   std::vector<int> running;
   for (std::size_t i = 0; i < tracks.size(); ++i)
@@ -96,10 +109,12 @@ NextStaircaseTrial NextTrial(const StaircaseConfig& c, const std::vector<Stairca
 double TrackEstimate(const StaircaseConfig& c, const TrackState& t) {
   const auto& r = t.reversal_levels;
   if (r.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const std::size_t skip =
-      static_cast<int>(r.size()) > c.discard_reversals ? static_cast<std::size_t>(c.discard_reversals) : 0;
+  const std::size_t skip = static_cast<int>(r.size()) > c.discard_reversals
+                               ? static_cast<std::size_t>(c.discard_reversals)
+                               : 0;
   double s = 0;
-  for (std::size_t i = skip; i < r.size(); ++i) s += c.step_type == StepType::kLog ? std::log(r[i]) : r[i];
+  for (std::size_t i = skip; i < r.size(); ++i)
+    s += c.step_type == StepType::kLog ? std::log(r[i]) : r[i];
   s /= static_cast<double>(r.size() - skip);
   return c.step_type == StepType::kLog ? std::exp(s) : s;
 }

@@ -421,7 +421,7 @@ void LogPlanEvents(db::Database& database, std::int64_t session, const std::vect
 }  // namespace
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
-  internal::CheckAdaptivePhases(p, opt.device);
+  internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
   const Lab lab = LoadLab(p, opt.device);
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);

@@ -19,13 +19,13 @@ using psychophysics::Shape;
 constexpr double kProbFloor = 1e-300;
 
 struct Eval {
-  double ll = 0;        // log-likelihood without the binomial coefficients
-  double g0 = 0, g1 = 0;  // gradient in (a, b)
+  double ll = 0;                     // log-likelihood without the binomial coefficients
+  double g0 = 0, g1 = 0;             // gradient in (a, b)
   double i00 = 0, i01 = 0, i11 = 0;  // expected (Fisher) information
 };
 
-Eval Evaluate(const PsychometricData& d, const std::vector<double>& gx, Shape s, double guess, double lapse,
-              double a, double b) {
+Eval Evaluate(const PsychometricData& d, const std::vector<double>& gx, Shape s, double guess,
+              double lapse, double a, double b) {
   Eval e;
   const double span = 1 - guess - lapse;
   for (std::size_t i = 0; i < gx.size(); ++i) {
@@ -55,8 +55,8 @@ double LogChooseSum(const PsychometricData& d) {
 }
 
 // Starting values: weighted least squares of the transformed, slightly shrunk proportions.
-void StartValues(const PsychometricData& d, const std::vector<double>& gx, Shape s, double guess, double lapse,
-                 double* a, double* b) {
+void StartValues(const PsychometricData& d, const std::vector<double>& gx, Shape s, double guess,
+                 double lapse, double* a, double* b) {
   double sw = 0, sx = 0, sy = 0, sxx = 0, sxy = 0;
   for (std::size_t i = 0; i < gx.size(); ++i) {
     const double p = (d.k[i] + 0.5) / (d.n[i] + 1.0);
@@ -74,8 +74,8 @@ void StartValues(const PsychometricData& d, const std::vector<double>& gx, Shape
 }
 
 // Fisher scoring with step halving at fixed guess and lapse rates.
-PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<double>& gx, Shape s, double guess,
-                              double lapse, double a0, double b0) {
+PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<double>& gx, Shape s,
+                              double guess, double lapse, double a0, double b0) {
   PsychometricFit f;
   double a = a0, b = b0;
   Eval e = Evaluate(d, gx, s, guess, lapse, a, b);
@@ -103,7 +103,8 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
     b += db;
     const double change = std::abs(next.ll - e.ll);
     e = next;
-    converged = change < 1e-13 * (1 + std::abs(e.ll)) && std::abs(da) + std::abs(db) < 1e-10 * (1 + std::abs(a) + std::abs(b));
+    converged = change < 1e-13 * (1 + std::abs(e.ll)) &&
+                std::abs(da) + std::abs(db) < 1e-10 * (1 + std::abs(a) + std::abs(b));
   }
   f.iterations = it;
   f.a = a;
@@ -116,9 +117,11 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
   f.params.threshold = s == Shape::kWeibull ? std::exp(g_alpha) : g_alpha;
   f.usable = converged && b != 0 && std::isfinite(a) && std::isfinite(b) && std::abs(b) < 1e8 &&
              std::isfinite(f.params.threshold);
-  f.message = f.usable ? "converged"
-                       : (converged ? "degenerate fit (slope 0 or unbounded: the data may be perfectly separated)"
-                                    : fmt::format("did not converge in {} iterations", it));
+  f.message =
+      f.usable ? "converged"
+               : (converged
+                      ? "degenerate fit (slope 0 or unbounded: the data may be perfectly separated)"
+                      : fmt::format("did not converge in {} iterations", it));
   return f;
 }
 
@@ -126,9 +129,12 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
 
 bool PsychometricFitOptions::IsValid(std::string* why) const {
   std::string w;
-  if (!(guess >= 0 && guess < 1)) w = "guess rate must be in [0, 1)";
-  else if (!lapse_free && !(lapse >= 0 && lapse < 1 - guess)) w = "lapse rate must be in [0, 1 - guess)";
-  else if (lapse_free && !(max_lapse > 0 && max_lapse < 1 - guess)) w = "max_lapse must be in (0, 1 - guess)";
+  if (!(guess >= 0 && guess < 1))
+    w = "guess rate must be in [0, 1)";
+  else if (!lapse_free && !(lapse >= 0 && lapse < 1 - guess))
+    w = "lapse rate must be in [0, 1 - guess)";
+  else if (lapse_free && !(max_lapse > 0 && max_lapse < 1 - guess))
+    w = "max_lapse must be in (0, 1 - guess)";
   if (why) *why = w;
   return w.empty();
 }
@@ -141,12 +147,14 @@ PsychometricFit FitPsychometric(const PsychometricData& d, const PsychometricFit
   std::vector<double> gx;
   for (std::size_t i = 0; i < d.x.size(); ++i) {
     if (d.n[i] < 1 || d.k[i] < 0 || d.k[i] > d.n[i])
-      throw std::invalid_argument(fmt::format("psychometric fit: bin {} has k = {} of n = {}", i, d.k[i], d.n[i]));
+      throw std::invalid_argument(
+          fmt::format("psychometric fit: bin {} has k = {} of n = {}", i, d.k[i], d.n[i]));
     if (o.shape == Shape::kWeibull && !(d.x[i] > 0))
       throw std::invalid_argument("psychometric fit: a Weibull needs stimuli > 0");
     gx.push_back(psychophysics::Predictor(o.shape, d.x[i]));
   }
-  if (gx.size() < 2 || *std::max_element(gx.begin(), gx.end()) == *std::min_element(gx.begin(), gx.end())) {
+  if (gx.size() < 2 ||
+      *std::max_element(gx.begin(), gx.end()) == *std::min_element(gx.begin(), gx.end())) {
     PsychometricFit f;
     f.message = "needs at least two distinct stimulus values";
     return f;
@@ -195,9 +203,11 @@ PsychometricFit FitPsychometric(const PsychometricData& d, const PsychometricFit
   return best;
 }
 
-PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d, const PsychometricFitOptions& o,
-                                            const PsychometricFit& fit, int replicates, std::uint64_t seed,
-                                            double level, double jnd_performance) {
+PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d,
+                                            const PsychometricFitOptions& o,
+                                            const PsychometricFit& fit, int replicates,
+                                            std::uint64_t seed, double level,
+                                            double jnd_performance) {
   if (!fit.usable) throw std::invalid_argument("bootstrap: the fit is not usable: " + fit.message);
   if (replicates < 2 || !(level > 0 && level < 1))
     throw std::invalid_argument("bootstrap: needs >= 2 replicates and 0 < level < 1");

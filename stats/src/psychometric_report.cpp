@@ -29,7 +29,8 @@ std::string Safe(const std::string& s) {
 
 std::string Num(double v) { return std::isfinite(v) ? fmt::format("{:.4g}", v) : "n/a"; }
 std::string Ci(const BootstrapInterval& i) {
-  return std::isfinite(i.lo) && std::isfinite(i.hi) ? fmt::format("[{:.4g}, {:.4g}]", i.lo, i.hi) : "n/a";
+  return std::isfinite(i.lo) && std::isfinite(i.hi) ? fmt::format("[{:.4g}, {:.4g}]", i.lo, i.hi)
+                                                    : "n/a";
 }
 
 PsychometricData ToData(const std::vector<AdaptiveAnswer>& a) {
@@ -51,8 +52,9 @@ struct FitRow {
   double staircase = NAN;  // mean of the reversal estimates of the tracks (staircase phases)
 };
 
-FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a, const protocols::AdaptiveSpec& spec,
-              const PsychometricFitOptions& o, int replicates, std::uint64_t seed) {
+FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a,
+              const protocols::AdaptiveSpec& spec, const PsychometricFitOptions& o, int replicates,
+              std::uint64_t seed) {
   FitRow r;
   r.who = who;
   r.trials = static_cast<int>(a.size());
@@ -71,7 +73,8 @@ FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a, cons
 
 }  // namespace
 
-std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const std::string& study, int phase_index) {
+std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const std::string& study,
+                                            int phase_index) {
   db::Database d(db_path, {.create = false, .read_only = true});
   std::vector<AdaptiveAnswer> out;
   const auto st = d.FindStudy(study);
@@ -181,9 +184,9 @@ std::vector<std::string> DrawPsychometricPlot(const PsychometricPlot& p, const s
   return files;
 }
 
-std::string AdaptiveReport(const std::string& db_path, const std::string& study, const std::string& protocol_toml,
-                           const std::string& out_dir, bool figures, std::vector<std::string>* files,
-                           int replicates) {
+std::string AdaptiveReport(const std::string& db_path, const std::string& study,
+                           const std::string& protocol_toml, const std::string& out_dir,
+                           bool figures, std::vector<std::string>* files, int replicates) {
   const auto proto = protocols::ParseProtocol(protocol_toml, "(protocol of " + study + ")");
   std::ostringstream md;
   std::ofstream csv;
@@ -199,7 +202,8 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
       csv.open(path);
       if (!csv) throw std::runtime_error(path + ": cannot write");
       files->push_back(path);
-      csv << "phase,participant,trials,function,threshold,threshold_lo,threshold_hi,slope,slope_lo,slope_hi,lapse,"
+      csv << "phase,participant,trials,function,threshold,threshold_lo,threshold_hi,slope,slope_lo,"
+             "slope_hi,lapse,"
              "jnd,jnd_lo,jnd_hi,weber,weber_lo,weber_hi,staircase_estimate\n";
     }
     PsychometricFitOptions o;
@@ -208,18 +212,23 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
     o.lapse_free = a.fit_lapse_free;
     o.lapse = a.fit_lapse;
     const bool weber = a.reference > 0;
-    md << fmt::format("\n### Phase {}: {} of `{}` ({} {}, {})\n\n", pi, psychophysics::ToString(a.task),
-                      a.parameter, a.material, a.method, protocols::ToString(ph.kind));
+    md << fmt::format("\n### Phase {}: {} of `{}` ({} {}, {})\n\n", pi,
+                      psychophysics::ToString(a.task), a.parameter, a.material, a.method,
+                      protocols::ToString(ph.kind));
     md << fmt::format(
-        "Stimulus x = comparison - reference ({} = {}). Fit: {} by maximum likelihood, guess rate {:.3g} (task), "
-        "lapse {}; 95 % parametric-bootstrap intervals ({} replicates). JND = x at {:.1f} % positive{}.\n\n",
+        "Stimulus x = comparison - reference ({} = {}). Fit: {} by maximum likelihood, guess rate "
+        "{:.3g} (task), "
+        "lapse {}; 95 % parametric-bootstrap intervals ({} replicates). JND = x at {:.1f} % "
+        "positive{}.\n\n",
         a.parameter, a.reference, psychophysics::ToString(a.fit), o.guess,
-        o.lapse_free ? fmt::format("free in [0, {}]", o.max_lapse) : fmt::format("fixed at {}", o.lapse), replicates,
-        100 * a.jnd_performance, weber ? "; Weber fraction = JND / reference" : "");
+        o.lapse_free ? fmt::format("free in [0, {}]", o.max_lapse)
+                     : fmt::format("fixed at {}", o.lapse),
+        replicates, 100 * a.jnd_performance, weber ? "; Weber fraction = JND / reference" : "");
     md << "| participant | trials | threshold [95 % CI] | slope [95 % CI] | lapse | JND [95 % CI] |"
        << (weber ? " Weber fraction [95 % CI] |" : "")
-       << (ph.kind == protocols::PhaseKind::kStaircase ? " staircase (mean of reversals) |" : "") << "\n|---|---|---|---|---|---|"
-       << (weber ? "---|" : "") << (ph.kind == protocols::PhaseKind::kStaircase ? "---|" : "") << "\n";
+       << (ph.kind == protocols::PhaseKind::kStaircase ? " staircase (mean of reversals) |" : "")
+       << "\n|---|---|---|---|---|---|" << (weber ? "---|" : "")
+       << (ph.kind == protocols::PhaseKind::kStaircase ? "---|" : "") << "\n";
     std::map<std::string, std::vector<AdaptiveAnswer>> by;
     for (const auto& x : answers) by[x.participant].push_back(x);
     std::vector<FitRow> rows;
@@ -243,7 +252,8 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
         }
       }
     }
-    if (by.size() > 1) rows.push_back(FitOne("all (pooled)", answers, a, o, replicates, DeriveSeed(seed, 2)));
+    if (by.size() > 1)
+      rows.push_back(FitOne("all (pooled)", answers, a, o, replicates, DeriveSeed(seed, 2)));
     for (const auto& r : rows) {
       const auto& f = r.fit;
       const BootstrapInterval w{r.boot.jnd.lo / a.reference, r.boot.jnd.hi / a.reference};
@@ -251,16 +261,17 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
         md << fmt::format("| {} | {} | fit not usable: {} |\n", r.who, r.trials, f.message);
         continue;
       }
-      md << fmt::format("| {} | {} | {} {} | {} {} | {} | {} {} |", r.who, r.trials, Num(f.params.threshold),
-                        Ci(r.boot.threshold), Num(f.params.slope), Ci(r.boot.slope), Num(f.params.lapse), Num(r.jnd),
-                        Ci(r.boot.jnd));
+      md << fmt::format("| {} | {} | {} {} | {} {} | {} | {} {} |", r.who, r.trials,
+                        Num(f.params.threshold), Ci(r.boot.threshold), Num(f.params.slope),
+                        Ci(r.boot.slope), Num(f.params.lapse), Num(r.jnd), Ci(r.boot.jnd));
       if (weber) md << fmt::format(" {} {} |", Num(r.jnd / a.reference), Ci(w));
       if (ph.kind == protocols::PhaseKind::kStaircase) md << " " << Num(r.staircase) << " |";
       md << "\n";
-      csv << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", pi, r.who, r.trials,
-                         psychophysics::ToString(a.fit), f.params.threshold, r.boot.threshold.lo, r.boot.threshold.hi,
-                         f.params.slope, r.boot.slope.lo, r.boot.slope.hi, f.params.lapse, r.jnd, r.boot.jnd.lo,
-                         r.boot.jnd.hi, weber ? r.jnd / a.reference : NAN, weber ? w.lo : NAN, weber ? w.hi : NAN,
+      csv << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", pi, r.who,
+                         r.trials, psychophysics::ToString(a.fit), f.params.threshold,
+                         r.boot.threshold.lo, r.boot.threshold.hi, f.params.slope, r.boot.slope.lo,
+                         r.boot.slope.hi, f.params.lapse, r.jnd, r.boot.jnd.lo, r.boot.jnd.hi,
+                         weber ? r.jnd / a.reference : NAN, weber ? w.lo : NAN, weber ? w.hi : NAN,
                          r.staircase);
     }
     if (a.simulated_observer) {
@@ -270,28 +281,34 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
                                 ? psychophysics::StimulusAt(so.shape, truth, a.jnd_performance)
                                 : std::nullopt;
       md << fmt::format(
-          "\nSessions run with `--device sim` answered from the simulated observer: {} threshold {}, slope {}, lapse "
+          "\nSessions run with `--device sim` and no `--ui` answered from the simulated observer: {} threshold "
+          "{}, slope {}, lapse "
           "{}; its true JND is {}{}.\n",
-          psychophysics::ToString(so.shape), so.threshold, so.slope, so.lapse, true_jnd ? Num(*true_jnd) : "n/a",
-          true_jnd && weber ? fmt::format(" (Weber fraction {})", Num(*true_jnd / a.reference)) : "");
+          psychophysics::ToString(so.shape), so.threshold, so.slope, so.lapse,
+          true_jnd ? Num(*true_jnd) : "n/a",
+          true_jnd && weber ? fmt::format(" (Weber fraction {})", Num(*true_jnd / a.reference))
+                            : "");
     }
     // The figure: the pooled fit over the binned answers of everyone.
     const FitRow& pooled = rows.back();
     if (figures && pooled.fit.usable) {
       PsychometricPlot plot;
-      plot.title = fmt::format("{}: {} {} ({})", a.material, a.parameter, psychophysics::ToString(a.task),
-                               by.size() > 1 ? "all participants" : by.begin()->first);
+      plot.title =
+          fmt::format("{}: {} {} ({})", a.material, a.parameter, psychophysics::ToString(a.task),
+                      by.size() > 1 ? "all participants" : by.begin()->first);
       plot.x_label = fmt::format("{} difference from {}", a.parameter, a.reference);
       plot.binned = BinForPlot(ToData(answers));
       plot.shape = a.fit;
       plot.fit = pooled.fit.params;
       plot.jnd = pooled.jnd;
       plot.jnd_performance = a.jnd_performance;
-      const std::string base = (fs::path(out_dir) / fmt::format("{}_phase{}_psychometric", sid, pi)).string();
+      const std::string base =
+          (fs::path(out_dir) / fmt::format("{}_phase{}_psychometric", sid, pi)).string();
       const auto f = DrawPsychometricPlot(plot, base);
       files->insert(files->end(), f.begin(), f.end());
       md << "\n![psychometric function, phase " << pi << "](" << fs::path(base).filename().string()
-         << ".png)\n\nThe curve is the pooled fit; circles are the answers binned by x (area proportional to the "
+         << ".png)\n\nThe curve is the pooled fit; circles are the answers binned by x (area "
+            "proportional to the "
             "trials in the bin); the dashed lines mark the JND.\n";
     }
   }

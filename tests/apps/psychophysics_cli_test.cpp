@@ -14,7 +14,9 @@ namespace hapticlab {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
-std::string Example() { return std::string(HL_SOURCE_DIR) + "/studies/examples/vibration-gain-jnd.toml"; }
+std::string Example() {
+  return std::string(HL_SOURCE_DIR) + "/studies/examples/vibration-gain-jnd.toml";
+}
 
 TEST(PsychophysicsCli, ExampleJndStudyRunsAndReportsTheJnd) {
   test::TempDir dir;
@@ -27,7 +29,8 @@ TEST(PsychophysicsCli, ExampleJndStudyRunsAndReportsTheJnd) {
                              &out),
             0)
       << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep"), &out), 0)
+      << out;
   const std::string md = test::ReadFile(dir.File("rep/report.md"));
   EXPECT_NE(md.find("| P01 |"), std::string::npos) << md;
   EXPECT_NE(md.find("![psychometric function, phase 1]"), std::string::npos) << md;
@@ -45,7 +48,8 @@ TEST(PsychophysicsCli, ExampleJndStudyRunsAndReportsTheJnd) {
   bad.replace(bad.find("down = 2"), 8, "down = 0");
   test::WriteFile(dir.File("bad.toml"), bad);
   EXPECT_EQ(test::RunCommand(Cli() + " study validate " + dir.File("bad.toml"), &out), 2);
-  EXPECT_NE(out.find("bad.toml:45: phase[1].down: expected an integer 1..5"), std::string::npos) << out;
+  EXPECT_NE(out.find("bad.toml:45: phase[1].down: expected an integer 1..5"), std::string::npos)
+      << out;
 }
 
 }  // namespace

@@ -93,7 +93,8 @@ TEST(AdaptiveProtocol, ParsesStaircaseAndQuestPlusPhases) {
 }
 
 TEST(AdaptiveProtocol, TheExampleStudyParses) {
-  const auto p = LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/examples/vibration-gain-jnd.toml");
+  const auto p =
+      LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/examples/vibration-gain-jnd.toml");
   ASSERT_TRUE(p.phases.back().adaptive);
   EXPECT_EQ(p.phases.back().adaptive->parameter, "vibration.gain");
 }
@@ -105,22 +106,35 @@ TEST(AdaptiveProtocol, EveryProblemNamesFileLineAndKey) {
   const std::vector<Case> cases = {
       {"parameter = \"vibration.gain\"", "parameter = \"vibration.gian\"",
        ":23: phase[1].parameter: unknown parameter 'vibration.gian'"},
-      {"material = \"Denim\"\nmethod", "material = \"Cotton\"\nmethod", ":21: phase[1].material: no [[material]] with id 'Cotton'"},
-      {"method = \"Hybrid\"\nparameter = \"vib", "method = \"LPC\"\nparameter = \"vib", ":22: phase[1].method: no [[method]] named 'LPC'"},
-      {"task = \"2afc\"", "task = \"4afc\"", ":24: phase[1].task: expected 2afc, 3afc or yes-no, got '4afc'"},
+      {"material = \"Denim\"\nmethod", "material = \"Cotton\"\nmethod",
+       ":21: phase[1].material: no [[material]] with id 'Cotton'"},
+      {"method = \"Hybrid\"\nparameter = \"vib", "method = \"LPC\"\nparameter = \"vib",
+       ":22: phase[1].method: no [[method]] named 'LPC'"},
+      {"task = \"2afc\"", "task = \"4afc\"",
+       ":24: phase[1].task: expected 2afc, 3afc or yes-no, got '4afc'"},
       {"reference = 1.0\n", "", ":19: phase[1].reference: missing"},
       {"steps = [0.2, 0.1]", "steps = [0.2, -0.1]", ":27: phase[1].steps: steps must be > 0"},
-      {"start = [0.5, 0.05]", "start = [0.5, 3.0]", ":28: phase[1].start: start levels must lie within [min, max]"},
+      {"start = [0.5, 0.05]", "start = [0.5, 3.0]",
+       ":28: phase[1].start: start levels must lie within [min, max]"},
       {"min = 0.01", "min = 0.0", "phase[1].min: logarithmic steps need min > 0"},
-      {"discard_reversals = 2", "discard_reversals = 10", ":32: phase[1].discard_reversals: expected fewer than reversals"},
-      {"max_trials = 50", "max_trials = 0", ":33: phase[1].max_trials: expected an integer 1..10000"},
-      {"max_trials = 50", "max_trials = 50\nrepetitions = 2", ":34: phase[1].repetitions: unknown key (a typo?)"},
-      {"slope = 3.0", "slope = -3.0", "phase[1].simulated_observer.slope: expected the observer's true slope > 0"},
-      {"slope = 3.0", "slope = 3.0\nthreshhold = 1", "phase[1].simulated_observer.threshhold: unknown key"},
-      {"task = \"2afc\"", "task = \"2afc\"\nfalse_alarm = 0.1", "phase[1].false_alarm: only a yes-no task"},
-      {"task = \"2afc\"", "task = \"2afc\"\nfit = \"gumbel\"", "phase[1].fit: expected logistic, weibull or normal"},
-      {"task = \"2afc\"", "task = \"2afc\"\nfit_lapse = \"maybe\"", "phase[1].fit_lapse: expected \"free\""},
-      {"task = \"2afc\"", "task = \"2afc\"\njnd_performance = 0.4", "phase[1].jnd_performance: expected guess rate (0.5) < p < 1"},
+      {"discard_reversals = 2", "discard_reversals = 10",
+       ":32: phase[1].discard_reversals: expected fewer than reversals"},
+      {"max_trials = 50", "max_trials = 0",
+       ":33: phase[1].max_trials: expected an integer 1..10000"},
+      {"max_trials = 50", "max_trials = 50\nrepetitions = 2",
+       ":34: phase[1].repetitions: unknown key (a typo?)"},
+      {"slope = 3.0", "slope = -3.0",
+       "phase[1].simulated_observer.slope: expected the observer's true slope > 0"},
+      {"slope = 3.0", "slope = 3.0\nthreshhold = 1",
+       "phase[1].simulated_observer.threshhold: unknown key"},
+      {"task = \"2afc\"", "task = \"2afc\"\nfalse_alarm = 0.1",
+       "phase[1].false_alarm: only a yes-no task"},
+      {"task = \"2afc\"", "task = \"2afc\"\nfit = \"gumbel\"",
+       "phase[1].fit: expected logistic, weibull or normal"},
+      {"task = \"2afc\"", "task = \"2afc\"\nfit_lapse = \"maybe\"",
+       "phase[1].fit_lapse: expected \"free\""},
+      {"task = \"2afc\"", "task = \"2afc\"\njnd_performance = 0.4",
+       "phase[1].jnd_performance: expected guess rate (0.5) < p < 1"},
   };
   for (const auto& c : cases) {
     std::string text = std::string(kBase) + kStair;
@@ -132,7 +146,8 @@ TEST(AdaptiveProtocol, EveryProblemNamesFileLineAndKey) {
       ADD_FAILURE() << "accepted: " << c.to;
     } catch (const InputError& e) {
       const std::string msg = e.what();
-      EXPECT_NE(msg.find("bad.toml" + (c.expect[0] == ':' ? c.expect : ":" )), std::string::npos) << msg;
+      EXPECT_NE(msg.find("bad.toml" + (c.expect[0] == ':' ? c.expect : ":")), std::string::npos)
+          << msg;
       EXPECT_NE(msg.find(c.expect), std::string::npos) << "case '" << c.to << "' gave:\n" << msg;
     }
   }
@@ -143,11 +158,14 @@ TEST(AdaptiveProtocol, QuestPlusProblems) {
     std::string from, to, expect;
   };
   const std::vector<Case> cases = {
-      {"count = 16 }", "count = 1 }", "phase[2].stimuli: expected { from = a, to = b, count = 2..1000"},
+      {"count = 16 }", "count = 1 }",
+       "phase[2].stimuli: expected { from = a, to = b, count = 2..1000"},
       {"slopes = [10, 20, 40]", "slopes = [10, 0]", "phase[2].slopes: slopes must be > 0"},
       {"slopes = [10, 20, 40]\n", "", "phase[2].slopes: missing"},
-      {"stimuli = { from = 0.0", "stimuli = { from = -0.5", "phase[2].stimuli: 0.3 + -0.5 = -0.2 is below the smallest friction.mu_k"},
-      {"fit = \"logistic\"", "fit = \"weibull\"", "phase[2].stimuli: fit = \"weibull\" needs stimulus differences > 0"},
+      {"stimuli = { from = 0.0", "stimuli = { from = -0.5",
+       "phase[2].stimuli: 0.3 + -0.5 = -0.2 is below the smallest friction.mu_k"},
+      {"fit = \"logistic\"", "fit = \"weibull\"",
+       "phase[2].stimuli: fit = \"weibull\" needs stimulus differences > 0"},
       {"trials = 40", "trials = 40\nsteps = [1]", "phase[2].steps: unknown key"},
   };
   for (const auto& c : cases) {
@@ -159,7 +177,9 @@ TEST(AdaptiveProtocol, QuestPlusProblems) {
       ParseProtocol(text, "bad.toml");
       ADD_FAILURE() << "accepted: " << c.to;
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find(c.expect), std::string::npos) << "case '" << c.to << "' gave:\n" << e.what();
+      EXPECT_NE(std::string(e.what()).find(c.expect), std::string::npos)
+          << "case '" << c.to << "' gave:\n"
+          << e.what();
     }
   }
 }

@@ -45,7 +45,8 @@ TEST(Psychometric, ParsesNames) {
 TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
   // 3AFC at the threshold of a Weibull: P(correct) = 1/3 + (2/3 - 0.02)(1 - 1/e); wrong
   // answers spread evenly over the two other intervals.
-  const SimulatedObserverParams o{.shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
+  const SimulatedObserverParams o{
+      .shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
   Rng rng(5);
   constexpr int n = 200000;
   int correct = 0, counts[3] = {0, 0, 0};

@@ -41,7 +41,8 @@ TEST(QuestPlus, UpdateIsBayesRuleOnTheGrid) {
     expect.push_back(l);
     z += l;
   }
-  for (std::size_t k = 0; k < expect.size(); ++k) EXPECT_NEAR(q.posterior()[k], expect[k] / z, 1e-14);
+  for (std::size_t k = 0; k < expect.size(); ++k)
+    EXPECT_NEAR(q.posterior()[k], expect[k] / z, 1e-14);
 }
 
 TEST(QuestPlus, PlacesTheStimulusOfLeastExpectedEntropy) {
@@ -56,7 +57,8 @@ TEST(QuestPlus, PlacesTheStimulusOfLeastExpectedEntropy) {
     double p_pos = 0;
     for (std::size_t k = 0; k < q.posterior().size(); ++k) {
       const auto p = q.Point(k);
-      p_pos += q.posterior()[k] * Psi(Shape::kWeibull, q.config().stimuli[j], {p.threshold, p.slope, 0.5, p.lapse});
+      p_pos += q.posterior()[k] *
+               Psi(Shape::kWeibull, q.config().stimuli[j], {p.threshold, p.slope, 0.5, p.lapse});
     }
     QuestPlus yes = q, no = q;
     yes.Update(j, true);
@@ -74,7 +76,8 @@ TEST(QuestPlus, ReplayReproducesTheIncrementalState) {
   QuestPlus q(Config());
   std::vector<std::pair<double, bool>> h;
   Rng rng(3);
-  const SimulatedObserverParams o{.shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
+  const SimulatedObserverParams o{
+      .shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
   for (int i = 0; i < 20; ++i) {
     const double x = q.NextStimulus();
     const bool r = SimulatedAnswer(o, Task::k2Afc, x, 0, rng).positive;
@@ -94,12 +97,14 @@ TEST(QuestPlus, ReplayReproducesTheIncrementalState) {
 TEST(QuestPlus, PosteriorConcentratesOnTheTrueParameters) {
   QuestPlusConfig c = Config();
   const double true_threshold = c.thresholds[12];  // about 0.19
-  const SimulatedObserverParams o{.shape = Shape::kWeibull, .threshold = true_threshold, .slope = 3, .lapse = 0.02};
+  const SimulatedObserverParams o{
+      .shape = Shape::kWeibull, .threshold = true_threshold, .slope = 3, .lapse = 0.02};
   constexpr int kSeeds = 10, kTrials = 200;
   int covered = 0;
   double prior_mean = 0, prior_var = 0;
   for (double t : c.thresholds) prior_mean += t / static_cast<double>(c.thresholds.size());
-  for (double t : c.thresholds) prior_var += (t - prior_mean) * (t - prior_mean) / static_cast<double>(c.thresholds.size());
+  for (double t : c.thresholds)
+    prior_var += (t - prior_mean) * (t - prior_mean) / static_cast<double>(c.thresholds.size());
   const double prior_sd = std::sqrt(prior_var);
   for (int s = 0; s < kSeeds; ++s) {
     QuestPlus q(c);
@@ -113,7 +118,8 @@ TEST(QuestPlus, PosteriorConcentratesOnTheTrueParameters) {
     for (std::size_t i = 0; i < 12; ++i) below += m[i];
     covered += below < 0.975 && below + m[12] > 0.025;
     double var = 0;
-    for (std::size_t i = 0; i < m.size(); ++i) var += m[i] * std::pow(c.thresholds[i] - q.Mean().threshold, 2);
+    for (std::size_t i = 0; i < m.size(); ++i)
+      var += m[i] * std::pow(c.thresholds[i] - q.Mean().threshold, 2);
     // Calibrated: the truth within 3 posterior SDs of the mean; concentrated: the posterior SD
     // a third of the prior's or less.
     EXPECT_NEAR(q.Mean().threshold, true_threshold, 3 * std::sqrt(var)) << "seed " << s;

@@ -49,15 +49,16 @@ TEST(Staircase, LogStepsClampAndStop) {
   std::vector<StaircaseTrial> h;
   for (bool a : {true, true}) h.push_back({0, NextTrial(c, h, 0).level, a});
   EXPECT_NEAR(NextTrial(c, h, 0).level, 0.3, 1e-12);  // 1 -> 0.5 -> 0.25 clamped to 0.3
-  h.push_back({0, 0.3, false});                        // reversal 1 at 0.3 -> 0.6
-  h.push_back({0, NextTrial(c, h, 0).level, true});    // reversal 2 at 0.6: stop
+  h.push_back({0, 0.3, false});                       // reversal 1 at 0.3 -> 0.6
+  h.push_back({0, NextTrial(c, h, 0).level, true});   // reversal 2 at 0.6: stop
   EXPECT_TRUE(NextTrial(c, h, 0).done);
   EXPECT_NEAR(TrackEstimate(c, ReplayStaircase(c, h)[0]), std::sqrt(0.3 * 0.6), 1e-12);
 }
 
 TEST(Staircase, ReplayRejectsARecordThatDoesNotFollowTheRules) {
   StaircaseConfig c;
-  std::vector<StaircaseTrial> h{{0, 1.0, true}, {0, 1.0, true}, {0, 1.0, true}};  // third should be 0.9
+  std::vector<StaircaseTrial> h{
+      {0, 1.0, true}, {0, 1.0, true}, {0, 1.0, true}};  // third should be 0.9
   EXPECT_THROW(ReplayStaircase(c, h), std::invalid_argument);
   h = {{3, 1.0, true}};
   EXPECT_THROW(ReplayStaircase(c, h), std::invalid_argument);
@@ -97,8 +98,9 @@ TEST(Staircase, InterleavedTracksAreChosenReproduciblyAndRunIndependently) {
   for (std::size_t i = 0; i < 30; ++i) first_half += a[i].track;
   EXPECT_GT(first_half, 5);
   EXPECT_LT(first_half, 25);
-  EXPECT_NE(run(10).front().level + run(11).front().level + run(12).front().level + run(13).front().level,
-            4 * a.front().level);  // another seed, another order
+  EXPECT_NE(
+      run(10).front().level + run(11).front().level + run(12).front().level + run(13).front().level,
+      4 * a.front().level);  // another seed, another order
 }
 
 TEST(Staircase, TargetProbabilitiesAreLevitts) {
@@ -112,7 +114,8 @@ TEST(Staircase, TargetProbabilitiesAreLevitts) {
 // A 1-up-2-down staircase on a simulated 2AFC observer with a known Weibull converges on the
 // stimulus where P(correct) = 70.7 % (Levitt 1971), not on the 79.4 % point of 1-up-3-down.
 TEST(Staircase, OneUpTwoDownConvergesOnThe707PercentPoint) {
-  const SimulatedObserverParams o{.shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0};
+  const SimulatedObserverParams o{
+      .shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0};
   const PsychometricParams truth{.threshold = 0.2, .slope = 3, .guess = 0.5, .lapse = 0};
   const double x707 = *StimulusAt(Shape::kWeibull, truth, 0.70710678);
   const double x794 = *StimulusAt(Shape::kWeibull, truth, TargetProbability(1, 3));

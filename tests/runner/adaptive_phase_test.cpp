@@ -26,7 +26,8 @@ name = "jnd-test"
 seed = 99
 criteria = ["vibration"]
 stimulus_duration_s = 0.1
-profiles = ")" + std::string(HL_SOURCE_DIR) + R"(/studies/shin2019/profiles.toml"
+profiles = ")" +
+         std::string(HL_SOURCE_DIR) + R"(/studies/shin2019/profiles.toml"
 
 [[material]]
 id = "Denim"
@@ -149,8 +150,59 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
     RunStudy(p, o);
     ADD_FAILURE() << "ran without a simulated observer";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("phase[0].simulated_observer: missing"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("phase[0].simulated_observer: missing"), std::string::npos)
+        << e.what();
   }
+}
+
+// A participant at the window: the simulated strokes of each interval are shown, the answer
+// comes from SessionUi::Choose. This one always picks the first interval, so a trial is
+// correct exactly when the comparison was first.
+class FirstIntervalUi : public SessionUi {
+ public:
+  bool Stimulus(const TrialScreen& t, int, const Eigen::Vector3d&, double) override {
+    intervals_seen.insert(t.phase);
+    return true;
+  }
+  std::optional<std::vector<double>> Rate(const TrialScreen&) override { return std::nullopt; }
+  bool Break(double) override { return true; }
+  std::optional<int> Choose(const TrialScreen& t) override {
+    EXPECT_EQ(t.answers, (std::vector<std::string>{"1", "2"}));
+    EXPECT_EQ(t.question, "Which interval was stronger?");
+    ++asked;
+    return asked > 12 ? std::nullopt : std::optional<int>(0);  // the experimenter aborts at 13
+  }
+  int asked = 0;
+  std::set<std::string> intervals_seen;
+};
+
+TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
+  test::TempDir dir;
+  std::string text = Protocol(kStaircase);
+  text = text.substr(0, text.find("[phase.simulated_observer]"));  // not needed with a UI
+  std::ofstream(dir.File("p.toml")) << text;
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  FirstIntervalUi ui;
+  RunOptions o{.db_path = dir.File("s.db"), .participant = "P01", .record = RecordMode::kNone, .ui = &ui,
+               .ui_playback_speed = 1e6};
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(ui.intervals_seen, (std::set<std::string>{"staircase: interval 1 of 2", "staircase: interval 2 of 2"}));
+  db::Database d(o.db_path);
+  int completed = 0;
+  for (const auto& t : d.Trials(s.session_id)) {
+    if (t.status != db::kTrialCompleted) continue;
+    ++completed;
+    double response = 0, interval = 0, correct = 0;
+    for (const auto& r : d.Ratings(t.id)) {
+      if (r.criterion == "response") response = r.score;
+      if (r.criterion == "interval") interval = r.score;
+      if (r.criterion == "correct") correct = r.score;
+    }
+    EXPECT_EQ(response, 1);
+    EXPECT_EQ(correct == 1, interval == 1);
+  }
+  EXPECT_EQ(completed, 12);
 }
 
 TEST(AdaptivePhase, QuestPlusFindsTheSimulatedObserversThreshold) {
@@ -189,7 +241,8 @@ lapse = 0.0
   double below = 0, at_or_below = 0;
   for (std::size_t i = 0; i < th.size(); ++i) {
     if (th[i] < 0.06 * (1 - 1e-9)) below += m[i];
-    if (th[i] <= 0.06 * (1 + 0.08)) at_or_below += m[i];  // the grid point nearest 0.06 (spacing 15 %)
+    if (th[i] <= 0.06 * (1 + 0.08))
+      at_or_below += m[i];  // the grid point nearest 0.06 (spacing 15 %)
   }
   EXPECT_LT(below, 0.995) << "posterior mean " << q.Mean().threshold;
   EXPECT_GT(at_or_below, 0.005) << "posterior mean " << q.Mean().threshold;

@@ -48,10 +48,12 @@ TEST(PsychometricFit, MatchesRGlmOnEcc2) {
     const PsychometricFit f = FitPsychometric(Ecc2(ref.rows[r][ref.Require("task")], size), o);
     ASSERT_TRUE(f.usable) << f.message;
     auto rel = [](double a, double b) { return std::abs(a - b) / std::max(1.0, std::abs(b)); };
-    EXPECT_LT(rel(f.params.threshold, ref.Number(r, ref.Require("threshold"))), kRTol) << f.params.threshold;
+    EXPECT_LT(rel(f.params.threshold, ref.Number(r, ref.Require("threshold"))), kRTol)
+        << f.params.threshold;
     EXPECT_LT(rel(f.params.slope, ref.Number(r, ref.Require("slope"))), kRTol) << f.params.slope;
     EXPECT_LT(rel(f.a, ref.Number(r, ref.Require("a"))), kRTol);
-    EXPECT_LT(rel(f.log_likelihood, ref.Number(r, ref.Require("loglik"))), kRTol) << f.log_likelihood;
+    EXPECT_LT(rel(f.log_likelihood, ref.Number(r, ref.Require("loglik"))), kRTol)
+        << f.log_likelihood;
     EXPECT_NEAR(f.params.lapse, ref.Number(r, ref.Require("lapse")), kRTol);
   }
 }
@@ -73,7 +75,8 @@ TEST(PsychometricFit, RejectsMalformedData) {
 // 40 seeds x 200 replicates: each interval's coverage is estimated to +-3.5 % (binomial SD
 // at 95 %), and the test costs about 1 s in release.
 TEST(PsychometricBootstrap, CoversTrueParametersInAtLeast90PercentOfSeeds) {
-  const psychophysics::PsychometricParams truth{.threshold = 0.2, .slope = 3.0, .guess = 0.5, .lapse = 0.0};
+  const psychophysics::PsychometricParams truth{
+      .threshold = 0.2, .slope = 3.0, .guess = 0.5, .lapse = 0.0};
   const std::vector<double> levels{0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4};
   constexpr int kSeeds = 40, kReplicates = 200, kTrialsPerLevel = 40;
   PsychometricFitOptions o;
@@ -95,7 +98,8 @@ TEST(PsychometricBootstrap, CoversTrueParametersInAtLeast90PercentOfSeeds) {
     const auto fit = FitPsychometric(d, o);
     if (!fit.usable) continue;
     ++usable;
-    const auto b = BootstrapPsychometric(d, o, fit, kReplicates, DeriveSeed(77, static_cast<std::uint64_t>(seed)));
+    const auto b = BootstrapPsychometric(d, o, fit, kReplicates,
+                                         DeriveSeed(77, static_cast<std::uint64_t>(seed)));
     estimates.push_back(fit.params.threshold);
     widths.push_back(b.threshold.hi - b.threshold.lo);
     thr_in += b.threshold.lo <= truth.threshold && truth.threshold <= b.threshold.hi;
@@ -117,7 +121,8 @@ TEST(PsychometricBootstrap, CoversTrueParametersInAtLeast90PercentOfSeeds) {
 TEST(PsychometricFit, RecoversLapseWhenFree) {
   // Many trials from a function with a 4 % lapse: the free fit finds it, a fit with the
   // lapse fixed at 0 has a lower likelihood.
-  const psychophysics::PsychometricParams truth{.threshold = 1.0, .slope = 4.0, .guess = 1.0 / 3, .lapse = 0.04};
+  const psychophysics::PsychometricParams truth{
+      .threshold = 1.0, .slope = 4.0, .guess = 1.0 / 3, .lapse = 0.04};
   PsychometricData d;
   for (double x = -0.5; x <= 3.0; x += 0.25) {
     const double p = psychophysics::Psi(Shape::kLogistic, x, truth);
@@ -129,7 +134,7 @@ TEST(PsychometricFit, RecoversLapseWhenFree) {
   PsychometricFitOptions o{.shape = Shape::kLogistic, .guess = 1.0 / 3, .lapse_free = true};
   const auto f = FitPsychometric(d, o);
   ASSERT_TRUE(f.usable) << f.message;
-  EXPECT_NEAR(f.params.lapse, 0.04, 2e-3);   // rounding the counts moves it slightly
+  EXPECT_NEAR(f.params.lapse, 0.04, 2e-3);  // rounding the counts moves it slightly
   EXPECT_NEAR(f.params.threshold, 1.0, 0.02);
   EXPECT_NEAR(f.params.slope, 4.0, 0.1);
   o.lapse_free = false;

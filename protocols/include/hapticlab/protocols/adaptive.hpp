@@ -31,8 +31,8 @@ struct AdaptiveSpec {
   std::string method;     ///< rendering method name
   std::string parameter;  ///< one of AdaptiveParameters()
   psychophysics::Task task = psychophysics::Task::k2Afc;
-  double reference = 1;   ///< reference parameter value; x = comparison - reference
-  double false_alarm = 0; ///< yes/no: guess rate used by the fit (dimensionless)
+  double reference = 1;    ///< reference parameter value; x = comparison - reference
+  double false_alarm = 0;  ///< yes/no: guess rate used by the fit (dimensionless)
   /// The psychometric function fitted in the report (and QUEST+'s model).
   psychophysics::Shape fit = psychophysics::Shape::kWeibull;
   bool fit_lapse_free = true;  ///< else fixed at fit_lapse

@@ -25,11 +25,11 @@ namespace hapticlab::psychophysics {
 
 struct QuestPlusConfig {
   Shape shape = Shape::kWeibull;
-  double guess = 0.5;                 ///< gamma, from the task
-  std::vector<double> stimuli;        ///< stimulus domain (the varied parameter's unit)
-  std::vector<double> thresholds;     ///< alpha grid
-  std::vector<double> slopes;         ///< beta grid
-  std::vector<double> lapses{0.0};    ///< lambda grid
+  double guess = 0.5;               ///< gamma, from the task
+  std::vector<double> stimuli;      ///< stimulus domain (the varied parameter's unit)
+  std::vector<double> thresholds;   ///< alpha grid
+  std::vector<double> slopes;       ///< beta grid
+  std::vector<double> lapses{0.0};  ///< lambda grid
   /// Empty when usable, else why not.
   bool IsValid(std::string* why) const;
 };
@@ -45,7 +45,8 @@ class QuestPlus {
   explicit QuestPlus(QuestPlusConfig c);
   /// Rebuilds the posterior from recorded (stimulus, positive) trials in order.
   /// @throws std::invalid_argument when a stimulus is not in the domain
-  static QuestPlus Replay(const QuestPlusConfig& c, const std::vector<std::pair<double, bool>>& trials);
+  static QuestPlus Replay(const QuestPlusConfig& c,
+                          const std::vector<std::pair<double, bool>>& trials);
 
   /// Bayes update with one answer at stimulus index j.
   void Update(std::size_t j, bool positive);

@@ -29,7 +29,7 @@ struct ObserverAnswer {
 double PositiveProbability(const SimulatedObserverParams& o, Task task, double x);
 
 /// One answer. `comparison_interval` is where the comparison was (m-AFC; ignored in yes/no).
-ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x, int comparison_interval,
-                               Rng& rng);
+ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x,
+                               int comparison_interval, Rng& rng);
 
 }  // namespace hapticlab::psychophysics

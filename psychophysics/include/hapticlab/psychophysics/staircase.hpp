@@ -29,8 +29,8 @@ struct StaircaseConfig {
   /// One start level per interleaved track (>= 1 track).
   std::vector<double> start_levels{1.0};
   double min_level = -1e300, max_level = 1e300;  ///< the level is clamped to these
-  int max_reversals = 12;  ///< a track stops after this many reversals
-  int max_trials = 80;     ///< ... or this many trials
+  int max_reversals = 12;                        ///< a track stops after this many reversals
+  int max_trials = 80;                           ///< ... or this many trials
   int discard_reversals = 4;  ///< the estimate averages the reversals after these
   /// Empty when usable, else why not.
   bool IsValid(std::string* why) const;
@@ -45,10 +45,10 @@ struct StaircaseTrial {
 
 /// State of one track after its recorded trials.
 struct TrackState {
-  double level = 0;           ///< level of the track's next trial
+  double level = 0;  ///< level of the track's next trial
   int trials = 0;
   int positive_run = 0, negative_run = 0;
-  int direction = 0;          ///< last move: +1 up, -1 down, 0 none yet
+  int direction = 0;                    ///< last move: +1 up, -1 down, 0 none yet
   std::vector<double> reversal_levels;  ///< level at each reversal, in order
   bool done = false;
 };
@@ -57,7 +57,8 @@ struct TrackState {
 /// @throws std::invalid_argument when a recorded level differs (by more than 1e-9 relative)
 /// from the one the rules give, or a track index is out of range: the record does not
 /// belong to this configuration.
-std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c, const std::vector<StaircaseTrial>& trials);
+std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c,
+                                        const std::vector<StaircaseTrial>& trials);
 
 struct NextStaircaseTrial {
   bool done = false;  ///< every track has stopped

@@ -36,23 +36,24 @@ struct PsychometricFitOptions {
 
 struct PsychometricFit {
   bool usable = false;
-  std::string message;      ///< why not usable (or "converged")
+  std::string message;                       ///< why not usable (or "converged")
   psychophysics::PsychometricParams params;  ///< threshold, slope, guess, lapse
-  double a = 0, b = 0;      ///< linear predictor eta = a + b g(x)
+  double a = 0, b = 0;                       ///< linear predictor eta = a + b g(x)
   double log_likelihood = 0;  ///< including the binomial coefficients (as R's logLik)
   int iterations = 0;
 };
 
 /// @throws std::invalid_argument when the options are invalid or the data are malformed
 /// (sizes differ, n < 1, k outside 0..n, x <= 0 for a Weibull).
-PsychometricFit FitPsychometric(const PsychometricData& data, const PsychometricFitOptions& options);
+PsychometricFit FitPsychometric(const PsychometricData& data,
+                                const PsychometricFitOptions& options);
 
 struct BootstrapInterval {
   double lo = 0, hi = 0;
 };
 struct PsychometricBootstrap {
-  int replicates = 0;          ///< usable refits
-  int failed = 0;              ///< refits that did not converge (left out)
+  int replicates = 0;  ///< usable refits
+  int failed = 0;      ///< refits that did not converge (left out)
   double level = 0.95;
   BootstrapInterval threshold, slope;  ///< percentile intervals
   BootstrapInterval jnd;  ///< of StimulusAt(jnd_performance) when one was asked for, else NaN
@@ -62,9 +63,11 @@ struct PsychometricBootstrap {
 /// stimuli and trial counts, each refitted with the same options; percentile intervals at
 /// `level`; with `jnd_performance` in (guess, 1) also of the stimulus at that performance.
 /// Deterministic for a seed.
-PsychometricBootstrap BootstrapPsychometric(const PsychometricData& data, const PsychometricFitOptions& options,
-                                            const PsychometricFit& fit, int replicates, std::uint64_t seed,
-                                            double level = 0.95, double jnd_performance = -1);
+PsychometricBootstrap BootstrapPsychometric(const PsychometricData& data,
+                                            const PsychometricFitOptions& options,
+                                            const PsychometricFit& fit, int replicates,
+                                            std::uint64_t seed, double level = 0.95,
+                                            double jnd_performance = -1);
 
 /// Pools trials with equal x (sorted by x): for binned plots and compact fits.
 PsychometricData PoolByStimulus(const PsychometricData& d);
