@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 
@@ -153,6 +154,19 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
     EXPECT_NE(std::string(e.what()).find("phase[0].simulated_observer: missing"), std::string::npos)
         << e.what();
   }
+  // A hardware device: refused before anything is recorded (its interval presentation is not
+  // implemented yet).
+  std::ofstream(dir.File("q.toml")) << Protocol(kStaircase);
+  o.device = "falcon";
+  try {
+    RunStudy(protocols::LoadProtocol(dir.File("q.toml")), o);
+    ADD_FAILURE() << "ran an adaptive phase on hardware";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("phase[0].kind: adaptive phases run with --device sim"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(o.db_path));
 }
 
 // A participant at the window: the simulated strokes of each interval are shown, the answer
