@@ -77,21 +77,23 @@ struct Presented {
   std::vector<Interaction> shown;  // one per interval (kept for a participant window)
 };
 
-// Plays a simulated interaction's stylus path to the UI in (scaled) real time.
+// Plays a simulated interaction's stylus path to the UI in (scaled) real time; at least one
+// frame, however fast the playback.
 bool Play(SessionUi& ui, const TrialScreen& screen, int side, const Interaction& in, double duration_s,
           double speed) {
   const std::size_t n = in.force.size() / 15;
   if (n == 0) return true;
   const auto t0 = std::chrono::steady_clock::now();
-  for (;;) {
-    const double t =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed;
-    if (t >= duration_s) return true;
+  double t = 0;
+  do {
     const auto i = std::min(n - 1, static_cast<std::size_t>(t * in.force_rate_hz));
     const Eigen::Vector3d pos(in.force[i * 15], in.force[i * 15 + 1], in.force[i * 15 + 2]);
     if (!ui.Stimulus(screen, side, pos, duration_s - t)) return false;
-  }
+    t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed;
+  } while (t < duration_s);
+  return true;
 }
+
 
 // Presents the trial's intervals in the simulated lab: the participant strokes each rendering
 // (the same exploration, jittered, on every interval) and the interactions are recorded as
