@@ -157,7 +157,9 @@ TEST(PsychometricReport, BinsKeepEveryTrialInOrder) {
   for (std::size_t i = 0; i < b.x.size(); ++i) {
     n += b.n[i];
     k += b.k[i];
-    if (i > 0) EXPECT_GT(b.x[i], b.x[i - 1]);
+    if (i > 0) {
+      EXPECT_GT(b.x[i], b.x[i - 1]);
+    }
   }
   for (int x : d.k) k0 += x;
   EXPECT_EQ(n, 300);
