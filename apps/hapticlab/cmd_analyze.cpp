@@ -23,9 +23,10 @@ void RegisterAnalyze(CLI::App& app) {
       "Run the analyses each study's protocol declares on its database and write a report:\n"
       "report.md, CSV tables (aggregates, rmANOVA, Tukey, grouping) and figures (SVG and PNG):\n"
       "bar charts with 95% CI and Tukey asterisks, per-material bars with A/B/C letters\n"
-      "against the real-real limits, box plots (docs/analysis.md). A damaged database\n"
-      "(SQLite quick_check) or a score that is not a number on the protocol's scale is\n"
-      "refused (exit 2).");
+      "against the real-real limits, box plots (docs/analysis.md). Staircase and QUEST+ phases:\n"
+      "psychometric fits with bootstrap intervals, JND, Weber fraction and the fitted curve over\n"
+      "the binned answers (docs/psychophysics.md). A damaged database (SQLite quick_check) or a\n"
+      "score that is not a number on the protocol's scale is refused (exit 2).");
   cmd->add_option("--db", o->db, "Study database")->required();
   cmd->add_option("--out", o->out, "Report folder (created when missing)")->required();
   cmd->add_flag("--no-figures", o->no_figures, "Tables only");

@@ -22,6 +22,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/sim_lab.hpp"
+#include "adaptive_phase.hpp"
 
 namespace hapticlab::runner {
 namespace {
@@ -411,6 +412,17 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                            t.method.empty() ? t.comparison : t.method));
     }
   }
+  // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
+  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed, opt, &writer, &sum.executed);
+  sum.planned += adaptive.added;
+  sum.completed += adaptive.completed;
+  sum.faults += adaptive.faults;
+  sum.simulated_s += adaptive.stimulus_s;
+  if (adaptive.aborted) {
+    sum.status = "aborted";
+    sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return sum;
+  }
   database.EndSession(session, "completed");
   sum.status = "completed";
   sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -430,6 +442,7 @@ void LogPlanEvents(db::Database& database, std::int64_t session, const std::vect
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
+  internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
   const Lab lab = LoadLab(p, opt.device);
   const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
