@@ -391,19 +391,22 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                              .start_time_s = 0,
                              .rate_hz = 100,
                              .channels = {"fz_N"},
-                             .samples = ramp(10, 1)});
+                             .samples = ramp(10, 1),
+                             .attempt = 1});
     d.InsertTrajectoryChunk({.trial_id = id,
                              .stream = "left_force",
                              .start_time_s = 0.15,
                              .rate_hz = 100,
                              .channels = {"fz_N"},
-                             .samples = ramp(5, 9)});
+                             .samples = ramp(5, 9),
+                             .attempt = 1});
     d.InsertTrajectoryChunk({.trial_id = id,
                              .stream = "right_force",
                              .start_time_s = 0,
                              .rate_hz = 100,
                              .channels = {"fz_N"},
-                             .samples = ramp(10, 20)});
+                             .samples = ramp(10, 20),
+                             .attempt = 1});
     d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
   }
   // A fourth trial that recorded samples and then faulted: not exported.
@@ -415,7 +418,8 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                            .start_time_s = 0,
                            .rate_hz = 100,
                            .channels = {"fz_N"},
-                           .samples = ramp(7, 50)});
+                           .samples = ramp(7, 50),
+                             .attempt = 1});
   d.SetTrialStatus(faulted, db::kTrialFaulted);
   d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
   // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of
