@@ -88,6 +88,11 @@ Database OpenForReading(const std::string& path) {
   try {
     Database d(path, {.create = false, .read_only = true});
     report = d.QuickCheck();
+    if (report == "ok" && d.SchemaVersion() < kSchemaVersion) {
+      // An older file is migrated forward first (its repairs included), then read.
+      { Database(path, {.create = false}); }
+      return Database(path, {.create = false, .read_only = true});
+    }
     if (report == "ok") return d;
   } catch (const InputError&) {
     throw;

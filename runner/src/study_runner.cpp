@@ -554,7 +554,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
 
 std::vector<ParticipantStatus> StudyStatus(const std::string& db_path, const std::string& participant) {
   if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
-  db::Database database(db_path, {.create = false, .read_only = true});
+  const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
   std::vector<ParticipantStatus> out;
   for (const auto& st : database.Studies())
     for (const auto& part : database.Participants(st.id)) {

@@ -91,15 +91,18 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   std::mt19937_64 rng(20261122);  // fixed seed: the kill moments are reproducible
   std::uniform_int_distribution<int> delay_ms(150, 900);
   int killed = 0;
+  std::string out;
+  // Whether P01's session exists yet (a kill may come before the run created it).
+  auto started = [&] {
+    return test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) == 0;
+  };
   for (int round = 0; round < 3; ++round) {
-    const std::string cmd = round == 0
-                                ? RunCmd(db, "P01")
-                                : Cli() + " study resume --db " + db + " --participant P01 --quiet";
+    const std::string cmd = started() ? Cli() + " study resume --db " + db + " --participant P01 --quiet"
+                                      : RunCmd(db, "P01");
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
-      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(),
-            static_cast<char*>(nullptr));
+      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(), static_cast<char*>(nullptr));
       _exit(127);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
@@ -109,14 +112,10 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
     killed += WIFSIGNALED(status);
     if (WIFEXITED(status) && WEXITSTATUS(status) == 0) break;  // finished before the kill
   }
-  std::string out;
-  if (test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) ==
-          0 &&
-      json::parse(out)["participants"][0]["session_status"] != "completed") {
-    ASSERT_EQ(
-        test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out),
-        0)
-        << out;
+  if (!started()) {
+    ASSERT_EQ(test::RunCommand(RunCmd(db, "P01"), &out), 0) << out;
+  } else if (json::parse(out)["participants"][0]["session_status"] != "completed") {
+    ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
   }
   EXPECT_GT(killed, 0) << "no run was killed: the test tests nothing";
   ExpectEveryTrialWhole(db, 1);

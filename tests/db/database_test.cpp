@@ -176,6 +176,19 @@ TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
   EXPECT_EQ(db.IntegrityCheck(), "ok");
 }
 
+TEST(Database, OpenForReadingMigratesAnOlderFileFirst) {
+  test::TempDir dir;
+  const std::string path = dir.File("v3.db");
+  {
+    Database old(path, {.migrate_to = 3});
+    Populate(old, 3);
+  }
+  const Database d = OpenForReading(path);
+  EXPECT_EQ(d.SchemaVersion(), kSchemaVersion);
+  EXPECT_TRUE(d.TrajectoryChunks(1).empty());  // reads the v4 columns
+  EXPECT_TRUE(d.VerifyTrajectories().empty());
+}
+
 TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   test::TempDir dir;
   Database db(dir.File("a.db"));

@@ -245,6 +245,7 @@ class WriterLease {
 
 /// Opens a study database for reading after checking it: the file exists and SQLite's
 /// quick_check passes. For analysis and export, which must never run on a damaged record.
+/// A file of an older schema is migrated forward first (which writes to it).
 /// @throws InputError naming the file (exit 2) when it is missing, not a HapticLab database,
 ///         newer than this build, or damaged
 Database OpenForReading(const std::string& path);

@@ -116,8 +116,9 @@ class TrajectoryWriter {
   std::uint64_t written_samples() const { return written_.load(std::memory_order_relaxed); }
   /// Chunks committed so far.
   std::uint64_t written_chunks() const { return chunks_.load(std::memory_order_relaxed); }
-  /// The first error the writer thread met (empty when none). After an error the writer
-  /// keeps draining queues so producers never stall, and counts the lost samples.
+  /// The first error the writer thread met (empty when none; it stays set after a retry
+  /// succeeded). After an error the writer keeps draining queues so producers never stall
+  /// and retries the failed chunks; each stream's report says what was finally committed.
   std::string error() const;
 
  private:
