@@ -23,7 +23,7 @@ double MedianSeconds(const std::string& command, int n) {
   std::vector<double> t;
   for (int i = 0; i < n; ++i) {
     const auto a = std::chrono::steady_clock::now();
-    const int rc = std::system((command + " > /dev/null 2>&1").c_str());
+    const int rc = std::system(("(" + command + ") > /dev/null 2>&1").c_str());
     const auto b = std::chrono::steady_clock::now();
     if (rc != 0) {
       fmt::print(stderr, "failed ({}): {}\n", rc, command);

@@ -148,5 +148,22 @@ TEST(StatsCli, LeanBinaryGivesTheSameAnswersWithoutTheHeavyLibraries) {
   EXPECT_NE(heavy.find("opencv"), std::string::npos) << "the check above would not notice: " << heavy;
 }
 
+// The analysis report names a participant the rmANOVA dropped, with the cells it lacks.
+TEST(StatsCli, ReportNamesADroppedParticipant) {
+  test::TempDir dir;
+  const std::string db = dir.File("s.db"), proto = test::DataPath("protocols/small.toml");
+  std::string out;
+  for (const char* p : {"P01", "P02"})
+    ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " + p + " --quiet", &out), 0)
+        << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant P03 --quiet --stop-after 15", &out), 0)
+      << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
+  const auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());
+  const auto at = md.find("- dropped P03: no rating for ");
+  ASSERT_NE(at, std::string::npos) << md;
+  EXPECT_NE(md.find("1 dropped for missing cells"), std::string::npos) << md;
+}
+
 }  // namespace
 }  // namespace hapticlab
