@@ -26,7 +26,7 @@ std::string Protocol(const std::string& phases) {
 name = "jnd-test"
 seed = 99
 criteria = ["vibration"]
-stimulus_duration_s = 0.1
+stimulus_duration_s = 0.05
 profiles = ")" +
          std::string(HL_SOURCE_DIR) + R"(/studies/shin2019/profiles.toml"
 
