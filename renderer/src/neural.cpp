@@ -242,25 +242,7 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
     s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(b.lo_hz, rate));
-    // Interpolation filter for upsampling by γ: Hann-windowed sinc with its cut-off at the
-    // decimated Nyquist frequency, kTaps * γ long, split into γ phases.
-    const int g = b.decimation, len = kTaps * g;
-    s.taps.assign(static_cast<std::size_t>(len), 0.0);
-    const double centre = 0.5 * (len - 1);
-    for (int p = 0; p < g; ++p)
-      for (int j = 0; j < kTaps; ++j) {
-        const int n = p + j * g;  // tap index within the full filter
-        const double t = (n - centre) / g;
-        const double sinc = std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
-        const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * (n + 0.5) / len);
-        s.taps[static_cast<std::size_t>(p * kTaps + j)] = sinc * w;
-      }
-    // Unit DC gain per phase.
-    for (int p = 0; p < g; ++p) {
-      double sum = 0;
-      for (int j = 0; j < kTaps; ++j) sum += s.taps[static_cast<std::size_t>(p * kTaps + j)];
-      for (int j = 0; j < kTaps; ++j) s.taps[static_cast<std::size_t>(p * kTaps + j)] /= sum;
-    }
+    s.up = PolyphaseUpsampler(b.decimation, kTaps);
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
     bands_.push_back(std::move(s));
@@ -274,8 +256,7 @@ void NeuralSynth::Reset() noexcept {
     std::fill(s.hist.begin(), s.hist.end(), 0.0);
     s.head = s.phase = 0;
     s.hp.Reset();
-    s.out.fill(0.0);
-    s.out_head = 0;
+    s.up.Reset();
   }
   running_ = false;
 }
@@ -318,20 +299,9 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       y = std::clamp(y, -10.0, 10.0);  // keep the feedback inside the trained range
       s.head = s.head == 0 ? static_cast<int>(M) - 1 : s.head - 1;
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
-      const double h = s.hp.Step(y);
-      s.out_head = s.out_head == 0 ? kTaps - 1 : s.out_head - 1;
-      s.out[static_cast<std::size_t>(s.out_head)] = s.out[static_cast<std::size_t>(s.out_head + kTaps)] = h;
+      s.up.Push(s.hp.Step(y));
     }
-    double out;
-    if (band.decimation == 1) {
-      out = s.out[static_cast<std::size_t>(s.out_head)];
-    } else {
-      // y[m γ + p] = sum_j x[m - j] h[p + j γ]: phase p of the polyphase filter.
-      const double* x = s.out.data() + s.out_head;
-      const double* t = s.taps.data() + static_cast<std::size_t>(s.phase) * kTaps;
-      out = 0;
-      for (int j = 0; j < kTaps; ++j) out += x[j] * t[j];
-    }
+    const double out = s.up.Output(s.phase);
     s.phase = (s.phase + 1) % band.decimation;
     sum += band.scale * out;
   }

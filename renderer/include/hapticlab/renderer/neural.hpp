@@ -26,6 +26,7 @@
 
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/renderer/biquad.hpp"
+#include "hapticlab/renderer/upsampler.hpp"
 
 namespace hapticlab::renderer {
 
@@ -92,9 +93,7 @@ class NeuralSynth {
     std::vector<double> input;    // M (+2) network input
     int head = 0, phase = 0;
     Biquad hp;                    // output path: high-pass at lo (decimated rate)
-    std::vector<double> taps;     // polyphase interpolator: taps[p * kTaps + j]
-    std::array<double, 2 * kTaps> out{};  // newest-first high-passed decimated outputs (doubled ring)
-    int out_head = 0;
+    PolyphaseUpsampler up;        // by γ, kTaps taps per phase
   };
   std::shared_ptr<const NeuralModel> m_;
   std::vector<BandState> bands_;
