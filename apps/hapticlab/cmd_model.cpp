@@ -352,8 +352,8 @@ void AddFitNeural(CLI::App& model) {
   auto* cmd = model.add_subcommand(
       "fit-neural",
       "Train the neural texture model (dissertation ch. III.3, Fig. 3.3) from recordings on a full\n"
-      "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 10, 5,\n"
-      "2, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
+      "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 8, 4,\n"
+      "1, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
       "30-25-15-5; Γ_D: one per band and grid cell, 30-25-15-5 for band 1 and 30-15-5 for the\n"
       "others), Adam with mini-batches and early stopping. Writes a neural model file; reference\n"
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");

@@ -112,8 +112,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
       sig[b].push_back(std::move(dec));
     }
     band.scale = n > 0 && ss > 0 ? std::sqrt(ss / n) : 1.0;
+    Rng dither(o.train.seed + 7 * b + 1);
     for (auto& s : sig[b])
-      for (auto& x : s) x /= band.scale;
+      for (auto& x : s) x = x / band.scale + (o.signal_noise > 0 ? o.signal_noise * dither.Normal() : 0.0);
     band.sigma.assign(cells, 0.0);
     band.nets.resize(unified ? 1 : cells);
   }
@@ -189,7 +190,17 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         MlpTrainOptions to = o.train;
         to.validation_fraction = total > 0 ? static_cast<double>(nval) / static_cast<double>(total) : 0.2;
         to.seed = o.train.seed + k;
+        const std::string name = unified ? fmt::format("band {}", j.band + 1)
+                                          : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1,
+                                                        m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
+                                                        m.forces_N[static_cast<std::size_t>(j.cell) % nf]);
         to.progress = nullptr;
+        if (o.progress)  // every 5th epoch: training can take minutes per network
+          to.progress = [&, name](int epoch, double val_mse) {
+            if (epoch % 5 == 0)
+              o.progress(fmt::format("{}: epoch {}/{}, validation MSE {:.4f}", name, epoch, o.train.max_epochs, val_mse),
+                         static_cast<int>(done.load()), static_cast<int>(jobs.size()));
+          };
         net.Train(X, y, to);
         // Residual RMS per cell (one-step prediction on every row of the cell's recording).
         const Eigen::VectorXd p = net.PredictRows(X);
@@ -238,11 +249,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
-        if (o.progress)
-          o.progress(unified ? fmt::format("band {}", j.band + 1)
-                             : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1, m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
-                                           m.forces_N[static_cast<std::size_t>(j.cell) % nf]),
-                     static_cast<int>(++done), static_cast<int>(jobs.size()));
+        if (o.progress) o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
       } catch (...) {
         std::lock_guard<std::mutex> lock(err_mu);
         if (!error) error = std::current_exception();

@@ -96,7 +96,7 @@ double NeuralModel::NormForce(double f) const {
 std::vector<NeuralBand> DefaultNeuralBands() {
   std::vector<NeuralBand> b(4);
   const double lo[] = {20, 100, 200, 500}, hi[] = {100, 200, 500, 1000};
-  const int g[] = {10, 5, 2, 1};
+  const int g[] = {8, 4, 1, 1};
   for (int i = 0; i < 4; ++i) {
     b[static_cast<std::size_t>(i)].lo_hz = lo[i];
     b[static_cast<std::size_t>(i)].hi_hz = hi[i];
@@ -241,7 +241,7 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
-    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(b.lo_hz, rate));
+    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
     s.up = PolyphaseUpsampler(b.decimation, kTaps);
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));

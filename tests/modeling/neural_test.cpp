@@ -5,10 +5,13 @@
 #include "hapticlab/modeling/neural.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
+#include <mutex>
 #include <numbers>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -100,13 +103,15 @@ TEST(Neural, ModelHasTheThesisStructure) {
   const auto o = NeuralFitOptions{};
   ASSERT_EQ(o.bands.size(), 4u);
   const double lo[] = {20, 100, 200, 500}, hi[] = {100, 200, 500, 1000};
-  const int g[] = {10, 5, 2, 1};
+  const int g[] = {8, 4, 1, 1};
   for (std::size_t b = 0; b < 4; ++b) {
     EXPECT_EQ(o.bands[b].lo_hz, lo[b]);
     EXPECT_EQ(o.bands[b].hi_hz, hi[b]);
     EXPECT_EQ(o.bands[b].decimation, g[b]);
     EXPECT_EQ(o.bands[b].history, 50);
     EXPECT_LE(hi[b], 2000.0 / (2 * g[b])) << "band " << b << " must not alias at its decimated rate";
+    // The interpolator (flat to 0.4 of its input rate) must pass a decimated band whole.
+    if (g[b] > 1) EXPECT_LE(hi[b], 0.4 * 2000.0 / g[b]) << "band " << b;
   }
   EXPECT_EQ(o.hidden_large, (std::vector<int>{30, 25, 15, 5}));
   EXPECT_EQ(o.hidden_small, (std::vector<int>{30, 15, 5}));
@@ -122,6 +127,36 @@ TEST(Neural, ModelHasTheThesisStructure) {
   }
   EXPECT_EQ(d.bands[0].nets[0].layers.size(), 4u);  // 12 -> 8 -> 4 -> 1 (band 1: the large shape)
   EXPECT_EQ(d.bands[1].nets[0].layers.size(), 3u);  // 12 -> 6 -> 1
+}
+
+TEST(Neural, TrainingReportsProgressPerEpochAndPerNetwork) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.12})
+    for (const double f : {0.54, 1.91}) recs.push_back(Texture(v, f, 0.5e-3, 70 + static_cast<std::uint64_t>(k++), 1.0));
+  NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
+  o.train.max_epochs = 5;
+  o.train.patience = 10;  // all five epochs run
+  o.hidden_large = {6};
+  for (auto& b : o.bands) b.history = 8;
+  std::mutex mu;
+  std::vector<std::string> lines;
+  o.progress = [&](const std::string& what, int done, int total) {
+    std::lock_guard<std::mutex> lock(mu);
+    lines.push_back(fmt::format("{}/{} {}", done, total, what));
+  };
+  FitNeural(recs, o);
+  int epochs = 0, trained = 0;
+  for (const auto& l : lines) {
+    epochs += l.find("epoch 5/5, validation MSE") != std::string::npos;
+    trained += l.find(": trained") != std::string::npos;
+  }
+  EXPECT_EQ(epochs, 4) << "one report at epoch 5 of each band's network";
+  EXPECT_EQ(trained, 4);
+  // The last network to finish reports 4 of 4 (which band that is depends on the threads).
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [](const std::string& l) {
+    return l.rfind("4/4 band ", 0) == 0 && l.find(": trained") != std::string::npos;
+  })) << fmt::format("{}", fmt::join(lines, "\n"));
 }
 
 TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
@@ -190,7 +225,7 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
 
   // Bad files name the file and key.
   std::string text = test::ReadFile(path);
-  text.replace(text.find("decimation = 10"), 15, "decimation = 30");
+  text.replace(text.find("decimation = 8"), 14, "decimation = 30");
   test::WriteFile(dir.File("bad.toml"), text);
   try {
     renderer::LoadNeuralModel(dir.File("bad.toml"));
@@ -275,6 +310,82 @@ TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
   // spectrum moves most with speed (the 0.2 mm texture: its peak moves 200 -> 600 Hz).
   EXPECT_GT(gap_d, gap_u);
   EXPECT_LT(rows[0].u_cv, rows[0].d_cv);
+}
+
+// The project's synthetic AR grid (tests/modeling/vibration_test.cpp): an AR(4) at 2 kHz whose
+// two resonances move with speed and force, its variance growing with both. `nonlinear`
+// adds a state-dependent term (0.6 tanh(3 x[k-1] / s) x[k-2], s the linear part's RMS) that
+// shifts and sharpens the spectrum with the amplitude: a process no linear AR model is.
+Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed, double seconds = 2.5) {
+  const double fs = 2000;
+  const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
+  const double r1 = 0.97 - 0.02 * f, r2 = 0.9;
+  auto poly = [&](double fr, double r) { return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r}; };
+  const auto [a1, a2] = poly(f1, r1);
+  const auto [b1, b2] = poly(f2, r2);
+  const double c[4] = {a1 + b1, a2 + b2 - a1 * b1, -a1 * b2 - a2 * b1, -a2 * b2};
+  const double sd = std::sqrt(0.5 * std::pow(v / 0.08, 1.6) * (f / 1.2));
+  Rng rng(seed);
+  const std::size_t n = static_cast<std::size_t>(seconds * fs), warm = 2000;
+  std::vector<double> x(n + warm, 0.0);
+  // RMS of the linear process for unit excitation (to scale the nonlinearity's argument).
+  double lin_rms = 1;
+  if (nonlinear) {
+    Rng r2n(seed + 999);
+    std::vector<double> y(20000, 0.0);
+    double ss = 0;
+    for (std::size_t k = 4; k < y.size(); ++k) {
+      y[k] = c[0] * y[k - 1] + c[1] * y[k - 2] + c[2] * y[k - 3] + c[3] * y[k - 4] + r2n.Normal();
+      ss += y[k] * y[k];
+    }
+    lin_rms = std::sqrt(ss / static_cast<double>(y.size()));
+  }
+  for (std::size_t k = 4; k < x.size(); ++k) {
+    double a = c[0] * x[k - 1] + c[1] * x[k - 2] + c[2] * x[k - 3] + c[3] * x[k - 4] + rng.Normal();
+    if (nonlinear) a += 0.6 * std::tanh(3 * x[k - 1] / lin_rms) * x[k - 2];
+    x[k] = a;
+  }
+  Recording rec;
+  rec.speed_mps = v;
+  rec.force_N = f;
+  rec.rate_hz = fs;
+  rec.file = fmt::format("{} AR v={} f={}", nonlinear ? "nonlinear" : "linear", v, f);
+  for (std::size_t k = warm; k < x.size(); ++k) rec.acc.push_back(sd * x[k]);
+  return rec;
+}
+
+std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.06, 0.08, 0.10, 0.12})
+    for (const double f : {0.54, 0.89, 1.18, 1.40, 1.91})
+      recs.push_back(ArGridRecording(v, f, nonlinear, seed + static_cast<std::uint64_t>(k++)));
+  return recs;
+}
+
+double EnvOr(const char* name, double def) {
+  const char* e = std::getenv(name);
+  return e ? std::atof(e) : def;
+}
+
+TEST(NeuralFig37, LinearAndNonlinearArGrids) {
+  const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
+  for (const bool nonlinear : {false, true}) {
+    if (EnvOr("HL_NL_ONLY", -1) >= 0 && static_cast<bool>(EnvOr("HL_NL_ONLY", 0)) != nonlinear) continue;
+    const auto recs = ArGrid(nonlinear, 40);
+    const auto lpc = CrossValidate(recs, tv, tf, {});
+    auto o = Quick(renderer::NeuralTopology::kUnified);
+    o.input_noise = EnvOr("HL_IN_NOISE", o.input_noise);
+    o.signal_noise = EnvOr("HL_SIG_NOISE", o.signal_noise);
+    o.train.max_epochs = static_cast<int>(EnvOr("HL_EPOCHS", o.train.max_epochs));
+    o.train.learning_rate = EnvOr("HL_LR", o.train.learning_rate);
+    o.train.patience = static_cast<int>(EnvOr("HL_PATIENCE", o.train.patience));
+    const auto u = CrossValidateNeural(recs, tv, tf, o);
+    std::printf("%s AR grid: LPC %.3f %.3f (order %d) | Γ_U %.3f %.3f\n", nonlinear ? "nonlinear" : "linear", lpc.mean_es_train,
+                lpc.mean_es_test, lpc.order, u.mean_es_train, u.mean_es_test);
+    for (const auto& r : u.rows)
+      if (r.train) std::printf("   Γ_U train %.2f %.2f: %.3f\n", r.speed_mps, r.force_N, r.es);
+  }
 }
 
 }  // namespace

@@ -12,11 +12,11 @@
 /// data (per cell, interpolated like the outputs). This is the nonlinear counterpart of the
 /// LPC model's excitation; sigma is then calibrated so that free-running synthesis at each
 /// training cell has the band power of the recording (the network's shrinkage toward zero
-/// would otherwise lower it). The output path high-passes each band at its lower edge,
-/// upsamples it by γ with a windowed-sinc polyphase interpolator (8 taps per phase; a band's
-/// content reaches its decimated Nyquist frequency, where linear interpolation would lose up
-/// to 60 % of the amplitude) and sums the bands. Latency: 4 decimated samples per band
-/// (20 ms for band 1, none for band 4).
+/// would otherwise lower it). The output path high-passes each band at half its lower edge
+/// (removing drift without cutting into the band), upsamples it by γ with a windowed-sinc
+/// polyphase interpolator (16 taps per phase: flat within 0.05 dB up to 0.4 of the decimated
+/// rate, where every band's top lies) and sums the bands. Latency: 8 decimated samples per
+/// band (32 ms for band 1, none at γ = 1).
 
 #include <array>
 #include <cstdint>
@@ -61,8 +61,9 @@ struct NeuralModel {
   double NormForce(double f) const;
 };
 
-/// The thesis's four bands with γ = 10, 5, 2, 1 (sample rate / γ keeps each band below its
-/// Nyquist frequency; the text's "γ = 10 for all networks" would alias bands 2-4).
+/// The thesis's four bands with γ = 8, 4, 1, 1 at 2 kHz: each band's top at most 0.4 of its
+/// decimated rate, so the interpolator passes the band whole (the text's "γ = 10 for all
+/// networks" would alias bands 2-4; see docs/modeling-neural.md).
 std::vector<NeuralBand> DefaultNeuralBands();
 
 /// Validates sizes (layer chains, one net or one per cell, sigma per cell). Throws
@@ -87,7 +88,7 @@ class NeuralSynth {
   double Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept;
 
  private:
-  static constexpr int kTaps = 8;  // interpolator taps per phase
+  static constexpr int kTaps = 16;  // interpolator taps per phase
   struct BandState {
     std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
     std::vector<double> input;    // M (+2) network input
