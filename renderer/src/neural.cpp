@@ -51,8 +51,10 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
   return k;
 }
 
+constexpr std::size_t kLinearTerms = 6;  // Γ_U's condition basis of the linear part
+
 // Allocation-free forward pass; `a` and `b` hold at least the widest layer.
-double Forward(const NeuralNet& n, const double* in, double* a, double* b) {
+double Forward(const NeuralNet& n, bool unified, const double* in, double* a, double* b) {
   const double* x = in;
   double* dst = a;
   std::size_t off = 0;
@@ -72,7 +74,26 @@ double Forward(const NeuralNet& n, const double* in, double* a, double* b) {
     x = dst;
     dst = dst == a ? b : a;
   }
-  return x[0];
+  double y = x[0];
+  // The linear part over the M history inputs; Γ_U's coefficients are quadratic in the
+  // scaled condition (v', f'), the last two inputs: basis 1, v', f', v'^2, v' f', f'^2.
+  if (!n.linear.empty()) {
+    const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
+    const double* w = n.linear.data();
+    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0};
+    std::size_t terms = 1;
+    if (unified) {
+      const double v = in[M], f = in[M + 1];
+      phi[1] = v, phi[2] = f, phi[3] = v * v, phi[4] = v * f, phi[5] = f * f;
+      terms = kLinearTerms;
+    }
+    for (std::size_t t = 0; t < terms; ++t) {
+      double acc = 0;
+      for (std::size_t i = 0; i < M; ++i) acc += w[t * M + i] * in[i];
+      y += phi[t] * acc;
+    }
+  }
+  return y;
 }
 
 }  // namespace
@@ -131,6 +152,11 @@ void ValidateNeuralModel(const NeuralModel& m) {
         throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
       for (const double p : n.params)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
+      const std::size_t want_lin = static_cast<std::size_t>(band.history) * (m.topology == NeuralTopology::kUnified ? kLinearTerms : 1);
+      if (!n.linear.empty() && n.linear.size() != want_lin)
+        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}", where, n.linear.size(), want_lin));
+      for (const double p : n.linear)
+        if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite linear weight");
     }
     if (!(band.scale > 0)) throw std::invalid_argument(where + ": scale must be positive");
   }
@@ -154,6 +180,11 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
     s += "layers = " + list(b.nets.front().layers) + "\nsigma = " + list(b.sigma) + "\nnets = [\n";
     for (const auto& n : b.nets) s += "  " + list(n.params) + ",\n";
     s += "]\n";
+    if (!b.nets.front().linear.empty()) {
+      s += "linear = [\n";
+      for (const auto& n : b.nets) s += "  " + list(n.linear) + ",\n";
+      s += "]\n";
+    }
   }
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot write");
@@ -221,6 +252,12 @@ NeuralModel LoadNeuralModel(const std::string& path) {
       numbers(nets->get(j), fmt::format("{}.nets[{}]", k, j + 1), &n.params);
       b.nets.push_back(std::move(n));
     }
+    if (const auto* lin = (*t)["linear"].as_array()) {
+      if (lin->size() != b.nets.size())
+        d.Add(path, line(t->get("linear")), k + ".linear", fmt::format("expected one array per network ({})", b.nets.size()));
+      for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
+        numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
+    }
     m.bands.push_back(std::move(b));
   }
   d.ThrowIfAny();
@@ -262,7 +299,7 @@ void NeuralSynth::Reset() noexcept {
 }
 
 double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept {
-  return Forward(m_->bands[band].nets[cell], input, act_a_.data(), act_b_.data());
+  return Forward(m_->bands[band].nets[cell], m_->topology == NeuralTopology::kUnified, input, act_a_.data(), act_b_.data());
 }
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
@@ -288,10 +325,10 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
         s.input[M + 1] = m.NormForce(force_N);
       }
       double y = 0, sig = 0;
-      if (unified) y = Forward(band.nets[0], s.input.data(), act_a_.data(), act_b_.data());
+      if (unified) y = Forward(band.nets[0], true, s.input.data(), act_a_.data(), act_b_.data());
       for (int k = 0; k < nw; ++k) {
         const auto c = static_cast<std::size_t>(cell[k]);
-        if (!unified) y += w[k] * Forward(band.nets[c], s.input.data(), act_a_.data(), act_b_.data());
+        if (!unified) y += w[k] * Forward(band.nets[c], false, s.input.data(), act_a_.data(), act_b_.data());
         sig += w[k] * band.sigma[c];
       }
       y += sig * noise_.Normal();

@@ -111,7 +111,9 @@ TEST(Neural, ModelHasTheThesisStructure) {
     EXPECT_EQ(o.bands[b].history, 50);
     EXPECT_LE(hi[b], 2000.0 / (2 * g[b])) << "band " << b << " must not alias at its decimated rate";
     // The interpolator (flat to 0.4 of its input rate) must pass a decimated band whole.
-    if (g[b] > 1) EXPECT_LE(hi[b], 0.4 * 2000.0 / g[b]) << "band " << b;
+    if (g[b] > 1) {
+      EXPECT_LE(hi[b], 0.4 * 2000.0 / g[b]) << "band " << b;
+    }
   }
   EXPECT_EQ(o.hidden_large, (std::vector<int>{30, 25, 15, 5}));
   EXPECT_EQ(o.hidden_small, (std::vector<int>{30, 15, 5}));
@@ -377,6 +379,8 @@ TEST(NeuralFig37, LinearAndNonlinearArGrids) {
     auto o = Quick(renderer::NeuralTopology::kUnified);
     o.input_noise = EnvOr("HL_IN_NOISE", o.input_noise);
     o.signal_noise = EnvOr("HL_SIG_NOISE", o.signal_noise);
+    o.linear_part = EnvOr("HL_LINEAR", 1) > 0;
+    o.linear_ridge = EnvOr("HL_RIDGE", o.linear_ridge);
     o.train.max_epochs = static_cast<int>(EnvOr("HL_EPOCHS", o.train.max_epochs));
     o.train.learning_rate = EnvOr("HL_LR", o.train.learning_rate);
     o.train.patience = static_cast<int>(EnvOr("HL_PATIENCE", o.train.patience));
@@ -384,7 +388,20 @@ TEST(NeuralFig37, LinearAndNonlinearArGrids) {
     std::printf("%s AR grid: LPC %.3f %.3f (order %d) | Γ_U %.3f %.3f\n", nonlinear ? "nonlinear" : "linear", lpc.mean_es_train,
                 lpc.mean_es_test, lpc.order, u.mean_es_train, u.mean_es_test);
     for (const auto& r : u.rows)
-      if (r.train) std::printf("   Γ_U train %.2f %.2f: %.3f\n", r.speed_mps, r.force_N, r.es);
+      std::printf("   Γ_U %s %.2f %.2f: %.3f\n", r.train ? "train" : "cv   ", r.speed_mps, r.force_N, r.es);
+    if (EnvOr("HL_DIAG", 0) > 0) {
+      for (const auto* res : {&lpc, &u}) {
+        const auto& r = res->rows[12];  // 0.08 m/s, 1.18 N (training)
+        std::printf("  %s at %.2f %.2f, magnitude ratio synth/measured per 50 Hz:", res == &lpc ? "LPC" : "Γ_U", r.speed_mps, r.force_N);
+        const std::size_t nb = r.measured_spectrum.size();
+        for (std::size_t b0 = 0; b0 < nb; b0 += nb / 20) {
+          double a = 0, bb = 0;
+          for (std::size_t k = b0; k < std::min(nb, b0 + nb / 20); ++k) a += r.synthesized_spectrum[k], bb += r.measured_spectrum[k];
+          std::printf(" %.2f", a / bb);
+        }
+        std::printf("\n");
+      }
+    }
   }
 }
 

@@ -35,6 +35,12 @@ namespace hapticlab::renderer {
 struct NeuralNet {
   std::vector<int> layers;     ///< sizes from input to output (output 1)
   std::vector<double> params;
+  /// Optional linear autoregressive part added to the MLP's output (empty: none). Over the
+  /// M history inputs x_i: Γ_D, M weights a_i, y += sum a_i x_i; Γ_U, 6 M weights, one block
+  /// of M per term of the condition basis phi = (1, v', f', v'^2, v' f', f'^2) (v', f' the
+  /// network's scaled speed and force inputs): y += sum_t phi_t sum_i w[t M + i] x_i
+  /// (docs/modeling-neural.md: why).
+  std::vector<double> linear;
   std::size_t ParamCount() const;
 };
 
