@@ -316,8 +316,9 @@ TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
 
 // The project's synthetic AR grid (tests/modeling/vibration_test.cpp): an AR(4) at 2 kHz whose
 // two resonances move with speed and force, its variance growing with both. `nonlinear`
-// adds a state-dependent term (0.6 tanh(3 x[k-1] / s) x[k-2], s the linear part's RMS) that
-// shifts and sharpens the spectrum with the amplitude: a process no linear AR model is.
+// adds a bounded bilinear term, 0.8 s tanh(x[k-1] / s) tanh(x[k-2] / s) with s the linear
+// part's RMS: sum and difference frequencies of the resonances, a process no linear AR model
+// is (and still stable: the term is bounded and the linear part is).
 Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed, double seconds = 2.5) {
   const double fs = 2000;
   const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
@@ -344,7 +345,7 @@ Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed
   }
   for (std::size_t k = 4; k < x.size(); ++k) {
     double a = c[0] * x[k - 1] + c[1] * x[k - 2] + c[2] * x[k - 3] + c[3] * x[k - 4] + rng.Normal();
-    if (nonlinear) a += 0.6 * std::tanh(3 * x[k - 1] / lin_rms) * x[k - 2];
+    if (nonlinear) a += 0.8 * lin_rms * std::tanh(x[k - 1] / lin_rms) * std::tanh(x[k - 2] / lin_rms);
     x[k] = a;
   }
   Recording rec;
