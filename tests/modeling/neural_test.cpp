@@ -236,6 +236,18 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
     EXPECT_NE(std::string(e.what()).find("bad.toml"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("Nyquist"), std::string::npos) << e.what();
   }
+  // The linear part is saved (one array per network) and its size is checked on load.
+  std::string lin = test::ReadFile(path);
+  const auto at = lin.find("linear = [\n  [");
+  ASSERT_NE(at, std::string::npos) << "the trained model has a linear part";
+  lin.insert(at + 14, "0.5, ");
+  test::WriteFile(dir.File("lin.toml"), lin);
+  try {
+    renderer::LoadNeuralModel(dir.File("lin.toml"));
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("linear weights, expected 0 or"), std::string::npos) << e.what();
+  }
 }
 
 // Free-running synthesis of a known nonlinear AR process: the noise-driven MLP reproduces
