@@ -65,7 +65,7 @@ void AddCheck(CLI::App& model) {
 
 void AddRender(CLI::App& model) {
   struct O {
-    std::string model, trajectory, out, vib_out, algorithm = "fric2";
+    std::string model, trajectory, out, vib_out, algorithm = "fric2", force_source = "auto";
     double force_rate = 1000, vib_rate = 10000, max_force = 8;
     bool no_vibration = false, no_filter = false;
     std::uint64_t seed = 1;
@@ -74,9 +74,11 @@ void AddRender(CLI::App& model) {
   auto* cmd = model.add_subcommand(
       "render",
       "Run the real-time ticks offline over a recorded trajectory (measurement CSV v1;\n"
-      "velocities are differentiated when absent, forces are ignored). Writes one row per\n"
-      "trajectory sample: model force, commanded force, normal force, friction, speed, contact,\n"
-      "fault, and the vibration sample at that time.");
+      "velocities are differentiated when absent). When the trajectory has forces, its normal\n"
+      "force (fz_N) drives the vibration model, which plays while fz_N > 0 (--force-source);\n"
+      "the rendered force still follows the geometry. Writes one row per trajectory sample:\n"
+      "model force, commanded force, normal force, friction, speed, contact, fault, and the\n"
+      "vibration sample at that time.");
   cmd->add_option("--model", o->model, "Material model (.toml)")->required();
   cmd->add_option("--trajectory", o->trajectory, "Trajectory (measurement CSV v1)")->required();
   cmd->add_option("--out", o->out, "Output CSV")->required();
@@ -85,6 +87,10 @@ void AddRender(CLI::App& model) {
       ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))->capture_default_str();
   cmd->add_option("--vibration-rate", o->vib_rate, "Vibration loop rate [Hz]")->capture_default_str();
   cmd->add_option("--max-force", o->max_force, "Device force limit [N]")->capture_default_str();
+  cmd->add_option("--force-source", o->force_source,
+                  "Normal force of the vibration model: auto (the trajectory's when it has forces),\n"
+                  "trajectory (required), model (the rendered normal force)")
+      ->check(CLI::IsMember({"auto", "trajectory", "model"}))->capture_default_str();
   cmd->add_flag("--no-vibration", o->no_vibration, "Force only");
   cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
   cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
@@ -103,7 +109,11 @@ void AddRender(CLI::App& model) {
       // The force loop runs at the trajectory's own rate.
       ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) / (traj.rows.back().t_s - traj.rows.front().t_s);
       ro.stale_after_s = 1e9;  // offline: samples are never stale
-      const auto res = runner::RenderOffline(m, ro, traj);
+      if (o->force_source == "trajectory" && !traj.has_forces)
+        throw InputError(o->trajectory, 0, "fz_N", "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
+      runner::OfflineOptions oo;
+      oo.measured_normal_force = o->force_source != "model" && traj.has_forces;
+      const auto res = runner::RenderOffline(m, ro, traj, oo);
       FILE* f = std::fopen(o->out.c_str(), "w");
       if (!f) throw std::runtime_error(o->out + ": cannot write");
       std::fprintf(f, "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,fault,acc_mps2\n");
@@ -120,8 +130,9 @@ void AddRender(CLI::App& model) {
           std::fprintf(v, "%.9g,%.9g\n", traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz, res.vibration_mps2[k]);
         if (std::fclose(v) != 0) throw std::runtime_error(o->vib_out + ": write failed");
       }
-      fmt::print(stderr, "rendered {} force ticks at {:.0f} Hz and {} vibration samples -> {}\n",
-                 res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(), o->out);
+      fmt::print(stderr, "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: {}) -> {}\n",
+                 res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(),
+                 oo.measured_normal_force ? "the trajectory's fz_N" : "the rendered normal force", o->out);
       return kExitOk;
     });
   });
@@ -216,17 +227,21 @@ void AddEnergy(CLI::App& model) {
 void AddImportPenn(CLI::App& model) {
   struct O {
     std::string xml, out;
-    double cutoff = 100;
+    double cutoff = 0;
   };
   auto o = std::make_shared<O>();
   auto* cmd = model.add_subcommand(
       "import-penn",
       "Convert a Penn Haptic Texture Toolkit model set (Models_<name>.xml, from your own copy;\n"
       "its licence forbids redistribution) into a HapticLab material model. The vibration\n"
-      "bank and mu are imported; contact and geometry are left at flat defaults to be fitted.");
+      "bank, its modelled range (maxSpeed, maxForce: saturated as the toolkit does) and mu are\n"
+      "imported; the bank plays down to the toolkit's 0.05 mm/s; contact and geometry are left\n"
+      "at flat defaults to be fitted. With flat geometry the vibration carries the whole\n"
+      "texture, so the hybrid cut-off is 0 (no split) unless --cutoff-hz says otherwise.");
   cmd->add_option("--xml", o->xml, "Penn model set XML")->required();
   cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
-  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid cut-off f_c to store [Hz]")->capture_default_str();
+  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid cut-off f_c to store [Hz]; 0: no split")
+      ->check(CLI::NonNegativeNumber)->capture_default_str();
   cmd->callback([o] {
     RunGuarded([&] {
       auto r = renderer::ImportPennXml(o->xml);
@@ -238,9 +253,13 @@ void AddImportPenn(CLI::App& model) {
                                renderer::MaterialToToml(r.model);
       std::fputs(text.c_str(), f);
       if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
-      fmt::print("{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e} -> {}\n", o->xml,
-                 r.model.vibration.cells.size(), r.arma ? "ARMA" : "AR", r.model.vibration.order(),
-                 r.model.friction.mu_k, r.max_lsf_reconstruction_error, o->out);
+      const auto& b = r.model.vibration;
+      fmt::print("{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e}; {} -> {}\n", o->xml,
+                 b.cells.size(), r.arma ? "ARMA" : "AR", b.order(), r.model.friction.mu_k,
+                 r.max_lsf_reconstruction_error,
+                 r.has_range ? fmt::format("range {:g} mm/s x {:g} N", b.max_speed_mps * 1e3, b.max_force_N)
+                             : std::string("no maxSpeed/maxForce: no saturation"),
+                 o->out);
       return kExitOk;
     });
   });
@@ -337,8 +356,8 @@ void AddFitNeural(CLI::App& model) {
   auto* cmd = model.add_subcommand(
       "fit-neural",
       "Train the neural texture model (dissertation ch. III.3, Fig. 3.3) from recordings on a full\n"
-      "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 10, 5,\n"
-      "2, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
+      "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 8, 4,\n"
+      "1, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
       "30-25-15-5; Γ_D: one per band and grid cell, 30-25-15-5 for band 1 and 30-15-5 for the\n"
       "others), Adam with mini-batches and early stopping. Writes a neural model file; reference\n"
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");

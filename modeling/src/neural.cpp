@@ -4,6 +4,7 @@
 #include <fmt/format.h>
 
 #include <Eigen/Core>
+#include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -112,8 +113,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
       sig[b].push_back(std::move(dec));
     }
     band.scale = n > 0 && ss > 0 ? std::sqrt(ss / n) : 1.0;
+    Rng dither(o.train.seed + 7 * b + 1);
     for (auto& s : sig[b])
-      for (auto& x : s) x /= band.scale;
+      for (auto& x : s) x = x / band.scale + (o.signal_noise > 0 ? o.signal_noise * dither.Normal() : 0.0);
     band.sigma.assign(cells, 0.0);
     band.nets.resize(unified ? 1 : cells);
   }
@@ -174,6 +176,32 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             }
             if (val) nval += static_cast<Eigen::Index>(b - a);
           }
+        // The linear part (NeuralFitOptions::linear_part): least squares on the clean training
+        // rows, features x_q (Γ_U: times each term of the condition basis), a ridge of 1e-6 of
+        // the mean diagonal.
+        const Eigen::Index nlin = o.linear_part ? (unified ? 6 * M : M) : 0;
+        auto features = [&](const auto& row, auto&& f) {
+          f.head(M) = row.head(M);
+          if (unified) {  // the condition basis 1, v', f', v'^2, v' f', f'^2 (renderer/neural.cpp)
+            const double v = row(M), fo = row(M + 1);
+            const double phi[5] = {v, fo, v * v, v * fo, fo * fo};
+            for (int t = 0; t < 5; ++t) f.segment((t + 1) * M, M) = row.head(M) * phi[t];
+          }
+        };
+        Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
+        Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
+        if (nlin > 0) {
+          const Eigen::Index ntr = total - nval;
+          Eigen::MatrixXd F(total, nlin);
+          for (Eigen::Index rr = 0; rr < total; ++rr) features(X.row(rr), F.row(rr));
+          Eigen::MatrixXd A = F.topRows(ntr).transpose() * F.topRows(ntr);
+          const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
+          A.diagonal().array() += lambda;
+          wlin = A.ldlt().solve(F.topRows(ntr).transpose() * y.head(ntr));
+          ylin = F * wlin;
+        }
+        const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
+        const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns
         // Input noise (see NeuralFitOptions::input_noise).
         const double in_noise = o.input_noise;
         if (in_noise > 0) {
@@ -189,10 +217,21 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         MlpTrainOptions to = o.train;
         to.validation_fraction = total > 0 ? static_cast<double>(nval) / static_cast<double>(total) : 0.2;
         to.seed = o.train.seed + k;
+        const std::string name = unified ? fmt::format("band {}", j.band + 1)
+                                          : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1,
+                                                        m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
+                                                        m.forces_N[static_cast<std::size_t>(j.cell) % nf]);
         to.progress = nullptr;
-        net.Train(X, y, to);
-        // Residual RMS per cell (one-step prediction on every row of the cell's recording).
-        const Eigen::VectorXd p = net.PredictRows(X);
+        if (o.progress)  // every 5th epoch: training can take minutes per network
+          to.progress = [&, name](int epoch, double val_mse) {
+            if (epoch % 5 == 0)
+              o.progress(fmt::format("{}: epoch {}/{}, validation MSE {:.4f}", name, epoch, o.train.max_epochs, val_mse),
+                         static_cast<int>(done.load()), static_cast<int>(jobs.size()));
+          };
+        net.Train(X, y_mlp, to);
+        // Residual RMS per cell (one-step prediction on every row of the cell's recording;
+        // with a linear part on the clean histories the synthesis feeds it).
+        const Eigen::VectorXd p = nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + ylin) : net.PredictRows(X);
         std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
         r = 0;
         for (const bool val : {false, true})
@@ -204,7 +243,17 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
               cnt[c] += 1;
             }
           }
-        renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size())};
+        renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
+                                std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
+        Eigen::RowVectorXd fbuf(std::max<Eigen::Index>(nlin, 1));
+        auto predict = [&](const Eigen::VectorXd& in) {
+          double v = net.Predict(in);
+          if (nlin > 0) {
+            features(in.transpose(), fbuf);
+            v += fbuf.head(nlin).dot(wlin.transpose());
+          }
+          return v;
+        };
         for (std::size_t c = 0; c < cells; ++c)
           if (cnt[c] > 0) band.sigma[c] = std::sqrt(se[c] / cnt[c]);
         // Calibrate sigma: a trained predictor shrinks toward zero, so free-running synthesis
@@ -226,7 +275,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             double ss = 0;
             const int warm = 300, steps = 3000;
             for (int t = 0; t < warm + steps; ++t) {
-              double yv = net.Predict(in) + band.sigma[c] * rng.Normal();
+              double yv = predict(in) + band.sigma[c] * rng.Normal();
               yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
               for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
               in(0) = yv;
@@ -238,11 +287,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
-        if (o.progress)
-          o.progress(unified ? fmt::format("band {}", j.band + 1)
-                             : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1, m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
-                                           m.forces_N[static_cast<std::size_t>(j.cell) % nf]),
-                     static_cast<int>(++done), static_cast<int>(jobs.size()));
+        if (o.progress) o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
       } catch (...) {
         std::lock_guard<std::mutex> lock(err_mu);
         if (!error) error = std::current_exception();

@@ -1,5 +1,6 @@
 #include "hapticlab/renderer/hybrid.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -14,7 +15,8 @@ HybridRenderer::HybridRenderer(const MaterialModel& m, const RenderOptions& o)
   if (!(o.force_rate_hz > 0) || !(o.vibration_rate_hz > 0))
     throw std::invalid_argument("loop rates must be positive");
   if (!(o.max_force_N > 0)) throw std::invalid_argument("max_force_N must be positive");
-  if (o.hybrid_filter) {
+  filter_on_ = o.hybrid_filter && cutoff_hz_ > 0;
+  if (filter_on_) {
     const auto lp = BiquadCoeffs::ButterworthLowPass(cutoff_hz_, o.force_rate_hz);
     for (auto& f : force_lp_) f.SetCoeffs(lp);
     vib_hp_.SetCoeffs(BiquadCoeffs::ButterworthHighPass(cutoff_hz_, o.vibration_rate_hz));
@@ -29,6 +31,12 @@ HybridRenderer::HybridRenderer(const MaterialModel& m, const RenderOptions& o)
       throw std::invalid_argument("the vibration bank's rate exceeds the vibration loop's rate");
     step_ = m.vibration.sample_rate_hz / o.vibration_rate_hz;
   }
+  // An integer rate ratio (2 kHz, 1 kHz models at a 10 kHz loop...) upsamples band-limited.
+  const double ratio = 1.0 / step_;
+  const double rounded = std::round(ratio);
+  if (std::abs(ratio - rounded) <= 1e-9 * ratio) up_ = PolyphaseUpsampler(static_cast<int>(rounded), kUpsampleTapsPerPhase);
+  else up_ = PolyphaseUpsampler();  // factor 1, unused: linear interpolation instead
+  upsample_ = std::abs(ratio - rounded) <= 1e-9 * ratio;
 }
 
 void HybridRenderer::Fault(std::atomic<std::uint64_t>& counter) noexcept {
@@ -44,7 +52,8 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
   counters_.force_ticks.fetch_add(1, std::memory_order_relaxed);
   ForceCommand cmd;
   const bool finite = in.state.p_m.allFinite() && in.state.v_mps.allFinite() &&
-                      std::isfinite(in.t_s) && std::isfinite(now_s);
+                      std::isfinite(in.t_s) && std::isfinite(now_s) &&
+                      (!in.has_normal_force || std::isfinite(in.normal_force_N));
   if (!finite) {
     cmd.fault = true;
     Fault(counters_.nan_faults);
@@ -57,7 +66,7 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
   }
   cmd.raw = force_.Step(in.state);
   Eigen::Vector3d f = cmd.raw.force_N;
-  if (options_.hybrid_filter)
+  if (filter_on_)
     for (int i = 0; i < 3; ++i) f[i] = force_lp_[static_cast<std::size_t>(i)].Step(f[i]);
   if (!f.allFinite()) {
     cmd.fault = true;
@@ -71,16 +80,20 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
     counters_.saturations.fetch_add(1, std::memory_order_relaxed);
   }
   cmd.force_N = f;
-  // Publish the vibration filter for the current speed and rendered normal force.
+  // Publish the vibration filter for the current speed and normal force: the measured one
+  // when the device reports it (in contact while it presses), else the rendered one.
+  const bool measured = in.has_normal_force;
+  const double vib_force_N = measured ? std::max(0.0, in.normal_force_N) : cmd.raw.normal_force_N;
+  const bool vib_contact = measured ? in.normal_force_N > 0 : cmd.raw.in_contact;
   ArFilter& slot = filter_box_.WriteSlot();
   if (options_.vibration) {
-    interp_.Interpolate(cmd.raw.tangential_speed_mps, cmd.raw.normal_force_N, cmd.raw.in_contact, &slot);
-    if (neural_) slot.active = cmd.raw.in_contact;  // the neural synth applies its own minimum speed
+    interp_.Interpolate(cmd.raw.tangential_speed_mps, vib_force_N, vib_contact, &slot);
+    if (neural_) slot.active = vib_contact;  // the neural synth applies its own minimum speed
   } else {
     slot.active = false;
   }
   slot.speed_mps = cmd.raw.tangential_speed_mps;
-  slot.force_N = cmd.raw.normal_force_N;
+  slot.force_N = vib_force_N;
   filter_box_.Publish();
   return cmd;
 }
@@ -88,19 +101,31 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
 double HybridRenderer::VibrationTick() noexcept {
   counters_.vibration_ticks.fetch_add(1, std::memory_order_relaxed);
   const ArFilter& f = filter_box_.Read();
-  // Run the AR model at the bank's rate; interpolate linearly to the loop's rate.
-  phase_ += step_;
-  while (phase_ >= 1.0) {
-    phase_ -= 1.0;
-    prev_ = next_;
-    next_ = neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f);
+  // Run the model at its rate; upsample band-limited (integer ratio) or linearly.
+  double a;
+  if (upsample_) {
+    if (up_phase_ == 0) up_.Push(neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f));
+    a = up_.Output(up_phase_);
+    up_phase_ = up_phase_ + 1 == up_.factor() ? 0 : up_phase_ + 1;
+  } else {
+    phase_ += step_;
+    while (phase_ >= 1.0) {
+      phase_ -= 1.0;
+      prev_ = next_;
+      next_ = neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f);
+    }
+    a = prev_ + (next_ - prev_) * phase_;
   }
-  double a = prev_ + (next_ - prev_) * phase_;
   if (!f.active) {
+    // Clear the model's state now (both calls do nothing when it is already clear).
+    if (neural_) neural_->Step(0, 0, false);
+    else synth_.StepWith(f, 0.0);
     prev_ = next_ = 0;
+    up_.Reset();
+    up_phase_ = 0;
     a = 0;
   }
-  if (options_.hybrid_filter) a = vib_hp_.Step(a);
+  if (filter_on_) a = vib_hp_.Step(a);
   return std::isfinite(a) ? a : 0.0;
 }
 

@@ -140,14 +140,16 @@ void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::p
 void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
                    VibrationBank* bank, int depth) {
   CheckKnownKeys(r, t, "vibration",
-                 {"file", "sample_rate_hz", "min_speed_mps", "speeds_mps", "forces_N", "cells",
-                  "triangles"});
+                 {"file", "sample_rate_hz", "min_speed_mps", "max_speed_mps", "max_force_N", "speeds_mps",
+                  "forces_N", "cells", "triangles"});
   if (auto f = r.String(t, "vibration", "file", false)) {
     ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
     return;
   }
   if (auto v = r.Number(t, "vibration", "sample_rate_hz", true)) bank->sample_rate_hz = *v;
   if (auto v = r.Number(t, "vibration", "min_speed_mps", false)) bank->min_speed_mps = *v;
+  if (auto v = r.Number(t, "vibration", "max_speed_mps", false)) bank->max_speed_mps = *v;
+  if (auto v = r.Number(t, "vibration", "max_force_N", false)) bank->max_force_N = *v;
   bank->grid_speeds_mps = r.Numbers(t, "vibration", "speeds_mps", false);
   bank->grid_forces_N = r.Numbers(t, "vibration", "forces_N", false);
   const toml::node* cells_node = t.get("cells");
@@ -367,10 +369,15 @@ void ValidateMaterial(const MaterialModel& m) {
   if (!(m.friction.kappa_N_per_m > 0)) d.Add(f, 0, "friction.kappa_N_per_m", "must be > 0");
   if (!(m.friction.mu_k >= 0)) d.Add(f, 0, "friction.mu_k", "must be >= 0");
   if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
-  if (!(m.hybrid_cutoff_hz > 0)) d.Add(f, 0, "hybrid.cutoff_hz", "must be > 0");
+  if (!(m.hybrid_cutoff_hz >= 0)) d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
   const auto& b = m.vibration;
   if (!b.empty()) {
     if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
+    if (!(b.min_speed_mps >= 0)) d.Add(f, 0, "vibration.min_speed_mps", "must be >= 0");
+    if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
+      d.Add(f, 0, "vibration.max_speed_mps", fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
+    if (!(b.max_force_N == 0 || b.max_force_N > kSaturationMarginForce_N))
+      d.Add(f, 0, "vibration.max_force_N", fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginForce_N));
     const std::size_t p = b.cells[0].coeffs.size();
     for (std::size_t i = 0; i < b.cells.size(); ++i) {
       if (b.cells[i].coeffs.size() != p)
@@ -429,6 +436,8 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
   if (!b.empty()) {
     s += fmt::format("\n[vibration]\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
                      b.sample_rate_hz, b.min_speed_mps);
+    if (b.max_speed_mps > 0) s += fmt::format("max_speed_mps = {:.17g}\n", b.max_speed_mps);
+    if (b.max_force_N > 0) s += fmt::format("max_force_N = {:.17g}\n", b.max_force_N);
     auto list = [](const std::vector<double>& v) {
       std::string o = "[";
       for (std::size_t i = 0; i < v.size(); ++i) o += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);

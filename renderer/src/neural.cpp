@@ -52,8 +52,10 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
   return k;
 }
 
+constexpr std::size_t kLinearTerms = 6;  // Γ_U's condition basis of the linear part
+
 // Allocation-free forward pass; `a` and `b` hold at least the widest layer.
-double Forward(const NeuralNet& n, const double* in, double* a, double* b) {
+double Forward(const NeuralNet& n, bool unified, const double* in, double* a, double* b) {
   const double* x = in;
   double* dst = a;
   std::size_t off = 0;
@@ -73,7 +75,26 @@ double Forward(const NeuralNet& n, const double* in, double* a, double* b) {
     x = dst;
     dst = dst == a ? b : a;
   }
-  return x[0];
+  double y = x[0];
+  // The linear part over the M history inputs; Γ_U's coefficients are quadratic in the
+  // scaled condition (v', f'), the last two inputs: basis 1, v', f', v'^2, v' f', f'^2.
+  if (!n.linear.empty()) {
+    const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
+    const double* w = n.linear.data();
+    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0};
+    std::size_t terms = 1;
+    if (unified) {
+      const double v = in[M], f = in[M + 1];
+      phi[1] = v, phi[2] = f, phi[3] = v * v, phi[4] = v * f, phi[5] = f * f;
+      terms = kLinearTerms;
+    }
+    for (std::size_t t = 0; t < terms; ++t) {
+      double acc = 0;
+      for (std::size_t i = 0; i < M; ++i) acc += w[t * M + i] * in[i];
+      y += phi[t] * acc;
+    }
+  }
+  return y;
 }
 
 }  // namespace
@@ -97,7 +118,7 @@ double NeuralModel::NormForce(double f) const {
 std::vector<NeuralBand> DefaultNeuralBands() {
   std::vector<NeuralBand> b(4);
   const double lo[] = {20, 100, 200, 500}, hi[] = {100, 200, 500, 1000};
-  const int g[] = {10, 5, 2, 1};
+  const int g[] = {8, 4, 1, 1};
   for (int i = 0; i < 4; ++i) {
     b[static_cast<std::size_t>(i)].lo_hz = lo[i];
     b[static_cast<std::size_t>(i)].hi_hz = hi[i];
@@ -132,6 +153,11 @@ void ValidateNeuralModel(const NeuralModel& m) {
         throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
       for (const double p : n.params)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
+      const std::size_t want_lin = static_cast<std::size_t>(band.history) * (m.topology == NeuralTopology::kUnified ? kLinearTerms : 1);
+      if (!n.linear.empty() && n.linear.size() != want_lin)
+        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}", where, n.linear.size(), want_lin));
+      for (const double p : n.linear)
+        if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite linear weight");
     }
     if (!(band.scale > 0)) throw std::invalid_argument(where + ": scale must be positive");
   }
@@ -155,6 +181,11 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
     s += "layers = " + list(b.nets.front().layers) + "\nsigma = " + list(b.sigma) + "\nnets = [\n";
     for (const auto& n : b.nets) s += "  " + list(n.params) + ",\n";
     s += "]\n";
+    if (!b.nets.front().linear.empty()) {
+      s += "linear = [\n";
+      for (const auto& n : b.nets) s += "  " + list(n.linear) + ",\n";
+      s += "]\n";
+    }
   }
   std::ofstream f(path);
   if (!f) throw std::runtime_error(path + ": cannot write");
@@ -222,6 +253,12 @@ NeuralModel LoadNeuralModel(const std::string& path) {
       numbers(nets->get(j), fmt::format("{}.nets[{}]", k, j + 1), &n.params);
       b.nets.push_back(std::move(n));
     }
+    if (const auto* lin = (*t)["linear"].as_array()) {
+      if (lin->size() != b.nets.size())
+        d.Add(path, line(t->get("linear")), k + ".linear", fmt::format("expected one array per network ({})", b.nets.size()));
+      for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
+        numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
+    }
     m.bands.push_back(std::move(b));
   }
   d.ThrowIfAny();
@@ -242,26 +279,8 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
-    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(b.lo_hz, rate));
-    // Interpolation filter for upsampling by γ: Hann-windowed sinc with its cut-off at the
-    // decimated Nyquist frequency, kTaps * γ long, split into γ phases.
-    const int g = b.decimation, len = kTaps * g;
-    s.taps.assign(static_cast<std::size_t>(len), 0.0);
-    const double centre = 0.5 * (len - 1);
-    for (int p = 0; p < g; ++p)
-      for (int j = 0; j < kTaps; ++j) {
-        const int n = p + j * g;  // tap index within the full filter
-        const double t = (n - centre) / g;
-        const double sinc = std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
-        const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * (n + 0.5) / len);
-        s.taps[static_cast<std::size_t>(p * kTaps + j)] = sinc * w;
-      }
-    // Unit DC gain per phase.
-    for (int p = 0; p < g; ++p) {
-      double sum = 0;
-      for (int j = 0; j < kTaps; ++j) sum += s.taps[static_cast<std::size_t>(p * kTaps + j)];
-      for (int j = 0; j < kTaps; ++j) s.taps[static_cast<std::size_t>(p * kTaps + j)] /= sum;
-    }
+    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
+    s.up = PolyphaseUpsampler(b.decimation, kTaps);
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
     bands_.push_back(std::move(s));
@@ -275,14 +294,13 @@ void NeuralSynth::Reset() noexcept {
     std::fill(s.hist.begin(), s.hist.end(), 0.0);
     s.head = s.phase = 0;
     s.hp.Reset();
-    s.out.fill(0.0);
-    s.out_head = 0;
+    s.up.Reset();
   }
   running_ = false;
 }
 
 double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept {
-  return Forward(m_->bands[band].nets[cell], input, act_a_.data(), act_b_.data());
+  return Forward(m_->bands[band].nets[cell], m_->topology == NeuralTopology::kUnified, input, act_a_.data(), act_b_.data());
 }
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
@@ -308,10 +326,10 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
         s.input[M + 1] = m.NormForce(force_N);
       }
       double y = 0, sig = 0;
-      if (unified) y = Forward(band.nets[0], s.input.data(), act_a_.data(), act_b_.data());
+      if (unified) y = Forward(band.nets[0], true, s.input.data(), act_a_.data(), act_b_.data());
       for (int k = 0; k < nw; ++k) {
         const auto c = static_cast<std::size_t>(cell[k]);
-        if (!unified) y += w[k] * Forward(band.nets[c], s.input.data(), act_a_.data(), act_b_.data());
+        if (!unified) y += w[k] * Forward(band.nets[c], false, s.input.data(), act_a_.data(), act_b_.data());
         sig += w[k] * band.sigma[c];
       }
       y += sig * noise_.Normal();
@@ -319,20 +337,9 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       y = std::clamp(y, -10.0, 10.0);  // keep the feedback inside the trained range
       s.head = s.head == 0 ? static_cast<int>(M) - 1 : s.head - 1;
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
-      const double h = s.hp.Step(y);
-      s.out_head = s.out_head == 0 ? kTaps - 1 : s.out_head - 1;
-      s.out[static_cast<std::size_t>(s.out_head)] = s.out[static_cast<std::size_t>(s.out_head + kTaps)] = h;
+      s.up.Push(s.hp.Step(y));
     }
-    double out;
-    if (band.decimation == 1) {
-      out = s.out[static_cast<std::size_t>(s.out_head)];
-    } else {
-      // y[m γ + p] = sum_j x[m - j] h[p + j γ]: phase p of the polyphase filter.
-      const double* x = s.out.data() + s.out_head;
-      const double* t = s.taps.data() + static_cast<std::size_t>(s.phase) * kTaps;
-      out = 0;
-      for (int j = 0; j < kTaps; ++j) out += x[j] * t[j];
-    }
+    const double out = s.up.Output(s.phase);
     s.phase = (s.phase + 1) % band.decimation;
     sum += band.scale * out;
   }

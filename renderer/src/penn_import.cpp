@@ -47,6 +47,20 @@ class XmlReader {
     }
     return v;
   }
+  // An integer element in [lo, hi] (checked before any conversion to int).
+  int Integer(const pugi::xml_node& parent, const char* name, bool required, int lo, int hi, int def) {
+    const pugi::xml_node n = parent.child(name);
+    if (!n) {
+      if (required) Error(parent, name, fmt::format("missing element; expected an integer in {}..{}", lo, hi));
+      return def;
+    }
+    const double v = Parse(n, name);
+    if (!(v >= lo && v <= hi && v == std::floor(v))) {
+      Error(n, name, fmt::format("expected an integer in {}..{}, got '{}'", lo, hi, n.text().as_string()));
+      return def;
+    }
+    return static_cast<int>(v);
+  }
   std::vector<double> Values(const pugi::xml_node& parent, const char* name, bool required) {
     std::vector<double> out;
     const pugi::xml_node n = parent.child(name);
@@ -63,10 +77,6 @@ class XmlReader {
   Diagnostics* d_;
   std::vector<std::size_t> line_starts_;
 };
-
-// A count or index read as a double, range-checked before the narrowing cast (a value
-// outside +-1e6 becomes -1, which every caller reports as out of range).
-int ToInt(double x) { return x >= -1e6 && x <= 1e6 ? static_cast<int>(x) : -1; }
 
 }  // namespace
 
@@ -101,10 +111,23 @@ PennImport ImportPennXml(const std::string& path) {
   m.friction.mu_k = r.Number(set, "mu", true);
   VibrationBank& bank = m.vibration;
   bank.sample_rate_hz = r.Number(set, "SampleRate", true, 0);
-  const int num_mod = ToInt(r.Number(set, "numMod", true));
-  const int num_ar = ToInt(r.Number(set, "numARCoeff", true));
-  const int num_ma = ToInt(r.Number(set, "numMACoeff", false, 0));
+  // Bounds: a model set never holds more than 100000 models; filters run up to kMaxArOrder.
+  const int num_mod = r.Integer(set, "numMod", true, 1, 100000, 0);
+  const int num_ar = r.Integer(set, "numARCoeff", true, 1, kMaxArOrder, 0);
+  const int num_ma = r.Integer(set, "numMACoeff", false, 0, kMaxArOrder, 0);
   out.arma = num_ma > 0;
+  // The modelled range (mm/s, N): the toolkit saturates speed and force just inside it.
+  if (set.child("maxSpeed")) {
+    const double v = r.Number(set, "maxSpeed", true);
+    if (!(v * 1e-3 > kSaturationMarginSpeed_mps)) r.Error(set.child("maxSpeed"), "maxSpeed", "must be > 0.01 mm/s");
+    else bank.max_speed_mps = v * 1e-3;
+  }
+  if (set.child("maxForce")) {
+    const double v = r.Number(set, "maxForce", true);
+    if (!(v > kSaturationMarginForce_N)) r.Error(set.child("maxForce"), "maxForce", "must be > 0.01 N");
+    else bank.max_force_N = v;
+  }
+  out.has_range = bank.max_speed_mps > 0 && bank.max_force_N > 0;
   const auto speeds_mmps = r.Values(set, "speedList", true);
   const auto forces = r.Values(set, "forceList", true);
   if (static_cast<int>(speeds_mmps.size()) != num_mod || static_cast<int>(forces.size()) != num_mod)
@@ -117,7 +140,7 @@ PennImport ImportPennXml(const std::string& path) {
     bool ok = true;
     for (const auto& v : tri.children("value")) {
       const double x = r.Parse(v, "tri");
-      const bool in_range = x >= 1 && x <= num_mod && x == std::floor(x);
+      const bool in_range = x >= 1 && x <= num_mod && x == std::floor(x);  // checked before the cast
       if (k < 3 && in_range) t[static_cast<std::size_t>(k)] = static_cast<int>(x) - 1;  // 1-based in the file
       ok = ok && in_range;
       ++k;
@@ -126,14 +149,12 @@ PennImport ImportPennXml(const std::string& path) {
     else bank.triangles.push_back(t);
   }
   for (const auto& model : set.children("model")) {
-    const int idx = ToInt(r.Number(model, "modNum", true)) - 1;
+    const int idx = r.Integer(model, "modNum", true, 1, std::max(1, num_mod), 0) - 1;
     ArCell cell;
     if (idx >= 0 && idx < static_cast<int>(speeds_mmps.size()) && idx < static_cast<int>(forces.size())) {
       cell.speed_mps = speeds_mmps[static_cast<std::size_t>(idx)] * 1e-3;
       cell.force_N = forces[static_cast<std::size_t>(idx)];
-    } else {
-      r.Error(model, "modNum", fmt::format("expected 1..{}", num_mod));
-    }
+    }  // else: Integer() or the speedList/forceList check has reported it
     const auto a = r.Values(model, "ARcoeff", true);
     const auto lsf = r.Values(model, "ARlsf", true);
     if (static_cast<int>(a.size()) != num_ar + 1 || a.empty() || a[0] != 1.0) {
@@ -171,19 +192,35 @@ PennImport ImportPennXml(const std::string& path) {
       }
       cell.ma_lsf = ArToLsf(neg);
       cell.gain = r.Number(model, "gain", true, 1.0);
-      // The ARMA files store var = 0 and put the amplitude in `gain`: unit excitation.
-      cell.variance = var > 0 ? var : 1.0;
-    } else {
-      cell.variance = var;
     }
+    // Excitation variance as stored, for both variants: the toolkit drives every model with
+    // N(0, var) noise (ARMA: times `gain`), so its var = 0 boundary models are silent.
+    cell.variance = var;
     if (idx >= 0 && static_cast<std::size_t>(idx) != bank.cells.size())
       r.Error(model, "modNum", "models must appear in modNum order 1, 2, ...");
     bank.cells.push_back(std::move(cell));
   }
   if (static_cast<int>(bank.cells.size()) != num_mod)
     r.Error(set, "model", fmt::format("numMod says {} models, found {}", num_mod, bank.cells.size()));
+  if (static_cast<int>(bank.cells.size()) == num_mod) {
+    // A triangle whose vertices are collinear or repeated cannot weight a point.
+    for (const auto& t : bank.triangles) {
+      const auto& a = bank.cells[static_cast<std::size_t>(t[0])];
+      const auto& b = bank.cells[static_cast<std::size_t>(t[1])];
+      const auto& c = bank.cells[static_cast<std::size_t>(t[2])];
+      const double det = (b.speed_mps - a.speed_mps) * (c.force_N - a.force_N) -
+                         (c.speed_mps - a.speed_mps) * (b.force_N - a.force_N);
+      if (det == 0)
+        r.Error(set, "tri", fmt::format("triangle {} {} {} (1-based) has no area", t[0] + 1, t[1] + 1, t[2] + 1));
+    }
+    if (num_mod > 1 && bank.triangles.empty()) r.Error(set, "tri", "no triangles: the models cannot be interpolated");
+  }
   diag.ThrowIfAny();
-  // Penn measured speeds up to the max in the set; keep the renderer's 1 cm/s threshold.
+  // The toolkit renders down to 0.05 mm/s; below it it interpolates at speed ~0, where its
+  // files hold var = 0 boundary models: silent, as the renderer is below min_speed_mps.
+  bank.min_speed_mps = kPennMinSpeed_mps;
+  // The geometry is flat: the vibration carries the whole texture, so no hybrid split.
+  m.hybrid_cutoff_hz = 0;
   ValidateMaterial(m);
   return out;
 }

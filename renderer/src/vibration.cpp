@@ -114,6 +114,9 @@ void VibrationInterpolator::Interpolate(double speed_mps, double force_N, bool i
     out->sigma = 0;
     return;
   }
+  // The modelled range: saturate just inside it (the Penn toolkit's rule).
+  if (bank_.max_speed_mps > 0 && speed_mps > bank_.max_speed_mps) speed_mps = bank_.max_speed_mps - kSaturationMarginSpeed_mps;
+  if (bank_.max_force_N > 0 && force_N > bank_.max_force_N) force_N = bank_.max_force_N - kSaturationMarginForce_N;
   const CellWeights w = Weights(speed_mps, force_N);
   std::fill(lsf_.begin(), lsf_.end(), 0.0);
   std::fill(ma_lsf_.begin(), ma_lsf_.end(), 0.0);

@@ -5,7 +5,8 @@
 namespace hapticlab::runner {
 
 OfflineResult RenderOffline(const renderer::MaterialModel& model,
-                            const renderer::RenderOptions& options, const Measurement& trajectory) {
+                            const renderer::RenderOptions& options, const Measurement& trajectory,
+                            const OfflineOptions& offline) {
   renderer::HybridRenderer r(model, options);
   OfflineResult out;
   out.rows.reserve(trajectory.rows.size());
@@ -19,6 +20,10 @@ OfflineResult RenderOffline(const renderer::MaterialModel& model,
     s.state.p_m = row.p_m;
     s.state.v_mps = row.v_mps;
     s.t_s = t;
+    if (offline.measured_normal_force) {
+      s.has_normal_force = true;
+      s.normal_force_N = row.f_N.z();
+    }
     const auto cmd = r.ForceTick(s, t);
     OfflineRow o;
     o.t_s = row.t_s;

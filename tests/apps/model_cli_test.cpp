@@ -8,6 +8,7 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "../renderer/penn_xml.hpp"
 
 namespace hapticlab {
 namespace {
@@ -103,6 +104,46 @@ TEST(ModelCli, ImportPennWritesALoadableModel) {
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["vibration"]["cells"], 1);
   EXPECT_DOUBLE_EQ(j["friction"]["mu_k"].get<double>(), 0.3);
+}
+
+// A generated set (tests/renderer/penn_xml.hpp) through import-penn and render: the
+// imported model keeps the toolkit's range, plays down to 0.05 mm/s with no hybrid split,
+// and render drives it with the trajectory's force.
+TEST(ModelCli, ImportPennThenRenderWithTheTrajectorysForce) {
+  test::TempDir dir;
+  const auto spec = test::MakePennSet(false);
+  test::WriteFile(dir.File("Models_G.xml"), test::PennXml(spec));
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model import-penn --xml " + dir.File("Models_G.xml") + " -o " + dir.File("g.toml"), &out), 0)
+      << out;
+  EXPECT_NE(out.find("range 250 mm/s x 2.5 N"), std::string::npos) << out;
+  const std::string toml = test::ReadFile(dir.File("g.toml"));
+  for (const char* line : {"cutoff_hz = 0\n", "max_speed_mps = 0.25\n", "max_force_N = 2.5\n", "min_speed_mps = 5.0000000000000002e-05\n"})
+    EXPECT_NE(toml.find(line), std::string::npos) << line << " in\n" << toml;
+  // 3 s at 140 mm/s pressing 1.5 N, the tool 1 mm above the flat geometry: only the
+  // trajectory's force says it touches.
+  std::string traj = "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
+  for (int k = 0; k <= 3000; ++k)
+    traj += fmt::format("{:.6f},{:.9f},0,0.001,0.14,0,0,0,0,1.5\n", k * 1e-3, 0.14 * k * 1e-3);
+  test::WriteFile(dir.File("t.csv"), traj);
+  auto vibration_rms = [&](const std::string& extra) {
+    EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") + " --trajectory " + dir.File("t.csv") +
+                                   " --out " + dir.File("r.csv") + " --vibration-out " + dir.File("v.csv") + extra, &out), 0)
+        << out;
+    const auto v = ReadCsv(dir.File("v.csv"));
+    double s = 0;
+    int n = 0;
+    for (std::size_t i = 2000; i < v.rows.size(); ++i, ++n) s += std::pow(v.Number(i, v.Require("acc_mps2")), 2);
+    return std::sqrt(s / std::max(1, n));
+  };
+  const double expected = std::sqrt(test::PennExpected(spec, 140, 1.5).Power());
+  EXPECT_NEAR(vibration_rms("") / expected, 1.0, 0.1);
+  EXPECT_EQ(vibration_rms(" --force-source model"), 0.0);  // the rendered force: not in contact
+  // Asking for the trajectory's force on a trajectory without one is a usage error.
+  test::WriteFile(dir.File("k.csv"), "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.001,0.0001,0,0\n");
+  EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") + " --trajectory " + dir.File("k.csv") +
+                                 " --out " + dir.File("r.csv") + " --force-source trajectory", &out), 2);
+  EXPECT_NE(out.find("fz_N"), std::string::npos) << out;
 }
 
 }  // namespace

@@ -143,6 +143,29 @@ TEST(Material, TomlRoundTripWithHeightFile) {
   EXPECT_EQ(back.vibration.grid_forces_N, m.vibration.grid_forces_N);
 }
 
+TEST(Material, ModelledRangeAndNoSplitRoundTripAndAreRangeChecked) {
+  auto m = ParseMaterial(kGood, "r.toml");
+  m.vibration.max_speed_mps = 0.25;
+  m.vibration.max_force_N = 2.5;
+  m.vibration.min_speed_mps = 5e-5;
+  m.hybrid_cutoff_hz = 0;  // no hybrid split
+  const auto back = ParseMaterial(MaterialToToml(m), "back.toml");
+  EXPECT_EQ(back.vibration.max_speed_mps, 0.25);
+  EXPECT_EQ(back.vibration.max_force_N, 2.5);
+  EXPECT_EQ(back.vibration.min_speed_mps, 5e-5);
+  EXPECT_EQ(back.hybrid_cutoff_hz, 0.0);
+  std::string bad = MaterialToToml(m);
+  bad.replace(bad.find("max_force_N = 2.5"), 17, "max_force_N = 0.005");
+  bad.replace(bad.find("cutoff_hz = 0"), 13, "cutoff_hz = -1");
+  try {
+    ParseMaterial(bad, "bad.toml");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vibration.max_force_N: must be 0 (no limit) or > 0.01"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("hybrid.cutoff_hz: must be >= 0"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Material, MissingHeightFileIsNamed) {
   test::TempDir dir;
   test::WriteFile(dir.File("m.toml"), R"(name = "x"

@@ -9,7 +9,10 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/vibration.hpp"
+#include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "penn_xml.hpp"
+#include "spectrum_util.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -101,12 +104,19 @@ TEST(PennImport, ReadsTheArmaVariant) {
   const auto& c = r.model.vibration.cells[2];
   EXPECT_EQ(c.ma.size(), 3u);
   EXPECT_DOUBLE_EQ(c.gain, 12.0);
-  EXPECT_DOUBLE_EQ(c.variance, 1.0);  // var = 0 in the file: unit excitation, amplitude in gain
+  // var = 0 in the file: the toolkit drives the model with N(0, 0) noise, so it is silent.
+  EXPECT_DOUBLE_EQ(c.variance, 0.0);
   EXPECT_EQ(c.ma_lsf.size(), 3u);
   VibrationInterpolator interp(r.model.vibration);
   ArFilter f;
   interp.Interpolate(0.0 + 0.011, 1.5, true, &f);  // near model 3 (0 mm/s, 1.5 N)
   EXPECT_EQ(f.ma_order, 3);
+  EXPECT_TRUE(f.active);
+  EXPECT_EQ(f.sigma, 0.0);
+  ArSynth synth(3);
+  double energy = 0;
+  for (int k = 0; k < 1000; ++k) energy += std::abs(synth.Step(f));
+  EXPECT_EQ(energy, 0.0);
 }
 
 TEST(PennImport, ErrorsNameTheElementAndLine) {
@@ -127,6 +137,164 @@ TEST(PennImport, ErrorsNameTheElementAndLine) {
   test::WriteFile(dir.File("broken.xml"), "<modelSet><material>x</mat");
   EXPECT_THROW(ImportPennXml(dir.File("broken.xml")), InputError);
   EXPECT_THROW(ImportPennXml(dir.File("missing.xml")), InputError);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Generated Penn-schema sets rendered end to end (import, the hybrid renderer's ticks with the
+// trajectory's force, the 10 kHz vibration loop) against the toolkit's semantics and the
+// analytic AR/ARMA spectrum of the model it would play.
+
+// Renders `seconds` of a constant stroke at (speed, force) and returns the vibration samples
+// after the first 0.2 s.
+std::vector<double> RenderStroke(const MaterialModel& m, double speed_mmps, double force_N, double seconds,
+                                 int* upsample_factor = nullptr) {
+  RenderOptions o;
+  o.algorithm = ForceAlgorithm::kWall;
+  o.force_rate_hz = 1000;
+  o.vibration_rate_hz = 10000;
+  o.seed = 7;
+  HybridRenderer r(m, o);
+  if (upsample_factor) *upsample_factor = r.upsample_factor();
+  std::vector<double> y;
+  const int n = static_cast<int>(seconds * 1000);
+  for (int k = 0; k < n; ++k) {
+    DeviceSample s;  // on the flat surface, 0.1 mm in, sliding along x, pressing with force_N
+    s.t_s = k * 1e-3;
+    s.state.p_m = {speed_mmps * 1e-3 * s.t_s, 0, -1e-4};
+    s.state.v_mps = {speed_mmps * 1e-3, 0, 0};
+    s.has_normal_force = true;
+    s.normal_force_N = force_N;
+    r.ForceTick(s, s.t_s);
+    for (int j = 0; j < 10; ++j) {
+      const double a = r.VibrationTick();
+      if (k >= 200) y.push_back(a);
+    }
+  }
+  return y;
+}
+
+double Rms(const std::vector<double>& x) {
+  double s = 0;
+  for (double v : x) s += v * v;
+  return std::sqrt(s / static_cast<double>(x.size()));
+}
+
+// Level within `level_tol` (relative RMS) and every band's mean PSD within `band_db` of the
+// analytic PSD of the model the toolkit would play there.
+void ExpectLikeToolkit(const std::vector<double>& y, const test::PennReference& ref,
+                       const std::vector<std::pair<double, double>>& bands, double level_tol, double band_db,
+                       const std::string& where) {
+  const double expected_rms = std::sqrt(ref.Power());
+  ASSERT_GT(expected_rms, 0) << where;
+  EXPECT_NEAR(Rms(y) / expected_rms, 1.0, level_tol) << where << ": RMS " << Rms(y) << " expected " << expected_rms;
+  const int n = 2048;
+  const double fs = 10000;
+  const auto psd = test::WelchPsdFft(y, fs, n);
+  for (const auto& [lo, hi] : bands) {
+    double sum = 0;
+    int bins = 0;
+    for (std::size_t k = 0; k < psd.size(); ++k) {
+      const double f = static_cast<double>(k) * fs / n;
+      if (f >= lo && f < hi) {
+        sum += psd[k];
+        ++bins;
+      }
+    }
+    const double db = 10 * std::log10(sum / bins / ref.MeanPsd(lo, hi));
+    EXPECT_LT(std::abs(db), band_db) << where << ": band " << lo << "-" << hi << " Hz off by " << db << " dB";
+  }
+}
+
+struct StrokePoint {
+  const char* where;
+  double speed_mmps, force_N;
+};
+
+// The points of the issue: a vertex, inside a triangle, on the hull's edge, beyond the
+// modelled range (saturated just inside) and at 1 mm/s (mixing the silent speed-0 models).
+const StrokePoint kPoints[] = {{"vertex (170 mm/s, 0.9 N)", 170, 0.9},
+                               {"inside a triangle (140 mm/s, 1.5 N)", 140, 1.5},
+                               {"hull edge (200 mm/s, 2.5 N)", 200, 2.5},
+                               {"beyond the range (400 mm/s, 4 N)", 400, 4.0},
+                               {"1 mm/s (1 mm/s, 1.5 N)", 1, 1.5}};
+
+TEST(PennToolkitSemantics, TenKilohertzArSetPlaysTheAnalyticSpectrumEverywhere) {
+  test::TempDir dir;
+  const auto spec = test::MakePennSet(false);
+  test::WriteFile(dir.File("Models_AR.xml"), test::PennXml(spec));
+  const auto imp = ImportPennXml(dir.File("Models_AR.xml"));
+  EXPECT_TRUE(imp.has_range);
+  EXPECT_DOUBLE_EQ(imp.model.vibration.max_speed_mps, 0.25);
+  EXPECT_DOUBLE_EQ(imp.model.vibration.max_force_N, 2.5);
+  EXPECT_EQ(imp.model.hybrid_cutoff_hz, 0.0);  // flat geometry: no split of the published vibration
+  int factor = -1;
+  for (const auto& p : kPoints) {
+    const auto y = RenderStroke(imp.model, p.speed_mmps, p.force_N, 2.5, &factor);
+    EXPECT_EQ(factor, 1);  // 10 kHz models at the 10 kHz loop
+    // Level: about 500 independent samples of a 190 Hz-wide resonance: RMS sd ~3 %.
+    ExpectLikeToolkit(y, test::PennExpected(spec, p.speed_mmps, p.force_N),
+                      {{50, 100}, {100, 200}, {200, 400}, {400, 800}, {800, 1600}, {1600, 3200}, {3200, 4800}}, 0.10,
+                      1.5, p.where);
+  }
+}
+
+TEST(PennToolkitSemantics, OneKilohertzArmaSetPlaysTheAnalyticSpectrumUpsampled) {
+  test::TempDir dir;
+  const auto spec = test::MakePennSet(true);
+  test::WriteFile(dir.File("Models_ARMA.xml"), test::PennXml(spec));
+  const auto imp = ImportPennXml(dir.File("Models_ARMA.xml"));
+  EXPECT_TRUE(imp.arma);
+  int factor = -1;
+  for (const auto& p : kPoints) {
+    const auto y = RenderStroke(imp.model, p.speed_mmps, p.force_N, 4.0, &factor);
+    EXPECT_EQ(factor, 10);  // 1 kHz models, band-limited to the 10 kHz loop
+    // Bands up to 0.45 of the model rate (the upsampler's pass band, upsampler_test.cpp).
+    ExpectLikeToolkit(y, test::PennExpected(spec, p.speed_mmps, p.force_N),
+                      {{20, 50}, {50, 100}, {100, 200}, {200, 300}, {300, 450}}, 0.12, 1.5, p.where);
+  }
+}
+
+TEST(PennToolkitSemantics, BoundaryModelsAreSilentAndTheRangeSaturatesJustInside) {
+  test::TempDir dir;
+  const auto spec = test::MakePennSet(true);
+  test::WriteFile(dir.File("Models_ARMA.xml"), test::PennXml(spec));
+  const auto imp = ImportPennXml(dir.File("Models_ARMA.xml"));
+  VibrationInterpolator interp(imp.model.vibration);
+  ArFilter f;
+  // On the force-0 and speed-0 boundary every weighted model has var = 0: silent, in contact.
+  for (const auto& [v, fn] : {std::pair{0.12, 0.0}, std::pair{0.2, 0.0}, std::pair{0.0, 1.8}}) {
+    interp.Interpolate(v, fn, true, &f);
+    EXPECT_EQ(f.sigma, 0.0) << v << " m/s, " << fn << " N";
+  }
+  // Beyond the range: the filter is the one just inside (maxSpeed - 0.01 mm/s, maxForce - 0.01 N).
+  ArFilter beyond, inside;
+  interp.Interpolate(0.4, 4.0, true, &beyond);
+  interp.Interpolate(0.25 - 1e-5, 2.5 - 0.01, true, &inside);
+  EXPECT_EQ(beyond.sigma, inside.sigma);
+  for (int i = 0; i < beyond.order; ++i) EXPECT_EQ(beyond.c[static_cast<std::size_t>(i)], inside.c[static_cast<std::size_t>(i)]);
+  // The toolkit renders down to 0.05 mm/s.
+  interp.Interpolate(0.06e-3, 1.5, true, &f);
+  EXPECT_TRUE(f.active);
+  EXPECT_GT(f.sigma, 0.0);
+  interp.Interpolate(0.04e-3, 1.5, true, &f);
+  EXPECT_FALSE(f.active);
+}
+
+TEST(PennImport, IntegerFieldsAreRangeCheckedBeforeConversion) {
+  test::TempDir dir;
+  std::string xml = test::PennXml(test::MakePennSet(false));
+  xml.replace(xml.find("<numMod>11</numMod>"), 19, "<numMod>1e30</numMod>");
+  const auto t = xml.find("<value>11</value>");  // a triangle vertex
+  xml.replace(t, 17, "<value>4e12</value>");
+  test::WriteFile(dir.File("big.xml"), xml);
+  try {
+    ImportPennXml(dir.File("big.xml"));
+    FAIL();
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("numMod: expected an integer in 1..100000, got '1e30'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("tri: expected three 1-based model indices"), std::string::npos) << msg;
+  }
 }
 
 }  // namespace

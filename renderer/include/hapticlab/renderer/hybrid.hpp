@@ -16,6 +16,7 @@
 #include "hapticlab/renderer/biquad.hpp"
 #include "hapticlab/renderer/force.hpp"
 #include "hapticlab/renderer/neural.hpp"
+#include "hapticlab/renderer/upsampler.hpp"
 #include "hapticlab/renderer/vibration.hpp"
 
 namespace hapticlab::renderer {
@@ -37,6 +38,11 @@ struct RenderOptions {
 struct DeviceSample {
   ToolState state;
   double t_s = 0;  ///< time the sample was measured [s]
+  /// A measured normal force (a force sensor, or a recorded trajectory's force): when
+  /// present it drives the vibration model instead of the rendered normal force, and the
+  /// vibration is on while it is > 0 (the Penn toolkit's rendering reads the device's force).
+  bool has_normal_force = false;
+  double normal_force_N = 0;
 };
 
 /// What the force tick commands and observes.
@@ -69,12 +75,17 @@ class HybridRenderer {
   const RtCounters& counters() const { return counters_; }
   const RenderOptions& options() const { return options_; }
   double cutoff_hz() const { return cutoff_hz_; }
+  /// Taps per phase of the band-limited upsampler (model rate -> vibration rate).
+  static constexpr int kUpsampleTapsPerPhase = 32;
+  /// The upsampling factor when the rates' ratio is an integer, else 0 (linear interpolation).
+  int upsample_factor() const { return upsample_ ? up_.factor() : 0; }
 
  private:
   void Fault(std::atomic<std::uint64_t>& counter) noexcept;
 
   RenderOptions options_;
   double cutoff_hz_;
+  bool filter_on_ = false;  // hybrid_filter and f_c > 0
   ForceModel force_;
   std::array<Biquad, 3> force_lp_;
   VibrationInterpolator interp_;
@@ -83,9 +94,12 @@ class HybridRenderer {
   ArSynth synth_;
   std::unique_ptr<NeuralSynth> neural_;  // the material's neural model, when it has one
   Biquad vib_hp_;
-  double phase_ = 1.0;   // fraction of a model-rate period elapsed
+  double phase_ = 1.0;   // fraction of a model-rate period elapsed (linear interpolation)
   double step_ = 0.2;    // model rate / vibration rate
   double prev_ = 0, next_ = 0;
+  bool upsample_ = false;   // integer rate ratio: band-limited polyphase upsampling
+  PolyphaseUpsampler up_;
+  int up_phase_ = 0;
   RtCounters counters_;
 };
 

@@ -51,6 +51,11 @@ struct ArCell {
   double gain = 1;               ///< excitation gain (dimensionless)
 };
 
+/// How far inside the modelled range a saturated condition is put (the Penn toolkit's
+/// 0.01 mm/s and 0.01 N: "slightly inside the convex hull because of rounding errors").
+inline constexpr double kSaturationMarginSpeed_mps = 1e-5;
+inline constexpr double kSaturationMarginForce_N = 0.01;
+
 /// The AR bank over (speed, normal force). Either a regular grid (`speeds_mps` x `forces_N`,
 /// cells row-major with force fastest) or scattered cells with a triangulation.
 struct VibrationBank {
@@ -60,6 +65,11 @@ struct VibrationBank {
   std::vector<double> grid_forces_N;          ///< ascending; empty for scattered cells
   std::vector<std::array<int, 3>> triangles;  ///< 0-based cell indices (scattered cells)
   double min_speed_mps = 0.01;                ///< synthesis is off below this speed (1 cm/s)
+  /// The modelled range (0: none). Above it the condition saturates just inside, as the Penn
+  /// toolkit renders: a speed above max_speed_mps becomes max_speed_mps - kSaturationMarginSpeed_mps,
+  /// a force above max_force_N becomes max_force_N - kSaturationMarginForce_N.
+  double max_speed_mps = 0;
+  double max_force_N = 0;
   bool empty() const { return cells.empty(); }
   int order() const { return cells.empty() ? 0 : static_cast<int>(cells[0].coeffs.size()); }
 };
@@ -73,7 +83,9 @@ struct MaterialModel {
   FrictionParams friction;
   std::shared_ptr<const HeightMap> geometry = std::make_shared<HeightMap>(HeightMap::Flat());
   VibrationBank vibration;
-  double hybrid_cutoff_hz = 100;           ///< f_c of the hybrid filter [Hz] (ch. III.5, V.1.4)
+  /// f_c of the hybrid filter [Hz] (ch. III.5, V.1.4); 0: no split (force not low-passed,
+  /// vibration not high-passed), for models whose vibration carries the whole texture
+  double hybrid_cutoff_hz = 100;
   /// Optional neural vibration model (ch. III.3), from `[neural] file = "..."`; when present
   /// the renderer synthesizes with it instead of the AR bank.
   std::shared_ptr<const NeuralModel> neural;

@@ -12,11 +12,11 @@
 /// data (per cell, interpolated like the outputs). This is the nonlinear counterpart of the
 /// LPC model's excitation; sigma is then calibrated so that free-running synthesis at each
 /// training cell has the band power of the recording (the network's shrinkage toward zero
-/// would otherwise lower it). The output path high-passes each band at its lower edge,
-/// upsamples it by γ with a windowed-sinc polyphase interpolator (8 taps per phase; a band's
-/// content reaches its decimated Nyquist frequency, where linear interpolation would lose up
-/// to 60 % of the amplitude) and sums the bands. Latency: 4 decimated samples per band
-/// (20 ms for band 1, none for band 4).
+/// would otherwise lower it). The output path high-passes each band at half its lower edge
+/// (removing drift without cutting into the band), upsamples it by γ with a windowed-sinc
+/// polyphase interpolator (16 taps per phase: flat within 0.05 dB up to 0.4 of the decimated
+/// rate, where every band's top lies) and sums the bands. Latency: 8 decimated samples per
+/// band (32 ms for band 1, none at γ = 1).
 
 #include <array>
 #include <cstdint>
@@ -26,6 +26,7 @@
 
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/renderer/biquad.hpp"
+#include "hapticlab/renderer/upsampler.hpp"
 
 namespace hapticlab::renderer {
 
@@ -34,6 +35,12 @@ namespace hapticlab::renderer {
 struct NeuralNet {
   std::vector<int> layers;     ///< sizes from input to output (output 1)
   std::vector<double> params;
+  /// Optional linear autoregressive part added to the MLP's output (empty: none). Over the
+  /// M history inputs x_i: Γ_D, M weights a_i, y += sum a_i x_i; Γ_U, 6 M weights, one block
+  /// of M per term of the condition basis phi = (1, v', f', v'^2, v' f', f'^2) (v', f' the
+  /// network's scaled speed and force inputs): y += sum_t phi_t sum_i w[t M + i] x_i
+  /// (docs/modeling-neural.md: why).
+  std::vector<double> linear;
   std::size_t ParamCount() const;
 };
 
@@ -60,8 +67,9 @@ struct NeuralModel {
   double NormForce(double f) const;
 };
 
-/// The thesis's four bands with γ = 10, 5, 2, 1 (sample rate / γ keeps each band below its
-/// Nyquist frequency; the text's "γ = 10 for all networks" would alias bands 2-4).
+/// The thesis's four bands with γ = 8, 4, 1, 1 at 2 kHz: each band's top at most 0.4 of its
+/// decimated rate, so the interpolator passes the band whole (the text's "γ = 10 for all
+/// networks" would alias bands 2-4; see docs/modeling-neural.md).
 std::vector<NeuralBand> DefaultNeuralBands();
 
 /// Validates sizes (layer chains, one net or one per cell, sigma per cell). Throws
@@ -86,15 +94,13 @@ class NeuralSynth {
   double Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept;
 
  private:
-  static constexpr int kTaps = 8;  // interpolator taps per phase
+  static constexpr int kTaps = 16;  // interpolator taps per phase
   struct BandState {
     std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
     std::vector<double> input;    // M (+2) network input
     int head = 0, phase = 0;
     Biquad hp;                    // output path: high-pass at lo (decimated rate)
-    std::vector<double> taps;     // polyphase interpolator: taps[p * kTaps + j]
-    std::array<double, 2 * kTaps> out{};  // newest-first high-passed decimated outputs (doubled ring)
-    int out_head = 0;
+    PolyphaseUpsampler up;        // by γ, kTaps taps per phase
   };
   std::shared_ptr<const NeuralModel> m_;
   std::vector<BandState> bands_;

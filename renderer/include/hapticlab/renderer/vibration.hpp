@@ -47,7 +47,8 @@ class VibrationInterpolator {
 
   /// Interpolated filter at (speed, force): LSFs and variance mixed with the weights, then
   /// converted back to AR coefficients. `active` follows the bank's minimum speed and
-  /// `in_contact`.
+  /// `in_contact`. A speed or force above the bank's modelled range (max_speed_mps,
+  /// max_force_N) saturates just inside it first.
   void Interpolate(double speed_mps, double force_N, bool in_contact, ArFilter* out) noexcept;
 
   const VibrationBank& bank() const { return bank_; }

@@ -24,9 +24,16 @@ struct OfflineResult {
   std::vector<double> vibration_mps2;  ///< every vibration sample, at the vibration rate
 };
 
+struct OfflineOptions {
+  /// Hand each row's fz_N (the force the surface exerts on the tool, along the normal) to the
+  /// renderer as the measured normal force that drives the vibration model.
+  bool measured_normal_force = false;
+};
+
 /// Runs one force tick per trajectory row (the row's t_s is both sample and tick time) and
 /// as many vibration ticks as the vibration rate puts between consecutive rows.
 OfflineResult RenderOffline(const renderer::MaterialModel& model,
-                            const renderer::RenderOptions& options, const Measurement& trajectory);
+                            const renderer::RenderOptions& options, const Measurement& trajectory,
+                            const OfflineOptions& offline = {});
 
 }  // namespace hapticlab::runner
