@@ -692,14 +692,16 @@ void AddBuild(CLI::App& model) {
       auto rel = [&](const std::string& p) { return fs::relative(fs::absolute(p), outdir).string(); };
       auto quoted = [](const std::string& p) { return nlohmann::json(p).dump(); };
       // Each part is read through the renderer's material parser (its own file named in errors).
-      auto parse = [](std::string text, const std::string& path) {
+      // Parts without the tables a material requires get neutral ones (not used).
+      auto parse = [](std::string text, const std::string& path, bool contact_part) {
         static const std::regex kName(R"((^|\n)[ \t]*name[ \t]*=)");
+        if (!contact_part) text = "[contact]\ntexture_K = 1.0\n\n[friction]\nkappa_N_per_m = 1.0\nmu_k = 0.0\n\n" + text;
         if (!std::regex_search(text, kName)) text = "name = \"part\"\n" + text;
         return renderer::ParseMaterial(text, path);
       };
-      renderer::MaterialModel mm = parse(ReadTextFile(o->contact, "contact fit"), o->contact);
-      const auto g = parse(ReadTextFile(o->height, "geometry table"), o->height);
-      const auto v = parse("[vibration]\nfile = " + quoted(fs::absolute(o->vibration).string()) + "\n", o->vibration);
+      renderer::MaterialModel mm = parse(ReadTextFile(o->contact, "contact fit"), o->contact, true);
+      const auto g = parse(ReadTextFile(o->height, "geometry table"), o->height, false);
+      const auto v = parse("[vibration]\nfile = " + quoted(fs::absolute(o->vibration).string()) + "\n", o->vibration, false);
       mm.name = o->name;
       mm.source_path.clear();
       mm.geometry = g.geometry;

@@ -110,7 +110,7 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
     if (!use(t) || !s[t - 1].contact || s[t].speed_mps < o.sliding_speed_mps || s[t - 1].speed_mps < o.sliding_speed_mps)
       continue;
     const double ux = s[t - 1].vx_mps / s[t - 1].speed_mps, uy = s[t - 1].vy_mps / s[t - 1].speed_mps;
-    const Eigen::Vector2d ax(s[t - 1].fn_N * ux, s[t].vx_mps), ay(s[t - 1].fn_N * uy, s[t].vy_mps);
+    const Eigen::Vector2d ax(s[t - 1].fload_N * ux, s[t].vx_mps), ay(s[t - 1].fload_N * uy, s[t].vy_mps);
     A += ax * ax.transpose() + ay * ay.transpose();
     b += ax * -s[t].ftx_N + ay * -s[t].fty_N;
   }
@@ -137,7 +137,7 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
       const std::size_t a0 = anchor;
       anchor = t;
       if (!use(t) || s[t].speed_mps > o.presliding_speed_mps) continue;
-      const double fc = mu(0) * s[a0].fn_N;
+      const double fc = mu(0) * s[a0].fload_N;
       if (!(fc > 0)) continue;
       const double tx = fc * dx / len, ty = fc * dy / len;
       const double zx = -s[a0].ftx_N - mu(1) * s[a0].vx_mps - tx, zy = -s[a0].fty_N - mu(1) * s[a0].vy_mps - ty;

@@ -105,7 +105,7 @@ double NormalForce(const std::vector<Resolved>& eff, const Replay::Sample& s) {
 // Friction force the surface exerts on the tool, replayed over every sample (the Dahl bristle
 // has state). Exact per-sample vector bristle update, as in the renderer.
 void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* ftx, double* fty) {
-  double Fx = 0, Fy = 0, ax = 0, ay = 0;  // bristle force, position at its last update
+  double Fx = 0, Fy = 0, ax = 0, ay = 0;  // bristle force, position seen through the play
   bool prev_contact = false;
   for (std::size_t i = 0; i < r.s.size(); ++i) {
     const auto& s = r.s[i];
@@ -117,18 +117,23 @@ void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* f
     }
     FrictionTerms t;
     for (const auto& x : eff) x.e->Friction(x.p.data(), s, t);
-    const double fc = std::max(0.0, s.fn_N * (t.mu_k * t.mu_scale + t.mu_add));
+    const double fc = std::max(0.0, s.fload_N * (t.mu_k * t.mu_scale + t.mu_add));
     if (t.kappa > 0) {
       if (!prev_contact || !(fc > 0)) {
         Fx = Fy = 0;
         ax = s.x_m, ay = s.y_m;
       } else {
-        const double dx = s.x_m - ax, dy = s.y_m - ay, len = std::hypot(dx, dy);
-        if (len >= r.position_resolution_m) {
+        // The bristle follows the position through a play (backlash) of half-width
+        // resolution / 2: noise at rest does not move it, and real motion loses only that
+        // play at each reversal (not whole sub-resolution excursions, as a fixed anchor would).
+        const double h = 0.5 * r.position_resolution_m;
+        const double ex = s.x_m - ax, ey = s.y_m - ay, dist = std::hypot(ex, ey);
+        if (dist > h) {
+          const double dx = ex * (1 - h / dist), dy = ey * (1 - h / dist), len = dist - h;
           const double tx = fc * dx / len, ty = fc * dy / len, a = std::exp(-t.kappa * len / fc);
           Fx = tx + (Fx - tx) * a;
           Fy = ty + (Fy - ty) * a;
-          ax = s.x_m, ay = s.y_m;
+          ax += dx, ay += dy;
         }
         const double mag = std::hypot(Fx, Fy);
         if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
@@ -191,6 +196,22 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   r.file = m.file;
   r.block_s = o.block_s;
   r.position_resolution_m = o.position_resolution_m;
+  if (!(o.position_resolution_m > 0)) {
+    // Position noise from rows at rest in contact: the second difference of white noise has
+    // variance 6 sigma^2, its median absolute value 0.6745 of its SD.
+    std::vector<double> d2;
+    for (std::size_t i = 1; i + 1 < m.rows.size(); ++i) {
+      const auto &a = m.rows[i - 1], &b = m.rows[i], &c = m.rows[i + 1];
+      if (b.v_mps.head<2>().norm() > 1e-3 || !(b.f_N.z() > o.contact_force_N)) continue;
+      for (int k = 0; k < 2; ++k) d2.push_back(std::abs(a.p_m[k] - 2 * b.p_m[k] + c.p_m[k]));
+    }
+    r.position_resolution_m = 1e-6;
+    if (d2.size() >= 200) {
+      std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2), d2.end());
+      const double sigma = d2[d2.size() / 2] / 0.674489750196 / std::sqrt(6.0);
+      r.position_resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
+    }
+  }
   if (m.rows.size() < 2) throw InputError(m.file, 0, "", "a measurement needs at least two rows");
   std::vector<double> dt;
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
@@ -198,6 +219,7 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   double rate = 1.0 / dt[dt.size() / 2];
   if (std::abs(rate - std::round(rate)) < 1e-6 * rate) rate = std::round(rate);  // time stamps' rounding
   const int stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
+  const auto half_load = static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.load_smoothing_s * rate)));
   r.rate_hz = rate / stride;
   const double t0 = m.rows.front().t_s;
   double dir = 0;
@@ -216,6 +238,14 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     if (s.speed_mps > 1e-3) dir = std::atan2(s.vy_mps, s.vx_mps);  // at rest: the last motion's
     s.dir_rad = dir;
     s.fn_N = row.f_N.z();
+    {
+      double sum = 0;
+      int count = 0;
+      const std::size_t lo = i >= half_load ? i - half_load : 0, hi = std::min(m.rows.size() - 1, i + half_load);
+      for (std::size_t k = lo; k <= hi; ++k)
+        if (m.rows[k].f_N.z() > o.contact_force_N) sum += m.rows[k].f_N.z(), ++count;
+      s.fload_N = count ? sum / count : s.fn_N;
+    }
     s.ftx_N = row.f_N.x();
     s.fty_N = row.f_N.y();
     s.contact = s.fn_N > o.contact_force_N;
@@ -657,7 +687,7 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   (*cost)(xp, r0.data());
   for (std::size_t k = 0; k < np; ++k) {
     const double h = 1e-5 * std::max(1.0, std::abs(x[k]));
-    xs = x;
+    std::copy(x.begin(), x.end(), xs.begin());
     xs[k] = x[k] + h;
     (*cost)(xp, rp.data());
     xs[k] = x[k] - h;
@@ -667,8 +697,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   std::map<int, Eigen::VectorXd> score;
   for (int i = 0; i < nres; ++i) {
     const int blk = r.s[cost->idx[i / per]].block;
-    auto [it, fresh] = score.try_emplace(blk, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(np)));
-    it->second += J.row(i).transpose() * r0[i];
+    auto it = score.try_emplace(blk, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(np))).first;
+    it->second += J.row(i).transpose() * r0[static_cast<std::size_t>(i)];
   }
   Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(np), static_cast<Eigen::Index>(np));
   for (const auto& [blk, sg] : score) meat += sg * sg.transpose();

@@ -207,15 +207,18 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
   const std::size_t n = r.s.size();
   const double pi = std::numbers::pi, T0 = r.s.front().t_s, T1 = r.s.back().t_s;
   std::vector<double> tedges;
-  for (int k = 0; k <= 10; ++k) tedges.push_back(T0 - T0 + (T1 - T0) * k / 10 + (k == 10 ? 1e-9 : 0));
+  for (int k = 0; k <= 10; ++k) tedges.push_back((T1 - T0) * k / 10 + (k == 10 ? 1e-9 : 0));
   const AxisBins time = MakeAxis("time", "s", tedges, false);
   const AxisBins speed = MakeAxis("speed", "mm/s", {0, 0.5, 1, 2, 3, 5, 10, 20, 50, 100, 200, 1e9}, true);
   const AxisBins load = MakeAxis("load", "N", {0, 0.25, 0.5, 0.75, 1, 1.5, 2, 3, 1e9}, false);
-  AxisBins dir = Categorical("direction", {});
-  dir.edges.clear();
-  for (int k = 0; k <= 8; ++k) dir.edges.push_back(-pi - pi / 8 + k * pi / 4);
-  for (int k = 0; k < 8; ++k) dir.labels.push_back(fmt::format("{:.0f} deg", -180 + 45.0 * k));
-  dir.centers.assign(8, 0);
+  const AxisBins dir = [&] {
+    AxisBins a = Categorical("direction", {});
+    a.edges.clear();
+    for (int k = 0; k <= 8; ++k) a.edges.push_back(-pi - pi / 8 + k * pi / 4);
+    for (int k = 0; k < 8; ++k) a.labels.push_back(fmt::format("{:.0f} deg", -180 + 45.0 * k));
+    a.centers.assign(8, 0);
+    return a;
+  }();
   const AxisBins pos = Categorical("position", {"front-left", "front-centre", "front-right", "middle-left", "centre",
                                                 "middle-right", "back-left", "back-centre", "back-right"});
   const AxisBins regime = Categorical("regime", {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"});

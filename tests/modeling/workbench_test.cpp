@@ -481,7 +481,9 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
     Model probe;
     AddEffects(&probe, BaselineEffects(), r);
     const auto note = FindEffect(c.effect)->Evidence(r, ComputeResiduals(probe, r, Predict(probe, r)));
-    if (!note.cause.empty()) EXPECT_EQ(c.evidence.find(note.cause), std::string::npos) << c.effect << ": " << c.evidence;
+    if (!note.cause.empty()) {
+      EXPECT_EQ(c.evidence.find(note.cause), std::string::npos) << c.effect << ": " << c.evidence;
+    }
   }
   EXPECT_TRUE(u.flagged) << u.summary;
   ASSERT_FALSE(u.channels.empty());

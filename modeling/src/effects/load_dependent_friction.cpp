@@ -20,7 +20,7 @@ class LoadDependentFriction final : public Effect {
     return {{"alpha", "1", 1.0, 0.2, 1.8, 0.1, true, "load exponent (1: Coulomb)"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
-    t.mu_scale *= std::pow(std::max(s.fn_N, 0.02), p[0] - 1);
+    t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; };

@@ -38,13 +38,17 @@ struct Replay {
   double block_s = 1.0;      ///< length of a time block of the split [s]
   struct Sample {
     double t_s, x_m, y_m, d_m, ddot_mps, vx_mps, vy_mps, speed_mps, dir_rad, fn_N, ftx_N, fty_N;
+    /// Measured normal force averaged over ReplayOptions::load_smoothing_s (rows in contact):
+    /// the load that sets the Coulomb level. Raw sensor noise through the bristle's saturation
+    /// (|F| <= f_C) would bias the friction level low, and a fitted mu_k high.
+    double fload_N;
     bool contact;
     int block;
     int row;  ///< index of the measurement row
   };
   std::vector<Sample> s;
   double x_min = 0, x_max = 0, y_min = 0, y_max = 0;  ///< bounds of the positions in contact
-  double position_resolution_m = 1e-6;  ///< the Dahl bristle moves once the tool has moved this far
+  double position_resolution_m = 1e-6;  ///< the Dahl bristle follows the tool through a play of this width [m]
 
   bool has_vibration = false;
   double acc_rate_hz = 0;
@@ -69,7 +73,10 @@ struct ReplayOptions {
   double max_variation = 0.35;     ///< windows whose speed or load varies more (SD / mean) are not scored
   /// Displacements below this are sensor noise for the Dahl bristle (an encoder's resolution):
   /// without it, position noise at rest would random-walk the pre-sliding state to zero.
-  double position_resolution_m = 1e-6;
+  /// 0 (default): 4 times the position noise estimated from the rows at rest (median absolute
+  /// second difference), within 0.05-5 um; 1 um when there are too few rows at rest.
+  double position_resolution_m = 0;
+  double load_smoothing_s = 0.02;  ///< window of Sample::fload_N [s]
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
