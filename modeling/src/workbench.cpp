@@ -30,6 +30,9 @@ constexpr double kMm = 1e-3;
 constexpr double kPreslidingSpeed_mps = 0.5e-3;
 constexpr double kSlidingSpeed_mps = 3e-3;
 constexpr double kVibrationRidge = 1.0;  // see FitVibration
+// Clusters of the sandwich covariance: this many consecutive 1 s blocks, so that a cluster spans
+// several strokes and rests and the residual's correlation along a stroke stays inside it.
+constexpr int kClusterBlocks = 3;
 
 // The core every model has: the contact stiffness K (force at 1 mm penetration).
 class Core final : public Effect {
@@ -696,7 +699,7 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   }
   std::map<int, Eigen::VectorXd> score;
   for (int i = 0; i < nres; ++i) {
-    const int blk = r.s[cost->idx[i / per]].block;
+    const int blk = r.s[cost->idx[i / per]].block / kClusterBlocks;
     auto it = score.try_emplace(blk, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(np))).first;
     it->second += J.row(i).transpose() * r0[static_cast<std::size_t>(i)];
   }
