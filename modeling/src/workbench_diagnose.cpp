@@ -155,25 +155,46 @@ std::string Hint(const std::string& axis) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split) {
+std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m) {
   std::map<std::string, double> floor;
-  std::vector<double> dn, dx, dy;
+  std::vector<double> dn, dx, dy, dvz, dvx, dvy;
   for (std::size_t i = 1; i + 1 < r.s.size(); ++i) {
     const auto &a = r.s[i - 1], &b = r.s[i], &c = r.s[i + 1];
     if (!a.contact || !b.contact || !c.contact) continue;
     dn.push_back(a.fn_N - 2 * b.fn_N + c.fn_N);
     dx.push_back(a.ftx_N - 2 * b.ftx_N + c.ftx_N);
     dy.push_back(a.fty_N - 2 * b.fty_N + c.fty_N);
+    dvz.push_back(a.ddot_mps - 2 * b.ddot_mps + c.ddot_mps);
+    dvx.push_back(a.vx_mps - 2 * b.vx_mps + c.vx_mps);
+    dvy.push_back(a.vy_mps - 2 * b.vy_mps + c.vy_mps);
   }
   const double sn = NoiseSd(dn), st2 = std::pow(NoiseSd(dx), 2) + std::pow(NoiseSd(dy), 2);
-  double nn = 0, nt = 0;
-  int count = 0;
-  for (const auto& s : r.s) {
-    if (!s.contact || !InSplit(s.block, split)) continue;
-    nn += s.fn_N * s.fn_N, nt += s.ftx_N * s.ftx_N + s.fty_N * s.fty_N, ++count;
+  // The model's sensitivity to the measured velocities, by replaying them shifted.
+  std::vector<double> gn(r.s.size(), 0), gt(r.s.size(), 0);
+  double svz = 0, svt = 0;
+  if (m) {
+    svz = NoiseSd(dvz);
+    svt = std::sqrt(0.5 * (std::pow(NoiseSd(dvx), 2) + std::pow(NoiseSd(dvy), 2)));
+    constexpr double kDv_mps = 1e-3;
+    const auto p0 = Predict(*m, r);
+    Replay shifted = r;
+    for (auto& s : shifted.s) s.ddot_mps += kDv_mps, s.vx_mps += kDv_mps;
+    const auto p1 = Predict(*m, shifted);
+    for (std::size_t i = 0; i < r.s.size(); ++i) {
+      gn[i] = (p1.fn_N[i] - p0.fn_N[i]) / kDv_mps;
+      gt[i] = (p1.ftx_N[i] - p0.ftx_N[i]) / kDv_mps;
+    }
   }
-  if (nn > 0) floor["normal_force"] = sn * std::sqrt(count / nn);
-  if (nt > 0) floor["friction"] = std::sqrt(st2 * count / nt);
+  double nn = 0, nt = 0, vn = 0, vt = 0;
+  for (std::size_t i = 0; i < r.s.size(); ++i) {
+    const auto& s = r.s[i];
+    if (!s.contact || !InSplit(s.block, split)) continue;
+    nn += s.fn_N * s.fn_N, nt += s.ftx_N * s.ftx_N + s.fty_N * s.fty_N;
+    vn += sn * sn + gn[i] * gn[i] * svz * svz;
+    vt += st2 + 2 * gt[i] * gt[i] * svt * svt;
+  }
+  if (nn > 0) floor["normal_force"] = std::sqrt(vn / nn);
+  if (nt > 0) floor["friction"] = std::sqrt(vt / nt);
   // Vibration: a band's power is the mean of k periodogram bins, about k / 1.5 of them
   // independent under a Hann window (its noise bandwidth is 1.5 bins); for X = mean of k_eff
   // unit exponentials E(sqrt X - 1)^2 = 2 - 2 Gamma(k + 1/2) / (Gamma(k) sqrt k), so the
@@ -438,7 +459,7 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
 
   // What no candidate explains.
   auto& u = dx.unexplained;
-  const auto floor = EstimateNoiseFloor(r, Split::kHeldOut);
+  const auto floor = EstimateNoiseFloor(r, Split::kHeldOut, &base);
   std::set<std::string> above;
   for (const auto& [ch, e] : ebase.channel) {
     UnexplainedChannel x{ch, e, floor.count(ch) ? floor.at(ch) : 0, 0};

@@ -406,12 +406,13 @@ TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths
     t.force_noise_N = noise;
     const auto sim = Simulate(t);
     const auto r = PrepareReplay(sim.m);
-    const auto est = EstimateNoiseFloor(r, Split::kHeldOut);
+    const auto model = TruthModel(sim, r);
+    const auto est = EstimateNoiseFloor(r, Split::kHeldOut, &model);
     const auto truth = NoiseFloor(sim, r, Split::kHeldOut);
     for (const char* ch : {"normal_force", "friction"}) {
       ASSERT_TRUE(est.count(ch)) << ch;
-      // 20 %: the truth's floor also holds the kinematic noise's share (velocity noise through
-      // the viscous term, load noise through f_C), which a noise estimate of the forces cannot see.
+      // 20 %: the estimate sees the force noise and the velocity noise through the model; the
+      // truth's floor also holds the load noise through f_C.
       EXPECT_NEAR(est.at(ch), truth.channel.at(ch), 0.2 * truth.channel.at(ch)) << ch << " at " << noise << " N";
     }
     ASSERT_TRUE(est.count("vibration"));

@@ -337,8 +337,10 @@ struct DiagnoseOptions {
 Diagnosis Diagnose(const Model& m, const Replay& r, const DiagnoseOptions& o = {});
 
 /// The noise floor of each channel's normalized error on the split, estimated from the
-/// measurement alone (see UnexplainedChannel).
-std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split);
+/// measurement alone (see UnexplainedChannel). With a model, the noise of the measured
+/// velocities (same estimator) is added through the model's sensitivity to them (the damping
+/// and viscous terms), as the model sees it when replayed.
+std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m = nullptr);
 
 /// Where a model's residual lives: every axis of every channel present, by share.
 std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p);
