@@ -476,12 +476,15 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
     table += fmt::format("  {:28s} {:+.1f} % of {}, t {:.1f}{} | {}\n", c.effect, 100 * c.relative_reduction, c.channel,
                          c.t_statistic, c.supported ? " SUPPORTED" : "", c.evidence);
   const auto& u = dx.unexplained;
+  // The residuals of the fitted baseline, for each effect's cause sentence.
+  Model probe;
+  AddEffects(&probe, BaselineEffects(), r);
+  Fit(&probe, r);
+  const auto probe_res = ComputeResiduals(probe, r, Predict(probe, r));
   for (const auto& c : dx.candidates) {
     EXPECT_FALSE(c.supported) << oc.name << "\n" << table;
     // No cause is asserted for an effect that is not supported.
-    Model probe;
-    AddEffects(&probe, BaselineEffects(), r);
-    const auto note = FindEffect(c.effect)->Evidence(r, ComputeResiduals(probe, r, Predict(probe, r)));
+    const auto note = FindEffect(c.effect)->Evidence(r, probe_res);
     if (!note.cause.empty()) {
       EXPECT_EQ(c.evidence.find(note.cause), std::string::npos) << c.effect << ": " << c.evidence;
     }
