@@ -164,7 +164,7 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
 ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const ContactFitOptions& o) {
   ContactFit out;
   out.uncertainty_method =
-      "cluster-robust sandwich over 1 s blocks (G/(G-1) (J'J)^-1 sum_g s_g s_g' (J'J)^-1), 95 % intervals with "
+      "cluster-robust sandwich over 3 s clusters of blocks (G/(G-1) (J'J)^-1 sum_g s_g s_g' (J'J)^-1), 95 % intervals with "
       "t(0.975, G-1)";
   // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
   const auto r = wb::PrepareReplay(m);

@@ -5,7 +5,7 @@
 /// (in its 2-D form) and refined jointly by Ceres; the normal force is Hunt-Crossley
 /// (eq. 4.11) fitted on pokes with samples above 2 N discarded. Both are the workbench's
 /// friction and normal channels (workbench.hpp), so `model fit-contact` and `hapticlab fit`
-/// agree by construction. Uncertainties: cluster-robust sandwich over 1 s blocks.
+/// agree by construction. Uncertainties: cluster-robust sandwich over 3 s clusters of blocks.
 
 #include <string>
 

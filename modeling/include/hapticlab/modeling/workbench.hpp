@@ -203,7 +203,7 @@ struct FitOptions {
   Split split = Split::kAll;
   bool normal = true, friction = true, vibration = true;  ///< channels to fit
   int max_iterations = 100;
-  /// Compute uncertainties (cluster-robust sandwich over the split's 1 s blocks; see ChannelFit).
+  /// Compute uncertainties (cluster-robust sandwich over 3 s clusters of the split's blocks; see ChannelFit).
   bool uncertainty = false;
   /// Normal-force samples above this are not fitted (ch. IV.3.3 fits the texture layer on
   /// pokes up to 2 N); infinity: every sample in contact [N].
@@ -239,7 +239,7 @@ struct ParamEstimate {
 
 /// A fitted channel. Uncertainty (FitOptions::uncertainty) is a cluster-robust sandwich
 /// estimator, cov = G/(G-1) (J'J)^-1 (sum_g s_g s_g') (J'J)^-1 with s_g = J_g' r_g the score of
-/// cluster g, the clusters being the 1 s time blocks of the split: it holds when residuals are
+/// cluster g, the clusters being 3 consecutive 1 s blocks of the split (a cluster spans several strokes): it holds when residuals are
 /// correlated within a stroke and their variance changes with load or speed, which the plain
 /// (J'J)^-1 sigma^2 does not.
 struct ChannelFit {
