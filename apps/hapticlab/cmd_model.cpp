@@ -2,11 +2,14 @@
 
 #include <fmt/core.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <regex>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
+#include "fit_summary_json.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -507,6 +510,14 @@ void AddCutoff(CLI::App& model) {
   });
 }
 
+// Writes a whole text file; errors name the file.
+void WriteModelText(const std::string& path, const std::string& text) {
+  FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  const bool ok = std::fputs(text.c_str(), f) >= 0;
+  if (std::fclose(f) != 0 || !ok) throw std::runtime_error(path + ": write failed");
+}
+
 void AddFitContact(CLI::App& model) {
   struct O {
     std::string measurement, pokes, out;
@@ -515,50 +526,84 @@ void AddFitContact(CLI::App& model) {
   auto o = std::make_shared<O>();
   auto* cmd = model.add_subcommand(
       "fit-contact",
-      "Identify friction (Dahl: Algorithm 1, then a Ceres batch refinement) from strokes and\n"
-      "stiffness (Hunt-Crossley K, B, n by Ceres, samples above 2 N discarded) from pokes, on a\n"
-      "flat sample with its surface at z = 0 (dissertation ch. IV.3). Pokes are the samples\n"
-      "without sliding in --measurement, or a separate --pokes file. Writes the [contact] and\n"
-      "[friction] tables of a material model.");
+      "Identify friction and stiffness on a flat sample with its surface at z = 0 (dissertation\n"
+      "ch. IV.3) with the workbench's engine: vector Dahl friction with Coulomb and viscous terms\n"
+      "replayed over the measured 2-D path (strokes in any direction), started by Algorithm 1 and\n"
+      "refined jointly by Ceres; Hunt-Crossley K, B, n on pokes (samples above 2 N discarded).\n"
+      "Pokes are the samples without sliding in --measurement, or a separate --pokes file.\n"
+      "Uncertainties: cluster-robust sandwich over 3 s clusters of blocks, 95 % intervals. Prints each\n"
+      "solve's termination, iterations, cost and parameters at bounds; exits 1 when a fit is not\n"
+      "usable. Writes a material model (effects, [contact], [friction]) for `model build`.");
   cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")->required();
   cmd->add_option("--pokes", o->pokes, "Pokes in a separate measurement CSV v1");
-  cmd->add_option("-o,--out", o->out, "TOML with [contact] and [friction] to write")->required();
-  cmd->add_flag("--json", o->json, "Print {\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b}} with uncertainties");
+  cmd->add_option("-o,--out", o->out, "Material model TOML to write ([contact], [friction], effects)")->required();
+  cmd->add_flag("--json", o->json,
+                "Print {\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b},\"uncertainty\":{...},\"fit\":{friction,"
+                "normal_force},\"usable\"}");
   cmd->callback([o] {
     RunGuarded([&] {
       const auto m = ReadMeasurementCsv(o->measurement);
-      Measurement strokes, pokes;
-      modeling::SplitStrokesAndPokes(m, &strokes, &pokes);
+      Measurement pokes;
       if (!o->pokes.empty()) pokes = ReadMeasurementCsv(o->pokes);
-      const auto d = modeling::FitDahl(strokes);
-      const auto h = modeling::FitHuntCrossley(pokes);
-      FILE* f = std::fopen(o->out.c_str(), "w");
-      if (!f) throw std::runtime_error(o->out + ": cannot write");
-      std::fputs(fmt::format("# Fitted by hapticlab model fit-contact from {} (SI units).\n"
-                             "[contact]\ntexture_K = {:.10g}  # +- {:.3g}\ntexture_B = {:.10g}  # +- {:.3g}\n"
-                             "texture_n = {:.10g}  # +- {:.3g}\n\n[friction]\nkappa_N_per_m = {:.10g}  # +- {:.3g}\n"
-                             "mu_k = {:.10g}  # +- {:.3g}\nmu_b_Ns_per_m = {:.10g}  # +- {:.3g}\n",
-                             o->measurement, h.K.value, h.K.sd, h.B.value, h.B.sd, h.n.value, h.n.sd, d.kappa_N_per_m.value,
-                             d.kappa_N_per_m.sd, d.mu_k.value, d.mu_k.sd, d.mu_b_Ns_per_m.value, d.mu_b_Ns_per_m.sd)
-                     .c_str(),
-                 f);
-      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+      const auto f = modeling::FitContact(m, o->pokes.empty() ? nullptr : &pokes);
+      // Written through the model types: the renderer's material, effects included.
+      renderer::MaterialModel mm;
+      mm.name = std::filesystem::path(o->out).stem().string();
+      mm.effects = modeling::ContactEffects();
+      mm.contact.texture = {f.K.value, f.B.value, f.n.value};
+      mm.contact.base = {0, 0, 1};
+      mm.contact.layer_thickness_m = 0.005;  // no base felt: thicker than any measured penetration
+      mm.friction = {f.kappa_N_per_m.value, f.mu_k.value, f.mu_b_Ns_per_m.value};
+      auto ci = [](const char* k, const modeling::Estimate& e) {
+        return fmt::format("#   {:14s} {:.6g} +- {:.3g} (95 %: {:.6g} .. {:.6g})\n", k, e.value, e.sd, e.lo95, e.hi95);
+      };
+      std::string text = fmt::format("# Fitted by hapticlab model fit-contact from {} (SI units).\n# Uncertainty: {}.\n",
+                                     o->measurement, f.uncertainty_method);
+      text += ci("texture_K", f.K) + ci("texture_B", f.B) + ci("texture_n", f.n) + ci("kappa_N_per_m", f.kappa_N_per_m) +
+              ci("mu_k", f.mu_k) + ci("mu_b_Ns_per_m", f.mu_b_Ns_per_m);
+      text += renderer::MaterialToToml(mm);
+      WriteModelText(o->out, text);
+      renderer::LoadMaterial(o->out);  // what was written is a loadable material
       if (o->json) {
-        auto est = [](const modeling::Estimate& e) { return nlohmann::json{{"value", e.value}, {"sd", e.sd}}; };
+        auto est = [](const modeling::Estimate& e) {
+          return nlohmann::json{{"value", e.value}, {"sd", e.sd}, {"lo95", e.lo95}, {"hi95", e.hi95}};
+        };
         fmt::print("{}\n", nlohmann::json{
-                               {"hunt_crossley", {{"K", h.K.value}, {"B", h.B.value}, {"n", h.n.value}}},
-                               {"dahl", {{"kappa", d.kappa_N_per_m.value}, {"mu_k", d.mu_k.value}, {"mu_b", d.mu_b_Ns_per_m.value}}},
-                               {"uncertainty", {{"K", est(h.K)}, {"B", est(h.B)}, {"n", est(h.n)}, {"kappa", est(d.kappa_N_per_m)},
-                                                {"mu_k", est(d.mu_k)}, {"mu_b", est(d.mu_b_Ns_per_m)}}},
-                               {"residual_rms_N", {{"hunt_crossley", h.rms_residual_N}, {"dahl", d.rms_residual_N}}},
-                               {"algorithm1", {{"passes", d.algorithm1_passes}, {"converged", d.algorithm1_converged}}}}
+                               {"hunt_crossley", {{"K", f.K.value}, {"B", f.B.value}, {"n", f.n.value},
+                                                  {"K1mm_N", f.K1mm_N.value}, {"B1mm", f.B1mm_Ns_per_m.value}}},
+                               {"dahl", {{"kappa", f.kappa_N_per_m.value}, {"mu_k", f.mu_k.value}, {"mu_b", f.mu_b_Ns_per_m.value}}},
+                               {"uncertainty", {{"K", est(f.K)}, {"B", est(f.B)}, {"n", est(f.n)}, {"K1mm_N", est(f.K1mm_N)},
+                                                {"B1mm", est(f.B1mm_Ns_per_m)}, {"kappa", est(f.kappa_N_per_m)},
+                                                {"mu_k", est(f.mu_k)}, {"mu_b", est(f.mu_b_Ns_per_m)}}},
+                               {"uncertainty_method", f.uncertainty_method},
+                               {"residual_rms_N", {{"hunt_crossley", f.normal_rms_N}, {"dahl", f.friction_rms_N}}},
+                               {"samples", {{"strokes", f.stroke_samples}, {"pokes", f.poke_samples}}},
+                               {"poke_source", f.poke_source},
+                               {"algorithm1", {{"passes", f.algorithm1.passes}, {"converged", f.algorithm1.converged},
+                                               {"kappa", f.algorithm1.kappa_N_per_m}, {"mu_k", f.algorithm1.mu_k},
+                                               {"mu_b", f.algorithm1.mu_b_Ns_per_m}}},
+                               {"fit", {{"friction", FitSummaryJson(f.friction_summary)},
+                                        {"normal_force", FitSummaryJson(f.normal_summary)}}},
+                               {"usable", f.IsUsable()},
+                               {"out", o->out}}
                                .dump(2));
       } else {
-        fmt::print("Hunt-Crossley ({} samples <= 2 N): K = {:.4g} +- {:.2g}, B = {:.4g} +- {:.2g}, n = {:.4f} +- {:.2g}; rms {:.4f} N\n",
-                   h.samples, h.K.value, h.K.sd, h.B.value, h.B.sd, h.n.value, h.n.sd, h.rms_residual_N);
-        fmt::print("Dahl (Algorithm 1: {} passes{}): kappa = {:.4g} +- {:.2g} N/m, mu_k = {:.4f} +- {:.2g}, mu_b = {:.4f} +- {:.2g} N s/m; rms {:.4f} N\n",
-                   d.algorithm1_passes, d.algorithm1_converged ? "" : ", not converged", d.kappa_N_per_m.value,
-                   d.kappa_N_per_m.sd, d.mu_k.value, d.mu_k.sd, d.mu_b_Ns_per_m.value, d.mu_b_Ns_per_m.sd, d.rms_residual_N);
+        auto pm = [](const modeling::Estimate& e) {
+          return fmt::format("{:.5g} +- {:.2g} [{:.5g}, {:.5g}]", e.value, e.sd, e.lo95, e.hi95);
+        };
+        fmt::print("Hunt-Crossley ({} samples <= 2 N from {}): K = {} N/m^n, B = {} N s/m^(n+1), n = {}; rms {:.4f} N\n",
+                   f.poke_samples, f.poke_source, pm(f.K), pm(f.B), pm(f.n), f.normal_rms_N);
+        fmt::print("Dahl ({} samples; Algorithm 1: {} passes{}, kappa {:.4g}, mu_k {:.4f}, mu_b {:.4f}): kappa = {} N/m, "
+                   "mu_k = {}, mu_b = {} N s/m; rms {:.4f} N\n",
+                   f.stroke_samples, f.algorithm1.passes, f.algorithm1.converged ? "" : ", not converged",
+                   f.algorithm1.kappa_N_per_m, f.algorithm1.mu_k, f.algorithm1.mu_b_Ns_per_m, pm(f.kappa_N_per_m),
+                   pm(f.mu_k), pm(f.mu_b_Ns_per_m), f.friction_rms_N);
+        fmt::print("{}\n{}\n", FitSummaryLine(f.friction_summary), FitSummaryLine(f.normal_summary));
+        fmt::print("uncertainty: {}\nwrote {}\n", f.uncertainty_method, o->out);
+      }
+      if (!f.IsUsable()) {
+        fmt::print(stderr, "fit-contact: a fit is not usable (see the fit lines); {} was written for inspection\n", o->out);
+        return kExitFailure;
       }
       return kExitOk;
     });
@@ -769,10 +814,13 @@ void AddBuild(CLI::App& model) {
   auto o = std::make_shared<O>();
   auto* cmd = model.add_subcommand(
       "build", "Assemble a complete material model from a height map (its .f32.toml from `model photometric`),\n"
-               "a contact fit (`model fit-contact`) and a vibration bank (`model fit-vibration`).");
+               "a contact fit (`model fit-contact`) and a vibration bank (`model fit-vibration`). Every\n"
+               "fitted effect and parameter of the parts is kept (the contact fit's effects, e.g.\n"
+               "hc-exponent, and the bank's vibration-speed/vibration-force); the bank is written inline.");
   cmd->add_option("--name", o->name, "Material name")->required();
   cmd->add_option("--height", o->height, "Geometry TOML written beside the height map (HEIGHT.f32.toml)")->required();
-  cmd->add_option("--contact", o->contact, "CONTACT.toml from fit-contact")->required();
+  cmd->add_option("--contact", o->contact, "Contact fit from fit-contact (a material TOML, or [contact] and [friction])")
+      ->required();
   cmd->add_option("--vibration", o->vibration, "BANK.toml from fit-vibration")->required();
   cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid filter cut-off f_c [Hz] (see `model cutoff`)")->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
@@ -781,23 +829,39 @@ void AddBuild(CLI::App& model) {
       namespace fs = std::filesystem;
       const auto outdir = fs::absolute(o->out).parent_path();
       auto rel = [&](const std::string& p) { return fs::relative(fs::absolute(p), outdir).string(); };
-      // The geometry table points at the .f32 next to it: re-point it relative to the model.
-      std::string geometry = ReadTextFile(o->height, "geometry table");
+      auto quoted = [](const std::string& p) { return nlohmann::json(p).dump(); };
+      // Each part is read through the renderer's material parser (its own file named in errors).
+      // Parts without the tables a material requires get neutral ones (not used).
+      auto parse = [](std::string text, const std::string& path, bool contact_part) {
+        static const std::regex kName(R"((^|\n)[ \t]*name[ \t]*=)");
+        if (!contact_part) text = "[contact]\ntexture_K = 1.0\n\n[friction]\nkappa_N_per_m = 1.0\nmu_k = 0.0\n\n" + text;
+        if (!std::regex_search(text, kName)) text = "name = \"part\"\n" + text;
+        return renderer::ParseMaterial(text, path);
+      };
+      renderer::MaterialModel mm = parse(ReadTextFile(o->contact, "contact fit"), o->contact, true);
+      const auto g = parse(ReadTextFile(o->height, "geometry table"), o->height, false);
+      const auto v = parse("[vibration]\nfile = " + quoted(fs::absolute(o->vibration).string()) + "\n", o->vibration, false);
+      mm.name = o->name;
+      mm.source_path.clear();
+      mm.geometry = g.geometry;
+      mm.vibration = v.vibration;
+      mm.hybrid_cutoff_hz = o->cutoff;
+      if (mm.effects.empty()) {
+        // A contact part without an effect list: the effects its parameters say were fitted.
+        mm.effects = {"coulomb", "dahl"};
+        if (mm.friction.mu_b_Ns_per_m > 0) mm.effects.push_back("viscous");
+        if (mm.contact.texture.B > 0) mm.effects.push_back("hc-damping");
+        if (mm.contact.texture.n != 1) mm.effects.push_back("hc-exponent");
+      }
+      if (!mm.vibration.empty())
+        for (const char* e : {"vibration-speed", "vibration-force"})
+          if (std::find(mm.effects.begin(), mm.effects.end(), e) == mm.effects.end()) mm.effects.push_back(e);
+      // The geometry by reference to its .f32, relative to the model.
       const auto f32 = (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();
-      const auto pos = geometry.find("file = ");
-      if (pos == std::string::npos) throw InputError(o->height, 0, "geometry.file", "missing");
-      geometry.replace(pos, geometry.find('\n', pos) - pos, "file = \"" + rel(f32) + "\"");
-      const std::string text = fmt::format(
-          "name = \"{}\"\neffects = [\"coulomb\", \"viscous\", \"dahl\", \"hc-damping\", \"vibration-speed\", "
-          "\"vibration-force\"]\n\n{}\n{}\n[hybrid]\ncutoff_hz = {:.10g}\n\n[vibration]\nfile = \"{}\"\n",
-          o->name, ReadTextFile(o->contact, "contact fit"), geometry, o->cutoff, rel(o->vibration));
-      FILE* f = std::fopen(o->out.c_str(), "w");
-      if (!f) throw std::runtime_error(o->out + ": cannot write");
-      std::fputs(text.c_str(), f);
-      std::fclose(f);
+      WriteModelText(o->out, renderer::MaterialToToml(mm, rel(f32)));
       const auto m = renderer::LoadMaterial(o->out);  // validates the assembled model
-      fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz)\n", o->out, m.name, m.geometry->width(),
-                 m.geometry->height(), m.vibration.cells.size(), m.hybrid_cutoff_hz);
+      fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz; effects: {})\n", o->out, m.name, m.geometry->width(),
+                 m.geometry->height(), m.vibration.cells.size(), m.hybrid_cutoff_hz, fmt::join(m.effects, ", "));
       return kExitOk;
     });
   });

@@ -1,6 +1,9 @@
+// Contact identification: Algorithm 1 (2-D) as the initialiser of the workbench's friction
+// channel, and `model fit-contact` as the workbench's friction and normal channels fitted on
+// strokes and pokes (one engine; see contact.hpp).
+
 #include "hapticlab/modeling/contact.hpp"
 
-#include <ceres/ceres.h>
 #include <fmt/format.h>
 
 #include <Eigen/Dense>
@@ -8,221 +11,225 @@
 #include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::modeling {
 namespace {
 
-// One stroke sample projected on the motion axis.
-struct Sample {
-  double x, v, fn, ff;  // position and velocity along the axis, normal load, friction (along v)
-};
+bool InSplit(int block, wb::Split s) { return s == wb::Split::kAll || (s == wb::Split::kTrain) == (block % 2 == 0); }
 
-std::vector<Sample> Project(const Measurement& m) {
-  // Principal axis of the tangential velocity.
-  Eigen::Matrix2d c = Eigen::Matrix2d::Zero();
-  for (const auto& r : m.rows) c += r.v_mps.head<2>() * r.v_mps.head<2>().transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(c);
-  const Eigen::Vector2d u = es.eigenvectors().col(1);
-  std::vector<Sample> s;
-  for (const auto& r : m.rows) {
-    if (!(r.f_N.z() > 0)) continue;  // out of contact
-    // The surface's friction on the tool opposes motion: friction along +v is -F.u.
-    s.push_back({r.p_m.head<2>().dot(u), r.v_mps.head<2>().dot(u), r.f_N.z(), -r.f_N.head<2>().dot(u)});
-  }
-  return s;
-}
-
-// The discrete Dahl model with viscous term, stepped exactly as the renderer does (1-D).
-std::vector<double> SimulateDahl(const std::vector<Sample>& s, double kappa, double mu_k, double mu_b) {
-  std::vector<double> out(s.size());
-  double fd = 0;
-  for (std::size_t t = 0; t < s.size(); ++t) {
-    const double fc = mu_k * s[t].fn;
-    if (t > 0 && fc > 0) {
-      const double dx = s[t].x - s[t - 1].x, len = std::abs(dx);
-      if (len > 0) {
-        const double target = dx > 0 ? fc : -fc;
-        fd = target + (fd - target) * std::exp(-kappa * len / fc);
-      }
-      if (std::abs(fd) > fc) fd = fd > 0 ? fc : -fc;
+const wb::ParamEstimate* FindParam(const wb::ChannelFit& c, const std::string& effect, const std::string& name, int* at) {
+  for (std::size_t k = 0; k < c.params.size(); ++k)
+    if (c.params[k].effect == effect && c.params[k].name == name) {
+      if (at) *at = static_cast<int>(k);
+      return &c.params[k];
     }
-    out[t] = fd + mu_b * s[t].v;
-  }
-  return out;
+  return nullptr;
 }
 
-struct DahlResidual {
-  const std::vector<Sample>* s;
-  bool operator()(const double* const p, double* r) const {
-    const auto f = SimulateDahl(*s, p[0], p[1], p[2]);
-    for (std::size_t i = 0; i < f.size(); ++i) r[i] = f[i] - (*s)[i].ff;
-    return std::isfinite(p[0]) && p[0] > 0 && p[1] > 0;
-  }
-};
+Estimate FromParam(const wb::ChannelFit& c, const std::string& effect, const std::string& name) {
+  Estimate e;
+  if (const auto* p = FindParam(c, effect, name, nullptr)) e = {p->value, p->sd, p->lo95, p->hi95};
+  return e;
+}
 
-struct HcResidual {
-  double d, ddot, f;
-  template <typename T>
-  bool operator()(const T* const k, const T* const b, const T* const n, T* r) const {
-    using std::exp;
-    using std::log;
-    const T dn = exp(n[0] * log(T(d)));
-    r[0] = k[0] * dn + b[0] * dn * T(ddot) - T(f);
-    return true;
+// Renderer units: X = X1mm / (1 mm)^n, so ln X = ln X1mm - n ln(1 mm); its variance by the
+// delta method from the channel's covariance, the interval exp(ln X -+ t sd).
+Estimate ToRendererUnits(const wb::ChannelFit& c, const std::string& effect, const std::string& name) {
+  Estimate e;
+  int i = -1, j = -1;
+  const auto* x = FindParam(c, effect, name, &i);
+  const auto* n = FindParam(c, "hc-exponent", "n", &j);
+  if (!x || !n) return e;
+  const double l = std::log(1e-3);
+  e.value = x->value / std::exp(n->value * l);
+  const std::size_t np = c.params.size();
+  if (c.covariance.size() == np * np && x->value > 0) {
+    const double vx = c.covariance[i * np + i], vn = c.covariance[j * np + j], cxn = c.covariance[i * np + j];
+    const double var_log = vx / (x->value * x->value) + l * l * vn - 2 * l * cxn / x->value;
+    const double sd_log = std::sqrt(std::max(var_log, 0.0));
+    e.sd = e.value * sd_log;
+    const double t = x->sd > 0 ? (x->hi95 - x->value) / x->sd : 1.96;  // the channel's t quantile
+    e.lo95 = e.value * std::exp(-t * sd_log);
+    e.hi95 = e.value * std::exp(t * sd_log);
+  } else {
+    e.lo95 = e.hi95 = e.value;
   }
-};
+  return e;
+}
 
-void Covariance(ceres::Problem& problem, std::vector<double*> blocks, std::vector<Estimate*> out) {
-  ceres::Covariance::Options co;
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> pairs;
-  for (auto* b : blocks) pairs.emplace_back(b, b);
-  if (!cov.Compute(pairs, &problem)) return;
-  for (std::size_t i = 0; i < blocks.size(); ++i) {
-    double v = 0;
-    cov.GetCovarianceBlock(blocks[i], blocks[i], &v);
-    out[i]->sd = std::sqrt(std::max(v, 0.0));
-  }
+double RmsNormal(const wb::Model& m, const wb::Replay& r, double max_force_N) {
+  const auto p = wb::Predict(m, r);
+  double s = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < r.s.size(); ++i)
+    if (r.s[i].contact && r.s[i].fn_N <= max_force_N) s += std::pow(r.s[i].fn_N - p.fn_N[i], 2), ++n;
+  return n ? std::sqrt(s / n) : 0;
 }
 
 }  // namespace
+
+std::vector<std::string> ContactEffects() { return {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent"}; }
 
 void SplitStrokesAndPokes(const Measurement& m, Measurement* strokes, Measurement* pokes) {
   *strokes = m;
   *pokes = m;
   strokes->rows.clear();
   pokes->rows.clear();
-  for (const auto& r : m.rows) {
+  strokes->row_lines.clear();
+  pokes->row_lines.clear();
+  for (std::size_t i = 0; i < m.rows.size(); ++i) {
+    const auto& r = m.rows[i];
     const bool poke = r.v_mps.head<2>().norm() < 1e-3 && std::abs(r.v_mps.z()) > 1e-4;
-    (poke ? pokes : strokes)->rows.push_back(r);
+    auto* dst = poke ? pokes : strokes;
+    dst->rows.push_back(r);
+    if (i < m.row_lines.size()) dst->row_lines.push_back(m.row_lines[i]);
   }
 }
 
-DahlFit FitDahl(const Measurement& m, const ContactFitOptions& o) {
-  const auto s = Project(m);
-  DahlFit fit;
-  // Algorithm 1: kappa from pre-sliding samples (eq. 4.9 as least squares), mu_k and mu_b
-  // from sliding samples (eq. 4.10, linear least squares), repeated until every parameter
-  // changes by less than TC.
-  double kappa = 1000, mu_k = 0.3, mu_b = 0;
-  for (const auto& x : s) {
-    const double v = std::abs(x.v);
-    fit.presliding_samples += v <= o.presliding_speed_mps;
-    fit.sliding_samples += v >= o.sliding_speed_mps;
+Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const ContactFitOptions& o) {
+  Algorithm1Result a;
+  const auto& s = r.s;
+  auto use = [&](std::size_t i) { return s[i].contact && InSplit(s[i].block, split); };
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    if (!use(i)) continue;
+    a.presliding_samples += s[i].speed_mps <= o.presliding_speed_mps;
+    a.sliding_samples += s[i].speed_mps >= o.sliding_speed_mps;
   }
-  if (fit.sliding_samples < 20 || fit.presliding_samples < 5)
-    throw InputError(m.file, 0, "vx_mps",
-                     fmt::format("strokes need sliding (>= {:.1f} mm/s) and pre-sliding (<= {:.1f} mm/s) samples; found "
-                                 "{} and {}",
-                                 o.sliding_speed_mps * 1e3, o.presliding_speed_mps * 1e3, fit.sliding_samples,
-                                 fit.presliding_samples));
+  if (a.sliding_samples < 20 || a.presliding_samples < 5)
+    throw InputError(r.file, 0, "vx_mps",
+                     fmt::format("strokes need sliding (>= {:.1f} mm/s) and pre-sliding (<= {:.1f} mm/s) samples in "
+                                 "contact; found {} and {}",
+                                 o.sliding_speed_mps * 1e3, o.presliding_speed_mps * 1e3, a.sliding_samples,
+                                 a.presliding_samples));
+  // estMu (eq. 4.10, vector form): the surface's force on the tool is -(f_C u + mu_b v) while
+  // sliding, with f_C = mu_k f_n and u the previous sample's direction of motion.
+  Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
+  Eigen::Vector2d b = Eigen::Vector2d::Zero();
+  for (std::size_t t = 1; t < s.size(); ++t) {
+    if (!use(t) || !s[t - 1].contact || s[t].speed_mps < o.sliding_speed_mps || s[t - 1].speed_mps < o.sliding_speed_mps)
+      continue;
+    const double ux = s[t - 1].vx_mps / s[t - 1].speed_mps, uy = s[t - 1].vy_mps / s[t - 1].speed_mps;
+    const Eigen::Vector2d ax(s[t - 1].fload_N * ux, s[t].vx_mps), ay(s[t - 1].fload_N * uy, s[t].vy_mps);
+    A += ax * ax.transpose() + ay * ay.transpose();
+    b += ax * -s[t].ftx_N + ay * -s[t].fty_N;
+  }
+  const Eigen::Vector2d mu = A.ldlt().solve(b);
+  double kappa = 2000, mu_k = 0, mu_b = 0;
   for (int pass = 1; pass <= 100; ++pass) {
-    // estMu: f_F(t) = mu_b v(t) + mu_k f_n(t-1) sgn(v(t-1)).
-    Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
-    Eigen::Vector2d b = Eigen::Vector2d::Zero();
-    for (std::size_t t = 1; t < s.size(); ++t) {
-      if (std::abs(s[t].v) < o.sliding_speed_mps || std::abs(s[t - 1].v) < o.sliding_speed_mps) continue;
-      const Eigen::Vector2d a(s[t - 1].fn * (s[t - 1].v > 0 ? 1 : -1), s[t].v);
-      A += a * a.transpose();
-      b += a * s[t].ff;
-    }
-    const Eigen::Vector2d mu = A.ldlt().solve(b);
-    // estKappa: (y - z) = -kappa (|dx| / f_C) z with z = f_D(t-1) - f_C s, y = f_D(t) - f_C s.
+    // estKappa (eq. 4.9, vector form): between bristle updates (the tool moved at least the
+    // position resolution from the anchor), y - z = -kappa (|dx| / f_C) z with z = F_D(anchor) - T,
+    // y = F_D(t) - T, T = f_C dx / |dx|, F_D = -f_t - mu_b v the measured bristle force.
     double num = 0, den = 0;
-    for (std::size_t t = 1; t < s.size(); ++t) {
-      if (std::abs(s[t].v) > o.presliding_speed_mps) continue;
-      const double dx = s[t].x - s[t - 1].x;
-      const double fc = mu(0) * s[t - 1].fn;
-      if (std::abs(dx) < 1e-12 || !(fc > 0)) continue;
-      const double sg = dx > 0 ? 1 : -1;
-      const double z = s[t - 1].ff - mu(1) * s[t - 1].v - fc * sg, y = s[t].ff - mu(1) * s[t].v - fc * sg;
-      const double w = std::abs(dx) / fc * z;
-      num += w * (z - y);
-      den += w * w;
+    std::size_t anchor = 0;
+    bool have_anchor = false;
+    for (std::size_t t = 0; t < s.size(); ++t) {
+      if (!s[t].contact) {
+        have_anchor = false;
+        continue;
+      }
+      if (!have_anchor) {
+        anchor = t, have_anchor = true;
+        continue;
+      }
+      const double dx = s[t].x_m - s[anchor].x_m, dy = s[t].y_m - s[anchor].y_m, len = std::hypot(dx, dy);
+      if (len < r.position_resolution_m) continue;
+      const std::size_t a0 = anchor;
+      anchor = t;
+      if (!use(t) || s[t].speed_mps > o.presliding_speed_mps) continue;
+      const double fc = mu(0) * s[a0].fload_N;
+      if (!(fc > 0)) continue;
+      const double tx = fc * dx / len, ty = fc * dy / len;
+      const double zx = -s[a0].ftx_N - mu(1) * s[a0].vx_mps - tx, zy = -s[a0].fty_N - mu(1) * s[a0].vy_mps - ty;
+      const double yx = -s[t].ftx_N - mu(1) * s[t].vx_mps - tx, yy = -s[t].fty_N - mu(1) * s[t].vy_mps - ty;
+      const double wx = len / fc * zx, wy = len / fc * zy;
+      num += wx * (zx - yx) + wy * (zy - yy);
+      den += wx * wx + wy * wy;
     }
-    const double k_new = den > 0 ? num / den : kappa;
+    const double k_new = den > 0 && num > 0 ? num / den : kappa;
     const double dk = std::abs(k_new - kappa), dmk = std::abs(mu(0) - mu_k), dmb = std::abs(mu(1) - mu_b);
-    kappa = k_new;
-    mu_k = mu(0);
-    mu_b = mu(1);
-    fit.algorithm1_passes = pass;
+    kappa = k_new, mu_k = mu(0), mu_b = mu(1);
+    a.passes = pass;
     if (dk < o.convergence && dmk < o.convergence && dmb < o.convergence) {
-      fit.algorithm1_converged = true;
+      a.converged = true;
       break;
     }
   }
-  // Batch refinement of all three with Ceres on the simulated friction of the whole record.
-  double p[3] = {std::max(kappa, 1.0), std::max(mu_k, 1e-3), mu_b};
-  ceres::Problem problem;
-  auto* cost = new ceres::NumericDiffCostFunction<DahlResidual, ceres::CENTRAL, ceres::DYNAMIC, 3>(
-      new DahlResidual{&s}, ceres::TAKE_OWNERSHIP, static_cast<int>(s.size()));
-  problem.AddResidualBlock(cost, nullptr, p);
-  problem.SetParameterLowerBound(p, 0, 1.0);
-  problem.SetParameterLowerBound(p, 1, 1e-4);
-  ceres::Solver::Options so;
-  so.max_num_iterations = 100;
-  so.function_tolerance = 1e-12;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  fit.kappa_N_per_m.value = p[0];
-  fit.mu_k.value = p[1];
-  fit.mu_b_Ns_per_m.value = p[2];
-  // Uncertainties: J^T J of the residuals (numeric) through Ceres' covariance.
-  ceres::Covariance::Options co;
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> pairs{{p, p}};
-  if (cov.Compute(pairs, &problem)) {
-    double c[9];
-    cov.GetCovarianceBlock(p, p, c);
-    fit.kappa_N_per_m.sd = std::sqrt(std::max(c[0], 0.0));
-    fit.mu_k.sd = std::sqrt(std::max(c[4], 0.0));
-    fit.mu_b_Ns_per_m.sd = std::sqrt(std::max(c[8], 0.0));
-  }
-  fit.rms_residual_N = std::sqrt(2 * summary.final_cost / static_cast<double>(s.size()));
-  return fit;
+  a.kappa_N_per_m = kappa;
+  a.mu_k = mu_k;
+  a.mu_b_Ns_per_m = mu_b;
+  return a;
 }
 
-HuntCrossleyFit FitHuntCrossley(const Measurement& m, const ContactFitOptions& o) {
-  std::vector<HcResidual> data;
-  for (const auto& r : m.rows) {
-    const double d = -r.p_m.z();
-    if (d > 1e-7 && r.f_N.z() > 0 && r.f_N.z() <= o.max_force_N) data.push_back({d, -r.v_mps.z(), r.f_N.z()});
+ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const ContactFitOptions& o) {
+  ContactFit out;
+  out.uncertainty_method =
+      "cluster-robust sandwich over 3 s clusters of blocks (G/(G-1) (J'J)^-1 sum_g s_g s_g' (J'J)^-1), 95 % intervals with "
+      "t(0.975, G-1)";
+  // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
+  const auto r = wb::PrepareReplay(m);
+  out.algorithm1 = AlgorithmOne(r, wb::Split::kAll, o);
+  wb::Model model;
+  wb::AddEffects(&model, ContactEffects(), r);
+  wb::FitOptions fo;
+  fo.normal = fo.vibration = false;
+  fo.uncertainty = true;
+  const auto fr = wb::Fit(&model, r, fo);
+  const auto* cf = fr.Find(wb::Channel::kFriction);
+  HL_DEMAND(cf != nullptr);
+  out.friction_summary = cf->summary;
+  out.kappa_N_per_m = FromParam(*cf, "dahl", "kappa");
+  out.mu_k = FromParam(*cf, "coulomb", "mu_k");
+  out.mu_b_Ns_per_m = FromParam(*cf, "viscous", "mu_b");
+  out.stroke_samples = cf->samples;
+  {
+    const auto p = wb::Predict(model, r);
+    double s = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < r.s.size(); ++i)
+      if (r.s[i].contact) s += std::pow(r.s[i].ftx_N - p.ftx_N[i], 2) + std::pow(r.s[i].fty_N - p.fty_N[i], 2), ++n;
+    out.friction_rms_N = n ? std::sqrt(s / n) : 0;
   }
-  if (data.size() < 10)
-    throw InputError(m.file, 0, "fz_N", fmt::format("{} poke samples in contact below {:.1f} N; at least 10 are needed",
-                                                    data.size(), o.max_force_N));
-  // Start: K and n from a log-log fit of quasi-static samples, B = 0.
-  double sx = 0, sy = 0, sxx = 0, sxy = 0;
-  for (const auto& x : data) {
-    const double lx = std::log(x.d), ly = std::log(x.f);
-    sx += lx;
-    sy += ly;
-    sxx += lx * lx;
-    sxy += lx * ly;
+
+  // Hunt-Crossley: a separate pokes file, the measurement's pokes, or all of it.
+  Measurement strokes, pokes;
+  SplitStrokesAndPokes(m, &strokes, &pokes);
+  auto in_contact = [&](const Measurement& x) {
+    int n = 0;
+    for (const auto& row : x.rows) n += row.f_N.z() > 0.02 && row.f_N.z() <= o.max_force_N;
+    return n;
+  };
+  const Measurement* src = &m;
+  if (pokes_in) {
+    src = pokes_in;
+    out.poke_source = fmt::format("the pokes file {}", pokes_in->file);
+  } else if (in_contact(pokes) >= 200) {
+    src = &pokes;
+    out.poke_source = fmt::format("the measurement's {} poke rows (vertical motion, tangential speed < 1 mm/s)",
+                                  pokes.rows.size());
+  } else {
+    out.poke_source = "every sample of the measurement in contact (it has no pokes)";
   }
-  const double nn = static_cast<double>(data.size());
-  double n = std::clamp((nn * sxy - sx * sy) / (nn * sxx - sx * sx), 1.0, 2.0);
-  double K = std::exp((sy - n * sx) / nn), B = 0;
-  ceres::Problem problem;
-  for (const auto& x : data)
-    problem.AddResidualBlock(new ceres::AutoDiffCostFunction<HcResidual, 1, 1, 1, 1>(new HcResidual(x)), nullptr, &K, &B, &n);
-  problem.SetParameterLowerBound(&K, 0, 1e-9);
-  problem.SetParameterLowerBound(&n, 0, 1.0);
-  problem.SetParameterUpperBound(&n, 0, 2.0);
-  ceres::Solver::Options so;
-  so.max_num_iterations = 200;
-  so.function_tolerance = 1e-14;
-  so.parameter_tolerance = 1e-12;
-  ceres::Solver::Summary summary;
-  ceres::Solve(so, &problem, &summary);
-  HuntCrossleyFit fit;
-  fit.K.value = K;
-  fit.B.value = B;
-  fit.n.value = n;
-  fit.samples = static_cast<int>(data.size());
-  fit.rms_residual_N = std::sqrt(2 * summary.final_cost / nn);
-  Covariance(problem, {&K, &B, &n}, {&fit.K, &fit.B, &fit.n});
-  return fit;
+  if (in_contact(*src) < 10)
+    throw InputError(src->file, 0, "fz_N",
+                     fmt::format("{} samples in contact at most {:.1f} N for Hunt-Crossley; at least 10 are needed",
+                                 in_contact(*src), o.max_force_N));
+  const auto pr = src == &m ? r : wb::PrepareReplay(*src);
+  fo.normal = true;
+  fo.friction = false;
+  fo.max_normal_force_N = o.max_force_N;
+  const auto nr = wb::Fit(&model, pr, fo);
+  const auto* nf = nr.Find(wb::Channel::kNormal);
+  HL_DEMAND(nf != nullptr);
+  out.normal_summary = nf->summary;
+  out.K1mm_N = FromParam(*nf, "core", "K1mm_N");
+  out.B1mm_Ns_per_m = FromParam(*nf, "hc-damping", "B1mm");
+  out.n = FromParam(*nf, "hc-exponent", "n");
+  out.K = ToRendererUnits(*nf, "core", "K1mm_N");
+  out.B = ToRendererUnits(*nf, "hc-damping", "B1mm");
+  out.poke_samples = nf->samples;
+  out.normal_rms_N = RmsNormal(model, pr, o.max_force_N);
+  return out;
 }
 
 }  // namespace hapticlab::modeling

@@ -21,6 +21,7 @@
 #include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/modeling/contact.hpp"
 
 namespace hapticlab::modeling::wb {
 namespace {
@@ -29,6 +30,9 @@ constexpr double kMm = 1e-3;
 constexpr double kPreslidingSpeed_mps = 0.5e-3;
 constexpr double kSlidingSpeed_mps = 3e-3;
 constexpr double kVibrationRidge = 1.0;  // see FitVibration
+// Clusters of the sandwich covariance: this many consecutive 1 s blocks, so that a cluster spans
+// several strokes and rests and the residual's correlation along a stroke stays inside it.
+constexpr int kClusterBlocks = 3;
 
 // The core every model has: the contact stiffness K (force at 1 mm penetration).
 class Core final : public Effect {
@@ -49,7 +53,7 @@ class Core final : public Effect {
     return {{"K1mm_N", "N", init, 1e-6, 1e6, init, true, "normal force at 1 mm penetration"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.K = p[0]; }
-  std::string Evidence(const Replay&, const Residuals&) const override { return ""; }
+  EvidenceNote Evidence(const Replay&, const Residuals&) const override { return {}; }
 };
 const Core kCore;
 
@@ -104,7 +108,7 @@ double NormalForce(const std::vector<Resolved>& eff, const Replay::Sample& s) {
 // Friction force the surface exerts on the tool, replayed over every sample (the Dahl bristle
 // has state). Exact per-sample vector bristle update, as in the renderer.
 void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* ftx, double* fty) {
-  double Fx = 0, Fy = 0, ax = 0, ay = 0;  // bristle force, position at its last update
+  double Fx = 0, Fy = 0, ax = 0, ay = 0;  // bristle force, position seen through the play
   bool prev_contact = false;
   for (std::size_t i = 0; i < r.s.size(); ++i) {
     const auto& s = r.s[i];
@@ -116,18 +120,23 @@ void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* f
     }
     FrictionTerms t;
     for (const auto& x : eff) x.e->Friction(x.p.data(), s, t);
-    const double fc = std::max(0.0, s.fn_N * (t.mu_k * t.mu_scale + t.mu_add));
+    const double fc = std::max(0.0, s.fload_N * (t.mu_k * t.mu_scale + t.mu_add));
     if (t.kappa > 0) {
       if (!prev_contact || !(fc > 0)) {
         Fx = Fy = 0;
         ax = s.x_m, ay = s.y_m;
       } else {
-        const double dx = s.x_m - ax, dy = s.y_m - ay, len = std::hypot(dx, dy);
-        if (len >= r.position_resolution_m) {
+        // The bristle follows the position through a play (backlash) of half-width
+        // resolution / 2: noise at rest does not move it, and real motion loses only that
+        // play at each reversal (not whole sub-resolution excursions, as a fixed anchor would).
+        const double h = 0.5 * r.position_resolution_m;
+        const double ex = s.x_m - ax, ey = s.y_m - ay, dist = std::hypot(ex, ey);
+        if (dist > h) {
+          const double dx = ex * (1 - h / dist), dy = ey * (1 - h / dist), len = dist - h;
           const double tx = fc * dx / len, ty = fc * dy / len, a = std::exp(-t.kappa * len / fc);
           Fx = tx + (Fx - tx) * a;
           Fy = ty + (Fy - ty) * a;
-          ax = s.x_m, ay = s.y_m;
+          ax += dx, ay += dy;
         }
         const double mag = std::hypot(Fx, Fy);
         if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
@@ -190,6 +199,22 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   r.file = m.file;
   r.block_s = o.block_s;
   r.position_resolution_m = o.position_resolution_m;
+  if (!(o.position_resolution_m > 0)) {
+    // Position noise from rows at rest in contact: the second difference of white noise has
+    // variance 6 sigma^2, its median absolute value 0.6745 of its SD.
+    std::vector<double> d2;
+    for (std::size_t i = 1; i + 1 < m.rows.size(); ++i) {
+      const auto &a = m.rows[i - 1], &b = m.rows[i], &c = m.rows[i + 1];
+      if (b.v_mps.head<2>().norm() > 1e-3 || !(b.f_N.z() > o.contact_force_N)) continue;
+      for (int k = 0; k < 2; ++k) d2.push_back(std::abs(a.p_m[k] - 2 * b.p_m[k] + c.p_m[k]));
+    }
+    r.position_resolution_m = 1e-6;
+    if (d2.size() >= 200) {
+      std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2), d2.end());
+      const double sigma = d2[d2.size() / 2] / 0.674489750196 / std::sqrt(6.0);
+      r.position_resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
+    }
+  }
   if (m.rows.size() < 2) throw InputError(m.file, 0, "", "a measurement needs at least two rows");
   std::vector<double> dt;
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
@@ -197,6 +222,7 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   double rate = 1.0 / dt[dt.size() / 2];
   if (std::abs(rate - std::round(rate)) < 1e-6 * rate) rate = std::round(rate);  // time stamps' rounding
   const int stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
+  const auto half_load = static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.load_smoothing_s * rate)));
   r.rate_hz = rate / stride;
   const double t0 = m.rows.front().t_s;
   double dir = 0;
@@ -215,6 +241,14 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     if (s.speed_mps > 1e-3) dir = std::atan2(s.vy_mps, s.vx_mps);  // at rest: the last motion's
     s.dir_rad = dir;
     s.fn_N = row.f_N.z();
+    {
+      double sum = 0;
+      int count = 0;
+      const std::size_t lo = i >= half_load ? i - half_load : 0, hi = std::min(m.rows.size() - 1, i + half_load);
+      for (std::size_t k = lo; k <= hi; ++k)
+        if (m.rows[k].f_N.z() > o.contact_force_N) sum += m.rows[k].f_N.z(), ++count;
+      s.fload_N = count ? sum / count : s.fn_N;
+    }
     s.ftx_N = row.f_N.x();
     s.fty_N = row.f_N.y();
     s.contact = s.fn_N > o.contact_force_N;
@@ -518,10 +552,70 @@ struct ChannelCost {
   }
 };
 
-void FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
+// Two-sided 97.5 % quantile of Student's t with `dof` degrees of freedom (Cornish-Fisher
+// expansion about the normal quantile; within 1e-3 for dof >= 5).
+double TQuantile975(int dof) {
+  const double z = 1.959963984540054, v = std::max(dof, 1);
+  return z + (z * z * z + z) / (4 * v) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * v * v) +
+         (3 * std::pow(z, 7) + 19 * std::pow(z, 5) + 17 * z * z * z - 15 * z) / (384 * v * v * v);
+}
+
+FitSummary FromCeres(const std::string& what, const ceres::Solver::Summary& sum) {
+  FitSummary f;
+  f.what = what;
+  f.method = "ceres (bounded trust region, numeric derivatives of the replay)";
+  switch (sum.termination_type) {
+    case ceres::CONVERGENCE: f.termination = "converged"; break;
+    case ceres::NO_CONVERGENCE: f.termination = "iteration limit"; break;
+    case ceres::USER_SUCCESS: f.termination = "converged"; break;
+    default: f.termination = "failed"; break;
+  }
+  f.message = sum.message;
+  f.iterations = sum.num_successful_steps + sum.num_unsuccessful_steps;
+  f.initial_cost = sum.initial_cost;
+  f.final_cost = sum.final_cost;
+  f.usable = f.termination == "converged" && std::isfinite(sum.final_cost);
+  return f;
+}
+
+ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
+  ChannelFit out;
+  out.channel = c;
+  out.summary.what = ChannelName(c);
   auto* cost = new ChannelCost{c, &r, {}, Resolve(*m, r, c), {}, {}, {}, {}};
   for (std::size_t i = 0; i < r.s.size(); ++i)
-    if (r.s[i].contact && InSplit(r.s[i].block, o.split)) cost->idx.push_back(static_cast<int>(i));
+    if (r.s[i].contact && InSplit(r.s[i].block, o.split) && (c != Channel::kNormal || r.s[i].fn_N <= o.max_normal_force_N))
+      cost->idx.push_back(static_cast<int>(i));
+  // Algorithm 1 starts a friction model that has never been fitted (coulomb and dahl at their
+  // initial values): the Ceres refinement is then the joint batch step of the dissertation.
+  if (c == Channel::kFriction && o.algorithm1_init && m->Has("coulomb") && m->Has("dahl")) {
+    auto slot = [&](const std::string& e, const std::string& p) -> double* {
+      for (auto& x : cost->eff)
+        if (x.name == e)
+          for (std::size_t k = 0; k < x.specs.size(); ++k)
+            if (x.specs[k].name == p) return &x.p[k];
+      return nullptr;
+    };
+    auto init = [&](const std::string& e, const std::string& p) {
+      for (const auto& spec : FindEffect(e)->Params(r))
+        if (spec.name == p) return spec.init;
+      return std::numeric_limits<double>::quiet_NaN();
+    };
+    double* mu_k = slot("coulomb", "mu_k");
+    double* kappa = slot("dahl", "kappa");
+    double* mu_b = slot("viscous", "mu_b");
+    if (mu_k && kappa && *mu_k == init("coulomb", "mu_k") && *kappa == init("dahl", "kappa") &&
+        (!mu_b || *mu_b == init("viscous", "mu_b"))) {
+      try {
+        const auto a = AlgorithmOne(r, o.split);
+        if (std::isfinite(a.mu_k) && a.mu_k > 0) *mu_k = std::min(a.mu_k, 3.0);
+        if (std::isfinite(a.kappa_N_per_m) && a.kappa_N_per_m > 0) *kappa = std::clamp(a.kappa_N_per_m, 10.0, 1e6);
+        if (mu_b && std::isfinite(a.mu_b_Ns_per_m)) *mu_b = std::clamp(a.mu_b_Ns_per_m, 0.0, 1000.0);
+      } catch (const InputError&) {
+        // Too few pre-sliding or sliding samples for Algorithm 1: start from the neutral values.
+      }
+    }
+  }
   std::vector<double> x, lo, hi;
   for (std::size_t e = 0; e < cost->eff.size(); ++e)
     for (std::size_t k = 0; k < cost->eff[e].specs.size(); ++k) {
@@ -533,13 +627,17 @@ void FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) 
       lo.push_back(s.lo / s.scale);
       hi.push_back(s.hi / s.scale);
     }
+  out.samples = static_cast<int>(cost->idx.size());
   if (x.empty() || cost->idx.size() < x.size() * 3) {
+    out.summary.termination = x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
+    out.summary.usable = x.empty();
     delete cost;
-    return;
+    return out;
   }
   cost->ftx.resize(r.s.size());
   cost->fty.resize(r.s.size());
-  const int nres = static_cast<int>(cost->idx.size()) * (c == Channel::kNormal ? 1 : 2);
+  const int per = c == Channel::kNormal ? 1 : 2;
+  const int nres = static_cast<int>(cost->idx.size()) * per;
   auto* fn = new ceres::DynamicNumericDiffCostFunction<ChannelCost, ceres::CENTRAL>(cost);
   fn->AddParameterBlock(static_cast<int>(x.size()));
   fn->SetNumResiduals(nres);
@@ -558,21 +656,94 @@ void FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) 
   so.num_threads = 1;
   ceres::Solver::Summary sum;
   ceres::Solve(so, &problem, &sum);
+  out.summary = FromCeres(ChannelName(c), sum);
   // Copy the optimum back (the functor's copy holds the last evaluated point, not the best).
   std::vector<Resolved> eff = cost->eff;
   for (std::size_t k = 0; k < cost->slots.size(); ++k) eff[cost->slots[k].first].p[cost->slots[k].second] = x[k] * cost->scale[k];
   Store(m, eff);
+  const std::size_t np = x.size();
+  for (std::size_t k = 0; k < np; ++k) {
+    const auto& x_eff = eff[cost->slots[k].first];
+    const auto& spec = x_eff.specs[cost->slots[k].second];
+    ParamEstimate pe;
+    pe.effect = x_eff.name;
+    pe.name = spec.name;
+    pe.value = x[k] * cost->scale[k];
+    pe.lo95 = pe.hi95 = pe.value;
+    // At a bound: within 1e-6 of the parameter's range (or of its scale, for open ranges).
+    const double tol = 1e-6 * std::max(1.0, std::min(hi[k] - lo[k], 1e6));
+    const bool at_lo = x[k] - lo[k] <= tol, at_hi = hi[k] - x[k] <= tol;
+    // A bound at exactly zero of a non-negative amplitude (mu_b, B, dmu_s) is its neutral value.
+    pe.at_bound = at_hi || (at_lo && lo[k] != 0.0);
+    if (pe.at_bound)
+      out.summary.at_bounds.push_back(fmt::format("{}.{} at its {} bound ({:.6g})", pe.effect, pe.name,
+                                                  at_hi ? "upper" : "lower", pe.value));
+    out.params.push_back(pe);
+  }
+  if (!o.uncertainty) return out;
+
+  // Sandwich covariance over the split's blocks, in scaled parameters, from a central-difference
+  // Jacobian of the residuals at the optimum.
+  Eigen::MatrixXd J(nres, static_cast<Eigen::Index>(np));
+  std::vector<double> r0(nres), rp(nres), rm(nres), xs = x;
+  const double* xp[1] = {xs.data()};
+  (*cost)(xp, r0.data());
+  for (std::size_t k = 0; k < np; ++k) {
+    const double h = 1e-5 * std::max(1.0, std::abs(x[k]));
+    std::copy(x.begin(), x.end(), xs.begin());
+    xs[k] = x[k] + h;
+    (*cost)(xp, rp.data());
+    xs[k] = x[k] - h;
+    (*cost)(xp, rm.data());
+    for (int i = 0; i < nres; ++i) J(i, static_cast<Eigen::Index>(k)) = (rp[i] - rm[i]) / (2 * h);
+  }
+  std::map<int, Eigen::VectorXd> score;
+  for (int i = 0; i < nres; ++i) {
+    const int blk = r.s[cost->idx[i / per]].block / kClusterBlocks;
+    auto it = score.try_emplace(blk, Eigen::VectorXd::Zero(static_cast<Eigen::Index>(np))).first;
+    it->second += J.row(i).transpose() * r0[static_cast<std::size_t>(i)];
+  }
+  Eigen::MatrixXd meat = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(np), static_cast<Eigen::Index>(np));
+  for (const auto& [blk, sg] : score) meat += sg * sg.transpose();
+  const double G = static_cast<double>(score.size());
+  out.clusters = static_cast<int>(score.size());
+  if (G < 2) return out;
+  const Eigen::MatrixXd bread = (J.transpose() * J).completeOrthogonalDecomposition().pseudoInverse();
+  const Eigen::MatrixXd cov = G / (G - 1) * bread * meat * bread;
+  const double t = TQuantile975(out.clusters - 1);
+  out.covariance.assign(np * np, 0);
+  for (std::size_t a = 0; a < np; ++a)
+    for (std::size_t b = 0; b < np; ++b)
+      out.covariance[a * np + b] = cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) * cost->scale[a] * cost->scale[b];
+  for (std::size_t k = 0; k < np; ++k) {
+    auto& pe = out.params[k];
+    pe.sd = std::sqrt(std::max(out.covariance[k * np + k], 0.0));
+    pe.lo95 = pe.value - t * pe.sd;
+    pe.hi95 = pe.value + t * pe.sd;
+  }
+  return out;
 }
 
-void FitVibration(Model* m, const Replay& r, Split split) {
-  if (!r.has_vibration) return;
+ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
+  ChannelFit out;
+  out.channel = Channel::kVibration;
+  out.summary.what = "vibration";
+  out.summary.method = "linear least squares (ridge on the effect columns)";
+  if (!r.has_vibration) {
+    out.summary.termination = "not run (no acceleration)";
+    return out;
+  }
   const auto vib = Resolve(*m, r, Channel::kVibration);
   std::vector<std::size_t> use;
   for (std::size_t w = 0; w < r.windows.size(); ++w)
     if (InSplit(r.windows[w].block, split)) use.push_back(w);
   int cols = 1;
   for (const auto& x : vib) cols += x.e->VibrationColumns();
-  if (use.size() < static_cast<std::size_t>(cols) + 2) return;
+  out.samples = static_cast<int>(use.size());
+  if (use.size() < static_cast<std::size_t>(cols) + 2) {
+    out.summary.termination = "not run (too few vibration windows)";
+    return out;
+  }
   const std::size_t nb = r.band_lo_hz.size();
   Eigen::MatrixXd X(use.size(), cols);
   Eigen::MatrixXd Y(use.size(), nb);
@@ -617,16 +788,39 @@ void FitVibration(Model* m, const Replay& r, Split split) {
   m->band_edges_hz = r.band_lo_hz;
   m->band_edges_hz.push_back(r.band_hi_hz.back());
   Store(m, vib);
+  double sse = 0;
+  const Eigen::MatrixXd fitted = X * C;
+  for (Eigen::Index k = 0; k < fitted.rows(); ++k)
+    for (Eigen::Index b = 0; b < fitted.cols(); ++b) sse += std::pow(Y(k, b) - fitted(k, b), 2);
+  out.summary.termination = "converged";
+  out.summary.iterations = 1;
+  out.summary.final_cost = 0.5 * sse;
+  out.summary.usable = std::isfinite(sse);
+  return out;
 }
 
 }  // namespace
 
-void Fit(Model* m, const Replay& r, const FitOptions& o) {
+FitReport Fit(Model* m, const Replay& r, const FitOptions& o) {
+  FitReport rep;
   if (!m->params.count("core"))
     for (const auto& s : kCore.Params(r)) m->params["core"][s.name] = s.init;
-  if (o.normal) FitForceChannel(m, r, Channel::kNormal, o);
-  if (o.friction) FitForceChannel(m, r, Channel::kFriction, o);
-  if (o.vibration) FitVibration(m, r, o.split);
+  if (o.normal) rep.channels.push_back(FitForceChannel(m, r, Channel::kNormal, o));
+  if (o.friction) rep.channels.push_back(FitForceChannel(m, r, Channel::kFriction, o));
+  if (o.vibration && r.has_vibration) rep.channels.push_back(FitVibration(m, r, o.split));
+  return rep;
+}
+
+bool FitReport::IsUsable() const {
+  for (const auto& c : channels)
+    if (!c.summary.usable) return false;
+  return true;
+}
+
+const ChannelFit* FitReport::Find(Channel c) const {
+  for (const auto& x : channels)
+    if (x.channel == c) return &x;
+  return nullptr;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -742,133 +936,6 @@ Comparison Compare(const Model& m, const Replay& r) {
     c.breakdown["time"]["vibration_dB"] = Bin(dims[5], wtime, wres, all);
   }
   return c;
-}
-
-// ---------------------------------------------------------------------------------------------
-Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
-  Diagnosis dx;
-  Model base = m0;
-  if (!base.params.count("core")) AddEffects(&base, {}, r);
-  Fit(&base, r, {.split = Split::kTrain});
-  const auto pbase = Predict(base, r);
-  const auto ebase = ComputeErrors(r, pbase, Split::kHeldOut);
-  const auto res = ComputeResiduals(base, r, pbase);
-  dx.baseline_error = ebase.overall;
-  dx.baseline_channel = ebase.channel;
-
-  // Candidates: effects the model lacks whose prerequisites it has, on channels with data.
-  std::vector<const Effect*> cands;
-  for (const auto& e : Catalogue()) {
-    if (base.Has(e->name())) continue;
-    bool ok = true;
-    for (const auto dep : e->requires_effects()) ok = ok && base.Has(dep);
-    if (e->channel() == Channel::kVibration && (!r.has_vibration || r.windows.empty())) ok = false;
-    if (ok) cands.push_back(e.get());
-  }
-  std::vector<Candidate> out(cands.size());
-  std::vector<Prediction> preds(cands.size());
-  std::atomic<std::size_t> next{0}, done{0};
-  auto work = [&] {
-    for (std::size_t k; (k = next++) < cands.size();) {
-      const Effect* e = cands[k];
-      Model m = base;
-      AddEffects(&m, {std::string(e->name())}, r);
-      FitOptions fo{.split = Split::kTrain};
-      fo.normal = e->channel() == Channel::kNormal;
-      fo.friction = e->channel() == Channel::kFriction;
-      fo.vibration = e->channel() == Channel::kVibration;
-      Fit(&m, r, fo);
-      preds[k] = Predict(m, r);
-      const auto err = ComputeErrors(r, preds[k], Split::kHeldOut);
-      auto& c = out[k];
-      c.effect = std::string(e->name());
-      c.channel = ChannelName(e->channel());
-      c.error_after = err.overall;
-      c.error_reduction = ebase.overall - err.overall;
-      const double b0 = ebase.channel.count(c.channel) ? ebase.channel.at(c.channel) : 0;
-      const double b1 = err.channel.count(c.channel) ? err.channel.at(c.channel) : 0;
-      c.relative_reduction = b0 > 0 ? (b0 - b1) / b0 : 0;
-      // Paired over held-out blocks: t of the per-block log ratio of the channel's error (scale
-      // free, so a few blocks with large errors do not dominate).
-      std::vector<double> d;
-      const auto& bb = ebase.block_sse.at(c.channel);
-      const auto& bc = err.block_sse.at(c.channel);
-      for (const auto& [blk, v] : bb)
-        if (bc.count(blk) && v > 0 && bc.at(blk) > 0) d.push_back(std::log(v / bc.at(blk)));
-      if (d.size() >= 3) {
-        const double nd = static_cast<double>(d.size());
-        const double mean = std::accumulate(d.begin(), d.end(), 0.0) / nd;
-        double var = 0;
-        for (const double x : d) var += (x - mean) * (x - mean);
-        var /= nd - 1;
-        c.t_statistic = var > 0 ? mean / std::sqrt(var / nd) : (mean > 0 ? 1e9 : 0);
-      }
-      c.supported = c.relative_reduction >= o.min_relative_reduction && c.t_statistic >= o.min_t;
-      for (const auto& [name, v] : m.params[c.effect]) c.params[name] = v;
-      if (c.channel == "vibration") {
-        // Summarize the coefficients by their spread in dB.
-        const auto& v = m.coef[c.effect];
-        double mx = 0;
-        for (const double x : v) mx = std::max(mx, std::abs(x));
-        c.params["max_coefficient_dB"] = mx * 10 / std::log(10.0);
-      }
-      c.evidence = e->Evidence(r, res);
-      if (o.progress) o.progress(c.effect, static_cast<int>(++done), static_cast<int>(cands.size()));
-    }
-  };
-  const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
-  std::vector<std::thread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
-  for (auto& t : pool) t.join();
-
-  // Confounding: supported candidates of one channel whose changes to the prediction on the
-  // held-out data are strongly correlated explain the same residual.
-  auto change = [&](std::size_t k) {
-    std::vector<double> v;
-    if (out[k].channel == "vibration") {
-      for (std::size_t w = 0; w < r.windows.size(); ++w)
-        if (r.windows[w].block % 2)
-          for (std::size_t b = 0; b < preds[k].band_power[w].size(); ++b)
-            v.push_back(std::log(preds[k].band_power[w][b] / pbase.band_power[w][b]));
-    } else {
-      for (std::size_t i = 0; i < r.s.size(); ++i) {
-        if (!r.s[i].contact || r.s[i].block % 2 == 0) continue;
-        if (out[k].channel == "normal_force") {
-          v.push_back(preds[k].fn_N[i] - pbase.fn_N[i]);
-        } else {
-          v.push_back(preds[k].ftx_N[i] - pbase.ftx_N[i]);
-          v.push_back(preds[k].fty_N[i] - pbase.fty_N[i]);
-        }
-      }
-    }
-    return v;
-  };
-  for (std::size_t a = 0; a < out.size(); ++a)
-    for (std::size_t b = a + 1; b < out.size(); ++b) {
-      if (!out[a].supported || !out[b].supported || out[a].channel != out[b].channel) continue;
-      const auto va = change(a), vb = change(b);
-      double saa = 0, sbb = 0, sab = 0;
-      for (std::size_t i = 0; i < va.size(); ++i) saa += va[i] * va[i], sbb += vb[i] * vb[i], sab += va[i] * vb[i];
-      if (saa > 0 && sbb > 0 && sab / std::sqrt(saa * sbb) > 0.8) {
-        out[a].confounded_with.push_back(out[b].effect);
-        out[b].confounded_with.push_back(out[a].effect);
-      }
-    }
-  for (auto& c : out) {
-    if (!c.supported)
-      c.evidence = fmt::format("not supported: held-out {} error {} by {:.1f} % (paired t = {:.1f}); residual pattern: {}",
-                               c.channel, c.relative_reduction >= 0 ? "falls" : "rises",
-                               std::abs(c.relative_reduction) * 100, c.t_statistic, c.evidence);
-    else if (!c.confounded_with.empty())
-      c.evidence += fmt::format(" (confounded with {}: they explain the same residual; measure the regime that separates "
-                                "them)",
-                                fmt::join(c.confounded_with, ", "));
-  }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.error_reduction > b.error_reduction; });
-  dx.candidates = std::move(out);
-  return dx;
 }
 
 // ---------------------------------------------------------------------------------------------

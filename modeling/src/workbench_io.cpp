@@ -227,8 +227,10 @@ Model LoadModel(const std::string& path) {
     m.params["coulomb"]["mu_k"] = mm.friction.mu_k;
     m.params["dahl"]["kappa"] = mm.friction.kappa_N_per_m;
     m.params["viscous"]["mu_b"] = mm.friction.mu_b_Ns_per_m;
+    // Vibration effects of a renderer material are its AR bank, not the workbench's band
+    // model: they are kept and have no coefficients until `hapticlab fit` fits them.
     for (const auto& e : m.effects)
-      if (!m.params.count(e))
+      if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
         diag.Add(path, line(effects_node), "effects",
                  fmt::format("effect '{}' has no parameters in a renderer material; fit it with 'hapticlab fit --add {}'", e,
                              e));

@@ -124,7 +124,8 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
   for (std::size_t k = 0; k < N; ++k) {
     if (d[k] <= 0) continue;
     const double dn = std::pow(d[k] / 1e-3, n_exp);
-    double f = dn * (t.K1mm_N + (t.Has("hc-damping") ? t.B1mm_Ns_per_m * dd[k] : 0.0));
+    const double K = t.K1mm_N * (1 + t.K_position_amp * x[k] / half);
+    double f = dn * (K + (t.Has("hc-damping") ? t.B1mm_Ns_per_m * dd[k] : 0.0));
     if (t.Has("base-layer") && d[k] > t.layer_m) f += t.base_K_N_per_m * (d[k] - t.layer_m);
     out.fn_clean[k] = std::max(0.0, f);
   }
@@ -142,7 +143,7 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
       continue;
     }
     const double v = std::hypot(vx[k], vy[k]), dir = dirs[k];
-    double S = 1;
+    double S = 1 + t.mu_drift * (static_cast<double>(k) / static_cast<double>(N) - 0.5);
     if (t.Has("anisotropic-friction"))
       S *= 1 + t.aniso[0] * std::cos(dir) + t.aniso[1] * std::sin(dir) + t.aniso[2] * std::cos(2 * dir) +
            t.aniso[3] * std::sin(2 * dir);

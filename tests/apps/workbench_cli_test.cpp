@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "hapticlab/test/test_util.hpp"
@@ -34,11 +35,28 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
   EXPECT_TRUE(check["has_acceleration"].get<bool>());
 
   const auto base = dir.File("base.toml");
-  const auto fit = Json(Cli() + " fit --json --measurement " + meas + " -o " + base);
+  const auto fit = Json(Cli() + " fit --json --quiet --measurement " + meas + " -o " + base);
   EXPECT_TRUE(std::filesystem::exists(base));
   EXPECT_EQ(fit["effects"].size(), 7u);
+  // Every solve's summary and every parameter's interval.
+  EXPECT_TRUE(fit["usable"].get<bool>());
+  ASSERT_EQ(fit["fits"].size(), 3u);
+  for (const auto& f : fit["fits"]) {
+    EXPECT_EQ(f["termination"], "converged") << f.dump();
+    for (const char* k : {"iterations", "final_cost", "at_bounds", "usable"}) EXPECT_TRUE(f.contains(k)) << k;
+  }
+  const auto& mu = fit["estimates"]["coulomb"]["mu_k"];
+  EXPECT_LT(mu["lo95"].get<double>(), mu["value"].get<double>());
+  EXPECT_GT(mu["hi95"].get<double>(), mu["value"].get<double>());
+  // Without --add nothing changes: one line for the fit, one held out; progress on stderr
+  // unless --quiet.
+  ASSERT_EQ(test::RunCommand(Cli() + " fit --measurement " + meas + " -o " + dir.File("b2.toml"), &out), 0) << out;
+  EXPECT_EQ(out.find("before"), std::string::npos) << out;
+  EXPECT_NE(out.find("fitted:"), std::string::npos) << out;
+  EXPECT_NE(out.find("fit: fitting on all data"), std::string::npos) << out;
+  EXPECT_NE(out.find("friction fit: converged"), std::string::npos) << out;
 
-  const auto dx = Json(Cli() + " diagnose --json --model " + base + " --measurement " + meas);
+  const auto dx = Json(Cli() + " diagnose --json --quiet --model " + base + " --measurement " + meas);
   ASSERT_FALSE(dx["candidates"].empty());
   const auto& top = dx["candidates"][0];
   EXPECT_EQ(top["effect"], "load-dependent-friction") << dx.dump(2);
@@ -48,16 +66,38 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
   for (std::size_t i = 1; i < dx["candidates"].size(); ++i)
     EXPECT_LE(dx["candidates"][i]["error_reduction"].get<double>(), dx["candidates"][i - 1]["error_reduction"].get<double>());
   EXPECT_NEAR(dx["baseline_error"].get<double>(), top["error_after"].get<double>() + top["error_reduction"].get<double>(), 1e-12);
+  // The unexplained report, keys as documented.
+  ASSERT_TRUE(dx.contains("unexplained"));
+  ASSERT_FALSE(dx["unexplained"]["channels"].empty());
+  for (const auto& c : dx["unexplained"]["channels"])
+    for (const char* k : {"channel", "error", "noise_floor", "ratio"}) EXPECT_TRUE(c.contains(k)) << k;
+  ASSERT_FALSE(dx["unexplained"]["axes"].empty());
+  const std::set<std::string> axes = {"time", "speed", "load", "direction", "position", "regime", "band"};
+  for (const auto& a : dx["unexplained"]["axes"]) {
+    for (const char* k : {"axis", "channel", "share", "description"}) EXPECT_TRUE(a.contains(k)) << k;
+    EXPECT_TRUE(axes.count(a["axis"].get<std::string>())) << a.dump();
+  }
+  EXPECT_FALSE(dx["unexplained"]["flagged"].get<bool>()) << "an effect is supported";
 
   const auto better = dir.File("better.toml");
-  const auto fit2 = Json(Cli() + " fit --json --measurement " + meas + " --model " + base +
+  const auto fit2 = Json(Cli() + " fit --json --quiet --measurement " + meas + " --model " + base +
                          " --add load-dependent-friction -o " + better);
   EXPECT_LT(fit2["held_out"]["after"]["channels"]["friction"].get<double>(),
             0.5 * fit2["held_out"]["before"]["channels"]["friction"].get<double>());
 
   const auto plots = dir.File("plots");
-  const auto cmp = Json(Cli() + " compare --json --model " + better + " --measurement " + meas + " --plots " + plots);
+  const auto cmp = Json(Cli() + " compare --json --model " + better + " --measurement " + meas + " --plots " + plots +
+                        " --before " + base);
   EXPECT_GT(cmp["error"].get<double>(), 0);
+  EXPECT_FALSE(cmp["summary"]["axes"].empty());
+  EXPECT_FALSE(cmp["summary"]["largest"].empty());
+  // The text report opens with the summary, the bin-by-bin detail after it.
+  ASSERT_EQ(test::RunCommand(Cli() + " compare --model " + base + " --measurement " + meas, &out), 0) << out;
+  const auto where = out.find("where the residual lives"), detail = out.find("detail:");
+  ASSERT_NE(where, std::string::npos) << out;
+  ASSERT_NE(detail, std::string::npos) << out;
+  EXPECT_LT(where, detail);
+  EXPECT_LT(out.find("largest systematic residuals"), detail);
   for (const char* dim : {"regime", "speed", "load", "direction", "position", "time", "band"})
     EXPECT_TRUE(cmp["breakdown"].contains(dim)) << dim;
   EXPECT_TRUE(std::filesystem::exists(plots + "/residual_load_friction_ratio.png"));

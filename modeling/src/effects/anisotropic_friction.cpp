@@ -29,7 +29,7 @@ class AnisotropicFriction final : public Effect {
                      p[3] * std::sin(2 * s.dir_rad);
     t.mu_scale *= std::max(f, 0.05);
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     std::vector<double> edges;
     for (int k = 0; k <= 8; ++k) edges.push_back(-std::numbers::pi + k * std::numbers::pi / 4);
     edges.back() += 1e-9;
@@ -38,13 +38,12 @@ class AnisotropicFriction final : public Effect {
         [&](std::size_t i) { return r.s[i].dir_rad; }, [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; },
         edges);
     const int hi = b.ArgMax(), lo = b.ArgMin();
-    if (hi < 0) return "too few sliding samples to judge";
+    if (hi < 0) return {"too few sliding samples to judge", "", false};
     const auto deg = [&](int j) { return (b.lo[j] + b.hi[j]) / 2 * 180 / std::numbers::pi; };
-    return fmt::format("friction-ratio residual ranges from {:+.3f} (moving toward {:.0f} deg) to {:+.3f} (toward {:.0f} "
-                       "deg): {}",
-                       b.mean[lo], deg(lo), b.mean[hi], deg(hi),
-                       b.mean[hi] - b.mean[lo] > 0.02 ? "friction depends on the direction of motion"
-                                                      : "little dependence on direction");
+    return {fmt::format("friction-ratio residual ranges from {:+.3f} (moving toward {:.0f} deg) to {:+.3f} (toward {:.0f} "
+                        "deg)",
+                        b.mean[lo], deg(lo), b.mean[hi], deg(hi)),
+            "friction depends on the direction of motion", !(b.mean[hi] - b.mean[lo] > 0.02)};
   }
 };
 }  // namespace

@@ -32,7 +32,7 @@ class BaseLayer final : public Effect {
   void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {
     t.extra_N += p[0] * std::max(0.0, s.d_m - p[1]);
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     double dmax = 0;
     for (const auto& s : r.s)
       if (s.contact) dmax = std::max(dmax, s.d_m);
@@ -43,14 +43,13 @@ class BaseLayer final : public Effect {
         r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].d_m; },
         [&](std::size_t i) { return r.s[i].contact; }, e);
     const int hi = b.Last();
-    if (hi < 2) return "too narrow a range of penetration to judge";
+    if (hi < 2) return {"too narrow a range of penetration to judge", "", false};
     // The deepest bin's excess over the trend of the shallower half.
     const int mid = hi / 2;
-    return fmt::format("normal-force residual is {} around {:.2f} mm and {} at the deepest {:.2f} mm: {}", Mn(b.mean[mid]),
-                       (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500,
-                       b.mean[hi] > b.mean[mid] + 0.01 ? "the contact gets stiffer beyond some depth, a base under the "
-                                                         "layer is felt"
-                                                       : "no stiffening at depth");
+    return {fmt::format("normal-force residual is {} around {:.2f} mm and {} at the deepest {:.2f} mm", Mn(b.mean[mid]),
+                        (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500),
+            "the contact gets stiffer beyond some depth, a base under the layer is felt",
+            !(b.mean[hi] > b.mean[mid] + 0.01)};
   }
 };
 }  // namespace

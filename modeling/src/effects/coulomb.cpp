@@ -28,16 +28,16 @@ class Coulomb final : public Effect {
     return {{"mu_k", "1", init, 0, 3, 0.3, true, "kinetic friction coefficient"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.mu_k = p[0]; }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
         r.s.size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.s[i].fn_N; },
         [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; },
         {0, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
-    if (lo < 0) return "too few sliding samples to judge";
-    return fmt::format("while sliding, the model under-predicts friction by {} at loads of {:.1f}-{:.1f} N and by {} at "
-                       "{:.1f}-{:.1f} N, at every speed: a resistance that grows with the normal load is missing",
-                       Mn(b.mean[lo]), b.lo[lo], b.hi[lo], Mn(b.mean[hi]), b.lo[hi], std::min(b.hi[hi], 9.9));
+    if (lo < 0) return {"too few sliding samples to judge", "", false};
+    return {fmt::format("while sliding, the friction residual is {} at loads of {:.1f}-{:.1f} N and {} at {:.1f}-{:.1f} N",
+                        Mn(b.mean[lo]), b.lo[lo], b.hi[lo], Mn(b.mean[hi]), b.lo[hi], std::min(b.hi[hi], 9.9)),
+            "a resistance that grows with the normal load is missing", !(b.mean[hi] > 0.005)};
   }
 };
 }  // namespace

@@ -21,7 +21,7 @@ class Dahl final : public Effect {
     return {{"kappa", "N/m", 2000, 10, 1e6, 1000, true, "pre-sliding stiffness"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.kappa = p[0]; }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Residual magnitude in pre-sliding / starting samples vs steady sliding.
     double pre = 0, sl = 0;
     int npre = 0, nsl = 0;
@@ -31,11 +31,12 @@ class Dahl final : public Effect {
       if (r.s[i].speed_mps < kSlidingSpeed_mps) pre += e, ++npre;
       else sl += e, ++nsl;
     }
-    if (npre < 10 || nsl < 10) return "too few pre-sliding or sliding samples to judge";
+    if (npre < 10 || nsl < 10) return {"too few pre-sliding or sliding samples to judge", "", false};
     const double a = std::sqrt(pre / npre), b = std::sqrt(sl / nsl);
-    return fmt::format("friction residual RMS is {:.4f} N below 3 mm/s (starts, stops, reversals) against {:.4f} N while "
-                       "sliding ({:.1f}x): the build-up of friction over the first tenths of a millimetre is {}",
-                       a, b, a / std::max(b, 1e-12), a > 1.5 * b ? "not modelled" : "not clearly mis-modelled");
+    return {fmt::format("friction residual RMS is {:.4f} N below 3 mm/s (starts, stops, reversals) against {:.4f} N while "
+                        "sliding ({:.1f}x)",
+                        a, b, a / std::max(b, 1e-12)),
+            "the build-up of friction over the first tenths of a millimetre is not modelled", !(a > 1.5 * b)};
   }
 };
 }  // namespace

@@ -29,19 +29,18 @@ class HcExponent final : public Effect {
     return {{"n", "1", 1.1, 1, 2, 0.1, true, "exponent"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.n = p[0]; }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
         r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].d_m; },
         [&](std::size_t i) { return r.s[i].contact; }, DepthEdges(r));
     const int lo = b.First(), hi = b.Last();
-    if (lo < 0 || hi - lo < 2) return "too narrow a range of penetration to judge";
+    if (lo < 0 || hi - lo < 2) return {"too narrow a range of penetration to judge", "", false};
     const int mid = (lo + hi) / 2;
     const bool curved = b.mean[lo] < b.mean[mid] - 0.005 || b.mean[hi] > b.mean[mid] + 0.005;
-    return fmt::format("normal-force residual is {} at {:.2f} mm, {} at {:.2f} mm and {} at {:.2f} mm of penetration: {}",
-                       Mn(b.mean[lo]), (b.lo[lo] + b.hi[lo]) * 500, Mn(b.mean[mid]), (b.lo[mid] + b.hi[mid]) * 500,
-                       Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500,
-                       curved ? "the force-penetration curve bends upward, the contact stiffens smoothly with depth"
-                              : "no smooth stiffening");
+    return {fmt::format("normal-force residual is {} at {:.2f} mm, {} at {:.2f} mm and {} at {:.2f} mm of penetration",
+                        Mn(b.mean[lo]), (b.lo[lo] + b.hi[lo]) * 500, Mn(b.mean[mid]), (b.lo[mid] + b.hi[mid]) * 500,
+                        Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500),
+            "the force-penetration curve bends upward, the contact stiffens smoothly with depth", !curved};
   }
 };
 }  // namespace

@@ -20,20 +20,19 @@ class LoadDependentFriction final : public Effect {
     return {{"alpha", "1", 1.0, 0.2, 1.8, 0.1, true, "load exponent (1: Coulomb)"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
-    t.mu_scale *= std::pow(std::max(s.fn_N, 0.02), p[0] - 1);
+    t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; };
     const auto b = BinMeans(
         r.s.size(), [&](std::size_t i) { return res.ratio[i]; }, [&](std::size_t i) { return r.s[i].fn_N; }, use,
         {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
-    if (lo < 0 || lo == hi) return "too narrow a range of loads to judge";
+    if (lo < 0 || lo == hi) return {"too narrow a range of loads to judge", "", false};
     const double d = b.mean[hi] - b.mean[lo];
-    return fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} N and {:+.3f} at {:.1f}-{:.1f} N: the friction "
-                       "coefficient {} with load",
-                       b.mean[lo], b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9),
-                       std::abs(d) < 0.01 ? "does not change" : (d < 0 ? "falls" : "rises"));
+    return {fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} N and {:+.3f} at {:.1f}-{:.1f} N", b.mean[lo],
+                        b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9)),
+            fmt::format("the friction coefficient {} with load", d < 0 ? "falls" : "rises"), std::abs(d) < 0.01};
   }
 };
 }  // namespace

@@ -47,7 +47,7 @@ class PositionDependentFriction final : public Effect {
         if (j || k) f += p[i++] * cu[j] * cv[k];
     t.mu_scale *= std::max(f, 0.05);
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Friction-ratio residual per tile of a 3 x 3 grid.
     double m[9] = {}, n[9] = {};
     for (std::size_t i = 0; i < r.s.size(); ++i) {
@@ -65,13 +65,13 @@ class PositionDependentFriction final : public Effect {
       if (lo < 0 || m[k] < m[lo]) lo = k;
       if (hi < 0 || m[k] > m[hi]) hi = k;
     }
-    if (lo < 0) return "too few sliding samples to judge";
+    if (lo < 0) return {"too few sliding samples to judge", "", false};
     static const char* kTile[9] = {"front-left", "front-centre", "front-right", "middle-left", "centre",
                                    "middle-right", "back-left", "back-centre", "back-right"};
-    return fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} tile of a 3 x 3 grid "
-                       "over the stroked area: {}",
-                       m[hi], kTile[hi], m[lo], kTile[lo],
-                       m[hi] - m[lo] > 0.03 ? "friction varies over the surface" : "little variation over the surface");
+    return {fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} tile of a 3 x 3 grid "
+                        "over the stroked area",
+                        m[hi], kTile[hi], m[lo], kTile[lo]),
+            "friction varies over the surface", !(m[hi] - m[lo] > 0.03)};
   }
 };
 }  // namespace

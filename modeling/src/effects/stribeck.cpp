@@ -24,18 +24,18 @@ class Stribeck final : public Effect {
     const double u = s.speed_mps / p[1];
     t.mu_add += p[0] * std::exp(-u * u);
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
         r.s.size(), [&](std::size_t i) { return r.s[i].fn_N > 0.05 ? res.friction_N[i] / r.s[i].fn_N : 0; },
         [&](std::size_t i) { return r.s[i].speed_mps; }, [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= 0.5e-3; },
         {0.0005, 0.002, 0.005, 0.01, 0.02, 0.05, 1});
     const int lo = b.First(10), hi = b.Last();
-    if (lo < 0 || hi < 0) return "too few slow sliding samples to judge";
+    if (lo < 0 || hi < 0) return {"too few slow sliding samples to judge", "", false};
     const bool pattern = b.mean[lo] > b.mean[hi] + 0.01;
-    return fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} mm/s and {:+.3f} at {:.0f}-{:.0f} mm/s{}",
-                       b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3, std::min(b.hi[hi], 0.2) * 1e3,
-                       pattern ? ": positive at low speed and decaying with speed, static friction exceeds kinetic"
-                               : ": no excess friction at low speed");
+    return {fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} mm/s and {:+.3f} at {:.0f}-{:.0f} mm/s{}",
+                        b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3,
+                        std::min(b.hi[hi], 0.2) * 1e3, pattern ? "" : " (no excess friction at low speed)"),
+            "positive at low speed and decaying with speed, static friction exceeds kinetic", !pattern};
   }
 };
 }  // namespace

@@ -22,7 +22,7 @@ class VibrationDirection final : public Effect {
   void VibrationFeatures(const double*, const Replay::Window& w, double* out) const override {
     for (int i = 0; i < 4; ++i) out[i] = w.dir[i];
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Axial direction (0-180 deg) bins: along vs across a structure.
     std::vector<double> e;
     for (int k = 0; k <= 4; ++k) e.push_back(-std::numbers::pi / 2 + k * std::numbers::pi / 4);
@@ -32,13 +32,12 @@ class VibrationDirection final : public Effect {
         [&](std::size_t w) { return 0.5 * std::atan2(r.windows[w].dir[3], r.windows[w].dir[2]); },
         [](std::size_t) { return true; }, e);
     const int hi = b.ArgMax(5), lo = b.ArgMin(5);
-    if (hi < 0) return "too few windows to judge";
+    if (hi < 0) return {"too few windows to judge", "", false};
     const auto deg = [&](int j) { return (b.lo[j] + b.hi[j]) / 2 * 180 / std::numbers::pi; };
-    return fmt::format("vibration band-power residual is {:+.1f} dB for strokes along {:.0f} deg and {:+.1f} dB along {:.0f} "
-                       "deg: {}",
-                       b.mean[hi], deg(hi), b.mean[lo], deg(lo),
-                       b.mean[hi] - b.mean[lo] > 1.5 ? "the vibration depends on the direction of motion"
-                                                     : "little direction dependence");
+    return {fmt::format("vibration band-power residual is {:+.1f} dB for strokes along {:.0f} deg and {:+.1f} dB along {:.0f} "
+                        "deg",
+                        b.mean[hi], deg(hi), b.mean[lo], deg(lo)),
+            "the vibration depends on the direction of motion", false};
   }
 };
 }  // namespace

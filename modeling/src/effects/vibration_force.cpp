@@ -28,7 +28,7 @@ class VibrationForce final : public Effect {
     Hats(p, kKnots, std::log(std::max(w.force_N, 1e-3)), h);
     for (int i = 1; i < kKnots; ++i) out[i - 1] = h[i];
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [](std::size_t) { return true; };
     const double c = Correlation(
         r.windows.size(), [&](std::size_t w) { return MeanBandResidualDb(res, w); },
@@ -37,11 +37,11 @@ class VibrationForce final : public Effect {
         r.windows.size(), [&](std::size_t w) { return MeanBandResidualDb(res, w); },
         [&](std::size_t w) { return r.windows[w].force_N; }, use, {0, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(5), hi = b.Last(5);
-    if (lo < 0 || lo == hi) return "too narrow a range of loads to judge";
-    return fmt::format("vibration band-power residual is {:+.1f} dB at {:.1f}-{:.1f} N and {:+.1f} dB at {:.1f}-{:.1f} N "
-                       "(correlation with ln f_n {:+.2f}): {}",
-                       b.mean[lo], b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9), c,
-                       std::abs(c) > 0.3 ? "the vibration level changes with the normal force" : "little load dependence");
+    if (lo < 0 || lo == hi) return {"too narrow a range of loads to judge", "", false};
+    return {fmt::format("vibration band-power residual is {:+.1f} dB at {:.1f}-{:.1f} N and {:+.1f} dB at {:.1f}-{:.1f} N "
+                        "(correlation with ln f_n {:+.2f})",
+                        b.mean[lo], b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9), c),
+            "the vibration level changes with the normal force", false};
   }
 };
 }  // namespace

@@ -29,7 +29,7 @@ class VibrationSpeed final : public Effect {
     Hats(p, kKnots, std::log(w.speed_mps), h);
     for (int i = 1; i < kKnots; ++i) out[i - 1] = h[i];
   }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [](std::size_t) { return true; };
     const double c = Correlation(
         r.windows.size(), [&](std::size_t w) { return MeanBandResidualDb(res, w); },
@@ -38,11 +38,12 @@ class VibrationSpeed final : public Effect {
         r.windows.size(), [&](std::size_t w) { return MeanBandResidualDb(res, w); },
         [&](std::size_t w) { return r.windows[w].speed_mps; }, use, {0.01, 0.02, 0.04, 0.08, 0.16, 1});
     const int lo = b.First(5), hi = b.Last(5);
-    if (lo < 0 || lo == hi) return "too narrow a range of speeds to judge";
-    return fmt::format("vibration band-power residual is {:+.1f} dB at {:.0f}-{:.0f} mm/s and {:+.1f} dB at {:.0f}-{:.0f} "
-                       "mm/s (correlation with ln v {:+.2f}): {}",
-                       b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3, std::min(b.hi[hi], 0.3) * 1e3,
-                       c, std::abs(c) > 0.3 ? "the vibration spectrum changes with speed" : "little speed dependence");
+    if (lo < 0 || lo == hi) return {"too narrow a range of speeds to judge", "", false};
+    return {fmt::format("vibration band-power residual is {:+.1f} dB at {:.0f}-{:.0f} mm/s and {:+.1f} dB at {:.0f}-{:.0f} "
+                        "mm/s (correlation with ln v {:+.2f})",
+                        b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3,
+                        std::min(b.hi[hi], 0.3) * 1e3, c),
+            "the vibration spectrum changes with speed", false};
   }
 };
 }  // namespace

@@ -18,7 +18,7 @@ class Viscous final : public Effect {
     return {{"mu_b", "N s/m", 0.0, 0, 1000, 1, true, "viscous coefficient"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.mu_b = p[0]; }
-  std::string Evidence(const Replay& r, const Residuals& res) const override {
+  EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; };
     const double c = Correlation(
         r.s.size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.s[i].speed_mps; }, use);
@@ -26,11 +26,12 @@ class Viscous final : public Effect {
         r.s.size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.s[i].speed_mps; }, use,
         {0.003, 0.01, 0.03, 0.06, 0.1, 0.15, 1});
     const int lo = b.First(), hi = b.Last();
-    if (lo < 0) return "too few sliding samples to judge";
-    return fmt::format("friction residual goes from {} at {:.0f}-{:.0f} mm/s to {} at {:.0f}-{:.0f} mm/s (correlation "
-                       "with speed {:+.2f}): friction {} with sliding speed",
-                       Mn(b.mean[lo]), b.lo[lo] * 1e3, b.hi[lo] * 1e3, Mn(b.mean[hi]), b.lo[hi] * 1e3,
-                       std::min(b.hi[hi], 0.2) * 1e3, c, c > 0 ? "rises" : "does not rise");
+    if (lo < 0) return {"too few sliding samples to judge", "", false};
+    return {fmt::format("friction residual goes from {} at {:.0f}-{:.0f} mm/s to {} at {:.0f}-{:.0f} mm/s (correlation "
+                        "with speed {:+.2f})",
+                        Mn(b.mean[lo]), b.lo[lo] * 1e3, b.hi[lo] * 1e3, Mn(b.mean[hi]), b.lo[hi] * 1e3,
+                        std::min(b.hi[hi], 0.2) * 1e3, c),
+            "friction rises with sliding speed", !(c > 0)};
   }
 };
 }  // namespace

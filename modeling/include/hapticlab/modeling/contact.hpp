@@ -1,33 +1,34 @@
 #pragma once
-/// @file Friction (Dahl) and stiffness (Hunt-Crossley) identification from stylus strokes and
-/// pokes (dissertation ch. IV.3): Algorithm 1 for the Dahl model, then a batch refinement of
-/// all friction parameters with Ceres; Hunt-Crossley K, B, n by nonlinear least squares
-/// (Ceres) on pokes with samples above 2 N discarded. Uncertainties from Ceres' covariance.
+/// @file Contact identification (dissertation ch. IV.3): one engine for `model fit-contact` and
+/// the workbench. Friction is the vector Dahl model with Coulomb and viscous terms
+/// (eqs. 4.6-4.7) replayed over the measured 2-D tangential path, initialised by Algorithm 1
+/// (in its 2-D form) and refined jointly by Ceres; the normal force is Hunt-Crossley
+/// (eq. 4.11) fitted on pokes with samples above 2 N discarded. Both are the workbench's
+/// friction and normal channels (workbench.hpp), so `model fit-contact` and `hapticlab fit`
+/// agree by construction. Uncertainties: cluster-robust sandwich over 3 s clusters of blocks.
 
 #include <string>
 
 #include "hapticlab/core/measurement.hpp"
-#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/modeling/workbench.hpp"
 
 namespace hapticlab::modeling {
 
+/// A parameter with its uncertainty.
 struct Estimate {
   double value = 0;
-  double sd = 0;  ///< standard error from the Ceres covariance (0 when unavailable)
+  double sd = 0;              ///< standard error (sandwich; 0 when unavailable)
+  double lo95 = 0, hi95 = 0;  ///< 95 % interval
 };
 
-struct DahlFit {
-  Estimate kappa_N_per_m, mu_k, mu_b_Ns_per_m;
-  int algorithm1_passes = 0;     ///< passes of Algorithm 1 until every change < 1e-9
-  bool algorithm1_converged = false;
-  double rms_residual_N = 0;     ///< friction residual after the batch refinement
+/// Algorithm 1 of the dissertation in 2-D: mu_k and mu_b from sliding samples by linear least
+/// squares on the vector form of eq. 4.10, kappa from pre-sliding samples by least squares on
+/// the vector form of eq. 4.9, alternated until every change is below `convergence`.
+struct Algorithm1Result {
+  double kappa_N_per_m = 0, mu_k = 0, mu_b_Ns_per_m = 0;
+  int passes = 0;
+  bool converged = false;
   int presliding_samples = 0, sliding_samples = 0;
-};
-
-struct HuntCrossleyFit {
-  Estimate K, B, n;
-  double rms_residual_N = 0;
-  int samples = 0;               ///< in contact and at most `max_force_N`
 };
 
 struct ContactFitOptions {
@@ -37,14 +38,36 @@ struct ContactFitOptions {
   double max_force_N = 2.0;              ///< poke samples above this are discarded (ch. IV.3.3)
 };
 
-/// Dahl friction from strokes on a flat sample (surface at z = 0, forces the surface exerts
-/// on the tool). The motion axis is the principal direction of the tangential velocity.
+/// Algorithm 1 over the replay's samples in the split.
 /// @throws InputError naming the file when there are too few pre-sliding or sliding samples.
-DahlFit FitDahl(const Measurement& strokes, const ContactFitOptions& o = {});
+Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const ContactFitOptions& o = {});
 
-/// Hunt-Crossley from pokes: penetration d = -z, rate -vz, force fz; samples in contact and
-/// at most max_force_N. @throws InputError when there are too few.
-HuntCrossleyFit FitHuntCrossley(const Measurement& pokes, const ContactFitOptions& o = {});
+struct ContactFit {
+  // Renderer units ([contact] and [friction] of a material model).
+  Estimate K;              ///< texture_K [N/m^n]
+  Estimate B;              ///< texture_B [N s/m^(n+1)]
+  Estimate n;              ///< texture_n (dimensionless)
+  Estimate K1mm_N;         ///< force at 1 mm penetration [N] (the workbench's core)
+  Estimate B1mm_Ns_per_m;  ///< damping at 1 mm [N s/m]
+  Estimate kappa_N_per_m, mu_k, mu_b_Ns_per_m;
+  Algorithm1Result algorithm1;
+  wb::FitSummary friction_summary, normal_summary;
+  double friction_rms_N = 0;  ///< RMS of the tangential residual (vector) over samples in contact
+  double normal_rms_N = 0;    ///< RMS of the normal residual over the fitted poke samples
+  int stroke_samples = 0, poke_samples = 0;
+  std::string poke_source;    ///< where the Hunt-Crossley samples came from, in words
+  std::string uncertainty_method;
+  bool IsUsable() const { return friction_summary.usable && normal_summary.usable; }
+};
+
+/// Friction from the strokes of `m` (all of it is replayed: pokes carry no sliding) and
+/// Hunt-Crossley from pokes: `pokes` when given, else the samples of `m` that are pokes
+/// (SplitStrokesAndPokes), else every sample of `m` in contact, up to `max_force_N`.
+/// @throws InputError when there are too few stroke or poke samples.
+ContactFit FitContact(const Measurement& m, const Measurement* pokes = nullptr, const ContactFitOptions& o = {});
+
+/// The effects FitContact fits: coulomb, viscous, dahl, hc-damping, hc-exponent.
+std::vector<std::string> ContactEffects();
 
 /// Samples of a measurement that are pokes (vertical motion, no sliding) and strokes (the rest).
 void SplitStrokesAndPokes(const Measurement& m, Measurement* strokes, Measurement* pokes);

@@ -16,6 +16,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <map>
 #include <memory>
 #include <string>
@@ -37,13 +38,17 @@ struct Replay {
   double block_s = 1.0;      ///< length of a time block of the split [s]
   struct Sample {
     double t_s, x_m, y_m, d_m, ddot_mps, vx_mps, vy_mps, speed_mps, dir_rad, fn_N, ftx_N, fty_N;
+    /// Measured normal force averaged over ReplayOptions::load_smoothing_s (rows in contact):
+    /// the load that sets the Coulomb level. Raw sensor noise through the bristle's saturation
+    /// (|F| <= f_C) would bias the friction level low, and a fitted mu_k high.
+    double fload_N;
     bool contact;
     int block;
     int row;  ///< index of the measurement row
   };
   std::vector<Sample> s;
   double x_min = 0, x_max = 0, y_min = 0, y_max = 0;  ///< bounds of the positions in contact
-  double position_resolution_m = 1e-6;  ///< the Dahl bristle moves once the tool has moved this far
+  double position_resolution_m = 1e-6;  ///< the Dahl bristle follows the tool through a play of this width [m]
 
   bool has_vibration = false;
   double acc_rate_hz = 0;
@@ -68,7 +73,10 @@ struct ReplayOptions {
   double max_variation = 0.35;     ///< windows whose speed or load varies more (SD / mean) are not scored
   /// Displacements below this are sensor noise for the Dahl bristle (an encoder's resolution):
   /// without it, position noise at rest would random-walk the pre-sliding state to zero.
-  double position_resolution_m = 1e-6;
+  /// 0 (default): 4 times the position noise estimated from the rows at rest (median absolute
+  /// second difference), within 0.05-5 um; 1 um when there are too few rows at rest.
+  double position_resolution_m = 0;
+  double load_smoothing_s = 0.02;  ///< window of Sample::fload_N [s]
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
@@ -99,6 +107,17 @@ struct FrictionTerms {
 
 struct Residuals;
 
+/// What the current model's residuals say about an effect: the pattern as measured, and the
+/// cause it would point to. Reports assert the cause only for supported effects.
+struct EvidenceNote {
+  std::string pattern;      ///< the residual pattern in words with numbers (no causal claim)
+  std::string cause;        ///< what the pattern means when the effect is supported
+  bool contradicts = false; ///< the pattern is not the one this effect produces (or is absent)
+  std::string Sentence(bool supported) const {
+    return supported && !cause.empty() ? pattern + ": " + cause : pattern;
+  }
+};
+
 /// A physical effect of the catalogue. Implementations live in modeling/src/effects/, one
 /// file each, registered in effects/registry.cpp.
 class Effect {
@@ -117,8 +136,9 @@ class Effect {
   /// Vibration effects add regression columns for the log band powers.
   virtual int VibrationColumns() const { return 0; }
   virtual void VibrationFeatures(const double* /*p*/, const Replay::Window& /*w*/, double* /*out*/) const {}
-  /// In words: what pattern of the current model's residuals points to this effect.
-  virtual std::string Evidence(const Replay& r, const Residuals& res) const = 0;
+  /// What pattern of the current model's residuals points to this effect, and whether the
+  /// residuals show it.
+  virtual EvidenceNote Evidence(const Replay& r, const Residuals& res) const = 0;
 };
 
 /// The catalogue, in a fixed order. The core ("contact": K and the vibration intercept) is
@@ -183,10 +203,64 @@ struct FitOptions {
   Split split = Split::kAll;
   bool normal = true, friction = true, vibration = true;  ///< channels to fit
   int max_iterations = 100;
+  /// Compute uncertainties (cluster-robust sandwich over 3 s clusters of the split's blocks; see ChannelFit).
+  bool uncertainty = false;
+  /// Normal-force samples above this are not fitted (ch. IV.3.3 fits the texture layer on
+  /// pokes up to 2 N); infinity: every sample in contact [N].
+  double max_normal_force_N = std::numeric_limits<double>::infinity();
+  /// When the friction channel has coulomb and dahl at their initial values (never fitted),
+  /// start the Ceres refinement from Algorithm 1 (2-D form, contact.hpp).
+  bool algorithm1_init = true;
 };
+
+/// What one fit did, kept from Ceres' Summary (STYLE.md §6): a fit that stopped at its
+/// iteration limit or with a parameter at a bound must not look like a converged one.
+struct FitSummary {
+  std::string what;          ///< channel name ("friction", "normal_force", "vibration")
+  std::string method;        ///< "ceres (numeric derivatives of the replay)" or "linear least squares"
+  std::string termination;   ///< "converged", "iteration limit", "failed", "not run (...)"
+  std::string message;       ///< the solver's own message
+  int iterations = 0;
+  double initial_cost = 0;   ///< 1/2 sum of squared residuals at the start [N^2 or ln^2]
+  double final_cost = 0;     ///< same at the end
+  std::vector<std::string> at_bounds;  ///< "effect.param at its lower|upper bound (value)"
+  bool usable = false;       ///< converged (or a linear solve) with a finite cost
+  bool IsUsable() const { return usable; }
+};
+
+/// One fitted parameter with its uncertainty.
+struct ParamEstimate {
+  std::string effect, name;
+  double value = 0;
+  double sd = 0;                 ///< standard error (0 when not computed)
+  double lo95 = 0, hi95 = 0;     ///< 95 % interval: value -+ t(0.975, clusters - 1) sd
+  bool at_bound = false;
+};
+
+/// A fitted channel. Uncertainty (FitOptions::uncertainty) is a cluster-robust sandwich
+/// estimator, cov = G/(G-1) (J'J)^-1 (sum_g s_g s_g') (J'J)^-1 with s_g = J_g' r_g the score of
+/// cluster g, the clusters being 3 consecutive 1 s blocks of the split (a cluster spans several strokes): it holds when residuals are
+/// correlated within a stroke and their variance changes with load or speed, which the plain
+/// (J'J)^-1 sigma^2 does not.
+struct ChannelFit {
+  Channel channel = Channel::kNormal;
+  FitSummary summary;
+  std::vector<ParamEstimate> params;  ///< fitted parameters in the order of the effects
+  std::vector<double> covariance;     ///< params.size()^2, row-major (empty without uncertainty)
+  int clusters = 0;                   ///< blocks in the sandwich
+  int samples = 0;                    ///< force samples (or windows) fitted
+};
+struct FitReport {
+  std::vector<ChannelFit> channels;
+  /// Every channel's fit usable.
+  bool IsUsable() const;
+  /// The channel's fit, or nullptr.
+  const ChannelFit* Find(Channel c) const;
+};
+
 /// Fits the model's parameters on the split (Ceres for forces, linear least squares for the
-/// vibration log band powers).
-void Fit(Model* m, const Replay& r, const FitOptions& o = {});
+/// vibration log band powers). Returns one ChannelFit per channel fitted.
+FitReport Fit(Model* m, const Replay& r, const FitOptions& o = {});
 
 /// `compare`: errors overall and by regime.
 struct BinRow {
@@ -212,24 +286,64 @@ struct Candidate {
   double error_reduction = 0;   ///< baseline_error - error_after
   double relative_reduction = 0;  ///< of the channel's held-out error
   double t_statistic = 0;       ///< paired over held-out blocks
+  /// Error falls by the threshold, t above its threshold, the fit usable, none of the effect's
+  /// parameters at a bound, and its own evidence does not contradict it.
   bool supported = false;
   std::map<std::string, double> params;
+  /// The residual pattern; the cause it points to is asserted only when supported.
   std::string evidence;
   std::vector<std::string> confounded_with;
+  FitSummary fit;                     ///< the candidate's channel refit
+  std::vector<std::string> rejected;  ///< why a candidate that passed the numbers is not supported
 };
+
+/// Held-out error of one channel against its noise floor, estimated from the measurement
+/// itself (force channels: sensor noise from the median absolute second difference of each
+/// force component; vibration: the spread of a band-averaged Hann periodogram about its mean).
+struct UnexplainedChannel {
+  std::string channel;
+  double error = 0, noise_floor = 0, ratio = 0;
+};
+/// How much of a channel's residual variance one axis explains (between-bin over total sum of
+/// squares), with the shape of the dependence in words.
+struct ResidualAxis {
+  std::string axis;     ///< time, speed, load, direction, position, regime, band
+  std::string channel;
+  double share = 0;     ///< 0..1
+  std::string description;
+};
+struct Unexplained {
+  std::vector<UnexplainedChannel> channels;
+  std::vector<ResidualAxis> axes;  ///< channels above the threshold first, then by share, descending
+  /// No candidate supported, yet some channel's error is at least `unexplained_ratio` times its floor.
+  bool flagged = false;
+  std::string summary;  ///< one paragraph: what is unexplained, where it lives, what would be needed
+};
+
 struct Diagnosis {
   double baseline_error = 0;
   std::map<std::string, double> baseline_channel;
   std::vector<Candidate> candidates;  ///< sorted by error_reduction, descending
+  Unexplained unexplained;
 };
 struct DiagnoseOptions {
   double min_relative_reduction = 0.02;  ///< of the channel's held-out error
   double min_t = 3.0;                    ///< paired t over held-out blocks
+  double unexplained_ratio = 1.5;        ///< a channel's error / noise floor above which it is unexplained
   int threads = 0;                       ///< candidates fitted in parallel; 0: all cores
   /// Called after each candidate (effect, done, total), from the worker threads.
   std::function<void(const std::string&, int, int)> progress;
 };
 Diagnosis Diagnose(const Model& m, const Replay& r, const DiagnoseOptions& o = {});
+
+/// The noise floor of each channel's normalized error on the split, estimated from the
+/// measurement alone (see UnexplainedChannel). With a model, the noise of the measured
+/// velocities (same estimator) is added through the model's sensitivity to them (the damping
+/// and viscous terms), as the model sees it when replayed.
+std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m = nullptr);
+
+/// Where a model's residual lives: every axis of every channel present, by share.
+std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p);
 
 /// Model files: a material TOML (renderer-loadable) with `effects = [...]` and a `[workbench]`
 /// table holding every effect's parameters; renderer materials without it are read from their
@@ -264,6 +378,10 @@ struct TruthParams {
   double tile_amp = 0.25;                             ///< µ varies by about ± this over the area
   double vib_sigma = 2.0, vib_speed_exp = 1.0, vib_force_exp = 0.8, vib_dir_amp = 0.8;
   double wavelength_m = 0.4e-3;                       ///< spatial period of the micro-geometry
+  /// Out of the catalogue (tests of `diagnose`'s unexplained report): mu_k drifts linearly by
+  /// this fraction over the recording (mu_k (1 + mu_drift (t / duration - 1/2))), and the
+  /// stiffness varies over the surface (K1mm (1 + K_position_amp x / (area / 2))).
+  double mu_drift = 0, K_position_amp = 0;
   double force_noise_N = 0.005, pos_noise_m = 0.2e-6, vel_noise_mps = 0.2e-3, acc_noise = 0.05;
   double duration_s = 30, rate_hz = 2000;
   double area_m = 0.04;                               ///< strokes stay in a square of this side
