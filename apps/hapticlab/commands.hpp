@@ -13,5 +13,6 @@ void RegisterStudy(CLI::App& app);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);
+void RegisterRig(CLI::App& app);
 
 }  // namespace hapticlab::cli

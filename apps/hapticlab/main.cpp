@@ -27,6 +27,7 @@ int main(int argc, char** argv) {
   RegisterAnalyze(app);
   RegisterWorkbench(app);
   RegisterDevice(app);
+  RegisterRig(app);
 
   try {
     app.parse(argc, argv);
