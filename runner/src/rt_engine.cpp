@@ -191,7 +191,7 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   const renderer::DeviceSample& sample = last_good_;
   const bool render = rr != devices::ReadResult::kLost && have_good_;
   if (render) cmd = renderer_.ForceTick(sample, now_s);
-  if (render && cmd.raw.normal_force_N > options_.contact_force_N) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
+  if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
   // The watchdog has the last word: zero force on any fault or lost read, this very tick.
   const Eigen::Vector3d command =
       watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate, render ? cmd.force_N : Eigen::Vector3d::Zero());

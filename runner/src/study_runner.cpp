@@ -132,8 +132,7 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
   return s;
 }
 
-constexpr double kContactForce_N = 0.3;     // a tick "in contact": the model pushes harder than this
-constexpr double kMinContactFraction = 0.05;  // a side with fewer such ticks touched nothing
+constexpr double kMinContactFraction = 0.05;  // a side with fewer ticks in contact touched nothing
 
 // Runs one trial, simulated or on hardware, through the one trial path: each side for the
 // stimulus duration, the method's renderer (or, for a real sample, zero force: the device
@@ -214,7 +213,6 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     EngineOptions eo;
     eo.virtual_clock = simrig ? &simrig->clock : nullptr;
     eo.sample_from_device = rig.device_from_sample[static_cast<std::size_t>(side)].inverse();
-    eo.contact_force_N = kContactForce_N;
     RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs_, vs);
     engine.Start();
     bool go_on = true;
@@ -249,8 +247,8 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
       faults.push_back(fmt::format("{} side: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", name, st.disconnects,
                                    st.nan_faults, st.stale_faults, st.miss_faults));
     else if (static_cast<double>(st.contact_ticks) < kMinContactFraction * static_cast<double>(st.force_ticks))
-      untouched.push_back(fmt::format("{} side ({}): {} of {} ticks in contact (> {} N)", name, stim, st.contact_ticks,
-                                      st.force_ticks, kContactForce_N));
+      untouched.push_back(fmt::format("{} side ({}): the stylus was inside the surface on {} of {} ticks", name, stim,
+                                      st.contact_ticks, st.force_ticks));
     if (opt.on_side)
       opt.on_side({.plan_index = t.plan_index, .side = side, .attempt = t.attempts, .stimulus = stim, .engine = st,
                    .hand_ticks = simrig ? simrig->hand.ticks() : 0, .contact_ticks = st.contact_ticks});

@@ -89,6 +89,8 @@ TEST(Watchdog, AShortLossZeroesTheForceASustainedOneIsADisconnect) {
   // A read with no new data renders the last sample: force as wanted, no fault.
   EXPECT_EQ(w.Check(kEmpty, Healthy(t - kPeriod), t, 0, kPeriod, want), want);
   t += kPeriod;
+  EXPECT_EQ(w.Check(kOk, Healthy(t), t, 0, kPeriod, want), want);
+  t += kPeriod;
   // Nine lost reads: zero force on each, no fault; the link comes back, force returns.
   for (int k = 0; k < 9; ++k, t += kPeriod) {
     EXPECT_EQ(w.Check(kLost, Healthy(t), t, 0, kPeriod, want), Eigen::Vector3d::Zero()) << k;

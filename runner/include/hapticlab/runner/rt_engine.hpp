@@ -67,8 +67,6 @@ struct EngineOptions {
   devices::VirtualClock* virtual_clock = nullptr;
   /// Pose of the device frame in the sample frame: p_sample = sample_from_device * p_device.
   Eigen::Isometry3d sample_from_device = Eigen::Isometry3d::Identity();
-  /// A force tick whose unclamped model normal force exceeds this is "in contact" (counted).
-  double contact_force_N = 0.3;
 };
 
 /// Counters and timing statistics, written by the loops, read by anyone.
@@ -77,7 +75,7 @@ struct EngineStats {
   std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
   std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0, bad_commands = 0;
   std::uint64_t recording_overflows = 0;
-  std::uint64_t contact_ticks = 0;  ///< force ticks with the stylus in the model's surface
+  std::uint64_t contact_ticks = 0;  ///< force ticks with the stylus inside the model's surface
   std::uint64_t empty_reads = 0, lost_reads = 0;  ///< reads with no new data, lost reads
   double force_jitter_max_s = 0, force_jitter_mean_s = 0;
   double vibration_jitter_max_s = 0;

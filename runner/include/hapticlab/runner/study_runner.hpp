@@ -91,7 +91,7 @@ struct SideReport {
   std::string stimulus;            ///< "real:Denim", "virtual:Denim"
   EngineStats engine;
   std::uint64_t hand_ticks = 0;    ///< simulated rig: ticks the hand was stepped
-  std::uint64_t contact_ticks = 0; ///< ticks the renderer found the stylus in the surface (> 0.3 N)
+  std::uint64_t contact_ticks = 0; ///< ticks the renderer found the stylus inside the surface
 };
 
 struct RunOptions {
