@@ -213,12 +213,15 @@ TEST(StudyRunner, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
   // trials unless the runner logged that it had to.
   db::Database d(o.db_path);
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
-  int relaxed = 0, faults = 0;
+  int relaxed = 0, faults = 0, disconnects = 0;
   for (const auto& e : d.Events(se.id)) {
     relaxed += e.kind == "constraint-relaxed";
-    faults += e.kind == "device-fault";
+    // Each injected dropout: the watchdog's event, then the trial's re-queue.
+    faults += e.kind == "device-fault" && e.detail.find("re-queued") != std::string::npos;
+    disconnects += e.kind == "device-fault" && e.detail.rfind("disconnect at", 0) == 0;
   }
   EXPECT_EQ(faults, s.faults);
+  EXPECT_EQ(disconnects, s.faults) << "the link's dropouts, seen by the watchdog";
   std::map<std::int64_t, std::string> material;
   for (const auto& t : d.Trials(se.id)) material[t.id] = t.material;
   const auto order = d.RatedTrialsInCompletionOrder(se.id);
