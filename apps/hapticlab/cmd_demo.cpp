@@ -82,8 +82,9 @@ void RegisterDemo(CLI::App& app) {
       "demo",
       "The main job: a complete simulated study end to end. Runs the dissertation's ch. V.3\n"
       "protocol (hybrid vs force-only vs vibration-only) with simulated participants in the\n"
-      "simulated lab, records everything to a new database, analyses it into a report, and\n"
-      "checks the real-time engine. Each run writes a new timestamped folder.");
+      "simulated lab (every trial through the real-time engine on a virtual clock, a simulated\n"
+      "hand on a simulated device), records everything to a new database, analyses it into a\n"
+      "report, and checks the engine on the real clock. Each run writes a new timestamped folder.");
   cmd->add_option("--out", o->out, "Parent folder of the run's output (default: demo-out)");
   cmd->add_option("--participants", o->participants, "Simulated participants")->capture_default_str()
       ->check(CLI::Range(2, 100));
