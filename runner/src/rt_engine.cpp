@@ -208,14 +208,15 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   force_last_s_.store(now_s, std::memory_order_relaxed);
   if (force_stream_) {
     const auto& s = sample.state;
-    const float v[15] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
+    const float v[16] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
                          static_cast<float>(s.p_m.z()),   static_cast<float>(s.v_mps.x()),
                          static_cast<float>(s.v_mps.y()), static_cast<float>(s.v_mps.z()),
                          static_cast<float>(cmd.raw.force_N.x()), static_cast<float>(cmd.raw.force_N.y()),
                          static_cast<float>(cmd.raw.force_N.z()), static_cast<float>(command.x()),
                          static_cast<float>(command.y()), static_cast<float>(command.z()),
                          static_cast<float>(cmd.raw.normal_force_N),
-                         static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f};
+                         static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f,
+                         static_cast<float>(late_s)};
     Record(force_stream_, static_cast<double>(k) / rate, v);
   }
 }

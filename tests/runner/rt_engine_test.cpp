@@ -81,6 +81,19 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   for (const auto& c : d.TrajectoryChunks(trial)) (c.stream == "force" ? force_samples : vib_samples) += c.sample_count();
   EXPECT_EQ(force_samples, st.force_ticks);
   EXPECT_EQ(vib_samples, st.vibration_ticks);
+  // Each force sample carries how late its tick ran: a loop never wakes before its deadline,
+  // and waking takes time.
+  double late_max = 0;
+  for (const auto& c : d.TrajectoryChunks(trial))
+    if (c.stream == "force") {
+      ASSERT_EQ(c.channels.back(), "late_s");
+      for (std::size_t i = 0; i < c.sample_count(); ++i) {
+        const float late = c.samples[i * c.channels.size() + 15];
+        EXPECT_GE(late, 0.f);
+        late_max = std::max(late_max, static_cast<double>(late));
+      }
+    }
+  EXPECT_GT(late_max, 0.0);
   std::printf("force %.0f Hz, vibration %.0f Hz, force jitter max %.1f us mean %.1f us, misses %llu/%llu\n",
               st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
               st.force_jitter_mean_s * 1e6, static_cast<unsigned long long>(st.force_deadline_misses),
