@@ -23,7 +23,9 @@ void RegisterAnalyze(CLI::App& app) {
       "Run the analyses each study's protocol declares on its database and write a report:\n"
       "report.md, CSV tables (aggregates, rmANOVA, Tukey, grouping) and figures (SVG and PNG):\n"
       "bar charts with 95% CI and Tukey asterisks, per-material bars with A/B/C letters\n"
-      "against the real-real limits, box plots (docs/analysis.md).");
+      "against the real-real limits, box plots (docs/analysis.md). Staircase and QUEST+ phases:\n"
+      "psychometric fits with bootstrap intervals, JND, Weber fraction and the fitted curve over\n"
+      "the binned answers (docs/psychophysics.md).");
   cmd->add_option("--db", o->db, "Study database")->required();
   cmd->add_option("--out", o->out, "Report folder (created when missing)")->required();
   cmd->add_flag("--no-figures", o->no_figures, "Tables only");

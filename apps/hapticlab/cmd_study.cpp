@@ -155,15 +155,18 @@ void RegisterStudy(CLI::App& app) {
 
   {
     auto path = std::make_shared<std::string>();
-    auto* cmd = study->add_subcommand("validate", "Check a protocol; every problem is listed with file, line and key");
+    auto* cmd = study->add_subcommand("validate", "Check a protocol (planned and adaptive phases); every problem is listed with file, line and key");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
     cmd->callback([path] {
       RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
         int rated = 0;
         for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
-        fmt::print("{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per participant\n", *path,
-                   p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated);
+        int adaptive = 0;  // staircase / quest-plus phases: trials chosen at run time
+        for (const auto& ph : p.phases) adaptive += ph.adaptive.has_value();
+        fmt::print("{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per participant{}\n",
+                   *path, p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated,
+                   adaptive ? fmt::format(", {} adaptive phase(s) (staircase/quest-plus)", adaptive) : "");
         return kExitOk;
       });
     });
@@ -236,7 +239,9 @@ void RegisterStudy(CLI::App& app) {
     auto* cmd = study->add_subcommand(
         "run",
         "Run a new participant through the protocol and record everything to the database.\n"
-        "Each trial's ratings commit in one transaction; after a crash use 'study resume'.");
+        "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
+        "Staircase / QUEST+ phases run after the planned ones (--device sim; the participant\n"
+        "answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();

@@ -97,6 +97,7 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
   std::vector<PlannedTrial> plan;
   const bool constrained = p.randomization.no_immediate_repeat;
   for (const auto& ph : p.phases) {
+    if (ph.adaptive) continue;  // adaptive trials are chosen at run time from the answers
     std::vector<Item> items;
     if (ph.kind == PhaseKind::kTraining) {
       for (const auto& m : p.materials)

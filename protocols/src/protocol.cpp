@@ -8,6 +8,7 @@
 #include <sstream>
 #include <toml++/toml.h>
 
+#include "adaptive_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 
@@ -77,6 +78,8 @@ const char* ToString(PhaseKind k) {
     case PhaseKind::kTraining: return "training";
     case PhaseKind::kReference: return "reference";
     case PhaseKind::kMain: return "main";
+    case PhaseKind::kStaircase: return "staircase";
+    case PhaseKind::kQuestPlus: return "quest-plus";
   }
   return "?";
 }
@@ -183,7 +186,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   }
 
   // [[phase]]
-  bool has_main = false;
+  bool has_main = false, has_adaptive = false;
   if (const toml::array* ps = doc["phase"].as_array()) {
     for (std::size_t i = 0; i < ps->size(); ++i) {
       const std::string pre = fmt::format("phase[{}]", i);
@@ -192,14 +195,24 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         r.Error(&(*ps)[i], pre, "expected a table");
         continue;
       }
-      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs"});
       Phase ph;
       ph.line = Reader::Line(t);
-      const std::string kind = r.Get<std::string>(*t, pre, "kind", true, "training, reference or main").value_or("main");
+      // Adaptive phases (staircase, quest-plus) have keys of their own: adaptive.cpp.
+      if (const auto k = t->get("kind") ? t->get("kind")->value<std::string>() : std::nullopt;
+          k == "staircase" || k == "quest-plus") {
+        ph.kind = *k == "staircase" ? PhaseKind::kStaircase : PhaseKind::kQuestPlus;
+        internal::ParseAdaptivePhase(*t, pre, file, p, &diag, &ph);
+        has_adaptive = true;
+        p.phases.push_back(ph);
+        continue;
+      }
+      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs"});
+      const std::string kind =
+          r.Get<std::string>(*t, pre, "kind", true, "training, reference, main, staircase or quest-plus").value_or("main");
       if (kind == "training") ph.kind = PhaseKind::kTraining;
       else if (kind == "reference") ph.kind = PhaseKind::kReference;
       else if (kind == "main") ph.kind = PhaseKind::kMain;
-      else r.Error(t->get("kind"), pre + ".kind", "expected training, reference or main, got '" + kind + "'");
+      else r.Error(t->get("kind"), pre + ".kind", "expected training, reference, main, staircase or quest-plus, got '" + kind + "'");
       has_main = has_main || ph.kind == PhaseKind::kMain;
       if (auto rep = r.Get<std::int64_t>(*t, pre, "repetitions", false, "an integer 1..100")) {
         if (*rep < 1 || *rep > 100) r.Error(t->get("repetitions"), pre + ".repetitions", "expected an integer 1..100");
@@ -230,7 +243,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       p.phases.push_back(ph);
     }
   }
-  if (!has_main && !p.methods.empty()) diag.Add(file, 0, "phase", "no [[phase]] with kind = \"main\": the methods are never shown");
+  if (!has_main && !has_adaptive && !p.methods.empty()) diag.Add(file, 0, "phase", "no [[phase]] with kind = \"main\": the methods are never shown");
   if (has_main && p.methods.empty()) diag.Add(file, 0, "method", "a main phase needs at least one [[method]]");
 
   if (const toml::table* t = doc["randomization"].as_table()) {

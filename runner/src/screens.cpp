@@ -91,7 +91,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     return act;
   }
   // The scene: the upper part of the window (all of it while the stimulus is explored).
-  const float scene_h = v.mode == ParticipantView::Mode::kRating ? size.y * 0.55f : size.y;
+  const bool below = v.mode == ParticipantView::Mode::kRating || v.mode == ParticipantView::Mode::kChoice;
+  const float scene_h = below ? size.y * 0.55f : size.y;
   const Eigen::Vector2d span = v.workspace_max_m - v.workspace_min_m;
   const float scale = std::min(size.x * 0.9f / static_cast<float>(span.x()), scene_h * 0.9f / static_cast<float>(span.y()));
   const ImVec2 origin((size.x - scale * static_cast<float>(span.x())) / 2, (scene_h - scale * static_cast<float>(span.y())) / 2);
@@ -139,6 +140,27 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     if (ImGui::Button("Confirm", ImVec2(120, 36)) && all) act.confirmed = true;
     Record(drawn, "confirm", bp, ImVec2(bp.x + 120, bp.y + 36));
     if (!all) ImGui::EndDisabled();
+  }
+  if (v.mode == ParticipantView::Mode::kChoice) {
+    // The question and one button per answer; number keys (and Y / N) answer too.
+    const float bw = 120, gap = 24;
+    const float total = static_cast<float>(v.answers.size()) * (bw + gap) - gap;
+    ImGui::SetCursorPos(ImVec2((size.x - ImGui::CalcTextSize(v.question.c_str()).x) / 2, scene_h + 10));
+    TextRecorded(drawn, "prompt", v.question);
+    ImGui::SetCursorPos(ImVec2((size.x - total) / 2, scene_h + 60));
+    for (std::size_t k = 0; k < v.answers.size(); ++k) {
+      if (k > 0) ImGui::SameLine(0, gap);
+      const bool lit = static_cast<int>(k) == v.highlighted;
+      if (lit) ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(80, 170, 255, 255));
+      const ImVec2 bp = ImGui::GetCursorScreenPos();
+      if (ImGui::Button(v.answers[k].c_str(), ImVec2(bw, 48))) act.chosen = static_cast<int>(k);
+      if (lit) ImGui::PopStyleColor();
+      Record(drawn, "answer:" + std::to_string(k), bp, ImVec2(bp.x + bw, bp.y + 48));
+      const bool yes_no = v.answers.size() == 2 && v.answers[0] == "yes" && v.answers[1] == "no";
+      if ((k < 9 && ImGui::IsKeyPressed('1' + static_cast<int>(k), false)) ||
+          (yes_no && ImGui::IsKeyPressed(k == 0 ? 'Y' : 'N', false)))
+        act.chosen = static_cast<int>(k);
+    }
   }
   if (v.trials > 0) {
     ImGui::SetCursorPos(ImVec2(10, size.y - 24));

@@ -110,6 +110,33 @@ std::optional<std::vector<double>> WindowSessionUi::Rate(const TrialScreen& t) {
   }
 }
 
+std::optional<int> WindowSessionUi::Choose(const TrialScreen& t) {
+  Show(t);
+  pv_.mode = ParticipantView::Mode::kChoice;
+  pv_.question = t.question;
+  pv_.answers = t.answers;
+  pv_.highlighted = -1;
+  if (t.answers.empty()) return std::nullopt;
+  for (;;) {
+    ParticipantAction a;
+    if (!Frame(&a)) return std::nullopt;
+    if (box_) {
+      const auto e = box_->Poll();
+      if (e.valid) {
+        const bool press = e.confirm && !box_button_;
+        box_button_ = e.confirm;
+        const auto n = static_cast<int>(t.answers.size());
+        pv_.highlighted = std::clamp(static_cast<int>(e.position * n), 0, n - 1);
+        if (press) a.chosen = pv_.highlighted;
+      }
+    }
+    if (a.chosen) {
+      cv_.log.push_back(fmt::format("trial {}: answered {}", t.index, t.answers[static_cast<std::size_t>(*a.chosen)]));
+      return a.chosen;
+    }
+  }
+}
+
 bool WindowSessionUi::Break(double seconds) {
   const auto saved = pv_;
   pv_.mode = ParticipantView::Mode::kBreak;

@@ -24,6 +24,8 @@
 #include "hapticlab/sim/falcon_twin.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
+#include "adaptive_phase.hpp"
+#include "stimulus_side.hpp"
 
 namespace hapticlab::runner {
 namespace {
@@ -80,17 +82,6 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
   return lab;
 }
 
-renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t seed) {
-  renderer::RenderOptions o;
-  o.algorithm = renderer::ParseForceAlgorithm(m.algorithm);
-  o.vibration = m.vibration;
-  o.hybrid_filter = m.hybrid_filter;
-  o.force_rate_hz = 1000;
-  o.vibration_rate_hz = 10000;
-  o.seed = seed;
-  return o;
-}
-
 struct Outcome {
   bool aborted = false;  // the experimenter aborted in the UI
   bool fault = false;
@@ -132,14 +123,13 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
   return s;
 }
 
-constexpr double kMinContactFraction = 0.05;  // a side with fewer ticks in contact touched nothing
-
 // Runs one trial, simulated or on hardware, through the one trial path: each side for the
-// stimulus duration, the method's renderer (or, for a real sample, zero force: the device
-// only measures) inside the real-time engine over the rig's device and actuator, with the
-// watchdog and the trajectory writer. A watchdog fault in either side faults the trial; a
-// side that touched nothing is reported. Ratings come from the participant window, or on a
-// simulated rig without one from the simulated observer rating what the hand felt.
+// stimulus duration through internal::RunStimulusSide (the method's renderer, or for a real
+// sample zero force: the device only measures, inside the real-time engine over the rig's
+// device and actuator, with the watchdog and the trajectory writer). A watchdog fault in
+// either side faults the trial; a side that touched nothing is reported. Ratings come from
+// the participant window, or on a simulated rig without one from the simulated observer
+// rating what the hand felt.
 Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
                      const RunOptions& opt, HardwareRig& rig, db::TrajectoryWriter* writer, const TrialScreen& screen,
                      db::Database& database, std::int64_t session) {
@@ -150,110 +140,42 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
       DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts));
   Rng rng(trial_seed);
   const double dur = p.stimulus_duration_s;
-  sim::SimRig* simrig = rig.sim;
+  const bool simulated = rig.sim != nullptr;
   // The simulated participant's exploration: one stroke, the same with ~10 % variation on
   // the other side.
   std::array<sim::Stroke, 2> strokes{};
-  if (simrig) {
+  if (simulated) {
     strokes[0] = sim::DrawStroke(rng);
     strokes[1] = sim::JitterStroke(strokes[0], rng);
   }
-  const bool inject_dropout = simrig && opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate;
+  const bool inject_dropout = simulated && opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate;
   std::array<sim::Features, 2> felt{};
   std::vector<std::string> faults, untouched;
   for (int side = 0; side < 2; ++side) {
     const std::string& stim = side == 0 ? t.left : t.right;
     const auto colon = stim.find(':');
     const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
-    const bool real = kind == "real";
-    renderer::RenderOptions ro;
-    const renderer::MaterialModel& model = lab.models.at(id);
-    if (real) {
-      // The real sample under the stylus: the device only measures; its force is held at zero.
-      ro.vibration = false;
-      ro.max_force_N = 1e-9;
-    } else {
-      ro = MethodOptions(*p.FindMethod(t.method), DeriveSeed(trial_seed, static_cast<std::uint64_t>(side)));
-      const auto caps = rig.device->Capabilities();
-      ro.max_force_N = std::min(ro.max_force_N, caps.max_force_N);
-      ro.device_max_stiffness_N_per_m = caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
+    internal::StimulusSide s;
+    s.model = &lab.models.at(id);
+    s.real = kind == "real";
+    if (!s.real)
+      s.options = internal::MethodOptions(*p.FindMethod(t.method), DeriveSeed(trial_seed, static_cast<std::uint64_t>(side)));
+    s.sample = side;
+    s.stroke = strokes[static_cast<std::size_t>(side)];
+    if (simulated && s.real) {
+      s.truth = &lab.profiles.profiles.at(p.FindMaterial(id)->profile);
+      s.truth_seed = rng.NextU64();
     }
-    renderer::HybridRenderer r(model, ro);
-    // The simulated hand: strokes the sample where it truly is; on a real side it touches
-    // the ground truth.
-    std::unique_ptr<sim::TruthSample> truth;
-    if (simrig) {
-      double top_m, stiffness;
-      if (real) {
-        truth = std::make_unique<sim::TruthSample>(lab.profiles.profiles.at(p.FindMaterial(id)->profile), rng.NextU64(),
-                                                   ro.vibration_rate_hz);
-        top_m = truth->top_m();
-        stiffness = truth->profile().stiffness_N_per_m;
-      } else {
-        top_m = model.contact.layer_thickness_m + (model.geometry->max_m() - model.geometry->min_m());
-        stiffness = model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m;
-      }
-      simrig->hand.Begin(strokes[static_cast<std::size_t>(side)], simrig->true_device_from_sample[static_cast<std::size_t>(side)],
-                         top_m, stiffness, truth.get(), ro.force_rate_hz, ro.vibration_rate_hz);
-      if (simrig->generic) {
-        simrig->generic->Reset();
-        if (inject_dropout && side == 0) simrig->generic->InjectDropout(0.3 * dur, 0.05);
-      }
-      if (simrig->twin) {
-        simrig->twin->BeginRun();
-        simrig->twin->InjectDropout(inject_dropout && side == 0 ? 0.3 * dur : -1, 0.05);
-      }
-    }
-    db::TrajectoryStream *fs_ = nullptr, *vs = nullptr;
-    const std::string name = side == 0 ? "left" : "right";
-    if (writer && opt.record != RecordMode::kNone)
-      fs_ = writer->OpenStream(t.id, name + "_force", ro.force_rate_hz, ForceStreamChannels());
-    if (writer && opt.record == RecordMode::kAll && ro.vibration && rig.actuator)
-      vs = writer->OpenStream(t.id, name + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
-    EngineOptions eo;
-    eo.virtual_clock = simrig ? &simrig->clock : nullptr;
-    eo.sample_from_device = rig.device_from_sample[static_cast<std::size_t>(side)].inverse();
-    RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs_, vs);
-    engine.Start();
-    bool go_on = true;
-    if (engine.is_virtual() && !opt.ui) {
-      engine.AdvanceTo(dur);
-    } else {
-      // Stimulus frames for the screens: on a virtual clock, time runs ui_playback_speed
-      // times faster than the wall clock.
-      const auto t0 = std::chrono::steady_clock::now();
-      const double speed = engine.is_virtual() ? opt.ui_playback_speed : 1.0;
-      for (;;) {
-        const double el = std::min(dur, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
-        if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
-        const auto s = engine.LastSample();
-        if (opt.ui && !opt.ui->Stimulus(screen, side, s.state.p_m, dur - el)) {
-          go_on = false;
-          break;
-        }
-        if (el >= dur) break;
-        if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-      }
-    }
-    engine.Stop();
-    if (fs_) writer->CloseStream(fs_);
-    if (vs) writer->CloseStream(vs);
-    FaultEvent e;
-    while (engine.watchdog().PopEvent(&e))
-      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
-                         .detail = fmt::format("{} at {:.3f} s ({} side, tick {})", FaultName(e.kind), e.t_s, name, e.tick)});
-    const auto st = engine.Stats();
-    if (engine.watchdog().tripped())
-      faults.push_back(fmt::format("{} side: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", name, st.disconnects,
-                                   st.nan_faults, st.stale_faults, st.miss_faults));
-    else if (static_cast<double>(st.contact_ticks) < kMinContactFraction * static_cast<double>(st.force_ticks))
-      untouched.push_back(fmt::format("{} side ({}): the stylus was inside the surface on {} of {} ticks", name, stim,
-                                      st.contact_ticks, st.force_ticks));
-    if (opt.on_side)
-      opt.on_side({.plan_index = t.plan_index, .side = side, .attempt = t.attempts, .stimulus = stim, .engine = st,
-                   .hand_ticks = simrig ? simrig->hand.ticks() : 0, .contact_ticks = st.contact_ticks});
-    if (simrig) felt[static_cast<std::size_t>(side)] = simrig->hand.Finish();
-    if (!go_on) {
+    s.dropout_at_s = inject_dropout && side == 0 ? 0.3 * dur : -1;
+    s.stream = side == 0 ? "left" : "right";
+    s.label = s.stream + " side";
+    s.stimulus = stim;
+    s.report_side = side;
+    const auto r = internal::RunStimulusSide(s, rig, dur, opt, writer, database, session, t, screen, side);
+    if (r.fault) faults.push_back(r.detail);
+    if (r.untouched) untouched.push_back(r.detail);
+    felt[static_cast<std::size_t>(side)] = r.felt;
+    if (r.aborted) {
       out.aborted = true;
       return out;
     }
@@ -416,6 +338,17 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                            t.method.empty() ? t.comparison : t.method));
     }
   }
+  // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
+  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed, opt, *rig, &writer, &sum.executed);
+  sum.planned += adaptive.added;
+  sum.completed += adaptive.completed;
+  sum.faults += adaptive.faults;
+  sum.simulated_s += adaptive.stimulus_s;
+  if (adaptive.aborted) {
+    sum.status = "aborted";
+    sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return sum;
+  }
   database.EndSession(session, "completed");
   sum.status = "completed";
   sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -434,6 +367,7 @@ void LogPlanEvents(db::Database& database, std::int64_t session, const std::vect
 }  // namespace
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
+  internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
   const Lab lab = LoadLab(p, opt.device);
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);

@@ -17,6 +17,7 @@
 #include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
 
@@ -104,6 +105,9 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     const std::string sid = Safe(st.name);
     md << "\n## Study `" << st.name << "`\n\n" << proto.description << "\n\n"
        << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows() << "\n";
+    // Adaptive phases (staircase, QUEST+): psychometric fits, JND and Weber fraction.
+    md << AdaptiveReport(db_path, st.name, st.protocol_toml, o.out_dir, o.figures, &w.files_);
+    if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0) continue;
     const auto main = study.Where({{"phase", "main"}});
     const auto ref = study.Where({{"phase", "reference"}});
     const auto methods = main.rows() ? main.Levels("method") : std::vector<std::string>{};

@@ -130,7 +130,7 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
       {"algorithm = \"fric2\"\nvibration", "algorithm = \"fric9\"\nvibration", "method[0].algorithm: expected wall, norm, fric1, fric2 or none, got 'fric9'"},
       {"name = \"Hybrid\"", "name = \"FF\"", "method[1].name: duplicate method 'FF'"},
       {"id = \"Cork\"", "id = \"Denim\"", "material[1].id: duplicate material id 'Denim'"},
-      {"kind = \"training\"", "kind = \"warmup\"", "phase[0].kind: expected training, reference or main, got 'warmup'"},
+      {"kind = \"training\"", "kind = \"warmup\"", "phase[0].kind: expected training, reference, main, staircase or quest-plus, got 'warmup'"},
       {"repetitions = 2", "repetitions = 0", "phase[2].repetitions: expected an integer 1..100"},
       {"different_pairs = 2", "different_pairs = 7", "phase[1].different_pairs: expected 0..6"},
       {"different_pairs = 2", "different_pairs = [[\"Denim\", \"Nope\"]]", "phase[1].different_pairs"},

@@ -126,3 +126,33 @@ TEST_F(Headless, ConsoleButtonsReport) {
 
 }  // namespace
 }  // namespace hapticlab::runner::ui
+
+namespace hapticlab::runner::ui {
+namespace {
+
+// Adaptive trials: one button per answer; a click or a number key answers, nothing else does.
+TEST_F(Headless, ChoiceAnswersByClickOrKey) {
+  ParticipantView v;
+  v.mode = ParticipantView::Mode::kChoice;
+  v.question = "Which interval differed?";
+  v.answers = {"1", "2", "3"};
+  Drawn d;
+  auto a = Frame(v, -1, -1, false, &d);
+  EXPECT_FALSE(a.chosen) << "no default answer";
+  const auto* b1 = Find(d, "answer:1");
+  ASSERT_TRUE(b1 && Find(d, "answer:0") && Find(d, "answer:2") && Find(d, "prompt"));
+  EXPECT_FALSE(Find(d, "answer:3"));
+  Frame(v, b1->cx(), b1->cy(), false);
+  Frame(v, b1->cx(), b1->cy(), true);
+  a = Frame(v, b1->cx(), b1->cy(), false);
+  ASSERT_TRUE(a.chosen);
+  EXPECT_EQ(*a.chosen, 1);
+  ImGui::GetIO().KeysDown['3'] = true;
+  a = Frame(v, -1, -1, false);
+  ImGui::GetIO().KeysDown['3'] = false;
+  ASSERT_TRUE(a.chosen);
+  EXPECT_EQ(*a.chosen, 2);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner::ui

@@ -5,8 +5,11 @@
 /// study seed and the participant index.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
+
+#include "hapticlab/protocols/adaptive.hpp"
 
 namespace hapticlab::protocols {
 
@@ -28,7 +31,9 @@ struct Method {
   int line = 0;
 };
 
-enum class PhaseKind { kTraining, kReference, kMain };
+/// kStaircase and kQuestPlus are adaptive phases (protocols/adaptive.hpp): their trials are
+/// not planned ahead but chosen one by one from the answers so far.
+enum class PhaseKind { kTraining, kReference, kMain, kStaircase, kQuestPlus };
 const char* ToString(PhaseKind k);
 
 struct Phase {
@@ -38,6 +43,7 @@ struct Phase {
   bool same_pairs = true;   ///< reference: each material against itself (upper limit)
   int different_pairs = 0;  ///< reference: distinct material pairs (lower limit), drawn by the study seed
   std::vector<std::pair<std::string, std::string>> explicit_pairs;  ///< or listed
+  std::optional<AdaptiveSpec> adaptive;  ///< staircase / quest-plus phases
   int line = 0;
 };
 

@@ -27,7 +27,7 @@ using Drawn = std::vector<DrawnItem>;
 const DrawnItem* Find(const Drawn& d, const std::string& id);
 
 struct ParticipantView {
-  enum class Mode { kStimulus, kRating, kBreak, kMessage };
+  enum class Mode { kStimulus, kRating, kBreak, kMessage, kChoice };
   Mode mode = Mode::kStimulus;
   // The scene, in the device's horizontal plane [m].
   Eigen::Vector2d workspace_min_m{-0.06, -0.04}, workspace_max_m{0.06, 0.04};
@@ -39,6 +39,10 @@ struct ParticipantView {
   std::vector<std::optional<double>> ratings;  ///< per criterion; unset: no handle drawn
   double scale_min = 0, scale_max = 100;
   std::string scale_low = "very different", scale_high = "identical";
+  // Choice (adaptive trials): one button per answer, keys 1..9 (and Y / N for yes / no).
+  std::string question;
+  std::vector<std::string> answers;
+  int highlighted = -1;  ///< the answer the rating box's knob points at (-1: none)
   // Break / message.
   double break_remaining_s = 0;
   std::string message;
@@ -48,6 +52,7 @@ struct ParticipantView {
 struct ParticipantAction {
   std::vector<std::optional<double>> ratings;  ///< after this frame's input
   bool confirmed = false;                       ///< confirm pressed with every criterion rated
+  std::optional<int> chosen;                    ///< choice mode: the answer clicked or keyed
 };
 
 /// Draws the participant window into the current ImGui frame (full window).

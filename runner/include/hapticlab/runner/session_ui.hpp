@@ -21,6 +21,9 @@ class WindowSessionUi final : public SessionUi {
                   const WindowOptions& o = {}, devices::RatingInput* box = nullptr);
   bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) override;
   std::optional<std::vector<double>> Rate(const TrialScreen& t) override;
+  /// Adaptive trials: a click, a number key (Y / N) or the rating box (the knob points at an
+  /// answer, a press confirms it).
+  std::optional<int> Choose(const TrialScreen& t) override;
   bool Break(double seconds) override;
   void Event(const std::string& line) override;
   bool TakeBreakNow() override {

@@ -44,6 +44,10 @@ struct TrialScreen {
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
   std::string scale_low = "very different", scale_high = "identical";
+  /// Adaptive trials (staircase, QUEST+): the question and the answers offered, e.g.
+  /// {"1", "2"} for the intervals of a 2AFC trial or {"yes", "no"}.
+  std::string question;
+  std::vector<std::string> answers;
 };
 
 /// Hooks a user interface into a session: the runner calls it from its own (main) thread.
@@ -58,6 +62,13 @@ class SessionUi {
   /// Blocks until the participant confirms a rating per criterion (in the protocol's scale),
   /// or the experimenter aborts (nullopt).
   virtual std::optional<std::vector<double>> Rate(const TrialScreen& t) = 0;
+  /// Blocks until the participant picks one of `t.answers` (adaptive trials); returns its
+  /// index, or nullopt when the experimenter aborted. A UI without answer keys keeps this
+  /// default and cannot run adaptive phases (they abort at their first trial).
+  virtual std::optional<int> Choose(const TrialScreen& t) {
+    (void)t;
+    return std::nullopt;
+  }
   /// Blocks through a break with a countdown. false: aborted.
   virtual bool Break(double seconds) = 0;
   /// A line for the console's log (faults, resume, ...).

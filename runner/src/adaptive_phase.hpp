@@ -1,0 +1,48 @@
+#pragma once
+// Adaptive phases (staircase, QUEST+) in a session: the runner's only entry point into them
+// (study_runner.cpp calls RunAdaptivePhases after the planned phases). Private to runner.
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/study_runner.hpp"
+
+namespace hapticlab::runner::internal {
+
+struct AdaptiveOutcome {
+  bool aborted = false;  // stopped (stop_after_trials); the session is marked aborted
+  int added = 0;         // trial rows created
+  int completed = 0, faults = 0;
+  double stimulus_s = 0;  // stimulus time rendered
+};
+
+// Runs every adaptive phase of the protocol, in protocol order, continuing each from its
+// recorded trials. `executed` counts trials run in this call of the session (for
+// stop_after_trials) and is advanced. Every interval is presented through the one trial
+// path (RunStimulusSide, stimulus_side.hpp) on `rig`: the method's renderer in the real-time
+// engine over the rig's device, the simulated hand stroking it, streams i<k>_force and
+// i<k>_vibration. With opt.ui the engine's stylus frames go to the participant window and
+// the participant answers (SessionUi::Choose); else the phase's simulated observer answers.
+// @throws hapticlab::InputError for a hardware device (not supported yet) or a simulated
+// session without a UI whose phase has no [phase.simulated_observer].
+AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
+                                  const protocols::Protocol& p,
+                                  const std::map<std::string, renderer::MaterialModel>& models,
+                                  std::uint64_t participant_seed, const RunOptions& opt,
+                                  HardwareRig& rig, db::TrajectoryWriter* writer, int* executed);
+
+// Checks before a session starts that its adaptive phases can run on `device`: a simulated
+// rig ("sim" or "falcon-twin"; hardware devices are refused); with a participant window the
+// participant answers, without one the phase's simulated observer must exist.
+void CheckAdaptivePhases(const protocols::Protocol& p, const std::string& device, bool with_ui);
+
+// The model with one parameter set to `value` (protocols::AdaptiveParameters()).
+renderer::MaterialModel WithParameter(const renderer::MaterialModel& m,
+                                      const std::string& parameter, double value);
+
+}  // namespace hapticlab::runner::internal

@@ -1,0 +1,266 @@
+// Adaptive phases through the study runner with the simulated lab: every trial's stimulus
+// value and answer recorded, the staircase's record follows its rules, resume continues
+// exactly (an interrupted session records what an uninterrupted one does), QUEST+ finds the
+// simulated observer's threshold.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <set>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/psychophysics/quest_plus.hpp"
+#include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::runner {
+namespace {
+
+std::string Protocol(const std::string& phases) {
+  return R"(
+[study]
+name = "jnd-test"
+seed = 99
+criteria = ["vibration"]
+stimulus_duration_s = 0.05
+profiles = ")" +
+         std::string(HL_SOURCE_DIR) + R"(/studies/shin2019/profiles.toml"
+
+[[material]]
+id = "Denim"
+
+[[method]]
+name = "Hybrid"
+algorithm = "fric2"
+)" + phases;
+}
+
+const char* kStaircase = R"(
+[[phase]]
+kind = "staircase"
+material = "Denim"
+method = "Hybrid"
+parameter = "vibration.gain"
+task = "2afc"
+reference = 1.0
+step_type = "log"
+steps = [0.2, 0.1]
+start = [0.6, 0.05]
+min = 0.005
+max = 2.0
+reversals = 8
+discard_reversals = 2
+max_trials = 25
+[phase.simulated_observer]
+threshold = 0.2
+slope = 3.0
+lapse = 0.02
+)";
+
+struct Record {
+  int plan_index = 0, track = 0;
+  double level = 0, correct = 0, response = 0, interval = 0;
+  bool operator==(const Record&) const = default;
+};
+
+std::vector<Record> Records(const std::string& db_path) {
+  db::Database d(db_path);
+  std::vector<Record> out;
+  for (const auto& st : d.Studies())
+    for (const auto& p : d.Participants(st.id))
+      for (const auto& se : d.Sessions(p.id))
+        for (const auto& t : d.Trials(se.id)) {
+          EXPECT_EQ(t.status, db::kTrialCompleted) << t.plan_index;
+          Record r{.plan_index = t.plan_index, .track = t.repetition};
+          for (const auto& x : d.Ratings(t.id)) {
+            if (x.criterion == "level") r.level = x.score;
+            if (x.criterion == "correct") r.correct = x.score;
+            if (x.criterion == "response") r.response = x.score;
+            if (x.criterion == "interval") r.interval = x.score;
+          }
+          out.push_back(r);
+        }
+  return out;
+}
+
+TEST(AdaptivePhase, StaircaseRecordsEveryTrialByItsRules) {
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("s.db"), .participant = "P01", .record = RecordMode::kForce};
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "completed");
+  const auto rec = Records(o.db_path);
+  ASSERT_EQ(static_cast<int>(rec.size()), s.completed);
+  ASSERT_GE(rec.size(), 16u);  // two tracks of at least 8 trials (8 reversals) each
+  std::vector<psychophysics::StaircaseTrial> h;
+  for (const auto& r : rec) {
+    // 2AFC: the answer is correct exactly when the chosen interval is the comparison's.
+    EXPECT_EQ(r.correct == 1, r.response == r.interval);
+    EXPECT_TRUE(r.interval == 1 || r.interval == 2);
+    h.push_back({r.track, r.level, r.correct == 1});
+  }
+  // The recorded levels are the ones the rules give (Replay throws otherwise), and both
+  // tracks stopped.
+  const auto tracks = psychophysics::ReplayStaircase(p.phases[0].adaptive->staircase, h);
+  for (const auto& t : tracks) EXPECT_TRUE(t.done);
+  // The stimuli were rendered and recorded: one force stream per interval.
+  db::Database d(o.db_path);
+  const auto trials = d.Trials(s.session_id);
+  const auto chunks = d.TrajectoryChunks(trials.front().id);
+  std::set<std::string> streams;
+  for (const auto& c : chunks) streams.insert(c.stream);
+  EXPECT_EQ(streams, (std::set<std::string>{"i1_force", "i2_force"}));
+}
+
+TEST(AdaptivePhase, ResumeContinuesExactly) {
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("whole.db"), .participant = "P01", .record = RecordMode::kNone};
+  RunStudy(p, o);
+  const auto whole = Records(o.db_path);
+  // The same participant stopped after 7 trials, then after 5 more each time, resumed to the end.
+  RunOptions r = o;
+  r.db_path = dir.File("pieces.db");
+  r.stop_after_trials = 7;
+  auto s = RunStudy(p, r);
+  int resumes = 0;
+  while (s.status != "completed") {
+    ASSERT_EQ(s.status, "aborted");
+    r.stop_after_trials = 5;
+    s = ResumeStudy(r);
+    ++resumes;
+  }
+  EXPECT_GE(resumes, 3);
+  EXPECT_EQ(Records(r.db_path), whole);
+}
+
+TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
+  test::TempDir dir;
+  std::string text = Protocol(kStaircase);
+  text = text.substr(0, text.find("[phase.simulated_observer]"));
+  std::ofstream(dir.File("p.toml")) << text;
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("s.db"), .participant = "P01"};
+  try {
+    RunStudy(p, o);
+    ADD_FAILURE() << "ran without a simulated observer";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("phase[0].simulated_observer: missing"), std::string::npos)
+        << e.what();
+  }
+  // A hardware device: refused before anything is recorded (its interval presentation is not
+  // implemented yet).
+  std::ofstream(dir.File("q.toml")) << Protocol(kStaircase);
+  o.device = "falcon";
+  try {
+    RunStudy(protocols::LoadProtocol(dir.File("q.toml")), o);
+    ADD_FAILURE() << "ran an adaptive phase on hardware";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("phase[0].kind: adaptive phases run with --device sim"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(o.db_path));
+}
+
+// A participant at the window: the simulated strokes of each interval are shown, the answer
+// comes from SessionUi::Choose. This one always picks the first interval, so a trial is
+// correct exactly when the comparison was first.
+class FirstIntervalUi : public SessionUi {
+ public:
+  bool Stimulus(const TrialScreen& t, int, const Eigen::Vector3d&, double) override {
+    intervals_seen.insert(t.phase);
+    return true;
+  }
+  std::optional<std::vector<double>> Rate(const TrialScreen&) override { return std::nullopt; }
+  bool Break(double) override { return true; }
+  std::optional<int> Choose(const TrialScreen& t) override {
+    EXPECT_EQ(t.answers, (std::vector<std::string>{"1", "2"}));
+    EXPECT_EQ(t.question, "Which interval was stronger?");
+    ++asked;
+    return asked > 12 ? std::nullopt : std::optional<int>(0);  // the experimenter aborts at 13
+  }
+  int asked = 0;
+  std::set<std::string> intervals_seen;
+};
+
+TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
+  test::TempDir dir;
+  std::string text = Protocol(kStaircase);
+  text = text.substr(0, text.find("[phase.simulated_observer]"));  // not needed with a UI
+  std::ofstream(dir.File("p.toml")) << text;
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  FirstIntervalUi ui;
+  RunOptions o{.db_path = dir.File("s.db"), .participant = "P01", .record = RecordMode::kNone, .ui = &ui,
+               .ui_playback_speed = 1e6};
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(ui.intervals_seen, (std::set<std::string>{"staircase: interval 1 of 2", "staircase: interval 2 of 2"}));
+  db::Database d(o.db_path);
+  int completed = 0;
+  for (const auto& t : d.Trials(s.session_id)) {
+    if (t.status != db::kTrialCompleted) continue;
+    ++completed;
+    double response = 0, interval = 0, correct = 0;
+    for (const auto& r : d.Ratings(t.id)) {
+      if (r.criterion == "response") response = r.score;
+      if (r.criterion == "interval") interval = r.score;
+      if (r.criterion == "correct") correct = r.score;
+    }
+    EXPECT_EQ(response, 1);
+    EXPECT_EQ(correct == 1, interval == 1);
+  }
+  EXPECT_EQ(completed, 12);
+}
+
+TEST(AdaptivePhase, QuestPlusFindsTheSimulatedObserversThreshold) {
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(R"(
+[[phase]]
+kind = "quest-plus"
+material = "Denim"
+method = "Hybrid"
+parameter = "friction.mu_k"
+task = "3afc"
+reference = 0.3
+fit = "weibull"
+stimuli = { from = 0.005, to = 0.3, count = 24, spacing = "log" }
+thresholds = { from = 0.01, to = 0.3, count = 25, spacing = "log" }
+slopes = [1.5, 2.5, 4]
+lapses = [0, 0.03]
+trials = 80
+[phase.simulated_observer]
+threshold = 0.06
+slope = 2.5
+lapse = 0.0
+)");
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("q.db"), .participant = "P01", .record = RecordMode::kNone};
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "completed");
+  const auto rec = Records(o.db_path);
+  ASSERT_EQ(rec.size(), 80u);
+  std::vector<std::pair<double, bool>> h;
+  for (const auto& r : rec) h.emplace_back(r.level, r.correct == 1);
+  const auto q = psychophysics::QuestPlus::Replay(p.phases[0].adaptive->quest, h);
+  // The posterior's threshold marginal: the truth lies in its central 99 %.
+  const auto m = q.ThresholdMarginal();
+  const auto& th = p.phases[0].adaptive->quest.thresholds;
+  double below = 0, at_or_below = 0;
+  for (std::size_t i = 0; i < th.size(); ++i) {
+    if (th[i] < 0.06 * (1 - 1e-9)) below += m[i];
+    if (th[i] <= 0.06 * (1 + 0.08))
+      at_or_below += m[i];  // the grid point nearest 0.06 (spacing 15 %)
+  }
+  EXPECT_LT(below, 0.995) << "posterior mean " << q.Mean().threshold;
+  EXPECT_GT(at_or_below, 0.005) << "posterior mean " << q.Mean().threshold;
+}
+
+}  // namespace
+}  // namespace hapticlab::runner
