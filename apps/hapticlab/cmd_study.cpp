@@ -240,8 +240,8 @@ void RegisterStudy(CLI::App& app) {
         "run",
         "Run a new participant through the protocol and record everything to the database.\n"
         "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
-        "Staircase / QUEST+ phases run after the planned ones (--device sim; the participant\n"
-        "answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
+        "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
+        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
