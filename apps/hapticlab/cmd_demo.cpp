@@ -1,7 +1,8 @@
 // hapticlab demo: the main job. A complete simulated study end to end: the dissertation's
 // chapter V.3 hybrid-realism protocol run by simulated participants in the simulated lab,
-// recorded to a new SQLite database, then analysed into a report; plus a check of the
-// real-time engine (force and vibration threads) on the same renderer.
+// recorded to a new SQLite database, then analysed into a report. Every trial runs through
+// the real-time engine on a virtual clock (the simulated rig); a last check runs the engine
+// on the real clock (force and vibration threads).
 
 #include <fmt/core.h>
 
@@ -16,10 +17,10 @@
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/export.hpp"
-#include "hapticlab/devices/replay.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
-#include "hapticlab/runner/sim_lab.hpp"
+#include "hapticlab/sim/sim_device.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/stats/report.hpp"
 
@@ -41,35 +42,31 @@ std::string UtcStamp() {
   return buf;
 }
 
-// One second of the Hybrid method on a placeholder model through the real-time engine: a
-// 1 kHz force thread and a 10 kHz vibration thread against a replayed simulated stroke.
+// One second of the Hybrid method on a placeholder model through the real-time engine on
+// the real clock: a 1 kHz force thread and a 10 kHz vibration thread driving the generic
+// simulated device, whose simulated hand strokes the virtual sample.
 void RealTimeCheck(const std::string& profiles_path) {
-  const auto set = runner::LoadProfiles(profiles_path);
-  const auto& prof = set.profiles.at("Denim");
-  const auto model = runner::PlaceholderModel(prof);
+  const auto set = sim::LoadProfiles(profiles_path);
+  const auto model = sim::PlaceholderModel(set.profiles.at("Denim"));
   renderer::RenderOptions ro;
   ro.algorithm = renderer::ForceAlgorithm::kFric2;
   renderer::HybridRenderer r(model, ro);
   Rng rng(1);
-  const auto stroke = runner::DrawStroke(rng);
-  const auto real = runner::StrokeVirtual(model, ro, stroke, 1.2);  // the hand's path, to replay
-  std::vector<devices::TrajectorySample> path;
-  for (std::size_t i = 0; i < real.force.size() / 15; ++i) {
-    const float* f = &real.force[i * 15];
-    path.push_back({static_cast<double>(i) / 1000.0, {f[0], f[1], f[2]}, {f[3], f[4], f[5]}});
-  }
-  runner::RtEngine* e = nullptr;
-  devices::ReplayDevice dev(path, [&] { return e->Now(); });
-  devices::BufferActuator act(ro.vibration_rate_hz, 20000);
+  sim::Hand hand;
+  sim::SimDevice dev(sim::SimDeviceModel{}, hand, nullptr);  // null clock: the real one
+  sim::SimActuator act(hand, ro.vibration_rate_hz);
+  hand.Begin(sim::DrawStroke(rng), Eigen::Isometry3d::Identity(),
+             model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
+             model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz,
+             ro.vibration_rate_hz);
   runner::RtEngine engine(r, dev, &act);
-  e = &engine;
-  engine.RunFor(std::chrono::seconds(3));
+  engine.RunFor(std::chrono::seconds(1));
   const auto st = engine.Stats();
-  fmt::print("real-time engine check (Denim, Hybrid, {:.1f} s): force loop {:.0f} Hz, vibration loop {:.0f} Hz, "
-             "force jitter max {:.0f} us (mean {:.0f} us), deadline misses {}/{}, faults {}\n",
-             static_cast<double>(st.force_ticks) / 1000.0, st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
-             st.force_jitter_mean_s * 1e6, st.force_deadline_misses, st.vibration_deadline_misses,
-             r.counters().nan_faults.load() + r.counters().stale_faults.load());
+  fmt::print("real-time engine check (Denim, Hybrid, 1 s on the real clock): force loop {:.0f} Hz, vibration loop {:.0f} Hz, "
+             "force jitter max {:.0f} us (mean {:.0f} us), deadline misses {}/{}, in contact {} of {} ticks, faults {}\n",
+             st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
+             st.force_jitter_mean_s * 1e6, st.force_deadline_misses, st.vibration_deadline_misses, st.contact_ticks,
+             st.force_ticks, r.counters().nan_faults.load() + r.counters().stale_faults.load());
 }
 
 }  // namespace
@@ -85,8 +82,9 @@ void RegisterDemo(CLI::App& app) {
       "demo",
       "The main job: a complete simulated study end to end. Runs the dissertation's ch. V.3\n"
       "protocol (hybrid vs force-only vs vibration-only) with simulated participants in the\n"
-      "simulated lab, records everything to a new database, analyses it into a report, and\n"
-      "checks the real-time engine. Each run writes a new timestamped folder.");
+      "simulated lab (every trial through the real-time engine on a virtual clock, a simulated\n"
+      "hand on a simulated device), records everything to a new database, analyses it into a\n"
+      "report, and checks the engine on the real clock. Each run writes a new timestamped folder.");
   cmd->add_option("--out", o->out, "Parent folder of the run's output (default: demo-out)");
   cmd->add_option("--participants", o->participants, "Simulated participants")->capture_default_str()
       ->check(CLI::Range(2, 100));

@@ -2,7 +2,9 @@
 
 #include <fmt/core.h>
 
+#include <array>
 #include <cstdio>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -14,7 +16,9 @@
 #include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/devices/hid_rating.hpp"
 #include "hapticlab/devices/vendor.hpp"
+#include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/session_ui.hpp"
+#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 
 namespace hapticlab::cli {
@@ -28,7 +32,7 @@ struct RunArgs {
   double fault_rate = 0;
   bool ui = false, json = false, quiet = false;
   // Hardware and screens.
-  std::string firmware, actuator = "none", audio_device, sample_layout = "-0.03,0,0.03,0", rating_box, rating_layout;
+  std::string firmware, actuator = "none", audio_device, rig_file, rating_box, rating_layout;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
 };
@@ -42,7 +46,19 @@ class Rig {
       throw InputError("", 0, "--device",
                        "'" + a.device + "' is compiled only when its vendor SDK is found at build time, and this build "
                        "has none (docs/hardware.md)");
-    std::string status = "sim (the simulated lab)";
+    // Frames and calibration: the rig file, or the back-end's built-in rig.
+    const runner::RigFile rf = a.rig_file.empty() ? runner::DefaultRig(a.device) : runner::LoadRig(a.rig_file);
+    rig_.device_from_sample = {rf.DeviceFromSample(0), rf.DeviceFromSample(1)};
+    rig_.calibration = rf.text;
+    rig_.rig_file_hash = rf.sha256;
+    std::string status = "sim (generic simulated device, simulated hand)";
+    if (a.device == "sim" || a.device == "falcon-twin") {
+      simulated_ = runner::OpenSimulatedRig(a.device, rf);
+      rig_ = simulated_->rig;
+      status = rig_.description;
+      if (a.actuator != "none")
+        throw InputError("", 0, "--actuator", "a simulated rig plays vibration to the simulated hand; use --actuator none");
+    }
     if (a.device == "dhd" || a.device == "openhaptics") {
       vendor_ = a.device == "dhd" ? devices::OpenDhd() : devices::OpenOpenHaptics();
       rig_.device = vendor_.get();
@@ -59,7 +75,10 @@ class Rig {
       const auto r = devices::falcon::LoadFirmware(*usb, fw);
       if (!r.ok) throw std::runtime_error("falcon: " + r.error);
       fmt::print(stderr, "falcon: firmware running (attempt {})\n", r.attempts);
-      falcon_ = std::make_unique<devices::falcon::FalconDevice>(std::move(usb));
+      devices::falcon::FalconOptions fo;
+      fo.motor_units_per_Nm = rf.motor_units_per_Nm;
+      if (rf.max_force_N > 0) fo.max_force_N = rf.max_force_N;
+      falcon_ = std::make_unique<devices::falcon::FalconDevice>(std::move(usb), std::function<double()>{}, fo);
       rig_.device = falcon_.get();
       status = "falcon, firmware " + a.firmware;
     }
@@ -75,14 +94,11 @@ class Rig {
       rig_.noise_rms_fs = a.noise_rms;
       status += "; audio actuator and masking noise";
     }
-    double xl, yl, xr, yr;
-    if (std::sscanf(a.sample_layout.c_str(), "%lf,%lf,%lf,%lf", &xl, &yl, &xr, &yr) != 4)
-      throw InputError("", 0, "--samples", "expected xl,yl,xr,yr in metres, got '" + a.sample_layout + "'");
-    rig_.left_sample_m = {xl, yl};
-    rig_.right_sample_m = {xr, yr};
-    rig_.description = status;
-    if (a.device != "sim") o->rig = &rig_;
-    if (a.device != "sim" && !a.ui)
+    if (!rig_.sim)
+      rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) + " (sha256 " +
+                         rf.sha256.substr(0, 16) + ")";
+    o->rig = &rig_;
+    if (!rig_.sim && !a.ui)
       throw InputError("", 0, "--ui", "a hardware session takes its ratings from the participant window: add --ui");
     if (!a.rating_box.empty()) {
       unsigned vid = 0, pid = 0;
@@ -105,6 +121,7 @@ class Rig {
 
  private:
   runner::HardwareRig rig_;
+  std::unique_ptr<runner::SimulatedRig> simulated_;
   std::unique_ptr<devices::falcon::FalconDevice> falcon_;
   std::unique_ptr<devices::HapticDevice> vendor_;
   std::unique_ptr<devices::AudioOutput> audio_;
@@ -192,9 +209,11 @@ void RegisterStudy(CLI::App& app) {
   // Adds the device/actuator/screen options shared by run and resume.
   auto hardware_options = [](CLI::App* cmd, RunArgs& a) {
     cmd->add_option("--device", a.device,
-                    "Haptic device back-end: sim (the simulated lab), falcon (Novint Falcon over libusb; needs "
+                    "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by the\n"
+                    "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
+                    "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
                     "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
-        ->check(CLI::IsMember({"sim", "falcon", "dhd", "openhaptics"}))
+        ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
         ->capture_default_str();
     cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
     cmd->add_option("--actuator", a.actuator, "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
@@ -205,7 +224,9 @@ void RegisterStudy(CLI::App& app) {
         ->capture_default_str();
     cmd->add_option("--noise-rms", a.noise_rms, "Masking noise level (RMS, full-scale units) when the protocol asks for it")
         ->capture_default_str()->check(CLI::Range(0.0, 0.5));
-    cmd->add_option("--samples", a.sample_layout, "Sample centres in the device frame: xl,yl,xr,yr [m]")->capture_default_str();
+    cmd->add_option("--rig", a.rig_file,
+                    "Rig file (TOML): device and sample frames, stylus tip offset, force calibration\n"
+                    "(docs/hardware.md; 'hapticlab rig show'). Default: the back-end's built-in rig");
     cmd->add_option("--rating-box", a.rating_box, "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
     cmd->add_option("--rating-layout", a.rating_layout, "TOML layout of the box's reports (docs/hardware.md)");
     cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
@@ -219,8 +240,8 @@ void RegisterStudy(CLI::App& app) {
         "run",
         "Run a new participant through the protocol and record everything to the database.\n"
         "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
-        "Staircase / QUEST+ phases run after the planned ones (--device sim; the participant\n"
-        "answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
+        "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
+        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();

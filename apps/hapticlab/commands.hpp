@@ -17,5 +17,6 @@ void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);
 void RegisterParticipant(CLI::App& app);
+void RegisterRig(CLI::App& app);
 
 }  // namespace hapticlab::cli

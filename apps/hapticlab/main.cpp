@@ -33,6 +33,7 @@ int main(int argc, char** argv) {
   RegisterWorkbench(app);
   RegisterDevice(app);
   RegisterParticipant(app);
+  RegisterRig(app);
 
   try {
     app.parse(argc, argv);

@@ -1,5 +1,7 @@
 // Force Dimension devices through the DHD API (compiled only with the SDK: HL_HAVE_DHD).
 // Units: the DHD API works in metres, metres per second and newtons, as HapticLab does.
+// No vendor scheduler runs here: the engine's force loop calls dhdSetForce itself, so there
+// is no force slot to go stale (a stopped engine's last command is zero, RtEngine::Stop).
 #include <dhdc.h>
 
 #include <chrono>
@@ -36,15 +38,15 @@ class DhdDevice final : public HapticDevice {
     return c;
   }
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
-  bool Read(renderer::DeviceSample* out) noexcept override {
+  ReadResult Read(renderer::DeviceSample* out) noexcept override {
     double x, y, z, vx, vy, vz;
     const char id = static_cast<char>(id_);
-    if (dhdGetPosition(&x, &y, &z, id) < DHD_NO_ERROR) return false;
-    if (dhdGetLinearVelocity(&vx, &vy, &vz, id) < DHD_NO_ERROR) return false;
+    if (dhdGetPosition(&x, &y, &z, id) < DHD_NO_ERROR) return ReadResult::kLost;
+    if (dhdGetLinearVelocity(&vx, &vy, &vz, id) < DHD_NO_ERROR) return ReadResult::kLost;
     out->state.p_m = {x, y, z};
     out->state.v_mps = {vx, vy, vz};
     out->t_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-    return true;
+    return ReadResult::kOk;
   }
   void WriteForce(const Eigen::Vector3d& f) noexcept override {
     dhdSetForce(f.x(), f.y(), f.z(), static_cast<char>(id_));

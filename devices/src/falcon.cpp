@@ -402,23 +402,49 @@ void FalconDevice::WriteForce(const Eigen::Vector3d& f) noexcept {
   }
 }
 
-bool FalconDevice::Read(renderer::DeviceSample* out) noexcept {
+ReadResult FalconDevice::Read(renderer::DeviceSample* out) noexcept {
   const auto packet = EncodeCommand(cmd_);
   if (usb_->BulkWrite(packet.data(), 16, o_.io_timeout_ms) != 16) {
-    ++missed_;
-    return false;
+    ++lost_reads_;
+    return ReadResult::kLost;
   }
   const int n = usb_->BulkRead(buf_.data(), static_cast<int>(buf_.size()), o_.io_timeout_ms);
-  Status st;
-  if (n <= 2 || !DecodeStatus(buf_.data() + 2, static_cast<std::size_t>(n - 2), &st, &malformed_)) {
-    ++missed_;
-    return false;
+  if (n < 0) {
+    ++lost_reads_;
+    return ReadResult::kLost;
   }
-  missed_ = 0;
+  // Two FTDI modem-status bytes lead every read; the payload joins what the last read left.
+  const std::size_t payload = n > 2 ? static_cast<std::size_t>(n - 2) : 0;
+  if (pending_n_ + payload > pending_.size()) {  // keep the newest bytes
+    const std::size_t drop = pending_n_ + payload - pending_.size();
+    std::memmove(pending_.data(), pending_.data() + drop, pending_n_ - drop);
+    pending_n_ -= drop;
+  }
+  std::memcpy(pending_.data() + pending_n_, buf_.data() + 2, payload);
+  pending_n_ += payload;
+  Status st;
+  const bool found = DecodeStatus(pending_.data(), pending_n_, &st, &malformed_);
+  // Keep an incomplete packet at the end ('<' in the last 15 bytes) for the next read.
+  std::size_t keep_from = pending_n_;
+  for (std::size_t i = pending_n_ > 15 ? pending_n_ - 15 : 0; i < pending_n_; ++i)
+    if (pending_[i] == '<') {
+      keep_from = i;
+      break;
+    }
+  std::memmove(pending_.data(), pending_.data() + keep_from, pending_n_ - keep_from);
+  pending_n_ -= keep_from;
+  if (!found) {
+    ++empty_reads_;
+    return ReadResult::kNoNewData;
+  }
+  ++packets_;
   status_ = st;
   const Eigen::Vector3d theta(EncoderToAngle(st.encoder[0]), EncoderToAngle(st.encoder[1]), EncoderToAngle(st.encoder[2]));
   Eigen::Vector3d p;
-  if (!ForwardKinematics(theta, p_m_, &p)) return false;
+  if (!ForwardKinematics(theta, p_m_, &p)) {
+    ++lost_reads_;
+    return ReadResult::kLost;
+  }
   const double t = clock_ ? clock_() : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   if (have_p_ && t > t_s_) {
     const double dt = t - t_s_, a = 1 - std::exp(-2 * kPi * o_.velocity_cutoff_hz * dt);
@@ -430,7 +456,7 @@ bool FalconDevice::Read(renderer::DeviceSample* out) noexcept {
   out->state.p_m = p;
   out->state.v_mps = v_mps_;
   out->t_s = t;
-  return true;
+  return ReadResult::kOk;
 }
 
 }  // namespace hapticlab::devices::falcon

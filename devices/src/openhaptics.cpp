@@ -2,6 +2,8 @@
 // HL_HAVE_OPENHAPTICS). The HD scheduler owns the servo loop (1 kHz); its callback copies the
 // device state out and the engine's last force in through lock-free triple buffers, so the
 // engine's loop and the scheduler never wait on each other (one extra servo tick of latency).
+// The force slot carries the time the engine wrote it: when it is older than
+// kForceStale_ns (the engine stalled or stopped), the servo commands zero force.
 // Units: the HD API works in millimetres; HapticLab in metres.
 #include <HD/hd.h>
 
@@ -23,7 +25,13 @@ struct State {
 };
 struct Force {
   double f[3];
+  long long t_ns;  // steady-clock time the engine wrote it
 };
+constexpr long long kForceStale_ns = 5'000'000;  // 5 ms: five servo ticks
+
+long long SteadyNs() noexcept {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
 
 class OpenHapticsDevice final : public HapticDevice {
  public:
@@ -60,17 +68,20 @@ class OpenHapticsDevice final : public HapticDevice {
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override {
     t0_ns_.store(std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count());
   }
-  bool Read(renderer::DeviceSample* out) noexcept override {
+  ReadResult Read(renderer::DeviceSample* out) noexcept override {
     const State& s = state_.Read();
-    if (!s.ok) return false;
+    if (!s.ok) return ReadResult::kLost;
+    if (s.t == last_t_) return ReadResult::kNoNewData;  // the servo has not run since
+    last_t_ = s.t;
     out->state.p_m = {s.p[0], s.p[1], s.p[2]};
     out->state.v_mps = {s.v[0], s.v[1], s.v[2]};
     out->t_s = s.t;
-    return true;
+    return ReadResult::kOk;
   }
   void WriteForce(const Eigen::Vector3d& f) noexcept override {
     Force& slot = force_.WriteSlot();
     slot.f[0] = f.x(), slot.f[1] = f.y(), slot.f[2] = f.z();
+    slot.t_ns = SteadyNs();
     force_.Publish();
   }
 
@@ -82,7 +93,9 @@ class OpenHapticsDevice final : public HapticDevice {
     hdGetDoublev(HD_CURRENT_POSITION, p);  // mm
     hdGetDoublev(HD_CURRENT_VELOCITY, v);  // mm/s
     const Force& f = self->force_.Read();
-    double cmd[3] = {f.f[0], f.f[1], f.f[2]};
+    // A stale slot (the engine stalled or stopped writing) gives zero force.
+    const bool fresh = SteadyNs() - f.t_ns <= kForceStale_ns;
+    double cmd[3] = {fresh ? f.f[0] : 0.0, fresh ? f.f[1] : 0.0, fresh ? f.f[2] : 0.0};
     hdSetDoublev(HD_CURRENT_FORCE, cmd);
     hdEndFrame(self->hhd_);
     const HDErrorInfo e = hdGetError();
@@ -99,7 +112,8 @@ class OpenHapticsDevice final : public HapticDevice {
   HDSchedulerHandle handle_ = 0;
   double max_force_N_ = 3.3, max_k_N_per_m_ = 1000;
   TripleBuffer<State> state_{State{{0, 0, 0}, {0, 0, 0}, 0, false}};
-  TripleBuffer<Force> force_{Force{{0, 0, 0}}};
+  TripleBuffer<Force> force_{Force{{0, 0, 0}, 0}};
+  double last_t_ = -1;  // engine thread only
   std::atomic<long long> t0_ns_{0};
 };
 

@@ -17,17 +17,26 @@ ReplayDevice::ReplayDevice(std::vector<TrajectorySample> samples, std::function<
   forces_.reserve(static_cast<std::size_t>(span * 4000 * 1.5) + 1024);
 }
 
-bool ReplayDevice::Read(renderer::DeviceSample* out) noexcept {
+const char* ReadResultName(ReadResult r) {
+  switch (r) {
+    case ReadResult::kOk: return "ok";
+    case ReadResult::kNoNewData: return "no-new-data";
+    case ReadResult::kLost: return "lost";
+  }
+  return "?";
+}
+
+ReadResult ReplayDevice::Read(renderer::DeviceSample* out) noexcept {
   const double now = clock_() + samples_.front().t_s;
   if (now > samples_.back().t_s) {
     finished_.store(true);
-    return false;
+    return ReadResult::kLost;
   }
   while (next_ + 1 < samples_.size() && samples_[next_ + 1].t_s <= now) ++next_;
   out->state.p_m = samples_[next_].p_m;
   out->state.v_mps = samples_[next_].v_mps;
   out->t_s = now - samples_.front().t_s;
-  return true;
+  return ReadResult::kOk;
 }
 
 void ReplayDevice::WriteForce(const Eigen::Vector3d& force_N) noexcept {

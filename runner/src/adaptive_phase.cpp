@@ -11,8 +11,8 @@
 #include "hapticlab/psychophysics/quest_plus.hpp"
 #include "hapticlab/psychophysics/simulated_observer.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
-#include "hapticlab/runner/rt_engine.hpp"
-#include "hapticlab/runner/sim_lab.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
+#include "stimulus_side.hpp"
 
 namespace hapticlab::runner::internal {
 namespace {
@@ -59,83 +59,65 @@ void History(db::Database& database, std::int64_t session, std::size_t phase_ind
   }
 }
 
-renderer::RenderOptions MethodRenderOptions(const protocols::Method& m, std::uint64_t seed) {
-  renderer::RenderOptions o;
-  o.algorithm = renderer::ParseForceAlgorithm(m.algorithm);
-  o.vibration = m.vibration;
-  o.hybrid_filter = m.hybrid_filter;
-  o.force_rate_hz = 1000;
-  o.vibration_rate_hz = 10000;
-  o.stale_after_s = 1e9;  // the simulated device is never stale
-  o.seed = seed;
-  return o;
-}
-
 struct Presented {
-  bool fault = false;
+  bool aborted = false;    // the experimenter aborted during an interval
+  bool fault = false;      // the watchdog tripped, or an interval touched nothing
+  bool untouched = false;  // an interval touched nothing (the rig's sample poses?)
   std::string detail;
-  std::vector<Interaction> shown;  // one per interval (kept for a participant window)
 };
 
-// Plays a simulated interaction's stylus path to the UI in (scaled) real time; at least one
-// frame, however fast the playback.
-bool Play(SessionUi& ui, const TrialScreen& screen, int side, const Interaction& in, double duration_s,
-          double speed) {
-  const std::size_t n = in.force.size() / 15;
-  if (n == 0) return true;
-  const auto t0 = std::chrono::steady_clock::now();
-  double t = 0;
-  do {
-    const auto i = std::min(n - 1, static_cast<std::size_t>(t * in.force_rate_hz));
-    const Eigen::Vector3d pos(in.force[i * 15], in.force[i * 15 + 1], in.force[i * 15 + 2]);
-    if (!ui.Stimulus(screen, side, pos, duration_s - t)) return false;
-    t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed;
-  } while (t < duration_s);
-  return true;
-}
-
-
-// Presents the trial's intervals in the simulated lab: the participant strokes each rendering
-// (the same exploration, jittered, on every interval) and the interactions are recorded as
-// streams i<k>_force / i<k>_vibration.
-Presented PresentSim(const std::vector<renderer::MaterialModel>& intervals,
-                     const protocols::Method& method, const protocols::Protocol& p,
-                     const db::Trial& t, const RunOptions& opt, Rng& rng,
-                     db::TrajectoryWriter* writer, double* stimulus_s) {
+// Presents the trial's intervals through the one trial path (RunStimulusSide): each
+// interval's model with the method's renderer in the real-time engine over the rig's device
+// and actuator, with the watchdog and the writer (streams i<k>_force / i<k>_vibration). On a
+// simulated rig the hand strokes each interval (the same exploration, jittered per interval,
+// on the sample pose of the interval's screen side). With a UI the engine's stylus frames are
+// shown (2AFC: interval 1 left, 2 right; else left). The first interval stops at a fault.
+// The generator's draws (strokes, render seeds, the injected fault) come first and in a fixed
+// order, so the answer drawn after the presentation does not depend on how it went.
+Presented PresentIntervals(const std::vector<renderer::MaterialModel>& intervals, const protocols::Method& method,
+                           const protocols::Protocol& p, const db::Trial& t, const RunOptions& opt,
+                           HardwareRig& rig, Rng& rng, db::TrajectoryWriter* writer, db::Database& database,
+                           std::int64_t session, TrialScreen* screen, const std::string& kind, double* stimulus_s) {
   Presented out;
-  const Stroke first = DrawStroke(rng);
-  for (std::size_t k = 0; k < intervals.size(); ++k) {
-    const Stroke s = k == 0 ? first : JitterStroke(first, rng);
-    Interaction in = StrokeVirtual(intervals[k], MethodRenderOptions(method, rng.NextU64()), s,
-                                   p.stimulus_duration_s);
-    *stimulus_s += p.stimulus_duration_s;
-    if (opt.ui) out.shown.push_back(in);
-    if (in.faults > 0) {
-      out.fault = true;
-      out.detail =
-          fmt::format("renderer reported {} faulted ticks in interval {}", in.faults, k + 1);
+  const std::size_t m = intervals.size();
+  std::vector<sim::Stroke> strokes(m);
+  std::vector<std::uint64_t> seeds(m);
+  for (std::size_t k = 0; k < m; ++k) {
+    strokes[k] = k == 0 ? sim::DrawStroke(rng) : sim::JitterStroke(strokes[0], rng);
+    seeds[k] = rng.NextU64();
+  }
+  // A simulated link dropout (tests): 50 ms from 30 % into the first interval.
+  const bool inject_dropout = opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate;
+  const double dur = p.stimulus_duration_s;
+  for (std::size_t k = 0; k < m; ++k) {
+    const int side = m == 2 ? static_cast<int>(k) : 0;
+    StimulusSide s;
+    s.model = &intervals[k];
+    s.options = MethodOptions(method, seeds[k]);
+    s.sample = side;
+    s.stroke = strokes[k];
+    s.dropout_at_s = inject_dropout && k == 0 ? 0.3 * dur : -1;
+    s.stream = fmt::format("i{}", k + 1);
+    s.label = fmt::format("interval {}", k + 1);
+    s.stimulus = t.left;
+    s.report_side = static_cast<int>(k);
+    screen->phase = fmt::format("{}: interval {} of {}", kind, k + 1, m);
+    const auto r = RunStimulusSide(s, rig, dur, opt, writer, database, session, t, *screen, side);
+    if (r.aborted) {
+      out.aborted = true;
       return out;
     }
-    if (!writer || opt.record == RecordMode::kNone) continue;
-    const std::string name = fmt::format("i{}", k + 1);
-    auto* fs = writer->OpenStream(t.id, name + "_force", in.force_rate_hz, ForceStreamChannels());
-    const std::size_t nf = in.force.size() / 15;
-    for (std::size_t i = 0; i < nf; ++i)
-      while (!fs->Push(static_cast<double>(i) / in.force_rate_hz, &in.force[i * 15]))
-        writer->Flush();
-    writer->CloseStream(fs);
-    if (opt.record == RecordMode::kAll) {
-      auto* vs = writer->OpenStream(t.id, name + "_vibration", in.vibration_rate_hz,
-                                    VibrationStreamChannels());
-      for (std::size_t i = 0; i < in.vibration.size(); ++i)
-        while (!vs->Push(static_cast<double>(i) / in.vibration_rate_hz, &in.vibration[i]))
-          writer->Flush();
-      writer->CloseStream(vs);
+    *stimulus_s += dur;
+    if (r.fault) {
+      out.fault = true;
+      out.detail = "watchdog: " + r.detail + "; force was zeroed, trial repeated";
+      return out;
     }
-  }
-  if (opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate) {
-    out.fault = true;
-    out.detail = "simulated device fault (injected): force driven to zero, trial repeated";
+    if (r.untouched) {
+      out.fault = out.untouched = true;
+      out.detail = "nothing was touched: " + r.detail + "; check the rig's sample poses (hapticlab rig show); trial repeated";
+      return out;
+    }
   }
   return out;
 }
@@ -170,14 +152,14 @@ void CheckAdaptivePhases(const protocols::Protocol& p, const std::string& device
   for (std::size_t i = 0; i < p.phases.size(); ++i) {
     const auto& ph = p.phases[i];
     if (!ph.adaptive) continue;
-    if (device != "sim")
+    if (device != "sim" && device != "falcon-twin")
       d.Add(p.file, ph.line, fmt::format("phase[{}].kind", i),
-            "adaptive phases run with --device sim in this build (hardware presentation of the "
-            "intervals is not implemented yet)");
+            "adaptive phases run with --device sim or falcon-twin (a simulated rig) in this build "
+            "(on a hardware device the participant's answers are not wired up and checked yet)");
     else if (!ph.adaptive->simulated_observer && !with_ui)
       d.Add(p.file, ph.line, fmt::format("phase[{}].simulated_observer", i),
-            "missing; --device sim without --ui needs the observer's true psychometric function on "
-            "the varied parameter");
+            "missing; a simulated rig without --ui needs the observer's true psychometric function "
+            "on the varied parameter");
   }
   d.ThrowIfAny();
 }
@@ -186,8 +168,9 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                                   const protocols::Protocol& p,
                                   const std::map<std::string, renderer::MaterialModel>& models,
                                   std::uint64_t participant_seed, const RunOptions& opt,
-                                  db::TrajectoryWriter* writer, int* executed) {
+                                  HardwareRig& rig, db::TrajectoryWriter* writer, int* executed) {
   AdaptiveOutcome out;
+  int untouched_in_a_row = 0;
   CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
   for (std::size_t pi = 0; pi < p.phases.size(); ++pi) {
     const auto& ph = p.phases[pi];
@@ -257,8 +240,28 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
             WithParameter(base, a.parameter, k == comparison ? value : a.reference));
       Rng rng(DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 +
                                                static_cast<std::uint64_t>(t.attempts)));
-      const Presented shown =
-          PresentSim(intervals, method, p, t, opt, rng, writer, &out.stimulus_s);
+      TrialScreen screen;
+      screen.index = static_cast<int>(done.size()) + 1;
+      screen.left = screen.right = fmt::format("virtual:{}", a.material);
+      screen.method = a.method;
+      screen.placement = "nothing to place: every interval is virtual";
+      screen.question = m == 1 ? "Did you feel it?"
+                               : (m == 2 ? "Which interval was stronger?" : "Which interval differed?");
+      if (m == 1) screen.answers = {"yes", "no"};
+      else
+        for (int k = 0; k < m; ++k) screen.answers.push_back(std::to_string(k + 1));
+      const Presented shown = PresentIntervals(intervals, method, p, t, opt, rig, rng, writer, database, session,
+                                               &screen, protocols::ToString(ph.kind), &out.stimulus_s);
+      const auto abort = [&](const std::string& why) {
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "abort", .detail = why});
+        database.EndSession(session, "aborted");
+        out.aborted = true;
+      };
+      if (shown.aborted) {
+        abort("the experimenter aborted in the console; 'study resume' continues with this trial");
+        return out;
+      }
+      untouched_in_a_row = shown.untouched ? untouched_in_a_row + 1 : 0;
       if (shown.fault) {
         ++out.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
@@ -266,38 +269,24 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                            .trial_id = t.id,
                            .kind = "device-fault",
                            .detail = shown.detail});
+        if (opt.ui) opt.ui->Event(fmt::format("{} trial {}: {}", protocols::ToString(ph.kind), done.size() + 1, shown.detail));
+        if (untouched_in_a_row >= opt.max_untouched_trials) {
+          abort(fmt::format("{} trials in a row touched nothing: the rig's sample poses are probably wrong "
+                            "(hapticlab rig show / rig calibrate)",
+                            untouched_in_a_row));
+          return out;
+        }
         continue;  // the same trial (same level) runs again
       }
-      // The answer: the participant at the window when there is one (the simulated strokes
-      // are what it shows), else the simulated observer.
+      // The answer: the participant at the window when there is one (it showed the engine's
+      // stylus frames of every interval), else the simulated observer.
       psychophysics::ObserverAnswer ans;
       double response_time_s = 0;
       if (opt.ui) {
-        TrialScreen screen;
-        screen.index = static_cast<int>(done.size()) + 1;
-        screen.left = screen.right = fmt::format("virtual:{}", a.material);
-        screen.method = a.method;
-        screen.placement = "nothing to place: every interval is virtual";
-        screen.question = m == 1 ? "Did you feel it?"
-                                 : (m == 2 ? "Which interval was stronger?" : "Which interval differed?");
-        if (m == 1) screen.answers = {"yes", "no"};
-        else
-          for (int k = 0; k < m; ++k) screen.answers.push_back(std::to_string(k + 1));
-        bool go_on = true;
-        for (int k = 0; k < m && go_on; ++k) {
-          screen.phase = fmt::format("{}: interval {} of {}", protocols::ToString(ph.kind), k + 1, m);
-          go_on = Play(*opt.ui, screen, m == 2 ? k : 0, shown.shown[static_cast<std::size_t>(k)],
-                       p.stimulus_duration_s, opt.ui_playback_speed);
-        }
         const auto asked = std::chrono::steady_clock::now();
-        const auto choice = go_on ? opt.ui->Choose(screen) : std::nullopt;
+        const auto choice = opt.ui->Choose(screen);
         if (!choice || *choice < 0 || *choice >= static_cast<int>(screen.answers.size())) {
-          database.LogEvent({.session_id = session,
-                             .trial_id = t.id,
-                             .kind = "abort",
-                             .detail = "the experimenter aborted; 'study resume' continues with this trial"});
-          database.EndSession(session, "aborted");
-          out.aborted = true;
+          abort("the experimenter aborted; 'study resume' continues with this trial");
           return out;
         }
         response_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
@@ -305,7 +294,7 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
         ans.response = m == 1 ? (*choice == 0 ? 1 : 0) : *choice;
       } else {
         ans = psychophysics::SimulatedAnswer(*a.simulated_observer, a.task, x, comparison, rng);
-        response_time_s = Observer::ResponseTime(rng);
+        response_time_s = sim::Observer::ResponseTime(rng);
       }
       database.CompleteTrial(
           t.id, {{kLevel, x, 0},

@@ -7,6 +7,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <stdexcept>
+#include <thread>
 
 namespace hapticlab::runner {
 namespace {
@@ -51,7 +53,9 @@ RtEngine::RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& de
       vibration_stream_(vibration_stream),
       watchdog_(WatchdogOptions{.stale_after_s = renderer.options().stale_after_s,
                                 .max_consecutive_misses = options.max_consecutive_misses,
-                                .max_force_N = renderer.options().max_force_N}) {
+                                .max_force_N = renderer.options().max_force_N,
+                                .max_lost_reads = options.max_lost_reads,
+                                .max_lost_s = options.max_lost_s}) {
   if (force_stream_ && force_stream_->channel_count() != ForceStreamChannels().size())
     throw std::invalid_argument("force stream must have the ForceStreamChannels() layout");
   if (vibration_stream_ && vibration_stream_->channel_count() != 1)
@@ -61,6 +65,7 @@ RtEngine::RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& de
 RtEngine::~RtEngine() { Stop(); }
 
 double RtEngine::Now() const {
+  if (options_.virtual_clock) return options_.virtual_clock->Now();
   return std::chrono::duration<double>(Clock::now() - t0_).count();
 }
 
@@ -77,6 +82,11 @@ void RtEngine::Start() {
   if (running_.exchange(true)) return;
   t0_ = Clock::now();
   device_.SetTimeBase(t0_);
+  if (options_.virtual_clock) {
+    options_.virtual_clock->Set(0);
+    vk_force_ = vk_vibration_ = 0;
+    return;
+  }
   force_thread_ = std::thread([this] { ForceLoop(); });
   if (renderer_.options().vibration) vibration_thread_ = std::thread([this] { VibrationLoop(); });
   if (options_.realtime_priority) {
@@ -97,7 +107,36 @@ void RtEngine::Stop() {
   recording_overflows_at_stop_.store(overflows);
 }
 
+bool RtEngine::AdvanceTo(double t_s) {
+  if (!options_.virtual_clock) throw std::logic_error("RtEngine::AdvanceTo needs a virtual clock");
+  if (!running_.load()) return false;
+  const double fr = renderer_.options().force_rate_hz, vr = renderer_.options().vibration_rate_hz;
+  const bool vib = renderer_.options().vibration;
+  devices::VirtualClock& clock = *options_.virtual_clock;
+  while (!device_lost_.load(std::memory_order_relaxed)) {
+    // The next force tick, after every vibration tick due before it (a force tick first on a tie).
+    const double tf = static_cast<double>(vk_force_ + 1) / fr;
+    const double tv = static_cast<double>(vk_vibration_ + 1) / vr;
+    if (vib && tv < tf) {
+      if (tv > t_s) break;
+      clock.Set(tv);
+      VibrationStep(++vk_vibration_, tv, 0.0);
+      continue;
+    }
+    if (tf > t_s) break;
+    clock.Set(tf);
+    ForceStep(++vk_force_, tf, 0.0);
+  }
+  return !device_lost_.load();
+}
+
 void RtEngine::RunFor(std::chrono::duration<double> duration) {
+  if (options_.virtual_clock) {
+    Start();
+    AdvanceTo(duration.count());
+    Stop();
+    return;
+  }
   Start();
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(duration);
   while (Clock::now() < end && !device_lost_.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
@@ -109,54 +148,77 @@ void RtEngine::ForceLoop() {
   const double rate = renderer_.options().force_rate_hz;
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
   std::uint64_t k = 0;
-  float rec[15];
   while (running_.load(std::memory_order_relaxed)) {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
     SleepUntil(deadline);
     const auto woke = Clock::now();
-    const double late_s = std::chrono::duration<double>(woke - deadline).count();
-    const double now_s = std::chrono::duration<double>(woke - t0_).count();
-    force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s, std::memory_order_relaxed);
-    AtomicMax(force_jitter_max_, late_s);
-    if (late_s > 1.0 / rate) force_misses_.fetch_add(1, std::memory_order_relaxed);
-    renderer::DeviceSample sample;
-    renderer::ForceCommand cmd;
-    const bool read_ok = device_.Read(&sample);
-    if (read_ok) {
-      auto& snap = last_sample_.WriteSlot();
-      for (int i = 0; i < 3; ++i) snap.p[i] = sample.state.p_m[i], snap.v[i] = sample.state.v_mps[i];
-      snap.t = sample.t_s;
-      last_sample_.Publish();
-    }
-    if (read_ok) cmd = renderer_.ForceTick(sample, now_s);
-    // The watchdog has the last word: zero force on any fault, this very tick.
-    const Eigen::Vector3d command =
-        watchdog_.Check(read_ok, sample, now_s, late_s, 1.0 / rate, read_ok ? cmd.force_N : Eigen::Vector3d::Zero());
-    const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault;
-    if (!read_ok) {
-      disconnects_.fetch_add(1, std::memory_order_relaxed);
-      device_lost_.store(true);
-    } else if (watchdog_.last() == FaultKind::kDeadlineMiss) {
-      miss_faults_.fetch_add(1, std::memory_order_relaxed);
-    }
-    device_.WriteForce(command);
-    force_ticks_.fetch_add(1, std::memory_order_relaxed);
-    force_last_s_.store(now_s, std::memory_order_relaxed);
-    if (force_stream_) {
-      const auto& s = sample.state;
-      const float v[15] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
-                           static_cast<float>(s.p_m.z()),   static_cast<float>(s.v_mps.x()),
-                           static_cast<float>(s.v_mps.y()), static_cast<float>(s.v_mps.z()),
-                           static_cast<float>(cmd.raw.force_N.x()), static_cast<float>(cmd.raw.force_N.y()),
-                           static_cast<float>(cmd.raw.force_N.z()), static_cast<float>(command.x()),
-                           static_cast<float>(command.y()), static_cast<float>(command.z()),
-                           static_cast<float>(cmd.raw.normal_force_N),
-                           static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f};
-      std::memcpy(rec, v, sizeof v);
-      force_stream_->Push(static_cast<double>(k) / rate, rec);
-    }
+    ForceStep(k, std::chrono::duration<double>(woke - t0_).count(), std::chrono::duration<double>(woke - deadline).count());
   }
   if (options_.on_thread_exit) options_.on_thread_exit();
+}
+
+void RtEngine::Record(db::TrajectoryStream* s, double t_s, const float* v) noexcept {
+  // On a virtual clock nothing waits on this thread: wait for the writer rather than lose a
+  // sample. On the real clock a full queue counts an overflow (the writer fell behind).
+  if (options_.virtual_clock)
+    while (s->free_slots() == 0) std::this_thread::yield();
+  s->Push(t_s, v);
+}
+
+void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept {
+  const double rate = renderer_.options().force_rate_hz;
+  force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s, std::memory_order_relaxed);
+  AtomicMax(force_jitter_max_, late_s);
+  if (late_s > 1.0 / rate) force_misses_.fetch_add(1, std::memory_order_relaxed);
+  renderer::DeviceSample fresh;
+  renderer::ForceCommand cmd;
+  const devices::ReadResult rr = device_.Read(&fresh);
+  if (rr == devices::ReadResult::kOk) {
+    // Device frame -> sample frame (the renderer's surface: base plane z = 0, +z out of it).
+    const Eigen::Isometry3d& T = options_.sample_from_device;
+    last_good_.state.p_m = T * fresh.state.p_m;
+    last_good_.state.v_mps = T.linear() * fresh.state.v_mps;
+    last_good_.t_s = fresh.t_s;
+    have_good_ = true;
+    auto& snap = last_sample_.WriteSlot();
+    for (int i = 0; i < 3; ++i) snap.p[i] = last_good_.state.p_m[i], snap.v[i] = last_good_.state.v_mps[i];
+    snap.t = last_good_.t_s;
+    last_sample_.Publish();
+  } else if (rr == devices::ReadResult::kNoNewData) {
+    empty_reads_.fetch_add(1, std::memory_order_relaxed);
+  }
+  // No new data: the newest good sample again (the stale check bounds how long).
+  const renderer::DeviceSample& sample = last_good_;
+  const bool render = rr != devices::ReadResult::kLost && have_good_;
+  if (render) cmd = renderer_.ForceTick(sample, now_s);
+  if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
+  // The watchdog has the last word: zero force on any fault or lost read, this very tick.
+  const Eigen::Vector3d command =
+      watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate, render ? cmd.force_N : Eigen::Vector3d::Zero());
+  const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault || !render;
+  if (watchdog_.last() == FaultKind::kDisconnect) {
+    disconnects_.fetch_add(1, std::memory_order_relaxed);
+    device_lost_.store(true);
+  } else if (watchdog_.last() == FaultKind::kDeadlineMiss) {
+    miss_faults_.fetch_add(1, std::memory_order_relaxed);
+  }
+  // Sample frame -> device frame.
+  device_.WriteForce(options_.sample_from_device.linear().transpose() * command);
+  force_ticks_.fetch_add(1, std::memory_order_relaxed);
+  force_last_s_.store(now_s, std::memory_order_relaxed);
+  if (force_stream_) {
+    const auto& s = sample.state;
+    const float v[16] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
+                         static_cast<float>(s.p_m.z()),   static_cast<float>(s.v_mps.x()),
+                         static_cast<float>(s.v_mps.y()), static_cast<float>(s.v_mps.z()),
+                         static_cast<float>(cmd.raw.force_N.x()), static_cast<float>(cmd.raw.force_N.y()),
+                         static_cast<float>(cmd.raw.force_N.z()), static_cast<float>(command.x()),
+                         static_cast<float>(command.y()), static_cast<float>(command.z()),
+                         static_cast<float>(cmd.raw.normal_force_N),
+                         static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f,
+                         static_cast<float>(late_s)};
+    Record(force_stream_, static_cast<double>(k) / rate, v);
+  }
 }
 
 void RtEngine::VibrationLoop() {
@@ -168,24 +230,31 @@ void RtEngine::VibrationLoop() {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
     SleepUntil(deadline);
     const auto woke = Clock::now();
-    const double late_s = std::chrono::duration<double>(woke - deadline).count();
-    AtomicMax(vibration_jitter_max_, late_s);
-    if (late_s > 1.0 / rate) vibration_misses_.fetch_add(1, std::memory_order_relaxed);
-    const double a = renderer_.VibrationTick();
-    if (actuator_) actuator_->Write(a);
-    vibration_ticks_.fetch_add(1, std::memory_order_relaxed);
-    vibration_last_s_.store(std::chrono::duration<double>(woke - t0_).count(), std::memory_order_relaxed);
-    if (vibration_stream_) {
-      const float v = static_cast<float>(a);
-      vibration_stream_->Push(static_cast<double>(k) / rate, &v);
-    }
+    VibrationStep(k, std::chrono::duration<double>(woke - t0_).count(), std::chrono::duration<double>(woke - deadline).count());
   }
   if (options_.on_thread_exit) options_.on_thread_exit();
+}
+
+void RtEngine::VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept {
+  const double rate = renderer_.options().vibration_rate_hz;
+  AtomicMax(vibration_jitter_max_, late_s);
+  if (late_s > 1.0 / rate) vibration_misses_.fetch_add(1, std::memory_order_relaxed);
+  const double a = renderer_.VibrationTick();
+  if (actuator_) actuator_->Write(a);
+  vibration_ticks_.fetch_add(1, std::memory_order_relaxed);
+  vibration_last_s_.store(now_s, std::memory_order_relaxed);
+  if (vibration_stream_) {
+    const float v = static_cast<float>(a);
+    Record(vibration_stream_, static_cast<double>(k) / rate, &v);
+  }
 }
 
 EngineStats RtEngine::Stats() const {
   EngineStats s;
   s.force_ticks = force_ticks_.load();
+  s.contact_ticks = contact_ticks_.load();
+  s.empty_reads = empty_reads_.load();
+  s.lost_reads = watchdog_.lost_reads();
   s.vibration_ticks = vibration_ticks_.load();
   s.force_deadline_misses = force_misses_.load();
   s.vibration_deadline_misses = vibration_misses_.load();

@@ -21,8 +21,11 @@
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
-#include "hapticlab/runner/sim_lab.hpp"
+#include "hapticlab/sim/falcon_twin.hpp"
+#include "hapticlab/sim/sim_device.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
 #include "adaptive_phase.hpp"
+#include "stimulus_side.hpp"
 
 namespace hapticlab::runner {
 namespace {
@@ -30,6 +33,11 @@ namespace {
 namespace fs = std::filesystem;
 using nlohmann::json;
 using protocols::PhaseKind;
+using sim::Observer;
+using sim::ProfileSet;
+
+// Back-ends whose sessions are simulated (a simulated hand, the simulated observer).
+bool IsSimulated(const std::string& device) { return device == "sim" || device == "falcon-twin"; }
 
 // Everything a session needs besides the database: models, profiles, observer.
 struct Lab {
@@ -40,13 +48,13 @@ struct Lab {
 };
 
 Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
-  const bool sim = device == "sim";
+  const bool sim = IsSimulated(device);
   Lab lab;
   lab.protocol = &p;
   const fs::path dir = fs::path(p.file).parent_path();
   if (p.profiles.empty() && sim)
     throw InputError(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
-  if (!p.profiles.empty()) lab.profiles = LoadProfiles((dir / p.profiles).string());
+  if (!p.profiles.empty()) lab.profiles = sim::LoadProfiles((dir / p.profiles).string());
   Diagnostics d;
   for (const auto& m : p.materials) {
     const auto prof = lab.profiles.profiles.find(m.profile);
@@ -61,7 +69,7 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       continue;
     }
     if (m.model == "placeholder") {
-      auto model = PlaceholderModel(prof->second);
+      auto model = sim::PlaceholderModel(prof->second);
       lab.model_hashes[m.id] = db::HashText(renderer::MaterialToToml(model));
       lab.models.emplace(m.id, std::move(model));
     } else {
@@ -74,40 +82,14 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
   return lab;
 }
 
-renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t seed) {
-  renderer::RenderOptions o;
-  o.algorithm = renderer::ParseForceAlgorithm(m.algorithm);
-  o.vibration = m.vibration;
-  o.hybrid_filter = m.hybrid_filter;
-  o.force_rate_hz = 1000;
-  o.vibration_rate_hz = 10000;
-  o.stale_after_s = 1e9;  // the simulated device is never stale
-  o.seed = seed;
-  return o;
-}
-
 struct Outcome {
   bool aborted = false;  // the experimenter aborted in the UI
   bool fault = false;
+  bool untouched = false;  // a side where the stylus never met the surface
   std::string fault_detail;
   std::vector<db::Rating> ratings;
   double stimulus_s = 0;
 };
-
-// Runs one trial in the simulated lab and records the interactions.
-// Plays a simulated interaction's stylus path to the UI in (scaled) real time.
-bool PlayToUi(SessionUi& ui, const TrialScreen& screen, int side, const Interaction& in, double duration_s, double speed) {
-  const std::size_t n = in.force.size() / 15;
-  if (n == 0) return true;
-  const auto t0 = std::chrono::steady_clock::now();
-  for (;;) {
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed;
-    if (t >= duration_s) return true;
-    const auto i = std::min(n - 1, static_cast<std::size_t>(t * in.force_rate_hz));
-    const Eigen::Vector3d p(in.force[i * 15], in.force[i * 15 + 1], in.force[i * 15 + 2]);
-    if (!ui.Stimulus(screen, side, p, duration_s - t)) return false;
-  }
-}
 
 // The participant's ratings from the UI, clamped to the scale, with the response time from
 // the rating screen's appearance; false when the experimenter aborted.
@@ -141,128 +123,59 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
   return s;
 }
 
-Outcome ExecuteSim(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
-                   const RunOptions& opt, db::TrajectoryWriter* writer, const TrialScreen& screen) {
+// Runs one trial, simulated or on hardware, through the one trial path: each side for the
+// stimulus duration through internal::RunStimulusSide (the method's renderer, or for a real
+// sample zero force: the device only measures, inside the real-time engine over the rig's
+// device and actuator, with the watchdog and the trajectory writer). A watchdog fault in
+// either side faults the trial; a side that touched nothing is reported. Ratings come from
+// the participant window, or on a simulated rig without one from the simulated observer
+// rating what the hand felt.
+Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
+                     const RunOptions& opt, HardwareRig& rig, db::TrajectoryWriter* writer, const TrialScreen& screen,
+                     db::Database& database, std::int64_t session) {
   const auto& p = *lab.protocol;
   Outcome out;
-  Rng rng(DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts)));
   if (t.phase == "training") return out;  // free exploration, not rated
+  const std::uint64_t trial_seed =
+      DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts));
+  Rng rng(trial_seed);
   const double dur = p.stimulus_duration_s;
-  const Stroke s = DrawStroke(rng);
-  // The two stimuli of the trial, in the order the participant meets them (left, right).
-  auto interact = [&](const std::string& stim, const Stroke& st) {
-    const auto colon = stim.find(':');
-    const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
-    if (kind == "real") return StrokeReal(lab.profiles.profiles.at(p.FindMaterial(id)->profile), st, dur, rng.NextU64());
-    const auto* method = p.FindMethod(t.method);
-    return StrokeVirtual(lab.models.at(id), MethodOptions(*method, rng.NextU64()), st, dur);
-  };
-  const Interaction left = interact(t.left, s);
-  const Interaction right = interact(t.right, JitterStroke(s, rng));
-  out.stimulus_s = 2 * dur;
-  if (opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate) {
-    out.fault = true;
-    out.fault_detail = "simulated device fault (injected): force driven to zero, trial re-queued";
-    return out;
+  const bool simulated = rig.sim != nullptr;
+  // The simulated participant's exploration: one stroke, the same with ~10 % variation on
+  // the other side.
+  std::array<sim::Stroke, 2> strokes{};
+  if (simulated) {
+    strokes[0] = sim::DrawStroke(rng);
+    strokes[1] = sim::JitterStroke(strokes[0], rng);
   }
-  if (left.faults + right.faults > 0) {
-    out.fault = true;
-    out.fault_detail = fmt::format("renderer reported {} faulted ticks", left.faults + right.faults);
-    return out;
-  }
-  if (writer && opt.record != RecordMode::kNone) {
-    for (const auto& [side, in] : {std::pair{"left", &left}, std::pair{"right", &right}}) {
-      auto* fs_ = writer->OpenStream(t.id, std::string(side) + "_force", in->force_rate_hz, ForceStreamChannels());
-      const std::size_t nf = in->force.size() / 15;
-      for (std::size_t i = 0; i < nf; ++i)
-        while (!fs_->Push(static_cast<double>(i) / in->force_rate_hz, &in->force[i * 15])) writer->Flush();
-      writer->CloseStream(fs_);
-      if (opt.record == RecordMode::kAll) {
-        auto* vs = writer->OpenStream(t.id, std::string(side) + "_vibration", in->vibration_rate_hz, VibrationStreamChannels());
-        for (std::size_t i = 0; i < in->vibration.size(); ++i)
-          while (!vs->Push(static_cast<double>(i) / in->vibration_rate_hz, &in->vibration[i])) writer->Flush();
-        writer->CloseStream(vs);
-      }
-    }
-  }
-  if (opt.ui) {
-    // The participant at the screen rates; the simulated strokes are what the screen shows.
-    if (!PlayToUi(*opt.ui, screen, 0, left, dur, opt.ui_playback_speed) ||
-        !PlayToUi(*opt.ui, screen, 1, right, dur, opt.ui_playback_speed)) {
-      out.aborted = true;
-      return out;
-    }
-    out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
-    return out;
-  }
-  for (const auto& c : p.criteria)
-    out.ratings.push_back({c, observer.Rate(c, left.features, right.features, p.scale_min, p.scale_max, rng),
-                           Observer::ResponseTime(rng)});
-  return out;
-}
-
-// Runs one trial on hardware: each side for the stimulus duration through the real-time
-// engine (virtual: the method's renderer; real: zero force, the stylus only records), the
-// participant's ratings from the UI. A watchdog fault in either side faults the trial.
-Outcome ExecuteHardware(const Lab& lab, const db::Trial& t, const RunOptions& opt, db::TrajectoryWriter* writer,
-                        const TrialScreen& screen, db::Database& database, std::int64_t session, std::uint64_t seed) {
-  const auto& p = *lab.protocol;
-  Outcome out;
-  if (t.phase == "training") return out;
-  HardwareRig& rig = *opt.rig;
-  const double dur = p.stimulus_duration_s;
-  std::vector<std::string> faults;
+  const bool inject_dropout = simulated && opt.fault_rate > 0 && rng.Uniform() < opt.fault_rate;
+  std::array<sim::Features, 2> felt{};
+  std::vector<std::string> faults, untouched;
   for (int side = 0; side < 2; ++side) {
     const std::string& stim = side == 0 ? t.left : t.right;
     const auto colon = stim.find(':');
     const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
-    renderer::RenderOptions ro;
-    const renderer::MaterialModel* model = &lab.models.at(id);
-    if (kind == "real") {
-      // The real sample under the stylus: the device only measures; its force is held at zero.
-      ro.vibration = false;
-      ro.max_force_N = 1e-9;
-    } else {
-      ro = MethodOptions(*p.FindMethod(t.method), DeriveSeed(seed, static_cast<std::uint64_t>(side)));
-      ro.stale_after_s = 0.005;
-      ro.max_force_N = std::min(ro.max_force_N, rig.device->Capabilities().max_force_N);
+    internal::StimulusSide s;
+    s.model = &lab.models.at(id);
+    s.real = kind == "real";
+    if (!s.real)
+      s.options = internal::MethodOptions(*p.FindMethod(t.method), DeriveSeed(trial_seed, static_cast<std::uint64_t>(side)));
+    s.sample = side;
+    s.stroke = strokes[static_cast<std::size_t>(side)];
+    if (simulated && s.real) {
+      s.truth = &lab.profiles.profiles.at(p.FindMaterial(id)->profile);
+      s.truth_seed = rng.NextU64();
     }
-    renderer::HybridRenderer r(*model, ro);
-    db::TrajectoryStream *fs_ = nullptr, *vs = nullptr;
-    const std::string name = side == 0 ? "left" : "right";
-    if (writer && opt.record != RecordMode::kNone)
-      fs_ = writer->OpenStream(t.id, name + "_force", ro.force_rate_hz, ForceStreamChannels());
-    if (writer && opt.record == RecordMode::kAll && ro.vibration && rig.actuator)
-      vs = writer->OpenStream(t.id, name + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
-    RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, {}, fs_, vs);
-    engine.Start();
-    const auto t0 = std::chrono::steady_clock::now();
-    const Eigen::Vector2d centre = side == 0 ? rig.left_sample_m : rig.right_sample_m;
-    bool go_on = true;
-    for (;;) {
-      const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (el >= dur) break;
-      const auto s = engine.LastSample();
-      const Eigen::Vector3d rel(s.state.p_m.x() - centre.x(), s.state.p_m.y() - centre.y(), s.state.p_m.z());
-      if (opt.ui && !opt.ui->Stimulus(screen, side, rel, dur - el)) {
-        go_on = false;
-        break;
-      }
-      if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    engine.Stop();
-    if (fs_) writer->CloseStream(fs_);
-    if (vs) writer->CloseStream(vs);
-    FaultEvent e;
-    while (engine.watchdog().PopEvent(&e))
-      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
-                         .detail = fmt::format("{} at {:.3f} s ({} side, tick {})", FaultName(e.kind), e.t_s, name, e.tick)});
-    if (engine.watchdog().tripped()) {
-      const auto st = engine.Stats();
-      faults.push_back(fmt::format("{} side: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", name, st.disconnects,
-                                   st.nan_faults, st.stale_faults, st.miss_faults));
-    }
-    if (!go_on) {
+    s.dropout_at_s = inject_dropout && side == 0 ? 0.3 * dur : -1;
+    s.stream = side == 0 ? "left" : "right";
+    s.label = s.stream + " side";
+    s.stimulus = stim;
+    s.report_side = side;
+    const auto r = internal::RunStimulusSide(s, rig, dur, opt, writer, database, session, t, screen, side);
+    if (r.fault) faults.push_back(r.detail);
+    if (r.untouched) untouched.push_back(r.detail);
+    felt[static_cast<std::size_t>(side)] = r.felt;
+    if (r.aborted) {
       out.aborted = true;
       return out;
     }
@@ -273,7 +186,18 @@ Outcome ExecuteHardware(const Lab& lab, const db::Trial& t, const RunOptions& op
     out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) + "; force was zeroed, trial re-queued";
     return out;
   }
-  out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
+  if (!untouched.empty()) {
+    out.fault = out.untouched = true;
+    out.fault_detail = "nothing was touched: " + fmt::format("{}", fmt::join(untouched, "; ")) +
+                       "; check the rig's sample poses (hapticlab rig show); trial re-queued";
+    return out;
+  }
+  if (opt.ui) {
+    out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
+    return out;
+  }
+  for (const auto& c : p.criteria)
+    out.ratings.push_back({c, observer.Rate(c, felt[0], felt[1], p.scale_min, p.scale_max, rng), Observer::ResponseTime(rng)});
   return out;
 }
 
@@ -290,20 +214,34 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
   sum.session_id = session;
   sum.participant = part.code;
   const Observer observer(lab.profiles.observer, DeriveSeed(part.seed, 0xABCDEF), p.criteria);
-  if (opt.device != "sim") {
-    if (!opt.rig || !opt.rig->device || !opt.ui)
+  // Without a rig, a simulated session builds the generic simulated rig.
+  std::unique_ptr<sim::SimRig> own_sim;
+  HardwareRig own_rig;
+  HardwareRig* rig = opt.rig;
+  if (!rig) {
+    if (opt.device != "sim")
       throw InputError("", 0, "--device",
                        "a hardware session needs an opened device and the participant window (--ui) for the ratings");
-    database.LogEvent({.session_id = session, .kind = "device", .detail = opt.rig->description});
+    own_sim = std::make_unique<sim::SimRig>(sim::SimDeviceModel{.seed = DeriveSeed(part.seed, 0x51D)}, sim::DefaultSamplePoses());
+    own_rig.device = own_sim->device;
+    own_rig.actuator = &own_sim->actuator;
+    own_rig.device_from_sample = own_sim->true_device_from_sample;
+    own_rig.sim = own_sim.get();
+    own_rig.description = "sim (generic simulated device, simulated hand)";
+    rig = &own_rig;
   }
+  if (!rig->device || (!rig->sim && !opt.ui))
+    throw InputError("", 0, "--device",
+                     "a hardware session needs an opened device and the participant window (--ui) for the ratings");
+  if (opt.device != "sim" || opt.rig) database.LogEvent({.session_id = session, .kind = "device", .detail = rig->description});
   // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
   struct Noise {
     devices::MaskingNoise* n;
     ~Noise() {
       if (n) n->SetNoiseLevel(0);
     }
-  } noise{p.masking_noise && opt.rig ? opt.rig->noise : nullptr};
-  if (noise.n) noise.n->SetNoiseLevel(opt.rig->noise_rms_fs);
+  } noise{p.masking_noise ? rig->noise : nullptr};
+  if (noise.n) noise.n->SetNoiseLevel(rig->noise_rms_fs);
   db::TrajectoryWriter writer(database.path());
   constexpr int kMaxTrajectoryFaults = 3;  // in a row: the disk or the database is the problem
   int trajectory_faults = 0;
@@ -316,6 +254,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       last_material = t.material;  // plan order: the last completed trial precedes the next
     }
   const bool constrained = p.randomization.no_immediate_repeat;
+  int untouched_in_a_row = 0;
   std::set<std::int64_t> break_before;  // trials the plan puts a break before
   for (const auto& e : database.Events(session))
     if (e.kind == "break-planned" && e.trial_id) break_before.insert(*e.trial_id);
@@ -364,12 +303,9 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       ++t.attempts;
       ++sum.executed;
       const auto screen = ScreenOf(p, t, sum.completed + 1, sum.planned);
-      const Outcome o = opt.device == "sim"
-                            ? ExecuteSim(lab, observer, t, part.seed, opt, &writer, screen)
-                            : ExecuteHardware(lab, t, opt, &writer, screen, database, session,
-                                              DeriveSeed(part.seed, static_cast<std::uint64_t>(t.plan_index) * 64 +
-                                                                        static_cast<std::uint64_t>(t.attempts)));
+      const Outcome o = ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
       sum.simulated_s += o.stimulus_s;
+      untouched_in_a_row = o.untouched ? untouched_in_a_row + 1 : 0;
       if (o.aborted) {
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "abort",
                            .detail = "the experimenter aborted in the console; 'study resume' continues with this trial"});
@@ -385,6 +321,16 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         if (opt.ui) opt.ui->Event(fmt::format("trial {}: {} (re-queued)", t.plan_index + 1, o.fault_detail));
         t.status = db::kTrialFaulted;
         queue.push_back(t);
+        if (untouched_in_a_row >= opt.max_untouched_trials) {
+          database.LogEvent({.session_id = session, .kind = "abort",
+                             .detail = fmt::format("{} trials in a row touched nothing: the rig's sample poses are "
+                                                   "probably wrong (hapticlab rig show / rig calibrate)",
+                                                   untouched_in_a_row)});
+          database.EndSession(session, "aborted");
+          sum.status = "aborted";
+          sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          return sum;
+        }
         continue;
       }
       // The ratings commit only with every trajectory stream of this attempt whole.
@@ -413,7 +359,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
     }
   }
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
-  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed, opt, &writer, &sum.executed);
+  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed, opt, *rig, &writer, &sum.executed);
   sum.planned += adaptive.added;
   sum.completed += adaptive.completed;
   sum.faults += adaptive.faults;
@@ -482,6 +428,10 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                      {"participant_seed", part.seed},
                      {"software", std::string(kVersion) + "+" + kGitSha},
                      {"device", opt.device},
+                     {"rig", opt.rig ? json{{"description", opt.rig->description},
+                                            {"file_sha256", opt.rig->rig_file_hash},
+                                            {"content", opt.rig->calibration}}
+                                     : json{{"description", "generic simulated rig"}}},
                      {"model_hashes", models},
                      {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
@@ -493,7 +443,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
     session = database.StartSession({.participant_id = pid,
                                      .software_version = std::string(kVersion) + "+" + kGitSha,
                                      .device = opt.device,
-                                     .calibration = opt.device == "sim" ? "simulated (no calibration)" : "",
+                                     .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
                                      .provenance_json = prov.dump(),
                                      .plan_json = plan_json.dump()});
     std::vector<db::Trial> rows;
@@ -503,7 +453,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       .repetition = t.repetition, .left = t.left, .right = t.right});
     for (const auto& r : rows) ids.push_back(database.AddTrial(r));
     database.LogEvent({.session_id = session, .kind = "consent",
-                       .detail = opt.device == "sim" ? "simulated participant" : "consent form signed"});
+                       .detail = IsSimulated(opt.device) ? "simulated participant" : "consent form signed"});
     LogPlanEvents(database, session, plan, ids, p);
     database.Exec("COMMIT");
   } catch (...) {

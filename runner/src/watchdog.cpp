@@ -23,15 +23,30 @@ void Watchdog::Reset() noexcept {
   last_ = FaultKind::kNone;
   misses_ = 0;
   run_ = 0;
+  lost_run_ = 0;
+  last_ok_s_ = 0;
 }
 
-Eigen::Vector3d Watchdog::Check(bool read_ok, const renderer::DeviceSample& s, double now_s, double late_s, double period_s,
-                                const Eigen::Vector3d& force) noexcept {
+Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s, double late_s,
+                                double period_s, const Eigen::Vector3d& force) noexcept {
   ++tick_;
   misses_ = late_s > period_s ? misses_ + 1 : 0;
   FaultKind k = FaultKind::kNone;
-  if (!read_ok) k = FaultKind::kDisconnect;
-  else if (!s.state.p_m.allFinite() || !s.state.v_mps.allFinite() || !std::isfinite(s.t_s)) k = FaultKind::kNaN;
+  if (read == devices::ReadResult::kOk) {
+    lost_run_ = 0;
+    last_ok_s_ = now_s;
+  }
+  if (read == devices::ReadResult::kLost) {
+    ++lost_run_;
+    lost_reads_.fetch_add(1, std::memory_order_relaxed);
+    if (lost_run_ < o_.max_lost_reads && now_s - last_ok_s_ < o_.max_lost_s) {
+      // A short loss: no sample this tick, so no force; not (yet) a fault.
+      run_ = 0;
+      last_ = FaultKind::kNone;
+      return Eigen::Vector3d::Zero();
+    }
+    k = FaultKind::kDisconnect;
+  } else if (!s.state.p_m.allFinite() || !s.state.v_mps.allFinite() || !std::isfinite(s.t_s)) k = FaultKind::kNaN;
   else if (now_s - s.t_s > o_.stale_after_s) k = FaultKind::kStale;
   else if (misses_ >= o_.max_consecutive_misses) k = FaultKind::kDeadlineMiss;
   else if (!force.allFinite() || force.norm() > o_.max_force_N * (1 + 1e-9)) k = FaultKind::kBadCommand;

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <utility>
+
 #include <cstring>
 #include <deque>
 #include <fstream>
@@ -38,6 +40,8 @@ class FakeFalcon : public UsbTransport {
   int corrupt_echo_at = -1;        // corrupt the echo of this upload byte (once)
   bool dead = false;               // never answers
   bool firmware_runs = true;       // answers status packets after loading
+  bool unplugged = false;          // reads fail with a USB error
+  int split_replies_at = 0;        // > 0: the next read returns only this many payload bytes
   std::array<std::int16_t, 3> encoders{0, 0, 0};
   std::vector<std::array<std::int16_t, 3>> motors;  // commands seen in normal mode
 
@@ -88,13 +92,15 @@ class FakeFalcon : public UsbTransport {
     return n;
   }
   int BulkRead(std::uint8_t* d, int n, unsigned) override {
+    if (unplugged) return -4;  // LIBUSB_ERROR_NO_DEVICE
     d[0] = 0x31;  // FTDI modem status bytes
     d[1] = 0x60;
     if (replies_.empty()) return 2;
     auto r = replies_.front();
-    const int k = std::min(static_cast<int>(r.size()), n - 2);
+    int k = std::min(static_cast<int>(r.size()), n - 2);
+    if (split_replies_at > 0) k = std::min(k, std::exchange(split_replies_at, 0));  // one split read
     std::memcpy(d + 2, r.data(), static_cast<std::size_t>(k));
-    if (k < static_cast<int>(r.size())) replies_.front().erase(r.begin(), r.begin() + k);
+    if (k < static_cast<int>(r.size())) replies_.front().erase(replies_.front().begin(), replies_.front().begin() + k);
     else replies_.pop_front();
     return k + 2;
   }
@@ -228,7 +234,7 @@ TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
   double t = 0;
   FalconDevice dev(std::move(fake), [&] { return t; });
   renderer::DeviceSample s;
-  ASSERT_TRUE(dev.Read(&s));
+  ASSERT_EQ(dev.Read(&s), ReadResult::kOk);
   EXPECT_LT((s.state.p_m - p0).norm(), 2e-4) << "within the encoder quantization";
   const Eigen::Vector3d q(EncoderToAngle(usb->encoders[0]), EncoderToAngle(usb->encoders[1]), EncoderToAngle(usb->encoders[2]));
   Eigen::Vector3d fk;
@@ -237,20 +243,44 @@ TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
   // A force command becomes motor efforts -J^-T f * scale on the next exchange.
   dev.WriteForce(Eigen::Vector3d(0, 0, 2.0));
   t = 0.001;
-  ASSERT_TRUE(dev.Read(&s));
+  ASSERT_EQ(dev.Read(&s), ReadResult::kOk);
   Eigen::Vector3d tau;
   ASSERT_TRUE(ForceToTorque(s.state.p_m, Eigen::Vector3d(0, 0, 2.0), &tau));
   ASSERT_EQ(usb->motors.size(), 2u);
   for (int k = 0; k < 3; ++k) EXPECT_NEAR(usb->motors[1][static_cast<std::size_t>(k)], -tau[k] * 10000, 1.0);
   // Non-finite force: zero effort.
   dev.WriteForce(Eigen::Vector3d(std::nan(""), 0, 0));
-  ASSERT_TRUE(dev.Read(&s));
+  ASSERT_EQ(dev.Read(&s), ReadResult::kOk);
   EXPECT_EQ(usb->motors.back(), (std::array<std::int16_t, 3>{0, 0, 0}));
-  // Unplugged: reads fail and the device reports itself lost.
+  // Firmware gone: the link answers with modem status only, reads carry no new data.
   usb->firmware_runs = false;
-  for (int k = 0; k < 5; ++k) EXPECT_FALSE(dev.Read(&s));
-  EXPECT_TRUE(dev.lost());
+  for (int k = 0; k < 5; ++k) EXPECT_EQ(dev.Read(&s), ReadResult::kNoNewData);
+  EXPECT_EQ(dev.empty_reads(), 5u);
+  EXPECT_EQ(dev.packets(), 3u);
+  // Unplugged: the exchange fails.
+  usb->unplugged = true;
+  EXPECT_EQ(dev.Read(&s), ReadResult::kLost);
+  EXPECT_EQ(dev.lost_reads(), 1u);
   EXPECT_EQ(dev.Capabilities().name, "falcon");
+}
+
+TEST(Falcon, APacketSplitAcrossTwoReadsIsReassembled) {
+  auto fake = std::make_unique<FakeFalcon>();
+  FakeFalcon* usb = fake.get();
+  usb->drop_handshakes = 0;
+  ASSERT_TRUE(LoadFirmware(*usb, Firmware(64)).ok);
+  usb->encoders = {120, -340, 55};
+  double t = 0;
+  FalconDevice dev(std::move(fake), [&] { return t; });
+  renderer::DeviceSample s;
+  // Each status packet arrives in two USB reads: 7 bytes, then 9.
+  usb->split_replies_at = 7;
+  ASSERT_EQ(dev.Read(&s), ReadResult::kNoNewData) << "the first half alone is no packet";
+  t = 0.001;
+  ASSERT_EQ(dev.Read(&s), ReadResult::kOk) << "the second half completes it";
+  EXPECT_EQ(dev.last_status().encoder, (std::array<std::int16_t, 3>{120, -340, 55}));
+  EXPECT_EQ(dev.malformed_packets(), 0);
+  EXPECT_EQ(dev.packets(), 1u);
 }
 
 }  // namespace

@@ -1,7 +1,9 @@
 // Adaptive phases through the study runner with the simulated lab: every trial's stimulus
 // value and answer recorded, the staircase's record follows its rules, resume continues
 // exactly (an interrupted session records what an uninterrupted one does), QUEST+ finds the
-// simulated observer's threshold.
+// simulated observer's threshold. Every interval runs through the one trial path (the
+// real-time engine on the simulated rig, the hand stroking it), on the generic simulated
+// device and on the Falcon twin alike; a link dropout faults the trial through the watchdog.
 
 #include <gtest/gtest.h>
 
@@ -14,6 +16,8 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/psychophysics/quest_plus.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/runner/rig.hpp"
+#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -117,6 +121,96 @@ TEST(AdaptivePhase, StaircaseRecordsEveryTrialByItsRules) {
   EXPECT_EQ(streams, (std::set<std::string>{"i1_force", "i2_force"}));
 }
 
+TEST(AdaptivePhase, EveryIntervalRunsThroughTheEngineOnTheSimulatedRig) {
+  // Each interval of each trial is one run of the real-time engine on the rig's virtual clock
+  // for exactly the stimulus duration: the hand was stepped once per force tick, the Hybrid
+  // method ran 10 vibration ticks per force tick, the stylus met the rendered surface, and
+  // the force stream of each interval holds every tick.
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  std::vector<SideReport> sides;
+  RunOptions o{.db_path = dir.File("e.db"), .participant = "P01", .record = RecordMode::kForce};
+  o.on_side = [&](const SideReport& r) { sides.push_back(r); };
+  const auto s = RunStudy(p, o);
+  ASSERT_EQ(s.status, "completed");
+  EXPECT_EQ(s.faults, 0);
+  ASSERT_EQ(static_cast<int>(sides.size()), 2 * s.completed);
+  const auto force_ticks = static_cast<std::uint64_t>(std::lround(p.stimulus_duration_s * 1000));
+  for (std::size_t i = 0; i < sides.size(); ++i) {
+    const auto& r = sides[i];
+    EXPECT_EQ(r.side, static_cast<int>(i % 2)) << "interval index";
+    EXPECT_EQ(r.stimulus, "virtual:Denim");
+    EXPECT_EQ(r.engine.force_ticks, force_ticks);
+    EXPECT_EQ(r.hand_ticks, force_ticks);
+    EXPECT_EQ(r.engine.vibration_ticks, 10 * force_ticks);
+    EXPECT_EQ(r.engine.disconnects + r.engine.nan_faults + r.engine.stale_faults + r.engine.miss_faults, 0u);
+    EXPECT_GE(static_cast<double>(r.contact_ticks), 0.05 * static_cast<double>(force_ticks)) << "trial " << r.plan_index;
+  }
+  db::Database d(o.db_path);
+  std::size_t samples = 0;
+  for (const auto& t : d.Trials(s.session_id))
+    for (const auto& c : d.TrajectoryChunks(t.id)) samples += c.sample_count();
+  EXPECT_EQ(samples, sides.size() * force_ticks);
+}
+
+TEST(AdaptivePhase, TheFalconTwinRecordsWhatTheGenericSimulatedRigDoes) {
+  // The simulated observer answers from its psychometric function, so the record (levels,
+  // intervals, answers) does not depend on which simulated device rendered the intervals;
+  // on the twin every interval went through the real Falcon back-end.
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("sim.db"), .participant = "P01", .record = RecordMode::kNone};
+  ASSERT_EQ(RunStudy(p, o).status, "completed");
+  auto sr = OpenSimulatedRig("falcon-twin", DefaultRig("falcon"));
+  std::uint64_t ticks = 0, contact = 0;
+  RunOptions t = o;
+  t.db_path = dir.File("twin.db");
+  t.device = "falcon-twin";
+  t.rig = &sr->rig;
+  t.on_side = [&](const SideReport& r) {
+    ticks += r.engine.force_ticks;
+    contact += r.contact_ticks;
+  };
+  const auto s = RunStudy(p, t);
+  ASSERT_EQ(s.status, "completed");
+  EXPECT_EQ(s.faults, 0);
+  EXPECT_GT(ticks, 0u);
+  EXPECT_GE(sr->falcon->packets(), ticks) << "one status packet per tick";
+  EXPECT_GT(contact, ticks / 2);
+  EXPECT_EQ(Records(t.db_path), Records(o.db_path));
+}
+
+TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) {
+  test::TempDir dir;
+  std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
+  const auto p = protocols::LoadProtocol(dir.File("p.toml"));
+  RunOptions o{.db_path = dir.File("f.db"), .participant = "P01", .record = RecordMode::kNone, .fault_rate = 0.3};
+  const auto s = RunStudy(p, o);
+  ASSERT_EQ(s.status, "completed");
+  EXPECT_GT(s.faults, 0);
+  db::Database d(o.db_path);
+  int watchdog_events = 0, trial_faults = 0;
+  for (const auto& e : d.Events(s.session_id)) {
+    if (e.kind != "device-fault") continue;
+    watchdog_events += e.detail.rfind("disconnect at ", 0) == 0 && e.detail.find("(interval 1, tick") != std::string::npos;
+    trial_faults += e.detail.rfind("watchdog: interval 1: ", 0) == 0;
+  }
+  EXPECT_EQ(trial_faults, s.faults);
+  EXPECT_GE(watchdog_events, s.faults);
+  // Every faulted trial ran again (none is left unfinished) and the record follows the rules.
+  std::vector<psychophysics::StaircaseTrial> h;
+  int repeated = 0;
+  for (const auto& t : d.Trials(s.session_id)) {
+    EXPECT_EQ(t.status, db::kTrialCompleted);
+    repeated += t.attempts > 1;
+  }
+  EXPECT_GT(repeated, 0);
+  for (const auto& r : Records(o.db_path)) h.push_back({r.track, r.level, r.correct == 1});
+  for (const auto& t : psychophysics::ReplayStaircase(p.phases[0].adaptive->staircase, h)) EXPECT_TRUE(t.done);
+}
+
 TEST(AdaptivePhase, ResumeContinuesExactly) {
   test::TempDir dir;
   std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
@@ -154,8 +248,8 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
     EXPECT_NE(std::string(e.what()).find("phase[0].simulated_observer: missing"), std::string::npos)
         << e.what();
   }
-  // A hardware device: refused before anything is recorded (its interval presentation is not
-  // implemented yet).
+  // A hardware device: refused before anything is recorded (the simulated rigs, sim and
+  // falcon-twin, run adaptive phases).
   std::ofstream(dir.File("q.toml")) << Protocol(kStaircase);
   o.device = "falcon";
   try {
@@ -169,7 +263,7 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
   EXPECT_FALSE(std::filesystem::exists(o.db_path));
 }
 
-// A participant at the window: the simulated strokes of each interval are shown, the answer
+// A participant at the window: the engine's stylus frames of each interval are shown, the answer
 // comes from SessionUi::Choose. This one always picks the first interval, so a trial is
 // correct exactly when the comparison was first.
 class FirstIntervalUi : public SessionUi {

@@ -12,6 +12,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/devices/replay.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -26,7 +27,7 @@ class CirclingDevice : public devices::HapticDevice {
   long nan_from = -1, nan_count = 0;
   devices::DeviceCapabilities Capabilities() const override { return {.name = "circling", .max_force_N = 4}; }
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
-  bool Read(renderer::DeviceSample* out) noexcept override {
+  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
     const long k = reads++;
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
     const double w = 0.05 / 0.01;
@@ -34,7 +35,7 @@ class CirclingDevice : public devices::HapticDevice {
     out->state.v_mps = {-0.05 * std::sin(w * t), 0.05 * std::cos(w * t), 0};
     if (nan_from >= 0 && k >= nan_from && k < nan_from + nan_count) out->state.p_m.x() = std::nan("");
     out->t_s = t;
-    return true;
+    return devices::ReadResult::kOk;
   }
   void WriteForce(const Eigen::Vector3d& f) noexcept override {
     if (f.norm() > max_seen) max_seen = f.norm();
@@ -91,6 +92,8 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   }
   EXPECT_EQ(rated_trials, ui.rated);
   EXPECT_GT(chunks, 0) << "force streams recorded";
+  for (const auto& e : d.Events(se.id))  // on a loaded machine: deadline misses (real clock)
+    if (e.kind == "device-fault") std::printf("%s\n", e.detail.c_str());
   bool device_logged = false;
   for (const auto& e : d.Events(se.id)) device_logged |= e.kind == "device" && e.detail == "circling test device";
   EXPECT_TRUE(device_logged);
@@ -127,6 +130,87 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   bad.ui = nullptr;
   bad.participant = "P11";
   EXPECT_THROW(RunStudy(p, bad), InputError);
+}
+
+// The Falcon twin: the real Falcon back-end (firmware loader, packets, kinematics, force to
+// torque) over the emulated Falcon, driven by the real-time engine with the simulated hand;
+// the session runs like a simulated one and its records show contact in the sample frame.
+TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
+  auto sr = OpenSimulatedRig("falcon-twin", DefaultRig("falcon"));
+  ASSERT_TRUE(sr->sim->twin->firmware_loaded());
+  std::uint64_t virtual_sides = 0, contact = 0, ticks = 0;
+  RunOptions o;
+  o.db_path = dir.File("twin.db");
+  o.participant = "T01";
+  o.device = "falcon-twin";
+  o.rig = &sr->rig;
+  o.record = RecordMode::kForce;
+  o.on_side = [&](const SideReport& r) {
+    ticks += r.engine.force_ticks;
+    contact += r.contact_ticks;
+    virtual_sides += r.stimulus.rfind("virtual:", 0) == 0;
+    EXPECT_EQ(r.engine.lost_reads, 0u);
+  };
+  const auto s = RunStudy(p, o);
+  ASSERT_EQ(s.status, "completed");
+  EXPECT_EQ(s.faults, 0);
+  EXPECT_GT(virtual_sides, 0u);
+  EXPECT_GT(contact, ticks * 8 / 10) << "the hand pressed on the samples through the Falcon";
+  EXPECT_GE(sr->falcon->packets(), ticks) << "one status packet per tick";
+  // The recorded force streams: sample-frame positions near the surface, and on virtual
+  // sides a normal force above 0.3 N in most samples.
+  db::Database d(o.db_path);
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  std::size_t n = 0, pressing = 0, near_surface = 0;
+  for (const auto& t : d.Trials(se.id)) {
+    if (t.phase == "training") continue;
+    for (const auto& c : d.TrajectoryChunks(t.id)) {
+      const bool virt = (c.stream == "left_force" ? t.left : t.right).rfind("virtual:", 0) == 0;
+      for (std::size_t i = 0; i < c.sample_count(); ++i) {
+        const float* r = &c.samples[i * c.channels.size()];
+        near_surface += std::abs(r[2]) < 0.01;
+        if (!virt) continue;
+        ++n;
+        pressing += r[12] > 0.3f;
+      }
+    }
+  }
+  ASSERT_GT(n, 0u);
+  EXPECT_GT(pressing, n * 8 / 10);
+  EXPECT_GT(near_surface, n);  // every side's samples, real sides included
+  const auto prov = se.provenance_json;
+  EXPECT_NE(prov.find("file_sha256"), std::string::npos);
+  EXPECT_NE(se.calibration.find("[sample.left]"), std::string::npos) << "the rig file is recorded";
+}
+
+TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
+  RigFile wrong = DefaultRig("falcon");
+  for (auto& w : wrong.world_from_sample) w.translation() -= w.linear().col(2) * 0.05;  // 5 cm below the truth
+  auto sr = OpenSimulatedRig("falcon-twin", wrong);
+  RunOptions o;
+  o.db_path = dir.File("wrong.db");
+  o.participant = "T02";
+  o.device = "falcon-twin";
+  o.rig = &sr->rig;
+  o.record = RecordMode::kNone;
+  const auto s = RunStudy(p, o);
+  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(s.completed, 4) << "only the (unrendered) training trials";
+  db::Database d(o.db_path);
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  int untouched = 0;
+  bool abort_says_why = false;
+  for (const auto& e : d.Events(se.id)) {
+    untouched += e.kind == "device-fault" && e.detail.find("nothing was touched") != std::string::npos;
+    abort_says_why |= e.kind == "abort" && e.detail.find("sample poses are probably wrong") != std::string::npos;
+  }
+  EXPECT_EQ(untouched, 3);
+  EXPECT_TRUE(abort_says_why);
+  for (const auto& t : d.Trials(se.id)) EXPECT_TRUE(d.Ratings(t.id).empty()) << "no silent trial was rated";
 }
 
 }  // namespace

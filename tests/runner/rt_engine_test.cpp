@@ -81,6 +81,19 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   for (const auto& c : d.TrajectoryChunks(trial)) (c.stream == "force" ? force_samples : vib_samples) += c.sample_count();
   EXPECT_EQ(force_samples, st.force_ticks);
   EXPECT_EQ(vib_samples, st.vibration_ticks);
+  // Each force sample carries how late its tick ran: a loop never wakes before its deadline,
+  // and waking takes time.
+  double late_max = 0;
+  for (const auto& c : d.TrajectoryChunks(trial))
+    if (c.stream == "force") {
+      ASSERT_EQ(c.channels.back(), "late_s");
+      for (std::size_t i = 0; i < c.sample_count(); ++i) {
+        const float late = c.samples[i * c.channels.size() + 15];
+        EXPECT_GE(late, 0.f);
+        late_max = std::max(late_max, static_cast<double>(late));
+      }
+    }
+  EXPECT_GT(late_max, 0.0);
   std::printf("force %.0f Hz, vibration %.0f Hz, force jitter max %.1f us mean %.1f us, misses %llu/%llu\n",
               st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
               st.force_jitter_mean_s * 1e6, static_cast<unsigned long long>(st.force_deadline_misses),
@@ -91,10 +104,10 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
 class FrozenDevice : public devices::HapticDevice {
  public:
   devices::DeviceCapabilities Capabilities() const override { return {}; }
-  bool Read(renderer::DeviceSample* out) noexcept override {
+  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
     out->state.p_m = {0, 0, -0.5e-3};
     out->t_s = 0;  // measured once, never again
-    return true;
+    return devices::ReadResult::kOk;
   }
   void WriteForce(const Eigen::Vector3d& f) noexcept override { last = f; ++writes; }
   Eigen::Vector3d last = Eigen::Vector3d::Ones();
@@ -112,6 +125,104 @@ TEST(RtEngine, StaleDeviceDataDrivesForceToZero) {
   engine.RunFor(std::chrono::milliseconds(100));
   EXPECT_GT(r.counters().stale_faults.load(), 0u);
   EXPECT_EQ(dev.last.norm(), 0.0);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner
+
+namespace hapticlab::runner {
+namespace {
+
+// A stylus held 0.2 mm into the surface, read over a link that returns no new data on a
+// fraction of reads (at random, fixed seed) and is lost for a window of time. Records every
+// commanded force with its tick's time (preallocated).
+class FlakyLink : public devices::HapticDevice {
+ public:
+  FlakyLink(const devices::Clock& clock, double empty_fraction, double lost_from_s, double lost_for_s)
+      : clock_(clock), empty_(empty_fraction), lost_from_(lost_from_s), lost_to_(lost_from_s + lost_for_s) {
+    forces.reserve(10000);
+  }
+  devices::DeviceCapabilities Capabilities() const override { return {.name = "flaky"}; }
+  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
+    t_ = clock_.Now();
+    if (t_ >= lost_from_ && t_ < lost_to_) return devices::ReadResult::kLost;
+    if (rng_.Uniform() < empty_) return devices::ReadResult::kNoNewData;
+    out->state.p_m = {0.05 * t_, 0, -0.2e-3};
+    out->state.v_mps = {0.05, 0, 0};
+    out->t_s = t_;
+    return devices::ReadResult::kOk;
+  }
+  void WriteForce(const Eigen::Vector3d& f) noexcept override {
+    if (forces.size() < forces.capacity()) forces.push_back({t_, f.norm()});
+  }
+  std::vector<std::pair<double, double>> forces;  // (tick time [s], |force| [N])
+
+ private:
+  const devices::Clock& clock_;
+  double empty_, lost_from_, lost_to_, t_ = 0;
+  Rng rng_{11};
+};
+
+TEST(RtEngineLink, TenPercentEmptyReadsDoNotFaultATrial) {
+  const auto m = test::TexturedMaterial();
+  renderer::RenderOptions ro;
+  renderer::HybridRenderer r(m, ro);
+  devices::VirtualClock clock;
+  FlakyLink dev(clock, 0.10, -1, 0);
+  EngineOptions eo;
+  eo.virtual_clock = &clock;
+  RtEngine engine(r, dev, nullptr, eo);
+  engine.Start();
+  {
+    test::NoAllocGuard guard;  // the virtual clock steps the same allocation-free ticks
+    EXPECT_TRUE(engine.AdvanceTo(2.0));
+    EXPECT_EQ(guard.count(), 0u);
+  }
+  engine.Stop();
+  const auto st = engine.Stats();
+  EXPECT_EQ(st.force_ticks, 2000u);
+  EXPECT_EQ(st.vibration_ticks, 20000u);
+  EXPECT_FALSE(engine.watchdog().tripped());
+  EXPECT_GT(st.empty_reads, 150u);
+  EXPECT_LT(st.empty_reads, 250u);
+  EXPECT_EQ(st.lost_reads, 0u);
+  // Each empty read rendered the last sample: the force never dropped (the stylus stays in;
+  // the first 0.1 s is the force filter's rise).
+  std::size_t pushing = 0, ticks = 0;
+  for (const auto& [t, f] : dev.forces)
+    if (t >= 0.1) ++ticks, pushing += f > 0.05;
+  EXPECT_GT(ticks, 1800u);
+  EXPECT_EQ(pushing, ticks - 1) << "all but the closing zero of Stop";
+}
+
+TEST(RtEngineLink, A50msDropoutFaultsTheTrialWithZeroForceFromItsFirstTick) {
+  const auto m = test::TexturedMaterial();
+  renderer::RenderOptions ro;
+  ro.vibration = false;
+  renderer::HybridRenderer r(m, ro);
+  devices::VirtualClock clock;
+  FlakyLink dev(clock, 0.0, 0.3, 0.05);
+  EngineOptions eo;
+  eo.virtual_clock = &clock;
+  RtEngine engine(r, dev, nullptr, eo);
+  engine.RunFor(std::chrono::seconds(1));
+  EXPECT_TRUE(engine.watchdog().tripped());
+  EXPECT_GE(engine.watchdog().count(FaultKind::kDisconnect), 1u);
+  FaultEvent e;
+  ASSERT_TRUE(engine.watchdog().PopEvent(&e));
+  EXPECT_EQ(e.kind, FaultKind::kDisconnect);
+  EXPECT_NEAR(e.t_s, 0.3 + 0.009, 1.5e-3) << "the tenth lost read";
+  bool before = true;
+  for (const auto& [t, f] : dev.forces) {
+    if (t < 0.3 - 1e-9) {
+      if (t >= 0.1) before = before && f > 0.05;
+    } else {
+      EXPECT_EQ(f, 0.0) << "at " << t << " s";
+    }
+  }
+  EXPECT_TRUE(before) << "the stylus pushed before the dropout";
+  EXPECT_GT(dev.forces.back().first, 0.3);
+  EXPECT_LT(engine.Stats().force_ticks, 320u) << "a disconnect ends the run";
 }
 
 }  // namespace

@@ -71,6 +71,48 @@ TEST(StudyRunner, RunsTheSmallStudyAndReportsStatus) {
   EXPECT_THROW(RunStudy(p, o), InputError);
 }
 
+TEST(StudyRunner, EverySimulatedTrialSideRunsThroughTheEngine) {
+  // The one trial path: each side of each rated trial is a run of the real-time engine (on
+  // the simulated rig's virtual clock) of exactly the stimulus duration, whose device reads
+  // stepped the simulated hand once per force tick; virtual sides with vibration also ran
+  // the vibration ticks; the stylus met the surface on every side.
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  std::vector<SideReport> sides;
+  RunOptions o;
+  o.db_path = dir.File("e.db");
+  o.participant = "P04";
+  o.record = RecordMode::kForce;
+  o.on_side = [&](const SideReport& r) { sides.push_back(r); };
+  const auto s = RunStudy(p, o);
+  ASSERT_EQ(s.status, "completed");
+  const int rated = s.planned - 4;  // 4 training trials
+  ASSERT_EQ(static_cast<int>(sides.size()), 2 * rated);
+  const auto force_ticks = static_cast<std::uint64_t>(std::lround(p.stimulus_duration_s * 1000));
+  int virtual_sides = 0;
+  for (const auto& r : sides) {
+    EXPECT_EQ(r.engine.force_ticks, force_ticks) << r.stimulus;
+    EXPECT_EQ(r.hand_ticks, force_ticks) << r.stimulus;
+    EXPECT_EQ(r.engine.disconnects + r.engine.nan_faults + r.engine.stale_faults, 0u) << r.stimulus;
+    EXPECT_GT(r.contact_ticks, force_ticks / 2) << r.stimulus << " side " << r.side;
+    if (r.stimulus.rfind("virtual:", 0) == 0) {
+      ++virtual_sides;
+      // FF has no vibration; Hybrid runs 10 vibration ticks per force tick.
+      EXPECT_TRUE(r.engine.vibration_ticks == 0 || r.engine.vibration_ticks == 10 * force_ticks) << r.engine.vibration_ticks;
+    } else {
+      EXPECT_EQ(r.engine.vibration_ticks, 0u) << "a real sample: the device only measures";
+    }
+  }
+  EXPECT_GT(virtual_sides, 0);
+  // What the engine recorded is what was stored: one force stream per side.
+  db::Database d(o.db_path);
+  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
+  std::size_t samples = 0;
+  for (const auto& t : d.Trials(se.id))
+    for (const auto& c : d.TrajectoryChunks(t.id)) samples += c.sample_count();
+  EXPECT_EQ(samples, sides.size() * force_ticks);
+}
+
 TEST(StudyRunner, AbortThenResumeCompletesEveryTrialOnce) {
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(SmallProtocol());
@@ -171,12 +213,15 @@ TEST(StudyRunner, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
   // trials unless the runner logged that it had to.
   db::Database d(o.db_path);
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
-  int relaxed = 0, faults = 0;
+  int relaxed = 0, faults = 0, disconnects = 0;
   for (const auto& e : d.Events(se.id)) {
     relaxed += e.kind == "constraint-relaxed";
-    faults += e.kind == "device-fault";
+    // Each injected dropout: the watchdog's event, then the trial's re-queue.
+    faults += e.kind == "device-fault" && e.detail.find("re-queued") != std::string::npos;
+    disconnects += e.kind == "device-fault" && e.detail.rfind("disconnect at", 0) == 0;
   }
   EXPECT_EQ(faults, s.faults);
+  EXPECT_EQ(disconnects, s.faults) << "the link's dropouts, seen by the watchdog";
   std::map<std::int64_t, std::string> material;
   for (const auto& t : d.Trials(se.id)) material[t.id] = t.material;
   const auto order = d.RatedTrialsInCompletionOrder(se.id);

@@ -50,6 +50,9 @@ class TrajectoryStream {
     return queue_.TryPush(s);
   }
   std::size_t channel_count() const { return channels_; }
+  /// Room left in the queue (approximate while the writer drains it). A producer without a
+  /// deadline (the engine on a virtual clock) waits for room instead of losing samples.
+  std::size_t free_slots() const noexcept { return queue_.capacity() - queue_.size(); }
   std::uint64_t overflow_count() const { return queue_.overflow_count(); }
   std::uint64_t written_count() const { return written_.load(std::memory_order_relaxed); }
   std::uint64_t offered_count() const { return offered_.load(std::memory_order_relaxed); }

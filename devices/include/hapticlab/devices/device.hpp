@@ -4,6 +4,7 @@
 /// only the noexcept methods below.
 
 #include <chrono>
+#include <cstdint>
 #include <string>
 
 #include <Eigen/Core>
@@ -21,14 +22,25 @@ struct DeviceCapabilities {
   Eigen::Vector3d workspace_m{0.16, 0.12, 0.12};  ///< workspace box extents [m]
 };
 
+/// What one read of a device gave.
+enum class ReadResult : std::uint8_t {
+  kOk,         ///< a new sample is in *out
+  kNoNewData,  ///< the link worked but carried no new sample (an empty USB frame, a packet
+               ///< still in flight); *out is untouched. The engine renders the last sample
+               ///< until it is stale.
+  kLost,       ///< the exchange failed (USB error, time-out, unplugged); the engine commands
+               ///< zero force, and a sustained loss faults the trial
+};
+const char* ReadResultName(ReadResult r);
+
 /// A force-feedback device. Read and Write are called from the force loop only.
 class HapticDevice {
  public:
   virtual ~HapticDevice() = default;
   virtual DeviceCapabilities Capabilities() const = 0;
-  /// Reads the newest tool state; returns false when the device is disconnected or has no
-  /// data. Never blocks longer than the device's own transfer.
-  virtual bool Read(renderer::DeviceSample* out) noexcept = 0;
+  /// Reads the newest tool state [device frame]. Never blocks longer than the device's own
+  /// transfer.
+  virtual ReadResult Read(renderer::DeviceSample* out) noexcept = 0;
   /// Commands a force on the tool [N] (already clamped by the renderer).
   virtual void WriteForce(const Eigen::Vector3d& force_N) noexcept = 0;
   /// The loops' time zero: samples are stamped in seconds since it (RtEngine::Start calls this).

@@ -127,25 +127,30 @@ struct FalconOptions {
   double motor_units_per_Nm = 10000;  ///< command scale (calibrate with a force gauge; docs/hardware.md)
   double max_force_N = 8.0;           ///< the Falcon's rated peak force
   unsigned io_timeout_ms = 2;         ///< a read that takes longer counts as no data
-  int max_missed_reads = 5;           ///< consecutive reads without a packet before reporting a disconnect
   double velocity_cutoff_hz = 100;    ///< low-pass of the differentiated position
 };
 
 /// HapticDevice on a Falcon whose firmware is loaded. Read() does one exchange: sends the last
-/// force command, reads the status, runs the kinematics.
+/// force command, reads what the link has, runs the kinematics on the newest complete status
+/// packet. A packet split across two reads is reassembled (the incomplete tail is kept for
+/// the next read). Results: kOk with a new packet; kNoNewData when the read carried no
+/// complete packet (an empty USB frame, a packet still in flight); kLost when the USB
+/// exchange failed or the encoders gave no position. Whether a loss is sustained is the
+/// engine's watchdog's decision.
 class FalconDevice final : public HapticDevice {
  public:
   /// @param clock seconds on the loops' time base; empty: seconds since SetTimeBase (the engine's)
   FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock = {}, const FalconOptions& o = {});
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
   DeviceCapabilities Capabilities() const override;
-  bool Read(renderer::DeviceSample* out) noexcept override;
+  ReadResult Read(renderer::DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
   const Status& last_status() const { return status_; }
   int malformed_packets() const { return malformed_; }
-  /// True after `max_missed_reads` exchanges in a row without a status packet (unplugged or
-  /// firmware gone); each such Read already returned false, so the force was zero.
-  bool lost() const { return missed_ >= o_.max_missed_reads; }
+  /// Packet counters: complete status packets decoded, reads without one, failed exchanges.
+  std::uint64_t packets() const { return packets_; }
+  std::uint64_t empty_reads() const { return empty_reads_; }
+  std::uint64_t lost_reads() const { return lost_reads_; }
 
  private:
   std::unique_ptr<UsbTransport> usb_;
@@ -157,8 +162,11 @@ class FalconDevice final : public HapticDevice {
   Eigen::Vector3d p_m_{0, 0, 0.12}, v_mps_ = Eigen::Vector3d::Zero();
   double t_s_ = 0;
   bool have_p_ = false;
-  int missed_ = 0, malformed_ = 0;
+  int malformed_ = 0;
+  std::uint64_t packets_ = 0, empty_reads_ = 0, lost_reads_ = 0;
   std::array<std::uint8_t, 64> buf_{};
+  std::array<std::uint8_t, 128> pending_{};  // link bytes not yet consumed (a partial packet)
+  std::size_t pending_n_ = 0;
 };
 
 }  // namespace hapticlab::devices::falcon

@@ -18,15 +18,15 @@ struct TrajectorySample {
 };
 
 /// Replays samples in time order against a clock (seconds since the replay started). Read
-/// returns the latest sample at or before now, stamped with now; after the last sample it
-/// reports a disconnect. Commanded forces are kept (preallocated) for inspection.
+/// returns the latest sample at or before now, stamped with now; after the last sample the
+/// link is lost. Commanded forces are kept (preallocated) for inspection.
 class ReplayDevice : public HapticDevice {
  public:
   /// @param clock returns the current time [s] on the replay's time base
   ReplayDevice(std::vector<TrajectorySample> samples, std::function<double()> clock,
                DeviceCapabilities caps = {});
   DeviceCapabilities Capabilities() const override { return caps_; }
-  bool Read(renderer::DeviceSample* out) noexcept override;
+  ReadResult Read(renderer::DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
   /// Forces written so far (read after the loop stopped).
   const std::vector<Eigen::Vector3d>& forces() const { return forces_; }

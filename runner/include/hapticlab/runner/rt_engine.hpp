@@ -3,7 +3,23 @@
 /// each waking at absolute deadlines, sharing state only through the renderer's lock-free
 /// hand-off, and recording through the db writer's SPSC streams.
 ///
-/// Safety: the Watchdog (watchdog.hpp) checks every force tick: a device read failure
+/// Two clocks, one tick code: on the real clock each loop has its own thread and sleeps to
+/// absolute deadlines; on a virtual clock (EngineOptions::virtual_clock) the caller's thread
+/// steps the same ForceStep/VibrationStep in time order (every force tick, then the
+/// vibration ticks up to the next one) as fast as they run, setting the clock before each
+/// tick, so simulated devices see the time they would see on a rig. A virtual run is
+/// deterministic and never drops a recorded sample (it waits for the writer instead).
+///
+/// Frames: the device reports in its own frame; the engine maps positions and velocities into
+/// the sample's frame (EngineOptions::sample_from_device, from the rig file) before the
+/// renderer and maps the renderer's force back into the device frame. The force stream is
+/// recorded in the sample frame.
+///
+/// Device reads: kOk renders the new sample; kNoNewData renders the newest good sample again
+/// (until it is stale); kLost commands zero force on that tick, and a sustained loss is a
+/// disconnect.
+///
+/// Safety: the Watchdog (watchdog.hpp) checks every force tick: a sustained loss of the link
 /// (disconnect), NaN or stale data, `max_consecutive_misses` late ticks in a row, or a bad
 /// command give zero force on that tick, latch the trial as faulted and queue an event; the
 /// renderer itself also zeroes NaN and stale data and clamps to the device limit.
@@ -15,19 +31,25 @@
 #include <string>
 #include <thread>
 
+#include <Eigen/Geometry>
+
 #include "hapticlab/core/triple_buffer.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/devices/clock.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/runner/watchdog.hpp"
 
 namespace hapticlab::runner {
 
-/// Channels of the force stream, in order (15 values per force tick).
+/// Channels of the force stream, in order (16 values per force tick; sample frame). A sample's
+/// time stamp is its scheduled tick time (start_time_s + i / rate_hz); `late_s` is how much
+/// later the tick actually ran (measured on the loop's clock; 0 on a virtual clock), so
+/// scheduled + late_s is the measured time of the tick.
 inline const std::vector<std::string>& ForceStreamChannels() {
   static const std::vector<std::string> k{"x_m",   "y_m",       "z_m",       "vx_mps",   "vy_mps",
                                           "vz_mps", "fx_N",      "fy_N",      "fz_N",     "cmd_fx_N",
-                                          "cmd_fy_N", "cmd_fz_N", "normal_N", "speed_mps", "fault"};
+                                          "cmd_fy_N", "cmd_fz_N", "normal_N", "speed_mps", "fault", "late_s"};
   return k;
 }
 /// Channels of the vibration stream.
@@ -38,9 +60,16 @@ inline const std::vector<std::string>& VibrationStreamChannels() {
 
 struct EngineOptions {
   int max_consecutive_misses = 3;   ///< late force ticks in a row before forcing zero force
+  int max_lost_reads = 10;          ///< lost reads in a row that fault the trial (disconnect)
+  double max_lost_s = 0.010;        ///< time without a good read that faults the trial [s]
   bool realtime_priority = false;   ///< ask for SCHED_FIFO (needs privileges; result reported)
-  /// Test hooks run on each loop thread before its first and after its last tick.
+  /// Test hooks run on each loop thread before its first and after its last tick (real
+  /// clock only).
   std::function<void()> on_thread_enter, on_thread_exit;
+  /// Borrowed; when set the engine runs on it (see the file comment) instead of the real clock.
+  devices::VirtualClock* virtual_clock = nullptr;
+  /// Pose of the device frame in the sample frame: p_sample = sample_from_device * p_device.
+  Eigen::Isometry3d sample_from_device = Eigen::Isometry3d::Identity();
 };
 
 /// Counters and timing statistics, written by the loops, read by anyone.
@@ -49,6 +78,8 @@ struct EngineStats {
   std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
   std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0, bad_commands = 0;
   std::uint64_t recording_overflows = 0;
+  std::uint64_t contact_ticks = 0;  ///< force ticks with the stylus inside the model's surface
+  std::uint64_t empty_reads = 0, lost_reads = 0;  ///< reads with no new data, lost reads
   double force_jitter_max_s = 0, force_jitter_mean_s = 0;
   double vibration_jitter_max_s = 0;
   double achieved_force_rate_hz = 0, achieved_vibration_rate_hz = 0;
@@ -73,18 +104,27 @@ class RtEngine {
   void Stop();
   /// Runs for `duration` (or until the device reports a disconnect), then stops.
   void RunFor(std::chrono::duration<double> duration);
+  /// Virtual clock only, between Start and Stop: runs every tick due up to `t_s` (seconds
+  /// since Start). Returns false once the device reported a disconnect.
+  bool AdvanceTo(double t_s);
+  bool is_virtual() const { return options_.virtual_clock != nullptr; }
   EngineStats Stats() const;
   /// The force loop's watchdog: tripped() tells whether the trial faulted; PopEvent drains its
   /// events (call from a non-real-time thread).
   Watchdog& watchdog() { return watchdog_; }
-  /// The newest device sample the force loop read (for screens; one reader thread).
+  /// The newest device sample the force loop read, in the sample frame (for screens; one
+  /// reader thread).
   renderer::DeviceSample LastSample();
-  /// Seconds since Start on the loops' clock.
+  /// Seconds since Start on the loops' clock (virtual or real).
   double Now() const;
 
  private:
   void ForceLoop();
   void VibrationLoop();
+  // One tick of each loop (the same code on either clock). k: 1-based tick number.
+  void ForceStep(std::uint64_t k, double now_s, double late_s) noexcept;
+  void VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept;
+  void Record(db::TrajectoryStream* s, double t_s, const float* v) noexcept;
 
   renderer::HybridRenderer& renderer_;
   devices::HapticDevice& device_;
@@ -102,8 +142,12 @@ class RtEngine {
   std::atomic<double> force_jitter_max_{0}, force_jitter_sum_{0}, vibration_jitter_max_{0};
   std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
   std::atomic<std::uint64_t> recording_overflows_at_stop_{0};
+  std::atomic<std::uint64_t> contact_ticks_{0}, empty_reads_{0};
+  renderer::DeviceSample last_good_;  // force loop only: the newest good sample (sample frame)
+  bool have_good_ = false;
   std::string priority_status_ = "not requested";
   Watchdog watchdog_;
+  std::uint64_t vk_force_ = 0, vk_vibration_ = 0;  // virtual clock: ticks done
   struct Snapshot {
     double p[3], v[3], t;
   };

@@ -1,8 +1,14 @@
 #pragma once
 /// @file Runs a study protocol for one participant and records everything: the session
 /// state machine (consent -> training -> reference -> main, with breaks, abort and resume),
-/// trial execution on a device back-end (today: the simulated lab), ratings committed one
-/// transaction per trial, trajectories through the writer thread, events and provenance.
+/// trial execution, ratings committed one transaction per trial, trajectories through the
+/// writer thread, events and provenance.
+///
+/// One trial path: every trial side, simulated or on hardware, runs the method's
+/// HybridRenderer inside RtEngine over the rig's HapticDevice and Actuator, with the watchdog
+/// and the trajectory writer. A simulated rig (sim::SimRig: a simulated hand holding a
+/// simulated device) differs only in its clock (virtual, stepped as fast as the ticks run)
+/// and in who rates (the simulated observer, from what the hand felt).
 ///
 /// Guarantees: the plan is stored before the first trial; a trial's ratings and completion
 /// marker commit together; `ResumeStudy` continues with exactly the trials not completed
@@ -17,7 +23,13 @@
 #include <Eigen/Core>
 #include <vector>
 
+#include <array>
+
+#include <Eigen/Geometry>
+
 #include "hapticlab/devices/device.hpp"
+#include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 
 namespace hapticlab::runner {
@@ -44,7 +56,7 @@ class SessionUi {
  public:
   virtual ~SessionUi() = default;
   /// One frame while the participant explores side 0 (left) or 1 (right): the stylus [m,
-  /// relative to that sample's centre] and the stimulus time left. false: the experimenter
+  /// in that sample's frame] and the stimulus time left. false: the experimenter
   /// aborted.
   virtual bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) = 0;
   /// Blocks until the participant confirms a rating per criterion (in the protocol's scale),
@@ -65,31 +77,52 @@ class SessionUi {
   virtual bool TakeBreakNow() { return false; }
 };
 
-/// The hardware a session runs on when the device is not "sim": borrowed, opened by the caller
-/// (hapticlab study run --device falcon ...). Ratings then come from the SessionUi.
+/// The rig a session runs on: borrowed, opened by the caller (hapticlab study run --device
+/// falcon ...). Without one, a "sim" session builds the generic simulated rig itself.
+/// Ratings come from the SessionUi, or from the simulated observer on a simulated rig.
 struct HardwareRig {
   devices::HapticDevice* device = nullptr;   ///< required
   devices::Actuator* actuator = nullptr;     ///< the vibrotactile actuator (may be null: no vibration)
   devices::MaskingNoise* noise = nullptr;    ///< headphones (may be null)
   double noise_rms_fs = 0.1;                 ///< masking level when the protocol asks for noise
-  Eigen::Vector2d left_sample_m{-0.03, 0}, right_sample_m{0.03, 0};  ///< sample centres in the device frame
+  /// Pose of each sample (0 left, 1 right) in the device frame: origin on the sample's base
+  /// plane, +z out of the sample (the rig file's; docs/hardware.md).
+  std::array<Eigen::Isometry3d, 2> device_from_sample{sim::DefaultSamplePoses()};
   std::string description;                   ///< recorded in the session's provenance
+  std::string calibration;                   ///< recorded with the session (rig file content)
+  std::string rig_file_hash;                 ///< SHA-256 of the rig file (provenance), empty: none
+  /// A simulated rig (borrowed): its virtual clock runs the engine, its hand explores, the
+  /// observer rates. Null on hardware.
+  sim::SimRig* sim = nullptr;
+};
+
+/// What one trial side did in the engine (RunOptions::on_side; tests and diagnostics).
+struct SideReport {
+  int plan_index = 0, side = 0, attempt = 0;
+  std::string stimulus;            ///< "real:Denim", "virtual:Denim"
+  EngineStats engine;
+  std::uint64_t hand_ticks = 0;    ///< simulated rig: ticks the hand was stepped
+  std::uint64_t contact_ticks = 0; ///< ticks the renderer found the stylus inside the surface
 };
 
 struct RunOptions {
   std::string db_path;
   std::string participant;       ///< pseudonymous code, e.g. "P07"
   int participant_index = -1;    ///< plan index; -1: the next free index in the study
-  std::string device = "sim";    ///< device back-end (sim only in this build)
+  std::string device = "sim";    ///< device back-end name (recorded; "sim": the generic simulated rig)
   RecordMode record = RecordMode::kAll;
   int stop_after_trials = -1;    ///< abort the session after this many trials (tests; -1: run all)
-  double fault_rate = 0;         ///< sim: probability that a trial's device faults (tests)
+  double fault_rate = 0;         ///< sim: probability that a trial's link drops out for 50 ms (tests)
   std::function<void(const std::string&)> log;  ///< progress lines (may be empty)
   /// Participant and console windows: ratings come from the participant; the stimulus is
   /// shown (sim: the simulated strokes, played in real time). Borrowed; may be null.
   SessionUi* ui = nullptr;
-  double ui_playback_speed = 1.0;  ///< sim with a UI: stimulus playback speed-up
+  double ui_playback_speed = 1.0;  ///< simulated rig with a UI: virtual time runs this much faster
   HardwareRig* rig = nullptr;      ///< required when device != "sim"
+  std::function<void(const SideReport&)> on_side;  ///< after every trial side (may be empty)
+  /// Abort the session after this many trials in a row where a side touched nothing (the
+  /// rig's sample pose is probably wrong).
+  int max_untouched_trials = 3;
 };
 
 struct RunSummary {

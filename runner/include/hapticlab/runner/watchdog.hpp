@@ -1,5 +1,6 @@
 #pragma once
-/// @file The force loop's watchdog: every tick it checks the device read (disconnect), the
+/// @file The force loop's watchdog: every tick it checks the device read (a sustained loss of
+/// the link is a disconnect; a single lost read only zeroes that tick's force), the
 /// sample (NaN, stale), the loop's lateness (consecutive missed deadlines) and the force about
 /// to be commanded (NaN, above the device limit), and commands zero force on the very tick a
 /// fault is seen. Faults latch for the trial (it is marked faulted and re-queued by the
@@ -13,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "hapticlab/core/spsc_queue.hpp"
+#include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
 
 namespace hapticlab::runner {
@@ -25,6 +27,10 @@ struct WatchdogOptions {
   double stale_after_s = 0.005;     ///< device data older than this is stale
   int max_consecutive_misses = 3;   ///< late ticks in a row before it is a fault
   double max_force_N = 8.0;         ///< a command above this (before clamping) is a fault
+  /// A loss is sustained (a disconnect fault) after this many lost reads in a row, or this
+  /// long since the last good read, whichever comes first.
+  int max_lost_reads = 10;
+  double max_lost_s = 0.010;
   std::size_t event_capacity = 1024;
 };
 
@@ -37,11 +43,12 @@ struct FaultEvent {
 class Watchdog {
  public:
   explicit Watchdog(const WatchdogOptions& o = {});
-  /// One force tick: `read_ok` from the device, its sample, the loop's time, how late the
-  /// tick woke, and the force the renderer wants. Returns the force to command: `force`, or
-  /// zero on a fault (the same tick).
-  Eigen::Vector3d Check(bool read_ok, const renderer::DeviceSample& s, double now_s, double late_s, double period_s,
-                        const Eigen::Vector3d& force) noexcept;
+  /// One force tick: what the device read gave, the sample rendered (the newest good one;
+  /// ignored on a lost read), the loop's time, how late the tick woke, and the force the
+  /// renderer wants. Returns the force to command: `force`, or zero on a fault (the same
+  /// tick) and on any lost read (a short loss zeroes the force without faulting the trial).
+  Eigen::Vector3d Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s, double late_s,
+                        double period_s, const Eigen::Vector3d& force) noexcept;
   /// The fault of the last Check (kNone when healthy).
   FaultKind last() const { return last_; }
   /// Any fault since Reset: the trial is faulted.
@@ -53,15 +60,18 @@ class Watchdog {
   /// 1000 ticks while it persists); false when none.
   bool PopEvent(FaultEvent* e) { return events_.TryPop(e); }
   std::uint64_t dropped_events() const { return dropped_.load(std::memory_order_relaxed); }
+  /// Reads that were lost (each zeroed its tick's force).
+  std::uint64_t lost_reads() const { return lost_reads_.load(std::memory_order_relaxed); }
 
  private:
   WatchdogOptions o_;
   SpscQueue<FaultEvent> events_;
   std::array<std::atomic<std::uint64_t>, kFaultKinds> counts_{};
-  std::atomic<std::uint64_t> dropped_{0};
+  std::atomic<std::uint64_t> dropped_{0}, lost_reads_{0};
   std::atomic<bool> tripped_{false};
   FaultKind last_ = FaultKind::kNone;
-  int misses_ = 0;
+  int misses_ = 0, lost_run_ = 0;
+  double last_ok_s_ = 0;
   std::uint64_t tick_ = 0, run_ = 0;  // ticks, ticks the current fault has lasted
 };
 

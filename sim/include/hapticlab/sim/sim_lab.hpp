@@ -11,6 +11,8 @@
 /// Placeholder virtual model (the thesis's baseline, derived from the profile until a lab
 /// measures its own): the macro geometry sampled at wavelength/20, Hunt-Crossley, Dahl with
 /// Coulomb + viscous friction, and a 3 x 3 AR bank fitted to the truth's resonance.
+/// The hand, the simulated devices and the truth under the stylus are in sim_device.hpp: every
+/// simulated stimulus runs through the real-time engine like a hardware one.
 /// Observer: features F = (vibration power in the Pacinian band, force fluctuation,
 /// friction ratio, stiffness, large-scale force pattern), all log-scaled where ratios
 /// matter; for criterion c, similarity = L + (U - L) exp(-d_c^2 / 2) + bias + noise, with d_c
@@ -23,9 +25,10 @@
 #include <vector>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/renderer/biquad.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::sim {
 
 /// Ground-truth description of a material (a "real sample") for the simulated lab.
 struct MaterialProfile {
@@ -88,30 +91,38 @@ struct Stroke {
   double force_N = 1.2;      ///< target load 0.5-2 N
   double direction_rad = 0;  ///< stroke direction on the surface
   double x0_m = 0, y0_m = 0; ///< where on the sample the stroke starts
-  double length_m = 0.04;    ///< back-and-forth excursion
+  double length_m = 0.04;    ///< back-and-forth excursion (2-4 cm)
 };
 
-/// Draws a participant's stroke for one trial (2-15 cm/s, 0.5-2 N, random direction).
+/// Draws a participant's stroke for one trial (2-15 cm/s, 0.5-2 N, random direction, 2-4 cm
+/// long, centred within 5 mm of the sample's origin).
 Stroke DrawStroke(Rng& rng);
 /// The same participant's stroke on the trial's other stimulus: the same exploration with
 /// about 10 % variation in speed and load, elsewhere on the sample.
 Stroke JitterStroke(const Stroke& s, Rng& rng);
 
-/// The recorded interaction of one stimulus (force at `force_rate_hz`, felt acceleration at
-/// `vibration_rate_hz`).
-struct Interaction {
-  double force_rate_hz = 1000, vibration_rate_hz = 10000;
-  std::vector<float> force;      ///< runner::ForceStreamChannels() layout, 15 per tick
-  std::vector<float> vibration;  ///< felt acceleration [m/s^2]
-  Features features;
-  std::uint64_t faults = 0;
-};
+/// Perceptual features of what a hand felt, accumulated tick by tick (allocation-free): the
+/// force the hand felt at the force rate, the acceleration it felt at the vibration rate.
+/// The first `settle_s` of a stimulus are ignored (the hand is still finding the surface).
+class FeatureAccumulator {
+ public:
+  FeatureAccumulator() = default;
+  FeatureAccumulator(double force_rate_hz, double vibration_rate_hz, double settle_s = 0.25);
+  /// One force tick: felt normal and tangential force [N], tangential speed [m/s], and how
+  /// deep the stylus is below where it first met resistance [m].
+  void AddForce(double normal_N, double tangential_N, double speed_mps, double penetration_m) noexcept;
+  /// One felt acceleration sample [m/s^2].
+  void AddVibration(double acc_mps2) noexcept;
+  Features Result() const;
+  std::uint64_t force_samples() const { return n_force_; }
 
-/// Strokes a real sample (truth physics) for `duration_s`.
-Interaction StrokeReal(const MaterialProfile& p, const Stroke& s, double duration_s, std::uint64_t seed);
-/// Strokes a virtual rendering through the renderer's ticks, the hand holding the load.
-Interaction StrokeVirtual(const renderer::MaterialModel& m, const renderer::RenderOptions& o, const Stroke& s,
-                          double duration_s);
+ private:
+  double fr_ = 1000, vr_ = 10000;
+  std::uint64_t skip_f_ = 0, skip_v_ = 0, n_force_ = 0, n_vib_ = 0;
+  renderer::Biquad hp_, hpt_, lp_, hpl_, bhp_, blp_;
+  double fl2_ = 0, pat2_ = 0, fn_sum_ = 0, ft_sum_ = 0, pen_sum_ = 0, sp_ = 0, v2_ = 0;
+  std::uint64_t cnt_ = 0, vcnt_ = 0;
+};
 
 /// A simulated participant: per-criterion biases, drawn from the participant's seed. The
 /// per-rating noise comes from the caller's generator (seeded per trial and attempt, so a
@@ -132,4 +143,4 @@ class Observer {
   std::map<std::string, double> bias_;
 };
 
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::sim

@@ -1,0 +1,125 @@
+#include "stimulus_side.hpp"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <thread>
+
+#include "hapticlab/sim/falcon_twin.hpp"
+
+namespace hapticlab::runner::internal {
+
+renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t seed) {
+  renderer::RenderOptions o;
+  o.algorithm = renderer::ParseForceAlgorithm(m.algorithm);
+  o.vibration = m.vibration;
+  o.hybrid_filter = m.hybrid_filter;
+  o.force_rate_hz = 1000;
+  o.vibration_rate_hz = 10000;
+  o.seed = seed;
+  return o;
+}
+
+SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s, const RunOptions& opt,
+                            db::TrajectoryWriter* writer, db::Database& database, std::int64_t session,
+                            const db::Trial& t, const TrialScreen& screen, int screen_side) {
+  SideOutcome out;
+  const double dur = duration_s;
+  const auto sample = static_cast<std::size_t>(side.sample);
+  sim::SimRig* simrig = rig.sim;
+  const renderer::MaterialModel& model = *side.model;
+  renderer::RenderOptions ro;
+  if (side.real) {
+    // The real sample under the stylus: the device only measures; its force is held at zero.
+    ro.vibration = false;
+    ro.max_force_N = 1e-9;
+  } else {
+    ro = side.options;
+    const auto caps = rig.device->Capabilities();
+    ro.max_force_N = std::min(ro.max_force_N, caps.max_force_N);
+    ro.device_max_stiffness_N_per_m = caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
+  }
+  renderer::HybridRenderer r(model, ro);
+  // The simulated hand: strokes the sample where it truly is; on a real side it touches the
+  // ground truth.
+  std::unique_ptr<sim::TruthSample> truth;
+  if (simrig) {
+    double top_m, stiffness;
+    if (side.real) {
+      truth = std::make_unique<sim::TruthSample>(*side.truth, side.truth_seed, ro.vibration_rate_hz);
+      top_m = truth->top_m();
+      stiffness = truth->profile().stiffness_N_per_m;
+    } else {
+      top_m = model.contact.layer_thickness_m + (model.geometry->max_m() - model.geometry->min_m());
+      stiffness = model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m;
+    }
+    simrig->hand.Begin(side.stroke, simrig->true_device_from_sample[sample], top_m, stiffness, truth.get(),
+                       ro.force_rate_hz, ro.vibration_rate_hz);
+    if (simrig->generic) {
+      simrig->generic->Reset();
+      if (side.dropout_at_s >= 0) simrig->generic->InjectDropout(side.dropout_at_s, 0.05);
+    }
+    if (simrig->twin) {
+      simrig->twin->BeginRun();
+      simrig->twin->InjectDropout(side.dropout_at_s, 0.05);
+    }
+  }
+  db::TrajectoryStream *fs = nullptr, *vs = nullptr;
+  if (writer && opt.record != RecordMode::kNone)
+    fs = writer->OpenStream(t.id, side.stream + "_force", ro.force_rate_hz, ForceStreamChannels());
+  if (writer && opt.record == RecordMode::kAll && ro.vibration && rig.actuator)
+    vs = writer->OpenStream(t.id, side.stream + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
+  EngineOptions eo;
+  eo.virtual_clock = simrig ? &simrig->clock : nullptr;
+  eo.sample_from_device = rig.device_from_sample[sample].inverse();
+  RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs, vs);
+  engine.Start();
+  bool go_on = true;
+  if (engine.is_virtual() && !opt.ui) {
+    engine.AdvanceTo(dur);
+  } else {
+    // Stimulus frames for the screens: on a virtual clock, time runs ui_playback_speed times
+    // faster than the wall clock.
+    const auto t0 = std::chrono::steady_clock::now();
+    const double speed = engine.is_virtual() ? opt.ui_playback_speed : 1.0;
+    for (;;) {
+      const double el = std::min(dur, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
+      if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
+      const auto s = engine.LastSample();
+      if (opt.ui && !opt.ui->Stimulus(screen, screen_side, s.state.p_m, dur - el)) {
+        go_on = false;
+        break;
+      }
+      if (el >= dur) break;
+      if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+  engine.Stop();
+  if (fs) writer->CloseStream(fs);
+  if (vs) writer->CloseStream(vs);
+  FaultEvent e;
+  while (engine.watchdog().PopEvent(&e))
+    database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
+                       .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind), e.t_s, side.label, e.tick)});
+  const auto st = engine.Stats();
+  out.stats = st;
+  if (engine.watchdog().tripped()) {
+    out.fault = true;
+    out.detail = fmt::format("{}: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", side.label,
+                             st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults);
+  } else if (static_cast<double>(st.contact_ticks) < kMinContactFraction * static_cast<double>(st.force_ticks)) {
+    out.untouched = true;
+    out.detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks", side.label, side.stimulus,
+                             st.contact_ticks, st.force_ticks);
+  }
+  if (opt.on_side)
+    opt.on_side({.plan_index = t.plan_index, .side = side.report_side, .attempt = t.attempts, .stimulus = side.stimulus,
+                 .engine = st, .hand_ticks = simrig ? simrig->hand.ticks() : 0, .contact_ticks = st.contact_ticks});
+  if (simrig) out.felt = simrig->hand.Finish();
+  out.aborted = !go_on;
+  return out;
+}
+
+}  // namespace hapticlab::runner::internal
