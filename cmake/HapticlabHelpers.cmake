@@ -30,12 +30,19 @@ function(hl_add_module name)
 endfunction()
 
 # hl_add_test(<module> <source>) builds tests/<module>/<source>_test.cpp.
+# SERIAL: the tests run alone (ctest RUN_SERIAL), for tests whose loops run on the real
+# clock and fault on missed deadlines when another test shares the machine's cores.
 function(hl_add_test module source)
-  cmake_parse_arguments(T "" "" "DEPS" ${ARGN})
+  cmake_parse_arguments(T "SERIAL" "" "DEPS" ${ARGN})
   set(target ${module}_${source}_test)
   add_executable(${target} ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
   target_link_libraries(${target} PRIVATE hapticlab::${module} ${T_DEPS} fmt::fmt
                         hl_test_util GTest::gtest_main hl_warnings)
+  set(serial FALSE)
+  if(T_SERIAL)
+    set(serial TRUE)
+  endif()
   gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60
-                       PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data")
+                       PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data"
+                                  RUN_SERIAL ${serial})
 endfunction()
