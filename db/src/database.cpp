@@ -11,6 +11,8 @@
 #include <fmt/ranges.h>
 
 #include <algorithm>
+#include <chrono>
+#include <thread>
 #include <cctype>
 #include <cmath>
 #include <cerrno>
@@ -145,6 +147,20 @@ void CheckSharedMemoryFile(const std::string& path) {
                          " bytes); when no HapticLab process uses the database, delete it");
 }
 
+// SQLite does not call the busy handler while it changes the journal mode: when several
+// processes open one new file at once, all but one get SQLITE_BUSY at once. Retried here
+// for as long as the busy timeout allows.
+void EnterWalMode(sqlite3* db, int busy_timeout_ms) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+  for (;;) {
+    const int rc = sqlite3_exec(db, "PRAGMA journal_mode = WAL", nullptr, nullptr, nullptr);
+    if (rc == SQLITE_OK) return;
+    if ((rc & 0xff) != SQLITE_BUSY || std::chrono::steady_clock::now() >= deadline) break;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ExecSql(db, "PRAGMA journal_mode = WAL");  // once more, for its error message
+}
+
 }  // namespace
 
 Database::Database(const std::string& path, const OpenOptions& options) : path_(path) {
@@ -161,7 +177,7 @@ Database::Database(const std::string& path, const OpenOptions& options) : path_(
   try {
     ExecSql(db_, "PRAGMA foreign_keys = ON");
     if (!options.read_only) {
-      ExecSql(db_, "PRAGMA journal_mode = WAL");
+      EnterWalMode(db_, options.busy_timeout_ms);
       // FULL: a committed transaction survives power loss, not only a process crash.
       ExecSql(db_, "PRAGMA synchronous = FULL");
       Migrate(options.migrate_to);

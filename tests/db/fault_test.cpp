@@ -357,8 +357,11 @@ TEST(Fault, ConcurrentSchemaCreationWaitsInsteadOfFailing) {
       try {
         Database db(path);
         _exit(db.SchemaVersion() == kSchemaVersion ? 0 : 5);
-      } catch (...) {
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "child %d: %s\n", i, e.what());
         _exit(6);
+      } catch (...) {
+        _exit(7);
       }
     }
     pids.push_back(pid);
