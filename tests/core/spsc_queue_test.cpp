@@ -47,6 +47,7 @@ TEST(SpscQueue, TwoThreadsTransferEveryElementInOrder) {
   std::thread producer([&] {
     for (std::uint64_t i = 0; i < kCount;) {
       if (q.TryPush(i)) ++i;
+      else std::this_thread::yield();  // on a loaded machine the consumer may be descheduled
     }
   });
   std::uint64_t expected = 0;
@@ -55,6 +56,8 @@ TEST(SpscQueue, TwoThreadsTransferEveryElementInOrder) {
     if (q.TryPop(&v)) {
       ASSERT_EQ(v, expected);
       ++expected;
+    } else {
+      std::this_thread::yield();
     }
   }
   producer.join();

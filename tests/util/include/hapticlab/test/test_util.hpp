@@ -6,6 +6,15 @@
 
 namespace hapticlab::test {
 
+/// True in AddressSanitizer and ThreadSanitizer builds (-O0 or instrumented code runs 10-50x
+/// slower). Property tests that sample many random states use it to take fewer samples
+/// there; the release build still runs the full count.
+#if defined(__SANITIZE_ADDRESS__) || defined(__SANITIZE_THREAD__)
+inline constexpr bool kSanitizerBuild = true;
+#else
+inline constexpr bool kSanitizerBuild = false;
+#endif
+
 /// Absolute path of a file under tests/data.
 std::string DataPath(const std::string& relative);
 
