@@ -279,7 +279,7 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
         done = st[0].session_status == "completed";
         completed = st[0].completed;
       }
-      if (completed <= last_completed && max_ms < 8000) max_ms *= 2;
+      if (completed <= last_completed && max_ms < 120000) max_ms *= 2;
       last_completed = std::max(last_completed, completed);
     }
   }
