@@ -165,6 +165,7 @@ extern "C" void OnStopSignal(int sig) {
 void InstallStopHandlers() {
   struct sigaction sa{};
   sa.sa_handler = OnStopSignal;
+  sa.sa_flags = SA_RESTART;  // other threads' system calls resume; the flag is polled between trials
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);

@@ -77,7 +77,8 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
     return false;
   };
   const auto where = [&](const std::string& name) {
-    return fmt::format("'{}' (looked up relative to the protocol's folder: {})", name, (dir / name).string());
+    return fmt::format("'{}' (looked up relative to the protocol's folder: {})", name,
+                       fs::absolute(dir / name).lexically_normal().string());
   };
   if (p.profiles.empty() && sim)
     d.Add(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
@@ -93,14 +94,14 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
     if (!placeholder) {
       if (!fs::is_regular_file(dir / m.model)) {
         d.Add(p.file, m.line, "material.model", "material '" + m.id + "': no model file " + where(m.model));
-        continue;
+      } else {
+        const std::string path = (dir / m.model).string();
+        attempt(m.line, "material.model", [&] {
+          auto model = renderer::LoadMaterial(path);
+          lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
+          lab.models.emplace(m.id, std::move(model));
+        });
       }
-      const std::string path = (dir / m.model).string();
-      attempt(m.line, "material.model", [&] {
-        auto model = renderer::LoadMaterial(path);
-        lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
-        lab.models.emplace(m.id, std::move(model));
-      });
       if (!sim) continue;  // hardware: the fitted model is all it needs
     }
     // The simulated lab (and a placeholder model) needs the sample's profile.
