@@ -284,7 +284,8 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--rating-layout", a.rating_layout, "TOML layout of the box's reports (docs/hardware.md)");
     cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
     cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
-    cmd->add_option("--ui-speed", a.ui_speed, "Sim with --ui: play the simulated strokes this much faster")
+    cmd->add_option("--ui-speed", a.ui_speed,
+                    "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
   };
   {

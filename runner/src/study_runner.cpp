@@ -220,9 +220,12 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     const auto r = internal::RunStimulusSide(s, rig, train_s, opt, writer, database, session, t, screen, 0);
     out.aborted = r.aborted;
     out.stimulus_s = train_s;
+    // A fault while training is logged (the watchdog zeroed the force) but the unrated trial
+    // is not repeated: a device that keeps faulting is caught by the rated trials.
     if (r.fault) {
-      out.fault = true;
-      out.fault_detail = "watchdog: " + r.detail + "; force was zeroed, trial re-queued";
+      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
+                         .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated"});
+      if (opt.ui) opt.ui->Event(fmt::format("training trial {}: {}", t.plan_index + 1, r.detail));
     }
     return out;
   }

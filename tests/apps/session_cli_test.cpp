@@ -52,7 +52,7 @@ TEST(SessionCli, ResumeContinuesInTheRecordedModeAndRefusesAnotherUnlessTold) {
   test::TempDir dir;
   const std::string db = dir.File("s.db");
   std::string out;
-  RunStopped(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet --stop-after 4");
+  RunStopped(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet --stop-after 6");
   // Another back-end, or the screens, is refused before anything opens, naming both modes.
   EXPECT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet --device falcon-twin", &out), 2);
   EXPECT_NE(out.find("recorded in mode [device sim, actuator none, screens off, ratings simulated]"), std::string::npos) << out;
@@ -68,10 +68,10 @@ TEST(SessionCli, ResumeContinuesInTheRecordedModeAndRefusesAnotherUnlessTold) {
     db::Database d(db, {.create = false, .read_only = true});
     EXPECT_EQ(d.Sessions(1).at(0).device, "falcon-twin");
   }
-  // With no options, resume continues in the (new) recorded mode to the end.
-  ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --json", &out), 0) << out;
-  EXPECT_EQ(json::parse(out)["status"], "completed");
+  // With no options, resume continues in the (new) recorded mode.
+  RunStopped(Cli() + " study resume --db " + db + " --participant P01 --quiet --stop-after 2");
   EXPECT_EQ(CountEvents(db, "mode-change"), 1);
+  EXPECT_EQ(CountEvents(db, "resume"), 2);
   // Every exported rating names its source.
   ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out), 0) << out;
   const auto ratings = ReadCsv(dir.File("x/ratings.csv"));
@@ -80,61 +80,24 @@ TEST(SessionCli, ResumeContinuesInTheRecordedModeAndRefusesAnotherUnlessTold) {
   for (const auto& r : ratings.rows) EXPECT_EQ(r[src], "simulated");
 }
 
-// Two participants rated in the participant window (marked so in the record, as the window
-// would store them) and one simulated session: the analysis and the stats over the export
-// leave the simulated ratings out unless asked, and say so.
-TEST(SessionCli, SimulatedRatingsStayOutOfAHumanStudyUnlessAsked) {
-  test::TempDir dir;
-  const std::string db = dir.File("s.db");
-  std::string out;
-  for (const char* p : {"P01", "P02", "P03"})
-    ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant " + p + " --quiet", &out), 0)
-        << out;
-  {
-    db::Database d(db);
-    d.Exec("UPDATE rating SET source = 'window' WHERE trial_id IN (SELECT t.id FROM trial t JOIN session s ON "
-           "s.id = t.session_id JOIN participant p ON p.id = s.participant_id WHERE p.code IN ('P01','P02'))");
-  }
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --no-figures --json", &out), 0)
-      << out;
-  auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());
-  EXPECT_NE(md.find("Participants: 2; ratings: 88"), std::string::npos) << md;  // 2 x 22 rated trials x 2 criteria
-  EXPECT_NE(md.find("**Simulated ratings excluded:** 44 ratings"), std::string::npos) << md;
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep2") +
-                                 " --no-figures --include-simulated --json",
-                             &out),
-            0)
-      << out;
-  md = test::ReadFile(json::parse(out)["report"].get<std::string>());
-  EXPECT_NE(md.find("Participants: 3; ratings: 132"), std::string::npos) << md;
-  EXPECT_NE(md.find("**Simulated ratings included**"), std::string::npos) << md;
-  // The export carries the source; stats over it leave the simulated rows out with a note.
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out), 0) << out;
-  const std::string stats = Cli() + " stats rm-anova --csv " + dir.File("x/ratings.csv") +
-                            " --dv score --subject participant --within method,material --where phase=main "
-                            "--where criterion=overall --json";
-  // The JSON on stdout (to a file), the note on stderr.
-  ASSERT_EQ(test::RunCommand("{ " + stats + " > " + dir.File("a.json") + "; }", &out), 0) << out;
-  EXPECT_NE(out.find("44 rows rated by the simulated observer are left out (88 rated by participants)"),
-            std::string::npos)
-      << out;
-  EXPECT_EQ(json::parse(test::ReadFile(dir.File("a.json")))["subjects"], 2);
-  ASSERT_EQ(test::RunCommand(stats + " --include-simulated", &out), 0) << out;
-  EXPECT_EQ(json::parse(out)["subjects"], 3) << out;
-}
-
 // The project's own export of a study with a reference phase (empty method cells in its
-// real-real rows) goes through stats with --where phase=main, and gives the F of the report.
-TEST(SessionCli, StatsReadTheProjectsOwnExportFilteringBeforeCheckingKeys) {
+// real-real rows) goes through stats with --where phase=main and gives the F of the report.
+// Then two participants' ratings are marked as given in the participant window (as the window
+// stores them) next to one simulated session: the analysis and the stats over the export
+// leave the simulated ratings out unless asked, and say so.
+TEST(SessionCli, StatsReadTheOwnExportAndSimulatedRatingsStayOutOfAHumanStudy) {
   test::TempDir dir;
   const std::string db = dir.File("s.db");
   std::string out;
   for (const char* p : {"P01", "P02", "P03"})
-    ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant " + p + " --quiet", &out), 0)
+    ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant " + p +
+                                   " --quiet --record none",
+                               &out),
+              0)
         << out;
   ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out), 0) << out;
-  const std::string csv = dir.File("x/ratings.csv");
-  const std::string common = " --csv " + csv + " --dv score --where criterion=overall";
+  std::string csv = dir.File("x/ratings.csv");
+  std::string common = " --csv " + csv + " --dv score --where criterion=overall";
   // Without the filter the reference rows' empty method cells are still an error, named.
   EXPECT_EQ(test::RunCommand(Cli() + " stats rm-anova" + common + " --subject participant --within method", &out), 2);
   EXPECT_NE(out.find("method: empty key cell"), std::string::npos) << out;
@@ -151,7 +114,10 @@ TEST(SessionCli, StatsReadTheProjectsOwnExportFilteringBeforeCheckingKeys) {
       << out;
   EXPECT_FALSE(json::parse(out).empty());
   // The same F as the report computes from the database.
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --no-figures", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --no-figures --json", &out), 0)
+      << out;
+  auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());
+  EXPECT_NE(md.find("All ratings come from the simulated observer"), std::string::npos) << md;
   const auto rep = ReadCsv(dir.File("rep/test-small_overall_rmanova.csv"));
   int compared = 0;
   for (const auto& row : rep.rows)
@@ -161,6 +127,39 @@ TEST(SessionCli, StatsReadTheProjectsOwnExportFilteringBeforeCheckingKeys) {
         ++compared;
       }
   EXPECT_EQ(compared, 3);  // method, material, method:material
+
+  // P01 and P02 rated by people, P03 simulated.
+  {
+    db::Database d(db);
+    d.Exec("UPDATE rating SET source = 'window' WHERE trial_id IN (SELECT t.id FROM trial t JOIN session s ON "
+           "s.id = t.session_id JOIN participant p ON p.id = s.participant_id WHERE p.code IN ('P01','P02'))");
+  }
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep1") + " --no-figures --json", &out), 0)
+      << out;
+  md = test::ReadFile(json::parse(out)["report"].get<std::string>());
+  EXPECT_NE(md.find("Participants: 2; ratings: 88"), std::string::npos) << md;  // 2 x 22 rated trials x 2 criteria
+  EXPECT_NE(md.find("**Simulated ratings excluded:** 44 ratings"), std::string::npos) << md;
+  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep2") +
+                                 " --no-figures --include-simulated --json",
+                             &out),
+            0)
+      << out;
+  md = test::ReadFile(json::parse(out)["report"].get<std::string>());
+  EXPECT_NE(md.find("Participants: 3; ratings: 132"), std::string::npos) << md;
+  EXPECT_NE(md.find("**Simulated ratings included**"), std::string::npos) << md;
+  // The export carries the source; stats over it leave the simulated rows out with a note.
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("y") + " --no-trajectories", &out), 0) << out;
+  const std::string stats = Cli() + " stats rm-anova --csv " + dir.File("y/ratings.csv") +
+                            " --dv score --subject participant --within method,material --where phase=main "
+                            "--where criterion=overall --json";
+  // The JSON on stdout (to a file), the note on stderr.
+  ASSERT_EQ(test::RunCommand("{ " + stats + " > " + dir.File("a.json") + "; }", &out), 0) << out;
+  EXPECT_NE(out.find("44 rows rated by the simulated observer are left out (88 rated by participants)"),
+            std::string::npos)
+      << out;
+  EXPECT_EQ(json::parse(test::ReadFile(dir.File("a.json")))["subjects"], 2);
+  ASSERT_EQ(test::RunCommand(stats + " --include-simulated", &out), 0) << out;
+  EXPECT_EQ(json::parse(out)["subjects"], 3) << out;
 }
 
 // `study validate` finds what `study run` would refuse, naming the file looked up.
