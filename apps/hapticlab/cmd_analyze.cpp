@@ -15,7 +15,7 @@ namespace hapticlab::cli {
 void RegisterAnalyze(CLI::App& app) {
   struct O {
     std::string db, out;
-    bool no_figures = false, json = false;
+    bool no_figures = false, json = false, include_simulated = false;
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand(
@@ -31,9 +31,13 @@ void RegisterAnalyze(CLI::App& app) {
   cmd->add_option("--out", o->out, "Report folder (created when missing)")->required();
   cmd->add_flag("--no-figures", o->no_figures, "Tables only");
   cmd->add_flag("--json", o->json, "Print the written files as JSON");
+  cmd->add_flag("--include-simulated", o->include_simulated,
+                "Keep the simulated observer's ratings in a study that also holds ratings by participants\n"
+                "(left out by default; the report says how many)");
   cmd->callback([o] {
     RunGuarded([&] {
-      const auto r = stats::Analyze(o->db, {.out_dir = o->out, .figures = !o->no_figures});
+      const auto r = stats::Analyze(o->db, {.out_dir = o->out, .figures = !o->no_figures,
+                                            .include_simulated = o->include_simulated});
       if (o->json) {
         fmt::print("{}\n", nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(2));
       } else {

@@ -9,6 +9,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
@@ -30,6 +31,7 @@ struct Common {
   std::string average_by;          // COLS
   bool json = false;
   bool allow_missing = false;      // rm-anova/tukey --within: --missing drop-subject
+  bool include_simulated = false;  // keep source=simulated rows next to a person's ratings
 };
 
 void AddCommon(CLI::App* cmd, Common& c) {
@@ -40,6 +42,9 @@ void AddCommon(CLI::App* cmd, Common& c) {
                   "Average the response within each combination of these columns first, e.g.\n"
                   "subject,method,material to use cell means (repetitions averaged)");
   cmd->add_flag("--json", c.json, "Print results as JSON");
+  cmd->add_flag("--include-simulated", c.include_simulated,
+                "A CSV with a 'source' column (hapticlab export): keep the simulated observer's rows\n"
+                "although rows rated by participants are present (left out by default, with a note)");
 }
 
 // Reads the CSV with the needed key columns, applies --where and --average-by.
@@ -56,7 +61,24 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
   keys.insert(keys.end(), avg.begin(), avg.end());
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  auto t = stats::ReadLongCsv(c.csv, c.dv, keys, c.allow_missing).Where(cond);
+  stats::RowFilter keep{.equal = cond, .not_equal = {}};
+  // The project's exports carry each rating's source: when a person rated any row, the
+  // simulated observer's rows are left out unless asked for (docs/analysis.md).
+  {
+    const CsvTable raw = ReadCsv(c.csv);
+    if (const auto sc = raw.Find("source"); sc && !c.include_simulated) {
+      std::size_t simulated = 0, human = 0;
+      for (const auto& row : raw.rows) (row[*sc] == "simulated" ? simulated : human) += row[*sc].empty() ? 0 : 1;
+      if (simulated && human) {
+        keep.not_equal.emplace_back("source", "simulated");
+        fmt::print(stderr,
+                   "note: {}: {} rows rated by the simulated observer are left out ({} rated by participants); "
+                   "--include-simulated keeps them\n",
+                   c.csv, simulated, human);
+      }
+    }
+  }
+  auto t = stats::ReadLongCsv(c.csv, c.dv, keys, c.allow_missing, keep);
   if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
   if (!avg.empty()) t = t.Average(avg);
   return t;

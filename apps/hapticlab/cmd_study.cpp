@@ -3,6 +3,7 @@
 #include <fmt/core.h>
 
 #include <array>
+#include <csignal>
 #include <cstdio>
 #include <functional>
 #include <memory>
@@ -30,7 +31,7 @@ struct RunArgs {
   std::string protocol, db, participant, device = "sim", record = "all";
   int index = -1, stop_after = -1;
   double fault_rate = 0;
-  bool ui = false, json = false, quiet = false;
+  bool ui = false, json = false, quiet = false, change_mode = false;
   // Hardware and screens.
   std::string firmware, actuator = "none", audio_device, rig_file, rating_box, rating_layout;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
@@ -42,6 +43,8 @@ class Rig {
  public:
   Rig(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
     o->device = a.device;
+    o->actuator = a.actuator;
+    o->rating_input = a.rating_box.empty() ? "window" : "rating-box:" + a.rating_box;
     if ((a.device == "dhd" && !devices::HaveDhd()) || (a.device == "openhaptics" && !devices::HaveOpenHaptics()))
       throw InputError("", 0, "--device",
                        "'" + a.device + "' is compiled only when its vendor SDK is found at build time, and this build "
@@ -147,6 +150,27 @@ void PrintSummary(const runner::RunSummary& s, bool json_out) {
   }
 }
 
+// SIGINT and SIGTERM ask the running session to stop at the next trial boundary (it ends
+// 'aborted', logs an 'interrupted' event and checkpoints the database); a second signal
+// ends the process at once, as the default action would.
+extern "C" void OnStopSignal(int sig) {
+  if (runner::StopRequested()) {
+    std::signal(sig, SIG_DFL);
+    std::raise(sig);
+    return;
+  }
+  runner::RequestStop(sig);
+}
+
+void InstallStopHandlers() {
+  struct sigaction sa{};
+  sa.sa_handler = OnStopSignal;
+  sa.sa_flags = SA_RESTART;  // other threads' system calls resume; the flag is polled between trials
+  sigemptyset(&sa.sa_mask);
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
 }  // namespace
 
 void RegisterStudy(CLI::App& app) {
@@ -155,11 +179,23 @@ void RegisterStudy(CLI::App& app) {
 
   {
     auto path = std::make_shared<std::string>();
-    auto* cmd = study->add_subcommand("validate", "Check a protocol (planned and adaptive phases); every problem is listed with file, line and key");
+    auto device = std::make_shared<std::string>("sim");
+    auto ui = std::make_shared<bool>(false);
+    auto* cmd = study->add_subcommand(
+        "validate",
+        "Check a protocol as 'study run' would before it starts: the protocol itself (planned and\n"
+        "adaptive phases), the profiles file and every model file (looked up relative to the\n"
+        "protocol file's folder), every material's profile. Every problem is listed with file,\n"
+        "line and key.");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
-    cmd->callback([path] {
+    cmd->add_option("--device", *device, "Check for this back-end (as 'study run --device')")
+        ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+        ->capture_default_str();
+    cmd->add_flag("--ui", *ui, "Check for a session rated in the participant window (as 'study run --ui')");
+    cmd->callback([=] {
       RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
+        runner::CheckRunnable(p, *device, *ui);
         int rated = 0;
         for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
         int adaptive = 0;  // staircase / quest-plus phases: trials chosen at run time
@@ -174,31 +210,48 @@ void RegisterStudy(CLI::App& app) {
   {
     auto path = std::make_shared<std::string>();
     auto index = std::make_shared<int>(0);
+    auto code = std::make_shared<std::string>();
+    auto db = std::make_shared<std::string>();
     auto as_json = std::make_shared<bool>(false);
-    auto* cmd = study->add_subcommand("plan", "Print a participant's exact trial list (deterministic from protocol, seed, index)");
+    auto* cmd = study->add_subcommand(
+        "plan",
+        "Print a participant's exact trial list (deterministic from protocol, seed and plan index).\n"
+        "Trials are numbered from 1, as the console and the log number them; plan_index (JSON,\n"
+        "exports) counts from 0.");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
-    cmd->add_option("--participant", *index, "Participant index (0-based)")->capture_default_str()->check(CLI::NonNegativeNumber);
+    auto* idx = cmd->add_option("--index", *index, "Plan index of the participant (0-based; 'study run' gives the next free one)")
+                    ->capture_default_str()->check(CLI::NonNegativeNumber);
+    auto* part = cmd->add_option("--participant", *code, "Participant code (e.g. P07) of a participant in --db: their plan index");
+    cmd->add_option("--db", *db, "Study database, to look up --participant's plan index");
+    part->excludes(idx);
     cmd->add_flag("--json", *as_json, "Print the plan as JSON");
     cmd->callback([=] {
       RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
+        if (!code->empty()) {
+          if (db->empty())
+            throw InputError("", 0, "--participant",
+                             "a participant code is looked up in a study database: add --db (or give --index N)");
+          *index = runner::ParticipantIndex(*db, p.name, *code);
+        }
         const auto plan = protocols::Plan(p, *index);
         if (*as_json) {
           json j = json::array();
           for (const auto& t : plan)
-            j.push_back({{"index", t.index}, {"phase", protocols::ToString(t.phase)}, {"material", t.material},
+            j.push_back({{"trial", t.index + 1}, {"plan_index", t.index}, {"phase", protocols::ToString(t.phase)}, {"material", t.material},
                          {"comparison", t.comparison}, {"method", t.method}, {"repetition", t.repetition},
                          {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
           fmt::print("{}\n", json{{"study", p.name}, {"participant_index", *index},
                                   {"participant_seed", protocols::ParticipantSeed(p, *index)}, {"trials", j}}.dump(2));
           return kExitOk;
         }
-        fmt::print("study {} — participant index {} (seed {})\n", p.name, *index, protocols::ParticipantSeed(p, *index));
+        fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n", p.name,
+                   code->empty() ? "" : *code + ", ", *index, protocols::ParticipantSeed(p, *index));
         fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", "#", "phase", "material", "comparison",
                    "method", "rep", "left", "right");
         for (const auto& t : plan) {
           if (t.break_before) fmt::print("      --- break ---\n");
-          fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index, protocols::ToString(t.phase),
+          fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index + 1, protocols::ToString(t.phase),
                      t.material, t.comparison, t.method, t.repetition, t.left, t.right);
         }
         return kExitOk;
@@ -231,7 +284,8 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--rating-layout", a.rating_layout, "TOML layout of the box's reports (docs/hardware.md)");
     cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
     cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
-    cmd->add_option("--ui-speed", a.ui_speed, "Sim with --ui: play the simulated strokes this much faster")
+    cmd->add_option("--ui-speed", a.ui_speed,
+                    "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
   };
   {
@@ -267,6 +321,7 @@ void RegisterStudy(CLI::App& app) {
         o.stop_after_trials = a->stop_after;
         o.fault_rate = a->fault_rate;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+        InstallStopHandlers();
         PrintSummary(runner::RunStudy(p, o), a->json);
         return kExitOk;
       });
@@ -274,24 +329,46 @@ void RegisterStudy(CLI::App& app) {
   }
   {
     auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand("resume", "Continue a participant's session where a crash or abort left it");
+    auto* cmd = study->add_subcommand(
+        "resume",
+        "Continue a participant's session where a crash, abort or signal left it, in the mode it was\n"
+        "recorded in (device, actuator, --ui, rating box): those options default to the recorded\n"
+        "ones, and a different mode is refused unless --change-mode is given (then it is logged).");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Participant code")->required();
     cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
         ->capture_default_str();
     cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
     hardware_options(cmd, *a);
+    cmd->add_flag("--change-mode", a->change_mode,
+                  "Continue in the mode these options give although it differs from the recorded one\n"
+                  "(logged as a 'mode-change' event; every rating records its source)");
     cmd->add_flag("--json", a->json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
-    cmd->callback([a] {
+    cmd->callback([a, cmd] {
       RunGuarded([&] {
+        // Options not given take the recorded mode's values.
+        const auto rec = runner::RecordedMode(a->db, a->participant);
+        if (cmd->count("--device") == 0) a->device = rec.device;
+        if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded") a->actuator = rec.actuator;
+        if (cmd->count("--ui") == 0) a->ui = rec.screens;
+        if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
+          a->rating_box = rec.rater.substr(std::string("rating-box:").size());
+        // Refused before any device or window is opened.
+        runner::CheckResumeMode(rec,
+                                {a->device, a->actuator, a->ui,
+                                 a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
+                                       : std::string("simulated")},
+                                a->change_mode, a->db, a->participant);
         runner::RunOptions o;
+        o.change_mode = a->change_mode;
         Rig rig(*a, "resume", a->participant, &o);
         o.db_path = a->db;
         o.participant = a->participant;
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+        InstallStopHandlers();
         PrintSummary(runner::ResumeStudy(o), a->json);
         return kExitOk;
       });

@@ -18,5 +18,6 @@ void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);
 void RegisterParticipant(CLI::App& app);
 void RegisterRig(CLI::App& app);
+void RegisterDb(CLI::App& app);
 
 }  // namespace hapticlab::cli

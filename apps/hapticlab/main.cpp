@@ -34,6 +34,7 @@ int main(int argc, char** argv) {
   RegisterDevice(app);
   RegisterParticipant(app);
   RegisterRig(app);
+  RegisterDb(app);
 
   try {
     app.parse(argc, argv);

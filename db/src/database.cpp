@@ -350,12 +350,57 @@ std::vector<Participant> Database::Participants(std::int64_t study_id) const {
 std::int64_t Database::StartSession(const Session& se) {
   Stmt s(db_,
          "INSERT INTO session(participant_id, status, software_version, device, calibration, "
-         "provenance_json, plan_json) VALUES (?,?,?,?,?,?,?)");
+         "provenance_json, plan_json, actuator, screens, rater) VALUES (?,?,?,?,?,?,?,?,?,?)");
   s.Bind(1, se.participant_id).Bind(2, se.status).Bind(3, se.software_version)
       .Bind(4, se.device).Bind(5, se.calibration)
       .Bind(6, se.provenance_json.empty() ? std::string("{}") : se.provenance_json)
-      .Bind(7, se.plan_json.empty() ? std::string("[]") : se.plan_json).Run();
+      .Bind(7, se.plan_json.empty() ? std::string("[]") : se.plan_json)
+      .Bind(8, se.actuator).Bind(9, static_cast<std::int64_t>(se.screens)).Bind(10, se.rater).Run();
   return sqlite3_last_insert_rowid(db_);
+}
+
+void Database::SetSessionMode(std::int64_t session_id, const std::string& device, const std::string& actuator,
+                              bool screens, const std::string& rater) {
+  Stmt s(db_, "UPDATE session SET device=?, actuator=?, screens=?, rater=? WHERE id=?");
+  s.Bind(1, device).Bind(2, actuator).Bind(3, static_cast<std::int64_t>(screens)).Bind(4, rater)
+      .Bind(5, session_id).Run();
+}
+
+void Database::Backup(const std::string& dest) const {
+  // Refuse to overwrite: a backup over an older record (or the source) would lose it.
+  struct ::stat st{};
+  if (::stat(dest.c_str(), &st) == 0)
+    throw InputError(dest, 0, "DEST", "already exists; a backup never overwrites a file");
+  sqlite3* out = nullptr;
+  if (sqlite3_open_v2(dest.c_str(), &out, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
+    const std::string msg = out ? sqlite3_errmsg(out) : "out of memory";
+    sqlite3_close(out);
+    throw InputError(dest, 0, "DEST", "cannot create: " + msg);
+  }
+  // Whole database in one step: the copy is one consistent snapshot of the committed state
+  // (a step that copies every page holds a read transaction on the source throughout).
+  sqlite3_backup* b = sqlite3_backup_init(out, "main", db_, "main");
+  int rc = SQLITE_ERROR;
+  if (b) {
+    for (int tries = 0; tries < 200; ++tries) {
+      rc = sqlite3_backup_step(b, -1);
+      if (rc != SQLITE_BUSY && rc != SQLITE_LOCKED) break;
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    sqlite3_backup_finish(b);
+  }
+  const std::string msg = sqlite3_errmsg(out);
+  sqlite3_close(out);
+  if (rc != SQLITE_DONE) {
+    ::unlink(dest.c_str());
+    throw InputError(dest, 0, "DEST", "backup failed: " + msg);
+  }
+}
+
+bool Database::Checkpoint() {
+  int log_frames = 0, checkpointed = 0;
+  const int rc = sqlite3_wal_checkpoint_v2(db_, "main", SQLITE_CHECKPOINT_TRUNCATE, &log_frames, &checkpointed);
+  return rc == SQLITE_OK;
 }
 
 void Database::EndSession(std::int64_t session_id, const std::string& status) {
@@ -367,7 +412,8 @@ void Database::EndSession(std::int64_t session_id, const std::string& status) {
 std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
   Stmt s(db_,
          "SELECT id, participant_id, started_at, coalesce(ended_at,''), status, software_version, "
-         "device, calibration, provenance_json, plan_json FROM session WHERE participant_id=? "
+         "device, calibration, provenance_json, plan_json, actuator, screens, rater FROM session "
+         "WHERE participant_id=? "
          "ORDER BY id");
   s.Bind(1, participant_id);
   std::vector<Session> out;
@@ -383,6 +429,9 @@ std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
     x.calibration = s.Text(7);
     x.provenance_json = s.Text(8);
     x.plan_json = s.Text(9);
+    x.actuator = s.Text(10);
+    x.screens = s.Int(11) != 0;
+    x.rater = s.Text(12);
     out.push_back(std::move(x));
   }
   return out;
@@ -498,9 +547,13 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
       ins.Reset();
     }
   }
-  Stmt ins(db_, "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (?,?,?,?)");
+  // A rating without a source is the session's rater's.
+  Stmt ins(db_,
+           "INSERT INTO rating(trial_id, criterion, score, response_time_s, source) VALUES (?,?,?,?, "
+           "coalesce(nullif(?,''), (SELECT s.rater FROM trial t JOIN session s ON s.id = t.session_id "
+           "WHERE t.id = ?1)))");
   for (const auto& r : ratings) {
-    ins.Bind(1, trial_id).Bind(2, r.criterion).Bind(3, r.score).Bind(4, r.response_time_s);
+    ins.Bind(1, trial_id).Bind(2, r.criterion).Bind(3, r.score).Bind(4, r.response_time_s).Bind(5, r.source);
     ins.Run();
     ins.Reset();
   }
@@ -549,7 +602,7 @@ std::vector<Trial> Database::Trials(std::int64_t session_id) const {
 }
 
 std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
-  Stmt s(db_, "SELECT criterion, score, response_time_s FROM rating WHERE trial_id=? ORDER BY id");
+  Stmt s(db_, "SELECT criterion, score, response_time_s, source FROM rating WHERE trial_id=? ORDER BY id");
   s.Bind(1, trial_id);
   std::vector<Rating> out;
   while (s.Step()) {
@@ -559,7 +612,7 @@ std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
         throw InputError(path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
                          fmt::format("trial {} criterion '{}': '{}' is not a finite number",
                                      trial_id, s.Text(0), s.IsNull(col) ? "NULL" : s.Text(col)));
-    out.push_back({s.Text(0), s.Real(1), s.Real(2)});
+    out.push_back({s.Text(0), s.Real(1), s.Real(2), s.Text(3)});
   }
   return out;
 }

@@ -63,17 +63,17 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
     CsvOut out((fs::path(out_dir) / "ratings.csv").string());
     out.Row({"study", "participant", "session_id", "trial_id", "plan_index", "phase", "material",
              "comparison", "method", "repetition", "left", "right", "criterion", "score",
-             "response_time_s"});
+             "response_time_s", "source"});
     Stmt q(h, (std::string("SELECT st.name, p.code, s.id, t.id, t.plan_index, t.phase, "
                            "t.material, t.comparison, t.method, t.repetition, t.left_stimulus, "
-                           "t.right_stimulus, r.criterion, r.score, r.response_time_s") +
+                           "t.right_stimulus, r.criterion, r.score, r.response_time_s, r.source") +
                kTrialJoin + "JOIN rating r ON r.trial_id = t.id ORDER BY s.id, t.plan_index, r.id")
                   .c_str());
     while (q.Step())
       out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)), std::to_string(q.Int(3)),
                std::to_string(q.Int(4)), q.Text(5), q.Text(6), q.Text(7), q.Text(8),
                std::to_string(q.Int(9)), q.Text(10), q.Text(11), q.Text(12), Num(q.Real(13)),
-               Num(q.Real(14))});
+               Num(q.Real(14)), q.Text(15)});
     files.push_back(out.Close());
   }
   {

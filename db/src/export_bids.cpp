@@ -116,10 +116,15 @@ ordered_json BehSidecar(const SessionRecord& s) {
                 {"Units", "arbitrary"}};
   j["response_time"] = {{"Description", "from the end of the second stimulus to confirmation"},
                         {"Units", "s"}};
+  j["rating_source"] = {{"Description", "who gave the rating: 'simulated' (the simulated observer) or the "
+                                        "participant's input device ('window', 'rating-box:VID:PID')"}};
   j["HapticLab"] = {{"study", s.study.name},
                     {"protocol_sha256", s.study.protocol_hash},
                     {"session_status", s.session.status},
                     {"device", s.session.device},
+                    {"actuator", s.session.actuator},
+                    {"screens", s.session.screens},
+                    {"rater", s.session.rater},
                     {"calibration", s.session.calibration},
                     {"software_version", s.session.software_version}};
   return j;
@@ -279,7 +284,7 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
     const std::string stem = sub + "_" + ses + "_" + task;
     std::string beh =
         "trial\tphase\tmaterial\tcomparison\tmethod\trepetition\tleft\tright\tattempts\tcriterion\t"
-        "score\tresponse_time\n";
+        "score\tresponse_time\trating_source\n";
     std::size_t rows = 0;
     // Rows in plan order, as the CSV export.
     std::vector<const internal::TrialRecord*> by_plan;
@@ -290,10 +295,10 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
     for (const auto* t : by_plan) {
       const auto& x = t->trial;
       for (const auto& r : t->ratings) {
-        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index,
+        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index,
                            Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
                            x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
-                           Num(r.score), Num(r.response_time_s));
+                           Num(r.score), Num(r.response_time_s), Cell(r.source));
         ++rows;
       }
     }

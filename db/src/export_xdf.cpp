@@ -172,7 +172,8 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
                            nlohmann::json{{"plan_index", t.trial.plan_index},
                                           {"criterion", r.criterion},
                                           {"score", r.score},
-                                          {"response_time_s", r.response_time_s}}
+                                          {"response_time_s", r.response_time_s},
+                                          {"source", r.source}}
                                .dump());
   std::stable_sort(ratings.begin(), ratings.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });

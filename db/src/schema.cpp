@@ -150,6 +150,29 @@ INSERT INTO event(session_id, trial_id, kind, detail)
   FROM trial t JOIN trajectory_chunk c ON c.trial_id = t.id
   WHERE c.attempt = 0 AND t.attempts > 0 GROUP BY t.id;
 )sql",
+    // v5: the session's mode (device back-end, actuator, screens, who rates) and each rating's
+    // source. Older sessions recorded only the device: a simulated back-end's ratings are
+    // marked as the simulated observer's and the screens as off (the older schema could not
+    // say whether a person rated through --ui), a hardware back-end's as the participant
+    // window's (hardware always rated there); the actuator is 'unrecorded'. Each inferred
+    // session gets a 'mode-inferred' event saying so.
+    R"sql(
+ALTER TABLE session ADD COLUMN actuator TEXT NOT NULL DEFAULT '';
+ALTER TABLE session ADD COLUMN screens INTEGER NOT NULL DEFAULT 0;
+ALTER TABLE session ADD COLUMN rater TEXT NOT NULL DEFAULT '';
+ALTER TABLE rating ADD COLUMN source TEXT NOT NULL DEFAULT '';
+UPDATE session SET actuator = 'unrecorded',
+  screens = CASE WHEN device IN ('sim', 'falcon-twin') THEN 0 ELSE 1 END,
+  rater = CASE WHEN device IN ('sim', 'falcon-twin') THEN 'simulated' ELSE 'window' END;
+UPDATE rating SET source = (SELECT s.rater FROM trial t JOIN session s ON s.id = t.session_id
+                            WHERE t.id = rating.trial_id);
+INSERT INTO event(session_id, kind, detail)
+  SELECT id, 'mode-inferred',
+         'schema v5 migration: the session''s mode was not recorded; inferred from its device ''' ||
+         device || ''': ratings ' || rater || ', screens ' ||
+         CASE screens WHEN 1 THEN 'on' ELSE 'off' END || ', actuator unrecorded'
+  FROM session;
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

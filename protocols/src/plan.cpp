@@ -95,13 +95,19 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
   // Different-material reference pairs are drawn once per study (the same for everyone).
   Rng study_rng(DeriveSeed(p.seed, 0xFFFF'FFFFull));
   std::vector<PlannedTrial> plan;
+  // Trials of a blocked phase (blocked, latin-square), and those that start a block: a
+  // break there falls between blocks, never inside one.
+  std::vector<bool> in_blocks, block_start;
   const bool constrained = p.randomization.no_immediate_repeat;
   for (const auto& ph : p.phases) {
     if (ph.adaptive) continue;  // adaptive trials are chosen at run time from the answers
     std::vector<Item> items;
     if (ph.kind == PhaseKind::kTraining) {
       for (const auto& m : p.materials)
-        items.push_back({{.phase = ph.kind, .material = m.id, .left = "real:" + m.id, .rated = false}, m.id});
+        // Each virtual sample in turn (ch. V.2.1), on the left square; nothing on the right.
+        items.push_back({{.phase = ph.kind, .material = m.id, .method = ph.method, .left = "virtual:" + m.id,
+                          .rated = false},
+                         m.id});
       rng.Shuffle(items);
       for (auto& it : items) plan.push_back(it.trial);
       continue;
@@ -149,25 +155,44 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
         if (p.randomization.scheme == Scheme::kBlocked) rng.Shuffle(order);
         else order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
         std::string prev = prev0;
+        std::vector<std::size_t> starts;  // positions in `items` where a block begins
         for (int b : order) {
           std::vector<Item> block;
           for (const auto& it : all)
             if ((by_method ? it.trial.method : it.trial.material) == blocks[static_cast<std::size_t>(b)]) block.push_back(it);
           auto ordered = NoRepeatOrder(std::move(block), prev, constrained, rng, p, ph);
-          if (!ordered.empty()) prev = ordered.back().key;
+          if (!ordered.empty()) {
+            prev = ordered.back().key;
+            starts.push_back(items.size());
+          }
           items.insert(items.end(), ordered.begin(), ordered.end());
         }
+        in_blocks.resize(plan.size(), false);
+        block_start.resize(plan.size(), false);
+        in_blocks.resize(plan.size() + items.size(), true);
+        block_start.resize(plan.size() + items.size(), false);
+        for (auto s : starts) block_start[plan.size() + s] = true;
       }
     }
     BalanceSides(items, p.randomization.balance_sides, rng);
     for (auto& it : items) plan.push_back(it.trial);
   }
-  int rated = 0;
+  in_blocks.resize(plan.size(), false);
+  block_start.resize(plan.size(), false);
+  // A break before every `every_trials`-th rated trial; in a blocked phase it waits for the
+  // next block boundary (the count restarts at each break). Without blocks this is a break
+  // before rated trial every_trials, 2 every_trials, ... as always.
+  int rated = 0, since_break = 0;
   for (std::size_t i = 0; i < plan.size(); ++i) {
     plan[i].index = static_cast<int>(i);
     if (!plan[i].rated) continue;
-    if (p.break_every_trials > 0 && rated > 0 && rated % p.break_every_trials == 0) plan[i].break_before = true;
+    const bool may_break = !in_blocks[i] || block_start[i];
+    if (p.break_every_trials > 0 && rated > 0 && since_break >= p.break_every_trials && may_break) {
+      plan[i].break_before = true;
+      since_break = 0;
+    }
     ++rated;
+    ++since_break;
   }
   return plan;
 }

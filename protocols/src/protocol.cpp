@@ -70,6 +70,13 @@ class Reader {
   Diagnostics* d_;
 };
 
+// The protocol's material ids, comma-separated, for messages.
+std::string MaterialIds(const Protocol& p) {
+  std::string s;
+  for (const auto& m : p.materials) s += (s.empty() ? "" : ", ") + m.id;
+  return s.empty() ? std::string("none") : s;
+}
+
 const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
 const std::set<std::string> kAnalyses{"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
 
@@ -241,7 +248,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         p.phases.push_back(ph);
         continue;
       }
-      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs"});
+      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs", "method"});
       const std::string kind =
           r.Get<std::string>(*t, pre, "kind", true, "training, reference, main, staircase or quest-plus").value_or("main");
       if (kind == "training") ph.kind = PhaseKind::kTraining;
@@ -252,6 +259,16 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       if (auto rep = r.Get<std::int64_t>(*t, pre, "repetitions", false, "an integer 1..100")) {
         if (*rep < 1 || *rep > 100) r.Error(t->get("repetitions"), pre + ".repetitions", "expected an integer 1..100");
         else ph.repetitions = static_cast<int>(*rep);
+      }
+      ph.method = r.Get<std::string>(*t, pre, "method", false, "a [[method]] name").value_or("");
+      if (ph.kind == PhaseKind::kTraining) {
+        if (ph.method.empty() && !p.methods.empty()) ph.method = p.methods.back().name;
+        if (ph.method.empty())
+          r.Error(t, pre + ".method", "a training phase renders virtual samples and needs a [[method]]");
+        else if (!p.FindMethod(ph.method))
+          r.Error(t->get("method"), pre + ".method", "unknown method '" + ph.method + "'");
+      } else if (t->get("method")) {
+        r.Error(t->get("method"), pre + ".method", "only a training phase takes a method");
       }
       ph.duration_s = r.Get<double>(*t, pre, "duration_s", false, "a number").value_or(30);
       if (!(ph.duration_s > 0)) r.Error(t->get("duration_s"), pre + ".duration_s", "expected > 0");
@@ -267,8 +284,15 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
             const toml::array* pair = x.as_array();
             auto a0 = pair && pair->size() == 2 ? (*pair)[0].value<std::string>() : std::nullopt;
             auto a1 = pair && pair->size() == 2 ? (*pair)[1].value<std::string>() : std::nullopt;
-            if (!a0 || !a1 || !p.FindMaterial(*a0) || !p.FindMaterial(*a1) || *a0 == *a1)
+            if (!a0 || !a1)
               r.Error(&x, pre + ".different_pairs", "expected [\"A\", \"B\"] with two different material ids");
+            else if (!p.FindMaterial(*a0) || !p.FindMaterial(*a1))
+              r.Error(&x, pre + ".different_pairs",
+                      fmt::format("unknown material id '{}' (the [[material]] ids are: {})",
+                                  !p.FindMaterial(*a0) ? *a0 : *a1, MaterialIds(p)));
+            else if (*a0 == *a1)
+              r.Error(&x, pre + ".different_pairs",
+                      fmt::format("a pair needs two different materials, got '{}' twice", *a0));
             else ph.explicit_pairs.emplace_back(*a0, *a1);
           }
         } else {

@@ -3,7 +3,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <thread>
 #include <set>
 #include <filesystem>
@@ -36,6 +38,11 @@ using protocols::PhaseKind;
 using sim::Observer;
 using sim::ProfileSet;
 
+// The stop request of RequestStop (a signal number; 0: none). Lock-free, so a signal
+// handler may store to it.
+std::atomic<int> g_stop_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free);
+
 // Back-ends whose sessions are simulated (a simulated hand, the simulated observer).
 bool IsSimulated(const std::string& device) { return device == "sim" || device == "falcon-twin"; }
 
@@ -47,35 +54,78 @@ struct Lab {
   std::map<std::string, std::string> model_hashes;
 };
 
+// Loads the profiles (ground truth of each sample) and every material's model. Files are
+// looked up relative to the protocol file's folder. Every problem is collected (file, line,
+// key, and the path looked up), then thrown together: `study validate` reports the same.
 Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
   const bool sim = IsSimulated(device);
   Lab lab;
   lab.protocol = &p;
   const fs::path dir = fs::path(p.file).parent_path();
-  if (p.profiles.empty() && sim)
-    throw InputError(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
-  if (!p.profiles.empty()) lab.profiles = sim::LoadProfiles((dir / p.profiles).string());
   Diagnostics d;
+  // Runs `load`; an input or I/O error becomes a diagnostic (at `line`, `field` when the
+  // error names no file of its own).
+  const auto attempt = [&](int line, const std::string& field, const auto& load) {
+    try {
+      load();
+      return true;
+    } catch (const InputError& e) {
+      for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
+    } catch (const std::exception& e) {
+      d.Add(p.file, line, field, e.what());
+    }
+    return false;
+  };
+  const auto where = [&](const std::string& name) {
+    return fmt::format("'{}' (looked up relative to the protocol's folder: {})", name,
+                       fs::absolute(dir / name).lexically_normal().string());
+  };
+  if (p.profiles.empty() && sim)
+    d.Add(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
+  bool have_profiles = false;
+  if (!p.profiles.empty()) {
+    if (!fs::is_regular_file(dir / p.profiles))
+      d.Add(p.file, 0, "study.profiles", "no such file " + where(p.profiles));
+    else
+      have_profiles = attempt(0, "study.profiles", [&] { lab.profiles = sim::LoadProfiles((dir / p.profiles).string()); });
+  }
   for (const auto& m : p.materials) {
+    const bool placeholder = m.model == "placeholder";
+    if (!placeholder) {
+      if (!fs::is_regular_file(dir / m.model)) {
+        d.Add(p.file, m.line, "material.model", "material '" + m.id + "': no model file " + where(m.model));
+      } else {
+        const std::string path = (dir / m.model).string();
+        attempt(m.line, "material.model", [&] {
+          auto model = renderer::LoadMaterial(path);
+          lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
+          lab.models.emplace(m.id, std::move(model));
+        });
+      }
+      if (!sim) continue;  // hardware: the fitted model is all it needs
+    }
+    // The simulated lab (and a placeholder model) needs the sample's profile.
+    if (p.profiles.empty()) {
+      if (!sim) d.Add(p.file, m.line, "material.model", "material '" + m.id + "': a placeholder model is built from the "
+                                                        "sample's profile, and the protocol names no profiles file");
+      continue;
+    }
+    if (!have_profiles) continue;  // the profiles file's own problem is reported above
     const auto prof = lab.profiles.profiles.find(m.profile);
-    if (m.model != "placeholder" && !sim) {  // hardware: the fitted model is all it needs
-      const std::string path = (dir / m.model).string();
-      lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
-      lab.models.emplace(m.id, renderer::LoadMaterial(path));
-      continue;
-    }
     if (prof == lab.profiles.profiles.end()) {
-      d.Add(p.file, m.line, "material.profile", "no profile '" + m.profile + "' in " + p.profiles);
+      d.Add(p.file, m.line, "material.profile",
+            "material '" + m.id + "': no profile '" + m.profile + "' in " + p.profiles + " (its profiles: " +
+                [&] {
+                  std::string names;
+                  for (const auto& [name, pr] : lab.profiles.profiles) names += (names.empty() ? "" : ", ") + name;
+                  return names.empty() ? std::string("none") : names;
+                }() + ")");
       continue;
     }
-    if (m.model == "placeholder") {
+    if (placeholder) {
       auto model = sim::PlaceholderModel(prof->second);
       lab.model_hashes[m.id] = db::HashText(renderer::MaterialToToml(model));
       lab.models.emplace(m.id, std::move(model));
-    } else {
-      const std::string path = (dir / m.model).string();
-      lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
-      lab.models.emplace(m.id, renderer::LoadMaterial(path));
     }
   }
   d.ThrowIfAny();
@@ -93,13 +143,14 @@ struct Outcome {
 
 // The participant's ratings from the UI, clamped to the scale, with the response time from
 // the rating screen's appearance; false when the experimenter aborted.
-bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protocol& p, std::vector<db::Rating>* out) {
+bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protocol& p, const std::string& source,
+              std::vector<db::Rating>* out) {
   const auto shown = std::chrono::steady_clock::now();
   const auto r = ui.Rate(screen);
   if (!r || r->size() != p.criteria.size()) return false;
   const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
   for (std::size_t i = 0; i < p.criteria.size(); ++i)
-    out->push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt});
+    out->push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt, source});
   return true;
 }
 
@@ -116,7 +167,8 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
     const std::string kind = stim.substr(0, colon), id = stim.substr(colon + 1);
     return kind == "real" ? "the real " + id + " sample" : "virtual (" + id + ")";
   };
-  s.placement = fmt::format("left: {}; right: {}", what(t.left), what(t.right));
+  s.placement = t.right.empty() ? fmt::format("left: {}; right: nothing", what(t.left))
+                                : fmt::format("left: {}; right: {}", what(t.left), what(t.right));
   s.criteria = p.criteria;
   s.scale_min = p.scale_min;
   s.scale_max = p.scale_max;
@@ -135,12 +187,48 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
                      db::Database& database, std::int64_t session) {
   const auto& p = *lab.protocol;
   Outcome out;
-  if (t.phase == "training") return out;  // free exploration, not rated
   const std::uint64_t trial_seed =
       DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts));
   Rng rng(trial_seed);
   const double dur = p.stimulus_duration_s;
   const bool simulated = rig.sim != nullptr;
+  if (t.phase == "training") {
+    // Training (ch. V.2.1): each virtual sample in turn, explored freely for the phase's
+    // duration, not rated. A simulated participant without screens learns nothing from it,
+    // so such a session records the trial without rendering it.
+    if (simulated && !opt.ui) return out;
+    const protocols::Phase* phase = nullptr;
+    for (const auto& ph : p.phases)
+      if (ph.kind == PhaseKind::kTraining) phase = &ph;
+    const std::string id = t.left.substr(t.left.find(':') + 1);
+    internal::StimulusSide s;
+    s.model = &lab.models.at(id);
+    s.real = t.left.rfind("real:", 0) == 0;  // plans from before virtual training: the real sample
+    const auto* method = p.FindMethod(t.method);
+    if (!s.real && method) s.options = internal::MethodOptions(*method, DeriveSeed(trial_seed, 0));
+    s.real = s.real || !method;
+    s.sample = 0;
+    if (simulated) s.stroke = sim::DrawStroke(rng);
+    if (simulated && s.real) {
+      s.truth = &lab.profiles.profiles.at(p.FindMaterial(id)->profile);
+      s.truth_seed = rng.NextU64();
+    }
+    s.stream = "left";
+    s.label = "training sample";
+    s.stimulus = t.left;
+    const double train_s = phase ? phase->duration_s : dur;
+    const auto r = internal::RunStimulusSide(s, rig, train_s, opt, writer, database, session, t, screen, 0);
+    out.aborted = r.aborted;
+    out.stimulus_s = train_s;
+    // A fault while training is logged (the watchdog zeroed the force) but the unrated trial
+    // is not repeated: a device that keeps faulting is caught by the rated trials.
+    if (r.fault) {
+      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
+                         .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated"});
+      if (opt.ui) opt.ui->Event(fmt::format("training trial {}: {}", t.plan_index + 1, r.detail));
+    }
+    return out;
+  }
   // The simulated participant's exploration: one stroke, the same with ~10 % variation on
   // the other side.
   std::array<sim::Stroke, 2> strokes{};
@@ -193,11 +281,12 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     return out;
   }
   if (opt.ui) {
-    out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
+    out.aborted = !RateInUi(*opt.ui, screen, p, opt.rating_input, &out.ratings);
     return out;
   }
   for (const auto& c : p.criteria)
-    out.ratings.push_back({c, observer.Rate(c, felt[0], felt[1], p.scale_min, p.scale_max, rng), Observer::ResponseTime(rng)});
+    out.ratings.push_back({c, observer.Rate(c, felt[0], felt[1], p.scale_min, p.scale_max, rng), Observer::ResponseTime(rng),
+                           db::kRaterSimulated});
   return out;
 }
 
@@ -279,6 +368,16 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       }
       db::Trial t = queue[pick];
       queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
+      if (const int sig = StopRequested()) {
+        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "interrupted",
+                           .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study resume' "
+                                                 "continues with it",
+                                                 sig, sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "signal")});
+        database.EndSession(session, "aborted");
+        sum.status = "aborted";
+        sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return sum;
+      }
       if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
         database.LogEvent({.session_id = session, .kind = "abort", .detail = "stopped after the requested number of trials"});
         database.EndSession(session, "aborted");
@@ -288,10 +387,14 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       }
       const bool requested = opt.ui && opt.ui->TakeBreakNow();
       if (opt.ui && (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
+        // A simulated session played faster (--ui-speed) shortens its breaks alike.
+        const double speed = rig->sim ? opt.ui_playback_speed : 1.0;
+        const double break_s = p.break_duration_s / speed;
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "break",
-                           .detail = fmt::format("{:.0f} s break ({})", p.break_duration_s,
-                                                 requested ? "requested by the experimenter" : "planned")});
-        if (!opt.ui->Break(p.break_duration_s)) {
+                           .detail = fmt::format("{:.0f} s break ({}{})", break_s,
+                                                 requested ? "requested by the experimenter" : "planned",
+                                                 speed != 1.0 ? fmt::format("; --ui-speed {:g}", speed) : "")});
+        if (!opt.ui->Break(break_s)) {
           database.LogEvent({.session_id = session, .kind = "abort", .detail = "the experimenter aborted during a break"});
           database.EndSession(session, "aborted");
           sum.status = "aborted";
@@ -384,7 +487,77 @@ void LogPlanEvents(db::Database& database, std::int64_t session, const std::vect
                          .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s)});
 }
 
+// Checkpoints the WAL into the main file when a session ends, however it ends (completed,
+// aborted, interrupted by a signal, or an error): the database file alone then holds every
+// committed rating. Runs after Execute's trajectory writer has closed its connection.
+struct CheckpointAtEnd {
+  db::Database* database;
+  ~CheckpointAtEnd() {
+    try {
+      database->Checkpoint();
+    } catch (...) {  // never throw from a destructor; the -wal still holds the data
+    }
+  }
+};
+
 }  // namespace
+
+std::string SessionMode::Describe() const {
+  return fmt::format("device {}, actuator {}, screens {}, ratings {}", device, actuator, screens ? "on" : "off",
+                     rater == db::kRaterSimulated ? "simulated" : "by the participant (" + rater + ")");
+}
+
+bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool change_mode,
+                     const std::string& db_path, const std::string& participant) {
+  const bool differs = now.device != recorded.device || now.screens != recorded.screens ||
+                       now.rater != recorded.rater ||
+                       (recorded.actuator != "unrecorded" && now.actuator != recorded.actuator);
+  if (differs && !change_mode)
+    throw InputError(db_path, 0, "--participant",
+                     fmt::format("{}'s session was recorded in mode [{}]; this resume asks for [{}]. Resume "
+                                 "without those options to continue in the recorded mode, or add --change-mode "
+                                 "to continue in the new one (logged; each rating records its source)",
+                                 participant, recorded.Describe(), now.Describe()));
+  return differs;
+}
+
+SessionMode ModeOf(const RunOptions& o) {
+  return {o.device, o.actuator, o.ui != nullptr, o.ui ? o.rating_input : std::string(db::kRaterSimulated)};
+}
+
+SessionMode RecordedMode(const std::string& db_path, const std::string& participant) {
+  if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
+  const db::Database database = db::OpenForReading(db_path);
+  for (const auto& st : database.Studies())
+    if (const auto part = database.FindParticipant(st.id, participant)) {
+      const auto sessions = database.Sessions(part->id);
+      if (sessions.empty()) break;
+      const auto& se = sessions.back();
+      return {se.device, se.actuator, se.screens, se.rater};
+    }
+  throw InputError(db_path, 0, "--participant", "no participant " + participant + " with a session in this database");
+}
+
+void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool ui) {
+  internal::CheckAdaptivePhases(p, device, ui);
+  (void)LoadLab(p, device);
+}
+
+int ParticipantIndex(const std::string& db_path, const std::string& study, const std::string& code) {
+  if (!fs::exists(db_path)) throw InputError(db_path, 0, "--db", "no such database");
+  const db::Database database = db::OpenForReading(db_path);
+  const auto st = database.FindStudy(study);
+  if (!st) throw InputError(db_path, 0, "--participant", "no study '" + study + "' in this database");
+  const auto part = database.FindParticipant(st->id, code);
+  if (!part)
+    throw InputError(db_path, 0, "--participant",
+                     "no participant " + code + " in study '" + study + "' (a code not yet run has no plan index; "
+                     "use --index N)");
+  return part->index;
+}
+
+void RequestStop(int signal_number) noexcept { g_stop_signal.store(signal_number); }
+int StopRequested() noexcept { return g_stop_signal.load(); }
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
@@ -393,6 +566,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);
+  const SessionMode mode = ModeOf(opt);
   std::int64_t study_id;
   if (auto s = database.FindStudy(p.name)) {
     if (s->protocol_hash != hash)
@@ -445,7 +619,10 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                                      .device = opt.device,
                                      .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
                                      .provenance_json = prov.dump(),
-                                     .plan_json = plan_json.dump()});
+                                     .plan_json = plan_json.dump(),
+                                     .actuator = mode.actuator,
+                                     .screens = mode.screens,
+                                     .rater = mode.rater});
     std::vector<db::Trial> rows;
     for (const auto& t : plan)
       rows.push_back({.session_id = session, .plan_index = t.index, .phase = protocols::ToString(t.phase),
@@ -453,15 +630,17 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       .repetition = t.repetition, .left = t.left, .right = t.right});
     for (const auto& r : rows) ids.push_back(database.AddTrial(r));
     database.LogEvent({.session_id = session, .kind = "consent",
-                       .detail = IsSimulated(opt.device) ? "simulated participant" : "consent form signed"});
+                       .detail = mode.rater == db::kRaterSimulated ? "simulated participant" : "consent form signed"});
     LogPlanEvents(database, session, plan, ids, p);
     database.Exec("COMMIT");
   } catch (...) {
     database.Exec("ROLLBACK");
     throw;
   }
-  Log(opt, fmt::format("{}: session {} with {} planned trials", opt.participant, session, plan.size()));
+  Log(opt, fmt::format("{}: session {} with {} planned trials ({})", opt.participant, session, plan.size(),
+                       mode.Describe()));
   db::Participant stored = *database.FindParticipant(study_id, opt.participant);
+  const CheckpointAtEnd checkpoint{&database};
   return Execute(database, lab, session, stored, opt);
 }
 
@@ -488,15 +667,29 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
     if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
       Log(opt, "note: the protocol file on disk changed since the session began; resuming with the recorded text");
-    RunOptions o = opt;
-    o.device = se.device;
-    const Lab lab = LoadLab(p, o.device);
+    // The recorded mode, or with --change-mode the new one (logged).
+    const SessionMode recorded{se.device, se.actuator, se.screens, se.rater};
+    const SessionMode now = ModeOf(opt);
+    const bool differs = CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
+    const Lab lab = LoadLab(p, opt.device);
+    if (differs) {
+      database.LogEvent({.session_id = se.id, .kind = "mode-change",
+                         .detail = fmt::format("resumed with --change-mode: [{}] -> [{}]", recorded.Describe(),
+                                               now.Describe())});
+      database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
+      Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant, recorded.Describe(), now.Describe()));
+    } else if (recorded.actuator == "unrecorded") {
+      database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
+    }
+    const RunOptions& o = opt;
     database.Exec(fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
     int done = 0;
     for (const auto& t : database.Trials(se.id)) done += t.status == db::kTrialCompleted;
     database.LogEvent({.session_id = se.id, .kind = "resume",
                        .detail = fmt::format("resumed with {} of {} trials completed", done, database.Trials(se.id).size())});
-    Log(opt, fmt::format("{}: resuming session {} ({} trials completed)", opt.participant, se.id, done));
+    Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant, se.id, done,
+                         now.Describe()));
+    const CheckpointAtEnd checkpoint{&database};
     return Execute(database, lab, se.id, *part, o);
   }
   throw InputError(opt.db_path, 0, "--participant", "no participant " + opt.participant + " in this database");

@@ -71,8 +71,12 @@ std::vector<std::string> LongTable::Levels(const std::string& name) const {
 }
 
 LongTable ReadLongCsv(const std::string& path, const std::string& dv,
-                      const std::vector<std::string>& key_columns, bool allow_missing) {
+                      const std::vector<std::string>& key_columns, bool allow_missing,
+                      const RowFilter& keep) {
   const CsvTable t = ReadCsv(path);
+  std::vector<std::pair<std::size_t, std::string>> eq, ne;
+  for (const auto& [k, v] : keep.equal) eq.emplace_back(t.Require(k), v);
+  for (const auto& [k, v] : keep.not_equal) ne.emplace_back(t.Require(k), v);
   LongTable out;
   out.source = path;
   out.y_name = dv;
@@ -82,6 +86,11 @@ LongTable ReadLongCsv(const std::string& path, const std::string& dv,
   for (const auto& k : key_columns) ck.push_back(t.Require(k));
   out.keys.assign(key_columns.size(), {});
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    // Filter first: cells of rows left out are never checked.
+    bool kept = true;
+    for (const auto& [c, v] : eq) kept = kept && t.rows[r][c] == v;
+    for (const auto& [c, v] : ne) kept = kept && t.rows[r][c] != v;
+    if (!kept) continue;
     const std::string& raw = t.rows[r][cy];
     if (allow_missing && (raw.empty() || raw == "NA")) {
       out.y.push_back(std::numeric_limits<double>::quiet_NaN());

@@ -62,7 +62,9 @@ std::pair<double, double> MeanCi(const LongTable& t) {
 
 }  // namespace
 
-LongTable RatingsFromDatabase(const std::string& db_path) {
+LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated, RatingSources* sources) {
+  RatingSources local;
+  RatingSources& src = sources ? *sources : local;
   // quick_check first: a damaged record is refused, never analysed.
   const db::Database d = db::OpenForReading(db_path);
   LongTable t;
@@ -73,6 +75,12 @@ LongTable RatingsFromDatabase(const std::string& db_path) {
   for (const auto& st : d.Studies()) {
     // Scores are checked against the scale of the protocol the study ran.
     const auto proto = protocols::ParseProtocol(st.protocol_toml, db_path + " (protocol of " + st.name + ")");
+    // A human study (any rating by a person) leaves the simulated observer's ratings out.
+    bool human = false;
+    for (const auto& p : d.Participants(st.id))
+      for (const auto& se : d.Sessions(p.id))
+        for (const auto& tr : d.Trials(se.id))
+          for (const auto& r : d.Ratings(tr.id)) human = human || r.source != db::kRaterSimulated;
     for (const auto& p : d.Participants(st.id))
       for (const auto& se : d.Sessions(p.id))
         for (const auto& tr : d.Trials(se.id))
@@ -83,6 +91,15 @@ LongTable RatingsFromDatabase(const std::string& db_path) {
                                            "outside the protocol's scale [{}, {}] or negative",
                                            st.name, tr.id, r.criterion, r.score, r.response_time_s, proto.scale_min,
                                            proto.scale_max));
+            if (r.source == db::kRaterSimulated) {
+              if (human && !include_simulated) {
+                ++src.simulated_excluded[st.name];
+                continue;
+              }
+              ++src.simulated_kept[st.name];
+            } else {
+              ++src.human[st.name];
+            }
             const std::string row[] = {st.name, p.code, tr.phase, tr.material, tr.comparison, tr.method,
                                        std::to_string(tr.repetition), r.criterion};
             for (std::size_t c = 0; c < t.key_names.size(); ++c) t.keys[c].push_back(row[c]);
@@ -93,7 +110,8 @@ LongTable RatingsFromDatabase(const std::string& db_path) {
 }
 
 ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
-  const LongTable all = RatingsFromDatabase(db_path);
+  RatingSources sources;
+  const LongTable all = RatingsFromDatabase(db_path, o.include_simulated, &sources);
   if (all.rows() == 0) throw InputError(db_path, 0, "", "the database holds no ratings yet");
   fs::create_directories(o.out_dir);
   Writer w(o.out_dir);
@@ -114,6 +132,24 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     const std::string sid = Safe(st.name);
     md << "\n## Study `" << st.name << "`\n\n" << proto.description << "\n\n"
        << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows() << "\n";
+    {
+      // Where the ratings came from: a person's input device or the simulated observer.
+      const auto count = [&](const std::map<std::string, std::size_t>& m) {
+        const auto it = m.find(st.name);
+        return it == m.end() ? std::size_t{0} : it->second;
+      };
+      const std::size_t human = count(sources.human), kept = count(sources.simulated_kept),
+                        excluded = count(sources.simulated_excluded);
+      if (excluded)
+        md << "\n**Simulated ratings excluded:** " << excluded << " ratings of the simulated observer (sessions or "
+           << "parts of sessions run without a person rating) are left out of this study's " << human
+           << " ratings by participants; `hapticlab analyze --include-simulated` keeps them.\n";
+      else if (kept && human)
+        md << "\n**Simulated ratings included** (`--include-simulated`): " << kept << " ratings of the simulated "
+           << "observer are analysed together with " << human << " ratings by participants.\n";
+      else if (kept)
+        md << "\nAll ratings come from the simulated observer (a simulated study).\n";
+    }
     // Adaptive phases (staircase, QUEST+): psychometric fits, JND and Weber fraction.
     md << AdaptiveReport(db_path, st.name, st.protocol_toml, o.out_dir, o.figures, &w.files_);
     if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0) continue;

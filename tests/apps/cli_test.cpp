@@ -12,7 +12,7 @@ std::string Cli() { return HL_CLI_PATH; }
 
 TEST(Cli, EveryCommandGroupHasHelp) {
   for (const char* group : {"study", "model", "model render", "model energy", "model check", "model import-penn", "model fit-vibration", "model cv-vibration", "model cutoff", "compare", "diagnose", "fit", "stats", "stats rm-anova", "stats tukey", "stats kruskal", "stats shapiro", "analyze", "study validate", "study plan", "study run", "study resume", "study status",
-                            "export", "demo", "participant", "participant new"}) {
+                            "export", "demo", "participant", "participant new", "db", "db backup"}) {
     std::string out;
     EXPECT_EQ(test::RunCommand(Cli() + " " + group + " --help", &out), 0) << group << ": " << out;
     EXPECT_NE(out.find("Usage"), std::string::npos) << group;

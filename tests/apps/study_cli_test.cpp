@@ -21,8 +21,8 @@ TEST(StudyCli, ValidateAndPlan) {
   EXPECT_EQ(test::RunCommand(Cli() + " study validate " + Small(), &out), 0) << out;
   EXPECT_NE(out.find("ok"), std::string::npos);
   std::string a, b;
-  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --participant 5 --json", &a), 0) << a;
-  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --participant 5 --json", &b), 0);
+  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --index 5 --json", &a), 0) << a;
+  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --index 5 --json", &b), 0);
   EXPECT_EQ(a, b);  // deterministic
   EXPECT_EQ(json::parse(a)["trials"].size(), 26u);
   test::TempDir dir;

@@ -26,7 +26,7 @@ TEST(Protocol, ParsesTheSmallStudy) {
 }
 
 TEST(Plan, MatchesTheGoldenPlanForAFixedSeed) {
-  // The golden file was written by `hapticlab study plan small.toml --participant 3 --json`
+  // The golden file was written by `hapticlab study plan small.toml --index 3 --json`
   // when the planner was introduced; any change of the plan for a given seed breaks
   // reproducibility of recorded studies and must be deliberate.
   const auto p = LoadProtocol(test::DataPath("protocols/small.toml"));
@@ -91,6 +91,19 @@ TEST(Plan, ConstraintsHoldForManySeedsAndEverySchemeAndAreDeterministic) {
               prev = t.method;
             }
           EXPECT_EQ(changes, 1);
+          // Breaks fall between blocks (small.toml: 6 reference trials, then two blocks of 8
+          // with a break due every 8 rated trials: it waits for the second block).
+          int breaks = 0;
+          prev.clear();
+          for (const auto& t : plan) {
+            if (t.phase != PhaseKind::kMain) continue;
+            if (t.break_before) {
+              ++breaks;
+              EXPECT_TRUE(!prev.empty() && t.method != prev) << "break inside a block at trial " << t.index + 1;
+            }
+            prev = t.method;
+          }
+          EXPECT_EQ(breaks, 1);
         }
       }
     }

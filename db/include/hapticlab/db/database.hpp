@@ -1,5 +1,5 @@
 #pragma once
-/// @file The study record in SQLite (DESIGN.md §5): typed access to every table.
+/// @file The study record in SQLite (docs/formats.md): typed access to every table.
 
 #include <cstdint>
 #include <optional>
@@ -12,7 +12,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 4;
+inline constexpr int kSchemaVersion = 5;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -32,6 +32,9 @@ struct Participant {
   std::uint64_t seed = 0;  ///< per-participant seed used for planning and simulation
 };
 
+/// Rating source of the simulated observer (anything else is a person's input device).
+inline constexpr const char* kRaterSimulated = "simulated";
+
 /// One sitting of a participant, with the provenance needed to reproduce it.
 struct Session {
   std::int64_t id = 0;
@@ -44,6 +47,11 @@ struct Session {
   std::string calibration;       ///< device calibration description or hash
   std::string provenance_json;   ///< protocol hash, seeds, model hashes (JSON object)
   std::string plan_json;         ///< the resolved trial plan (schema v3)
+  // The session's mode (schema v5); `study resume` continues in it.
+  std::string actuator;          ///< vibrotactile actuator: "audio", "none" ("unrecorded": before v5)
+  bool screens = false;          ///< participant window and console (--ui)
+  std::string rater = kRaterSimulated;  ///< who rates: "simulated" or the participant's input
+                                        ///< device ("window", "rating-box:VID:PID")
 };
 
 /// Trial status values.
@@ -75,6 +83,9 @@ struct Rating {
   std::string criterion;        ///< e.g. "roughness"
   double score = 0;             ///< on the protocol's scale (0-100 by default)
   double response_time_s = 0;   ///< from stimulus end to confirmation [s]
+  /// Who gave it: "simulated" (the simulated observer) or the participant's input device
+  /// ("window", "rating-box:VID:PID"). Empty when stored: the session's rater.
+  std::string source;
 };
 
 /// An event in a session: break, pause, abort, device fault, trial re-queue...
@@ -165,6 +176,18 @@ class Database {
   // Sessions.
   std::int64_t StartSession(const Session& s);
   void EndSession(std::int64_t session_id, const std::string& status);
+  /// Records a new mode for a session (resume with --change-mode); ratings stored from now
+  /// on carry the new rater as their source.
+  void SetSessionMode(std::int64_t session_id, const std::string& device, const std::string& actuator,
+                      bool screens, const std::string& rater);
+  /// Copies the database's committed content (the -wal included) into `dest` with SQLite's
+  /// online backup API, while other connections may keep writing. `dest` must not exist.
+  /// @throws InputError naming dest when it exists or cannot be written
+  void Backup(const std::string& dest) const;
+  /// Moves every committed page from the -wal into the main file and empties the -wal
+  /// (PRAGMA wal_checkpoint(TRUNCATE)), so the main file alone holds the record. Returns
+  /// false when another connection kept the checkpoint from completing.
+  bool Checkpoint();
   std::vector<Session> Sessions(std::int64_t participant_id) const;
 
   // Trials and ratings.

@@ -15,7 +15,8 @@ struct ExportedFile {
 };
 
 /// Writes into `out_dir` (created when missing):
-/// - `ratings.csv`: one row per rating, with its study, participant, trial and design cells;
+/// - `ratings.csv`: one row per rating, with its study, participant, trial and design cells
+///   and its source ("simulated" or the participant's input device; docs/formats.md);
 /// - `trials.csv`: one row per trial with status and attempts;
 /// - `events.csv`: one row per event;
 /// - `trajectory_<stream>.csv`: one row per sample (study, participant, trial_id, t_s, then

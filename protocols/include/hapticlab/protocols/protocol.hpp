@@ -40,6 +40,9 @@ struct Phase {
   PhaseKind kind = PhaseKind::kMain;
   int repetitions = 1;
   double duration_s = 30;   ///< training: exploration time per sample [s]
+  /// training: the method rendering the virtual samples (ch. V.2.1: each virtual sample in
+  /// turn); default the last [[method]] (the full one in the dissertation's protocols)
+  std::string method;
   bool same_pairs = true;   ///< reference: each material against itself (upper limit)
   int different_pairs = 0;  ///< reference: distinct material pairs (lower limit), drawn by the study seed
   std::vector<std::pair<std::string, std::string>> explicit_pairs;  ///< or listed

@@ -123,7 +123,53 @@ struct RunOptions {
   /// Abort the session after this many trials in a row where a side touched nothing (the
   /// rig's sample pose is probably wrong).
   int max_untouched_trials = 3;
+  // The session's mode besides `device` and `ui` (recorded; resume continues in it).
+  std::string actuator = "none";   ///< vibrotactile actuator back-end ("audio", "none")
+  std::string rating_input = "window";  ///< with a UI: the participant's input device
+                                        ///< ("window", "rating-box:VID:PID")
+  /// Resume: continue in this mode although it differs from the recorded one (logged as a
+  /// 'mode-change' event); without it a different mode is refused.
+  bool change_mode = false;
 };
+
+/// A session's mode: what `study run` recorded and `study resume` continues in.
+struct SessionMode {
+  std::string device = "sim";     ///< back-end
+  std::string actuator = "none";  ///< "unrecorded" for sessions before schema v5
+  bool screens = false;           ///< --ui
+  std::string rater = "simulated";///< "simulated" or the participant's input device
+  std::string Describe() const;   ///< e.g. "device sim, actuator none, screens off, ratings simulated"
+};
+
+/// Resuming in `now` a session recorded in `recorded`: true when the mode changes (allowed
+/// only with `change_mode`). A field recorded as "unrecorded" (before schema v5) matches any.
+/// @throws InputError naming both modes when they differ and `change_mode` is false
+bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool change_mode,
+                     const std::string& db_path, const std::string& participant);
+
+/// The mode a RunOptions runs in.
+SessionMode ModeOf(const RunOptions& options);
+
+/// The recorded mode of a participant's last session (for `study resume` to default to).
+/// @throws InputError when the database or the participant does not exist
+SessionMode RecordedMode(const std::string& db_path, const std::string& participant);
+
+/// Every check `RunStudy` makes before it writes anything, for `study validate`: adaptive
+/// phases runnable on the device, the profiles file (looked up relative to the protocol
+/// file's folder) present and naming every material's profile, every model file present and
+/// loadable. @throws InputError listing every problem (file, line, key, path looked up)
+void CheckRunnable(const protocols::Protocol& protocol, const std::string& device = "sim", bool ui = false);
+
+/// The plan index of participant `code` of study `study` in the database (`study plan
+/// --participant CODE --db DB`). @throws InputError when there is no such participant
+int ParticipantIndex(const std::string& db_path, const std::string& study, const std::string& code);
+
+/// Asks a running session to stop at the next trial boundary: it ends 'aborted' with an
+/// 'interrupted' event and checkpoints the database (async-signal-safe: for SIGINT/SIGTERM
+/// handlers). `study resume` continues it.
+void RequestStop(int signal_number) noexcept;
+/// The signal that requested a stop (0: none).
+int StopRequested() noexcept;
 
 struct RunSummary {
   std::int64_t session_id = 0;

@@ -30,13 +30,23 @@ struct LongTable {
   std::vector<std::string> Levels(const std::string& name) const;
 };
 
+/// Which rows of a CSV to read: those whose columns equal every `equal` value and differ
+/// from every `not_equal` value. Rows left out are never checked (an empty key cell or a
+/// missing response there is no error).
+struct RowFilter {
+  std::vector<std::pair<std::string, std::string>> equal;
+  std::vector<std::pair<std::string, std::string>> not_equal;
+};
+
 /// Reads a CSV: `dv` must be numeric in every kept row; `key_columns` are kept as text.
 /// Empty or non-numeric responses are errors naming file, line and column (missing data is
 /// never silently dropped). With `allow_missing`, an empty or `NA` response is read as NaN
 /// (for the ANOVA, which drops and names the subject, as afex does); anything else
 /// non-numeric is still an error.
+/// Only rows that pass `keep` are read (filter columns must exist).
 LongTable ReadLongCsv(const std::string& path, const std::string& dv,
-                      const std::vector<std::string>& key_columns, bool allow_missing = false);
+                      const std::vector<std::string>& key_columns, bool allow_missing = false,
+                      const RowFilter& keep = {});
 
 /// Splits "a,b,c" into {"a","b","c"} (empty parts dropped).
 std::vector<std::string> SplitList(const std::string& s);

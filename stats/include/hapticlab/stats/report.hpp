@@ -3,6 +3,7 @@
 /// record, written as a report (Markdown, CSV tables, SVG and PNG figures) that mirrors the
 /// dissertation's tables and figures (Tables 4.1, 4.2, 5.2-5.5; Figs. 4.5, 4.8, 5.7, 5.8).
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -13,6 +14,9 @@ namespace hapticlab::stats {
 struct ReportOptions {
   std::string out_dir;
   bool figures = true;
+  /// Keep the simulated observer's ratings in a study that also holds a person's ratings
+  /// (by default they are excluded there, and the report says how many).
+  bool include_simulated = false;
 };
 
 struct ReportResult {
@@ -21,9 +25,20 @@ struct ReportResult {
   std::vector<std::string> studies;  ///< studies analysed
 };
 
+/// Which ratings RatingsFromDatabase kept and left out, per study.
+struct RatingSources {
+  std::map<std::string, std::size_t> human;               ///< a person's ratings kept, by study
+  std::map<std::string, std::size_t> simulated_kept;      ///< the simulated observer's, kept
+  std::map<std::string, std::size_t> simulated_excluded;  ///< the simulated observer's, left out
+};
+
 /// Ratings of every study in the database as a long table with keys study, participant,
 /// phase, material, comparison, method, repetition, criterion (response: score).
-LongTable RatingsFromDatabase(const std::string& db_path);
+/// A study holding any rating from a person (source other than "simulated") is a human
+/// study: its simulated ratings are left out unless `include_simulated`. A study rated only
+/// by the simulated observer keeps them all.
+LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated = false,
+                              RatingSources* sources = nullptr);
 
 /// Runs the analyses of every study in the database. @throws InputError when the database
 /// holds no ratings.

@@ -1,0 +1,129 @@
+// Schema v5 (session mode, rating source), WAL checkpoint and the online backup.
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <filesystem>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::db {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Ratings counted by a fresh, independent SQLite connection (not our Database class).
+int CountRatings(const std::string& path, const std::string& where = "1") {
+  sqlite3* h = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  const std::string sql = "SELECT count(*) FROM rating WHERE " + where;
+  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
+  int n = -1;
+  if (sqlite3_step(s) == SQLITE_ROW) n = sqlite3_column_int(s, 0);
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return n;
+}
+
+// A study with one participant, one session in `device`'s mode and `trials` main trials.
+std::int64_t OneSession(Database& db, const Session& mode, int trials) {
+  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "p", .protocol_hash = "h", .seed = 1});
+  const auto p = db.AddParticipant({.study_id = st, .code = "P01", .index = 0, .seed = 2});
+  Session se = mode;
+  se.participant_id = p;
+  const auto session = db.StartSession(se);
+  for (int i = 0; i < trials; ++i)
+    db.AddTrial({.session_id = session, .plan_index = i, .phase = "main", .material = "Denim"});
+  return session;
+}
+
+TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
+  test::TempDir dir;
+  const std::string path = dir.File("v4.db");
+  {
+    Database old(path, {.migrate_to = 4});
+    old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
+    old.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
+    old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'sim'), (2,'falcon')");
+    old.Exec("INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','A'), (2,0,'main','A')");
+    old.Exec("INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (1,'overall',50,1), "
+             "(2,'overall',60,1)");
+  }
+  Database db(path);
+  ASSERT_EQ(db.SchemaVersion(), kSchemaVersion);
+  const auto s1 = db.Sessions(1).at(0), s2 = db.Sessions(2).at(0);
+  EXPECT_EQ(s1.rater, "simulated");
+  EXPECT_FALSE(s1.screens);
+  EXPECT_EQ(s2.rater, "window");  // a hardware session always rated in the participant window
+  EXPECT_TRUE(s2.screens);
+  EXPECT_EQ(s1.actuator, "unrecorded");
+  EXPECT_EQ(db.Ratings(1).at(0).source, "simulated");
+  EXPECT_EQ(db.Ratings(2).at(0).source, "window");
+  int inferred = 0;
+  for (const auto& e : db.Events(2)) inferred += e.kind == "mode-inferred" && e.detail.find("falcon") != std::string::npos;
+  EXPECT_EQ(inferred, 1);
+}
+
+TEST(SessionMode, RatingsTakeTheSessionsRaterUnlessTheyNameTheirSource) {
+  test::TempDir dir;
+  Database db(dir.File("a.db"));
+  const auto session = OneSession(db, {.device = "sim", .actuator = "none", .screens = true, .rater = "window"}, 3);
+  const auto trials = db.Trials(session);
+  db.StartTrial(trials[0].id);
+  db.CompleteTrial(trials[0].id, {{"overall", 40, 1.5, ""}});
+  db.StartTrial(trials[1].id);
+  db.CompleteTrial(trials[1].id, {{"overall", 41, 1.5, "simulated"}});
+  db.SetSessionMode(session, "falcon-twin", "none", false, "simulated");
+  db.StartTrial(trials[2].id);
+  db.CompleteTrial(trials[2].id, {{"overall", 42, 1.5, ""}});
+  EXPECT_EQ(db.Ratings(trials[0].id).at(0).source, "window");
+  EXPECT_EQ(db.Ratings(trials[1].id).at(0).source, "simulated");
+  EXPECT_EQ(db.Ratings(trials[2].id).at(0).source, "simulated");
+  const auto se = db.Sessions(db.Participants(1).at(0).id).at(0);
+  EXPECT_EQ(se.device, "falcon-twin");
+  EXPECT_FALSE(se.screens);
+}
+
+TEST(SessionMode, CheckpointLeavesEveryCommittedRatingInTheMainFile) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  Database db(path);
+  const auto session = OneSession(db, {.device = "sim"}, 5);
+  for (const auto& t : db.Trials(session)) {
+    db.StartTrial(t.id);
+    db.CompleteTrial(t.id, {{"overall", 50, 1, ""}});
+  }
+  // Before the checkpoint the ratings may sit in the -wal only; after it, a copy of the main
+  // file alone (no -wal beside it) holds them all.
+  ASSERT_TRUE(db.Checkpoint());
+  EXPECT_EQ(fs::file_size(path + "-wal"), 0u);
+  fs::copy_file(path, dir.File("copy.db"));
+  EXPECT_EQ(CountRatings(dir.File("copy.db")), 5);
+}
+
+TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  Database db(path);
+  const auto session = OneSession(db, {.device = "sim"}, 4);
+  for (const auto& t : db.Trials(session)) {
+    db.StartTrial(t.id);
+    db.CompleteTrial(t.id, {{"overall", 50, 1, ""}, {"roughness", 20, 1, ""}});
+  }
+  // The writer keeps its connection open (a live study): the ratings are in the -wal.
+  ASSERT_GT(fs::file_size(path + "-wal"), 0u);
+  db.Backup(dir.File("b.db"));
+  EXPECT_FALSE(fs::exists(dir.File("b.db-wal")) && fs::file_size(dir.File("b.db-wal")) > 0);
+  EXPECT_EQ(CountRatings(dir.File("b.db")), 8);
+  EXPECT_EQ(Database(dir.File("b.db"), {.create = false, .read_only = true}).IntegrityCheck(), "ok");
+  // An existing destination is refused and left alone.
+  const auto before = fs::file_size(dir.File("b.db"));
+  EXPECT_THROW(db.Backup(dir.File("b.db")), InputError);
+  EXPECT_EQ(fs::file_size(dir.File("b.db")), before);
+}
+
+}  // namespace
+}  // namespace hapticlab::db
