@@ -106,7 +106,12 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     band.nets.clear();
     double ss = 0, n = 0;
     for (std::size_t i = 0; i < recs.size(); ++i) {
-      const auto full = BandSplit(pre[i], m.sample_rate_hz, band.lo_hz, band.hi_hz);
+      // The network's signal: the recording low-passed (ideal) to its decimated Nyquist
+      // frequency, not band-passed to the band: a band-passed signal is zero over most of
+      // the decimated range, so a predictor fitted to it is ill-conditioned (it needed a
+      // dither whose white floor then showed in and around every band). The band itself is
+      // selected at synthesis by the crossover filters (renderer/neural.cpp).
+      const auto full = BandSplit(pre[i], m.sample_rate_hz, 0, 0.5 * m.sample_rate_hz / band.decimation);
       std::vector<double> dec;
       for (std::size_t k = 0; k < full.size(); k += static_cast<std::size_t>(band.decimation)) dec.push_back(full[k]);
       for (const double x : dec) ss += x * x, n += 1;
@@ -258,30 +263,37 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           if (cnt[c] > 0) band.sigma[c] = std::sqrt(se[c] / cnt[c]);
         // Calibrate sigma: a trained predictor shrinks toward zero, so free-running synthesis
         // driven by the one-step residual would have too little power. Scale sigma until the
-        // free-running band signal has the recording's RMS (three fixed-point passes).
+        // free-running signal has the recording's RMS inside the band (what the crossovers
+        // pass; three fixed-point passes).
+        const double rate_dec = m.sample_rate_hz / band.decimation;
+        auto in_band_rms = [&](const std::vector<double>& x) {
+          const auto bx = BandSplit(x, rate_dec, band.lo_hz, band.hi_hz);
+          double q = 0;
+          for (const double v : bx) q += v * v;
+          return std::sqrt(q / static_cast<double>(std::max<std::size_t>(1, bx.size())));
+        };
         for (const auto i : use) {
           const auto c = static_cast<std::size_t>(cell_of[i]);
-          double target = 0;
-          for (const double x : sig[j.band][i]) target += x * x;
-          target = std::sqrt(target / static_cast<double>(std::max<std::size_t>(1, sig[j.band][i].size())));
+          const double target = in_band_rms(sig[j.band][i]);
           Rng rng(o.train.seed + 7919 * k + c);
           Eigen::VectorXd in = Eigen::VectorXd::Zero(inputs);
           if (unified) {
             in(M) = m.NormSpeed(recs[i].speed_mps);
             in(M + 1) = m.NormForce(recs[i].force_N);
           }
+          std::vector<double> run;
           for (int pass = 0; pass < 3 && target > 0; ++pass) {
             in.head(M).setZero();
-            double ss = 0;
+            run.clear();
             const int warm = 300, steps = 3000;
             for (int t = 0; t < warm + steps; ++t) {
               double yv = predict(in) + band.sigma[c] * rng.Normal();
               yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
               for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
               in(0) = yv;
-              if (t >= warm) ss += yv * yv;
+              if (t >= warm) run.push_back(yv);
             }
-            const double got = std::sqrt(ss / steps);
+            const double got = in_band_rms(run);
             if (!(got > 0)) break;
             band.sigma[c] *= std::clamp(target / got, 0.25, 4.0);
           }

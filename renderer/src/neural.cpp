@@ -54,6 +54,21 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
 
 constexpr std::size_t kLinearTerms = 6;  // Γ_U's condition basis of the linear part
 
+// One second-order section of a Butterworth low- or high-pass (bilinear transform with
+// pre-warping; `q` the section's quality factor). Two sections with q = 0.5412 and 1.3066
+// make the fourth-order filter (hand-written: BiquadCoeffs has only the q = 0.7071 section).
+BiquadCoeffs ButterworthSection(double fc, double fs, double q, bool high) {
+  const double k = std::tan(std::numbers::pi * fc / fs);
+  const double norm = 1.0 / (1.0 + k / q + k * k);
+  BiquadCoeffs c;
+  c.b0 = high ? norm : k * k * norm;
+  c.b1 = high ? -2.0 * norm : 2.0 * k * k * norm;
+  c.b2 = c.b0;
+  c.a1 = 2.0 * (k * k - 1.0) * norm;
+  c.a2 = (1.0 - k / q + k * k) * norm;
+  return c;
+}
+
 // Allocation-free forward pass; `a` and `b` hold at least the widest layer.
 double Forward(const NeuralNet& n, bool unified, const double* in, double* a, double* b) {
   const double* x = in;
@@ -134,10 +149,13 @@ void ValidateNeuralModel(const NeuralModel& m) {
     for (std::size_t i = 1; i < g->size(); ++i)
       if (!((*g)[i] > (*g)[i - 1])) throw std::invalid_argument("neural model: grid values must be strictly ascending");
   if (!(m.sample_rate_hz > 0)) throw std::invalid_argument("neural model: sample_rate_hz must be positive");
-  if (m.bands.empty()) throw std::invalid_argument("neural model: no bands");
+  if (m.bands.empty() || m.bands.size() > kMaxNeuralBands)
+    throw std::invalid_argument(fmt::format("neural model: {} bands, expected 1 to {}", m.bands.size(), kMaxNeuralBands));
   const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
     const auto& band = m.bands[b];
+    if (!(band.lo_hz >= 0 && band.hi_hz > band.lo_hz) || (b > 0 && std::abs(band.lo_hz - m.bands[b - 1].hi_hz) > 1e-9))
+      throw std::invalid_argument(fmt::format("neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band below)", b + 1));
     const std::string where = fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
     if (band.decimation < 1 || band.history < 1) throw std::invalid_argument(where + ": decimation and history must be >= 1");
     if (band.hi_hz > 0.5 * m.sample_rate_hz / band.decimation + 1e-9)
@@ -279,8 +297,19 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
-    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
+    if (&b == &m_->bands.front()) s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
     s.up = PolyphaseUpsampler(b.decimation, kTaps);
+    // The crossovers (docs/modeling-neural.md): fourth-order Butterworth pairs at every band
+    // boundary below the Nyquist frequency; band b takes the high-pass of every boundary below
+    // it and the low-pass of its own top, so the powers sum to one at every frequency.
+    const double nyq = 0.5 * m_->sample_rate_hz;
+    for (const auto& lower : m_->bands) {
+      if (&lower == &b) break;
+      if (lower.hi_hz < nyq)
+        for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(lower.hi_hz, m_->sample_rate_hz, q, true));
+    }
+    if (b.hi_hz < nyq)
+      for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(b.hi_hz, m_->sample_rate_hz, q, false));
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
     bands_.push_back(std::move(s));
@@ -295,6 +324,7 @@ void NeuralSynth::Reset() noexcept {
     s.head = s.phase = 0;
     s.hp.Reset();
     s.up.Reset();
+    for (auto& x : s.xover) x.Reset();
   }
   running_ = false;
 }
@@ -339,7 +369,8 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
       s.up.Push(s.hp.Step(y));
     }
-    const double out = s.up.Output(s.phase);
+    double out = s.up.Output(s.phase);
+    for (int k = 0; k < s.nxover; ++k) out = s.xover[static_cast<std::size_t>(k)].Step(out);
     s.phase = (s.phase + 1) % band.decimation;
     sum += band.scale * out;
   }

@@ -32,7 +32,7 @@ struct NeuralFitOptions {
   /// SD of white noise added to each band signal before the training pairs are cut (units of
   /// the band's RMS): histories and targets alike, so the predictor stays unbiased for the
   /// band signal plus a white floor (see docs/modeling-neural.md).
-  double signal_noise = 0.2;
+  double signal_noise = 0.0;
   /// Give every network a linear autoregressive part fitted by least squares on the clean
   /// histories (Γ_U: with coefficients linear in v', f'); the MLP learns what it leaves.
   bool linear_part = true;

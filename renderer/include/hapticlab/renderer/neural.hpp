@@ -56,6 +56,8 @@ struct NeuralBand {
 
 enum class NeuralTopology { kUnified, kDecomposed };
 
+inline constexpr std::size_t kMaxNeuralBands = 8;
+
 struct NeuralModel {
   NeuralTopology topology = NeuralTopology::kUnified;
   double sample_rate_hz = 2000;            ///< model rate [Hz]
@@ -95,12 +97,15 @@ class NeuralSynth {
 
  private:
   static constexpr int kTaps = 16;  // interpolator taps per phase
+  static constexpr double kButterworth4Q[2] = {0.54119610014619701, 1.3065629648763766};
   struct BandState {
     std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
     std::vector<double> input;    // M (+2) network input
     int head = 0, phase = 0;
-    Biquad hp;                    // output path: high-pass at lo (decimated rate)
+    Biquad hp;                    // lowest band only: drift high-pass at lo / 2 (decimated rate)
     PolyphaseUpsampler up;        // by γ, kTaps taps per phase
+    std::array<Biquad, 2 * kMaxNeuralBands> xover{};  // crossover sections at the model rate
+    int nxover = 0;
   };
   std::shared_ptr<const NeuralModel> m_;
   std::vector<BandState> bands_;
