@@ -184,26 +184,38 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         // The linear part (NeuralFitOptions::linear_part): least squares on the clean training
         // rows, features x_q (Γ_U: times each term of the condition basis), a ridge of 1e-6 of
         // the mean diagonal.
-        const Eigen::Index nlin = o.linear_part ? (unified ? 6 * M : M) : 0;
+        const Eigen::Index nlin = o.linear_part ? (unified ? 9 * M : M) : 0;
         auto features = [&](const auto& row, auto&& f) {
           f.head(M) = row.head(M);
-          if (unified) {  // the condition basis 1, v', f', v'^2, v' f', f'^2 (renderer/neural.cpp)
+          if (unified) {  // the biquadratic condition basis (1, v', v'^2) x (1, f', f'^2) (renderer/neural.cpp)
             const double v = row(M), fo = row(M + 1);
-            const double phi[5] = {v, fo, v * v, v * fo, fo * fo};
-            for (int t = 0; t < 5; ++t) f.segment((t + 1) * M, M) = row.head(M) * phi[t];
+            const double phi[8] = {v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo};
+            for (int t = 0; t < 8; ++t) f.segment((t + 1) * M, M) = row.head(M) * phi[t];
           }
         };
         Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
         Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
         if (nlin > 0) {
-          const Eigen::Index ntr = total - nval;
-          Eigen::MatrixXd F(total, nlin);
-          for (Eigen::Index rr = 0; rr < total; ++rr) features(X.row(rr), F.row(rr));
-          Eigen::MatrixXd A = F.topRows(ntr).transpose() * F.topRows(ntr);
+          // Normal equations accumulated over blocks of rows (the full feature matrix of Γ_U's
+          // 2 kHz bands would take 9 x 50 x 36000 doubles).
+          const Eigen::Index ntr = total - nval, blk = 2048;
+          Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin), F(blk, nlin);
+          Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
+          for (Eigen::Index r0 = 0; r0 < ntr; r0 += blk) {
+            const Eigen::Index nb = std::min(blk, ntr - r0);
+            for (Eigen::Index rr = 0; rr < nb; ++rr) features(X.row(r0 + rr), F.row(rr));
+            A.selfadjointView<Eigen::Lower>().rankUpdate(F.topRows(nb).transpose());
+            rhs.noalias() += F.topRows(nb).transpose() * y.segment(r0, nb);
+          }
+          A = A.selfadjointView<Eigen::Lower>();
           const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
           A.diagonal().array() += lambda;
-          wlin = A.ldlt().solve(F.topRows(ntr).transpose() * y.head(ntr));
-          ylin = F * wlin;
+          wlin = A.ldlt().solve(rhs);
+          for (Eigen::Index r0 = 0; r0 < total; r0 += blk) {
+            const Eigen::Index nb = std::min(blk, total - r0);
+            for (Eigen::Index rr = 0; rr < nb; ++rr) features(X.row(r0 + rr), F.row(rr));
+            ylin.segment(r0, nb).noalias() = F.topRows(nb) * wlin;
+          }
         }
         const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
         const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns

@@ -52,7 +52,9 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
   return k;
 }
 
-constexpr std::size_t kLinearTerms = 6;  // Γ_U's condition basis of the linear part
+// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
+// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
+constexpr std::size_t kLinearTerms = 9, kLinearTermsQuadratic = 6;
 
 // One second-order section of a Butterworth low- or high-pass (bilinear transform with
 // pre-warping; `q` the section's quality factor). Two sections with q = 0.5412 and 1.3066
@@ -96,12 +98,13 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
   if (!n.linear.empty()) {
     const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
     const double* w = n.linear.data();
-    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0};
+    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0, 0, 0, 0};
     std::size_t terms = 1;
     if (unified) {
       const double v = in[M], f = in[M + 1];
       phi[1] = v, phi[2] = f, phi[3] = v * v, phi[4] = v * f, phi[5] = f * f;
-      terms = kLinearTerms;
+      phi[6] = v * v * f, phi[7] = v * f * f, phi[8] = v * v * f * f;
+      terms = n.linear.size() / M;
     }
     for (std::size_t t = 0; t < terms; ++t) {
       double acc = 0;
@@ -171,9 +174,12 @@ void ValidateNeuralModel(const NeuralModel& m) {
         throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
       for (const double p : n.params)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
-      const std::size_t want_lin = static_cast<std::size_t>(band.history) * (m.topology == NeuralTopology::kUnified ? kLinearTerms : 1);
-      if (!n.linear.empty() && n.linear.size() != want_lin)
-        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}", where, n.linear.size(), want_lin));
+      const auto H = static_cast<std::size_t>(band.history);
+      const bool uni = m.topology == NeuralTopology::kUnified;
+      const std::size_t want_lin = H * (uni ? kLinearTerms : 1);
+      if (!n.linear.empty() && n.linear.size() != want_lin && !(uni && n.linear.size() == H * kLinearTermsQuadratic))
+        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
+                                                uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : ""));
       for (const double p : n.linear)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite linear weight");
     }
