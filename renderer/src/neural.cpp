@@ -93,8 +93,8 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
     dst = dst == a ? b : a;
   }
   double y = x[0];
-  // The linear part over the M history inputs; Γ_U's coefficients are quadratic in the
-  // scaled condition (v', f'), the last two inputs: basis 1, v', f', v'^2, v' f', f'^2.
+  // The linear part over the M history inputs; Γ_U's coefficients are biquadratic in the
+  // scaled condition (v', f'), the last two inputs (kLinearTerms; 6-term files: quadratic).
   if (!n.linear.empty()) {
     const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
     const double* w = n.linear.data();
