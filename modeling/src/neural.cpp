@@ -182,40 +182,43 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             if (val) nval += static_cast<Eigen::Index>(b - a);
           }
         // The linear part (NeuralFitOptions::linear_part): least squares on the clean training
-        // rows, features x_q (Γ_U: times each term of the condition basis), a ridge of 1e-6 of
-        // the mean diagonal.
-        const Eigen::Index nlin = o.linear_part ? (unified ? 9 * M : M) : 0;
-        auto features = [&](const auto& row, auto&& f) {
-          f.head(M) = row.head(M);
-          if (unified) {  // the biquadratic condition basis (1, v', v'^2) x (1, f', f'^2) (renderer/neural.cpp)
-            const double v = row(M), fo = row(M + 1);
-            const double phi[8] = {v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo};
-            for (int t = 0; t < 8; ++t) f.segment((t + 1) * M, M) = row.head(M) * phi[t];
-          }
+        // rows. Its features are phi(v', f') (x) x (Γ_D: phi = 1; Γ_U: the biquadratic
+        // condition basis of renderer/neural.cpp), and phi is constant within a recording, so
+        // the normal matrix is sum over recordings of (phi phi^T) (x) (X_i^T X_i): one M x M
+        // Gram matrix per recording instead of 9 M features per row.
+        const Eigen::Index terms = unified ? 9 : 1, nlin = o.linear_part ? terms * M : 0;
+        auto basis = [&](double v, double fo) {
+          Eigen::VectorXd phi(terms);
+          phi(0) = 1;
+          if (unified) phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
+          return phi;
         };
         Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
         Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
         if (nlin > 0) {
-          // Normal equations accumulated over blocks of rows (the full feature matrix of Γ_U's
-          // 2 kHz bands would take 9 x 50 x 36000 doubles).
-          const Eigen::Index ntr = total - nval, blk = 2048;
-          Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin), F(blk, nlin);
+          Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin);
           Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
-          for (Eigen::Index r0 = 0; r0 < ntr; r0 += blk) {
-            const Eigen::Index nb = std::min(blk, ntr - r0);
-            for (Eigen::Index rr = 0; rr < nb; ++rr) features(X.row(r0 + rr), F.row(rr));
-            A.selfadjointView<Eigen::Lower>().rankUpdate(F.topRows(nb).transpose());
-            rhs.noalias() += F.topRows(nb).transpose() * y.segment(r0, nb);
+          Eigen::Index off = 0;
+          for (const auto i : use) {  // the training rows, recording by recording (as laid out above)
+            const auto [a, b] = rows_of(j, i, false);
+            const auto n = static_cast<Eigen::Index>(b - a);
+            const auto Xi = X.block(off, 0, n, M);
+            const Eigen::MatrixXd G = Xi.transpose() * Xi;
+            const Eigen::VectorXd g = Xi.transpose() * y.segment(off, n);
+            const Eigen::VectorXd phi = unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N)) : basis(0, 0);
+            for (Eigen::Index t = 0; t < terms; ++t) {
+              rhs.segment(t * M, M) += phi(t) * g;
+              for (Eigen::Index u = 0; u < terms; ++u) A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
+            }
+            off += n;
           }
-          A = A.selfadjointView<Eigen::Lower>();
           const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
           A.diagonal().array() += lambda;
           wlin = A.ldlt().solve(rhs);
-          for (Eigen::Index r0 = 0; r0 < total; r0 += blk) {
-            const Eigen::Index nb = std::min(blk, total - r0);
-            for (Eigen::Index rr = 0; rr < nb; ++rr) features(X.row(r0 + rr), F.row(rr));
-            ylin.segment(r0, nb).noalias() = F.topRows(nb) * wlin;
-          }
+          // ylin = sum_t phi_t (x . w_t): the histories times the M x terms weight matrix.
+          const Eigen::MatrixXd P = X.leftCols(M) * Eigen::Map<const Eigen::MatrixXd>(wlin.data(), M, terms);
+          for (Eigen::Index rr = 0; rr < total; ++rr)
+            ylin(rr) = P.row(rr).dot(unified ? basis(X(rr, M), X(rr, M + 1)) : basis(0, 0));
         }
         const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
         const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns
@@ -262,13 +265,10 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
         renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
                                 std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
-        Eigen::RowVectorXd fbuf(std::max<Eigen::Index>(nlin, 1));
-        auto predict = [&](const Eigen::VectorXd& in) {
+        const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
+        auto predict = [&](const Eigen::VectorXd& in, const Eigen::VectorXd& phi) {
           double v = net.Predict(in);
-          if (nlin > 0) {
-            features(in.transpose(), fbuf);
-            v += fbuf.head(nlin).dot(wlin.transpose());
-          }
+          if (nlin > 0) v += (in.head(M).transpose() * W).dot(phi);
           return v;
         };
         for (std::size_t c = 0; c < cells; ++c)
@@ -293,13 +293,14 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             in(M) = m.NormSpeed(recs[i].speed_mps);
             in(M + 1) = m.NormForce(recs[i].force_N);
           }
+          const Eigen::VectorXd phi_c = unified ? basis(in(M), in(M + 1)) : basis(0, 0);
           std::vector<double> run;
           for (int pass = 0; pass < 3 && target > 0; ++pass) {
             in.head(M).setZero();
             run.clear();
             const int warm = 300, steps = 3000;
             for (int t = 0; t < warm + steps; ++t) {
-              double yv = predict(in) + band.sigma[c] * rng.Normal();
+              double yv = predict(in, phi_c) + band.sigma[c] * rng.Normal();
               yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
               for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
               in(0) = yv;
