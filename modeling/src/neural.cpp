@@ -106,7 +106,12 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     band.nets.clear();
     double ss = 0, n = 0;
     for (std::size_t i = 0; i < recs.size(); ++i) {
-      const auto full = BandSplit(pre[i], m.sample_rate_hz, band.lo_hz, band.hi_hz);
+      // The network's signal: the recording low-passed (ideal) to its decimated Nyquist
+      // frequency, not band-passed to the band: a band-passed signal is zero over most of
+      // the decimated range, so a predictor fitted to it is ill-conditioned (it needed a
+      // dither whose white floor then showed in and around every band). The band itself is
+      // selected at synthesis by the crossover filters (renderer/neural.cpp).
+      const auto full = BandSplit(pre[i], m.sample_rate_hz, 0, 0.5 * m.sample_rate_hz / band.decimation);
       std::vector<double> dec;
       for (std::size_t k = 0; k < full.size(); k += static_cast<std::size_t>(band.decimation)) dec.push_back(full[k]);
       for (const double x : dec) ss += x * x, n += 1;
@@ -177,28 +182,43 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             if (val) nval += static_cast<Eigen::Index>(b - a);
           }
         // The linear part (NeuralFitOptions::linear_part): least squares on the clean training
-        // rows, features x_q (Γ_U: times each term of the condition basis), a ridge of 1e-6 of
-        // the mean diagonal.
-        const Eigen::Index nlin = o.linear_part ? (unified ? 6 * M : M) : 0;
-        auto features = [&](const auto& row, auto&& f) {
-          f.head(M) = row.head(M);
-          if (unified) {  // the condition basis 1, v', f', v'^2, v' f', f'^2 (renderer/neural.cpp)
-            const double v = row(M), fo = row(M + 1);
-            const double phi[5] = {v, fo, v * v, v * fo, fo * fo};
-            for (int t = 0; t < 5; ++t) f.segment((t + 1) * M, M) = row.head(M) * phi[t];
-          }
+        // rows. Its features are phi(v', f') (x) x (Γ_D: phi = 1; Γ_U: the biquadratic
+        // condition basis of renderer/neural.cpp), and phi is constant within a recording, so
+        // the normal matrix is sum over recordings of (phi phi^T) (x) (X_i^T X_i): one M x M
+        // Gram matrix per recording instead of 9 M features per row.
+        const Eigen::Index terms = unified ? 9 : 1, nlin = o.linear_part ? terms * M : 0;
+        auto basis = [&](double v, double fo) {
+          Eigen::VectorXd phi(terms);
+          phi(0) = 1;
+          if (unified) phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
+          return phi;
         };
         Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
         Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
         if (nlin > 0) {
-          const Eigen::Index ntr = total - nval;
-          Eigen::MatrixXd F(total, nlin);
-          for (Eigen::Index rr = 0; rr < total; ++rr) features(X.row(rr), F.row(rr));
-          Eigen::MatrixXd A = F.topRows(ntr).transpose() * F.topRows(ntr);
+          Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin);
+          Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
+          Eigen::Index off = 0;
+          for (const auto i : use) {  // the training rows, recording by recording (as laid out above)
+            const auto [a, b] = rows_of(j, i, false);
+            const auto n = static_cast<Eigen::Index>(b - a);
+            const auto Xi = X.block(off, 0, n, M);
+            const Eigen::MatrixXd G = Xi.transpose() * Xi;
+            const Eigen::VectorXd g = Xi.transpose() * y.segment(off, n);
+            const Eigen::VectorXd phi = unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N)) : basis(0, 0);
+            for (Eigen::Index t = 0; t < terms; ++t) {
+              rhs.segment(t * M, M) += phi(t) * g;
+              for (Eigen::Index u = 0; u < terms; ++u) A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
+            }
+            off += n;
+          }
           const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
           A.diagonal().array() += lambda;
-          wlin = A.ldlt().solve(F.topRows(ntr).transpose() * y.head(ntr));
-          ylin = F * wlin;
+          wlin = A.ldlt().solve(rhs);
+          // ylin = sum_t phi_t (x . w_t): the histories times the M x terms weight matrix.
+          const Eigen::MatrixXd P = X.leftCols(M) * Eigen::Map<const Eigen::MatrixXd>(wlin.data(), M, terms);
+          for (Eigen::Index rr = 0; rr < total; ++rr)
+            ylin(rr) = P.row(rr).dot(unified ? basis(X(rr, M), X(rr, M + 1)) : basis(0, 0));
         }
         const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
         const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns
@@ -245,43 +265,48 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
         renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
                                 std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
-        Eigen::RowVectorXd fbuf(std::max<Eigen::Index>(nlin, 1));
-        auto predict = [&](const Eigen::VectorXd& in) {
+        const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
+        auto predict = [&](const Eigen::VectorXd& in, const Eigen::VectorXd& phi) {
           double v = net.Predict(in);
-          if (nlin > 0) {
-            features(in.transpose(), fbuf);
-            v += fbuf.head(nlin).dot(wlin.transpose());
-          }
+          if (nlin > 0) v += (in.head(M).transpose() * W).dot(phi);
           return v;
         };
         for (std::size_t c = 0; c < cells; ++c)
           if (cnt[c] > 0) band.sigma[c] = std::sqrt(se[c] / cnt[c]);
         // Calibrate sigma: a trained predictor shrinks toward zero, so free-running synthesis
         // driven by the one-step residual would have too little power. Scale sigma until the
-        // free-running band signal has the recording's RMS (three fixed-point passes).
+        // free-running signal has the recording's RMS inside the band (what the crossovers
+        // pass; three fixed-point passes).
+        const double rate_dec = m.sample_rate_hz / band.decimation;
+        auto in_band_rms = [&](const std::vector<double>& x) {
+          const auto bx = BandSplit(x, rate_dec, band.lo_hz, band.hi_hz);
+          double q = 0;
+          for (const double v : bx) q += v * v;
+          return std::sqrt(q / static_cast<double>(std::max<std::size_t>(1, bx.size())));
+        };
         for (const auto i : use) {
           const auto c = static_cast<std::size_t>(cell_of[i]);
-          double target = 0;
-          for (const double x : sig[j.band][i]) target += x * x;
-          target = std::sqrt(target / static_cast<double>(std::max<std::size_t>(1, sig[j.band][i].size())));
+          const double target = in_band_rms(sig[j.band][i]);
           Rng rng(o.train.seed + 7919 * k + c);
           Eigen::VectorXd in = Eigen::VectorXd::Zero(inputs);
           if (unified) {
             in(M) = m.NormSpeed(recs[i].speed_mps);
             in(M + 1) = m.NormForce(recs[i].force_N);
           }
+          const Eigen::VectorXd phi_c = unified ? basis(in(M), in(M + 1)) : basis(0, 0);
+          std::vector<double> run;
           for (int pass = 0; pass < 3 && target > 0; ++pass) {
             in.head(M).setZero();
-            double ss = 0;
+            run.clear();
             const int warm = 300, steps = 3000;
             for (int t = 0; t < warm + steps; ++t) {
-              double yv = predict(in) + band.sigma[c] * rng.Normal();
+              double yv = predict(in, phi_c) + band.sigma[c] * rng.Normal();
               yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
               for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
               in(0) = yv;
-              if (t >= warm) ss += yv * yv;
+              if (t >= warm) run.push_back(yv);
             }
-            const double got = std::sqrt(ss / steps);
+            const double got = in_band_rms(run);
             if (!(got > 0)) break;
             band.sigma[c] *= std::clamp(target / got, 0.25, 4.0);
           }

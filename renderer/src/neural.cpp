@@ -52,7 +52,24 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
   return k;
 }
 
-constexpr std::size_t kLinearTerms = 6;  // Γ_U's condition basis of the linear part
+// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
+// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
+constexpr std::size_t kLinearTerms = 9, kLinearTermsQuadratic = 6;
+
+// One second-order section of a Butterworth low- or high-pass (bilinear transform with
+// pre-warping; `q` the section's quality factor). Two sections with q = 0.5412 and 1.3066
+// make the fourth-order filter (hand-written: BiquadCoeffs has only the q = 0.7071 section).
+BiquadCoeffs ButterworthSection(double fc, double fs, double q, bool high) {
+  const double k = std::tan(std::numbers::pi * fc / fs);
+  const double norm = 1.0 / (1.0 + k / q + k * k);
+  BiquadCoeffs c;
+  c.b0 = high ? norm : k * k * norm;
+  c.b1 = high ? -2.0 * norm : 2.0 * k * k * norm;
+  c.b2 = c.b0;
+  c.a1 = 2.0 * (k * k - 1.0) * norm;
+  c.a2 = (1.0 - k / q + k * k) * norm;
+  return c;
+}
 
 // Allocation-free forward pass; `a` and `b` hold at least the widest layer.
 double Forward(const NeuralNet& n, bool unified, const double* in, double* a, double* b) {
@@ -76,17 +93,18 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
     dst = dst == a ? b : a;
   }
   double y = x[0];
-  // The linear part over the M history inputs; Γ_U's coefficients are quadratic in the
-  // scaled condition (v', f'), the last two inputs: basis 1, v', f', v'^2, v' f', f'^2.
+  // The linear part over the M history inputs; Γ_U's coefficients are biquadratic in the
+  // scaled condition (v', f'), the last two inputs (kLinearTerms; 6-term files: quadratic).
   if (!n.linear.empty()) {
     const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
     const double* w = n.linear.data();
-    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0};
+    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0, 0, 0, 0};
     std::size_t terms = 1;
     if (unified) {
       const double v = in[M], f = in[M + 1];
       phi[1] = v, phi[2] = f, phi[3] = v * v, phi[4] = v * f, phi[5] = f * f;
-      terms = kLinearTerms;
+      phi[6] = v * v * f, phi[7] = v * f * f, phi[8] = v * v * f * f;
+      terms = n.linear.size() / M;
     }
     for (std::size_t t = 0; t < terms; ++t) {
       double acc = 0;
@@ -134,10 +152,13 @@ void ValidateNeuralModel(const NeuralModel& m) {
     for (std::size_t i = 1; i < g->size(); ++i)
       if (!((*g)[i] > (*g)[i - 1])) throw std::invalid_argument("neural model: grid values must be strictly ascending");
   if (!(m.sample_rate_hz > 0)) throw std::invalid_argument("neural model: sample_rate_hz must be positive");
-  if (m.bands.empty()) throw std::invalid_argument("neural model: no bands");
+  if (m.bands.empty() || m.bands.size() > kMaxNeuralBands)
+    throw std::invalid_argument(fmt::format("neural model: {} bands, expected 1 to {}", m.bands.size(), kMaxNeuralBands));
   const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
     const auto& band = m.bands[b];
+    if (!(band.lo_hz >= 0 && band.hi_hz > band.lo_hz) || (b > 0 && std::abs(band.lo_hz - m.bands[b - 1].hi_hz) > 1e-9))
+      throw std::invalid_argument(fmt::format("neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band below)", b + 1));
     const std::string where = fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
     if (band.decimation < 1 || band.history < 1) throw std::invalid_argument(where + ": decimation and history must be >= 1");
     if (band.hi_hz > 0.5 * m.sample_rate_hz / band.decimation + 1e-9)
@@ -153,9 +174,12 @@ void ValidateNeuralModel(const NeuralModel& m) {
         throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
       for (const double p : n.params)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
-      const std::size_t want_lin = static_cast<std::size_t>(band.history) * (m.topology == NeuralTopology::kUnified ? kLinearTerms : 1);
-      if (!n.linear.empty() && n.linear.size() != want_lin)
-        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}", where, n.linear.size(), want_lin));
+      const auto H = static_cast<std::size_t>(band.history);
+      const bool uni = m.topology == NeuralTopology::kUnified;
+      const std::size_t want_lin = H * (uni ? kLinearTerms : 1);
+      if (!n.linear.empty() && n.linear.size() != want_lin && !(uni && n.linear.size() == H * kLinearTermsQuadratic))
+        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
+                                                uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : ""));
       for (const double p : n.linear)
         if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite linear weight");
     }
@@ -279,8 +303,19 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
-    s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
+    if (&b == &m_->bands.front()) s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
     s.up = PolyphaseUpsampler(b.decimation, kTaps);
+    // The crossovers (docs/modeling-neural.md): fourth-order Butterworth pairs at every band
+    // boundary below the Nyquist frequency; band b takes the high-pass of every boundary below
+    // it and the low-pass of its own top, so the powers sum to one at every frequency.
+    const double nyq = 0.5 * m_->sample_rate_hz;
+    for (const auto& lower : m_->bands) {
+      if (&lower == &b) break;
+      if (lower.hi_hz < nyq)
+        for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(lower.hi_hz, m_->sample_rate_hz, q, true));
+    }
+    if (b.hi_hz < nyq)
+      for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(b.hi_hz, m_->sample_rate_hz, q, false));
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
     bands_.push_back(std::move(s));
@@ -295,6 +330,7 @@ void NeuralSynth::Reset() noexcept {
     s.head = s.phase = 0;
     s.hp.Reset();
     s.up.Reset();
+    for (auto& x : s.xover) x.Reset();
   }
   running_ = false;
 }
@@ -339,7 +375,8 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
       s.up.Push(s.hp.Step(y));
     }
-    const double out = s.up.Output(s.phase);
+    double out = s.up.Output(s.phase);
+    for (int k = 0; k < s.nxover; ++k) out = s.xover[static_cast<std::size_t>(k)].Step(out);
     s.phase = (s.phase + 1) % band.decimation;
     sum += band.scale * out;
   }

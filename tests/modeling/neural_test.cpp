@@ -250,6 +250,49 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
   }
 }
 
+// The crossovers that select each band at synthesis (docs/modeling-neural.md): every band's
+// network runs on a signal that covers its whole decimated range, and band b's output passes
+// the fourth-order Butterworth high-passes of the boundaries below it and the low-pass at its
+// top. The bands are independent processes, so their powers add: with every network silent
+// and each band driven by white noise of the density of a white 2 kHz signal (scale 1/sqrt(γ)),
+// the sum must be white over 20-950 Hz (power-complementary crossovers, the interpolators'
+// roll-off included). Without the crossovers bands 3 and 4 would each add a full-range white
+// signal (+3 dB over 0-1000 Hz), with amplitude-complementary (Linkwitz-Riley) ones the sum
+// would lose 3 dB at every boundary.
+TEST(Neural, BandCrossoversArePowerComplementary) {
+  auto m = std::make_shared<renderer::NeuralModel>();
+  m->topology = renderer::NeuralTopology::kDecomposed;
+  m->speeds_mps = {0.05};
+  m->forces_N = {1.0};
+  m->bands = renderer::DefaultNeuralBands();
+  for (auto& b : m->bands) {
+    renderer::NeuralNet n;
+    n.layers = {b.history, 1};
+    n.params.assign(n.ParamCount(), 0.0);  // silent network: the band is its white excitation
+    b.nets = {n};
+    b.sigma = {1.0};
+    b.scale = 1 / std::sqrt(static_cast<double>(b.decimation));
+  }
+  renderer::NeuralSynth s(m, 17);
+  std::vector<double> x(200000);
+  for (std::size_t k = 0; k < 4000; ++k) s.Step(0.05, 1.0, true);
+  for (auto& v : x) v = s.Step(0.05, 1.0, true);
+  const int seg = 512;
+  const auto mag = WelchMagnitude(x, seg);
+  const double white = std::sqrt(3.0 * seg / 8.0);  // E|X_k|^2 of unit white noise, Hann window
+  double worst_db = 0, worst_hz = 0;
+  for (std::size_t k = 0; k + 4 < mag.size(); k += 4) {  // 4-bin (15.6 Hz) averages of the power
+    const double f0 = static_cast<double>(k) * 2000.0 / seg;
+    if (f0 < 20 || f0 + 15.6 > 950) continue;
+    double p = 0;
+    for (std::size_t j = k; j < k + 4; ++j) p += mag[j] * mag[j];
+    const double db = 10 * std::log10(p / 4 / (white * white));
+    if (std::abs(db) > std::abs(worst_db)) worst_db = db, worst_hz = f0;
+  }
+  std::printf("sum of the silent bands: largest departure from white %.2f dB at %.0f Hz (20-950 Hz)\n", worst_db, worst_hz);
+  EXPECT_LT(std::abs(worst_db), 0.75) << "at " << worst_hz << " Hz";
+}
+
 // Free-running synthesis of a known nonlinear AR process: the noise-driven MLP reproduces
 // its spectrum on held-out data better than a linear AR fit of the same order.
 TEST(Neural, FreeRunningMlpMatchesANonlinearProcessBetterThanLinearAr) {
@@ -376,8 +419,10 @@ std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
 // Fig. 3.7 on the synthetic AR grids (thesis grid: train 4, 8, 12 cm/s x 0.54, 1.18, 1.91 N,
 // held out 6, 10 cm/s and 0.89, 1.40 N): LPC, Γ_U, Γ_D, training and held-out mean E_s.
 // Issue #19's targets: on the linear grid Γ_U within 0.05 of LPC on training conditions and
-// within 0.1 held out; on the nonlinear grid Γ_U below LPC held out. What the networks
-// reach is in docs/modeling-neural.md; asserted is what they reach.
+// within 0.1 held out (met with margin on every data seed tried, docs/modeling-neural.md); on
+// the nonlinear grid Γ_U below LPC held out, which Γ_U reaches on 3 of 4 data seeds
+// (differences -0.016 to +0.015, the E_s estimate's own spread): asserted there is what holds
+// on every seed tried, training within 0.05 of LPC and held out within 0.03.
 TEST(NeuralFig37, LinearAndNonlinearArGrids) {
   const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
   std::printf("AR grid    | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
@@ -388,14 +433,9 @@ TEST(NeuralFig37, LinearAndNonlinearArGrids) {
     const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
     std::printf("%-10s |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", nonlinear ? "nonlinear" : "linear", lpc.mean_es_train,
                 lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test);
-    if (!nonlinear) {
-      // Held out within 0.1 of LPC, LPC's home ground (the issue's target, met). Training within
-      // 0.05 is not reached yet (+0.063 on 2026-11-22, docs/modeling-neural.md); asserted is
-      // within 0.1, which the model before the linear part and the headroom bands missed by far
-      // (+0.16: 0.322 against 0.166).
-      EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.1);
-      EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.1);
-    }
+    EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.05);
+    if (!nonlinear) EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.1);
+    else EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.03);
   }
 }
 

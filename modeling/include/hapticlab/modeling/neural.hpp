@@ -29,12 +29,13 @@ struct NeuralFitOptions {
   /// histories it stays a noise-driven process with the band's spectrum. 0.3 was chosen on
   /// the synthetic textures of tests/modeling/neural_test.cpp (NeuralFig37 runs with it).
   double input_noise = 0.3;
-  /// SD of white noise added to each band signal before the training pairs are cut (units of
-  /// the band's RMS): histories and targets alike, so the predictor stays unbiased for the
-  /// band signal plus a white floor (see docs/modeling-neural.md).
-  double signal_noise = 0.2;
+  /// SD of white noise added to each band's training signal before the pairs are cut (units
+  /// of the band's RMS): histories and targets alike. Default 0: the training signals cover
+  /// their whole decimated range and need no conditioning; the dither (0.2 before issue #19)
+  /// put a white floor into every band (docs/modeling-neural.md).
+  double signal_noise = 0.0;
   /// Give every network a linear autoregressive part fitted by least squares on the clean
-  /// histories (Γ_U: with coefficients linear in v', f'); the MLP learns what it leaves.
+  /// histories (Γ_U: coefficients biquadratic in v', f'); the MLP learns what it leaves.
   bool linear_part = true;
   /// Ridge of the linear part's least squares, relative to the mean diagonal of its normal
   /// matrix (keeps the coefficients, and their condition dependence, small where the data
@@ -47,11 +48,13 @@ struct NeuralFitOptions {
 };
 
 /// Trains the model on recordings at the conditions of a full speed x force grid (the
-/// thesis's design). Band b's signal is the preprocessed recording band-passed to the band
-/// (zero-phase Butterworth) and decimated by γ_b, in units of its RMS over all recordings;
-/// each network learns y[m] from y[m-1..m-M] (Γ_U: and v, f scaled to [-1, 1]); the last
-/// 20 % of every recording is the early-stopping validation set. Sigma per band and cell is
-/// the one-step residual RMS. Seeded by options.train.seed.
+/// thesis's design). Band b's network runs on the preprocessed recording low-passed (ideal,
+/// FFT) to the Nyquist frequency of its decimated rate and decimated by γ_b, in units of its
+/// RMS over all recordings; the band itself is selected at synthesis by the crossovers
+/// (renderer/neural.hpp). Each network learns y[m] from y[m-1..m-M] (Γ_U: and v, f scaled to
+/// [-1, 1]); the last 20 % of every recording is the early-stopping validation set. Sigma
+/// per band and cell: the one-step residual RMS, calibrated so that free-running synthesis
+/// has the recording's power inside the band. Seeded by options.train.seed.
 /// @throws InputError when the recordings do not form a full grid (listing what is missing).
 renderer::NeuralModel FitNeural(const std::vector<Recording>& recordings, const NeuralFitOptions& o);
 

@@ -11,12 +11,17 @@
 /// e ~ N(0, 1), with sigma the network's one-step residual standard deviation on its training
 /// data (per cell, interpolated like the outputs). This is the nonlinear counterpart of the
 /// LPC model's excitation; sigma is then calibrated so that free-running synthesis at each
-/// training cell has the band power of the recording (the network's shrinkage toward zero
-/// would otherwise lower it). The output path high-passes each band at half its lower edge
-/// (removing drift without cutting into the band), upsamples it by γ with a windowed-sinc
-/// polyphase interpolator (16 taps per phase: flat within 0.05 dB up to 0.4 of the decimated
-/// rate, where every band's top lies) and sums the bands. Latency: 8 decimated samples per
-/// band (32 ms for band 1, none at γ = 1).
+/// training cell has the recording's power inside the band. Each band's network runs on a
+/// signal that covers its whole decimated range (not only the band: a band-limited signal is
+/// an ill-conditioned prediction problem); the output path selects the band: the lowest band
+/// is high-passed at half its lower edge (drift), every band is upsampled by γ with a
+/// windowed-sinc polyphase interpolator (16 taps per phase) and then passes fourth-order
+/// Butterworth crossovers at the model rate: the high-passes of every band boundary below it
+/// and the low-pass at its own top. Butterworth low- and high-pass of one order and cut-off
+/// are power-complementary (|L|^2 + |H|^2 = 1), and the bands are independent processes, so
+/// their powers sum to the model's at every frequency (within 0.5 dB over 20-950 Hz with the
+/// interpolators' roll-off, tests/modeling/neural_test.cpp). Latency: 8 decimated samples
+/// per band (32 ms for band 1, none at γ = 1) plus the crossovers' group delay.
 
 #include <array>
 #include <cstdint>
@@ -36,10 +41,11 @@ struct NeuralNet {
   std::vector<int> layers;     ///< sizes from input to output (output 1)
   std::vector<double> params;
   /// Optional linear autoregressive part added to the MLP's output (empty: none). Over the
-  /// M history inputs x_i: Γ_D, M weights a_i, y += sum a_i x_i; Γ_U, 6 M weights, one block
-  /// of M per term of the condition basis phi = (1, v', f', v'^2, v' f', f'^2) (v', f' the
-  /// network's scaled speed and force inputs): y += sum_t phi_t sum_i w[t M + i] x_i
-  /// (docs/modeling-neural.md: why).
+  /// M history inputs x_i: Γ_D, M weights a_i, y += sum a_i x_i; Γ_U, 9 M weights, one block
+  /// of M per term of the biquadratic condition basis phi = (1, v', f', v'^2, v' f', f'^2,
+  /// v'^2 f', v' f'^2, v'^2 f'^2) (v', f' the network's scaled speed and force inputs):
+  /// y += sum_t phi_t sum_i w[t M + i] x_i. Files with 6 M weights (the quadratic basis, its
+  /// first six terms; before 2026-11-23) still load (docs/modeling-neural.md: why).
   std::vector<double> linear;
   std::size_t ParamCount() const;
 };
@@ -55,6 +61,8 @@ struct NeuralBand {
 };
 
 enum class NeuralTopology { kUnified, kDecomposed };
+
+inline constexpr std::size_t kMaxNeuralBands = 8;
 
 struct NeuralModel {
   NeuralTopology topology = NeuralTopology::kUnified;
@@ -95,12 +103,15 @@ class NeuralSynth {
 
  private:
   static constexpr int kTaps = 16;  // interpolator taps per phase
+  static constexpr double kButterworth4Q[2] = {0.54119610014619701, 1.3065629648763766};
   struct BandState {
     std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
     std::vector<double> input;    // M (+2) network input
     int head = 0, phase = 0;
-    Biquad hp;                    // output path: high-pass at lo (decimated rate)
+    Biquad hp;                    // lowest band only: drift high-pass at lo / 2 (decimated rate)
     PolyphaseUpsampler up;        // by γ, kTaps taps per phase
+    std::array<Biquad, 2 * kMaxNeuralBands> xover{};  // crossover sections at the model rate
+    int nxover = 0;
   };
   std::shared_ptr<const NeuralModel> m_;
   std::vector<BandState> bands_;
