@@ -241,7 +241,10 @@ void RegisterStudy(CLI::App& app) {
         "Run a new participant through the protocol and record everything to the database.\n"
         "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
         "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
-        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
+        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).\n"
+        "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
+        "--stop-after, or trials that touched nothing): completed trials are recorded, continue with\n"
+        "'study resume'; 2 bad input; 1 any other failure.");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
@@ -267,14 +270,16 @@ void RegisterStudy(CLI::App& app) {
         o.stop_after_trials = a->stop_after;
         o.fault_rate = a->fault_rate;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
-        PrintSummary(runner::RunStudy(p, o), a->json);
-        return kExitOk;
+        const auto sum = runner::RunStudy(p, o);
+        PrintSummary(sum, a->json);
+        return sum.status == "aborted" ? kExitStopped : kExitOk;
       });
     });
   }
   {
     auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand("resume", "Continue a participant's session where a crash or abort left it");
+    auto* cmd = study->add_subcommand("resume", "Continue a participant's session where a crash or abort left it\n"
+                                      "(exit status as for 'study run': 0 completed, 3 stopped again)");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Participant code")->required();
     cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
@@ -292,8 +297,9 @@ void RegisterStudy(CLI::App& app) {
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
-        PrintSummary(runner::ResumeStudy(o), a->json);
-        return kExitOk;
+        const auto sum = runner::ResumeStudy(o);
+        PrintSummary(sum, a->json);
+        return sum.status == "aborted" ? kExitStopped : kExitOk;
       });
     });
   }
