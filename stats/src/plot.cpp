@@ -53,12 +53,12 @@ void DrawBars(const BarChart& c) {
   // A single unnamed group: each bar is labelled with its series name.
   if (ng == 1 && c.groups[0].empty())
     for (int s = 0; s < ns; ++s)
-      plmtex("b", 1.5, (-0.4 + (s + 0.45) * w + 0.6) / ng, 0.5, c.series[static_cast<std::size_t>(s)].name.c_str());
+      plmtex("b", 1.5, (-0.4 + (s + 0.45) * w + 0.6) / (ng + 0.2), 0.5, c.series[static_cast<std::size_t>(s)].name.c_str());
   for (int g = 0; g < ng; ++g) {
     // Group label below the axis: vertical when there are many groups.
     const double x = g;
     plcol0(15);
-    const double pos = (g + 0.6) / ng;
+    const double pos = (g + 0.6) / (ng + 0.2);  // the window spans [-0.6, ng - 0.4]
     if (ng > 4) plmtex("bv", 0.5, pos, 1.0, c.groups[static_cast<std::size_t>(g)].c_str());
     else plmtex("b", 1.5, pos, 0.5, c.groups[static_cast<std::size_t>(g)].c_str());
     double top = c.y_min;
@@ -116,7 +116,7 @@ void DrawBoxes(const BoxPlot& b) {
   for (int g = 0; g < ng; ++g) {
     const auto& x = b.samples[static_cast<std::size_t>(g)];
     plcol0(15);
-    plmtex("b", 1.5, (g + 0.6) / ng, 0.5, b.groups[static_cast<std::size_t>(g)].c_str());
+    plmtex("b", 1.5, (g + 0.6) / (ng + 0.2), 0.5, b.groups[static_cast<std::size_t>(g)].c_str());
     if (x.empty()) continue;
     const auto f = Outliers(x, QuartileRule::kHinges);
     std::vector<double> s(x);
