@@ -12,6 +12,10 @@ namespace hapticlab::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;   ///< the work failed (I/O, a fit that diverged, ...)
 inline constexpr int kExitBadInput = 2;  ///< bad usage or bad input (message names file/line/field)
+/// study run / resume: the session stopped before its end (the experimenter's Abort,
+/// --stop-after, or too many untouched trials); what was completed is recorded and
+/// 'hapticlab study resume' continues it.
+inline constexpr int kExitStopped = 3;
 
 /// Runs a command body, mapping exceptions to exit codes and messages on stderr:
 /// InputError and std::invalid_argument -> 2, anything else -> 1.

@@ -295,7 +295,10 @@ void RegisterStudy(CLI::App& app) {
         "Run a new participant through the protocol and record everything to the database.\n"
         "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
         "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
-        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).");
+        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).\n"
+        "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
+        "--stop-after, or trials that touched nothing): completed trials are recorded, continue with\n"
+        "'study resume'; 2 bad input; 1 any other failure.");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
@@ -322,8 +325,9 @@ void RegisterStudy(CLI::App& app) {
         o.fault_rate = a->fault_rate;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         InstallStopHandlers();
-        PrintSummary(runner::RunStudy(p, o), a->json);
-        return kExitOk;
+        const auto sum = runner::RunStudy(p, o);
+        PrintSummary(sum, a->json);
+        return sum.status == "aborted" ? kExitStopped : kExitOk;
       });
     });
   }
@@ -333,7 +337,8 @@ void RegisterStudy(CLI::App& app) {
         "resume",
         "Continue a participant's session where a crash, abort or signal left it, in the mode it was\n"
         "recorded in (device, actuator, --ui, rating box): those options default to the recorded\n"
-        "ones, and a different mode is refused unless --change-mode is given (then it is logged).");
+        "ones, and a different mode is refused unless --change-mode is given (then it is logged).\n"
+        "Exit status as for 'study run': 0 completed, 3 stopped again.");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Participant code")->required();
     cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
@@ -369,8 +374,9 @@ void RegisterStudy(CLI::App& app) {
         o.stop_after_trials = a->stop_after;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         InstallStopHandlers();
-        PrintSummary(runner::ResumeStudy(o), a->json);
-        return kExitOk;
+        const auto sum = runner::ResumeStudy(o);
+        PrintSummary(sum, a->json);
+        return sum.status == "aborted" ? kExitStopped : kExitOk;
       });
     });
   }

@@ -190,13 +190,14 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         r.Error(&(*ms)[i], pre, "expected a table");
         continue;
       }
-      r.Known(*t, pre, {"id", "sample", "model", "profile"});
+      r.Known(*t, pre, {"id", "sample", "model", "profile", "group"});
       Material m;
       m.line = Reader::Line(t);
       m.id = r.Get<std::string>(*t, pre, "id", true, "a string").value_or("");
       m.sample = r.Get<std::string>(*t, pre, "sample", false, "a string").value_or(m.id);
       m.model = r.Get<std::string>(*t, pre, "model", false, "a file or \"placeholder\"").value_or("placeholder");
       m.profile = r.Get<std::string>(*t, pre, "profile", false, "a string").value_or(m.id);
+      m.group = r.Get<std::string>(*t, pre, "group", false, "a string").value_or("");
       if (!m.id.empty() && !ids.insert(m.id).second) r.Error(t->get("id"), pre + ".id", "duplicate material id '" + m.id + "'");
       p.materials.push_back(m);
     }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <tuple>
 
 namespace hapticlab::runner::ui {
 namespace {
@@ -90,26 +91,58 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     ImGui::End();
     return act;
   }
-  // The scene: the upper part of the window (all of it while the stimulus is explored).
+  // The scene: the upper part of the window (all of it while the stimulus is explored),
+  // below the phase's prompt. The margins hold the whole cursor (a 6 mm sphere) wherever
+  // the stylus is, so it is never clipped at the window's edges.
   const bool below = v.mode == ParticipantView::Mode::kRating || v.mode == ParticipantView::Mode::kChoice;
-  const float scene_h = below ? size.y * 0.55f : size.y;
+  // Rating: the panel under the scene holds the prompt, each criterion (gap, name, scale,
+  // end labels) and the confirm button; the scene gets what is left (at most 55 %).
+  const ImGuiStyle& style = ImGui::GetStyle();
+  const float line = ImGui::GetTextLineHeightWithSpacing();
+  const float per_criterion = 14 + 1.25f * line + 28 + style.ItemSpacing.y + line + style.ItemSpacing.y;
+  const float panel = v.mode == ParticipantView::Mode::kRating
+                          ? 10 + line + static_cast<float>(v.criteria.size()) * per_criterion + 10 + 36 + 34
+                          : 130;
+  const float scene_h = below ? std::max(size.y * 0.3f, std::min(size.y * 0.55f, size.y - panel)) : size.y;
+  float top = 0;
+  if (v.mode == ParticipantView::Mode::kStimulus && !v.stimulus_prompt.empty()) {
+    ImGui::SetWindowFontScale(1.5f);
+    const ImVec2 ts = ImGui::CalcTextSize(v.stimulus_prompt.c_str());
+    ImGui::SetCursorPos(ImVec2((size.x - ts.x) / 2, 12));
+    TextRecorded(drawn, "stimulus-prompt", v.stimulus_prompt);
+    ImGui::SetWindowFontScale(1.0f);
+    top = ts.y + 24;
+  }
+  constexpr double kCursorRadius_m = 0.006;
   const Eigen::Vector2d span = v.workspace_max_m - v.workspace_min_m;
-  const float scale = std::min(size.x * 0.9f / static_cast<float>(span.x()), scene_h * 0.9f / static_cast<float>(span.y()));
-  const ImVec2 origin((size.x - scale * static_cast<float>(span.x())) / 2, (scene_h - scale * static_cast<float>(span.y())) / 2);
+  const float scale = std::min(size.x * 0.95f / static_cast<float>(span.x() + 2 * kCursorRadius_m),
+                               (scene_h - top) * 0.95f / static_cast<float>(span.y() + 2 * kCursorRadius_m));
+  const ImVec2 origin((size.x - scale * static_cast<float>(span.x())) / 2,
+                      top + (scene_h - top - scale * static_cast<float>(span.y())) / 2);
   auto to_px = [&](const Eigen::Vector2d& m) {
     // y of the device (away from the participant) goes up on the screen.
     return ImVec2(origin.x + scale * static_cast<float>(m.x() - v.workspace_min_m.x()),
                   origin.y + scale * static_cast<float>(v.workspace_max_m.y() - m.y()));
   };
   const float half = 0.5f * scale * static_cast<float>(v.square_size_m);
-  for (const auto& [id, c] : {std::pair{"left-square", v.left_square_m}, std::pair{"right-square", v.right_square_m}}) {
+  for (const auto& [id, c, label] : {std::tuple{"left-square", v.left_square_m, v.left_label},
+                                     std::tuple{"right-square", v.right_square_m, v.right_label}}) {
     const ImVec2 m = to_px(c);
     dl->AddRectFilled(ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half), kWhite);
     Record(drawn, id, ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half));
+    // The square's name under it ("A" / "B"), as the prompts and the experimenter call them.
+    ImGui::SetWindowFontScale(1.6f);
+    const ImVec2 ls = ImGui::CalcTextSize(label.c_str());
+    ImGui::SetCursorScreenPos(ImVec2(m.x - ls.x / 2, m.y + half + 6));
+    TextRecorded(drawn, std::string("name:") + id, label);
+    ImGui::SetWindowFontScale(1.0f);
   }
-  // The sphere cursor: shaded disc, darker when pressing into the surface (z < 0).
-  const ImVec2 cp = to_px(v.stylus_m.head<2>());
-  const float r = std::max(6.f, 0.006f * scale);
+  // The sphere cursor: shaded disc, darker when pressing into the surface (z < 0); kept
+  // whole inside the scene.
+  const float r = std::max(6.f, static_cast<float>(kCursorRadius_m) * scale);
+  ImVec2 cp = to_px(v.stylus_m.head<2>());
+  cp.x = std::clamp(cp.x, r, std::max(r, size.x - r));
+  cp.y = std::clamp(cp.y, top + r, std::max(top + r, scene_h - r));
   const float press = std::clamp(static_cast<float>(-v.stylus_m.z() / 0.002), 0.f, 1.f);
   const auto shade = [&](float k) {
     return IM_COL32(static_cast<int>((255 - 90 * press) * k), static_cast<int>((140 - 60 * press) * k), static_cast<int>(30 * k), 255);
@@ -122,17 +155,26 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     const float width = std::min(700.f, size.x * 0.6f);
     const float x0 = (size.x - width) / 2;
     ImGui::SetCursorPos(ImVec2(x0, scene_h + 10));
-    TextRecorded(drawn, "prompt", "How similar are the two samples? Click on each scale, then confirm.");
+    TextRecorded(drawn, "prompt",
+                 fmt::format("How similar are {} and {}? Click on each scale, then confirm.", v.left_label, v.right_label));
     for (std::size_t i = 0; i < v.criteria.size(); ++i) {
+      // One group per criterion: its name (larger) right above its scale, the scale's end
+      // labels right under it, then a gap before the next criterion's name.
+      ImGui::Dummy(ImVec2(0, i == 0 ? 4.f : 14.f));
       ImGui::SetCursorPosX(x0);
+      ImGui::SetWindowFontScale(1.25f);
       TextRecorded(drawn, "label:" + v.criteria[i], v.criteria[i]);
+      ImGui::SetWindowFontScale(1.0f);
       ImGui::SetCursorPosX(x0);
       RatingScale(v.criteria[i], &act.ratings[i], v.scale_min, v.scale_max, width, drawn);
       ImGui::SetCursorPosX(x0);
+      ImGui::PushStyleColor(ImGuiCol_Text, IM_COL32(170, 170, 170, 255));
       TextRecorded(drawn, "low:" + v.criteria[i], v.scale_low);
       ImGui::SameLine(x0 + width - ImGui::CalcTextSize(v.scale_high.c_str()).x);
       TextRecorded(drawn, "high:" + v.criteria[i], v.scale_high);
+      ImGui::PopStyleColor();
     }
+    ImGui::Dummy(ImVec2(0, 10));
     const bool all = std::all_of(act.ratings.begin(), act.ratings.end(), [](const auto& x) { return x.has_value(); });
     ImGui::SetCursorPosX(x0 + width / 2 - 60);
     if (!all) ImGui::BeginDisabled();
@@ -164,7 +206,7 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   }
   if (v.trials > 0) {
     ImGui::SetCursorPos(ImVec2(10, size.y - 24));
-    TextRecorded(drawn, "trial", fmt::format("{} / {}", v.trial, v.trials));
+    TextRecorded(drawn, "trial", fmt::format("{}{} / {}", v.training ? "Training " : "", v.trial, v.trials));
   }
   ImGui::End();
   return act;
@@ -174,13 +216,31 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   ConsoleAction act;
   FullWindow("console", IM_COL32(32, 34, 40, 255));
   TextRecorded(drawn, "title", fmt::format("Study {}   participant {}", v.study, v.participant));
+  // Progress: rated trials of the main phases (the participant window counts the same);
+  // training trials apart.
   const ImVec2 pp = ImGui::GetCursorScreenPos();
   const float frac = v.total > 0 ? static_cast<float>(v.done) / static_cast<float>(v.total) : 0.f;
   ImGui::PushStyleColor(ImGuiCol_PlotHistogram, IM_COL32(60, 180, 90, 255));
-  ImGui::ProgressBar(frac, ImVec2(-1, 24), fmt::format("{} of {} trials", v.done, v.total).c_str());
+  ImGui::ProgressBar(frac, ImVec2(-1, 24), fmt::format("{} of {} rated trials", v.done, v.total).c_str());
   ImGui::PopStyleColor();
   Record(drawn, "progress", pp, ImVec2(pp.x + ImGui::GetContentRegionAvail().x, pp.y + 24));
-  TextRecorded(drawn, "phase", "Phase: " + v.phase + (v.paused ? "   [PAUSED]" : ""));
+  if (v.training_total > 0)
+    TextRecorded(drawn, "training", fmt::format("Training: {} of {} trials", v.training_done, v.training_total));
+  TextRecorded(drawn, "phase", "Phase: " + v.phase);
+  // The session's state, impossible to miss: paused, on a break (with its countdown).
+  if (v.paused || v.on_break) {
+    const std::string state = v.paused ? "PAUSED - the participant sees \"Please wait\". Press Resume to continue."
+                                       : fmt::format("BREAK - {:.0f} s left", std::ceil(v.break_remaining_s));
+    const ImVec2 sp = ImGui::GetCursorScreenPos();
+    const float w = ImGui::GetContentRegionAvail().x;
+    ImGui::GetWindowDrawList()->AddRectFilled(sp, ImVec2(sp.x + w, sp.y + 34),
+                                              v.paused ? IM_COL32(190, 120, 20, 255) : IM_COL32(40, 110, 190, 255));
+    ImGui::SetCursorScreenPos(ImVec2(sp.x + 8, sp.y + 6));
+    ImGui::SetWindowFontScale(1.3f);
+    TextRecorded(drawn, v.paused ? "state:paused" : "state:break", state);
+    ImGui::SetWindowFontScale(1.0f);
+    ImGui::SetCursorScreenPos(ImVec2(sp.x, sp.y + 40));
+  }
   TextRecorded(drawn, "current", "Now: " + v.current);
   ImGui::PushStyleColor(ImGuiCol_Text, IM_COL32(255, 210, 80, 255));
   TextRecorded(drawn, "next", "Place next: " + v.next_placement);
@@ -203,7 +263,8 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   if (v.paused) act.resume = ImGui::Button("Resume", ImVec2(110, 30));
   else act.pause = ImGui::Button("Pause", ImVec2(110, 30));
   ImGui::SameLine();
-  act.take_break = ImGui::Button("Break", ImVec2(110, 30));
+  if (v.on_break) act.end_break = ImGui::Button("End break now", ImVec2(110, 30));
+  else act.take_break = ImGui::Button("Break", ImVec2(110, 30));
   ImGui::SameLine();
   ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
   act.abort = ImGui::Button("Abort", ImVec2(110, 30));
@@ -216,6 +277,37 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   TextRecorded(drawn, "faults", "Faults: " + (faults.empty() ? std::string("none") : faults));
   ImGui::Separator();
   for (std::size_t i = v.log.size() > 8 ? v.log.size() - 8 : 0; i < v.log.size(); ++i) ImGui::TextUnformatted(v.log[i].c_str());
+  // Abort asks first: a modal over the console (nothing else in it reacts while it is open).
+  if (v.confirm_abort) {
+    if (!ImGui::IsPopupOpen("Abort the session?")) ImGui::OpenPopup("Abort the session?");
+    const ImVec2 size = ImGui::GetIO().DisplaySize;
+    ImGui::SetNextWindowPos(ImVec2(size.x / 2, size.y / 2), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowSize(ImVec2(460, 0));
+    if (ImGui::BeginPopupModal("Abort the session?", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings)) {
+      const ImVec2 mp = ImGui::GetWindowPos();
+      ImGui::TextWrapped("Abort this session now? Completed trials stay recorded; the current trial is "
+                         "not. 'hapticlab study resume' continues with it later.");
+      ImGui::Spacing();
+      const ImVec2 yp = ImGui::GetCursorScreenPos();
+      ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
+      act.abort_confirmed = ImGui::Button("Abort session", ImVec2(200, 32));
+      ImGui::PopStyleColor();
+      Record(drawn, "abort-confirm", yp, ImVec2(yp.x + 200, yp.y + 32));
+      ImGui::SameLine();
+      const ImVec2 np = ImGui::GetCursorScreenPos();
+      act.abort_cancelled = ImGui::Button("Continue", ImVec2(200, 32));
+      Record(drawn, "abort-cancel", np, ImVec2(np.x + 200, np.y + 32));
+      Record(drawn, "abort-modal", mp, ImVec2(mp.x + ImGui::GetWindowWidth(), mp.y + ImGui::GetWindowHeight()));
+      ImGui::EndPopup();
+    }
+    act.abort = false;
+  } else if (ImGui::IsPopupOpen("Abort the session?")) {
+    // Closed from outside (the session ended, or a cancel): close the popup too.
+    if (ImGui::BeginPopupModal("Abort the session?")) {
+      ImGui::CloseCurrentPopup();
+      ImGui::EndPopup();
+    }
+  }
   ImGui::End();
   return act;
 }

@@ -17,40 +17,90 @@ WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& pa
   cv_.device_status = device_status;
 }
 
+void WindowSessionUi::Log(const std::string& kind, const std::string& detail) {
+  cv_.log.push_back(detail.empty() ? kind : kind + ": " + detail);
+  if (log_event) log_event(kind, detail);
+}
+
 bool WindowSessionUi::Frame(ParticipantAction* pa) {
-  for (;;) {
+  const ParticipantView saved = pv_;
+  bool held = false;  // paused or asked to confirm an abort: the participant waits
+  for (bool first = true;; first = false) {
     ConsoleAction ca;
     ParticipantAction a;
-    if (!win_.Frame(pv_, cv_, &a, &ca)) return false;  // a window was closed: abort
-    if (pa) *pa = a;
-    if (ca.abort) return false;
-    if (ca.take_break) break_requested_ = true;
-    if (ca.pause) cv_.paused = true;
-    if (ca.resume) cv_.paused = false;
-    std::this_thread::sleep_for(std::chrono::milliseconds(15));  // ~60 frames per second without vsync
-    if (!cv_.paused) return true;
-    const auto saved = pv_;
-    pv_.mode = ParticipantView::Mode::kMessage;
-    pv_.message = "Paused. Please wait for the experimenter.";
-    ConsoleAction c2;
-    while (cv_.paused) {
-      if (!win_.Frame(pv_, cv_, nullptr, &c2) || c2.abort) return false;
-      if (c2.resume) cv_.paused = false;
-      std::this_thread::sleep_for(std::chrono::milliseconds(15));
+    Drawn drawn;
+    const bool open = win_.Frame(pv_, cv_, held ? nullptr : &a, &ca, nullptr, &drawn);
+    if (first && pa) *pa = a;
+    if (script_) {
+      const ConsoleAction s = script_(cv_, drawn);
+      ca.pause |= s.pause;
+      ca.resume |= s.resume;
+      ca.take_break |= s.take_break;
+      ca.end_break |= s.end_break;
+      ca.abort |= s.abort;
+      ca.abort_confirmed |= s.abort_confirmed;
+      ca.abort_cancelled |= s.abort_cancelled;
     }
-    pv_ = saved;
-    return true;
+    if (!open) {  // a window's close button: asks like Abort
+      win_.KeepOpen();
+      ca.abort = true;
+    }
+    if (cv_.confirm_abort) {
+      if (ca.abort_confirmed) {
+        Log("abort-confirmed", cv_.current);
+        return false;
+      }
+      if (ca.abort_cancelled) {
+        cv_.confirm_abort = false;
+        Log("abort-cancelled", "the session continues");
+      }
+    } else if (ca.abort) {
+      cv_.confirm_abort = true;
+      Log("abort-requested", cv_.current);
+    }
+    if (ca.take_break && !cv_.on_break && !break_requested_) {
+      break_requested_ = true;
+      Log("break-requested", "the break starts before the next trial");
+    }
+    if (ca.end_break && cv_.on_break) end_break_ = true;
+    if (ca.pause && !cv_.paused) {
+      cv_.paused = true;
+      Log("pause", cv_.current);
+    }
+    if (ca.resume && cv_.paused) {
+      cv_.paused = false;
+      Log("resume", cv_.current);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(15));  // ~60 frames per second without vsync
+    if (!cv_.paused && !cv_.confirm_abort) {
+      if (held) pv_ = saved;
+      return true;
+    }
+    if (!held) {
+      held = true;
+      pv_.mode = ParticipantView::Mode::kMessage;
+      pv_.message = "Paused. Please wait for the experimenter.";
+    }
   }
 }
 
 void WindowSessionUi::Show(const TrialScreen& t) {
   cv_.phase = t.phase;
-  cv_.done = t.index - 1;
-  cv_.total = t.total;
-  cv_.current = fmt::format("trial {}: {} | {}{}", t.index, t.left, t.right, t.method.empty() ? "" : " (" + t.method + ")");
+  cv_.done = t.rated_total > 0 ? t.rated_done : t.index - 1;
+  cv_.total = t.rated_total > 0 ? t.rated_total : t.total;
+  cv_.training_done = t.training_done;
+  cv_.training_total = t.training_total;
+  cv_.current = fmt::format("{} {}: {} | {}{}", t.training ? "training trial" : "trial", t.index, t.left, t.right,
+                            t.method.empty() ? "" : " (" + t.method + ")");
   cv_.next_placement = t.placement;
   pv_.trial = t.index;
   pv_.trials = t.total;
+  pv_.training = t.training;
+  // The participant's prompt per phase (the same for reference and main trials: the
+  // participant is not told which sample is real).
+  pv_.stimulus_prompt = t.training              ? "Training (not rated): explore A and B with the stylus"
+                        : !t.answers.empty()    ? "Explore each interval, then answer"
+                                                : "Explore A, then B: you will rate how similar they feel";
   pv_.criteria = t.criteria;
   pv_.scale_min = t.scale_min;
   pv_.scale_max = t.scale_max;
@@ -69,7 +119,7 @@ bool WindowSessionUi::Stimulus(const TrialScreen& t, int side, const Eigen::Vect
   cv_.force_N.push_back(static_cast<float>(std::max(0.0, -stylus_m.z()) * 1000));
   if (cv_.speed_mps.size() > 300) cv_.speed_mps.erase(cv_.speed_mps.begin());
   if (cv_.force_N.size() > 300) cv_.force_N.erase(cv_.force_N.begin());
-  cv_.current += fmt::format(" - exploring the {} sample, {:.1f} s left", side == 0 ? "left" : "right", remaining_s);
+  cv_.current += fmt::format(" - exploring {}, {:.1f} s left", side == 0 ? "A (left)" : "B (right)", remaining_s);
   return Frame();
 }
 
@@ -140,16 +190,28 @@ std::optional<int> WindowSessionUi::Choose(const TrialScreen& t) {
 bool WindowSessionUi::Break(double seconds) {
   const auto saved = pv_;
   pv_.mode = ParticipantView::Mode::kBreak;
+  cv_.on_break = true;
+  end_break_ = false;
   const auto t0 = std::chrono::steady_clock::now();
+  bool go_on = true;
   for (;;) {
     const double left = seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (left <= 0) break;
-    pv_.break_remaining_s = left;
-    if (!Frame()) return false;
+    pv_.break_remaining_s = cv_.break_remaining_s = left;
+    if (!Frame()) {
+      go_on = false;
+      break;
+    }
+    if (end_break_) {
+      Log("break-ended", fmt::format("the experimenter ended the break with {:.0f} s left", left));
+      break;
+    }
   }
+  cv_.on_break = false;
+  end_break_ = false;
   pv_ = saved;
   break_requested_ = false;
-  return true;
+  return go_on;
 }
 
 void WindowSessionUi::Event(const std::string& line) {

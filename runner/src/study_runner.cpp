@@ -342,6 +342,28 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       ++sum.completed;
       last_material = t.material;  // plan order: the last completed trial precedes the next
     }
+  // The screens count rated trials of the planned phases (training apart), 1-based.
+  int rated_total = 0, rated_done = 0, training_total = 0, training_done = 0;
+  for (const auto& t : trials) {
+    const bool training = t.phase == std::string("training");
+    (training ? training_total : rated_total) += 1;
+    if (t.status == db::kTrialCompleted) (training ? training_done : rated_done) += 1;
+  }
+  // The experimenter's actions in the console (pause, resume, abort asked / cancelled, a
+  // break ended early) become session events, tied to the trial under way.
+  std::optional<std::int64_t> trial_under_way;
+  struct UiEvents {
+    SessionUi* ui;
+    ~UiEvents() {
+      if (ui) ui->log_event = nullptr;
+    }
+  } ui_events{opt.ui};
+  if (opt.ui)
+    opt.ui->log_event = [&](const std::string& kind, const std::string& detail) {
+      database.LogEvent({.session_id = session, .trial_id = trial_under_way, .kind = kind, .detail = detail});
+    };
+  // A simulated rig's virtual clock runs --ui-speed times faster: so do its breaks.
+  const double break_s = p.break_duration_s / (rig->sim ? opt.ui_playback_speed : 1.0);
   const bool constrained = p.randomization.no_immediate_repeat;
   int untouched_in_a_row = 0;
   std::set<std::int64_t> break_before;  // trials the plan puts a break before
@@ -394,6 +416,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                            .detail = fmt::format("{:.0f} s break ({}{})", break_s,
                                                  requested ? "requested by the experimenter" : "planned",
                                                  speed != 1.0 ? fmt::format("; --ui-speed {:g}", speed) : "")});
+        trial_under_way = t.id;
         if (!opt.ui->Break(break_s)) {
           database.LogEvent({.session_id = session, .kind = "abort", .detail = "the experimenter aborted during a break"});
           database.EndSession(session, "aborted");
@@ -405,7 +428,14 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       database.StartTrial(t.id);
       ++t.attempts;
       ++sum.executed;
-      const auto screen = ScreenOf(p, t, sum.completed + 1, sum.planned);
+      const bool training = t.phase == std::string("training");
+      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1, training ? training_total : rated_total);
+      screen.training = training;
+      screen.rated_done = rated_done;
+      screen.rated_total = rated_total;
+      screen.training_done = training_done;
+      screen.training_total = training_total;
+      trial_under_way = t.id;
       const Outcome o = ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
       sum.simulated_s += o.stimulus_s;
       untouched_in_a_row = o.untouched ? untouched_in_a_row + 1 : 0;
@@ -421,7 +451,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         ++sum.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault", .detail = o.fault_detail});
-        if (opt.ui) opt.ui->Event(fmt::format("trial {}: {} (re-queued)", t.plan_index + 1, o.fault_detail));
+        if (opt.ui) opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial", screen.index, o.fault_detail));
         t.status = db::kTrialFaulted;
         queue.push_back(t);
         if (untouched_in_a_row >= opt.max_untouched_trials) {
@@ -444,7 +474,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         ++sum.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
         database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "trajectory-fault", .detail = e.what()});
-        if (opt.ui) opt.ui->Event(fmt::format("trial {}: trajectories not stored (re-queued)", t.plan_index + 1));
+        if (opt.ui) opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)", training ? "training trial" : "trial", screen.index));
         if (++trajectory_faults >= kMaxTrajectoryFaults) {
           database.EndSession(session, "aborted");
           throw std::runtime_error(fmt::format("{} trials in a row could not store their trajectories; last: {}; "
@@ -456,6 +486,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         continue;
       }
       ++sum.completed;
+      (training ? training_done : rated_done) += 1;
       last_material = t.material;
       Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned, t.phase, t.material,
                            t.method.empty() ? t.comparison : t.method));

@@ -113,6 +113,10 @@ bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, Participan
   return open;
 }
 
+void Windows::KeepOpen() {
+  for (auto& w : wins_) glfwSetWindowShouldClose(w->w, GLFW_FALSE);
+}
+
 void Windows::SaveScreenshot(int window, const std::string& path) const {
   const Win& w = *wins_.at(static_cast<std::size_t>(window));
   if (w.pixels.empty()) throw std::runtime_error("no frame drawn yet");

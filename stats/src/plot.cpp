@@ -38,18 +38,27 @@ void Rect(double x0, double x1, double y0, double y1) {
 
 void DrawBars(const BarChart& c) {
   const int ng = static_cast<int>(c.groups.size()), ns = static_cast<int>(c.series.size());
-  plvpor(0.1, 0.97, ng > 4 ? 0.28 : 0.15, 0.9);
+  std::size_t longest = 0;
+  for (const auto& g : c.groups) longest = std::max(longest, g.size());
+  plvpor(0.1, 0.97, ng > 4 ? 0.34 : 0.17, 0.9);
   plwind(-0.6, ng - 0.4, c.y_min, c.y_max);
   plcol0(15);
   plschr(0, 0.8);
   plbox("bc", 0, 0, "bcnstv", 0, 0);
   pllab("", c.y_label.c_str(), c.title.c_str());
   const double w = 0.8 / std::max(ns, 1);
+  // The x-axis label below the group labels (vertical labels take about 0.7 character
+  // heights per character).
+  plmtex("b", ng > 4 ? 1.5 + 0.7 * static_cast<double>(longest) : 3.0, 0.5, 0.5, c.x_label.c_str());
+  // A single unnamed group: each bar is labelled with its series name.
+  if (ng == 1 && c.groups[0].empty())
+    for (int s = 0; s < ns; ++s)
+      plmtex("b", 1.5, (-0.4 + (s + 0.45) * w + 0.6) / (ng + 0.2), 0.5, c.series[static_cast<std::size_t>(s)].name.c_str());
   for (int g = 0; g < ng; ++g) {
     // Group label below the axis: vertical when there are many groups.
     const double x = g;
     plcol0(15);
-    const double pos = (g + 0.6) / ng;
+    const double pos = (g + 0.6) / (ng + 0.2);  // the window spans [-0.6, ng - 0.4]
     if (ng > 4) plmtex("bv", 0.5, pos, 1.0, c.groups[static_cast<std::size_t>(g)].c_str());
     else plmtex("b", 1.5, pos, 0.5, c.groups[static_cast<std::size_t>(g)].c_str());
     double top = c.y_min;
@@ -98,16 +107,16 @@ void DrawBars(const BarChart& c) {
 
 void DrawBoxes(const BoxPlot& b) {
   const int ng = static_cast<int>(b.groups.size());
-  plvpor(0.1, 0.97, 0.15, 0.9);
+  plvpor(0.1, 0.97, 0.17, 0.9);
   plwind(-0.6, ng - 0.4, b.y_min, b.y_max);
   plcol0(15);
   plschr(0, 0.8);
   plbox("bc", 0, 0, "bcnstv", 0, 0);
-  pllab("", b.y_label.c_str(), b.title.c_str());
+  pllab(b.x_label.c_str(), b.y_label.c_str(), b.title.c_str());
   for (int g = 0; g < ng; ++g) {
     const auto& x = b.samples[static_cast<std::size_t>(g)];
     plcol0(15);
-    plmtex("b", 1.5, (g + 0.6) / ng, 0.5, b.groups[static_cast<std::size_t>(g)].c_str());
+    plmtex("b", 1.5, (g + 0.6) / (ng + 0.2), 0.5, b.groups[static_cast<std::size_t>(g)].c_str());
     if (x.empty()) continue;
     const auto f = Outliers(x, QuartileRule::kHinges);
     std::vector<double> s(x);

@@ -7,6 +7,8 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <optional>
+#include <ostream>
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -27,6 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 
 std::string P(double p) { return p < 0.001 ? "< 0.001" : fmt::format("{:.3f}", p); }
+// "p < 0.001" or "p = 0.020", for sentences.
+std::string PEq(double p) { return p < 0.001 ? "p < 0.001" : fmt::format("p = {:.3f}", p); }
 std::string Stars(double p) { return p < 0.01 ? "**" : p < 0.05 ? "*" : ""; }
 std::string Safe(const std::string& s) {
   std::string o;
@@ -58,6 +62,101 @@ std::pair<double, double> MeanCi(const LongTable& t) {
   if (per.rows() == 0) return {NAN, NAN};
   const auto d = Describe(per.y);
   return {d.mean, d.n > 1 ? d.ci95_hi - d.mean : NAN};
+}
+
+// Levels of `present` in the protocol's order (`order`), then any others (sorted).
+std::vector<std::string> InProtocolOrder(const std::vector<std::string>& order, const std::vector<std::string>& present) {
+  std::vector<std::string> out;
+  for (const auto& x : order)
+    if (std::find(present.begin(), present.end(), x) != present.end()) out.push_back(x);
+  for (const auto& x : present)
+    if (std::find(out.begin(), out.end(), x) == out.end()) out.push_back(x);
+  return out;
+}
+
+// A requested analysis that cannot run says why, in the report (never dropped silently).
+void NotRun(std::ostream& md, const std::string& test, const std::string& why) {
+  md << "\n*`" << test << "` was requested but not run: " << why << "*\n";
+}
+
+// Aggregate tables in the layout of the dissertation's Tables 5.4/5.5: methods as rows in
+// protocol order, materials as columns in protocol order, one table per material group.
+void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Protocol& proto, const std::string& crit,
+                     const LongTable& cm, const std::vector<std::string>& methods,
+                     const std::vector<std::string>& materials, double upper) {
+  std::vector<std::string> groups;  // in the order the protocol first names them
+  std::map<std::string, std::vector<std::string>> by_group;
+  for (const auto& ma : materials) {
+    const auto* m = proto.FindMaterial(ma);
+    const std::string g = m ? m->group : "";
+    if (!by_group.count(g)) groups.push_back(g);
+    by_group[g].push_back(ma);
+  }
+  md << "\nMean " << crit << " similarity (methods x materials, the layout of Tables 5.4/5.5)"
+     << (std::isfinite(upper) ? "; in parentheses the ratio to the upper limit" : "") << ":\n";
+  for (const auto& g : groups) {
+    if (groups.size() > 1 || !g.empty()) md << "\n**" << (g.empty() ? "other" : g) << "**\n";
+    md << "\n| method |";
+    for (const auto& ma : by_group[g]) md << " " << ma << " |";
+    md << "\n|---|";
+    for (std::size_t i = 0; i < by_group[g].size(); ++i) md << "---|";
+    md << "\n";
+    for (const auto& me : methods) {
+      md << "| " << me << " |";
+      for (const auto& ma : by_group[g]) {
+        const auto cell = cm.Where({{"material", ma}, {"method", me}});
+        if (cell.rows() == 0) {
+          md << " |";
+          continue;
+        }
+        const auto ds = Describe(cell.y);
+        const double ratio = std::isfinite(upper) ? ds.mean / upper : NAN;
+        md << fmt::format(" {:.2f}{} |", ds.mean, std::isfinite(ratio) ? fmt::format(" ({:.2f})", ratio) : "");
+        agg << fmt::format("{},{},{},{},{:.6f},{:.6f},{},{}\n", crit, g, ma, me, ds.mean, ds.sd, ds.n,
+                           std::isfinite(ratio) ? fmt::format("{:.6f}", ratio) : "");
+      }
+      md << "\n";
+    }
+  }
+}
+
+// The rmANOVA table with Mauchly's test beside each effect, and every violated assumption
+// said in words with the correction used.
+void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
+  md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
+     << (a.dropped_subjects.empty() ? "" : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
+     << "):\n\n";
+  // Every dropped participant named, with the cells it lacks.
+  for (std::size_t i = 0; i < a.dropped_subjects.size(); ++i)
+    md << "- dropped " << a.dropped_subjects[i] << ": " << a.dropped_reasons[i] << "\n";
+  if (!a.dropped_subjects.empty()) md << "\n";
+  md << "| factor | df | F | p | partial eta^2 | Mauchly W | p (Mauchly) | GG eps | p (GG) |\n"
+        "|---|---|---|---|---|---|---|---|---|\n";
+  std::vector<std::string> notes;
+  for (const auto& e : a.effects) {
+    const bool violated = e.mauchly_defined && e.df1 > 1 && e.mauchly_p < 0.05;
+    const double p_used = violated ? e.p_gg : e.p;
+    const std::string W = e.between_only || e.df1 <= 1 ? "-" : e.mauchly_defined ? fmt::format("{:.3f}", e.mauchly_W) : "n/a";
+    const std::string pW = e.between_only || e.df1 <= 1 ? "-" : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "") : "n/a";
+    md << fmt::format("| {}{} | {:.0f}, {:.0f} | {} | {} | {:.3f} | {} | {} | {:.3f} | {} |\n", e.effect,
+                      p_used < 0.05 ? "*" : "", e.df1, e.df2, e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F),
+                      P(e.p), e.pes, W, pW, e.gg_epsilon, P(e.p_gg));
+    csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", e.effect, e.df1,
+                       e.df2, e.F, e.p, e.pes, std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
+                       std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "", e.gg_epsilon, e.p_gg,
+                       e.hf_epsilon, e.p_hf);
+    if (violated)
+      notes.push_back(fmt::format("**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The Greenhouse-Geisser "
+                                  "correction is used (epsilon = {:.3f}, corrected {}).",
+                                  e.effect, e.mauchly_W, PEq(e.mauchly_p), e.gg_epsilon, PEq(e.p_gg)));
+    else if (!e.between_only && e.df1 > 1 && !e.mauchly_defined)
+      notes.push_back(fmt::format("Mauchly's test does not exist for {} (more levels than participants - 1); read "
+                                  "the Greenhouse-Geisser corrected p.",
+                                  e.effect));
+  }
+  md << "\nSignificant factors (p < 0.05; the Greenhouse-Geisser p where sphericity is violated) are marked by *. "
+        "Mauchly's test is shown for factors with more than two levels (with two, sphericity holds trivially).\n";
+  for (const auto& n : notes) md << "\n" << n << "\n";
 }
 
 }  // namespace
@@ -155,11 +254,18 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0) continue;
     const auto main = study.Where({{"phase", "main"}});
     const auto ref = study.Where({{"phase", "reference"}});
-    const auto methods = main.rows() ? main.Levels("method") : std::vector<std::string>{};
-    const auto materials = main.rows() ? main.Levels("material") : std::vector<std::string>{};
+    std::vector<std::string> proto_methods, proto_materials;
+    for (const auto& m : proto.methods) proto_methods.push_back(m.name);
+    for (const auto& m : proto.materials) proto_materials.push_back(m.id);
+    const auto methods = main.rows() ? InProtocolOrder(proto_methods, main.Levels("method")) : std::vector<std::string>{};
+    const auto materials =
+        main.rows() ? InProtocolOrder(proto_materials, main.Levels("material")) : std::vector<std::string>{};
     // Aggregated score tables for every criterion (Tables 4.1, 5.4, 5.5).
-    auto agg = w.Open(sid + "_aggregate.csv");
-    agg << "criterion,material,method,mean,sd,n,ratio_to_upper\n";
+    std::ofstream agg;
+    if (tests.count("aggregate")) {
+      agg = w.Open(sid + "_aggregate.csv");
+      agg << "criterion,group,material,method,mean,sd,n,ratio_to_upper\n";
+    }
     for (const auto& crit : proto.criteria) {
       const auto cm = main.Where({{"criterion", crit}});
       md << "\n### " << crit << "\n";
@@ -183,67 +289,56 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
                           "materials, n = {}).\n",
                           upper, same.rows(), lower, diff.rows());
       }
-      if (cm.rows() == 0) continue;
-      // Aggregate table.
-      if (tests.count("aggregate")) {
-        md << "\nMean similarity (material x method)" << (std::isfinite(upper) ? "; in parentheses the ratio to the upper limit" : "")
-           << ":\n\n| material |";
-        for (const auto& me : methods) md << " " << me << " |";
-        md << "\n|---|";
-        for (std::size_t i = 0; i < methods.size(); ++i) md << "---|";
-        md << "\n";
-        for (const auto& ma : materials) {
-          md << "| " << ma << " |";
-          for (const auto& me : methods) {
-            const auto cell = cm.Where({{"material", ma}, {"method", me}});
-            if (cell.rows() == 0) {
-              md << " |";
-              continue;
-            }
-            const auto ds = Describe(cell.y);
-            const double ratio = std::isfinite(upper) ? ds.mean / upper : NAN;
-            md << fmt::format(" {:.2f}{} |", ds.mean, std::isfinite(ratio) ? fmt::format(" ({:.2f})", ratio) : "");
-            agg << fmt::format("{},{},{},{:.6f},{:.6f},{},{}\n", crit, ma, me, ds.mean, ds.sd, ds.n,
-                               std::isfinite(ratio) ? fmt::format("{:.6f}", ratio) : "");
-          }
-          md << "\n";
-        }
+      if (cm.rows() == 0) {
+        md << "\nNo main-phase ratings of " << crit << " yet: the aggregate table, ANOVA, Tukey, grouping, "
+           << "Kruskal-Wallis and Shapiro-Wilk analyses need them.\n";
+        continue;
       }
-      // Repeated-measures ANOVA (Tables 5.2, 5.3).
+      if (tests.count("aggregate")) AggregateTables(md, agg, proto, crit, cm, methods, materials, upper);
+      // Repeated-measures ANOVA (Tables 5.2, 5.3); Tukey needs its error term.
       std::vector<std::string> within;
       if (methods.size() >= 2) within.push_back("method");
       if (materials.size() >= 2) within.push_back("material");
       const auto cells = cm.Average({"participant", "method", "material"});
-      if (tests.count("rm-anova") && !within.empty() && cm.Levels("participant").size() >= 2) {
-        const auto a = RmAnova(cm, "participant", within);
-        auto csv = w.Open(fmt::format("{}_{}_rmanova.csv", sid, Safe(crit)));
-        csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf\n";
-        md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
-           << (a.dropped_subjects.empty() ? "" : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
-           << "):\n\n";
-        // Every dropped participant named, with the cells it lacks.
-        for (std::size_t i = 0; i < a.dropped_subjects.size(); ++i)
-          md << "- dropped " << a.dropped_subjects[i] << ": " << a.dropped_reasons[i] << "\n";
-        if (!a.dropped_subjects.empty()) md << "\n";
-        md << "| factor | df | F | p | partial eta^2 | GG eps | p (GG) |\n|---|---|---|---|---|---|---|\n";
-        for (const auto& e : a.effects) {
-          md << fmt::format("| {}{} | {:.0f}, {:.0f} | {:.3f} | {} | {:.3f} | {:.3f} | {} |\n", e.effect,
-                            e.p < 0.05 ? "*" : "", e.df1, e.df2, e.F, P(e.p), e.pes, e.gg_epsilon, P(e.p_gg));
-          csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", e.effect, e.df1,
-                             e.df2, e.F, e.p, e.pes, std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
-                             std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "", e.gg_epsilon, e.p_gg,
-                             e.hf_epsilon, e.p_hf);
+      const std::size_t n_participants = cm.Levels("participant").size();
+      std::optional<RmAnovaResult> anova;
+      std::string anova_why;
+      if (tests.count("rm-anova") || tests.count("tukey")) {
+        if (within.empty())
+          anova_why = "it needs a within factor with two or more levels (this study has one method and one material)";
+        else if (n_participants < 2)
+          anova_why = fmt::format("it needs two or more participants ({} so far)", n_participants);
+        else
+          try {
+            anova = RmAnova(cm, "participant", within);
+          } catch (const InputError& e) {
+            anova_why = e.what();
+          }
+      }
+      if (tests.count("rm-anova")) {
+        if (anova) {
+          auto csv = w.Open(fmt::format("{}_{}_rmanova.csv", sid, Safe(crit)));
+          csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf\n";
+          AnovaTable(md, csv, *anova);
+        } else {
+          NotRun(md, "rm-anova", anova_why);
         }
-        md << "\nSignificant factors (p < 0.05) are marked by *.\n";
-        // Tukey on method + the bar chart of Figs. 5.7/5.8.
-        if (methods.size() >= 2 && tests.count("tukey")) {
-          const auto tk = TukeyWithin(a, "method", false);
+      }
+      // Tukey on method + the bar chart of Figs. 5.7/5.8.
+      if (tests.count("tukey")) {
+        if (methods.size() < 2) {
+          NotRun(md, "tukey", fmt::format("it compares methods and this study has {} method", methods.size()));
+        } else if (!anova) {
+          NotRun(md, "tukey", "it uses the repeated-measures ANOVA's error term, which could not be computed: " + anova_why);
+        } else {
+          const auto tk = TukeyWithin(*anova, "method", false);
           auto tcsv = w.Open(fmt::format("{}_{}_tukey.csv", sid, Safe(crit)));
           tcsv << "a,b,diff,lwr,upr,p_adj\n";
           md << "\nTukey HSD on method (univariate error of the method effect, df = " << tk.df << "):\n\n"
              << "| pair | diff | 95 % CI | p adj |\n|---|---|---|---|\n";
           BarChart bc;
           bc.title = fmt::format("{}: {} similarity", st.name, crit);
+          bc.x_label = "rendering method";
           bc.y_label = crit + " similarity";
           bc.error_label = "95% CI";
           bc.groups = {""};
@@ -269,24 +364,34 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
           }
         }
       }
-      // Per-material bars by method (Figs. 4.8, 5.8) and box plots.
-      if (o.figures) {
-        BarChart bm;
-        bm.title = fmt::format("{}: {} similarity by material", st.name, crit);
-        bm.y_label = crit + " similarity";
-        bm.error_label = "95% CI";
-        bm.groups = materials;
-        for (const auto& me : methods) {
-          BarSeries s{me, {}, {}};
-          for (const auto& ma : materials) {
-            const auto [m, ci] = MeanCi(cm.Where({{"material", ma}, {"method", me}}));
-            s.mean.push_back(m);
-            s.err.push_back(ci);
-          }
-          bm.series.push_back(s);
+      // Per-material bars by method (Figs. 4.8, 5.8).
+      BarChart bm;
+      bm.title = fmt::format("{}: {} similarity by material", st.name, crit);
+      bm.x_label = "material";
+      bm.y_label = crit + " similarity";
+      bm.error_label = "95% CI";
+      bm.groups = materials;
+      for (const auto& me : methods) {
+        BarSeries s{me, {}, {}};
+        for (const auto& ma : materials) {
+          const auto [m, ci] = MeanCi(cm.Where({{"material", ma}, {"method", me}}));
+          s.mean.push_back(m);
+          s.err.push_back(ci);
         }
-        // Letters against the real-real limits (Fig. 4.5).
-        if (tests.count("grouping") && same.rows() && diff.rows() && methods.size() == 1) {
+        bm.series.push_back(s);
+      }
+      // Letters against the real-real limits (Fig. 4.5).
+      if (tests.count("grouping")) {
+        if (methods.size() != 1) {
+          NotRun(md, "grouping",
+                 fmt::format("it compares the materials of a single method against the real-real limits "
+                             "(ch. IV.5.2), and this study has {} methods (see Tukey HSD for them)",
+                             methods.size()));
+        } else if (!same.rows() || !diff.rows()) {
+          NotRun(md, "grouping",
+                 "it needs the real-real limits: a reference phase with both same-material and "
+                 "different-material pairs");
+        } else {
           LongTable g = cm;
           for (std::size_t i = 0; i < same.rows(); ++i) {
             for (std::size_t c = 0; c < g.key_names.size(); ++c)
@@ -324,15 +429,26 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             s.err.push_back(Describe(same.y).se);
           }
           bm.error_label = "95% CI (limits: SE)";
-        } else if (tests.count("kruskal") && methods.size() >= 2) {
-          const auto kw = KruskalWallis(cells, "method");
-          md << fmt::format("\nKruskal-Wallis on cell means by method: H({:.0f}) = {:.2f}, p = {}.\n", kw.df, kw.H, P(kw.p));
         }
+      }
+      // Kruskal-Wallis on the cell means by method (or by material in a one-method study).
+      if (tests.count("kruskal")) {
+        const std::string by = methods.size() >= 2 ? "method" : "material";
+        if (cells.Levels(by).size() < 2)
+          NotRun(md, "kruskal", "it needs two or more methods or materials");
+        else {
+          const auto kw = KruskalWallis(cells, by);
+          md << fmt::format("\nKruskal-Wallis on cell means by {}: H({:.0f}) = {:.2f}, {}.\n", by, kw.df, kw.H,
+                            PEq(kw.p));
+        }
+      }
+      if (o.figures) {
         const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();
         w.Add(DrawBarChart(bm, base));
         md << "\n![" << crit << " by material](" << fs::path(base).filename().string() << ".png)\n";
         BoxPlot bp;
         bp.title = fmt::format("{}: {} ratings", st.name, crit);
+        bp.x_label = "rendering method";
         bp.y_label = crit + " similarity";
         for (const auto& me : methods) {
           bp.groups.push_back(me);
@@ -342,53 +458,70 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         w.Add(DrawBoxPlot(bp, bbase));
         md << "\n![" << crit << " box plot](" << fs::path(bbase).filename().string() << ".png)\n";
       }
-      // Normality and outliers per method.
+      // Normality (of the participant x cell means the ANOVA uses) and outliers per method.
       if (tests.count("shapiro")) {
-        md << "\n| method | Shapiro-Wilk W (cell means) | p | boxplot outliers (raw) |\n|---|---|---|---|\n";
+        md << "\n| method | Shapiro-Wilk W (cell means) | p | normality | boxplot outliers (raw) |\n|---|---|---|---|---|\n";
+        std::vector<std::string> flags;
         for (const auto& me : methods) {
           const auto c = cells.Where({{"method", me}});
           const auto raw = cm.Where({{"method", me}});
-          std::string wcell = "n/a", pcell = "n/a";
+          std::string wcell = "n/a", pcell = "n/a", verdict = "not tested (fewer than 3 cell means or no spread)";
           if (c.rows() >= 3 && c.rows() <= 5000) {
             try {
               const auto s = ShapiroWilk(c.y);
               wcell = fmt::format("{:.4f}", s.W);
               pcell = P(s.p);
+              verdict = s.p < 0.05 ? "**violated**" : "not rejected";
+              if (s.p < 0.05)
+                flags.push_back(fmt::format("**Normality violated** for method {}: Shapiro-Wilk W = {:.4f}, {} "
+                                            "(< 0.05) on its {} cell means. The ANOVA's p-values may be off; the "
+                                            "rank-based Kruskal-Wallis test (`kruskal`) does not assume normality.",
+                                            me, s.W, PEq(s.p), c.rows()));
             } catch (const std::invalid_argument&) {
             }
           }
-          md << fmt::format("| {} | {} | {} | {} of {} |\n", me, wcell, pcell, Outliers(raw.y, QuartileRule::kHinges).outliers.size(),
-                            raw.rows());
+          md << fmt::format("| {} | {} | {} | {} | {} of {} |\n", me, wcell, pcell, verdict,
+                            Outliers(raw.y, QuartileRule::kHinges).outliers.size(), raw.rows());
         }
+        for (const auto& f : flags) md << "\n" << f << "\n";
       }
     }
     // Correlation of overall similarity with the criteria (Table 4.2), on trial ratings.
-    if (tests.count("correlation") && std::count(proto.criteria.begin(), proto.criteria.end(), "overall") &&
-        proto.criteria.size() >= 2) {
-      std::map<std::tuple<std::string, std::string, std::string, std::string, std::string>, std::map<std::string, double>> trials;
-      for (std::size_t i = 0; i < main.rows(); ++i)
-        trials[{main.keys[1][i], main.keys[3][i], main.keys[4][i], main.keys[5][i], main.keys[6][i]}][main.keys[7][i]] = main.y[i];
-      std::map<std::string, std::vector<double>> col;
-      for (const auto& [k, m] : trials) {
-        if (m.size() != proto.criteria.size()) continue;
-        double mn = 1e300, mx = -1e300, sum = 0;
-        for (const auto& c : proto.criteria) {
-          col[c].push_back(m.at(c));
-          if (c == "overall") continue;
-          mn = std::min(mn, m.at(c));
-          mx = std::max(mx, m.at(c));
-          sum += m.at(c);
+    if (tests.count("correlation")) {
+      if (!std::count(proto.criteria.begin(), proto.criteria.end(), "overall") || proto.criteria.size() < 2) {
+        md << "\n### Correlation of overall similarity (Table 4.2)\n";
+        NotRun(md, "correlation", "it needs an `overall` criterion and at least one other criterion");
+      } else {
+        std::map<std::tuple<std::string, std::string, std::string, std::string, std::string>, std::map<std::string, double>> trials;
+        for (std::size_t i = 0; i < main.rows(); ++i)
+          trials[{main.keys[1][i], main.keys[3][i], main.keys[4][i], main.keys[5][i], main.keys[6][i]}][main.keys[7][i]] = main.y[i];
+        std::map<std::string, std::vector<double>> col;
+        for (const auto& [k, m] : trials) {
+          if (m.size() != proto.criteria.size()) continue;
+          double mn = 1e300, mx = -1e300, sum = 0;
+          for (const auto& c : proto.criteria) {
+            col[c].push_back(m.at(c));
+            if (c == "overall") continue;
+            mn = std::min(mn, m.at(c));
+            mx = std::max(mx, m.at(c));
+            sum += m.at(c);
+          }
+          col["min"].push_back(mn);
+          col["max"].push_back(mx);
+          col["mean"].push_back(sum / static_cast<double>(proto.criteria.size() - 1));
         }
-        col["min"].push_back(mn);
-        col["max"].push_back(mx);
-        col["mean"].push_back(sum / static_cast<double>(proto.criteria.size() - 1));
-      }
-      if (col["overall"].size() >= 3) {
-        md << "\n### Correlation of overall similarity (Table 4.2)\n\n| with | Pearson r | p |\n|---|---|---|\n";
-        for (const auto& [name, v] : col) {
-          if (name == "overall") continue;
-          const auto c = Pearson(col["overall"], v);
-          md << fmt::format("| {} | {:.3f} | {} |\n", name, c.r, P(c.p));
+        md << "\n### Correlation of overall similarity (Table 4.2)\n";
+        if (col["overall"].size() >= 3) {
+          md << "\n| with | Pearson r | p |\n|---|---|---|\n";
+          for (const auto& [name, v] : col) {
+            if (name == "overall") continue;
+            const auto c = Pearson(col["overall"], v);
+            md << fmt::format("| {} | {:.3f} | {} |\n", name, c.r, P(c.p));
+          }
+        } else {
+          NotRun(md, "correlation",
+                 fmt::format("it needs three or more main-phase trials rated on every criterion ({} so far)",
+                             col["overall"].size()));
         }
       }
     }

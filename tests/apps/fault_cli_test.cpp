@@ -133,7 +133,7 @@ TEST(FaultCli, ASecondWriterIsRefusedNamingTheHolder) {
     EXPECT_NE(out.find("process " + std::to_string(getpid())), std::string::npos) << out;
     EXPECT_NE(out.find(db), std::string::npos) << out;
   }
-  EXPECT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 2", &out), 0) << out;
+  EXPECT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 2", &out), 3) << out;  // stopped: exit 3
 }
 
 TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
@@ -150,7 +150,7 @@ TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
       test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0)
       << out;
   EXPECT_EQ(out, "P01\n");
-  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 1", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 1", &out), 3) << out;
   EXPECT_EQ(test::RunCommand(RunCmd(db, "JohnSmith1985"), &out), 2);
   ASSERT_EQ(
       test::RunCommand(Cli() + " participant new --protocol " + Small() + " --db " + db, &out), 0)
@@ -172,7 +172,7 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
   test::TempDir dir;
   const std::string db = dir.File("a.db");
   std::string out;
-  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 10", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 10", &out), 3) << out;
   std::filesystem::copy_file(db, dir.File("scores.db"));
   std::filesystem::copy_file(db, dir.File("chunks.db"));
   // A score that is text, or outside the protocol's 0..100 scale, is refused, never analysed.

@@ -223,7 +223,7 @@ TEST_F(Interchange, XdfBadOutputIsRefusedWithTheField) {
       test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
                            db2 + " --participant P02 --record none --stop-after 1 --quiet",
                        &out),
-      0)
+      3)
       << out;
   EXPECT_EQ(
       test::RunCommand(

@@ -156,7 +156,7 @@ TEST(StatsCli, ReportNamesADroppedParticipant) {
   for (const char* p : {"P01", "P02"})
     ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " + p + " --quiet", &out), 0)
         << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant P03 --quiet --stop-after 15", &out), 0)
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant P03 --quiet --stop-after 15", &out), 3)
       << out;
   ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
   const auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());

@@ -86,6 +86,20 @@ TEST_F(Headless, SceneMapsTheWorkspaceAndBreaksShowACountdown) {
   EXPECT_NEAR(c->cx(), r->cx(), 1.0);
   EXPECT_NEAR(c->cy(), r->cy(), 1.0);
   EXPECT_NEAR(l->cy(), 400, 1.0) << "y = 0 is the middle of the full-window scene";
+  // The squares are named under them; at the workspace's far edge, below the phase's
+  // prompt, the cursor is drawn whole (not clipped at the window's top).
+  EXPECT_TRUE(Find(d, "name:left-square") && Find(d, "name:right-square"));
+  v.stimulus_prompt = "Explore A, then B";
+  v.stylus_m = {0.0, 0.04, 0.0};
+  d.clear();
+  Frame(v, -1, -1, false, &d);
+  const auto *prompt = Find(d, "stimulus-prompt"), *top = Find(d, "cursor");
+  ASSERT_TRUE(prompt && top);
+  EXPECT_GE(top->y0, prompt->y1);
+  v.stylus_m = {0.0, 0.2, 0.0};  // far outside the workspace: still whole on the screen
+  d.clear();
+  Frame(v, -1, -1, false, &d);
+  EXPECT_GE(Find(d, "cursor")->y0, prompt->y1);
   v.mode = ParticipantView::Mode::kBreak;
   v.break_remaining_s = 41.2;
   d.clear();
@@ -117,11 +131,47 @@ TEST_F(Headless, ConsoleButtonsReport) {
   ASSERT_TRUE(b && Find(d, "progress") && Find(d, "trace:force") && Find(d, "faults"));
   // Abort is the third button (110 px each, default spacing).
   const float ax = b->x0 + 2 * 110 + 2 * ImGui::GetStyle().ItemSpacing.x + 50, ay = b->cy();
+  const float bx = b->x0 + 110 + ImGui::GetStyle().ItemSpacing.x + 50;  // the second button
   frame(ax, ay, false, nullptr);
   frame(ax, ay, true, nullptr);
   const auto a = frame(ax, ay, false, nullptr);
   EXPECT_TRUE(a.abort);
   EXPECT_FALSE(a.pause);
+  // Abort only asks: the console then draws the confirmation, whose buttons answer it.
+  v.confirm_abort = true;
+  d.clear();
+  frame(-1, -1, false, &d);
+  d.clear();
+  frame(-1, -1, false, &d);
+  const auto *yes = Find(d, "abort-confirm"), *no = Find(d, "abort-cancel");
+  ASSERT_TRUE(yes && no);
+  frame(no->cx(), no->cy(), false, nullptr);
+  frame(no->cx(), no->cy(), true, nullptr);
+  const auto c = frame(no->cx(), no->cy(), false, nullptr);
+  EXPECT_TRUE(c.abort_cancelled);
+  EXPECT_FALSE(c.abort_confirmed);
+  frame(yes->cx(), yes->cy(), false, nullptr);
+  frame(yes->cx(), yes->cy(), true, nullptr);
+  const auto y = frame(yes->cx(), yes->cy(), false, nullptr);
+  EXPECT_TRUE(y.abort_confirmed);
+  // While the modal is open the console's own buttons do not react.
+  frame(ax, ay, false, nullptr);
+  frame(ax, ay, true, nullptr);
+  EXPECT_FALSE(frame(ax, ay, false, nullptr).abort);
+  // A break: the countdown on the console and "End break now" where Break was.
+  v.confirm_abort = false;
+  v.on_break = true;
+  v.break_remaining_s = 12.3;
+  d.clear();
+  frame(-1, -1, false, &d);
+  ASSERT_TRUE(Find(d, "state:break"));
+  const auto* b2 = Find(d, "buttons");
+  ASSERT_TRUE(b2);
+  frame(bx, b2->cy(), false, nullptr);
+  frame(bx, b2->cy(), true, nullptr);
+  const auto e = frame(bx, b2->cy(), false, nullptr);
+  EXPECT_TRUE(e.end_break);
+  EXPECT_FALSE(e.take_break);
 }
 
 }  // namespace

@@ -45,6 +45,8 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   cv.next_placement = "sandpaper on the left, virtual on the right";
   cv.done = 6;
   cv.total = 60;
+  cv.training_done = 10;
+  cv.training_total = 10;
   for (int k = 0; k < 200; ++k) {
     cv.force_N.push_back(1.0f + 0.3f * std::sin(static_cast<float>(k) * 0.1f));
     cv.speed_mps.push_back(0.05f + 0.02f * std::sin(static_cast<float>(k) * 0.05f));
@@ -81,7 +83,22 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   EXPECT_GT(cur->cx(), l->x0);
   EXPECT_LT(cur->cx(), l->x1);
   // Every label and the confirm button have text in their boxes.
-  for (const auto& id : {"label:roughness", "label:friction", "label:overall similarity", "low:roughness", "high:roughness", "prompt"}) {
+  // Nothing drawn outside the window (the confirm button, the last scale's labels).
+  for (const auto& it : pd) {
+    EXPECT_GE(it.y0, 0) << it.id;
+    EXPECT_LE(it.y1, 700) << it.id;
+  }
+  // Each criterion's name sits with its own scale: right above it, and clearly below the
+  // previous scale's end labels.
+  for (const auto& [prev, crit] : {std::pair{"roughness", "friction"}, std::pair{"friction", "overall similarity"}}) {
+    const auto *label = Find(pd, std::string("label:") + crit), *scale = Find(pd, std::string("scale:") + crit);
+    const auto* prev_end = Find(pd, std::string("high:") + prev);
+    ASSERT_TRUE(label && scale && prev_end) << crit;
+    EXPECT_LE(label->y1, scale->y0 + 1) << crit;
+    EXPECT_LT(scale->y0 - label->y1, label->y0 - prev_end->y1) << crit << ": nearer its scale than the previous one";
+  }
+  for (const auto& id : {"label:roughness", "label:friction", "label:overall similarity", "low:roughness", "high:roughness", "prompt",
+                         "name:left-square", "name:right-square"}) {
     const auto* it = Find(pd, id);
     ASSERT_TRUE(it) << id;
     EXPECT_GT(Bright(p, *it), 15) << id;
@@ -112,6 +129,79 @@ class ScriptedBox : public devices::RatingInput {
  private:
   std::size_t k_ = 0;
 };
+
+// The console's Abort asks first (the modal drawn, its buttons readable): Continue keeps the
+// session running, a second Abort confirmed stops it (the runner then records the stop and
+// 'study run' exits 3: tests/apps/study_cli_test.cpp). Pause and an early-ended break show
+// their state on the console, and every one of these actions is logged as an event.
+TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
+  const std::string out = std::string(HL_BINARY_DIR) + "/screenshots";
+  std::filesystem::create_directories(out);
+  WindowSessionUi ui("s", "P01", "test", {.width = 900, .height = 650});
+  std::vector<std::string> events;
+  ui.log_event = [&](const std::string& kind, const std::string&) { events.push_back(kind); };
+  TrialScreen t;
+  t.index = 3;
+  t.total = 20;
+  t.rated_done = 2;
+  t.rated_total = 20;
+  t.criteria = {"roughness"};
+  std::string answer;  // what the scripted experimenter does once the state is shown
+  bool asked = false, shown = false;
+  int frames = 0, modal_frames = 0;
+  ui.SetConsoleScript([&](const ConsoleView& cv, const Drawn& d) {
+    ConsoleAction a;
+    ++frames;
+    if (answer == "cancel" || answer == "confirm") {
+      if (!asked) {
+        a.abort = asked = true;
+      } else if (cv.confirm_abort && Find(d, "abort-confirm") && Find(d, "abort-cancel") && ++modal_frames >= 3) {
+        // (ImGui sizes a new popup on its first frame and shows it from the next.)
+        if (!shown) {
+          ui.SaveScreenshot(1, out + "/console-abort.png");
+          const cv::Mat c = cv::imread(out + "/console-abort.png");
+          EXPECT_GT(Bright(c, *Find(d, "abort-confirm")), 15) << "the confirm button has its text";
+          EXPECT_GT(Bright(c, *Find(d, "abort-cancel")), 15) << "the cancel button has its text";
+        }
+        shown = true;
+        (answer == "cancel" ? a.abort_cancelled : a.abort_confirmed) = true;
+      }
+    } else if (answer == "pause") {
+      if (!cv.paused && !shown) a.pause = true;
+      else if (cv.paused && Find(d, "state:paused")) {
+        shown = true;
+        a.resume = true;
+      }
+    } else if (answer == "end break") {
+      if (cv.on_break && Find(d, "state:break")) {
+        shown = true;
+        a.end_break = true;
+      }
+    }
+    return a;
+  });
+  const auto step = [&](const std::string& what) {
+    answer = what;
+    asked = shown = false;
+    frames = modal_frames = 0;
+  };
+  step("cancel");
+  EXPECT_TRUE(ui.Stimulus(t, 0, Eigen::Vector3d::Zero(), 1.0)) << "Continue keeps the session running";
+  EXPECT_TRUE(shown) << "the confirmation was drawn";
+  step("pause");
+  EXPECT_TRUE(ui.Stimulus(t, 0, Eigen::Vector3d::Zero(), 1.0));
+  EXPECT_TRUE(shown) << "the PAUSED state was drawn";
+  step("end break");
+  EXPECT_TRUE(ui.Break(600.0)) << "ended early, not aborted";
+  EXPECT_TRUE(shown) << "the break's countdown was drawn";
+  EXPECT_LT(frames, 100) << "the break ended when asked";
+  step("confirm");
+  EXPECT_FALSE(ui.Stimulus(t, 1, Eigen::Vector3d::Zero(), 1.0)) << "a confirmed abort stops the session";
+  EXPECT_TRUE(shown);
+  const std::vector<std::string> expected = {"abort-requested", "abort-cancelled", "pause", "resume",
+                                             "break-ended", "abort-requested", "abort-confirmed"};
+  EXPECT_EQ(events, expected);
+}
 
 TEST(Screenshot, RatingBoxDrivesTheParticipantWindow) {
   ScriptedBox box;

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <functional>
 #include <cmath>
@@ -136,8 +137,11 @@ class ScriptedUi : public SessionUi {
  public:
   int stimulus_frames = 0, rated = 0, breaks = 0, abort_at_trial = -1, break_request_at = -1;
   std::vector<int> sides_seen;
+  std::vector<double> break_s;
+  std::vector<std::pair<int, int>> rated_numbers;  // (index, total) per rated trial
+  std::vector<std::array<int, 3>> progress;        // (rated done, training done, training total)
   bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p, double remaining) override {
-    ++stimulus_frames;
+    if (stimulus_frames++ == 0 && log_event) log_event("pause", "scripted");  // the console's actions reach the record
     EXPECT_TRUE(p.allFinite());
     EXPECT_GE(remaining, 0);
     EXPECT_FALSE(t.placement.empty());
@@ -146,11 +150,15 @@ class ScriptedUi : public SessionUi {
   }
   std::optional<std::vector<double>> Rate(const TrialScreen& t) override {
     ++rated;
+    EXPECT_FALSE(t.training);
+    rated_numbers.emplace_back(t.index, t.total);
+    progress.push_back({t.rated_done, t.training_done, t.training_total});
     std::vector<double> r;
     for (std::size_t i = 0; i < t.criteria.size(); ++i) r.push_back(10.0 * static_cast<double>(t.index % 10) + static_cast<double>(i));
     return r;
   }
-  bool Break(double) override {
+  bool Break(double seconds) override {
+    break_s.push_back(seconds);
     ++breaks;
     return true;
   }
@@ -180,13 +188,26 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   EXPECT_EQ(ui.sides_seen[1], 1);
   db::Database d(o.db_path);
   bool abort_logged = false, break_logged = false;
+  int pause_logged = 0;
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
   for (const auto& e : d.Events(se.id)) {
+    pause_logged += e.kind == "pause" && e.detail == "scripted" && e.trial_id.has_value();
     abort_logged |= e.kind == "abort" && e.detail.find("console") != std::string::npos;
     break_logged |= e.kind == "break" && e.detail.find("requested by the experimenter") != std::string::npos;
   }
   EXPECT_TRUE(abort_logged);
   EXPECT_TRUE(break_logged);
+  EXPECT_EQ(pause_logged, 1);
+  // The simulated rig's breaks run --ui-speed times faster, like its strokes (30 s / 200).
+  ASSERT_FALSE(ui.break_s.empty());
+  for (double b : ui.break_s) EXPECT_DOUBLE_EQ(b, p.break_duration_s / 200);
+  // The screens number the rated trials 1, 2, ... of the 22, with the 4 training trials
+  // (done before them) counted apart.
+  ASSERT_EQ(ui.rated_numbers.size(), 11u) << "aborted at rated trial 12";
+  for (int i = 0; i < 11; ++i) {
+    EXPECT_EQ(ui.rated_numbers[static_cast<std::size_t>(i)], std::make_pair(i + 1, 22));
+    EXPECT_EQ(ui.progress[static_cast<std::size_t>(i)], (std::array<int, 3>{i, 4, 4}));
+  }
   // Ratings stored are the participant's, exactly.
   for (const auto& t : d.Trials(se.id)) {
     if (t.status != db::kTrialCompleted || t.phase == "training") continue;

@@ -19,6 +19,8 @@ struct Material {
   std::string sample;   ///< physical sample label the experimenter places
   std::string model;    ///< virtual model file (relative to the protocol), or "placeholder"
   std::string profile;  ///< simulated-lab ground truth profile (defaults to id)
+  /// Report grouping of the aggregate tables, e.g. "inhomogeneous" (Tables 5.4/5.5); "" none.
+  std::string group;
   int line = 0;
 };
 

@@ -46,7 +46,12 @@ struct ParticipantView {
   // Break / message.
   double break_remaining_s = 0;
   std::string message;
-  int trial = 0, trials = 0;
+  int trial = 0, trials = 0;  ///< 1-based rated trial of the main phases, and how many
+  bool training = false;      ///< a training trial: `trial`/`trials` count the training trials
+  /// The prompt above the squares while the participant explores (per phase), e.g.
+  /// "Training: explore both samples"; empty: none.
+  std::string stimulus_prompt;
+  std::string left_label = "A", right_label = "B";  ///< under the squares
 };
 
 struct ParticipantAction {
@@ -60,16 +65,23 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn = nullp
 
 struct ConsoleView {
   std::string study, participant, phase, current, next_placement;
-  int done = 0, total = 0;
+  int done = 0, total = 0;                  ///< rated trials of the main phases completed / planned
+  int training_done = 0, training_total = 0;  ///< training trials (shown apart from the progress)
   std::vector<float> force_N, speed_mps, acc_mps2;  ///< recent samples, oldest first
   std::string device_status;
   std::map<std::string, std::uint64_t> faults;      ///< counter name -> count
   bool paused = false;
+  bool on_break = false;                            ///< a break is running (countdown below)
+  double break_remaining_s = 0;
+  bool confirm_abort = false;                       ///< the abort confirmation is open (modal)
   std::vector<std::string> log;                     ///< recent events, newest last
 };
 
+/// What the experimenter did this frame. `abort` only asks: the console then shows a modal
+/// confirmation, and `abort_confirmed` / `abort_cancelled` answer it.
 struct ConsoleAction {
-  bool pause = false, resume = false, take_break = false, abort = false;
+  bool pause = false, resume = false, take_break = false, end_break = false, abort = false;
+  bool abort_confirmed = false, abort_cancelled = false;
 };
 
 ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn = nullptr);

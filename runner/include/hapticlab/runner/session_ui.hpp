@@ -3,6 +3,7 @@
 /// experimenter watches the console and can pause, call a break or abort.
 
 #include <deque>
+#include <functional>
 #include <memory>
 #include <string>
 
@@ -31,12 +32,22 @@ class WindowSessionUi final : public SessionUi {
     break_requested_ = false;
     return b;
   }
+  /// A scripted experimenter (tests): called after every frame with the console's state and
+  /// what it drew; the actions it returns are merged with the mouse's.
+  using ConsoleScript = std::function<ConsoleAction(const ConsoleView&, const Drawn&)>;
+  void SetConsoleScript(ConsoleScript script) { script_ = std::move(script); }
+  /// Writes the last frame of window 0 (participant) or 1 (console) as PNG.
+  void SaveScreenshot(int window, const std::string& path) const { win_.SaveScreenshot(window, path); }
 
  private:
-  // One frame of both windows; handles pause (blocks while paused), a requested break and
-  // closing the windows (abort). Returns false on abort.
+  // One frame of both windows. Abort (or closing a window) opens the console's confirmation
+  // and holds the session, as Pause does, until it is answered; a requested break is noted
+  // for the runner. Returns false once the abort is confirmed.
   bool Frame(ParticipantAction* pa = nullptr);
   void Show(const TrialScreen& t);
+  void Log(const std::string& kind, const std::string& detail);
+  ConsoleScript script_;
+  bool end_break_ = false;
   Windows win_;
   ParticipantView pv_;
   ConsoleView cv_;

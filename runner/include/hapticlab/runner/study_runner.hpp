@@ -39,7 +39,12 @@ enum class RecordMode { kNone, kForce, kAll };
 
 /// What a user interface shows of a trial (hapticlab study run --ui).
 struct TrialScreen {
-  int index = 0, total = 0;           ///< 1-based position in the session, trials planned
+  /// 1-based number of this trial among the rated trials of the planned phases, and how
+  /// many there are; a training trial (`training`) counts among the training trials instead.
+  int index = 0, total = 0;
+  bool training = false;
+  int rated_done = 0, rated_total = 0;        ///< rated trials completed / planned (console progress)
+  int training_done = 0, training_total = 0;  ///< training trials completed / planned
   std::string phase, left, right, method, placement;  ///< placement: what the experimenter puts where
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
@@ -75,6 +80,9 @@ class SessionUi {
   virtual void Event(const std::string&) {}
   /// Polled before each trial: the experimenter asked for a break (cleared by reading).
   virtual bool TakeBreakNow() { return false; }
+  /// Set by the runner while a session runs: the UI records the experimenter's actions
+  /// (pause, resume, abort requested / cancelled, break ended early) as session events.
+  std::function<void(const std::string& kind, const std::string& detail)> log_event;
 };
 
 /// The rig a session runs on: borrowed, opened by the caller (hapticlab study run --device

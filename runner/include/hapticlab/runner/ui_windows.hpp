@@ -29,6 +29,8 @@ class Windows {
   /// Draws one frame in each window and handles input; false once a window was closed.
   bool Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa, ConsoleAction* ca,
              Drawn* participant_drawn = nullptr, Drawn* console_drawn = nullptr);
+  /// Clears the windows' close requests (the close button asks for a confirmation first).
+  void KeepOpen();
   /// Writes the last frame of window 0 (participant) or 1 (console) as PNG.
   void SaveScreenshot(int window, const std::string& path) const;
 

@@ -16,7 +16,8 @@ struct BarSeries {
 };
 
 struct BarChart {
-  std::string title, y_label, error_label;  ///< error_label e.g. "95% CI"
+  std::string title, x_label, y_label, error_label;  ///< error_label e.g. "95% CI"
+  /// Groups along the x axis; a single unnamed group ({""}) labels each bar with its series.
   std::vector<std::string> groups;
   std::vector<BarSeries> series;
   std::vector<std::string> group_marks;     ///< text above each group (letters), optional
@@ -33,7 +34,7 @@ struct BarChart {
 std::vector<std::string> DrawBarChart(const BarChart& chart, const std::string& base);
 
 struct BoxPlot {
-  std::string title, y_label;
+  std::string title, x_label, y_label;
   std::vector<std::string> groups;
   std::vector<std::vector<double>> samples;  ///< one sample per group
   double y_min = 0, y_max = 100;
