@@ -77,6 +77,8 @@ struct ReplayOptions {
   /// second difference), within 0.05-5 um; 1 um when there are too few rows at rest.
   double position_resolution_m = 0;
   double load_smoothing_s = 0.02;  ///< window of Sample::fload_N [s]
+  bool load_savgol = true;
+  double position_smoothing_s = 0.02;
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
