@@ -223,7 +223,7 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
   ro.position_smoothing_s = env("EXP_PSMOOTH", 0.02);
   ro.position_resolution_m = env("EXP_RES", 0);
   const int seeds = static_cast<int>(env("EXP_SEEDS", 6));
-  double sum = 0, sumk = 0, summk = 0;
+  double sum = 0, sumk = 0, summk = 0, sumsq = 0, sumz = 0;
   for (int s = 0; s < seeds; ++s) {
     const auto m = FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true);
     const auto r = wb::PrepareReplay(m, ro);
@@ -242,8 +242,10 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
     }
     fmt::print("seed {} mu_b {:+.3f}% (sd {:.3f}%) kappa {:+.3f}% mu_k {:+.4f}% res {}\n", s, 100 * (mb / t.mu_b_Ns_per_m - 1),
                100 * sdb / t.mu_b_Ns_per_m, 100 * (kp / t.kappa_N_per_m - 1), 100 * (mk / t.mu_k - 1), r.position_resolution_m);
+    sumsq += std::pow(mb / t.mu_b_Ns_per_m - 1, 2), sumz += std::pow((mb - t.mu_b_Ns_per_m) / sdb, 2);
     sum += mb / t.mu_b_Ns_per_m - 1, sumk += kp / t.kappa_N_per_m - 1, summk += mk / t.mu_k - 1;
   }
+  fmt::print("RMS mu_b error {:.3f}%, RMS z {:.2f}\n", 100 * std::sqrt(sumsq / seeds), std::sqrt(sumz / seeds));
   fmt::print("MEAN mu_b {:+.3f}% kappa {:+.3f}% mu_k {:+.4f}%\n", 100 * sum / seeds, 100 * sumk / seeds, 100 * summk / seeds);
 }
 
