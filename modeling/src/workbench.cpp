@@ -30,7 +30,7 @@ constexpr double kMm = 1e-3;
 constexpr double kPreslidingSpeed_mps = 0.5e-3;
 constexpr double kSlidingSpeed_mps = 3e-3;
 constexpr double kVibrationRidge = 1.0;  // see FitVibration
-// Clusters of the sandwich covariance: this many consecutive 1 s blocks, so that a cluster spans
+// Clusters of the jackknife covariance: this many consecutive 1 s blocks, so that a cluster spans
 // several strokes and rests and the residual's correlation along a stroke stays inside it.
 constexpr int kClusterBlocks = 3;
 
