@@ -531,7 +531,7 @@ void AddFitContact(CLI::App& model) {
       "replayed over the measured 2-D path (strokes in any direction), started by Algorithm 1 and\n"
       "refined jointly by Ceres; Hunt-Crossley K, B, n on pokes (samples above 2 N discarded).\n"
       "Pokes are the samples without sliding in --measurement, or a separate --pokes file.\n"
-      "Uncertainties: cluster-robust sandwich over 3 s clusters of blocks, 95 % intervals. Prints each\n"
+      "Uncertainties: cluster jackknife over 3 s clusters of blocks, 95 % intervals. Prints each\n"
       "solve's termination, iterations, cost and parameters at bounds; exits 1 when a fit is not\n"
       "usable. Writes a material model (effects, [contact], [friction]) for `model build`.");
   cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")->required();

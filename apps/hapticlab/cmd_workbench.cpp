@@ -90,7 +90,7 @@ void AddFit(CLI::App& app) {
       "(Algorithm 1, then a joint Ceres refinement of the vector Dahl replay). Prints the error\n"
       "(before and after when there is a change), on all data and held out (fitted on the even\n"
       "1 s blocks, scored on the odd ones), each solve's termination, iterations, cost and\n"
-      "parameters at bounds, the parameters with 95 % intervals (cluster-robust sandwich over\n"
+      "parameters at bounds, the parameters with 95 % intervals (cluster jackknife over\n"
       "3 s clusters of blocks), and writes the fitted model (a material TOML the renderer plays, with a\n"
       "[workbench] table of every parameter). Progress goes to stderr unless --quiet.");
   cmd->add_option("--measurement", o->measurement, "Measurement CSV v1 (with acc_mps2 for the vibration channel)")

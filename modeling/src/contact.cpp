@@ -164,7 +164,8 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
 ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const ContactFitOptions& o) {
   ContactFit out;
   out.uncertainty_method =
-      "cluster-robust sandwich over 3 s clusters of blocks (G/(G-1) (J'J)^-1 sum_g s_g s_g' (J'J)^-1), 95 % intervals with "
+      "cluster jackknife over 3 s clusters of blocks (delete-one-cluster one-step refits d_g = (J'J - J_g'J_g)^-1 J_g' "
+      "r_g, cov = (G-1)/G sum (d_g - mean)(d_g - mean)'), 95 % intervals with "
       "t(0.975, G-1)";
   // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
   const auto r = wb::PrepareReplay(m);

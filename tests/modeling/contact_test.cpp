@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <numbers>
 #include <random>
@@ -29,6 +30,7 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr int kSubsteps = 400;
+double g_pnoise = 1e-7, g_vnoise = 1e-4;
 
 // The truth of the free-hand sample (workbench units: the normal law is
 // f = (d / 1 mm)^n (K1mm + B1mm d_dot)).
@@ -101,7 +103,7 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
     if (fc <= 0 || !was_in_contact || k == 0) {
       Fx = Fy = 0;
     } else {
-      // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 40 explicit Euler substeps.
+      // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 400 explicit Euler substeps.
       const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps, sl = std::hypot(sx, sy);
       for (int j = 0; j < kSubsteps; ++j) {
         const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc), gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
@@ -113,8 +115,8 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
     was_in_contact = fc > 0;
     MeasurementRow r;
     r.t_s = static_cast<double>(k) * dt;
-    r.p_m = {x[k] + 1e-7 * gauss(rng), y[k] + 1e-7 * gauss(rng), -d[k] + 1e-7 * gauss(rng)};
-    r.v_mps = {vx + 1e-4 * gauss(rng), vy + 1e-4 * gauss(rng), -dd + 1e-4 * gauss(rng)};
+    r.p_m = {x[k] + g_pnoise * gauss(rng), y[k] + g_pnoise * gauss(rng), -d[k] + g_pnoise * gauss(rng)};
+    r.v_mps = {vx + g_vnoise * gauss(rng), vy + g_vnoise * gauss(rng), -dd + g_vnoise * gauss(rng)};
     r.f_N = {-(Fx + tr.mu_b_Ns_per_m * vx) + noise_N * gauss(rng), -(Fy + tr.mu_b_Ns_per_m * vy) + noise_N * gauss(rng),
              fn + noise_N * gauss(rng)};
     m.rows.push_back(r);
@@ -182,8 +184,12 @@ TEST(ContactFreeHand, AlgorithmOneStartsNearTheTruthFromSlidingAndTremor) {
 // every estimate must be within its tolerance. With the plain (J'J)^-1 sigma^2 of the earlier
 // engine, mu_k's interval (+- 0.002) covered the truth in none.
 // KNOWN FAILURE, so disabled (run with --gtest_also_run_disabled_tests, 14 s): mu_b is covered in
-// 16 of 20 seeds only (its estimates sit about 1 % low, cause not found yet); K1mm, n, B1mm,
-// kappa and mu_k reach 18-20 of 20, and every estimate is within its tolerance.
+// 16 of 20 seeds only. Its former bias (-1.0 % mean over these seeds: a moving-average load,
+// +1.4 % on noise-free data, and position noise random-walking the bristle, -1.8 points) is gone
+// (-0.3 %), but its error varies by 2.1 % (SD) from seed to seed while the cluster jackknife
+// reports 1.3 % (median): an error that depends on the recording's strokes, which no interval from
+// within one recording sees. K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19 of 20; every estimate
+// is within its tolerance.
 TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
   const Truth t;
   constexpr int kSeeds = 20;
@@ -206,6 +212,50 @@ TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
     EXPECT_GE(c, 18) << name << ": the 95 % interval covered the truth in " << c << " of " << kSeeds << " seeds";
     EXPECT_EQ(within[name], kSeeds) << name << " outside its tolerance";
   }
+}
+
+// Not a test (it asserts nothing and is disabled): the measurement aid behind the bias numbers in
+// docs/modeling-geometry-contact.md. Environment: EXP_NOISE (force noise, N), EXP_PNOISE,
+// EXP_VNOISE (position and velocity noise), EXP_RATE, EXP_SMOOTH, EXP_SG, EXP_PSMOOTH, EXP_RES
+// (ReplayOptions), EXP_SEEDS. Prints mu_b's, kappa's and mu_k's mean error, mu_b's RMS error and
+// RMS z (error / reported SD) over the seeds.
+TEST(ContactFreeHand, DISABLED_Experiment) {
+  const Truth t;
+  auto env = [](const char* n, double d) { const char* v = std::getenv(n); return v ? std::atof(v) : d; };
+  g_pnoise = env("EXP_PNOISE", 1e-7);
+  g_vnoise = env("EXP_VNOISE", 1e-4);
+  const double noise = env("EXP_NOISE", 0.008);
+  wb::ReplayOptions ro;
+  ro.max_force_rate_hz = env("EXP_RATE", 500);
+  ro.load_smoothing_s = env("EXP_SMOOTH", 0.02);
+  ro.load_savgol = env("EXP_SG", 1) > 0;
+  ro.position_smoothing_s = env("EXP_PSMOOTH", 0.02);
+  ro.position_resolution_m = env("EXP_RES", 0);
+  const int seeds = static_cast<int>(env("EXP_SEEDS", 6));
+  double sum = 0, sumk = 0, summk = 0, sumsq = 0, sumz = 0;
+  for (int s = 0; s < seeds; ++s) {
+    const auto m = FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true);
+    const auto r = wb::PrepareReplay(m, ro);
+    wb::Model model;
+    wb::AddEffects(&model, ContactEffects(), r);
+    wb::FitOptions fo;
+    fo.normal = fo.vibration = false;
+    fo.uncertainty = true;
+    const auto fr = wb::Fit(&model, r, fo);
+    const auto* cf = fr.Find(wb::Channel::kFriction);
+    double mb = 0, kp = 0, mk = 0, sdb = 0;
+    for (const auto& p : cf->params) {
+      if (p.name == "mu_b") mb = p.value, sdb = p.sd;
+      if (p.name == "kappa") kp = p.value;
+      if (p.name == "mu_k") mk = p.value;
+    }
+    fmt::print("seed {} mu_b {:+.3f}% (sd {:.3f}%) kappa {:+.3f}% mu_k {:+.4f}% res {}\n", s, 100 * (mb / t.mu_b_Ns_per_m - 1),
+               100 * sdb / t.mu_b_Ns_per_m, 100 * (kp / t.kappa_N_per_m - 1), 100 * (mk / t.mu_k - 1), r.position_resolution_m);
+    sumsq += std::pow(mb / t.mu_b_Ns_per_m - 1, 2), sumz += std::pow((mb - t.mu_b_Ns_per_m) / sdb, 2);
+    sum += mb / t.mu_b_Ns_per_m - 1, sumk += kp / t.kappa_N_per_m - 1, summk += mk / t.mu_k - 1;
+  }
+  fmt::print("RMS mu_b error {:.3f}%, RMS z {:.2f}\n", 100 * std::sqrt(sumsq / seeds), std::sqrt(sumz / seeds));
+  fmt::print("MEAN mu_b {:+.3f}% kappa {:+.3f}% mu_k {:+.4f}%\n", 100 * sum / seeds, 100 * sumk / seeds, 100 * summk / seeds);
 }
 
 TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {

@@ -5,7 +5,7 @@
 /// (in its 2-D form) and refined jointly by Ceres; the normal force is Hunt-Crossley
 /// (eq. 4.11) fitted on pokes with samples above 2 N discarded. Both are the workbench's
 /// friction and normal channels (workbench.hpp), so `model fit-contact` and `hapticlab fit`
-/// agree by construction. Uncertainties: cluster-robust sandwich over 3 s clusters of blocks.
+/// agree by construction. Uncertainties: delete-one-cluster jackknife over 3 s clusters of blocks.
 
 #include <string>
 
@@ -17,7 +17,7 @@ namespace hapticlab::modeling {
 /// A parameter with its uncertainty.
 struct Estimate {
   double value = 0;
-  double sd = 0;              ///< standard error (sandwich; 0 when unavailable)
+  double sd = 0;              ///< standard error (cluster jackknife; 0 when unavailable)
   double lo95 = 0, hi95 = 0;  ///< 95 % interval
 };
 

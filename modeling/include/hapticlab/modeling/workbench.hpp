@@ -77,6 +77,12 @@ struct ReplayOptions {
   /// second difference), within 0.05-5 um; 1 um when there are too few rows at rest.
   double position_resolution_m = 0;
   double load_smoothing_s = 0.02;  ///< window of Sample::fload_N [s]
+  /// Sample::fload_N by a quadratic Savitzky-Golay fit over load_smoothing_s where the whole
+  /// window is in contact (a moving average flattens the load where it curves); false: the mean.
+  bool load_savgol = true;
+  /// Sample::x_m / y_m (what the Dahl bristle follows) by a quadratic Savitzky-Golay fit over
+  /// this window [s]; an estimated position resolution is scaled to the smoothed noise. 0: raw.
+  double position_smoothing_s = 0.02;
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
@@ -203,7 +209,7 @@ struct FitOptions {
   Split split = Split::kAll;
   bool normal = true, friction = true, vibration = true;  ///< channels to fit
   int max_iterations = 100;
-  /// Compute uncertainties (cluster-robust sandwich over 3 s clusters of the split's blocks; see ChannelFit).
+  /// Compute uncertainties (delete-one-cluster jackknife over 3 s clusters of the split's blocks; see ChannelFit).
   bool uncertainty = false;
   /// Normal-force samples above this are not fitted (ch. IV.3.3 fits the texture layer on
   /// pokes up to 2 N); infinity: every sample in contact [N].
@@ -237,17 +243,18 @@ struct ParamEstimate {
   bool at_bound = false;
 };
 
-/// A fitted channel. Uncertainty (FitOptions::uncertainty) is a cluster-robust sandwich
-/// estimator, cov = G/(G-1) (J'J)^-1 (sum_g s_g s_g') (J'J)^-1 with s_g = J_g' r_g the score of
-/// cluster g, the clusters being 3 consecutive 1 s blocks of the split (a cluster spans several strokes): it holds when residuals are
-/// correlated within a stroke and their variance changes with load or speed, which the plain
-/// (J'J)^-1 sigma^2 does not.
+/// A fitted channel. Uncertainty (FitOptions::uncertainty) is a delete-one-cluster jackknife
+/// (CR3), cov = (G-1)/G sum_g (d_g - mean d)(d_g - mean d)' with d_g = (J'J - J_g'J_g)^-1 J_g' r_g
+/// the one-step change of leaving cluster g out, the clusters being 3 consecutive 1 s blocks of
+/// the split (a cluster spans several strokes): it holds when residuals are correlated within a
+/// stroke and their variance changes with load or speed, which the plain (J'J)^-1 sigma^2 does
+/// not, and unlike the CR0 sandwich it is not biased low with few clusters.
 struct ChannelFit {
   Channel channel = Channel::kNormal;
   FitSummary summary;
   std::vector<ParamEstimate> params;  ///< fitted parameters in the order of the effects
   std::vector<double> covariance;     ///< params.size()^2, row-major (empty without uncertainty)
-  int clusters = 0;                   ///< blocks in the sandwich
+  int clusters = 0;                   ///< clusters in the jackknife
   int samples = 0;                    ///< force samples (or windows) fitted
 };
 struct FitReport {
