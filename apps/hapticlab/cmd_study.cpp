@@ -152,6 +152,8 @@ void PrintSummary(const runner::RunSummary& s, bool json_out) {
 void RegisterStudy(CLI::App& app) {
   auto* study = app.add_subcommand("study", "Study protocols: validate, plan, run, resume, status (docs/studies.md)");
   study->require_subcommand(1);
+  RegisterPower(*study);
+  RegisterCalibrate(*study);
 
   {
     auto path = std::make_shared<std::string>();

@@ -55,6 +55,7 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
   if (p.profiles.empty() && sim)
     throw InputError(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
   if (!p.profiles.empty()) lab.profiles = sim::LoadProfiles((dir / p.profiles).string());
+  if (!p.observer.empty()) lab.profiles.observer = sim::LoadObserver((dir / p.observer).string());
   Diagnostics d;
   for (const auto& m : p.materials) {
     const auto prof = lab.profiles.profiles.find(m.profile);
@@ -196,8 +197,15 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     out.aborted = !RateInUi(*opt.ui, screen, p, &out.ratings);
     return out;
   }
+  if (opt.on_felt) {
+    FeltTrial ft{.plan_index = t.plan_index, .phase = t.phase, .material = t.material, .comparison = t.comparison,
+                 .method = t.method, .repetition = t.repetition, .distances = {}};
+    for (const auto& c : p.criteria) ft.distances.push_back(observer.Distance(c, felt[0], felt[1]));
+    opt.on_felt(ft);
+  }
   for (const auto& c : p.criteria)
-    out.ratings.push_back({c, observer.Rate(c, felt[0], felt[1], p.scale_min, p.scale_max, rng), Observer::ResponseTime(rng)});
+    out.ratings.push_back({c, observer.Rate(c, t.material, t.method, felt[0], felt[1], p.scale_min, p.scale_max, rng),
+                           Observer::ResponseTime(rng)});
   return out;
 }
 
