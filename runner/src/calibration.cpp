@@ -202,7 +202,7 @@ CalibrationState PrepareCalibration(const CalibrationSpec& spec, const std::func
   for (const auto& p : spec.protocols) {
     const auto proto = protocols::LoadProtocol(p.file);
     if (log) log(fmt::format("recording the physics of {} ({} participants through the runner)", p.id, spec.pool));
-    st.pools.push_back(RecordFeltPool(proto, spec.pool, 2, log));
+    st.pools.push_back(RecordFeltPool(proto, spec.pool, 2, log, spec.pool_first));
   }
   st.start = spec.start.empty() ? st.pools.front().observer : sim::LoadObserver(spec.start);
   return st;

@@ -23,7 +23,7 @@ sim::ObserverParams ProtocolObserver(const protocols::Protocol& p) {
 }
 
 FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads,
-                        const std::function<void(const std::string&)>& log) {
+                        const std::function<void(const std::string&)>& log, int first_index) {
   if (pool_size < 1) throw InputError("", 0, "--pool", "expected at least 1 pool participant");
   FeltPool pool;
   pool.protocol = p.name;
@@ -52,8 +52,8 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
       try {
         RunOptions o;
         o.db_path = (tmp / fmt::format("pool{}.db", i)).string();
-        o.participant = fmt::format("P{:02d}", i + 1);
-        o.participant_index = i;
+        o.participant = fmt::format("P{:02d}", first_index + i + 1);
+        o.participant_index = first_index + i;
         o.record = RecordMode::kNone;
         auto& out = pool.participants[static_cast<std::size_t>(i)];
         o.on_felt = [&out](const FeltTrial& t) {

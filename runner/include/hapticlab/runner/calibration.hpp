@@ -43,6 +43,7 @@ struct CalibrationSpec {
   std::string path;
   std::uint64_t seed = 1;
   int simulations = 16, pool = 6, sweeps = 10;
+  int pool_first = 0;  ///< plan index of the first pool participant (not in the file; tests hold out the fit's)
   std::string observer_out, start;
   std::vector<CalibrationProtocol> protocols;
   std::vector<CalibrationParam> params;

@@ -33,11 +33,11 @@ struct FeltPool {
   std::vector<std::vector<FeltTrial>> participants;  ///< rated trials of each pool participant, plan order
 };
 
-/// Runs `pool_size` simulated participants (plan indices 0..pool_size-1) through the runner,
-/// each in its own temporary database (removed afterwards), `threads` at a time.
+/// Runs `pool_size` simulated participants (plan indices first_index..first_index+pool_size-1)
+/// through the runner, each in its own temporary database (removed afterwards), `threads` at a time.
 /// @throws InputError as RunStudy does
 FeltPool RecordFeltPool(const protocols::Protocol& protocol, int pool_size, int threads = 2,
-                        const std::function<void(const std::string&)>& log = {});
+                        const std::function<void(const std::string&)>& log = {}, int first_index = 0);
 
 /// The observer of a protocol as the runner would load it (observer file, else profiles).
 sim::ObserverParams ProtocolObserver(const protocols::Protocol& protocol);
