@@ -21,7 +21,9 @@
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
+#include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/stats/power.hpp"
 #include "hapticlab/stats/report.hpp"
 
 #ifndef HL_SOURCE_DIR
@@ -69,6 +71,33 @@ void RealTimeCheck(const std::string& profiles_path) {
              st.force_ticks, r.counters().nan_faults.load() + r.counters().stale_faults.load());
 }
 
+// One line of `study power`: participants for 80 % power on the method effect, from the
+// demo's own participants' interactions re-rated by fresh simulated observers.
+void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
+  bool has_main = false;
+  for (const auto& v : pool.participants)
+    for (const auto& t : v) has_main |= t.phase == "main";
+  if (!has_main || p.methods.size() < 2) return;
+  stats::PowerOptions po;
+  // A quick estimate (a few seconds): 40 studies per count; `study power` for more.
+  po.participants = {4, 6, 8, 12, 16, 24};
+  po.simulations = 40;
+  po.seed = p.seed;
+  po.effects = {"method"};
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto r = stats::SimulatePower(
+      p.name, [&pool](int n, Rng& rng) { return runner::SimulateRatings(pool, pool.observer, n, rng, true); }, po);
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::string line;
+  for (const auto& c : p.criteria) {
+    const int n = stats::ParticipantsFor(r, c, "method", 0.8);
+    line += fmt::format("{}{}: {}", line.empty() ? "" : ", ", c, n ? fmt::format("{}", n) : "more than 24");
+  }
+  fmt::print("power: participants for 80 % power on the method effect (p < 0.05; {} simulated studies per count, "
+             "{:.1f} s; hapticlab study power): {}\n",
+             po.simulations, s, line);
+}
+
 }  // namespace
 
 void RegisterDemo(CLI::App& app) {
@@ -103,6 +132,14 @@ void RegisterDemo(CLI::App& app) {
       fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n", kVersion, kGitSha, p.name,
                  o->participants, dir.string());
       double stimulus_s = 0;
+      // What the simulated participants felt: the physics pool of the power line at the end.
+      runner::FeltPool pool;
+      pool.protocol = p.name;
+      pool.criteria = p.criteria;
+      pool.scale_min = p.scale_min;
+      pool.scale_max = p.scale_max;
+      pool.observer = runner::ProtocolObserver(p);
+      pool.participants.resize(static_cast<std::size_t>(o->participants));
       for (int i = 0; i < o->participants; ++i) {
         runner::RunOptions ro;
         ro.db_path = db_path;
@@ -110,6 +147,11 @@ void RegisterDemo(CLI::App& app) {
         ro.record = o->record == "all" || (o->record == "first" && i == 0) ? runner::RecordMode::kAll
                     : o->record == "force"                                 ? runner::RecordMode::kForce
                                                                            : runner::RecordMode::kNone;
+        ro.on_felt = [&pool, i](const runner::FeltTrial& t) {
+          auto& v = pool.participants[static_cast<std::size_t>(i)];
+          if (!v.empty() && v.back().plan_index == t.plan_index) v.back() = t;
+          else v.push_back(t);
+        };
         const auto s = runner::RunStudy(p, ro);
         stimulus_s += s.simulated_s;
         fmt::print("  {}: {} trials, {}\n", s.participant, s.completed, s.status);
@@ -119,6 +161,7 @@ void RegisterDemo(CLI::App& app) {
       // Trajectories stay in the database (`hapticlab export` writes them on request).
       const auto files = db::ExportCsv(database, (dir / "export").string(), false);
       RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
+      PowerLine(p, pool);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s, wall, stimulus_s / wall);
       fmt::print("database: {}\nreport:   {}\nexport:   {} ({} CSV files)\n", db_path, report.markdown,

@@ -176,6 +176,8 @@ void InstallStopHandlers() {
 void RegisterStudy(CLI::App& app) {
   auto* study = app.add_subcommand("study", "Study protocols: validate, plan, run, resume, status (docs/studies.md)");
   study->require_subcommand(1);
+  RegisterPower(*study);
+  RegisterCalibrate(*study);
 
   {
     auto path = std::make_shared<std::string>();

@@ -13,6 +13,10 @@ void RegisterStats(CLI::App& app);
 /// and the lean `hapticlab-stats` binary share them.
 void AddStatsCommands(CLI::App& group);
 void RegisterStudy(CLI::App& app);
+/// `study power` (cmd_power.cpp), registered under the study group.
+void RegisterPower(CLI::App& study);
+/// `study calibrate` (cmd_calibrate.cpp), registered under the study group.
+void RegisterCalibrate(CLI::App& study);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);

@@ -148,7 +148,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   // [study]
   if (const toml::table* s = doc["study"].as_table()) {
     r.Known(*s, "study", {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles",
-                           "participant_code"});
+                           "observer", "participant_code"});
     p.name = r.Get<std::string>(*s, "study", "name", true, "a string").value_or("");
     p.description = r.Get<std::string>(*s, "study", "description", false, "a string").value_or("");
     if (auto seed = r.Get<std::int64_t>(*s, "study", "seed", true, "a non-negative integer")) {
@@ -171,6 +171,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     if (!(p.stimulus_duration_s > 0 && p.stimulus_duration_s <= 600))
       r.Error(s->get("stimulus_duration_s"), "study.stimulus_duration_s", "expected 0 < seconds <= 600");
     p.profiles = r.Get<std::string>(*s, "study", "profiles", false, "a file name").value_or("");
+    p.observer = r.Get<std::string>(*s, "study", "observer", false, "a file name").value_or("");
     if (auto pat = r.Get<std::string>(*s, "study", "participant_code", false, "a regular expression")) {
       std::string why;
       if (!ValidCodePattern(*pat, &why)) r.Error(s->get("participant_code"), "study.participant_code", why);

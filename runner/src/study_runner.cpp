@@ -89,6 +89,12 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
     else
       have_profiles = attempt(0, "study.profiles", [&] { lab.profiles = sim::LoadProfiles((dir / p.profiles).string()); });
   }
+  if (!p.observer.empty()) {
+    if (!fs::is_regular_file(dir / p.observer))
+      d.Add(p.file, 0, "study.observer", "no such file " + where(p.observer));
+    else
+      attempt(0, "study.observer", [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
+  }
   for (const auto& m : p.materials) {
     const bool placeholder = m.model == "placeholder";
     if (!placeholder) {
@@ -284,9 +290,15 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     out.aborted = !RateInUi(*opt.ui, screen, p, opt.rating_input, &out.ratings);
     return out;
   }
+  if (opt.on_felt) {
+    FeltTrial ft{.plan_index = t.plan_index, .phase = t.phase, .material = t.material, .comparison = t.comparison,
+                 .method = t.method, .repetition = t.repetition, .distances = {}};
+    for (const auto& c : p.criteria) ft.distances.push_back(observer.Distance(c, felt[0], felt[1]));
+    opt.on_felt(ft);
+  }
   for (const auto& c : p.criteria)
-    out.ratings.push_back({c, observer.Rate(c, felt[0], felt[1], p.scale_min, p.scale_max, rng), Observer::ResponseTime(rng),
-                           db::kRaterSimulated});
+    out.ratings.push_back({c, observer.Rate(c, t.material, t.method, felt[0], felt[1], p.scale_min, p.scale_max, rng),
+                           Observer::ResponseTime(rng), db::kRaterSimulated});
   return out;
 }
 

@@ -135,6 +135,90 @@ renderer::MaterialModel PlaceholderModel(const MaterialProfile& p) {
   return m;
 }
 
+namespace {
+
+void Number(const toml::table& t, const std::string& path, const std::string& pre, const char* key, double* out, double lo,
+            double hi, Diagnostics& diag) {
+  const toml::node* n = t.get(key);
+  if (!n) return;
+  auto v = n->value<double>();
+  if (!v || !(*v >= lo && *v <= hi))
+    diag.Add(path, static_cast<int>(n->source().begin.line), pre + "." + key, fmt::format("expected a number in [{}, {}]", lo, hi));
+  else *out = *v;
+}
+
+void CheckKeys(const toml::table& t, const std::string& path, const std::string& pre, std::initializer_list<const char*> known,
+               Diagnostics& diag) {
+  for (const auto& [k, v] : t)
+    if (std::none_of(known.begin(), known.end(), [&](const char* x) { return k.str() == x; }))
+      diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()), "unknown key (a typo?)");
+}
+
+// Per-criterion keys; `bias_sd` is the older name of offset_sd (profiles files).
+void ParseCriterion(const toml::table& t, const std::string& path, const std::string& pre, Diagnostics& diag,
+                    CriterionObserver* c) {
+  Number(t, path, pre, "sensitivity", &c->sensitivity, 0, 100, diag);
+  Number(t, path, pre, "bias_sd", &c->offset_sd, 0, 100, diag);
+  Number(t, path, pre, "offset_sd", &c->offset_sd, 0, 100, diag);
+  Number(t, path, pre, "material_sd", &c->material_sd, 0, 100, diag);
+  Number(t, path, pre, "method_sd", &c->method_sd, 0, 100, diag);
+  Number(t, path, pre, "noise_sd", &c->noise_sd, 0, 100, diag);
+}
+
+void ParseObserverTable(const toml::table& o, const std::string& path, Diagnostics& diag, ObserverParams* ob) {
+  CheckKeys(o, path, "observer",
+            {"upper", "lower", "range_sd", "lapse_rate", "sensitivity", "bias_sd", "offset_sd", "material_sd", "method_sd",
+             "noise_sd", "scale_vibration", "scale_fluctuation", "scale_friction", "scale_stiffness", "scale_pattern"},
+            diag);
+  Number(o, path, "observer", "upper", &ob->upper, 0, 1000, diag);
+  Number(o, path, "observer", "lower", &ob->lower, 0, 1000, diag);
+  Number(o, path, "observer", "range_sd", &ob->range_sd, 0, 2, diag);
+  Number(o, path, "observer", "lapse_rate", &ob->lapse_rate, 0, 1, diag);
+  ParseCriterion(o, path, "observer", diag, &ob->defaults);
+  Number(o, path, "observer", "scale_vibration", &ob->scale_vibration, 1e-3, 10, diag);
+  Number(o, path, "observer", "scale_fluctuation", &ob->scale_fluctuation, 1e-3, 10, diag);
+  Number(o, path, "observer", "scale_friction", &ob->scale_friction, 1e-3, 10, diag);
+  Number(o, path, "observer", "scale_stiffness", &ob->scale_stiffness, 1e-3, 10, diag);
+  Number(o, path, "observer", "scale_pattern", &ob->scale_pattern, 1e-3, 10, diag);
+  if (const toml::node* u = o.get("upper"); u && !(ob->lower < ob->upper))
+    diag.Add(path, static_cast<int>(u->source().begin.line), "observer.upper", "expected upper > lower");
+}
+
+}  // namespace
+
+ObserverParams LoadObserver(const std::string& path) {
+  toml::table doc;
+  try {
+    doc = toml::parse(ReadTomlFile(path, "observer file"), path);
+  } catch (const toml::parse_error& e) {
+    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+  }
+  Diagnostics diag;
+  ObserverParams ob;
+  CheckKeys(doc, path, "", {"observer", "criterion"}, diag);
+  if (const toml::table* o = doc["observer"].as_table()) ParseObserverTable(*o, path, diag, &ob);
+  else diag.Add(path, 1, "observer", "missing [observer] table");
+  if (const toml::node* cn = doc.get("criterion")) {
+    const toml::table* ct = cn->as_table();
+    if (!ct) diag.Add(path, static_cast<int>(cn->source().begin.line), "criterion", "expected [criterion.NAME] tables");
+    static const toml::table kEmpty;
+    for (const auto& [k, v] : ct ? *ct : kEmpty) {  // a reference: a copy would lose the source lines
+      const std::string pre = "criterion." + std::string(k.str());
+      const toml::table* t = v.as_table();
+      if (!t) {
+        diag.Add(path, static_cast<int>(v.source().begin.line), pre, "expected a table");
+        continue;
+      }
+      CheckKeys(*t, path, pre, {"sensitivity", "offset_sd", "material_sd", "method_sd", "noise_sd"}, diag);
+      CriterionObserver c = ob.defaults;
+      ParseCriterion(*t, path, pre, diag, &c);
+      ob.criteria[std::string(k.str())] = c;
+    }
+  }
+  diag.ThrowIfAny();
+  return ob;
+}
+
 ProfileSet LoadProfiles(const std::string& path) {
   toml::table doc;
   try {
@@ -189,31 +273,22 @@ ProfileSet LoadProfiles(const std::string& path) {
     if (!p.id.empty() && !set.profiles.emplace(p.id, p).second)
       diag.Add(path, p.line, pre + ".id", "duplicate profile '" + p.id + "'");
   }
-  if (const toml::table* o = doc["observer"].as_table()) {
-    auto& ob = set.observer;
-    num(*o, "observer", "upper", &ob.upper, 0, 1000);
-    num(*o, "observer", "lower", &ob.lower, 0, 1000);
-    num(*o, "observer", "bias_sd", &ob.bias_sd, 0, 100);
-    num(*o, "observer", "noise_sd", &ob.noise_sd, 0, 100);
-    for (const auto& [k, v] : *o) {
-      static const char* known[] = {"upper", "lower", "bias_sd", "noise_sd", "scale_vibration", "scale_fluctuation",
-                                    "scale_friction", "scale_stiffness", "scale_pattern"};
-      if (std::none_of(std::begin(known), std::end(known), [&](const char* x) { return k.str() == x; }))
-        diag.Add(path, static_cast<int>(v.source().begin.line), "observer." + std::string(k.str()), "unknown key (a typo?)");
-    }
-    num(*o, "observer", "scale_vibration", &ob.scale_vibration, 1e-3, 10);
-    num(*o, "observer", "scale_fluctuation", &ob.scale_fluctuation, 1e-3, 10);
-    num(*o, "observer", "scale_friction", &ob.scale_friction, 1e-3, 10);
-    num(*o, "observer", "scale_stiffness", &ob.scale_stiffness, 1e-3, 10);
-    num(*o, "observer", "scale_pattern", &ob.scale_pattern, 1e-3, 10);
-  }
+  if (const toml::table* o = doc["observer"].as_table()) ParseObserverTable(*o, path, diag, &set.observer);
   diag.ThrowIfAny();
   return set;
 }
 
-Observer::Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria) : p_(p) {
+Observer::Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria)
+    : p_(p), seed_(seed) {
   Rng rng(seed);
-  for (const auto& c : criteria) bias_[c] = rng.Normal(0, p_.bias_sd);
+  for (const auto& c : criteria) offset_[c] = rng.Normal(0, p_.For(c).offset_sd);
+  range_ = std::exp(rng.Normal(0, p_.range_sd));
+}
+
+double Observer::Effect(const char* kind, const std::string& c, const std::string& level, double sd) const {
+  if (sd <= 0 || level.empty()) return 0;
+  Rng rng(DeriveSeed(seed_, internal::HashId(std::string(kind) + "\x1f" + c + "\x1f" + level)));
+  return rng.Normal(0, sd);
 }
 
 double Observer::Distance(const std::string& c, const Features& a, const Features& b) const {
@@ -232,12 +307,24 @@ double Observer::Distance(const std::string& c, const Features& a, const Feature
   return std::sqrt((rough * rough + dm * dm + dk * dk + geometry * geometry) / 4);
 }
 
-double Observer::Rate(const std::string& c, const Features& a, const Features& b, double lo, double hi,
-                      Rng& noise) const {
-  const double d = Distance(c, a, b);
-  const auto it = bias_.find(c);
-  const double bias = it == bias_.end() ? 0.0 : it->second;
-  const double s = p_.lower + (p_.upper - p_.lower) * std::exp(-0.5 * d * d) + bias + noise.Normal(0, p_.noise_sd);
+double Observer::Rate(const std::string& c, const std::string& material, const std::string& method, const Features& a,
+                      const Features& b, double lo, double hi, Rng& noise) const {
+  return RateDistance(c, material, method, Distance(c, a, b), lo, hi, noise);
+}
+
+double Observer::RateDistance(const std::string& c, const std::string& material, const std::string& method, double d,
+                              double lo, double hi, Rng& noise) const {
+  const CriterionObserver& co = p_.For(c);
+  const double g = co.sensitivity * d;
+  const double latent = p_.lower + (p_.upper - p_.lower) * std::exp(-0.5 * g * g);
+  const auto it = offset_.find(c);
+  const double offset = it == offset_.end() ? 0.0 : it->second;
+  const double mid = 0.5 * (lo + hi);
+  // Both draws always happen, so a lapse does not shift the rest of the trial's stream.
+  const double lapse = noise.Uniform(), e = noise.Normal(0, co.noise_sd), any = noise.Uniform();
+  if (lapse < p_.lapse_rate) return lo + (hi - lo) * any;
+  const double s = mid + range_ * (latent - mid) + offset + Effect("material", c, material, co.material_sd) +
+                   Effect("method", c, method, co.method_sd) + e;
   return std::clamp(s, lo, hi);
 }
 

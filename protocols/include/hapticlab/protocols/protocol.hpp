@@ -70,6 +70,7 @@ struct Protocol {
   double scale_min = 0, scale_max = 100;
   double stimulus_duration_s = 2.0;  ///< exploration time per stimulus in a rated trial [s]
   std::string profiles;           ///< simulated-lab profiles file (relative to the protocol)
+  std::string observer;           ///< simulated observer's parameters (relative; empty: the profiles' [observer])
   std::vector<Material> materials;
   std::vector<Method> methods;
   std::vector<Phase> phases;

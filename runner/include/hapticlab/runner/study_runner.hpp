@@ -113,6 +113,15 @@ struct SideReport {
   std::uint64_t contact_ticks = 0; ///< ticks the renderer found the stylus inside the surface
 };
 
+/// What the simulated hand felt in one rated trial, as the observer's feature distance per
+/// criterion (protocol order) before its rating (RunOptions::on_felt; `study power`).
+struct FeltTrial {
+  int plan_index = 0;
+  std::string phase, material, comparison, method;
+  int repetition = 0;
+  std::vector<double> distances;
+};
+
 struct RunOptions {
   std::string db_path;
   std::string participant;       ///< pseudonymous code, e.g. "P07"
@@ -128,6 +137,7 @@ struct RunOptions {
   double ui_playback_speed = 1.0;  ///< simulated rig with a UI: virtual time runs this much faster
   HardwareRig* rig = nullptr;      ///< required when device != "sim"
   std::function<void(const SideReport&)> on_side;  ///< after every trial side (may be empty)
+  std::function<void(const FeltTrial&)> on_felt;   ///< simulated rig: before every rating (may be empty)
   /// Abort the session after this many trials in a row where a side touched nothing (the
   /// rig's sample pose is probably wrong).
   int max_untouched_trials = 3;

@@ -52,17 +52,41 @@ struct MaterialProfile {
   int line = 0;
 };
 
-/// Observer-model constants (perceptual scales are in the features' units).
+/// Per-criterion part of the observer: how strongly the rendered difference moves the rating
+/// and the participant's random effects on that criterion (rating points, SD).
+struct CriterionObserver {
+  double sensitivity = 1;   ///< multiplies the feature distance d_c
+  double offset_sd = 4;     ///< participant's offset on this criterion
+  double material_sd = 0;   ///< participant x material
+  double method_sd = 0;     ///< participant x method
+  double noise_sd = 7;      ///< per rating
+};
+
+/// Observer-model constants (perceptual scales are in the features' units). Loaded from the
+/// [observer] table of the profiles file or, preferably, from the protocol's `observer`
+/// file (studies/shin2019/observer.toml; docs/studies.md "The simulated observer").
 struct ObserverParams {
   double upper = 78, lower = 35;          ///< dissertation's real-real limits
-  double bias_sd = 4, noise_sd = 7;       ///< per participant x criterion, per rating
+  double range_sd = 0;                    ///< log-SD of a participant's scale range (x exp(N(0, sd)) about the midpoint)
+  double lapse_rate = 0;                  ///< probability that a rating is uniform on the scale
+  CriterionObserver defaults;             ///< every criterion not in `criteria`
+  std::map<std::string, CriterionObserver> criteria;
   // Perceptual scales: a feature difference of one scale is one unit of distance d.
   double scale_vibration = 0.25;          ///< log10 vibration power (x1.8 in RMS)
   double scale_fluctuation = 0.3;         ///< log10 force fluctuation (x2)
   double scale_friction = 0.12;           ///< friction ratio
   double scale_stiffness = 0.25;          ///< log10 stiffness (x1.8)
   double scale_pattern = 0.4;             ///< log10 large-scale force pattern (x2.5)
+  const CriterionObserver& For(const std::string& criterion) const {
+    const auto it = criteria.find(criterion);
+    return it == criteria.end() ? defaults : it->second;
+  }
 };
+
+/// Reads an observer file: an [observer] table (upper, lower, range_sd, lapse_rate, the
+/// perceptual scales and the per-criterion defaults) and optional [criterion.NAME] tables.
+/// @throws hapticlab::InputError listing every problem (file, line, key)
+ObserverParams LoadObserver(const std::string& path);
 
 /// Profiles file: [[profile]] tables and an optional [observer] table (docs/studies.md).
 struct ProfileSet {
@@ -124,23 +148,36 @@ class FeatureAccumulator {
   std::uint64_t cnt_ = 0, vcnt_ = 0;
 };
 
-/// A simulated participant: per-criterion biases, drawn from the participant's seed. The
-/// per-rating noise comes from the caller's generator (seeded per trial and attempt, so a
+/// A simulated participant. Rating on criterion c of a trial (material m, method k):
+///   s0 = L + (U - L) exp(-(g_c d_c)^2 / 2)                 latent similarity
+///   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e       mid = scale midpoint
+/// with r = exp(N(0, range_sd)) the participant's scale range, o_c, u_cm, v_ck the
+/// participant's offset, participant x material and participant x method effects (drawn
+/// from the participant's seed, reproducibly per name) and e the trial noise; with
+/// probability lapse_rate the rating is uniform on the scale instead. Clamped to the scale.
+/// The per-rating draws come from the caller's generator (seeded per trial and attempt, so a
 /// re-run trial after a crash is rated reproducibly).
 class Observer {
  public:
   Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria);
   /// Similarity of the two interactions on `criterion` (clamped to [lo, hi]).
-  double Rate(const std::string& criterion, const Features& a, const Features& b, double lo, double hi,
-              Rng& noise) const;
+  double Rate(const std::string& criterion, const std::string& material, const std::string& method, const Features& a,
+              const Features& b, double lo, double hi, Rng& noise) const;
+  /// The same from a feature distance (Distance()); used by `study power` to re-rate
+  /// recorded interactions.
+  double RateDistance(const std::string& criterion, const std::string& material, const std::string& method, double d,
+                      double lo, double hi, Rng& noise) const;
   /// Time to answer [s] (lognormal around 4 s).
   static double ResponseTime(Rng& noise);
   /// Feature distance for a criterion, in perceptual units (exposed for tests and docs).
   double Distance(const std::string& criterion, const Features& a, const Features& b) const;
 
  private:
+  double Effect(const char* kind, const std::string& criterion, const std::string& level, double sd) const;
   ObserverParams p_;
-  std::map<std::string, double> bias_;
+  std::uint64_t seed_ = 0;
+  double range_ = 1;
+  std::map<std::string, double> offset_;
 };
 
 }  // namespace hapticlab::sim
