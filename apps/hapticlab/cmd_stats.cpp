@@ -289,7 +289,7 @@ json LmmJson(const stats::LmmResult& r) {
                       {"sd", g.sd}, {"corr", corr}});
   }
   return json{{"formula", r.formula}, {"method", r.reml ? "REML" : "ML"}, {"n", r.n}, {"fixed", fixed},
-              {"anova_type3", anova}, {"ddf", "Satterthwaite"}, {"random", random},
+              {"anova_type3", anova}, {"ddf", r.ddf}, {"random", random},
               {"residual_variance", r.sigma * r.sigma}, {"sigma", r.sigma}, {"theta", r.theta},
               {r.reml ? "REML_criterion" : "deviance", r.deviance}, {"logLik", r.logLik}, {"AIC", r.AIC}, {"BIC", r.BIC},
               {"n_parameters", r.n_parameters},
@@ -311,12 +311,12 @@ void PrintLmm(const stats::LmmResult& r) {
                  i == 0 ? fmt::format("{} ({})", g.group, g.levels) : "", g.names[i], g.variance[i], g.sd[i], corr);
     }
   fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}\n\n", "Residual", "", r.sigma * r.sigma, r.sigma);
-  fmt::print("Fixed effects (sum-to-zero contrasts; Satterthwaite df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n", "name",
-             "estimate", "SE", "df", "t", "p");
+  fmt::print("Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n", r.ddf,
+             "name", "estimate", "SE", "df", "t", "p");
   for (const auto& c : r.fixed)
     fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se, c.df, c.t, c.p);
-  fmt::print("\nType III F tests (Satterthwaite df, as lmerTest anova(m, type = 3) / afex::mixed):\n"
-             "{:<28} {:>6} {:>9} {:>10} {:>11}\n", "term", "num df", "den df", "F", "p");
+  fmt::print("\nType III F tests ({} df, as lmerTest anova(m, type = 3) / afex::mixed):\n"
+             "{:<28} {:>6} {:>9} {:>10} {:>11}\n", r.ddf, "term", "num df", "den df", "F", "p");
   for (const auto& t : r.anova)
     fmt::print("{:<28} {:>6.0f} {:>9.2f} {:>10.4f} {:>11.4g}\n", t.term, t.num_df, t.den_df, t.F, t.p);
   fmt::print("\nConvergence: {}; {} after {} deviance evaluations; max |d deviance / d theta| = {:.2g}{}\n",
@@ -346,9 +346,9 @@ void AddLmm(CLI::App& s) {
   auto* reml_flag = cmd->add_flag("--reml", *reml, "Restricted maximum likelihood (the default, as lmer)");
   cmd->add_flag("--ml", *ml, "Maximum likelihood (for comparing fixed effects by likelihood ratio)")->excludes(reml_flag);
   cmd->add_option("--ddf", *ddf,
-                  "Denominator df of the t and F tests: satterthwaite (lmerTest's default; Kenward-Roger\n"
-                  "is not implemented in this build)")
-      ->check(CLI::IsMember({"satterthwaite"}))
+                  "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or kenward-roger\n"
+                  "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)")
+      ->check(CLI::IsMember({"satterthwaite", "kenward-roger"}))
       ->capture_default_str();
   cmd->add_flag("--json", c->json, "Print results as JSON");
   cmd->callback([=] {
@@ -359,6 +359,7 @@ void AddLmm(CLI::App& s) {
       keys.erase(keys.begin());
       stats::LmmOptions o;
       o.reml = !*ml;
+      o.kenward_roger = *ddf == "kenward-roger";
       const auto r = stats::FitLmm(Load(*c, keys), *formula, o);
       if (c->json) {
         fmt::print("{}\n", LmmJson(r).dump(2));

@@ -330,6 +330,44 @@ double FStatDdf(const std::vector<double>& nu) {
   return 2 * E / (E - static_cast<double>(nu.size()));
 }
 
+// Kenward-Roger t and F tests (lmerTest's ddf = "Kenward-Roger", through pbkrtest).
+void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorXd& beta, LmmResult& r) {
+  std::vector<double> gamma;
+  for (const auto& t : r.random) {
+    const auto k = t.names.size();
+    for (std::size_t j = 0; j < k; ++j)
+      for (std::size_t i = j; i < k; ++i) gamma.push_back(i == j ? t.variance[i] : t.corr[i][j] * t.sd[i] * t.sd[j]);
+  }
+  for (double& g : gamma)
+    if (!std::isfinite(g)) g = 0;  // a correlation with a zero variance: the covariance is 0
+  gamma.push_back(r.sigma * r.sigma);
+  const auto a = detail::KenwardRogerVcov(d, gamma, Phi);
+  const Eigen::Index p = Phi.rows();
+  for (Eigen::Index j = 0; j < p; ++j) {
+    LmmCoefficient c;
+    c.name = d.x_names[static_cast<std::size_t>(j)];
+    c.estimate = beta[j];
+    c.se = std::sqrt(a.PhiA(j, j));
+    c.t = c.estimate / c.se;
+    c.df = detail::KenwardRogerTest(a, Phi, MatrixXd(VectorXd::Unit(p, j).transpose()), beta).ddf;
+    c.p = PtTwoSided(c.t, c.df);
+    r.fixed.push_back(c);
+  }
+  for (const auto& term : d.x_terms) {
+    const auto q = static_cast<Eigen::Index>(term.columns.size());
+    MatrixXd L = MatrixXd::Zero(q, p);
+    for (Eigen::Index i = 0; i < q; ++i) L(i, term.columns[static_cast<std::size_t>(i)]) = 1.0;
+    const auto kt = detail::KenwardRogerTest(a, Phi, L, beta);
+    LmmFTest t;
+    t.term = term.name;
+    t.num_df = static_cast<double>(q);
+    t.den_df = kt.ddf;
+    t.F = kt.F;
+    t.p = PfUpper(t.F, t.num_df, t.den_df);
+    r.anova.push_back(t);
+  }
+}
+
 }  // namespace
 
 LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOptions& options) {
@@ -346,11 +384,18 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
                            std::to_string(p) + " columns): a cell of the design has no data?");
   }
   if (d.X.rows() <= p) throw InputError(data.source, 0, "--formula", "fewer observations than fixed effects");
+  if (options.kenward_roger && !options.reml)
+    throw InputError(data.source, 0, "--ddf", "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest): drop --ml");
+  if (options.kenward_roger && d.X.rows() > kKenwardRogerMaxRows)
+    throw InputError(data.source, 0, "--ddf",
+                     "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) + " observations exceed " +
+                         std::to_string(kKenwardRogerMaxRows) + " (use satterthwaite)");
 
   Pls pls(d, options.reml);
   LmmResult r;
   r.formula = formula;
   r.reml = options.reml;
+  r.ddf = options.kenward_roger ? "Kenward-Roger" : "Satterthwaite";
   r.n = static_cast<int>(d.y.size());
   VectorXd theta0(pls.ntheta());
   for (int t = 0; t < pls.ntheta(); ++t) theta0[t] = pls.lower()[static_cast<std::size_t>(t)] == 0.0 ? 1.0 : 0.0;
@@ -408,9 +453,13 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     r.random.push_back(rt);
   }
 
-  // Satterthwaite (lmerTest): A = 2 H⁻¹ over (θ, σ); J_i = ∂cov(β̂)/∂(θ, σ)_i.
   VectorXd vp(pls.ntheta() + 1);
   vp << theta, r.sigma;
+  if (options.kenward_roger) {
+    KenwardRoger(d, pls.CovBeta(vp), sol.beta, r);
+    return r;
+  }
+  // Satterthwaite (lmerTest): A = 2 H⁻¹ over (θ, σ); J_i = ∂cov(β̂)/∂(θ, σ)_i.
   const MatrixXd H = Hessian([&](const VectorXd& x) { return pls.DevianceVp(x); }, vp);
   const MatrixXd A = 2.0 * H.inverse();
   const MatrixXd C = pls.CovBeta(vp);

@@ -32,4 +32,21 @@ struct LmmDesign {
 ///         level, or an unsupported random term
 LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f);
 
+/// pbkrtest's vcovAdj: the Kenward-Roger adjusted cov(β̂) and what the df need.
+struct KrAdjusted {
+  Eigen::MatrixXd PhiA;               ///< adjusted covariance of β̂
+  std::vector<Eigen::MatrixXd> P;     ///< -X'V⁻¹ G_r V⁻¹ X
+  Eigen::MatrixXd W;                  ///< 2 × inverse expected information of γ
+};
+/// @param gamma the variance-covariance elements (per block its covariance's lower
+///        triangle, column-major; then σ²) @param Phi unadjusted cov(β̂) = (X'V⁻¹X)⁻¹
+KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma, const Eigen::MatrixXd& Phi);
+
+struct KrTest {
+  double ddf = 0, F = 0, scaling = 1;  ///< F already scaled (pbkrtest's Fstat)
+};
+/// pbkrtest's .KR_adjust for H0: L β = 0 (L of full row rank).
+KrTest KenwardRogerTest(const KrAdjusted& a, const Eigen::MatrixXd& Phi, const Eigen::MatrixXd& L,
+                        const Eigen::VectorXd& beta);
+
 }  // namespace hapticlab::stats::detail

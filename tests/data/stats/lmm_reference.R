@@ -1,9 +1,9 @@
 # Reference values for linear mixed models (hapticlab stats lmm): lme4::lmer fits (REML and
 # ML) with lmerTest's Satterthwaite df for the coefficient t tests and the type-3 F tests
 # (anova(m, type = 3) with sum-to-zero contrasts, which is what afex::mixed(method = "S")
-# reports).
-# R 4.2.2, lme4 1.1.31, lmerTest 3.1.3, jsonlite 1.8.4 (Debian 12: apt-get install
-# r-base-core r-cran-lme4 r-cran-lmertest r-cran-jsonlite).
+# reports), and for the REML fits the same with Kenward-Roger df (pbkrtest 0.5.2).
+# R 4.2.2, lme4 1.1.31, lmerTest 3.1.3, pbkrtest 0.5.2, jsonlite 1.8.4 (Debian 12: apt-get install
+# r-base-core r-cran-lme4 r-cran-lmertest r-cran-pbkrtest r-cran-jsonlite).
 # Run from this directory: Rscript lmm_reference.R   (writes lmm_*.csv and lmm_reference.json)
 #
 # The optimizer runs with tight tolerances (lme4's default nloptwrap/BOBYQA, xtol_abs 1e-12)
@@ -75,9 +75,19 @@ summarise <- function(m) {
   vc <- as.data.frame(VarCorr(m))
   random <- lapply(seq_len(nrow(vc)), function(i) list(group = vc$grp[i], var1 = vc$var1[i],
     var2 = if (is.na(vc$var2[i])) "" else vc$var2[i], vcov = vc$vcov[i], sdcor = vc$sdcor[i]))
-  list(theta = unname(getME(m, "theta")), sigma = sigma(m), logLik = as.numeric(logLik(m)),
+  out <- list(theta = unname(getME(m, "theta")), sigma = sigma(m), logLik = as.numeric(logLik(m)),
        deviance = if (isREML(m)) NA else deviance(m), REMLcrit = if (isREML(m)) REMLcrit(m) else NA,
        AIC = AIC(m), singular = isSingular(m), fixed = fixed, anova = ftests, random = random)
+  if (isREML(m)) {  # Kenward-Roger (pbkrtest through lmerTest): REML fits only
+    ck <- summary(m, ddf = "Kenward-Roger")$coefficients
+    ak <- anova(m, type = 3, ddf = "Kenward-Roger")
+    out$kr <- list(
+      fixed = lapply(seq_len(nrow(ck)), function(i) list(name = rownames(ck)[i], estimate = ck[i, "Estimate"],
+        se = ck[i, "Std. Error"], df = ck[i, "df"], t = ck[i, "t value"], p = ck[i, "Pr(>|t|)"])),
+      anova = lapply(seq_len(nrow(ak)), function(i) list(term = rownames(ak)[i], num_df = ak[i, "NumDF"],
+        den_df = ak[i, "DenDF"], F = ak[i, "F value"], p = ak[i, "Pr(>F)"])))
+  }
+  out
 }
 
 sets <- list(

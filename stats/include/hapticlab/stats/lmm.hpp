@@ -44,9 +44,15 @@ struct LmmFormula {
 /// @throws hapticlab::InputError naming `source` and the field "--formula" for bad syntax
 LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source = "");
 
+/// Kenward-Roger works on dense n x n matrices: larger data sets are refused.
+constexpr long kKenwardRogerMaxRows = 3000;
+
 struct LmmOptions {
   bool reml = true;
   int max_evaluations = 20000;  ///< of the profiled deviance, by the optimizer
+  /// Kenward-Roger instead of Satterthwaite df (pbkrtest's adjusted cov(β̂) for the SEs and
+  /// the scaled F, as lmerTest's ddf = "Kenward-Roger"); REML fits only, n ≤ kKenwardRogerMaxRows.
+  bool kenward_roger = false;
 };
 
 struct LmmCoefficient {
@@ -72,8 +78,9 @@ struct LmmResult {
   std::string formula;
   bool reml = true;
   int n = 0;                                   ///< observations
-  std::vector<LmmCoefficient> fixed;           ///< Satterthwaite df t tests
-  std::vector<LmmFTest> anova;                 ///< type 3, Satterthwaite df
+  std::string ddf;                             ///< "Satterthwaite" or "Kenward-Roger"
+  std::vector<LmmCoefficient> fixed;           ///< t tests with `ddf` df (KR: adjusted SEs)
+  std::vector<LmmFTest> anova;                 ///< type 3, `ddf` df (KR: scaled F)
   std::vector<LmmRandomTerm> random;           ///< in lme4's order (most levels first)
   std::vector<double> theta;                   ///< lme4's θ (lower triangles, column-major)
   double sigma = 0;                            ///< residual SD
