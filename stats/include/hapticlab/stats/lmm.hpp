@@ -11,7 +11,8 @@
 /// 2 (l'Cl)² / (g'Ag) with g the gradient of l'C(θ, σ)l, C = cov(β̂); multi-df F tests (type 3
 /// with sum-to-zero contrasts, as afex::mixed / anova(m, type = 3)) use lmerTest's eigen
 /// decomposition of L C L' (Fai & Cornelius 1996). Derivatives are central differences with
-/// Richardson extrapolation (lmerTest uses numDeriv's, the same method).
+/// Richardson extrapolation (lmerTest uses numDeriv's, the same method). Kenward-Roger
+/// (options.kenward_roger, REML only) follows pbkrtest 0.5 (lmm_kr.cpp).
 ///
 /// Formula syntax (a subset of lme4's): `y ~ a * b + c + a:c + (1 + a | g) + (1 | h)` with
 /// `*` (all interactions), `:`, `+`; random terms `(1 | g)`, `(1 + x + ... | g)`, `(x | g)`
