@@ -13,7 +13,7 @@ int main(int argc, char** argv) {
   using namespace hapticlab::cli;
   CLI::App app{
       "hapticlab-stats: the statistics of 'hapticlab stats' (rm-anova, tukey, kruskal,\n"
-      "shapiro) on any long-format CSV, in a binary that starts fast (see docs/analysis.md).\n"
+      "shapiro, lmm) on any long-format CSV, in a binary that starts fast (see docs/analysis.md).\n"
       "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.",
       "hapticlab-stats"};
   app.set_version_flag("--version", std::string("hapticlab-stats ") + hapticlab::kVersion + " (" + hapticlab::kGitSha + ")");

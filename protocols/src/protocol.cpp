@@ -78,7 +78,7 @@ std::string MaterialIds(const Protocol& p) {
 }
 
 const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
-const std::set<std::string> kAnalyses{"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
+const std::set<std::string> kAnalyses{"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro", "lmm"};
 
 }  // namespace
 
@@ -338,12 +338,17 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     p.masking_level_dB = r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
   }
   if (const toml::table* t = doc["analysis"].as_table()) {
-    r.Known(*t, "analysis", {"tests"});
+    r.Known(*t, "analysis", {"tests", "lmm_formula"});
     p.analyses = r.Strings(*t, "analysis", "tests", false);
     for (const auto& a : p.analyses)
       if (!kAnalyses.count(a))
         r.Error(t->get("tests"), "analysis.tests",
-                "unknown analysis '" + a + "' (expected rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro)");
+                "unknown analysis '" + a + "' (expected rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm)");
+    // The formula's columns are checked when the report fits it (the stats module parses it).
+    p.lmm_formula = r.Get<std::string>(*t, "analysis", "lmm_formula", false, "an lme4 formula").value_or(p.lmm_formula);
+    if (p.lmm_formula.find('~') == std::string::npos || p.lmm_formula.find('|') == std::string::npos)
+      r.Error(t->get("lmm_formula"), "analysis.lmm_formula",
+              "expected an lme4 formula 'score ~ fixed terms + (1 | participant)', got '" + p.lmm_formula + "'");
   } else {
     p.analyses = {"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
   }

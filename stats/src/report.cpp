@@ -17,6 +17,7 @@
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/descriptive.hpp"
 #include "hapticlab/stats/distributions.hpp"
+#include "hapticlab/stats/lmm.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include "hapticlab/stats/psychometric_report.hpp"
@@ -362,6 +363,34 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             md << "\n![" << crit << " by method](" << fs::path(base).filename().string() << ".png)\n"
                << "\n(* p < 0.05, ** p < 0.01, Tukey HSD.)\n";
           }
+        }
+      }
+      // Linear mixed model of the protocol's [analysis] lmm_formula (every rating, no averaging).
+      if (tests.count("lmm")) {
+        md << "\nLinear mixed model `" << proto.lmm_formula
+           << "` (REML, lme4's fit; Satterthwaite df, type 3 tests with sum-to-zero contrasts, as lmerTest / "
+              "afex::mixed):\n\n";
+        try {
+          const auto m = FitLmm(cm, proto.lmm_formula);
+          auto csv = w.Open(fmt::format("{}_{}_lmm.csv", sid, Safe(crit)));
+          csv << "kind,name,estimate_or_F,se,num_df,den_df,t,p\n";
+          md << "| term | df | F | p |\n|---|---|---|---|\n";
+          for (const auto& t : m.anova) {
+            md << fmt::format("| {}{} | {:.0f}, {:.2f} | {:.3f} | {} |\n", t.term, t.p < 0.05 ? "*" : "", t.num_df, t.den_df,
+                              t.F, P(t.p));
+            csv << fmt::format("F,{},{:.10g},,{:.0f},{:.10g},,{:.10g}\n", t.term, t.F, t.num_df, t.den_df, t.p);
+          }
+          for (const auto& c : m.fixed)
+            csv << fmt::format("coefficient,{},{:.10g},{:.10g},1,{:.10g},{:.10g},{:.10g}\n", c.name, c.estimate, c.se, c.df,
+                               c.t, c.p);
+          md << "\n| random effect | SD |\n|---|---|\n";
+          for (const auto& g : m.random)
+            for (std::size_t i = 0; i < g.names.size(); ++i) md << fmt::format("| {} {} | {:.3f} |\n", g.group, g.names[i], g.sd[i]);
+          md << fmt::format("| residual | {:.3f} |\n", m.sigma);
+          if (m.singular) md << "\nBoundary (singular) fit: a variance is 0 or a correlation is +-1; simplify the random terms.\n";
+          if (!m.converged) md << "\nThe optimizer did not converge; the numbers above are unreliable.\n";
+        } catch (const InputError& e) {
+          md << "Not fitted: " << e.what() << "\n";
         }
       }
       // Per-material bars by method (Figs. 4.8, 5.8).

@@ -152,6 +152,8 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
       {"scheme = \"full\"", "scheme = \"random\"", "randomization.scheme: expected full, blocked or latin-square"},
       {"scheme = \"full\"", "scheme = \"blocked\"\nblock_by = \"material\"", "infeasible with no_immediate_repeat"},
       {"every_trials = 8", "every_trials = 8\nduraton_s = 3", "breaks.duraton_s: unknown key"},
+      {"duration_s = 30", "duration_s = 30\n[analysis]\ntests = [\"lmm\"]\nlmm_formula = \"score ~ method\"",
+       "analysis.lmm_formula: expected an lme4 formula"},
       {"[study]", "[studdy]", "studdy: unknown key"},
       // Range-checked before narrowing: 2^32 must not wrap to 0 ("no breaks").
       {"every_trials = 8", "every_trials = 4294967296", "breaks.every_trials: expected an integer 0..10000"},

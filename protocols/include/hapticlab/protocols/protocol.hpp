@@ -82,7 +82,11 @@ struct Protocol {
   /// Participant codes must match this ECMAScript regular expression (`[study]
   /// participant_code`); the default allows 1-3 capital letters and 2-4 digits (P07, AB123).
   std::string participant_code = "^[A-Z]{1,3}[0-9]{2,4}$";
-  std::vector<std::string> analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro
+  std::vector<std::string> analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm
+  /// `[analysis] lmm_formula`: the linear mixed model of the "lmm" analysis, fitted per
+  /// criterion to the main phase's ratings (columns: score, participant, method, material,
+  /// comparison, repetition).
+  std::string lmm_formula = "score ~ method + (1 | participant) + (1 | material)";
   const Material* FindMaterial(const std::string& id) const;
   const Method* FindMethod(const std::string& name) const;
 };

@@ -1,0 +1,509 @@
+// Linear mixed models: lme4's penalised least squares fit and lmerTest's Satterthwaite
+// inference (see lmm.hpp for the formulation and references).
+
+#include "hapticlab/stats/lmm.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <numbers>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/stats/distributions.hpp"
+#include "lmm_design.hpp"
+
+namespace hapticlab::stats {
+namespace {
+
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+using SpMat = Eigen::SparseMatrix<double>;
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+// The PLS problem of one model: everything that does not depend on θ is computed once.
+class Pls {
+ public:
+  Pls(const detail::LmmDesign& d, bool reml) : d_(d), reml_(reml) {
+    n_ = static_cast<double>(d.y.size());
+    p_ = static_cast<double>(d.X.cols());
+    ZtZ_ = SpMat(d.Z.transpose() * d.Z);
+    ZtX_ = d.Z.transpose() * d.X;
+    Zty_ = d.Z.transpose() * d.y;
+    XtX_ = d.X.transpose() * d.X;
+    Xty_ = d.X.transpose() * d.y;
+    // θ layout: per block, the lower triangle of its template, column-major (lme4's).
+    for (const auto& b : d.blocks)
+      for (int j = 0; j < b.p; ++j)
+        for (int i = j; i < b.p; ++i) {
+          entries_.push_back({&b - d.blocks.data(), i, j});
+          lower_.push_back(i == j ? 0.0 : -std::numeric_limits<double>::infinity());
+        }
+    eye_.resize(d.Z.cols(), d.Z.cols());
+    eye_.setIdentity();
+  }
+
+  int ntheta() const { return static_cast<int>(entries_.size()); }
+  const std::vector<double>& lower() const { return lower_; }
+  double n() const { return n_; }
+
+  struct Solution {
+    bool ok = false;
+    double ldL2 = 0, ldRX2 = 0, r2 = 0;
+    VectorXd beta;
+    MatrixXd XtVX;  // R_X'R_X = X'X - X'ZΛ (Λ'Z'ZΛ + I)⁻¹ Λ'Z'X
+  };
+
+  Solution Solve(const VectorXd& theta) {
+    Solution s;
+    const SpMat L = Lambda(theta);
+    const SpMat Lt = L.transpose();
+    SpMat A = Lt * ZtZ_ * L + eye_;
+    chol_.compute(A);
+    if (chol_.info() != Eigen::Success) return s;
+    const MatrixXd LZX = Lt * ZtX_;
+    const VectorXd LZy = Lt * Zty_;
+    const MatrixXd S = chol_.solve(LZX);
+    const VectorXd sv = chol_.solve(LZy);
+    s.XtVX = XtX_ - LZX.transpose() * S;
+    Eigen::LLT<MatrixXd> rx(s.XtVX);
+    if (rx.info() != Eigen::Success) return s;
+    s.beta = rx.solve(Xty_ - LZX.transpose() * sv);
+    const VectorXd u = sv - S * s.beta;
+    const VectorXd resid = d_.y - d_.X * s.beta - d_.Z * (L * u);
+    s.r2 = resid.squaredNorm() + u.squaredNorm();
+    s.ldL2 = chol_.vectorD().array().log().sum();
+    s.ldRX2 = 2.0 * rx.matrixLLT().diagonal().array().log().sum();
+    s.ok = std::isfinite(s.ldL2) && std::isfinite(s.ldRX2);
+    return s;
+  }
+
+  // The profiled deviance (REML criterion or ML deviance), lme4's formula.
+  double Deviance(const VectorXd& theta) {
+    const auto s = Solve(theta);
+    if (!s.ok) return std::numeric_limits<double>::infinity();
+    if (!reml_) return s.ldL2 + n_ * (1.0 + std::log(kTwoPi * s.r2 / n_));
+    const double nmp = n_ - p_;
+    return s.ldL2 + s.ldRX2 + nmp * (1.0 + std::log(kTwoPi * s.r2 / nmp));
+  }
+
+  // The deviance at given (θ, σ), β at its PLS solution: lmerTest's devfun_vp.
+  double DevianceVp(const VectorXd& vp) {
+    const VectorXd theta = vp.head(vp.size() - 1);
+    const double s2 = vp[vp.size() - 1] * vp[vp.size() - 1];
+    const auto s = Solve(theta);
+    if (!s.ok) return std::numeric_limits<double>::quiet_NaN();
+    double dev = s.ldL2 + s.r2 / s2 + n_ * std::log(kTwoPi * s2);
+    if (reml_) dev += s.ldRX2 - p_ * std::log(kTwoPi * s2);
+    return dev;
+  }
+
+  // cov(β̂) = σ² (R_X'R_X)⁻¹ at (θ, σ).
+  MatrixXd CovBeta(const VectorXd& vp) {
+    const auto s = Solve(vp.head(vp.size() - 1));
+    const double s2 = vp[vp.size() - 1] * vp[vp.size() - 1];
+    return s2 * s.XtVX.inverse();
+  }
+
+  // The block's template T (relative covariance factor) from θ.
+  MatrixXd Template(const VectorXd& theta, std::size_t block) const {
+    const int p = d_.blocks[block].p;
+    MatrixXd T = MatrixXd::Zero(p, p);
+    for (std::size_t t = 0; t < entries_.size(); ++t)
+      if (static_cast<std::size_t>(entries_[t].block) == block) T(entries_[t].i, entries_[t].j) = theta[static_cast<Eigen::Index>(t)];
+    return T;
+  }
+
+ private:
+  SpMat Lambda(const VectorXd& theta) const {
+    std::vector<Eigen::Triplet<double>> trip;
+    for (std::size_t t = 0; t < entries_.size(); ++t) {
+      const auto& e = entries_[t];
+      const auto& b = d_.blocks[static_cast<std::size_t>(e.block)];
+      for (int l = 0; l < b.levels; ++l)
+        trip.emplace_back(b.offset + l * b.p + e.i, b.offset + l * b.p + e.j, theta[static_cast<Eigen::Index>(t)]);
+    }
+    SpMat L(d_.Z.cols(), d_.Z.cols());
+    L.setFromTriplets(trip.begin(), trip.end());
+    return L;
+  }
+
+  struct Entry {
+    std::ptrdiff_t block;
+    int i, j;
+  };
+  const detail::LmmDesign& d_;
+  bool reml_;
+  double n_ = 0, p_ = 0;
+  SpMat ZtZ_, eye_;
+  MatrixXd ZtX_, XtX_;
+  VectorXd Zty_, Xty_;
+  std::vector<Entry> entries_;
+  std::vector<double> lower_;
+  Eigen::SimplicialLDLT<SpMat> chol_;
+};
+
+// Nelder-Mead with bounds by projection, restarted from its best point until a restart no
+// longer improves. Hand-written: no bound-constrained derivative-free optimizer is in the
+// tree (lme4 uses BOBYQA from NLopt, which is not installed; Ceres has no bounds for general
+// objectives). The deviance is smooth and θ has few elements, so this reaches lme4's optimum
+// (checked against lme4 with tight BOBYQA tolerances in tests/stats/lmm_test.cpp).
+struct Minimum {
+  VectorXd x;
+  double f = 0;
+  int evaluations = 0;
+  bool converged = false;
+};
+
+Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0, const std::vector<double>& lower,
+                   int max_evals) {
+  const Eigen::Index m = x0.size();
+  auto project = [&](VectorXd x) {
+    for (Eigen::Index i = 0; i < m; ++i) x[i] = std::max(x[i], lower[static_cast<std::size_t>(i)]);
+    return x;
+  };
+  Minimum best{project(x0), 0, 0, false};
+  best.f = f(best.x);
+  best.evaluations = 1;
+  double step = 0.5;
+  for (int restart = 0; restart < 30 && best.evaluations < max_evals; ++restart) {
+    std::vector<VectorXd> sx{best.x};
+    std::vector<double> fx{best.f};
+    for (Eigen::Index i = 0; i < m; ++i) {
+      VectorXd x = best.x;
+      x[i] += (x[i] + step > lower[static_cast<std::size_t>(i)]) ? step : -step;
+      sx.push_back(project(x));
+      fx.push_back(f(sx.back()));
+      ++best.evaluations;
+    }
+    bool done = false;
+    while (best.evaluations < max_evals) {
+      std::vector<std::size_t> o(sx.size());
+      for (std::size_t i = 0; i < o.size(); ++i) o[i] = i;
+      std::sort(o.begin(), o.end(), [&](auto a, auto b) { return fx[a] < fx[b]; });
+      std::vector<VectorXd> s2;
+      std::vector<double> f2;
+      for (auto i : o) {
+        s2.push_back(sx[i]);
+        f2.push_back(fx[i]);
+      }
+      sx = s2;
+      fx = f2;
+      double extent = 0;
+      for (std::size_t i = 1; i < sx.size(); ++i) extent = std::max(extent, (sx[i] - sx[0]).lpNorm<Eigen::Infinity>());
+      if (fx.back() - fx.front() <= 1e-12 * (1.0 + std::abs(fx.front())) && extent < 1e-9) {
+        done = true;
+        break;
+      }
+      VectorXd c = VectorXd::Zero(m);
+      for (std::size_t i = 0; i + 1 < sx.size(); ++i) c += sx[i];
+      c /= static_cast<double>(m);
+      auto eval = [&](const VectorXd& x) {
+        ++best.evaluations;
+        return f(x);
+      };
+      const VectorXd xr = project(c + (c - sx.back()));
+      const double fr = eval(xr);
+      if (fr < fx.front()) {
+        const VectorXd xe = project(c + 2.0 * (c - sx.back()));
+        const double fe = eval(xe);
+        if (fe < fr) {
+          sx.back() = xe;
+          fx.back() = fe;
+        } else {
+          sx.back() = xr;
+          fx.back() = fr;
+        }
+      } else if (fr < fx[fx.size() - 2]) {
+        sx.back() = xr;
+        fx.back() = fr;
+      } else {
+        const bool outside = fr < fx.back();
+        const VectorXd xc = project(outside ? VectorXd(c + 0.5 * (xr - c)) : VectorXd(c + 0.5 * (sx.back() - c)));
+        const double fc = eval(xc);
+        if (fc < std::min(fr, fx.back())) {
+          sx.back() = xc;
+          fx.back() = fc;
+        } else {
+          for (std::size_t i = 1; i < sx.size(); ++i) {
+            sx[i] = project(sx[0] + 0.5 * (sx[i] - sx[0]));
+            fx[i] = eval(sx[i]);
+          }
+        }
+      }
+    }
+    const auto it = std::min_element(fx.begin(), fx.end());
+    const double improvement = best.f - *it;
+    if (*it < best.f) {
+      best.f = *it;
+      best.x = sx[static_cast<std::size_t>(it - fx.begin())];
+    }
+    best.converged = done;
+    if (done && restart > 0 && improvement <= 1e-10 * (1.0 + std::abs(best.f))) break;
+    step = 1e-3;
+  }
+  return best;
+}
+
+// Richardson extrapolation of a central-difference estimate D(h) whose error is a series in
+// h² (numDeriv's method, 4 halvings of the step).
+template <class T>
+T Richardson(const std::function<T(double)>& D, double h0) {
+  constexpr int kLevels = 4;
+  std::vector<std::vector<T>> tab(kLevels);
+  for (int i = 0; i < kLevels; ++i) {
+    tab[static_cast<std::size_t>(i)].push_back(D(h0 / std::pow(2.0, i)));
+    for (int k = 1; k <= i; ++k) {
+      const auto& a = tab[static_cast<std::size_t>(i)][static_cast<std::size_t>(k - 1)];
+      const auto& b = tab[static_cast<std::size_t>(i - 1)][static_cast<std::size_t>(k - 1)];
+      const double w = std::pow(4.0, k) - 1.0;
+      tab[static_cast<std::size_t>(i)].push_back(T(a + (a - b) / w));
+    }
+  }
+  return tab.back().back();
+}
+
+// numDeriv's initial step: 10 % of |x|, 1e-4 near zero.
+double Step0(double x) { return 0.1 * std::abs(x) + (std::abs(x) < 1.78e-5 ? 1e-4 : 0.0); }
+
+MatrixXd Hessian(const std::function<double(const VectorXd&)>& f, const VectorXd& x) {
+  const Eigen::Index m = x.size();
+  const double f0 = f(x);
+  MatrixXd H(m, m);
+  for (Eigen::Index i = 0; i < m; ++i)
+    for (Eigen::Index j = 0; j <= i; ++j) {
+      const double hi0 = Step0(x[i]), hj0 = Step0(x[j]);
+      std::function<double(double)> D = [&](double s) {
+        const double hi = hi0 * s, hj = hj0 * s;
+        VectorXd a = x, b = x;
+        if (i == j) {
+          a[i] += hi;
+          b[i] -= hi;
+          return (f(a) - 2.0 * f0 + f(b)) / (hi * hi);
+        }
+        VectorXd c = x, d = x;
+        a[i] += hi, a[j] += hj;
+        b[i] += hi, b[j] -= hj;
+        c[i] -= hi, c[j] += hj;
+        d[i] -= hi, d[j] -= hj;
+        return (f(a) - f(b) - f(c) + f(d)) / (4.0 * hi * hj);
+      };
+      H(i, j) = H(j, i) = Richardson<double>(D, 1.0);
+    }
+  return H;
+}
+
+// d C / d x_i for a matrix-valued C(x), each by Richardson-extrapolated central differences.
+std::vector<MatrixXd> Jacobian(const std::function<MatrixXd(const VectorXd&)>& C, const VectorXd& x) {
+  std::vector<MatrixXd> J;
+  for (Eigen::Index i = 0; i < x.size(); ++i) {
+    const double h0 = Step0(x[i]);
+    std::function<MatrixXd(double)> D = [&](double s) {
+      VectorXd a = x, b = x;
+      a[i] += h0 * s;
+      b[i] -= h0 * s;
+      return MatrixXd((C(a) - C(b)) / (2.0 * h0 * s));
+    };
+    J.push_back(Richardson<MatrixXd>(D, 1.0));
+  }
+  return J;
+}
+
+// lmerTest's get_Fstat_ddf: the F denominator df from the per-direction df.
+double FStatDdf(const std::vector<double>& nu) {
+  if (nu.size() == 1) return nu[0];
+  bool equal = true;
+  for (std::size_t i = 1; i < nu.size(); ++i) equal = equal && std::abs(nu[i] - nu[i - 1]) < 1e-8;
+  if (equal) {
+    double s = 0;
+    for (double v : nu) s += v;
+    return s / static_cast<double>(nu.size());
+  }
+  double E = 0;
+  for (double v : nu) {
+    if (v <= 2) return 2;
+    E += v / (v - 2);
+  }
+  return 2 * E / (E - static_cast<double>(nu.size()));
+}
+
+// Kenward-Roger t and F tests (lmerTest's ddf = "Kenward-Roger", through pbkrtest).
+void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorXd& beta, LmmResult& r) {
+  std::vector<double> gamma;
+  for (const auto& t : r.random) {
+    const auto k = t.names.size();
+    for (std::size_t j = 0; j < k; ++j)
+      for (std::size_t i = j; i < k; ++i) gamma.push_back(i == j ? t.variance[i] : t.corr[i][j] * t.sd[i] * t.sd[j]);
+  }
+  for (double& g : gamma)
+    if (!std::isfinite(g)) g = 0;  // a correlation with a zero variance: the covariance is 0
+  gamma.push_back(r.sigma * r.sigma);
+  const auto a = detail::KenwardRogerVcov(d, gamma, Phi);
+  const Eigen::Index p = Phi.rows();
+  for (Eigen::Index j = 0; j < p; ++j) {
+    LmmCoefficient c;
+    c.name = d.x_names[static_cast<std::size_t>(j)];
+    c.estimate = beta[j];
+    c.se = std::sqrt(a.PhiA(j, j));
+    c.t = c.estimate / c.se;
+    c.df = detail::KenwardRogerTest(a, Phi, MatrixXd(VectorXd::Unit(p, j).transpose()), beta).ddf;
+    c.p = PtTwoSided(c.t, c.df);
+    r.fixed.push_back(c);
+  }
+  for (const auto& term : d.x_terms) {
+    const auto q = static_cast<Eigen::Index>(term.columns.size());
+    MatrixXd L = MatrixXd::Zero(q, p);
+    for (Eigen::Index i = 0; i < q; ++i) L(i, term.columns[static_cast<std::size_t>(i)]) = 1.0;
+    const auto kt = detail::KenwardRogerTest(a, Phi, L, beta);
+    LmmFTest t;
+    t.term = term.name;
+    t.num_df = static_cast<double>(q);
+    t.den_df = kt.ddf;
+    t.F = kt.F;
+    t.p = PfUpper(t.F, t.num_df, t.den_df);
+    r.anova.push_back(t);
+  }
+}
+
+}  // namespace
+
+LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOptions& options) {
+  const LmmFormula f = ParseLmmFormula(formula, data.source);
+  const detail::LmmDesign d = detail::BuildLmmDesign(data, f);
+  for (double v : data.y)
+    if (!std::isfinite(v)) throw InputError(data.source, 0, f.response, "missing response values are not supported");
+  const Eigen::Index p = d.X.cols();
+  {
+    Eigen::ColPivHouseholderQR<MatrixXd> qr(d.X);
+    if (qr.rank() < p)
+      throw InputError(data.source, 0, "--formula",
+                       "the fixed-effects design is rank deficient (rank " + std::to_string(qr.rank()) + " < " +
+                           std::to_string(p) + " columns): a cell of the design has no data?");
+  }
+  if (d.X.rows() <= p) throw InputError(data.source, 0, "--formula", "fewer observations than fixed effects");
+  if (options.kenward_roger && !options.reml)
+    throw InputError(data.source, 0, "--ddf", "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest): drop --ml");
+  if (options.kenward_roger && d.X.rows() > kKenwardRogerMaxRows)
+    throw InputError(data.source, 0, "--ddf",
+                     "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) + " observations exceed " +
+                         std::to_string(kKenwardRogerMaxRows) + " (use satterthwaite)");
+
+  Pls pls(d, options.reml);
+  LmmResult r;
+  r.formula = formula;
+  r.reml = options.reml;
+  r.ddf = options.kenward_roger ? "Kenward-Roger" : "Satterthwaite";
+  r.n = static_cast<int>(d.y.size());
+  VectorXd theta0(pls.ntheta());
+  for (int t = 0; t < pls.ntheta(); ++t) theta0[t] = pls.lower()[static_cast<std::size_t>(t)] == 0.0 ? 1.0 : 0.0;
+  auto dev = [&](const VectorXd& th) { return pls.Deviance(th); };
+  const Minimum opt = NelderMead(dev, theta0, pls.lower(), options.max_evaluations);
+  r.optimizer = "Nelder-Mead with bounds, restarted to convergence";
+  r.evaluations = opt.evaluations;
+  r.converged = opt.converged;
+  const VectorXd theta = opt.x;
+  r.theta.assign(theta.data(), theta.data() + theta.size());
+  r.deviance = opt.f;
+
+  // Diagnostics: gradient over the free θ, singular fit (lme4's isSingular, tol 1e-4).
+  for (int t = 0; t < pls.ntheta(); ++t) {
+    const bool bounded = pls.lower()[static_cast<std::size_t>(t)] == 0.0;
+    if (bounded && theta[t] < 1e-4) {
+      r.singular = true;
+      continue;
+    }
+    const double h = 1e-6 * std::max(1.0, std::abs(theta[t]));
+    VectorXd a = theta, b = theta;
+    a[t] += h;
+    b[t] -= h;
+    r.gradient_max_abs = std::max(r.gradient_max_abs, std::abs(dev(a) - dev(b)) / (2 * h));
+  }
+
+  const auto sol = pls.Solve(theta);
+  const double n = pls.n();
+  r.sigma = std::sqrt(sol.r2 / (options.reml ? n - static_cast<double>(p) : n));
+  r.logLik = -0.5 * r.deviance;
+  r.n_parameters = static_cast<int>(p) + pls.ntheta() + 1;
+  r.AIC = -2.0 * r.logLik + 2.0 * r.n_parameters;
+  r.BIC = -2.0 * r.logLik + std::log(n) * r.n_parameters;
+
+  for (std::size_t k = 0; k < d.blocks.size(); ++k) {
+    const auto& b = d.blocks[k];
+    const MatrixXd T = pls.Template(theta, k);
+    const MatrixXd S = r.sigma * r.sigma * T * T.transpose();
+    LmmRandomTerm rt;
+    rt.group = b.group;
+    rt.levels = b.levels;
+    rt.names = b.names;
+    for (int i = 0; i < b.p; ++i) {
+      rt.variance.push_back(S(i, i));
+      rt.sd.push_back(std::sqrt(S(i, i)));
+    }
+    rt.corr.assign(static_cast<std::size_t>(b.p), std::vector<double>(static_cast<std::size_t>(b.p), 1.0));
+    for (int i = 0; i < b.p; ++i)
+      for (int j = 0; j < b.p; ++j)
+        if (i != j) {
+          const double den = std::sqrt(S(i, i) * S(j, j));
+          rt.corr[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+              den > 0 ? S(i, j) / den : std::numeric_limits<double>::quiet_NaN();
+        }
+    r.random.push_back(rt);
+  }
+
+  VectorXd vp(pls.ntheta() + 1);
+  vp << theta, r.sigma;
+  if (options.kenward_roger) {
+    KenwardRoger(d, pls.CovBeta(vp), sol.beta, r);
+    return r;
+  }
+  // Satterthwaite (lmerTest): A = 2 H⁻¹ over (θ, σ); J_i = ∂cov(β̂)/∂(θ, σ)_i.
+  const MatrixXd H = Hessian([&](const VectorXd& x) { return pls.DevianceVp(x); }, vp);
+  const MatrixXd A = 2.0 * H.inverse();
+  const MatrixXd C = pls.CovBeta(vp);
+  const auto J = Jacobian([&](const VectorXd& x) { return pls.CovBeta(x); }, vp);
+  auto df_of = [&](const VectorXd& l, double var) {
+    VectorXd g(static_cast<Eigen::Index>(J.size()));
+    for (std::size_t i = 0; i < J.size(); ++i) g[static_cast<Eigen::Index>(i)] = l.dot(J[i] * l);
+    return 2.0 * var * var / g.dot(A * g);
+  };
+  for (Eigen::Index j = 0; j < p; ++j) {
+    LmmCoefficient c;
+    c.name = d.x_names[static_cast<std::size_t>(j)];
+    c.estimate = sol.beta[j];
+    c.se = std::sqrt(C(j, j));
+    c.t = c.estimate / c.se;
+    c.df = df_of(VectorXd::Unit(p, j), C(j, j));
+    c.p = PtTwoSided(c.t, c.df);
+    r.fixed.push_back(c);
+  }
+  // Type 3 F tests: with sum-to-zero contrasts and every cell observed, the hypothesis of a
+  // term is that its coefficients are zero (L selects them), as lmerTest's type 3 contrasts.
+  for (const auto& term : d.x_terms) {
+    const auto q = static_cast<Eigen::Index>(term.columns.size());
+    MatrixXd L = MatrixXd::Zero(q, p);
+    for (Eigen::Index i = 0; i < q; ++i) L(i, term.columns[static_cast<std::size_t>(i)]) = 1.0;
+    Eigen::SelfAdjointEigenSolver<MatrixXd> eig(L * C * L.transpose());
+    const MatrixXd PtL = eig.eigenvectors().transpose() * L;
+    std::vector<double> nu;
+    double F = 0;
+    for (Eigen::Index m = 0; m < q; ++m) {
+      const double dm = eig.eigenvalues()[m];
+      const VectorXd l = PtL.row(m).transpose();
+      F += std::pow(l.dot(sol.beta), 2) / dm;
+      nu.push_back(df_of(l, dm));
+    }
+    LmmFTest t;
+    t.term = term.name;
+    t.num_df = static_cast<double>(q);
+    t.F = F / static_cast<double>(q);
+    t.den_df = FStatDdf(nu);
+    t.p = PfUpper(t.F, t.num_df, t.den_df);
+    r.anova.push_back(t);
+  }
+  return r;
+}
+
+}  // namespace hapticlab::stats
