@@ -10,6 +10,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/devices/audio.hpp"
@@ -35,6 +36,7 @@ struct RunArgs {
   std::string firmware, actuator = "none", audio_device, rig_file, rating_box, rating_layout;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
+  runner::RtThreadOptions rt;
 };
 
 // Opens the hardware and the windows a run asks for and keeps them alive for the session.
@@ -233,6 +235,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
     cmd->add_option("--ui-speed", a.ui_speed, "Sim with --ui: play the simulated strokes this much faster")
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+    AddRtOptions(cmd, a.rt);
   };
   {
     auto a = std::make_shared<RunArgs>();
@@ -266,6 +269,7 @@ void RegisterStudy(CLI::App& app) {
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
         o.fault_rate = a->fault_rate;
+        o.rt = a->rt;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         PrintSummary(runner::RunStudy(p, o), a->json);
         return kExitOk;
@@ -291,6 +295,7 @@ void RegisterStudy(CLI::App& app) {
         o.participant = a->participant;
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
+        o.rt = a->rt;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         PrintSummary(runner::ResumeStudy(o), a->json);
         return kExitOk;

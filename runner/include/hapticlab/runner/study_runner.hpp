@@ -123,6 +123,9 @@ struct RunOptions {
   /// Abort the session after this many trials in a row where a side touched nothing (the
   /// rig's sample pose is probably wrong).
   int max_untouched_trials = 3;
+  /// What the loop threads ask for on the real clock (spin, SCHED_FIFO, mlockall, CPU);
+  /// outcomes are stored per trial side (db/timing.hpp). Ignored on a virtual clock.
+  RtThreadOptions rt;
 };
 
 struct RunSummary {
