@@ -64,11 +64,14 @@ void RealTimeCheck(const std::string& profiles_path) {
   runner::RtEngine engine(r, dev, &act);
   engine.RunFor(std::chrono::seconds(1));
   const auto st = engine.Stats();
+  const auto& ft = st.force_timing;
   fmt::print("real-time engine check (Denim, Hybrid, 1 s on the real clock): force loop {:.0f} Hz, vibration loop {:.0f} Hz, "
-             "force jitter max {:.0f} us (mean {:.0f} us), deadline misses {}/{}, in contact {} of {} ticks, faults {}\n",
-             st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
-             st.force_jitter_mean_s * 1e6, st.force_deadline_misses, st.vibration_deadline_misses, st.contact_ticks,
-             st.force_ticks, r.counters().nan_faults.load() + r.counters().stale_faults.load());
+             "force wake-up lateness p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us, max {:.1f} us (timer slack {} ns, {}), "
+             "deadline misses {}/{}, in contact {} of {} ticks, faults {}\n",
+             st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, ft.late_p50_s * 1e6, ft.late_p99_s * 1e6,
+             ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_thread.timer_slack_ns, st.force_thread.priority_status,
+             st.force_deadline_misses, st.vibration_deadline_misses, st.contact_ticks, st.force_ticks,
+             r.counters().nan_faults.load() + r.counters().stale_faults.load());
 }
 
 // One line of `study power`: participants for 80 % power on the method effect, from the

@@ -13,6 +13,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/runner/rig.hpp"
@@ -119,18 +120,32 @@ void RegisterRig(CLI::App& app) {
   }
   {
     struct O {
-      std::string path, device = "falcon-twin";
+      std::string path, device = "falcon-twin", clock = "virtual";
       double seconds = 2, empty = 0, split = 0;
-      bool json = false;
+      bool json = false, no_vibration = false;
+      TimingCheckArgs timing;
     };
     auto o = std::make_shared<O>();
     auto* cmd = rig->add_subcommand(
         "check",
-        "Run a simulated rig through the real-time engine (virtual clock) for a while: the\n"
-        "simulated hand strokes a virtual sample on the left pose of the rig file; reports the\n"
-        "ticks, the link's empty and lost reads, contact, and whether the grip's rest pose is\n"
-        "already in contact with a sample (a wrong rig file).");
+        "--clock virtual (default): run a simulated rig through the real-time engine on a virtual\n"
+        "clock: the simulated hand strokes a virtual sample on the left pose of the rig file;\n"
+        "reports the ticks, the link's empty and lost reads, contact, and whether the grip's rest\n"
+        "pose is already in contact with a sample (a wrong rig file).\n"
+        "--clock real: run the force loop (at --rate) and the 10 kHz vibration loop on the real\n"
+        "clock with a resting simulated grip (zero force) and the chosen actuator, and print a\n"
+        "histogram of wake-up lateness like cyclictest, what the threads got (priority, memory\n"
+        "lock, timer slack) and the verdict for the rate (exit 1: a missed deadline or a rate\n"
+        "off by more than 1 %).");
     cmd->add_option("--device", o->device, "Simulated rig")->check(CLI::IsMember({"sim", "falcon-twin"}))->capture_default_str();
+    cmd->add_option("--clock", o->clock, "virtual: the stroke check; real: the timing check")
+        ->check(CLI::IsMember({"virtual", "real"}))->capture_default_str();
+    cmd->add_option("--rate", o->timing.rate_hz, "--clock real: force loop rate [Hz]")->check(CLI::Range(100.0, 20000.0))->capture_default_str();
+    cmd->add_option("--actuator", o->timing.actuator, "--clock real: vibrotactile actuator (audio: PortAudio)")
+        ->check(CLI::IsMember({"none", "audio"}))->capture_default_str();
+    cmd->add_option("--audio-device", o->timing.audio_device, "--clock real: PortAudio output device (name substring)");
+    cmd->add_flag("--no-vibration", o->no_vibration, "--clock real: run the force loop only");
+    AddRtOptions(cmd, o->timing.rt);
     cmd->add_option("--rig", o->path, "Rig file (default: the device's built-in rig)");
     cmd->add_option("--seconds", o->seconds, "Stroking time [s] (virtual)")->check(CLI::Range(0.01, 600.0))->capture_default_str();
     cmd->add_option("--empty-reads", o->empty, "Fraction of link reads with no new data")->check(CLI::Range(0.0, 0.9));
@@ -139,6 +154,14 @@ void RegisterRig(CLI::App& app) {
     cmd->add_flag("--json", o->json, "Print {\"device\", \"ticks\", \"empty_reads\", \"lost\", \"home_in_contact\", ...}");
     cmd->callback([o] {
       RunGuarded([&] {
+        if (o->clock == "real") {
+          TimingCheckArgs a = o->timing;
+          a.device = o->device;
+          a.seconds = o->seconds;
+          a.json = o->json;
+          a.vibration = !o->no_vibration;
+          return RunTimingCheck(a);
+        }
         const auto rf = LoadOrDefault(o->path, o->device == "falcon-twin" ? "falcon" : "sim");
         auto sr = runner::OpenSimulatedRig(o->device, rf, sim::SimDeviceModel{.empty_read_probability = o->empty},
                                            sim::FalconTwinOptions{.empty_read_probability = o->empty,
@@ -178,7 +201,16 @@ void RegisterRig(CLI::App& app) {
                   {"lost", st.lost_reads},
                   {"faulted", engine.watchdog().tripped()},
                   {"contact_ticks", st.contact_ticks},
-                  {"home_in_contact", home_in_contact}};
+                  {"home_in_contact", home_in_contact},
+                  // The timing keys of --clock real, for one schema: a virtual clock has no lateness.
+                  {"clock", "virtual"},
+                  {"force_rate_hz", st.achieved_force_rate_hz},
+                  {"jitter_us", {{"p50", 0.0}, {"p99", 0.0}, {"p999", 0.0}, {"max", 0.0}}},
+                  {"misses", st.force_deadline_misses},
+                  {"underruns", st.audio_underruns},
+                  {"priority", "virtual clock"},
+                  {"memory_locked", st.memory.locked},
+                  {"timer_slack_ns", nullptr}};
         if (sr->falcon) {
           j["falcon_packets"] = sr->falcon->packets();
           j["falcon_empty_reads"] = sr->falcon->empty_reads();

@@ -11,6 +11,7 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/devices/audio.hpp"
@@ -36,6 +37,7 @@ struct RunArgs {
   std::string firmware, actuator = "none", audio_device, rig_file, rating_box, rating_layout;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
+  runner::RtThreadOptions rt;
 };
 
 // Opens the hardware and the windows a run asks for and keeps them alive for the session.
@@ -289,6 +291,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--ui-speed", a.ui_speed,
                     "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+    AddRtOptions(cmd, a.rt);
   };
   {
     auto a = std::make_shared<RunArgs>();
@@ -325,6 +328,7 @@ void RegisterStudy(CLI::App& app) {
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
         o.fault_rate = a->fault_rate;
+        o.rt = a->rt;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         InstallStopHandlers();
         const auto sum = runner::RunStudy(p, o);
@@ -374,6 +378,7 @@ void RegisterStudy(CLI::App& app) {
         o.participant = a->participant;
         o.record = ParseRecord(a->record);
         o.stop_after_trials = a->stop_after;
+        o.rt = a->rt;
         if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
         InstallStopHandlers();
         const auto sum = runner::ResumeStudy(o);

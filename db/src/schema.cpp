@@ -173,6 +173,38 @@ INSERT INTO event(session_id, kind, detail)
          CASE screens WHEN 1 THEN 'on' ELSE 'off' END || ', actuator unrecorded'
   FROM session;
 )sql",
+    // v6: real-time timing per trial side and loop (hapticlab/db/timing.hpp): rates,
+    // lateness and tick-duration percentiles [us], the lateness histogram (sparse
+    // "bin:count", 0.5 us bins), misses, overflows, underruns and what the loop thread got.
+    R"sql(
+CREATE TABLE side_timing (
+  id INTEGER PRIMARY KEY,
+  trial_id INTEGER NOT NULL REFERENCES trial(id),
+  attempt INTEGER NOT NULL,
+  side TEXT NOT NULL,
+  loop TEXT NOT NULL CHECK (loop IN ('force', 'vibration')),
+  clock TEXT NOT NULL CHECK (clock IN ('real', 'virtual')),
+  rate_hz REAL NOT NULL,
+  achieved_rate_hz REAL NOT NULL,
+  ticks INTEGER NOT NULL,
+  deadline_misses INTEGER NOT NULL,
+  late_p50_us REAL NOT NULL,
+  late_p99_us REAL NOT NULL,
+  late_p999_us REAL NOT NULL,
+  late_max_us REAL NOT NULL,
+  tick_p50_us REAL NOT NULL,
+  tick_p99_us REAL NOT NULL,
+  tick_p999_us REAL NOT NULL,
+  tick_max_us REAL NOT NULL,
+  late_histogram TEXT NOT NULL,
+  recording_overflows INTEGER NOT NULL,
+  audio_underruns INTEGER NOT NULL,
+  priority TEXT NOT NULL,
+  memory_locked INTEGER NOT NULL,
+  timer_slack_ns INTEGER NOT NULL,
+  UNIQUE (trial_id, attempt, side, loop)
+);
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

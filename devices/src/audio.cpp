@@ -64,7 +64,16 @@ void AudioOutput::Write(double acc) noexcept {
   if (!queue_.TryPush(v)) overflows_.fetch_add(1, std::memory_order_relaxed);
 }
 
+void AudioOutput::SetSource(devices::SampleSource* source) noexcept {
+  source_.store(source, std::memory_order_seq_cst);
+  // The callback may still be inside the previous source: wait for it to leave.
+  while (in_render_.load(std::memory_order_seq_cst)) {
+  }
+}
+
 void AudioOutput::Render(float* out, unsigned long frames) noexcept {
+  in_render_.store(true, std::memory_order_seq_cst);
+  devices::SampleSource* const src = c_.pull ? source_.load(std::memory_order_seq_cst) : nullptr;
   const double rms = noise_rms_.load(std::memory_order_relaxed);
   const auto ch = static_cast<std::size_t>(c_.channels);
   for (unsigned long f = 0; f < frames; ++f) {
@@ -74,7 +83,12 @@ void AudioOutput::Render(float* out, unsigned long frames) noexcept {
       phase_ -= 1.0;
       prev_ = cur_;
       float v;
-      if (queue_.TryPop(&v)) {
+      if (c_.pull) {
+        // The source is the synthesis itself: no sample can be missing (silence before the
+        // engine starts and after it stops).
+        const double acc = src ? src->NextSample() : 0.0;
+        cur_ = std::isfinite(acc) ? acc / c_.full_scale_mps2 : 0.0;
+      } else if (queue_.TryPop(&v)) {
         cur_ = v;
       } else {
         cur_ = 0;  // nothing written: silence (the actuator must not hold a stale value)
@@ -93,6 +107,7 @@ void AudioOutput::Render(float* out, unsigned long frames) noexcept {
       out[f * ch + k] = static_cast<float>(s);
     }
   }
+  in_render_.store(false, std::memory_order_seq_cst);
 }
 
 // ---------------------------------------------------------------------------------------------

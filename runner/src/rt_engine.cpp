@@ -6,6 +6,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -32,12 +33,34 @@ void AtomicMax(std::atomic<double>& a, double v) noexcept {
   }
 }
 
-std::string RequestFifo(std::thread& t, int priority) {
-  sched_param sp{};
-  sp.sched_priority = priority;
-  const int rc = pthread_setschedparam(t.native_handle(), SCHED_FIFO, &sp);
-  return rc == 0 ? "SCHED_FIFO " + std::to_string(priority)
-                 : std::string("SCHED_FIFO refused: ") + std::strerror(rc) + " (running at normal priority)";
+// Sleeps to `spin` before the deadline, then spins on the clock until it (spin 0: sleeps to
+// the deadline). No allocation, no locks.
+void WaitUntil(Clock::time_point deadline, Clock::duration spin) noexcept {
+  if (spin.count() <= 0) {
+    SleepUntil(deadline);
+    return;
+  }
+  if (Clock::now() < deadline - spin) SleepUntil(deadline - spin);
+  while (Clock::now() < deadline) {
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  }
+}
+
+LoopTiming Summarize(const LatencySummary& late, const LatencySummary& tick, std::uint64_t ticks, std::uint64_t misses) {
+  LoopTiming t;
+  t.ticks = ticks;
+  t.misses = misses;
+  t.late_p50_s = late.Quantile(0.5);
+  t.late_p99_s = late.Quantile(0.99);
+  t.late_p999_s = late.Quantile(0.999);
+  t.late_max_s = late.max_s;
+  t.tick_p50_s = tick.Quantile(0.5);
+  t.tick_p99_s = tick.Quantile(0.99);
+  t.tick_p999_s = tick.Quantile(0.999);
+  t.tick_max_s = tick.max_s;
+  return t;
 }
 
 }  // namespace
@@ -87,19 +110,35 @@ void RtEngine::Start() {
     vk_force_ = vk_vibration_ = 0;
     return;
   }
+  memory_ = LockMemory(options_.rt.lock_memory);
+  underruns_at_start_ = actuator_ ? actuator_->Underruns() : 0;
+  threads_configured_.store(0);
+  threads_started_ = 1;
   force_thread_ = std::thread([this] { ForceLoop(); });
-  if (renderer_.options().vibration) vibration_thread_ = std::thread([this] { VibrationLoop(); });
-  if (options_.realtime_priority) {
-    priority_status_ = "force: " + RequestFifo(force_thread_, 80);
-    if (vibration_thread_.joinable()) priority_status_ += "; vibration: " + RequestFifo(vibration_thread_, 79);
+  pulled_ = renderer_.options().vibration && actuator_ && actuator_->PullsSamples();
+  if (pulled_) {
+    pulled_source_.k = 0;
+    actuator_->SetSource(&pulled_source_);
+  } else if (renderer_.options().vibration) {
+    ++threads_started_;
+    vibration_thread_ = std::thread([this] { VibrationLoop(); });
   }
+}
+
+double RtEngine::PulledVibration::NextSample() noexcept {
+  const auto t0 = Clock::now();
+  const double a = e_.VibrationStep(++k, std::chrono::duration<double>(t0 - e_.t0_).count(), 0.0);
+  e_.vibration_tick_.Add(std::chrono::duration<double>(Clock::now() - t0).count());
+  return a;
 }
 
 void RtEngine::Stop() {
   if (!running_.exchange(false)) return;
   if (force_thread_.joinable()) force_thread_.join();
   if (vibration_thread_.joinable()) vibration_thread_.join();
+  if (pulled_) actuator_->SetSource(nullptr);  // returns once the callback has left the engine
   device_.WriteForce(Eigen::Vector3d::Zero());
+  if (actuator_) underruns_at_stop_.store(actuator_->Underruns() - underruns_at_start_);
   // Keep the streams' overflow counts: the caller may close the streams after Stop.
   std::uint64_t overflows = 0;
   if (force_stream_) overflows += force_stream_->overflow_count();
@@ -120,11 +159,13 @@ bool RtEngine::AdvanceTo(double t_s) {
     if (vib && tv < tf) {
       if (tv > t_s) break;
       clock.Set(tv);
+      vibration_late_.Add(0.0);
       VibrationStep(++vk_vibration_, tv, 0.0);
       continue;
     }
     if (tf > t_s) break;
     clock.Set(tf);
+    force_late_.Add(0.0);
     ForceStep(++vk_force_, tf, 0.0);
   }
   return !device_lost_.load();
@@ -144,15 +185,21 @@ void RtEngine::RunFor(std::chrono::duration<double> duration) {
 }
 
 void RtEngine::ForceLoop() {
+  force_report_ = ConfigureRtThread(options_.rt.priority, options_.rt.cpu, options_.rt.prefault_stack_bytes);
+  threads_configured_.fetch_add(1, std::memory_order_release);
   if (options_.on_thread_enter) options_.on_thread_enter();
   const double rate = renderer_.options().force_rate_hz;
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  const auto spin = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options_.rt.spin_us) * 1e-6));
   std::uint64_t k = 0;
   while (running_.load(std::memory_order_relaxed)) {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
-    SleepUntil(deadline);
+    WaitUntil(deadline, spin);
     const auto woke = Clock::now();
-    ForceStep(k, std::chrono::duration<double>(woke - t0_).count(), std::chrono::duration<double>(woke - deadline).count());
+    const double late_s = std::chrono::duration<double>(woke - deadline).count();
+    force_late_.Add(late_s);
+    ForceStep(k, std::chrono::duration<double>(woke - t0_).count(), late_s);
+    force_tick_.Add(std::chrono::duration<double>(Clock::now() - woke).count());
   }
   if (options_.on_thread_exit) options_.on_thread_exit();
 }
@@ -222,6 +269,12 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
 }
 
 void RtEngine::VibrationLoop() {
+  // One priority below the force loop, on the next CPU; no spin (at 10 kHz a spin of 20 us
+  // would spend a fifth of a core, and the audio buffer absorbs the vibration loop's lateness).
+  const int prio = options_.rt.priority > 1 ? options_.rt.priority - 1 : options_.rt.priority;
+  const int cpu = options_.rt.cpu >= 0 ? options_.rt.cpu + 1 : -1;
+  vibration_report_ = ConfigureRtThread(prio, cpu, options_.rt.prefault_stack_bytes);
+  threads_configured_.fetch_add(1, std::memory_order_release);
   if (options_.on_thread_enter) options_.on_thread_enter();
   const double rate = renderer_.options().vibration_rate_hz;
   const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
@@ -230,23 +283,27 @@ void RtEngine::VibrationLoop() {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
     SleepUntil(deadline);
     const auto woke = Clock::now();
-    VibrationStep(k, std::chrono::duration<double>(woke - t0_).count(), std::chrono::duration<double>(woke - deadline).count());
+    const double late_s = std::chrono::duration<double>(woke - deadline).count();
+    vibration_late_.Add(late_s);
+    VibrationStep(k, std::chrono::duration<double>(woke - t0_).count(), late_s);
+    vibration_tick_.Add(std::chrono::duration<double>(Clock::now() - woke).count());
   }
   if (options_.on_thread_exit) options_.on_thread_exit();
 }
 
-void RtEngine::VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept {
+double RtEngine::VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept {
   const double rate = renderer_.options().vibration_rate_hz;
   AtomicMax(vibration_jitter_max_, late_s);
   if (late_s > 1.0 / rate) vibration_misses_.fetch_add(1, std::memory_order_relaxed);
   const double a = renderer_.VibrationTick();
-  if (actuator_) actuator_->Write(a);
+  if (actuator_ && !pulled_) actuator_->Write(a);
   vibration_ticks_.fetch_add(1, std::memory_order_relaxed);
   vibration_last_s_.store(now_s, std::memory_order_relaxed);
   if (vibration_stream_) {
     const float v = static_cast<float>(a);
     Record(vibration_stream_, static_cast<double>(k) / rate, &v);
   }
+  return a;
 }
 
 EngineStats RtEngine::Stats() const {
@@ -275,8 +332,26 @@ EngineStats RtEngine::Stats() const {
   } else {
     s.recording_overflows = recording_overflows_at_stop_.load();
   }
-  s.priority_status = priority_status_;
+  s.virtual_clock = options_.virtual_clock != nullptr;
+  s.memory = memory_;
+  if (!s.virtual_clock && threads_configured_.load(std::memory_order_acquire) == threads_started_) {
+    s.force_thread = force_report_;
+    s.vibration_thread = vibration_report_;
+    s.priority_status = "force: " + force_report_.priority_status;
+    if (threads_started_ > 1) s.priority_status += "; vibration: " + vibration_report_.priority_status;
+    if (pulled_) s.priority_status += "; vibration: paced by the actuator's callback";
+  } else {
+    s.priority_status = priority_status_;
+  }
+  s.audio_underruns = running_.load() ? (actuator_ ? actuator_->Underruns() - underruns_at_start_ : 0) : underruns_at_stop_.load();
+  const EngineTiming t = Timing();
+  s.force_timing = Summarize(t.force_late, t.force_tick, s.force_ticks, s.force_deadline_misses);
+  s.vibration_timing = Summarize(t.vibration_late, t.vibration_tick, s.vibration_ticks, s.vibration_deadline_misses);
   return s;
+}
+
+EngineTiming RtEngine::Timing() const {
+  return {force_late_.Snapshot(), force_tick_.Snapshot(), vibration_late_.Snapshot(), vibration_tick_.Snapshot()};
 }
 
 }  // namespace hapticlab::runner

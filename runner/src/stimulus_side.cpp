@@ -7,6 +7,7 @@
 #include <memory>
 #include <thread>
 
+#include "hapticlab/db/timing.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
 
 namespace hapticlab::runner::internal {
@@ -20,6 +21,43 @@ renderer::RenderOptions MethodOptions(const protocols::Method& m, std::uint64_t 
   o.vibration_rate_hz = 10000;
   o.seed = seed;
   return o;
+}
+
+void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, const std::string& side,
+                const renderer::RenderOptions& ro, const RtEngine& engine) {
+  const EngineStats st = engine.Stats();
+  const EngineTiming tm = engine.Timing();
+  for (int loop = 0; loop < 2; ++loop) {
+    const bool force = loop == 0;
+    const LoopTiming& lt = force ? st.force_timing : st.vibration_timing;
+    if (!force && lt.ticks == 0) continue;
+    const RtThreadReport& th = force ? st.force_thread : st.vibration_thread;
+    db::SideTiming r;
+    r.trial_id = trial_id;
+    r.attempt = attempt;
+    r.side = side;
+    r.loop = force ? "force" : "vibration";
+    r.clock = st.virtual_clock ? "virtual" : "real";
+    r.rate_hz = force ? ro.force_rate_hz : ro.vibration_rate_hz;
+    r.achieved_rate_hz = force ? st.achieved_force_rate_hz : st.achieved_vibration_rate_hz;
+    r.ticks = static_cast<std::int64_t>(lt.ticks);
+    r.deadline_misses = static_cast<std::int64_t>(lt.misses);
+    r.late_p50_us = lt.late_p50_s * 1e6;
+    r.late_p99_us = lt.late_p99_s * 1e6;
+    r.late_p999_us = lt.late_p999_s * 1e6;
+    r.late_max_us = lt.late_max_s * 1e6;
+    r.tick_p50_us = lt.tick_p50_s * 1e6;
+    r.tick_p99_us = lt.tick_p99_s * 1e6;
+    r.tick_p999_us = lt.tick_p999_s * 1e6;
+    r.tick_max_us = lt.tick_max_s * 1e6;
+    r.late_histogram = (force ? tm.force_late : tm.vibration_late).Sparse();
+    r.recording_overflows = force ? static_cast<std::int64_t>(st.recording_overflows) : 0;
+    r.audio_underruns = force ? 0 : static_cast<std::int64_t>(st.audio_underruns);
+    r.priority = st.virtual_clock ? "virtual clock" : th.priority_status;
+    r.memory_locked = st.memory.locked;
+    r.timer_slack_ns = st.virtual_clock ? -1 : th.timer_slack_ns;
+    db::SaveSideTiming(database, r);
+  }
 }
 
 SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s, const RunOptions& opt,
@@ -73,6 +111,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     vs = writer->OpenStream(t.id, side.stream + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
   EngineOptions eo;
   eo.virtual_clock = simrig ? &simrig->clock : nullptr;
+  eo.rt = opt.rt;
   eo.sample_from_device = rig.device_from_sample[sample].inverse();
   RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs, vs);
   engine.Start();
@@ -105,6 +144,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
                        .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind), e.t_s, side.label, e.tick)});
   const auto st = engine.Stats();
   out.stats = st;
+  SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
   if (engine.watchdog().tripped()) {
     out.fault = true;
     out.detail = fmt::format("{}: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", side.label,

@@ -59,6 +59,10 @@ struct SideOutcome {
   sim::Features felt;      // simulated rig: what the hand felt
 };
 
+// Stores the engine's timing of one side (db::SideTiming rows: force, and vibration when it ran).
+void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, const std::string& side,
+                const renderer::RenderOptions& ro, const RtEngine& engine);
+
 // Runs one side for `duration_s` on `rig`: streams opened on `writer` per opt.record (the
 // vibration stream only when the side vibrates and the rig has an actuator), watchdog events
 // logged as "device-fault" events of trial `t`, opt.on_side called. With opt.ui the stimulus

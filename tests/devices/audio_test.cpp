@@ -30,6 +30,7 @@ TEST(Audio, ActuatorChannelCarriesTheSignalAndHeadphonesTheNoise) {
   c.noise_channels = {1, 2};
   c.full_scale_mps2 = 20;
   c.noise_rms_fs = 0.1;
+  c.pull = false;  // the queue path (the pull path: PullModeSynthesisIsPacedByTheCallback)
   auto stream = std::make_unique<FakeStream>();
   FakeStream* s = stream.get();
   AudioOutput out(c, std::move(stream));
@@ -75,6 +76,7 @@ TEST(Audio, UnderflowsAndClippingAreCountedNeverHeld) {
   c.noise_channels = {};
   c.channels = 1;
   c.full_scale_mps2 = 1;
+  c.pull = false;
   auto stream = std::make_unique<FakeStream>();
   FakeStream* s = stream.get();
   AudioOutput out(c, std::move(stream));
@@ -92,6 +94,49 @@ TEST(Audio, UnderflowsAndClippingAreCountedNeverHeld) {
   // A full queue drops (and counts) instead of waiting.
   for (int k = 0; k < 10000; ++k) out.Write(0.1);
   EXPECT_GT(out.overflows(), 0u);
+}
+
+// A source that counts its calls and returns a ramp.
+class Ramp : public SampleSource {
+ public:
+  double NextSample() noexcept override { return 0.01 * static_cast<double>(calls++); }
+  std::uint64_t calls = 0;
+};
+
+TEST(Audio, PullModeSynthesisIsPacedByTheCallback) {
+  AudioConfig c;
+  c.sample_rate_hz = 40000;
+  c.input_rate_hz = 10000;
+  c.channels = 1;
+  c.noise_channels = {};
+  c.full_scale_mps2 = 100;
+  auto stream = std::make_unique<FakeStream>();
+  FakeStream* s = stream.get();
+  AudioOutput out(c, std::move(stream));
+  ASSERT_TRUE(out.PullsSamples());
+  out.Start();
+  std::vector<float> buf(4000);
+  s->render(buf.data(), 400);  // no source yet: silence, not an underflow
+  for (int f = 0; f < 400; ++f) ASSERT_EQ(buf[static_cast<std::size_t>(f)], 0.f);
+  Ramp ramp;
+  out.SetSource(&ramp);
+  {
+    test::NoAllocGuard guard;
+    s->render(buf.data(), 4000);
+    EXPECT_EQ(guard.count(), 0u);
+  }
+  // The callback asked for exactly one input sample per 4 output frames: the sound card's
+  // clock sets the synthesis rate.
+  EXPECT_EQ(ramp.calls, 1000u);
+  EXPECT_EQ(out.underflows(), 0u);
+  // The ramp (0.01 m/s^2 per input sample), linearly upsampled with one input sample of
+  // latency: after frame f the callback has pulled n = (f + 1) / 4 samples (fractional) and
+  // plays sample n - 2 (0-based), i.e. 0.01 (n - 2) m/s^2, at full scale 100 m/s^2.
+  for (int f = 8; f < 4000; ++f)
+    ASSERT_NEAR(buf[static_cast<std::size_t>(f)], 0.01 * ((f + 1) / 4.0 - 2.0) / 100.0, 1e-7) << f;
+  out.SetSource(nullptr);
+  s->render(buf.data(), 8);
+  EXPECT_EQ(ramp.calls, 1000u) << "no call after the source was removed";
 }
 
 TEST(Audio, BadConfigurationsNameTheField) {

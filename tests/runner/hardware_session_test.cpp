@@ -10,6 +10,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/db/timing.hpp"
 #include "hapticlab/devices/replay.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
@@ -92,6 +93,19 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   }
   EXPECT_EQ(rated_trials, ui.rated);
   EXPECT_GT(chunks, 0) << "force streams recorded";
+  // Timing per trial side and loop (real clock): the force loop's threads had 1 ns slack.
+  int force_rows = 0;
+  for (const auto& t : db::StudySideTimings(d, d.Studies()[0].id)) {
+    EXPECT_EQ(t.clock, "real");
+    if (t.loop != "force") continue;
+    ++force_rows;
+    EXPECT_EQ(t.timer_slack_ns, 1);
+    EXPECT_GT(t.ticks, 100);
+    EXPECT_FALSE(t.late_histogram.empty());
+    EXPECT_LE(t.late_p50_us, t.late_p99_us);
+    EXPECT_LE(t.late_p99_us, t.late_max_us);
+  }
+  EXPECT_GE(force_rows, 2 * rated_trials);
   for (const auto& e : d.Events(se.id))  // on a loaded machine: deadline misses (real clock)
     if (e.kind == "device-fault") std::printf("%s\n", e.detail.c_str());
   bool device_logged = false;

@@ -12,7 +12,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 5;
+inline constexpr int kSchemaVersion = 6;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {

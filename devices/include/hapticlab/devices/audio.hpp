@@ -1,10 +1,12 @@
 #pragma once
 /// @file The `audio` back-end: the vibrotactile actuator (a voice coil such as the Haptuator,
 /// through an audio amplifier) and the masking noise on the participant's headphones, both
-/// on one sound device through PortAudio. The vibration loop writes acceleration samples at
-/// its own rate into a lock-free queue; the audio callback upsamples them to the device's
-/// rate, maps channels, adds white noise on the headphone channels, and counts underflows
-/// and clipping. The host API is behind AudioStream so tests drive the callback themselves.
+/// on one sound device (one stream) through PortAudio. By default (AudioConfig::pull) the
+/// audio callback pulls acceleration samples at the input rate from the engine's
+/// SampleSource, so the sound card's clock paces the vibration synthesis; otherwise the
+/// vibration loop writes them at its own rate into a lock-free queue. Either way the callback
+/// upsamples to the device's rate, maps channels, adds white noise on the headphone
+/// channels, and counts underflows and clipping. The host API is behind AudioStream so tests drive the callback themselves.
 
 #include <atomic>
 #include <cstdint>
@@ -31,6 +33,10 @@ struct AudioConfig {
   double noise_rms_fs = 0.1;            ///< masking noise level (RMS, full-scale units)
   double queue_s = 0.05;                ///< buffer between the vibration loop and the callback
   std::uint64_t seed = 1;               ///< noise seed (recorded with the session)
+  /// true: the callback pulls input samples from the engine's source (SetSource): the sound
+  /// card's clock paces the vibration synthesis and there is no queue to underrun. false:
+  /// the vibration loop pushes through a queue (Write).
+  bool pull = true;
 };
 /// Checks channel indices, rates and levels; throws std::invalid_argument naming the field.
 void ValidateAudioConfig(const AudioConfig& c);
@@ -57,12 +63,15 @@ class AudioOutput final : public Actuator, public MaskingNoise {
   /// Vibration loop: queue one sample [m/s^2]; a full queue drops it (counted).
   void Write(double acc_mps2) noexcept override;
   void SetNoiseLevel(double rms_fs) noexcept override { noise_rms_.store(rms_fs, std::memory_order_relaxed); }
+  bool PullsSamples() const noexcept override { return c_.pull; }
+  void SetSource(devices::SampleSource* source) noexcept override;
   void Start();
   void Stop();
   /// The audio callback's body (public for tests): fills `frames` interleaved frames.
   void Render(float* out, unsigned long frames) noexcept;
 
   std::uint64_t underflows() const { return underflows_.load(); }  ///< output samples with no input
+  std::uint64_t Underruns() const noexcept override { return underflows_.load(std::memory_order_relaxed); }
   std::uint64_t overflows() const { return overflows_.load(); }    ///< input samples dropped
   std::uint64_t clipped() const { return clipped_.load(); }        ///< output samples beyond full scale
 
@@ -75,6 +84,8 @@ class AudioOutput final : public Actuator, public MaskingNoise {
   double phase_ = 0, prev_ = 0, cur_ = 0, step_;  // one input sample of latency (interpolation)
   std::vector<char> is_actuator_, is_noise_;
   std::atomic<std::uint64_t> underflows_{0}, overflows_{0}, clipped_{0};
+  std::atomic<devices::SampleSource*> source_{nullptr};
+  std::atomic<bool> in_render_{false};
   bool started_ = false;
 };
 

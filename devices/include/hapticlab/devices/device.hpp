@@ -47,12 +47,29 @@ class HapticDevice {
   virtual void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept { (void)t0; }
 };
 
+/// Where an actuator that keeps its own clock (a sound card) pulls its input samples from:
+/// called on the device's callback thread, once per input sample (SampleRateHz()), so the
+/// device's clock paces the synthesis. Real-time: no allocation, no locks, no I/O.
+class SampleSource {
+ public:
+  virtual ~SampleSource() = default;
+  virtual double NextSample() noexcept = 0;  ///< acceleration [m/s^2]
+};
+
 /// A vibrotactile actuator driven with acceleration samples [m/s^2] at a fixed rate.
 class Actuator {
  public:
   virtual ~Actuator() = default;
   virtual double SampleRateHz() const = 0;
   virtual void Write(double acc_mps2) noexcept = 0;
+  /// Output samples the device played with no input (an audio underrun); 0 when it cannot tell.
+  virtual std::uint64_t Underruns() const noexcept { return 0; }
+  /// true: the actuator's own clock pulls samples from SetSource (a sound card); Write is
+  /// then not used on the real clock.
+  virtual bool PullsSamples() const noexcept { return false; }
+  /// Pulling actuators: where samples come from (borrowed; null: silence). Setting null
+  /// returns only after the device's callback no longer uses the previous source.
+  virtual void SetSource(SampleSource* source) noexcept { (void)source; }
 };
 
 /// A participant's rating input (a knob or slider box): polled by the UI thread.

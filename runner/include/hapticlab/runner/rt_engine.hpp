@@ -19,6 +19,12 @@
 /// (until it is stale); kLost commands zero force on that tick, and a sustained loss is a
 /// disconnect.
 ///
+/// Vibration clocked by the output device: on the real clock, an actuator that keeps its own
+/// clock (Actuator::PullsSamples: the sound card) gets the vibration synthesis as its
+/// SampleSource and its callback runs the vibration ticks; no vibration thread is started and
+/// no queue between a thread and the callback can underrun. The virtual clock steps the
+/// vibration ticks itself as before (deterministic).
+///
 /// Safety: the Watchdog (watchdog.hpp) checks every force tick: a sustained loss of the link
 /// (disconnect), NaN or stale data, `max_consecutive_misses` late ticks in a row, or a bad
 /// command give zero force on that tick, latch the trial as faulted and queue an event; the
@@ -38,6 +44,8 @@
 #include "hapticlab/devices/clock.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/core/latency_histogram.hpp"
+#include "hapticlab/runner/rt_thread.hpp"
 #include "hapticlab/runner/watchdog.hpp"
 
 namespace hapticlab::runner {
@@ -62,7 +70,11 @@ struct EngineOptions {
   int max_consecutive_misses = 3;   ///< late force ticks in a row before forcing zero force
   int max_lost_reads = 10;          ///< lost reads in a row that fault the trial (disconnect)
   double max_lost_s = 0.010;        ///< time without a good read that faults the trial [s]
-  bool realtime_priority = false;   ///< ask for SCHED_FIFO (needs privileges; result reported)
+  /// What the loop threads ask for before their first tick (real clock only): timer slack
+  /// 1 ns always; spin, SCHED_FIFO priority (the vibration loop one below the force loop),
+  /// memory locking, CPU pinning (the vibration loop on the next CPU) as asked. Outcomes in
+  /// EngineStats; nothing is fatal.
+  RtThreadOptions rt;
   /// Test hooks run on each loop thread before its first and after its last tick (real
   /// clock only).
   std::function<void()> on_thread_enter, on_thread_exit;
@@ -70,6 +82,19 @@ struct EngineOptions {
   devices::VirtualClock* virtual_clock = nullptr;
   /// Pose of the device frame in the sample frame: p_sample = sample_from_device * p_device.
   Eigen::Isometry3d sample_from_device = Eigen::Isometry3d::Identity();
+};
+
+/// One loop's timing over a run [s]: wake-up lateness (how long after its deadline a tick
+/// started) and tick duration (from waking to the end of the tick), as percentiles of the
+/// loop's histogram. On a virtual clock lateness is 0 and durations are not measured.
+struct LoopTiming {
+  std::uint64_t ticks = 0, misses = 0;
+  double late_p50_s = 0, late_p99_s = 0, late_p999_s = 0, late_max_s = 0;
+  double tick_p50_s = 0, tick_p99_s = 0, tick_p999_s = 0, tick_max_s = 0;
+};
+/// The loops' histograms (for storage and merging across trials).
+struct EngineTiming {
+  LatencySummary force_late, force_tick, vibration_late, vibration_tick;
 };
 
 /// Counters and timing statistics, written by the loops, read by anyone.
@@ -83,7 +108,12 @@ struct EngineStats {
   double force_jitter_max_s = 0, force_jitter_mean_s = 0;
   double vibration_jitter_max_s = 0;
   double achieved_force_rate_hz = 0, achieved_vibration_rate_hz = 0;
-  std::string priority_status;  ///< what became of the real-time priority request
+  std::string priority_status;  ///< what became of the real-time priority request (both loops)
+  LoopTiming force_timing, vibration_timing;
+  RtThreadReport force_thread, vibration_thread;  ///< what each loop thread got (real clock)
+  MemoryLockReport memory;
+  std::uint64_t audio_underruns = 0;  ///< actuator output samples with no input during the run
+  bool virtual_clock = false;
 };
 
 class RtEngine {
@@ -109,6 +139,8 @@ class RtEngine {
   bool AdvanceTo(double t_s);
   bool is_virtual() const { return options_.virtual_clock != nullptr; }
   EngineStats Stats() const;
+  /// The loops' histograms (copies; any thread).
+  EngineTiming Timing() const;
   /// The force loop's watchdog: tripped() tells whether the trial faulted; PopEvent drains its
   /// events (call from a non-real-time thread).
   Watchdog& watchdog() { return watchdog_; }
@@ -123,7 +155,20 @@ class RtEngine {
   void VibrationLoop();
   // One tick of each loop (the same code on either clock). k: 1-based tick number.
   void ForceStep(std::uint64_t k, double now_s, double late_s) noexcept;
-  void VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept;
+  // Returns the acceleration it synthesized (also written to a pushing actuator).
+  double VibrationStep(std::uint64_t k, double now_s, double late_s) noexcept;
+  // The vibration synthesis as the pulling actuator's source (its callback thread runs it).
+  class PulledVibration final : public devices::SampleSource {
+   public:
+    explicit PulledVibration(RtEngine& e) : e_(e) {}
+    double NextSample() noexcept override;
+    std::uint64_t k = 0;
+
+   private:
+    RtEngine& e_;
+  };
+  PulledVibration pulled_source_{*this};
+  bool pulled_ = false;  // real clock: the actuator's callback runs the vibration synthesis
   void Record(db::TrajectoryStream* s, double t_s, const float* v) noexcept;
 
   renderer::HybridRenderer& renderer_;
@@ -146,6 +191,14 @@ class RtEngine {
   renderer::DeviceSample last_good_;  // force loop only: the newest good sample (sample frame)
   bool have_good_ = false;
   std::string priority_status_ = "not requested";
+  LatencyHistogram force_late_, force_tick_, vibration_late_, vibration_tick_;
+  // Written by each loop thread before its first tick, read after Stop (joined).
+  RtThreadReport force_report_, vibration_report_;
+  MemoryLockReport memory_;
+  std::uint64_t underruns_at_start_ = 0;
+  std::atomic<std::uint64_t> underruns_at_stop_{0};
+  std::atomic<int> threads_configured_{0};  // release: the loop's report is written
+  int threads_started_ = 0;
   Watchdog watchdog_;
   std::uint64_t vk_force_ = 0, vk_vibration_ = 0;  // virtual clock: ticks done
   struct Snapshot {

@@ -148,6 +148,9 @@ struct RunOptions {
   /// Resume: continue in this mode although it differs from the recorded one (logged as a
   /// 'mode-change' event); without it a different mode is refused.
   bool change_mode = false;
+  /// What the loop threads ask for on the real clock (spin, SCHED_FIFO, mlockall, CPU);
+  /// outcomes are stored per trial side (db/timing.hpp). Ignored on a virtual clock.
+  RtThreadOptions rt;
 };
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.

@@ -9,6 +9,10 @@
 
 #include "hapticlab/stats/long_table.hpp"
 
+namespace hapticlab::db {
+class Database;
+}
+
 namespace hapticlab::stats {
 
 struct ReportOptions {
@@ -43,5 +47,12 @@ LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated
 /// Runs the analyses of every study in the database. @throws InputError when the database
 /// holds no ratings.
 ReportResult Analyze(const std::string& db_path, const ReportOptions& options);
+
+/// The methods-section sentence on real-time timing of a study (its `side_timing` rows):
+/// per loop the requested and achieved rates and the wake-up lateness percentiles (p50, p99,
+/// p99.9, max) of all real-clock ticks (the trial sides' histograms merged), deadline misses,
+/// tick duration, recording overflows and audio underruns, and what the loop threads got.
+/// A study run only on a virtual clock says so.
+std::string TimingMethodsSentence(const db::Database& d, std::int64_t study_id);
 
 }  // namespace hapticlab::stats

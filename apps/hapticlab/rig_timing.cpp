@@ -1,0 +1,154 @@
+#include "rig_timing.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <chrono>
+#include <memory>
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "hapticlab/devices/audio.hpp"
+#include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
+
+namespace hapticlab::cli {
+namespace {
+
+using nlohmann::json;
+
+// A grip at rest 5 cm above the device origin (out of contact with any sample): every read
+// is a new sample stamped with the real clock since the loops' time zero.
+class RestingDevice final : public devices::HapticDevice {
+ public:
+  devices::DeviceCapabilities Capabilities() const override {
+    devices::DeviceCapabilities c;
+    c.name = "sim (resting grip)";
+    c.max_rate_hz = 20000;
+    return c;
+  }
+  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
+    out->state.p_m = Eigen::Vector3d(0, 0, 0.05);
+    out->state.v_mps = Eigen::Vector3d::Zero();
+    out->t_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    return devices::ReadResult::kOk;
+  }
+  void WriteForce(const Eigen::Vector3d&) noexcept override {}
+  void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+json Percentiles(const LatencySummary& s) {
+  return {{"p50", s.Quantile(0.5) * 1e6}, {"p99", s.Quantile(0.99) * 1e6}, {"p999", s.Quantile(0.999) * 1e6}, {"max", s.max_s * 1e6}};
+}
+
+// cyclictest-like: count per microsecond of lateness up to the largest non-empty one (at most
+// 100 rows; the rest in one overflow row).
+void PrintHistogram(const LatencySummary& s) {
+  constexpr std::size_t kPerUs = 2, kRows = 100;  // two 0.5 us bins per row
+  std::uint64_t beyond = 0;
+  std::size_t last = 0;
+  for (std::size_t i = 0; i <= LatencySummary::kBins; ++i)
+    if (s.counts[i]) last = i;
+  for (std::size_t row = 0; row * kPerUs <= last; ++row) {
+    std::uint64_t n = 0;
+    for (std::size_t j = 0; j < kPerUs; ++j) n += s.counts[row * kPerUs + j];
+    if (row >= kRows) {
+      beyond += n;
+      continue;
+    }
+    fmt::print("  {:>4} us  {:>9}\n", row, n);
+  }
+  if (beyond) fmt::print("  >{:>3} us  {:>9}\n", kRows - 1, beyond);
+}
+
+}  // namespace
+
+void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
+  cmd->add_option("--rt-priority", rt.priority,
+                  "SCHED_FIFO priority of the force loop (the vibration loop gets one less); 0: normal\n"
+                  "scheduling. Needs rtprio in limits.conf or CAP_SYS_NICE (docs/hardware.md); a refusal is\n"
+                  "reported and the loops run at normal priority")
+      ->capture_default_str()->check(CLI::Range(0, 1000));
+  cmd->add_option("--spin-us", rt.spin_us, "Busy-wait this long before each force-loop deadline [us] (0: sleep only)")
+      ->capture_default_str()->check(CLI::Range(0.0, 500.0));
+  cmd->add_flag("--lock-memory", rt.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loops start (needs memlock)");
+  cmd->add_option("--cpu", rt.cpu, "Pin the force loop to this CPU (the vibration loop to the next); -1: no pinning")
+      ->capture_default_str()->check(CLI::Range(-1, 1023));
+}
+
+int RunTimingCheck(const TimingCheckArgs& a) {
+  if (a.device != "sim") throw std::invalid_argument("rig check --clock real: only --device sim (a resting simulated grip) is supported");
+  const auto model = sim::PlaceholderModel(sim::MaterialProfile{.id = "check"});
+  renderer::RenderOptions ro;
+  ro.force_rate_hz = a.rate_hz;
+  ro.vibration = a.vibration;
+  renderer::HybridRenderer r(model, ro);
+  RestingDevice dev;
+  std::unique_ptr<devices::AudioOutput> audio;
+  if (a.actuator == "audio") {
+    devices::AudioConfig c;
+    c.device = a.audio_device;
+    c.input_rate_hz = ro.vibration_rate_hz;
+    audio = std::make_unique<devices::AudioOutput>(c, devices::OpenPortAudio());
+    audio->Start();
+  }
+  runner::EngineOptions eo;
+  eo.rt = a.rt;
+  runner::RtEngine engine(r, dev, audio.get(), eo);
+  engine.RunFor(std::chrono::duration<double>(a.seconds));
+  if (audio) audio->Stop();
+  const auto st = engine.Stats();
+  const auto tm = engine.Timing();
+  const double period_s = 1.0 / a.rate_hz;
+  // The verdict: the loop kept its rate (within 1 %) and never started a tick a whole period late.
+  const bool rate_ok = std::abs(st.achieved_force_rate_hz - a.rate_hz) <= 0.01 * a.rate_hz;
+  const bool ok = rate_ok && st.force_deadline_misses == 0;
+  const std::string verdict = ok ? fmt::format("ok for {:.0f} Hz", a.rate_hz)
+                                 : fmt::format("NOT ok for {:.0f} Hz ({})", a.rate_hz,
+                                               rate_ok ? fmt::format("{} deadline misses", st.force_deadline_misses)
+                                                       : fmt::format("achieved {:.1f} Hz", st.achieved_force_rate_hz));
+  if (a.json) {
+    json j = {{"device", a.device},
+              {"clock", "real"},
+              {"seconds", a.seconds},
+              {"requested_rate_hz", a.rate_hz},
+              {"force_rate_hz", st.achieved_force_rate_hz},
+              {"force_ticks", st.force_ticks},
+              {"jitter_us", Percentiles(tm.force_late)},
+              {"tick_us", Percentiles(tm.force_tick)},
+              {"misses", st.force_deadline_misses},
+              {"underruns", st.audio_underruns},
+              {"priority", st.force_thread.priority_status},
+              {"priority_granted", st.force_thread.fifo},
+              {"memory_locked", st.memory.locked},
+              {"memory_status", st.memory.status},
+              {"affinity", st.force_thread.affinity_status},
+              {"timer_slack_ns", st.force_thread.timer_slack_ns},
+              {"spin_us", a.rt.spin_us},
+              {"verdict", verdict},
+              {"ok", ok}};
+    if (a.vibration)
+      j["vibration"] = {{"rate_hz", st.achieved_vibration_rate_hz}, {"jitter_us", Percentiles(tm.vibration_late)},
+                        {"misses", st.vibration_deadline_misses}, {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
+    fmt::print("{}\n", j.dump(2));
+  } else {
+    fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n", st.achieved_force_rate_hz,
+               a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
+    fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n", st.force_thread.priority_status,
+               st.force_thread.affinity_status, st.memory.status, st.force_thread.timer_slack_ns);
+    fmt::print("wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses {}\n",
+               tm.force_late.Quantile(0.5) * 1e6, tm.force_late.Quantile(0.99) * 1e6, tm.force_late.Quantile(0.999) * 1e6,
+               tm.force_late.max_s * 1e6, st.force_deadline_misses);
+    fmt::print("tick duration [us]: p50 {:.1f}, p99 {:.1f}, max {:.1f}; audio underruns {}\n", tm.force_tick.Quantile(0.5) * 1e6,
+               tm.force_tick.Quantile(0.99) * 1e6, tm.force_tick.max_s * 1e6, st.audio_underruns);
+    fmt::print("histogram of wake-up lateness (1 us rows, ticks):\n");
+    PrintHistogram(tm.force_late);
+    fmt::print("verdict: {} (period {:.0f} us)\n", verdict, period_s * 1e6);
+  }
+  return ok ? kExitOk : kExitFailure;
+}
+
+}  // namespace hapticlab::cli

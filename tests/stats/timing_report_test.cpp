@@ -1,0 +1,86 @@
+// The report's real-time timing sentence from stored side_timing rows: the lateness
+// percentiles are those of all ticks of all real-clock sides together (the histograms
+// merged), checked against the nearest-rank percentiles of the raw values; a study that ran
+// only on a virtual clock says so.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fmt/format.h>
+
+#include "hapticlab/core/latency_histogram.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/db/timing.hpp"
+#include "hapticlab/stats/report.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::stats {
+namespace {
+
+struct Fixture {
+  test::TempDir dir;
+  db::Database d{dir.File("t.db")};
+  std::int64_t study = 0, trial = 0;
+  Fixture() {
+    study = d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
+    const auto p = d.AddParticipant({.study_id = study, .code = "P01"});
+    const auto se = d.StartSession({.participant_id = p});
+    trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+  }
+  // A force-loop row of `values` [s] (its percentiles from the histogram, as the engine stores them).
+  void Add(const std::string& side, const std::vector<double>& values, const std::string& clock = "real") {
+    LatencyHistogram h;
+    for (const double v : values) h.Add(v);
+    const auto s = h.Snapshot();
+    db::SideTiming t{.trial_id = trial, .attempt = 1, .side = side, .loop = "force", .clock = clock, .rate_hz = 1000,
+                     .achieved_rate_hz = 999.5, .ticks = static_cast<std::int64_t>(values.size())};
+    t.late_p50_us = s.Quantile(0.5) * 1e6;
+    t.late_max_us = s.max_s * 1e6;
+    t.late_histogram = s.Sparse();
+    t.priority = "not requested (normal scheduling)";
+    t.timer_slack_ns = 1;
+    db::SaveSideTiming(d, t);
+  }
+};
+
+double NearestRank(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[static_cast<std::size_t>(std::ceil(q * static_cast<double>(v.size()))) - 1];
+}
+
+TEST(TimingReport, PercentilesAreOverAllTicksOfAllSides) {
+  Fixture f;
+  // Left: 1000 ticks 2-4 us late; right: 1000 ticks 40-60 us late; each value a quarter into
+  // a 0.5 us bin, so the histogram's percentile (the bin's upper edge, at most the maximum)
+  // is the nearest-rank value plus 0.375 us.
+  constexpr double w = LatencySummary::kBinWidthS;
+  std::vector<double> left, right, all;
+  for (int i = 0; i < 1000; ++i) left.push_back((4 + (i % 5) + 0.25) * w);
+  for (int i = 0; i < 1000; ++i) right.push_back((80 + (i % 41) + 0.25) * w);
+  f.Add("left", left);
+  f.Add("right", right);
+  all = left;
+  all.insert(all.end(), right.begin(), right.end());
+  const std::string s = TimingMethodsSentence(f.d, f.study);
+  // The pooled median lies in the left side's values; p99 in the right's.
+  const double max_us = (120 + 0.25) * w * 1e6;
+  auto edge = [&](double q) { return std::min(NearestRank(all, q) * 1e6 + 0.375, max_us); };
+  const std::string expect = fmt::format("p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us (max {:.1f} us)", edge(0.5),
+                                         edge(0.99), edge(0.999), max_us);
+  EXPECT_NE(s.find(expect), std::string::npos) << s << "\nexpected: " << expect;
+  EXPECT_NE(s.find("2 trial sides on the real clock"), std::string::npos) << s;
+  EXPECT_NE(s.find("over 2000 ticks"), std::string::npos) << s;
+  EXPECT_NE(s.find("timer slack 1 ns on 2 of 2 sides"), std::string::npos) << s;
+}
+
+TEST(TimingReport, AVirtualClockStudySaysSo) {
+  Fixture f;
+  f.Add("left", {0, 0, 0}, "virtual");
+  EXPECT_NE(TimingMethodsSentence(f.d, f.study).find("virtual clock"), std::string::npos);
+  Fixture none;
+  EXPECT_NE(TimingMethodsSentence(none.d, none.study).find("No real-time timing"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hapticlab::stats
