@@ -374,8 +374,6 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
     opt.ui->log_event = [&](const std::string& kind, const std::string& detail) {
       database.LogEvent({.session_id = session, .trial_id = trial_under_way, .kind = kind, .detail = detail});
     };
-  // A simulated rig's virtual clock runs --ui-speed times faster: so do its breaks.
-  const double break_s = p.break_duration_s / (rig->sim ? opt.ui_playback_speed : 1.0);
   const bool constrained = p.randomization.no_immediate_repeat;
   int untouched_in_a_row = 0;
   std::set<std::int64_t> break_before;  // trials the plan puts a break before
