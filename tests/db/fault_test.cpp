@@ -94,9 +94,9 @@ void ExpectWhole(const std::string& path, std::int64_t session, int planned) {
   }
 }
 
-std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n) {
+std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n, int first_index = 0) {
   std::vector<Trial> t;
-  for (int i = 0; i < n; ++i)
+  for (int i = first_index; i < first_index + n; ++i)
     t.push_back({.session_id = session, .plan_index = i, .phase = "main", .material = "m"});
   return db.AddTrials(t);
 }
@@ -230,9 +230,11 @@ TEST(Fault, SigkillWhileTrajectoriesAreWrittenNeverMixesAttempts) {
   }
   std::mt19937_64 rng(20261122);  // fixed seed: the kill moments are reproducible
   std::uniform_int_distribution<int> delay_ms(20, 150);
-  int killed = 0, interrupted_rounds = 0;
-  // At least 5 kills, and on until one interrupted an attempt that had committed chunks.
-  for (int round = 0; round < 40 && (round < 5 || interrupted_rounds == 0); ++round) {
+  int killed = 0, interrupted_rounds = 0, planned = 30;
+  // At least 5 kills, and on until one interrupted an attempt that had committed chunks. A
+  // child may finish every trial between two kills on a fast machine: then 30 more are
+  // planned, so that later kills have trials to interrupt.
+  for (int round = 0; round < 100 && (round < 5 || interrupted_rounds == 0); ++round) {
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) RunUntilKilled(path, session);
@@ -242,13 +244,20 @@ TEST(Fault, SigkillWhileTrajectoriesAreWrittenNeverMixesAttempts) {
     waitpid(pid, &status, 0);
     killed += WIFSIGNALED(status);
     Database db(path);
-    for (const auto& t : db.Trials(session))
+    bool all_completed = true;
+    for (const auto& t : db.Trials(session)) {
       interrupted_rounds +=
           t.status == kTrialRunning && !db.TrajectoryChunks(t.id, t.attempts).empty();
+      all_completed = all_completed && t.status == kTrialCompleted;
+    }
+    if (all_completed && interrupted_rounds == 0) {
+      Plan(db, session, 30, planned);
+      planned += 30;
+    }
   }
   EXPECT_GT(killed, 0) << "no child was killed mid-run: the test tests nothing";
   Resume(path, session);
-  ExpectWhole(path, session, 30);
+  ExpectWhole(path, session, planned);
   // The kills left chunks of interrupted attempts behind; none of them is read with a trial.
   Database db(path);
   int interrupted = 0;
