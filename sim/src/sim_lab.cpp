@@ -229,12 +229,7 @@ ProfileSet LoadProfiles(const std::string& path) {
   Diagnostics diag;
   ProfileSet set;
   auto num = [&](const toml::table& t, const std::string& pre, const char* key, double* out, double lo, double hi) {
-    const toml::node* n = t.get(key);
-    if (!n) return;
-    auto v = n->value<double>();
-    if (!v || !(*v >= lo && *v <= hi))
-      diag.Add(path, static_cast<int>(n->source().begin.line), pre + "." + key, fmt::format("expected a number in [{}, {}]", lo, hi));
-    else *out = *v;
+    Number(t, path, pre, key, out, lo, hi, diag);
   };
   const toml::array* ps = doc["profile"].as_array();
   if (!ps) diag.Add(path, 1, "profile", "no [[profile]] tables");

@@ -331,6 +331,14 @@ double FStatDdf(const std::vector<double>& nu) {
 }
 
 // Kenward-Roger t and F tests (lmerTest's ddf = "Kenward-Roger", through pbkrtest).
+// The hypothesis matrix of a fixed term: one row per coefficient of the term, selecting it
+// among the p coefficients (with sum-to-zero contrasts, lmerTest's type 3 contrasts).
+MatrixXd Selector(const std::vector<int>& columns, Eigen::Index p) {
+  MatrixXd L = MatrixXd::Zero(static_cast<Eigen::Index>(columns.size()), p);
+  for (std::size_t i = 0; i < columns.size(); ++i) L(static_cast<Eigen::Index>(i), columns[i]) = 1.0;
+  return L;
+}
+
 void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorXd& beta, LmmResult& r) {
   std::vector<double> gamma;
   for (const auto& t : r.random) {
@@ -354,9 +362,8 @@ void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorX
     r.fixed.push_back(c);
   }
   for (const auto& term : d.x_terms) {
-    const auto q = static_cast<Eigen::Index>(term.columns.size());
-    MatrixXd L = MatrixXd::Zero(q, p);
-    for (Eigen::Index i = 0; i < q; ++i) L(i, term.columns[static_cast<std::size_t>(i)]) = 1.0;
+    const MatrixXd L = Selector(term.columns, p);
+    const Eigen::Index q = L.rows();
     const auto kt = detail::KenwardRogerTest(a, Phi, L, beta);
     LmmFTest t;
     t.term = term.name;
@@ -482,9 +489,8 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   // Type 3 F tests: with sum-to-zero contrasts and every cell observed, the hypothesis of a
   // term is that its coefficients are zero (L selects them), as lmerTest's type 3 contrasts.
   for (const auto& term : d.x_terms) {
-    const auto q = static_cast<Eigen::Index>(term.columns.size());
-    MatrixXd L = MatrixXd::Zero(q, p);
-    for (Eigen::Index i = 0; i < q; ++i) L(i, term.columns[static_cast<std::size_t>(i)]) = 1.0;
+    const MatrixXd L = Selector(term.columns, p);
+    const Eigen::Index q = L.rows();
     Eigen::SelfAdjointEigenSolver<MatrixXd> eig(L * C * L.transpose());
     const MatrixXd PtL = eig.eigenvectors().transpose() * L;
     std::vector<double> nu;

@@ -54,23 +54,8 @@ PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& gen
     std::atomic<long> finished{0};
     std::exception_ptr error;
     std::mutex error_mutex;
-    auto work = [&] {
-      for (std::size_t i; (i = next.fetch_add(1)) < mine.size();) {
-        try {
-          Rng rng(DeriveSeed(DeriveSeed(o.seed, static_cast<std::uint64_t>(n)), static_cast<std::uint64_t>(mine[i])));
-          per[i] = AnalyseOnce(generate(n, rng), o.alpha);
-        } catch (...) {
-          const std::lock_guard lock(error_mutex);
-          if (!error) error = std::current_exception();
-          next = mine.size();
-        }
-        ++finished;
-      }
-    };
-    std::vector<std::thread> pool;
-    for (int t = 1; t < std::max(o.threads, 1); ++t) pool.emplace_back(work);
-    // The calling thread works too and reports progress between its simulations.
-    for (std::size_t i; (i = next.fetch_add(1)) < mine.size();) {
+    // Simulation i of this shard; an error stops every worker and is rethrown below.
+    auto simulate = [&](std::size_t i) {
       try {
         Rng rng(DeriveSeed(DeriveSeed(o.seed, static_cast<std::uint64_t>(n)), static_cast<std::uint64_t>(mine[i])));
         per[i] = AnalyseOnce(generate(n, rng), o.alpha);
@@ -80,6 +65,15 @@ PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& gen
         next = mine.size();
       }
       ++finished;
+    };
+    auto work = [&] {
+      for (std::size_t i; (i = next.fetch_add(1)) < mine.size();) simulate(i);
+    };
+    std::vector<std::thread> pool;
+    for (int t = 1; t < std::max(o.threads, 1); ++t) pool.emplace_back(work);
+    // The calling thread works too and reports progress between its simulations.
+    for (std::size_t i; (i = next.fetch_add(1)) < mine.size();) {
+      simulate(i);
       if (o.progress) o.progress(done + finished.load(), total);
     }
     for (auto& t : pool) t.join();
