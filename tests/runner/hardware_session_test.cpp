@@ -117,7 +117,9 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   CirclingDevice dev;
-  dev.nan_from = 200;  // during the first rated trial
+  // During the first rated trial: a hardware session first renders one 0.5 s training trial
+  // per material at 1 kHz (a fault there is logged, not re-queued), then the rated trials.
+  dev.nan_from = static_cast<long>(p.materials.size()) * 500 + 200;
   dev.nan_count = 5;
   HardwareRig rig{.device = &dev, .description = "glitching"};
   Rater ui;
