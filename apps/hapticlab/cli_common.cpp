@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::cli {
 
@@ -16,7 +17,12 @@ int Guard(const std::function<int()>& body) {
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitBadInput;
+  } catch (const PreconditionError& e) {
+    fmt::print(stderr, "internal error (please report): {}\n", e.what());
+    return kExitFailure;
   } catch (const std::invalid_argument& e) {
+    // Transitional: library code still throwing std::invalid_argument for user data is being
+    // moved to InputError (docs/architecture.md, "Errors"); until then it stays exit 2.
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitBadInput;
   } catch (const std::exception& e) {

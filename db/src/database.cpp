@@ -295,7 +295,7 @@ std::string Database::IntegrityCheck() const {
 }
 
 std::int64_t Database::CreateStudy(const Study& st) {
-  HL_THROW_UNLESS(!st.name.empty(), "study name must not be empty");
+  HL_REQUIRE(!st.name.empty(), "study name must not be empty");
   Stmt s(db_, "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES (?,?,?,?)");
   s.Bind(1, st.name).Bind(2, st.protocol_toml)
       .Bind(3, st.protocol_hash.empty() ? HashText(st.protocol_toml) : st.protocol_hash)
@@ -668,11 +668,11 @@ std::int64_t Database::SaveMeasurement(const std::string& material, const std::s
 }
 
 void Database::InsertTrajectoryChunk(const TrajectoryChunk& c) {
-  HL_THROW_UNLESS(c.attempt >= 0, "trajectory chunk attempt must not be negative");
-  HL_THROW_UNLESS(!c.channels.empty(), "trajectory chunk needs at least one channel");
-  HL_THROW_UNLESS(c.samples.size() % c.channels.size() == 0,
+  HL_REQUIRE(c.attempt >= 0, "trajectory chunk attempt must not be negative");
+  HL_REQUIRE(!c.channels.empty(), "trajectory chunk needs at least one channel");
+  HL_REQUIRE(c.samples.size() % c.channels.size() == 0,
                   "trajectory chunk sample count is not a multiple of its channel count");
-  HL_THROW_UNLESS(c.rate_hz > 0, "trajectory chunk rate must be positive");
+  HL_REQUIRE(c.rate_hz > 0, "trajectory chunk rate must be positive");
   Stmt s(db_,
          "INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, "
          "sample_count, samples, attempt) VALUES (?,?,?,?,?,?,?,?)");

@@ -31,7 +31,7 @@ TrajectoryStream::TrajectoryStream(std::int64_t trial_id, int attempt, std::stri
 
 TrajectoryWriter::TrajectoryWriter(const std::string& db_path, const WriterOptions& options)
     : impl_(std::make_unique<Impl>(db_path, options.busy_timeout_ms)), options_(options) {
-  HL_THROW_UNLESS(options.chunk_samples >= 1, "chunk_samples must be at least 1");
+  HL_REQUIRE(options.chunk_samples >= 1, "chunk_samples must be at least 1");
   if (options.start_thread) Start();
 }
 
@@ -48,10 +48,10 @@ void TrajectoryWriter::Start() {
 TrajectoryStream* TrajectoryWriter::OpenStream(std::int64_t trial_id, const std::string& name,
                                                double rate_hz,
                                                const std::vector<std::string>& channels) {
-  HL_THROW_UNLESS(rate_hz > 0 && std::isfinite(rate_hz), "stream rate must be positive");
-  HL_THROW_UNLESS(!channels.empty() && channels.size() <= kMaxChannels,
+  HL_REQUIRE(rate_hz > 0 && std::isfinite(rate_hz), "stream rate must be positive");
+  HL_REQUIRE(!channels.empty() && channels.size() <= kMaxChannels,
                   "a stream has 1 to 16 channels");
-  HL_THROW_UNLESS(!name.empty(), "stream name must not be empty");
+  HL_REQUIRE(!name.empty(), "stream name must not be empty");
   int attempt = 0;
   {
     std::lock_guard lock(reader_mu_);

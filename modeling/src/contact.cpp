@@ -177,7 +177,7 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
   fo.uncertainty = true;
   const auto fr = wb::Fit(&model, r, fo);
   const auto* cf = fr.Find(wb::Channel::kFriction);
-  HL_DEMAND(cf != nullptr);
+  HL_REQUIRE(cf != nullptr, "the contact cost functor must exist");
   out.friction_summary = cf->summary;
   out.kappa_N_per_m = FromParam(*cf, "dahl", "kappa");
   out.mu_k = FromParam(*cf, "coulomb", "mu_k");
@@ -221,7 +221,7 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
   fo.max_normal_force_N = o.max_force_N;
   const auto nr = wb::Fit(&model, pr, fo);
   const auto* nf = nr.Find(wb::Channel::kNormal);
-  HL_DEMAND(nf != nullptr);
+  HL_REQUIRE(nf != nullptr, "the cost functor must exist");
   out.normal_summary = nf->summary;
   out.K1mm_N = FromParam(*nf, "core", "K1mm_N");
   out.B1mm_Ns_per_m = FromParam(*nf, "hc-damping", "B1mm");

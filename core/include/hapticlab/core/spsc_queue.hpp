@@ -25,7 +25,7 @@ class SpscQueue {
  public:
   /// @param capacity number of elements the queue can hold; rounded up to a power of two.
   explicit SpscQueue(std::size_t capacity) {
-    HL_THROW_UNLESS(capacity >= 1 && capacity <= (std::size_t{1} << 30),
+    HL_REQUIRE(capacity >= 1 && capacity <= (std::size_t{1} << 30),
                     "SpscQueue capacity must be in [1, 2^30]");
     std::size_t c = 1;
     while (c < capacity) c <<= 1;
