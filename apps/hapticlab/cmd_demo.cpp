@@ -7,6 +7,7 @@
 #include <fmt/core.h>
 
 #include <chrono>
+#include <fstream>
 #include <ctime>
 #include <filesystem>
 #include <memory>
@@ -47,7 +48,9 @@ std::string UtcStamp() {
 // One second of the Hybrid method on a placeholder model through the real-time engine on
 // the real clock: a 1 kHz force thread and a 10 kHz vibration thread driving the generic
 // simulated device, whose simulated hand strokes the virtual sample.
-void RealTimeCheck(const std::string& profiles_path) {
+// Returns the methods-section sentence for the demo's report: the simulated participants ran
+// on a virtual clock, so the report's timing figures are this check's, on this computer.
+std::string RealTimeCheck(const std::string& profiles_path) {
   const auto set = sim::LoadProfiles(profiles_path);
   const auto model = sim::PlaceholderModel(set.profiles.at("Denim"));
   renderer::RenderOptions ro;
@@ -72,6 +75,18 @@ void RealTimeCheck(const std::string& profiles_path) {
              ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_thread.timer_slack_ns, st.force_thread.priority_status,
              st.force_deadline_misses, st.vibration_deadline_misses, st.contact_ticks, st.force_ticks,
              r.counters().nan_faults.load() + r.counters().stale_faults.load());
+  const auto& vt = st.vibration_timing;
+  return fmt::format(
+      "Real-time check on the computer that ran this demo ({}; the simulated participants above ran on a "
+      "virtual clock, so these are the engine's figures on this computer, not the sessions'): the Hybrid method "
+      "(Denim) ran 1 s on the real clock with a simulated hand stroking the virtual sample; the force loop "
+      "(requested {:.0f} Hz) achieved {:.1f} Hz with wake-up lateness p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us "
+      "(max {:.1f} us) and {} deadline misses; the vibration loop (requested {:.0f} Hz) achieved {:.1f} Hz with "
+      "lateness p50 {:.1f} us, p99 {:.1f} us; timer slack {} ns, {}, spin {} us before each force deadline.\n",
+      UtcStamp(), ro.force_rate_hz, st.achieved_force_rate_hz, ft.late_p50_s * 1e6, ft.late_p99_s * 1e6,
+      ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_deadline_misses, ro.vibration_rate_hz,
+      st.achieved_vibration_rate_hz, vt.late_p50_s * 1e6, vt.late_p99_s * 1e6, st.force_thread.timer_slack_ns,
+      st.force_thread.priority_status, runner::EngineOptions{}.rt.spin_us);
 }
 
 // One line of `study power`: participants for 80 % power on the method effect, from the
@@ -163,7 +178,12 @@ void RegisterDemo(CLI::App& app) {
       db::Database database(db_path, {.create = false, .read_only = true});
       // Trajectories stay in the database (`hapticlab export` writes them on request).
       const auto files = db::ExportCsv(database, (dir / "export").string(), false);
-      RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
+      const std::string timing = RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
+      {
+        std::ofstream md(report.markdown, std::ios::app);
+        md << "\n## Real-time check\n\n" << timing;
+        if (!md) throw std::runtime_error("cannot append the real-time check to " + report.markdown);
+      }
       PowerLine(p, pool);
       const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s, wall, stimulus_s / wall);
