@@ -133,7 +133,8 @@ void RegisterRig(CLI::App& app) {
         "reports the ticks, the link's empty and lost reads, contact, and whether the grip's rest\n"
         "pose is already in contact with a sample (a wrong rig file).\n"
         "--clock real: run the force loop (at --rate) and the 10 kHz vibration loop on the real\n"
-        "clock with a resting simulated grip (zero force) and the chosen actuator, and print a\n"
+        "clock with a resting simulated grip (zero force; --render MODEL: a simulated hand strokes\n"
+        "the rendered model) and the chosen actuator, and print a\n"
         "histogram of wake-up lateness like cyclictest, what the threads got (priority, memory\n"
         "lock, timer slack) and the verdict for the rate (exit 1: a missed deadline or a rate\n"
         "off by more than 1 %).");
@@ -145,6 +146,10 @@ void RegisterRig(CLI::App& app) {
         ->check(CLI::IsMember({"none", "audio"}))->capture_default_str();
     cmd->add_option("--audio-device", o->timing.audio_device, "--clock real: PortAudio output device (name substring)");
     cmd->add_flag("--no-vibration", o->no_vibration, "--clock real: run the force loop only");
+    cmd->add_option("--render", o->timing.render,
+                    "--clock real: render this material model (.toml) while a simulated hand strokes the\n"
+                    "virtual sample (default: a resting grip out of contact, zero force)")
+        ->check(CLI::ExistingFile);
     AddRtOptions(cmd, o->timing.rt);
     cmd->add_option("--rig", o->path, "Rig file (default: the device's built-in rig)");
     cmd->add_option("--seconds", o->seconds, "Stroking time [s] (virtual)")->check(CLI::Range(0.01, 600.0))->capture_default_str();

@@ -8,8 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
+#include "hapticlab/core/rng.hpp"
 #include "hapticlab/devices/audio.hpp"
+#include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
 namespace hapticlab::cli {
@@ -81,12 +84,26 @@ void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
 
 int RunTimingCheck(const TimingCheckArgs& a) {
   if (a.device != "sim") throw std::invalid_argument("rig check --clock real: only --device sim (a resting simulated grip) is supported");
-  const auto model = sim::PlaceholderModel(sim::MaterialProfile{.id = "check"});
+  const auto model = a.render.empty() ? sim::PlaceholderModel(sim::MaterialProfile{.id = "check"})
+                                       : renderer::LoadMaterial(a.render);
   renderer::RenderOptions ro;
   ro.force_rate_hz = a.rate_hz;
   ro.vibration = a.vibration;
   renderer::HybridRenderer r(model, ro);
-  RestingDevice dev;
+  // Without a model: a grip resting out of contact. With one: the simulated hand strokes the
+  // virtual sample (device frame = sample frame) back and forth on the real clock.
+  RestingDevice resting;
+  sim::Hand hand;
+  sim::SimDevice stroking(sim::SimDeviceModel{}, hand, nullptr);  // null clock: the real one
+  if (!a.render.empty()) {
+    Rng rng(1);
+    sim::Stroke stroke = sim::DrawStroke(rng);
+    const double relief_m = model.geometry ? model.geometry->max_m() - model.geometry->min_m() : 0.0;
+    hand.Begin(stroke, Eigen::Isometry3d::Identity(), model.contact.layer_thickness_m + relief_m,
+               model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz,
+               ro.vibration_rate_hz);
+  }
+  devices::HapticDevice& dev = a.render.empty() ? static_cast<devices::HapticDevice&>(resting) : stroking;
   std::unique_ptr<devices::AudioOutput> audio;
   if (a.actuator == "audio") {
     devices::AudioConfig c;
@@ -112,6 +129,8 @@ int RunTimingCheck(const TimingCheckArgs& a) {
                                                        : fmt::format("achieved {:.1f} Hz", st.achieved_force_rate_hz));
   if (a.json) {
     json j = {{"device", a.device},
+              {"render", a.render.empty() ? json(nullptr) : json(a.render)},
+              {"contact_ticks", st.contact_ticks},
               {"clock", "real"},
               {"seconds", a.seconds},
               {"requested_rate_hz", a.rate_hz},
@@ -137,6 +156,9 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   } else {
     fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n", st.achieved_force_rate_hz,
                a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
+    if (!a.render.empty())
+      fmt::print("rendering {} with a simulated hand stroking it: in contact on {} of {} ticks\n", a.render,
+                 st.contact_ticks, st.force_ticks);
     fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n", st.force_thread.priority_status,
                st.force_thread.affinity_status, st.memory.status, st.force_thread.timer_slack_ns);
     fmt::print("wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses {}\n",

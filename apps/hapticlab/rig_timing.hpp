@@ -1,5 +1,6 @@
 #pragma once
-// hapticlab rig check --clock real: the loops on the real clock with a resting device, timed.
+// hapticlab rig check --clock real: the loops on the real clock, timed: a resting grip (zero
+// force) or, with --render MODEL, a simulated hand stroking the rendered model.
 
 #include <CLI/CLI.hpp>
 
@@ -17,6 +18,10 @@ struct TimingCheckArgs {
   std::string device = "sim";     ///< only "sim": a simulated grip resting out of contact
   std::string actuator = "none";  ///< "none" or "audio" (PortAudio, --audio-device)
   std::string audio_device;
+  /// Material model (.toml) to render while a simulated hand strokes the virtual sample on
+  /// the real clock (the tick durations of that model); empty: a resting grip out of contact,
+  /// so the commanded force is zero.
+  std::string render;
   double seconds = 2;
   double rate_hz = 1000;          ///< force loop rate
   bool vibration = true;          ///< run the vibration loop (10 kHz)

@@ -49,6 +49,38 @@ TEST(RigTimingCli, ARefusedPriorityIsReportedAndTheCheckRuns) {
   EXPECT_GT(j["force_ticks"].get<int>(), 100);
 }
 
+// --render MODEL: the simulated hand strokes the rendered model on the real clock, so the loop
+// times real force ticks (in contact) and commands force; without it the grip rests out of
+// contact (zero force). A model file that does not exist is bad input.
+TEST(RigTimingCli, RenderStrokesTheModelOnTheRealClock) {
+  test::TempDir dir;
+  test::WriteFile(dir.File("m.toml"), R"(name = "Sine test"
+effects = ["coulomb", "dahl"]
+[contact]
+texture_K = 900.0
+base_K = 2000.0
+layer_thickness_m = 5e-4
+[friction]
+kappa_N_per_m = 2000.0
+mu_k = 0.3
+[geometry]
+kind = "sine"
+amplitude_m = 1e-5
+wavelength_m = 1e-3
+)");
+  int rc = -1;
+  const auto with = RunJson("--seconds 0.5 --no-vibration --render " + dir.File("m.toml"), &rc);
+  EXPECT_TRUE(rc == 0 || rc == 1) << rc;
+  EXPECT_EQ(with["render"], dir.File("m.toml"));
+  EXPECT_GT(with["contact_ticks"].get<int>(), with["force_ticks"].get<int>() / 2) << with.dump();
+  const auto without = RunJson("--seconds 0.2 --no-vibration", &rc);
+  EXPECT_EQ(without["contact_ticks"], 0) << without.dump();
+  EXPECT_TRUE(without["render"].is_null());
+  std::string out;
+  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device sim --clock real --render " +
+                                 dir.File("missing.toml"), &out), 2) << out;
+}
+
 TEST(RigTimingCli, OnlyTheSimulatedGripRunsOnTheRealClock) {
   std::string out;
   EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device falcon-twin --clock real --seconds 0.1", &out), 2) << out;
