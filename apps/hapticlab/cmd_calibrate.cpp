@@ -47,6 +47,11 @@ double& Ref(sim::ObserverParams& o, const std::string& name) {
   if (name == "lower") return o.lower;
   if (name == "range_sd") return o.range_sd;
   if (name == "lapse_rate") return o.lapse_rate;
+  if (name == "scale_vibration") return o.scale_vibration;
+  if (name == "scale_fluctuation") return o.scale_fluctuation;
+  if (name == "scale_friction") return o.scale_friction;
+  if (name == "scale_stiffness") return o.scale_stiffness;
+  if (name == "scale_pattern") return o.scale_pattern;
   const auto dot = name.find('.');
   auto& c = o.criteria[name.substr(0, dot)];
   const std::string f = name.substr(dot + 1);
@@ -80,7 +85,7 @@ void RegisterCalibrate(CLI::App& study) {
   auto* cmd = study.add_subcommand(
       "calibrate",
       "Fit the simulated observer (range, offsets, participant x material / x method effects, noise,\n"
-      "criterion sensitivity) to published statistics: partial eta^2, method means, SDs, real-real\n"
+      "criterion sensitivity, perceptual cue scales) to published statistics: partial eta^2, method means, SDs, real-real\n"
       "limits, listed with weights in a targets file (studies/shin2019/calibration.toml). Writes\n"
       "an observer file and prints the targets, weights and achieved values. Reproducible from the\n"
       "targets file's seed.");
