@@ -66,7 +66,8 @@ std::string ObserverToml(const sim::ObserverParams& o, const std::string& header
   std::string s = header;
   s += fmt::format("[observer]\nupper = {:.3f}\nlower = {:.3f}\nrange_sd = {:.4f}\nlapse_rate = {:.4f}\n", o.upper, o.lower,
                    o.range_sd, o.lapse_rate);
-  s += fmt::format("scale_vibration = {}\nscale_fluctuation = {}\nscale_friction = {}\nscale_stiffness = {}\nscale_pattern = {}\n",
+  s += fmt::format("scale_vibration = {:.4f}\nscale_fluctuation = {:.4f}\nscale_friction = {:.4f}\nscale_stiffness = {:.4f}\n"
+                   "scale_pattern = {:.4f}\n",
                    o.scale_vibration, o.scale_fluctuation, o.scale_friction, o.scale_stiffness, o.scale_pattern);
   s += fmt::format("sensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = {:.3f}\nmethod_sd = {:.3f}\nnoise_sd = {:.3f}\n",
                    o.defaults.sensitivity, o.defaults.offset_sd, o.defaults.material_sd, o.defaults.method_sd,
