@@ -24,7 +24,8 @@ int Line(const toml::node* n) { return n ? static_cast<int>(n->source().begin.li
 
 bool SameScales(const sim::ObserverParams& a, const sim::ObserverParams& b) {
   return a.scale_vibration == b.scale_vibration && a.scale_fluctuation == b.scale_fluctuation &&
-         a.scale_friction == b.scale_friction && a.scale_stiffness == b.scale_stiffness && a.scale_pattern == b.scale_pattern;
+         a.scale_friction == b.scale_friction && a.scale_stiffness == b.scale_stiffness &&
+         a.scale_pattern == b.scale_pattern;
 }
 
 // The pool's trials with each criterion's feature distance recomputed from the recorded features
@@ -182,12 +183,15 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     p.name = str(*t, pre, "name", true);
     const auto dot = p.name.find('.');
     const bool scale = IsScaleParam(p.name);
-    const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" || p.name == "lapse_rate" || scale ||
+    const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" ||
+                    p.name == "lapse_rate" || scale ||
                     (dot != std::string::npos && dot > 0 &&
-                     std::any_of(std::begin(kFields), std::end(kFields), [&](const char* f) { return p.name.substr(dot + 1) == f; }));
+                     std::any_of(std::begin(kFields), std::end(kFields),
+                                 [&](const char* f) { return p.name.substr(dot + 1) == f; }));
     if (!p.name.empty() && !ok)
       d.Add(path, Line(t->get("name")), pre + ".name",
-            "expected upper, lower, range_sd, lapse_rate, scale_(vibration|fluctuation|friction|stiffness|pattern) or "
+            "expected upper, lower, range_sd, lapse_rate, "
+            "scale_(vibration|fluctuation|friction|stiffness|pattern) or "
             "CRITERION.(sensitivity|offset_sd|material_sd|method_sd|noise_sd)");
     // A perceptual scale divides a feature difference: the observer file accepts [0.001, 10].
     const double lim_lo = scale ? 1e-3 : -1e6, lim_hi = scale ? 10 : 1e6;
@@ -254,8 +258,8 @@ double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& sp
     auto work = [&] {
       for (int s; (s = next.fetch_add(1)) < spec.simulations;) {
         Rng rng(DeriveSeed(DeriveSeed(spec.seed, pi), static_cast<std::uint64_t>(s)));
-        per[static_cast<std::size_t>(s)] =
-            Statistics(SimulateRatings(pool, observer, spec.protocols[pi].participants, rng, false), targets);
+        per[static_cast<std::size_t>(s)] = Statistics(
+            SimulateRatings(pool, observer, spec.protocols[pi].participants, rng, false), targets);
       }
     };
     std::vector<std::thread> ts;

@@ -2,11 +2,11 @@
 // dissertation's published statistics: ch. V.3 with 15 participants reproduces Table 5.3's
 // partial eta^2 (mean absolute difference over the nine criterion x factor values <= 0.10)
 // and the method means of Tables 5.4/5.5 within 6 points (LPC, FF and Hybrid); ch. IV.5 with
-// 20 participants reproduces Table 4.1's SDs within 5 points. Averaged over simulated studies with seeds
-// and a physics pool other than the calibration's: plan indices 6-8 through the runner,
-// where the fit used 0-5.
-// Heavy (simulated sessions through the runner): excluded from the ASan pass by name.
-// CalibrationSpec.* (the targets file's perceptual-scale parameters) is cheap and runs everywhere.
+// 20 participants reproduces Table 4.1's SDs within 5 points. Averaged over simulated studies with
+// seeds and a physics pool other than the calibration's: plan indices 6-8 through the runner, where
+// the fit used 0-5. Heavy (simulated sessions through the runner): excluded from the ASan pass by
+// name. CalibrationSpec.* (the targets file's perceptual-scale parameters) is cheap and runs
+// everywhere.
 
 #include <gtest/gtest.h>
 
@@ -23,18 +23,22 @@ namespace {
 // A targets file with the given [[param]] tables (one protocol, one target).
 std::string TargetsFile(const test::TempDir& dir, const std::string& params) {
   const std::string path = dir.File("cal.toml");
-  test::WriteFile(path, "[fit]\nobserver = \"o.toml\"\n\n[[protocol]]\nid = \"p\"\nfile = \"p.toml\"\nparticipants = 4\n\n" +
-                            params +
-                            "\n[[target]]\nprotocol = \"p\"\nstatistic = \"sd\"\ncriterion = \"roughness\"\nvalue = 20\n"
-                            "weight = 1\n");
+  test::WriteFile(path,
+                  "[fit]\nobserver = \"o.toml\"\n\n[[protocol]]\nid = \"p\"\nfile = "
+                  "\"p.toml\"\nparticipants = 4\n\n" +
+                      params +
+                      "\n[[target]]\nprotocol = \"p\"\nstatistic = \"sd\"\ncriterion = "
+                      "\"roughness\"\nvalue = 20\n"
+                      "weight = 1\n");
   return path;
 }
 
 TEST(CalibrationSpec, PerceptualScalesAreFreeParameters) {
   const test::TempDir dir;
-  const auto spec = LoadCalibration(TargetsFile(dir,
-                                                "[[param]]\nname = \"scale_vibration\"\nlo = 0.05\nhi = 2\nstep = 0.1\n\n"
-                                                "[[param]]\nname = \"scale_pattern\"\nlo = 0.1\nhi = 3\nstep = 0.2\n"));
+  const auto spec = LoadCalibration(
+      TargetsFile(dir,
+                  "[[param]]\nname = \"scale_vibration\"\nlo = 0.05\nhi = 2\nstep = 0.1\n\n"
+                  "[[param]]\nname = \"scale_pattern\"\nlo = 0.1\nhi = 3\nstep = 0.2\n"));
   ASSERT_EQ(spec.params.size(), 2U);
   EXPECT_EQ(spec.params[0].name, "scale_vibration");
   EXPECT_DOUBLE_EQ(spec.params[1].hi, 3);
@@ -46,9 +50,10 @@ TEST(CalibrationSpec, ScaleOutsideTheObserverFilesRangeNamesFileLineField) {
   const test::TempDir dir;
   // Line 11: lo = 0 (a scale divides a feature difference: lo must be >= 0.001); line 16: a
   // misspelt scale.
-  const std::string path = TargetsFile(dir,
-                                       "[[param]]\nname = \"scale_vibration\"\nlo = 0\nhi = 2\nstep = 0.1\n\n"
-                                       "[[param]]\nname = \"scale_vibrations\"\nlo = 0.1\nhi = 2\nstep = 0.1\n");
+  const std::string path =
+      TargetsFile(dir,
+                  "[[param]]\nname = \"scale_vibration\"\nlo = 0\nhi = 2\nstep = 0.1\n\n"
+                  "[[param]]\nname = \"scale_vibrations\"\nlo = 0.1\nhi = 2\nstep = 0.1\n");
   try {
     LoadCalibration(path);
     FAIL() << "expected InputError";

@@ -10,8 +10,8 @@
 ///   [[param]]    name ("upper", "lower", "range_sd", "lapse_rate", a perceptual scale
 ///                "scale_vibration" | "scale_fluctuation" | "scale_friction" | "scale_stiffness" |
 ///                "scale_pattern" (lo, hi within [0.001, 10]), or "CRITERION.FIELD" with
-///                FIELD sensitivity | offset_sd | material_sd | method_sd | noise_sd), lo, hi, step.
-///                A candidate with other perceptual scales than the recording observer's
+///                FIELD sensitivity | offset_sd | material_sd | method_sd | noise_sd), lo, hi,
+///                step. A candidate with other perceptual scales than the recording observer's
 ///                re-measures each recorded trial's feature distances (FeltTrial::felt).
 ///   [[target]]   protocol (an id), statistic, value, weight, and per statistic:
 ///                pes: criterion, effect (method | material | method:material) — mean partial eta^2
