@@ -47,6 +47,11 @@ double& Ref(sim::ObserverParams& o, const std::string& name) {
   if (name == "lower") return o.lower;
   if (name == "range_sd") return o.range_sd;
   if (name == "lapse_rate") return o.lapse_rate;
+  if (name == "scale_vibration") return o.scale_vibration;
+  if (name == "scale_fluctuation") return o.scale_fluctuation;
+  if (name == "scale_friction") return o.scale_friction;
+  if (name == "scale_stiffness") return o.scale_stiffness;
+  if (name == "scale_pattern") return o.scale_pattern;
   const auto dot = name.find('.');
   auto& c = o.criteria[name.substr(0, dot)];
   const std::string f = name.substr(dot + 1);
@@ -61,7 +66,8 @@ std::string ObserverToml(const sim::ObserverParams& o, const std::string& header
   std::string s = header;
   s += fmt::format("[observer]\nupper = {:.3f}\nlower = {:.3f}\nrange_sd = {:.4f}\nlapse_rate = {:.4f}\n", o.upper, o.lower,
                    o.range_sd, o.lapse_rate);
-  s += fmt::format("scale_vibration = {}\nscale_fluctuation = {}\nscale_friction = {}\nscale_stiffness = {}\nscale_pattern = {}\n",
+  s += fmt::format("scale_vibration = {:.4f}\nscale_fluctuation = {:.4f}\nscale_friction = {:.4f}\n"
+                   "scale_stiffness = {:.4f}\nscale_pattern = {:.4f}\n",
                    o.scale_vibration, o.scale_fluctuation, o.scale_friction, o.scale_stiffness, o.scale_pattern);
   s += fmt::format("sensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = {:.3f}\nmethod_sd = {:.3f}\nnoise_sd = {:.3f}\n",
                    o.defaults.sensitivity, o.defaults.offset_sd, o.defaults.material_sd, o.defaults.method_sd,
@@ -80,10 +86,10 @@ void RegisterCalibrate(CLI::App& study) {
   auto* cmd = study.add_subcommand(
       "calibrate",
       "Fit the simulated observer (range, offsets, participant x material / x method effects, noise,\n"
-      "criterion sensitivity) to published statistics: partial eta^2, method means, SDs, real-real\n"
-      "limits, listed with weights in a targets file (studies/shin2019/calibration.toml). Writes\n"
-      "an observer file and prints the targets, weights and achieved values. Reproducible from the\n"
-      "targets file's seed.");
+      "criterion sensitivity, perceptual cue scales) to published statistics: partial eta^2,\n"
+      "method means, SDs, real-real limits, listed with weights in a targets file\n"
+      "(studies/shin2019/calibration.toml). Writes an observer file and prints the targets,\n"
+      "weights and achieved values. Reproducible from the targets file's seed.");
   cmd->add_option("TARGETS", a->targets, "Calibration targets (.toml)")->required();
   cmd->add_option("--out", a->out, "Observer file to write (default: the targets file's `observer`)");
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");

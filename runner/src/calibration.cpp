@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <thread>
 #include <toml++/toml.h>
 
@@ -20,6 +21,25 @@ namespace {
 namespace fs = std::filesystem;
 
 int Line(const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 1; }
+
+bool SameScales(const sim::ObserverParams& a, const sim::ObserverParams& b) {
+  return a.scale_vibration == b.scale_vibration && a.scale_fluctuation == b.scale_fluctuation &&
+         a.scale_friction == b.scale_friction && a.scale_stiffness == b.scale_stiffness &&
+         a.scale_pattern == b.scale_pattern;
+}
+
+// The pool's trials with each criterion's feature distance recomputed from the recorded features
+// by `observer`'s perceptual scales (Observer::Distance, the runner's own code).
+FeltPool Rescaled(const FeltPool& pool, const sim::ObserverParams& observer) {
+  FeltPool out = pool;
+  out.observer = observer;
+  const sim::Observer obs(observer, 0, pool.criteria);
+  for (auto& trials : out.participants)
+    for (auto& tr : trials)
+      for (std::size_t c = 0; c < pool.criteria.size() && c < tr.distances.size(); ++c)
+        tr.distances[c] = obs.Distance(pool.criteria[c], tr.felt[0], tr.felt[1]);
+  return out;
+}
 
 // The main-phase rows as stats::AnalyseOnce wants them (participant, criterion, method, material).
 stats::LongTable MainOnly(const stats::LongTable& t) {
@@ -81,6 +101,11 @@ std::vector<double> Statistics(const stats::LongTable& t, const std::vector<cons
 }
 
 }  // namespace
+
+bool IsScaleParam(const std::string& name) {
+  return name == "scale_vibration" || name == "scale_fluctuation" || name == "scale_friction" ||
+         name == "scale_stiffness" || name == "scale_pattern";
+}
 
 CalibrationSpec LoadCalibration(const std::string& path) {
   toml::table doc;
@@ -157,14 +182,21 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     CalibrationParam p;
     p.name = str(*t, pre, "name", true);
     const auto dot = p.name.find('.');
-    const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" || p.name == "lapse_rate" ||
+    const bool scale = IsScaleParam(p.name);
+    const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" ||
+                    p.name == "lapse_rate" || scale ||
                     (dot != std::string::npos && dot > 0 &&
-                     std::any_of(std::begin(kFields), std::end(kFields), [&](const char* f) { return p.name.substr(dot + 1) == f; }));
+                     std::any_of(std::begin(kFields), std::end(kFields),
+                                 [&](const char* f) { return p.name.substr(dot + 1) == f; }));
     if (!p.name.empty() && !ok)
       d.Add(path, Line(t->get("name")), pre + ".name",
-            "expected upper, lower, range_sd, lapse_rate or CRITERION.(sensitivity|offset_sd|material_sd|method_sd|noise_sd)");
-    p.lo = num(*t, pre, "lo", -1e6, 1e6, true, 0);
-    p.hi = num(*t, pre, "hi", -1e6, 1e6, true, 1);
+            "expected upper, lower, range_sd, lapse_rate, "
+            "scale_(vibration|fluctuation|friction|stiffness|pattern) or "
+            "CRITERION.(sensitivity|offset_sd|material_sd|method_sd|noise_sd)");
+    // A perceptual scale divides a feature difference: the observer file accepts [0.001, 10].
+    const double lim_lo = scale ? 1e-3 : -1e6, lim_hi = scale ? 10 : 1e6;
+    p.lo = num(*t, pre, "lo", lim_lo, lim_hi, true, 0);
+    p.hi = num(*t, pre, "hi", lim_lo, lim_hi, true, 1);
     p.step = num(*t, pre, "step", 1e-9, 1e6, true, 0.1);
     if (!(p.lo < p.hi)) d.Add(path, Line(t), pre + ".hi", "expected hi > lo");
     s.params.push_back(p);
@@ -217,13 +249,17 @@ double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& sp
     for (const auto& t : spec.targets)
       if (t.protocol == spec.protocols[pi].id) targets.push_back(&t);
     if (targets.empty()) continue;
+    // The recorded distances hold for the recording observer's scales; others re-measure them.
+    std::optional<FeltPool> rescaled;
+    if (!SameScales(st.pools[pi].observer, observer)) rescaled = Rescaled(st.pools[pi], observer);
+    const FeltPool& pool = rescaled ? *rescaled : st.pools[pi];
     std::vector<std::vector<double>> per(static_cast<std::size_t>(spec.simulations));
     std::atomic<int> next{0};
     auto work = [&] {
       for (int s; (s = next.fetch_add(1)) < spec.simulations;) {
         Rng rng(DeriveSeed(DeriveSeed(spec.seed, pi), static_cast<std::uint64_t>(s)));
-        per[static_cast<std::size_t>(s)] =
-            Statistics(SimulateRatings(st.pools[pi], observer, spec.protocols[pi].participants, rng, false), targets);
+        per[static_cast<std::size_t>(s)] = Statistics(
+            SimulateRatings(pool, observer, spec.protocols[pi].participants, rng, false), targets);
       }
     };
     std::vector<std::thread> ts;

@@ -292,7 +292,7 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
   }
   if (opt.on_felt) {
     FeltTrial ft{.plan_index = t.plan_index, .phase = t.phase, .material = t.material, .comparison = t.comparison,
-                 .method = t.method, .repetition = t.repetition, .distances = {}};
+                 .method = t.method, .repetition = t.repetition, .distances = {}, .felt = felt};
     for (const auto& c : p.criteria) ft.distances.push_back(observer.Distance(c, felt[0], felt[1]));
     opt.on_felt(ft);
   }

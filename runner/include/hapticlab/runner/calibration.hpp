@@ -7,8 +7,12 @@
 ///             (participants recorded through the runner per protocol), sweeps, observer
 ///             (file written, relative to the targets file), start (observer file to start from)
 ///   [[protocol]] id, file (relative), participants (per simulated study)
-///   [[param]]    name ("upper", "lower", "range_sd", "lapse_rate" or "CRITERION.FIELD" with
-///                FIELD sensitivity | offset_sd | material_sd | method_sd | noise_sd), lo, hi, step
+///   [[param]]    name ("upper", "lower", "range_sd", "lapse_rate", a perceptual scale
+///                "scale_vibration" | "scale_fluctuation" | "scale_friction" | "scale_stiffness" |
+///                "scale_pattern" (lo, hi within [0.001, 10]), or "CRITERION.FIELD" with
+///                FIELD sensitivity | offset_sd | material_sd | method_sd | noise_sd), lo, hi,
+///                step. A candidate with other perceptual scales than the recording observer's
+///                re-measures each recorded trial's feature distances (FeltTrial::felt).
 ///   [[target]]   protocol (an id), statistic, value, weight, and per statistic:
 ///                pes: criterion, effect (method | material | method:material) — mean partial eta^2
 ///                method_mean: criterion, method — mean main-phase score of the method
@@ -49,6 +53,8 @@ struct CalibrationSpec {
   std::vector<CalibrationParam> params;
   std::vector<CalibrationTarget> targets;
 };
+/// Whether `name` is one of the observer's perceptual scales (ObserverParams::scale_*).
+bool IsScaleParam(const std::string& name);
 /// @throws InputError listing every problem (file, line, key)
 CalibrationSpec LoadCalibration(const std::string& path);
 

@@ -114,12 +114,15 @@ struct SideReport {
 };
 
 /// What the simulated hand felt in one rated trial, as the observer's feature distance per
-/// criterion (protocol order) before its rating (RunOptions::on_felt; `study power`).
+/// criterion (protocol order) before its rating (RunOptions::on_felt; `study power`), and the
+/// features of the two sides themselves (`study calibrate` recomputes distances when it fits
+/// the observer's perceptual scales).
 struct FeltTrial {
   int plan_index = 0;
   std::string phase, material, comparison, method;
   int repetition = 0;
   std::vector<double> distances;
+  std::array<sim::Features, 2> felt{};
 };
 
 struct RunOptions {
