@@ -10,6 +10,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/db/force_record.hpp"
 #include "hapticlab/db/timing.hpp"
 #include "hapticlab/devices/replay.hpp"
 #include "hapticlab/protocols/protocol.hpp"
@@ -186,10 +187,10 @@ TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
       const bool virt = (c.stream == "left_force" ? t.left : t.right).rfind("virtual:", 0) == 0;
       for (std::size_t i = 0; i < c.sample_count(); ++i) {
         const float* r = &c.samples[i * c.channels.size()];
-        near_surface += std::abs(r[2]) < 0.01;
+        near_surface += std::abs(r[db::Col(db::ForceChannel::kZ_m)]) < 0.01;
         if (!virt) continue;
         ++n;
-        pressing += r[12] > 0.3f;
+        pressing += r[db::Col(db::ForceChannel::kNormal_N)] > 0.3f;
       }
     }
   }
