@@ -297,6 +297,13 @@ void RegisterStudy(CLI::App& app) {
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
     AddRtOptions(cmd, a.rt);
   };
+  // What study run and resume record and print.
+  auto session_options = [](CLI::App* cmd, RunArgs& a) {
+    cmd->add_option("--record", a.record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
+        ->capture_default_str();
+    cmd->add_flag("--json", a.json, "Print the summary as JSON");
+    cmd->add_flag("--quiet", a.quiet, "No per-trial progress");
+  };
   {
     auto a = std::make_shared<RunArgs>();
     auto* cmd = study->add_subcommand(
@@ -313,13 +320,10 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
     cmd->add_option("--index", a->index, "Plan index of the participant (default: the next free one)");
     hardware_options(cmd, *a);
-    cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
-        ->capture_default_str();
+    session_options(cmd, *a);
     cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
     cmd->add_option("--inject-faults", a->fault_rate, "Sim: probability of a device fault per trial")
         ->check(CLI::Range(0.0, 0.9));
-    cmd->add_flag("--json", a->json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
       RunStudyGuarded([&] {
         const auto p = protocols::LoadProtocol(a->protocol);
@@ -340,15 +344,12 @@ void RegisterStudy(CLI::App& app) {
         "Exit status as for 'study run': 0 completed, 3 stopped again.");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Participant code")->required();
-    cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
-        ->capture_default_str();
     cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
     hardware_options(cmd, *a);
+    session_options(cmd, *a);
     cmd->add_flag("--change-mode", a->change_mode,
                   "Continue in the mode these options give although it differs from the recorded one\n"
                   "(logged as a 'mode-change' event; every rating records its source)");
-    cmd->add_flag("--json", a->json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a, cmd] {
       RunStudyGuarded([&] {
         // Options not given take the recorded mode's values.
