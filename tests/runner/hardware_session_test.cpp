@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/force_record.hpp"
 #include "hapticlab/db/timing.hpp"
@@ -142,11 +143,12 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   }
   EXPECT_TRUE(nan_logged);
   EXPECT_TRUE(requeue);
-  // Without the participant window a hardware session is refused (ratings need a person).
+  // Without the participant window a hardware session is refused (ratings need a person):
+  // a caller's bug (the CLI refuses it as bad input before), so a PreconditionError.
   RunOptions bad = o;
   bad.ui = nullptr;
   bad.participant = "P11";
-  EXPECT_THROW(RunStudy(p, bad), InputError);
+  EXPECT_THROW(RunStudy(p, bad), PreconditionError);
 }
 
 // The Falcon twin: the real Falcon back-end (firmware loader, packets, kinematics, force to
