@@ -36,6 +36,32 @@ void RunGuarded(const std::function<int()>& body) {
   if (rc != kExitOk) throw CLI::RuntimeError(rc);
 }
 
+int ParseAndRun(CLI::App& app, int argc, const char* const* argv) {
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::RuntimeError& e) {
+    return e.get_exit_code();
+  } catch (const CLI::ParseError& e) {
+    const int rc = app.exit(e);
+    return rc == 0 ? kExitOk : kExitBadInput;
+  }
+  return kExitOk;
+}
+
+void WithFlags(const std::map<std::string, std::string>& flags, const std::function<void()>& body) {
+  try {
+    body();
+  } catch (const InputError& e) {
+    Diagnostics d;
+    for (const auto& x : e.diagnostics()) {
+      const auto flag = flags.find(x.field);
+      d.Add(x.file, x.line, flag == flags.end() ? x.field : flag->second, x.message);
+    }
+    d.ThrowIfAny();
+    throw;  // an InputError without diagnostics: as it was
+  }
+}
+
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,
                 const std::string& issue) {
   auto* cmd = parent.add_subcommand(name, description + " [not in this build yet: " + issue + "]");

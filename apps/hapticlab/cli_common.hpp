@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <map>
 #include <string>
 
 namespace hapticlab::cli {
@@ -17,12 +18,24 @@ inline constexpr int kExitBadInput = 2;  ///< bad usage or bad input (message na
 /// 'hapticlab study resume' continues it.
 inline constexpr int kExitStopped = 3;
 
+/// The file an InputError about a command-line argument names (docs/architecture.md, "Errors").
+inline constexpr const char* kCommandLine = "<command line>";
+
 /// Runs a command body, mapping exceptions to exit codes and messages on stderr:
 /// InputError and std::invalid_argument -> 2, anything else -> 1.
 int Guard(const std::function<int()>& body);
 
 /// Guard for CLI11 callbacks: runs `body` and turns a non-zero exit into CLI11's exit path.
 void RunGuarded(const std::function<int()>& body);
+
+/// Parses `argv` with `app` (running the chosen command's callback) and returns the process's
+/// exit code: a command's own (CLI::RuntimeError), 0 for --help and --version, 2 for bad usage.
+int ParseAndRun(CLI::App& app, int argc, const char* const* argv);
+
+/// Runs `body`; an InputError it throws is thrown again with each field found in `flags`
+/// (a library's name for it, e.g. "firmware") replaced by the command-line option that set
+/// it ("--firmware"): library code names its own fields, never the CLI's flags.
+void WithFlags(const std::map<std::string, std::string>& flags, const std::function<void()>& body);
 
 /// Registers a command group whose work lands with a later issue; running it explains that.
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,

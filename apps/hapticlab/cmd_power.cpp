@@ -42,11 +42,11 @@ std::vector<int> ParseCounts(const std::string& s) {
     } catch (const std::exception&) {
       n = 0;
     }
-    if (n < 2 || n > 10000) throw InputError("", 0, "--participants", "expected counts 2..10000 such as 8,12,16, got '" + part + "'");
-    if (!out.empty() && n <= out.back()) throw InputError("", 0, "--participants", "expected increasing counts");
+    if (n < 2 || n > 10000) throw InputError(kCommandLine, 0, "--participants", "expected counts 2..10000 such as 8,12,16, got '" + part + "'");
+    if (!out.empty() && n <= out.back()) throw InputError(kCommandLine, 0, "--participants", "expected increasing counts");
     out.push_back(n);
   }
-  if (out.empty()) throw InputError("", 0, "--participants", "expected at least one count");
+  if (out.empty()) throw InputError(kCommandLine, 0, "--participants", "expected at least one count");
   return out;
 }
 
@@ -57,9 +57,9 @@ void ParseShard(const std::string& s, int* i, int* n) {
     *i = std::stoi(s.substr(0, slash));
     *n = std::stoi(s.substr(slash + 1));
   } catch (const std::exception&) {
-    throw InputError("", 0, "--shard", "expected i/N, e.g. 0/8, got '" + s + "'");
+    throw InputError(kCommandLine, 0, "--shard", "expected i/N, e.g. 0/8, got '" + s + "'");
   }
-  if (*n < 1 || *i < 0 || *i >= *n) throw InputError("", 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
+  if (*n < 1 || *i < 0 || *i >= *n) throw InputError(kCommandLine, 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
 }
 
 void Emit(const stats::PowerResult& r, const PowerArgs& a) {
@@ -107,13 +107,13 @@ void RegisterPower(CLI::App& study) {
   cmd->callback([a] {
     RunGuarded([&] {
       if (!a->merge.empty()) {
-        if (!a->protocol.empty()) throw InputError("", 0, "PROTOCOL", "give either a protocol or --merge FILES");
+        if (!a->protocol.empty()) throw InputError(kCommandLine, 0, "PROTOCOL", "give either a protocol or --merge FILES");
         std::vector<stats::PowerResult> parts;
         for (const auto& f : a->merge) parts.push_back(stats::PowerFromJson(ReadTextFile(f), f));
         Emit(stats::MergePower(parts, a->merge), *a);
         return kExitOk;
       }
-      if (a->protocol.empty()) throw InputError("", 0, "PROTOCOL", "missing (or give --merge FILES)");
+      if (a->protocol.empty()) throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
       stats::PowerOptions o;
       o.participants = ParseCounts(a->participants);
       o.simulations = a->simulations;
@@ -122,7 +122,7 @@ void RegisterPower(CLI::App& study) {
       if (!a->shard.empty()) ParseShard(a->shard, &o.shard, &o.shards);
       if (!a->effect.empty()) {
         if (a->effect != "method" && a->effect != "material" && a->effect != "method:material")
-          throw InputError("", 0, "--effect", "expected method, material or method:material, got '" + a->effect + "'");
+          throw InputError(kCommandLine, 0, "--effect", "expected method, material or method:material, got '" + a->effect + "'");
         o.effects = {a->effect};
       }
       const auto p = protocols::LoadProtocol(a->protocol);

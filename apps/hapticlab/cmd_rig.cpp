@@ -262,7 +262,7 @@ void RegisterRig(CLI::App& app) {
         if (!o->up.empty()) {
           double x, y, z;
           if (std::sscanf(o->up.c_str(), "%lf,%lf,%lf", &x, &y, &z) != 3)
-            throw InputError("", 0, "--up", "expected x,y,z, got '" + o->up + "'");
+            throw InputError(kCommandLine, 0, "--up", "expected x,y,z, got '" + o->up + "'");
           up = {x, y, z};
         }
         const auto fit = runner::FitSamplePlane(pts, up);

@@ -54,7 +54,7 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
   for (const auto& w : c.where) {
     const auto eq = w.find('=');
     if (eq == std::string::npos || eq == 0)
-      throw InputError("", 0, "--where", "expected COL=VALUE, got '" + w + "'");
+      throw InputError(kCommandLine, 0, "--where", "expected COL=VALUE, got '" + w + "'");
     cond.emplace_back(w.substr(0, eq), w.substr(eq + 1));
     keys.push_back(cond.back().first);
   }

@@ -14,12 +14,9 @@
 #include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/protocol.hpp"
-#include "hapticlab/devices/audio.hpp"
-#include "hapticlab/devices/falcon.hpp"
-#include "hapticlab/devices/hid_rating.hpp"
-#include "hapticlab/devices/vendor.hpp"
+#include "hapticlab/devices/factory.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner/session_ui.hpp"
+#include "hapticlab/runner_ui/session_ui.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 
@@ -44,13 +41,16 @@ struct RunArgs {
 class Rig {
  public:
   Rig(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
+    WithFlags({{"device", "--device"}, {"firmware", "--firmware"}, {"rating_box", "--rating-box"},
+               {"rating_layout", "--rating-layout"}},
+              [&] { Open(a, study, participant, o); });
+  }
+
+ private:
+  void Open(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
     o->device = a.device;
     o->actuator = a.actuator;
     o->rating_input = a.rating_box.empty() ? "window" : "rating-box:" + a.rating_box;
-    if ((a.device == "dhd" && !devices::HaveDhd()) || (a.device == "openhaptics" && !devices::HaveOpenHaptics()))
-      throw InputError("", 0, "--device",
-                       "'" + a.device + "' is compiled only when its vendor SDK is found at build time, and this build "
-                       "has none (docs/hardware.md)");
     // Frames and calibration: the rig file, or the back-end's built-in rig.
     const runner::RigFile rf = a.rig_file.empty() ? runner::DefaultRig(a.device) : runner::LoadRig(a.rig_file);
     rig_.device_from_sample = {rf.DeviceFromSample(0), rf.DeviceFromSample(1)};
@@ -62,38 +62,19 @@ class Rig {
       rig_ = simulated_->rig;
       status = rig_.description;
       if (a.actuator != "none")
-        throw InputError("", 0, "--actuator", "a simulated rig plays vibration to the simulated hand; use --actuator none");
-    }
-    if (a.device == "dhd" || a.device == "openhaptics") {
-      vendor_ = a.device == "dhd" ? devices::OpenDhd() : devices::OpenOpenHaptics();
-      rig_.device = vendor_.get();
-      status = vendor_->Capabilities().name;
-    }
-    if (a.device == "falcon") {
-      if (a.firmware.empty()) throw InputError("", 0, "--firmware", "the Falcon needs its firmware file (docs/hardware.md)");
-      const auto fw = devices::falcon::ReadFirmwareFile(a.firmware);
-      if (devices::falcon::CountDevices() == 0)
-        throw std::runtime_error("no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48); check the cable, power "
-                                 "and the udev rule in docs/hardware.md");
-      auto usb = devices::falcon::OpenLibusb(0);
-      fmt::print(stderr, "falcon: loading firmware {} ({} bytes)...\n", a.firmware, fw.size());
-      const auto r = devices::falcon::LoadFirmware(*usb, fw);
-      if (!r.ok) throw std::runtime_error("falcon: " + r.error);
-      fmt::print(stderr, "falcon: firmware running (attempt {})\n", r.attempts);
-      devices::falcon::FalconOptions fo;
-      fo.motor_units_per_Nm = rf.motor_units_per_Nm;
-      if (rf.max_force_N > 0) fo.max_force_N = rf.max_force_N;
-      falcon_ = std::make_unique<devices::falcon::FalconDevice>(std::move(usb), std::function<double()>{}, fo);
-      rig_.device = falcon_.get();
-      status = "falcon, firmware " + a.firmware;
+        throw InputError(kCommandLine, 0, "--actuator",
+                         "a simulated rig plays vibration to the simulated hand; use --actuator none");
+    } else {
+      auto opened = devices::OpenRealDevice(
+          {.device = a.device, .firmware = a.firmware, .motor_units_per_Nm = rf.motor_units_per_Nm,
+           .max_force_N = rf.max_force_N},
+          [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
+      device_ = std::move(opened.device);
+      rig_.device = device_.get();
+      status = opened.description;
     }
     if (a.actuator == "audio") {
-      devices::AudioConfig c;
-      c.device = a.audio_device;
-      c.full_scale_mps2 = a.full_scale_mps2;
-      c.noise_rms_fs = 0;  // on only while the protocol asks for it
-      audio_ = std::make_unique<devices::AudioOutput>(c, devices::OpenPortAudio());
-      audio_->Start();
+      audio_ = devices::OpenAudioActuator(a.audio_device, a.full_scale_mps2);
       rig_.actuator = audio_.get();
       rig_.noise = audio_.get();
       rig_.noise_rms_fs = a.noise_rms;
@@ -104,15 +85,12 @@ class Rig {
                          rf.sha256.substr(0, 16) + ")";
     o->rig = &rig_;
     if (!rig_.sim && !a.ui)
-      throw InputError("", 0, "--ui", "a hardware session takes its ratings from the participant window: add --ui");
+      throw InputError(kCommandLine, 0, "--ui",
+                       "a hardware session takes its ratings from the participant window: add --ui");
     if (!a.rating_box.empty()) {
-      unsigned vid = 0, pid = 0;
-      if (std::sscanf(a.rating_box.c_str(), "%x:%x", &vid, &pid) != 2)
-        throw InputError("", 0, "--rating-box", "expected VID:PID in hex, got '" + a.rating_box + "'");
-      if (a.rating_layout.empty()) throw InputError("", 0, "--rating-layout", "the rating box needs its report layout");
-      if (!a.ui) throw InputError("", 0, "--rating-box", "the rating box feeds the participant window: add --ui");
-      box_ = devices::OpenHidRating(static_cast<std::uint16_t>(vid), static_cast<std::uint16_t>(pid),
-                                    devices::LoadHidLayout(a.rating_layout));
+      if (!a.ui)
+        throw InputError(kCommandLine, 0, "--rating-box", "the rating box feeds the participant window: add --ui");
+      box_ = devices::OpenRatingBox(a.rating_box, a.rating_layout);
       status += "; rating box " + a.rating_box;
     }
     if (a.ui) {
@@ -124,11 +102,9 @@ class Rig {
     }
   }
 
- private:
   runner::HardwareRig rig_;
   std::unique_ptr<runner::SimulatedRig> simulated_;
-  std::unique_ptr<devices::falcon::FalconDevice> falcon_;
-  std::unique_ptr<devices::HapticDevice> vendor_;
+  std::unique_ptr<devices::HapticDevice> device_;
   std::unique_ptr<devices::AudioOutput> audio_;
   std::unique_ptr<devices::RatingInput> box_;
   std::unique_ptr<runner::ui::WindowSessionUi> ui_;
@@ -171,6 +147,34 @@ void InstallStopHandlers() {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
+}
+
+// study run / resume: opens the rig and windows `a` asks for, completes `o` from `a`, runs
+// `session` with the stop handlers installed and prints its summary; the exit code.
+int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
+               const std::function<runner::RunSummary(const runner::RunOptions&)>& session) {
+  Rig rig(a, study, a.participant, &o);
+  o.db_path = a.db;
+  o.participant = a.participant;
+  o.record = ParseRecord(a.record);
+  o.stop_after_trials = a.stop_after;
+  o.rt = a.rt;
+  if (!a.quiet && !a.json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+  InstallStopHandlers();
+  const auto sum = session(o);
+  PrintSummary(sum, a.json);
+  return sum.status == "aborted" ? kExitStopped : kExitOk;
+}
+
+// RunGuarded, with the runner's names for what the user gave ("participant", "db", ...)
+// shown as the options that gave them.
+void RunStudyGuarded(const std::function<int()>& body) {
+  RunGuarded([&] {
+    int rc = kExitOk;
+    WithFlags({{"participant", "--participant"}, {"db", "--db"}, {"change_mode", "--change-mode"}},
+              [&] { rc = body(); });
+    return rc;
+  });
 }
 
 }  // namespace
@@ -230,11 +234,11 @@ void RegisterStudy(CLI::App& app) {
     part->excludes(idx);
     cmd->add_flag("--json", *as_json, "Print the plan as JSON");
     cmd->callback([=] {
-      RunGuarded([&] {
+      RunStudyGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
         if (!code->empty()) {
           if (db->empty())
-            throw InputError("", 0, "--participant",
+            throw InputError(kCommandLine, 0, "--participant",
                              "a participant code is looked up in a study database: add --db (or give --index N)");
           *index = runner::ParticipantIndex(*db, p.name, *code);
         }
@@ -293,6 +297,13 @@ void RegisterStudy(CLI::App& app) {
         ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
     AddRtOptions(cmd, a.rt);
   };
+  // What study run and resume record and print.
+  auto session_options = [](CLI::App* cmd, RunArgs& a) {
+    cmd->add_option("--record", a.record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
+        ->capture_default_str();
+    cmd->add_flag("--json", a.json, "Print the summary as JSON");
+    cmd->add_flag("--quiet", a.quiet, "No per-trial progress");
+  };
   {
     auto a = std::make_shared<RunArgs>();
     auto* cmd = study->add_subcommand(
@@ -309,31 +320,17 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
     cmd->add_option("--index", a->index, "Plan index of the participant (default: the next free one)");
     hardware_options(cmd, *a);
-    cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
-        ->capture_default_str();
+    session_options(cmd, *a);
     cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
     cmd->add_option("--inject-faults", a->fault_rate, "Sim: probability of a device fault per trial")
         ->check(CLI::Range(0.0, 0.9));
-    cmd->add_flag("--json", a->json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a] {
-      RunGuarded([&] {
+      RunStudyGuarded([&] {
         const auto p = protocols::LoadProtocol(a->protocol);
         runner::RunOptions o;
-        Rig rig(*a, p.name, a->participant, &o);
-        o.db_path = a->db;
-        o.participant = a->participant;
         o.participant_index = a->index;
-        o.device = a->device;
-        o.record = ParseRecord(a->record);
-        o.stop_after_trials = a->stop_after;
         o.fault_rate = a->fault_rate;
-        o.rt = a->rt;
-        if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
-        InstallStopHandlers();
-        const auto sum = runner::RunStudy(p, o);
-        PrintSummary(sum, a->json);
-        return sum.status == "aborted" ? kExitStopped : kExitOk;
+        return RunSession(*a, p.name, o, [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
       });
     });
   }
@@ -347,17 +344,14 @@ void RegisterStudy(CLI::App& app) {
         "Exit status as for 'study run': 0 completed, 3 stopped again.");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Participant code")->required();
-    cmd->add_option("--record", a->record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
-        ->capture_default_str();
     cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
     hardware_options(cmd, *a);
+    session_options(cmd, *a);
     cmd->add_flag("--change-mode", a->change_mode,
                   "Continue in the mode these options give although it differs from the recorded one\n"
                   "(logged as a 'mode-change' event; every rating records its source)");
-    cmd->add_flag("--json", a->json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a->quiet, "No per-trial progress");
     cmd->callback([a, cmd] {
-      RunGuarded([&] {
+      RunStudyGuarded([&] {
         // Options not given take the recorded mode's values.
         const auto rec = runner::RecordedMode(a->db, a->participant);
         if (cmd->count("--device") == 0) a->device = rec.device;
@@ -373,17 +367,7 @@ void RegisterStudy(CLI::App& app) {
                                 a->change_mode, a->db, a->participant);
         runner::RunOptions o;
         o.change_mode = a->change_mode;
-        Rig rig(*a, "resume", a->participant, &o);
-        o.db_path = a->db;
-        o.participant = a->participant;
-        o.record = ParseRecord(a->record);
-        o.stop_after_trials = a->stop_after;
-        o.rt = a->rt;
-        if (!a->quiet && !a->json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
-        InstallStopHandlers();
-        const auto sum = runner::ResumeStudy(o);
-        PrintSummary(sum, a->json);
-        return sum.status == "aborted" ? kExitStopped : kExitOk;
+        return RunSession(*a, "resume", o, [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
       });
     });
   }
@@ -394,7 +378,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--participant", a->participant, "Only this participant");
     cmd->add_flag("--json", a->json, "Print {\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
     cmd->callback([a] {
-      RunGuarded([&] {
+      RunStudyGuarded([&] {
         const auto st = runner::StudyStatus(a->db, a->participant);
         if (a->json) {
           json ps = json::array();

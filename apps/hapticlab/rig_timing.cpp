@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/devices/audio.hpp"
 #include "hapticlab/renderer/material.hpp"
@@ -83,7 +84,7 @@ void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
 }
 
 int RunTimingCheck(const TimingCheckArgs& a) {
-  if (a.device != "sim") throw std::invalid_argument("rig check --clock real: only --device sim (a resting simulated grip) is supported");
+  if (a.device != "sim") throw InputError(kCommandLine, 0, "--device", "with --clock real only --device sim (a resting simulated grip) is supported");
   const auto model = a.render.empty() ? sim::PlaceholderModel(sim::MaterialProfile{.id = "check"})
                                        : renderer::LoadMaterial(a.render);
   renderer::RenderOptions ro;

@@ -19,13 +19,5 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("hapticlab-stats ") + hapticlab::kVersion + " (" + hapticlab::kGitSha + ")");
   app.require_subcommand(1);
   AddStatsCommands(app);
-  try {
-    app.parse(argc, argv);
-  } catch (const CLI::RuntimeError& e) {
-    return e.get_exit_code();
-  } catch (const CLI::ParseError& e) {
-    const int rc = app.exit(e);
-    return rc == 0 ? kExitOk : kExitBadInput;
-  }
-  return kExitOk;
+  return ParseAndRun(app, argc, argv);
 }

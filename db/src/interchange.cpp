@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/force_record.hpp"
 #include "interchange_internal.hpp"
 #include "sqlite_util.hpp"
 
@@ -25,31 +26,13 @@ constexpr Suffix kSuffixes[] = {{"_mps2", "m/s^2", "acceleration"},
                                 {"_s", "s", "time"},
                                 {"_Hz", "Hz", "frequency"}};
 
-// Meanings of the runner's channel names (runner::ForceStreamChannels and
-// VibrationStreamChannels); other names get a generic sentence from their unit suffix.
+// Meanings of the recorded channels (db/force_record.hpp); other names get a generic
+// sentence from their unit suffix.
 std::string KnownMeaning(const std::string& name) {
-  static const std::map<std::string, std::string> k{
-      {"x_m", "stylus tip position, x axis of the device frame"},
-      {"y_m", "stylus tip position, y axis of the device frame"},
-      {"z_m", "stylus tip position, z axis of the device frame (normal to the sample surface)"},
-      {"vx_mps", "stylus tip velocity, x axis"},
-      {"vy_mps", "stylus tip velocity, y axis"},
-      {"vz_mps", "stylus tip velocity, z axis"},
-      {"fx_N", "force the renderer computed, x axis (before the safety clamp)"},
-      {"fy_N", "force the renderer computed, y axis (before the safety clamp)"},
-      {"fz_N", "force the renderer computed, z axis (before the safety clamp)"},
-      {"cmd_fx_N", "force commanded to the device, x axis (after clamp and watchdog)"},
-      {"cmd_fy_N", "force commanded to the device, y axis (after clamp and watchdog)"},
-      {"cmd_fz_N", "force commanded to the device, z axis (after clamp and watchdog)"},
-      {"normal_N", "normal (contact) force between stylus and surface"},
-      {"speed_mps", "tangential speed of the stylus over the surface"},
-      {"fault",
-       "1 when the tick was faulted (watchdog or renderer) and the force was zeroed, else 0"},
-      {"acc_mps2",
-       "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"},
-  };
-  const auto it = k.find(name);
-  return it == k.end() ? std::string() : it->second;
+  for (const auto& c : kForceChannels)
+    if (c.name == name) return std::string(c.meaning);
+  if (kVibrationChannel.name == name) return std::string(kVibrationChannel.meaning);
+  return {};
 }
 
 }  // namespace

@@ -154,11 +154,12 @@ void CheckAdaptivePhases(const protocols::Protocol& p, const std::string& device
     if (!ph.adaptive) continue;
     if (device != "sim" && device != "falcon-twin")
       d.Add(p.file, ph.line, fmt::format("phase[{}].kind", i),
-            "adaptive phases run with --device sim or falcon-twin (a simulated rig) in this build "
+            "adaptive phases run on a simulated device (sim or falcon-twin) in this build "
             "(on a hardware device the participant's answers are not wired up and checked yet)");
     else if (!ph.adaptive->simulated_observer && !with_ui)
       d.Add(p.file, ph.line, fmt::format("phase[{}].simulated_observer", i),
-            "missing; a simulated rig without --ui needs the observer's true psychometric function "
+            "missing; a simulated rig without the participant window needs the observer's true "
+            "psychometric function "
             "on the varied parameter");
   }
   d.ThrowIfAny();

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::runner {
 
@@ -24,7 +25,7 @@ sim::ObserverParams ProtocolObserver(const protocols::Protocol& p) {
 
 FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads,
                         const std::function<void(const std::string&)>& log, int first_index) {
-  if (pool_size < 1) throw InputError("", 0, "--pool", "expected at least 1 pool participant");
+  HL_REQUIRE(pool_size >= 1, "a pool needs at least 1 participant");
   FeltPool pool;
   pool.protocol = p.name;
   pool.criteria = p.criteria;
@@ -94,7 +95,7 @@ stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams
   t.key_names = main_only ? std::vector<std::string>{"participant", "criterion", "method", "material"}
                           : std::vector<std::string>{"participant", "criterion", "phase", "material", "comparison", "method"};
   t.keys.assign(t.key_names.size(), {});
-  if (pool.participants.empty()) throw InputError("", 0, "--pool", "empty pool");
+  HL_REQUIRE(!pool.participants.empty(), "SimulateRatings needs a non-empty pool");
   for (int i = 0; i < participants; ++i) {
     const auto& trials = pool.participants[static_cast<std::size_t>(
         rng.NextU64() % static_cast<std::uint64_t>(pool.participants.size()))];

@@ -255,15 +255,25 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   force_last_s_.store(now_s, std::memory_order_relaxed);
   if (force_stream_) {
     const auto& s = sample.state;
-    const float v[16] = {static_cast<float>(s.p_m.x()),   static_cast<float>(s.p_m.y()),
-                         static_cast<float>(s.p_m.z()),   static_cast<float>(s.v_mps.x()),
-                         static_cast<float>(s.v_mps.y()), static_cast<float>(s.v_mps.z()),
-                         static_cast<float>(cmd.raw.force_N.x()), static_cast<float>(cmd.raw.force_N.y()),
-                         static_cast<float>(cmd.raw.force_N.z()), static_cast<float>(command.x()),
-                         static_cast<float>(command.y()), static_cast<float>(command.z()),
-                         static_cast<float>(cmd.raw.normal_force_N),
-                         static_cast<float>(cmd.raw.tangential_speed_mps), fault ? 1.f : 0.f,
-                         static_cast<float>(late_s)};
+    using db::Col;
+    using db::ForceChannel;
+    float v[db::kForceChannelCount];
+    v[Col(ForceChannel::kX_m)] = static_cast<float>(s.p_m.x());
+    v[Col(ForceChannel::kY_m)] = static_cast<float>(s.p_m.y());
+    v[Col(ForceChannel::kZ_m)] = static_cast<float>(s.p_m.z());
+    v[Col(ForceChannel::kVx_mps)] = static_cast<float>(s.v_mps.x());
+    v[Col(ForceChannel::kVy_mps)] = static_cast<float>(s.v_mps.y());
+    v[Col(ForceChannel::kVz_mps)] = static_cast<float>(s.v_mps.z());
+    v[Col(ForceChannel::kFx_N)] = static_cast<float>(cmd.raw.force_N.x());
+    v[Col(ForceChannel::kFy_N)] = static_cast<float>(cmd.raw.force_N.y());
+    v[Col(ForceChannel::kFz_N)] = static_cast<float>(cmd.raw.force_N.z());
+    v[Col(ForceChannel::kCmdFx_N)] = static_cast<float>(command.x());
+    v[Col(ForceChannel::kCmdFy_N)] = static_cast<float>(command.y());
+    v[Col(ForceChannel::kCmdFz_N)] = static_cast<float>(command.z());
+    v[Col(ForceChannel::kNormal_N)] = static_cast<float>(cmd.raw.normal_force_N);
+    v[Col(ForceChannel::kSpeed_mps)] = static_cast<float>(cmd.raw.tangential_speed_mps);
+    v[Col(ForceChannel::kFault)] = fault ? 1.f : 0.f;
+    v[Col(ForceChannel::kLate_s)] = static_cast<float>(late_s);
     Record(force_stream_, static_cast<double>(k) / rate, v);
   }
 }

@@ -1,32 +1,24 @@
 #include "hapticlab/runner/sim_rigs.hpp"
 
-#include <stdexcept>
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/sim/simulated_device.hpp"
 
 namespace hapticlab::runner {
 
 std::unique_ptr<SimulatedRig> OpenSimulatedRig(const std::string& device, const RigFile& rf,
                                                const sim::SimDeviceModel& generic, const sim::FalconTwinOptions& twin_o) {
-  if (device != "sim" && device != "falcon-twin")
-    throw std::invalid_argument("no simulated rig '" + device + "' (sim, falcon-twin)");
-  auto out = std::make_unique<SimulatedRig>();
+  if (!sim::IsSimulatedDevice(device))
+    throw InputError("<command line>", 0, "device", "no simulated rig '" + device + "' (sim, falcon-twin)");
   const RigFile truth = DefaultRig(device);
-  out->sim = std::make_unique<sim::SimRig>(generic, std::array<Eigen::Isometry3d, 2>{truth.DeviceFromSample(0),
-                                                                                     truth.DeviceFromSample(1)});
-  std::string what = "sim (generic simulated device, simulated hand)";
-  if (device == "falcon-twin") {
-    auto link = std::make_unique<sim::FalconTwinTransport>(out->sim->hand, out->sim->clock, twin_o);
-    const auto r = devices::falcon::LoadFirmware(*link, sim::FalconTwinFirmware());
-    if (!r.ok) throw std::runtime_error("falcon-twin: " + r.error);
-    out->sim->twin = link.get();
-    devices::falcon::FalconOptions fo;
-    fo.motor_units_per_Nm = rf.motor_units_per_Nm;
-    if (rf.max_force_N > 0) fo.max_force_N = rf.max_force_N;
-    const devices::Clock* clock = &out->sim->clock;
-    out->falcon = std::make_unique<devices::falcon::FalconDevice>(std::move(link), [clock] { return clock->Now(); }, fo);
-    out->sim->generic.reset();
-    out->sim->device = out->falcon.get();
-    what = "falcon-twin (the Falcon back-end over an emulated Falcon, simulated hand)";
-  }
+  devices::falcon::FalconOptions fo;
+  fo.motor_units_per_Nm = rf.motor_units_per_Nm;
+  if (rf.max_force_N > 0) fo.max_force_N = rf.max_force_N;
+  auto opened = sim::OpenSimulatedDevice(device, {truth.DeviceFromSample(0), truth.DeviceFromSample(1)}, fo, generic,
+                                         twin_o);
+  auto out = std::make_unique<SimulatedRig>();
+  out->sim = std::move(opened.sim);
+  out->falcon = std::move(opened.falcon);
+  const std::string& what = opened.description;
   HardwareRig& h = out->rig;
   h.device = out->sim->device;
   h.actuator = &out->sim->actuator;

@@ -256,7 +256,7 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
     RunStudy(protocols::LoadProtocol(dir.File("q.toml")), o);
     ADD_FAILURE() << "ran an adaptive phase on hardware";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("phase[0].kind: adaptive phases run with --device sim"),
+    EXPECT_NE(std::string(e.what()).find("phase[0].kind: adaptive phases run on a simulated device (sim or falcon-twin)"),
               std::string::npos)
         << e.what();
   }

@@ -9,7 +9,9 @@
 #include <cmath>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/db/force_record.hpp"
 #include "hapticlab/db/timing.hpp"
 #include "hapticlab/devices/replay.hpp"
 #include "hapticlab/protocols/protocol.hpp"
@@ -141,11 +143,12 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   }
   EXPECT_TRUE(nan_logged);
   EXPECT_TRUE(requeue);
-  // Without the participant window a hardware session is refused (ratings need a person).
+  // Without the participant window a hardware session is refused (ratings need a person):
+  // a caller's bug (the CLI refuses it as bad input before), so a PreconditionError.
   RunOptions bad = o;
   bad.ui = nullptr;
   bad.participant = "P11";
-  EXPECT_THROW(RunStudy(p, bad), InputError);
+  EXPECT_THROW(RunStudy(p, bad), PreconditionError);
 }
 
 // The Falcon twin: the real Falcon back-end (firmware loader, packets, kinematics, force to
@@ -186,10 +189,10 @@ TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
       const bool virt = (c.stream == "left_force" ? t.left : t.right).rfind("virtual:", 0) == 0;
       for (std::size_t i = 0; i < c.sample_count(); ++i) {
         const float* r = &c.samples[i * c.channels.size()];
-        near_surface += std::abs(r[2]) < 0.01;
+        near_surface += std::abs(r[db::Col(db::ForceChannel::kZ_m)]) < 0.01;
         if (!virt) continue;
         ++n;
-        pressing += r[12] > 0.3f;
+        pressing += r[db::Col(db::ForceChannel::kNormal_N)] > 0.3f;
       }
     }
   }

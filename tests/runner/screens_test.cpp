@@ -2,7 +2,7 @@
 // scales have no default position, confirm needs every criterion, clicks set values, the
 // console's buttons report.
 
-#include "hapticlab/runner/screens.hpp"
+#include "hapticlab/runner_ui/screens.hpp"
 
 #include <gtest/gtest.h>
 #include <imgui.h>

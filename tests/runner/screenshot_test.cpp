@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "hapticlab/runner/session_ui.hpp"
-#include "hapticlab/runner/ui_windows.hpp"
+#include "hapticlab/runner_ui/session_ui.hpp"
+#include "hapticlab/runner_ui/ui_windows.hpp"
 
 namespace hapticlab::runner::ui {
 namespace {

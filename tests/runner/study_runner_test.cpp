@@ -1,5 +1,5 @@
-// The study runner: crash and resume, fault re-queue, status, and the simulated chapter V.3
-// study's main result.
+// The study runner: a session end to end, status, the participant window, crash and resume,
+// and the simulated chapter IV and V.3 studies (the queue's own tests: session_queue_test).
 
 #include "hapticlab/runner/study_runner.hpp"
 
@@ -20,30 +20,13 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "study_checks.hpp"
 
 namespace hapticlab::runner {
 namespace {
 
-std::string SmallProtocol() { return test::DataPath("protocols/small.toml"); }
-
-// Every planned trial of every session exactly once, with all its ratings.
-void ExpectCompleteAndWhole(const std::string& db_path, int criteria) {
-  db::Database d(db_path);
-  EXPECT_EQ(d.IntegrityCheck(), "ok");
-  for (const auto& st : d.Studies())
-    for (const auto& p : d.Participants(st.id))
-      for (const auto& se : d.Sessions(p.id)) {
-        EXPECT_EQ(se.status, "completed") << p.code;
-        std::map<int, int> seen;
-        for (const auto& t : d.Trials(se.id)) {
-          ++seen[t.plan_index];
-          EXPECT_EQ(t.status, db::kTrialCompleted) << p.code << " trial " << t.plan_index;
-          const auto r = d.Ratings(t.id);
-          EXPECT_EQ(r.size(), t.phase == "training" ? 0u : static_cast<std::size_t>(criteria)) << t.plan_index;
-        }
-        for (const auto& [i, n] : seen) EXPECT_EQ(n, 1) << "plan index " << i;
-      }
-}
+using test_checks::ExpectCompleteAndWhole;
+using test_checks::SmallProtocol;
 
 TEST(StudyRunner, RunsTheSmallStudyAndReportsStatus) {
   test::TempDir dir;
@@ -112,23 +95,6 @@ TEST(StudyRunner, EverySimulatedTrialSideRunsThroughTheEngine) {
   for (const auto& t : d.Trials(se.id))
     for (const auto& c : d.TrajectoryChunks(t.id)) samples += c.sample_count();
   EXPECT_EQ(samples, sides.size() * force_ticks);
-}
-
-TEST(StudyRunner, AbortThenResumeCompletesEveryTrialOnce) {
-  test::TempDir dir;
-  const auto p = protocols::LoadProtocol(SmallProtocol());
-  RunOptions o;
-  o.db_path = dir.File("a.db");
-  o.participant = "P02";
-  o.record = RecordMode::kNone;
-  o.stop_after_trials = 7;
-  EXPECT_EQ(RunStudy(p, o).status, "aborted");
-  o.stop_after_trials = 5;
-  EXPECT_EQ(ResumeStudy(o).status, "aborted");
-  o.stop_after_trials = -1;
-  EXPECT_EQ(ResumeStudy(o).status, "completed");
-  ExpectCompleteAndWhole(o.db_path, 2);
-  EXPECT_THROW(ResumeStudy(o), InputError);  // nothing left to resume
 }
 
 // A user interface driven by a script: the participant's ratings come from it, the
@@ -216,40 +182,6 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   ui.abort_at_trial = -1;
   EXPECT_EQ(ResumeStudy(o).status, "completed");
   ExpectCompleteAndWhole(o.db_path, 2);
-}
-
-TEST(StudyRunner, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
-  test::TempDir dir;
-  const auto p = protocols::LoadProtocol(SmallProtocol());
-  RunOptions o;
-  o.db_path = dir.File("f.db");
-  o.participant = "P03";
-  o.record = RecordMode::kNone;
-  o.fault_rate = 0.25;
-  const auto s = RunStudy(p, o);
-  EXPECT_GT(s.faults, 0);
-  EXPECT_EQ(s.completed, s.planned);
-  ExpectCompleteAndWhole(o.db_path, 2);
-  // Execution order (completion time) never puts one material twice in a row among rated
-  // trials unless the runner logged that it had to.
-  db::Database d(o.db_path);
-  const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
-  int relaxed = 0, faults = 0, disconnects = 0;
-  for (const auto& e : d.Events(se.id)) {
-    relaxed += e.kind == "constraint-relaxed";
-    // Each injected dropout: the watchdog's event, then the trial's re-queue.
-    faults += e.kind == "device-fault" && e.detail.find("re-queued") != std::string::npos;
-    disconnects += e.kind == "device-fault" && e.detail.rfind("disconnect at", 0) == 0;
-  }
-  EXPECT_EQ(faults, s.faults);
-  EXPECT_EQ(disconnects, s.faults) << "the link's dropouts, seen by the watchdog";
-  std::map<std::int64_t, std::string> material;
-  for (const auto& t : d.Trials(se.id)) material[t.id] = t.material;
-  const auto order = d.RatedTrialsInCompletionOrder(se.id);
-  ASSERT_EQ(order.size(), material.size() - 4);  // all but the 4 training trials
-  int repeats = 0;
-  for (std::size_t i = 1; i < order.size(); ++i) repeats += material[order[i]] == material[order[i - 1]];
-  EXPECT_LE(repeats, relaxed);
 }
 
 TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {

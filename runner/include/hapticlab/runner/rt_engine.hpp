@@ -42,6 +42,7 @@
 #include "hapticlab/core/triple_buffer.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/devices/clock.hpp"
+#include "hapticlab/db/force_record.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/core/latency_histogram.hpp"
@@ -50,19 +51,12 @@
 
 namespace hapticlab::runner {
 
-/// Channels of the force stream, in order (16 values per force tick; sample frame). A sample's
-/// time stamp is its scheduled tick time (start_time_s + i / rate_hz); `late_s` is how much
-/// later the tick actually ran (measured on the loop's clock; 0 on a virtual clock), so
-/// scheduled + late_s is the measured time of the tick.
-inline const std::vector<std::string>& ForceStreamChannels() {
-  static const std::vector<std::string> k{"x_m",   "y_m",       "z_m",       "vx_mps",   "vy_mps",
-                                          "vz_mps", "fx_N",      "fy_N",      "fz_N",     "cmd_fx_N",
-                                          "cmd_fy_N", "cmd_fz_N", "normal_N", "speed_mps", "fault", "late_s"};
-  return k;
-}
+/// Channels of the force stream, in order: db::ForceChannel (db/force_record.hpp names each
+/// column, its unit, frame and meaning).
+inline const std::vector<std::string>& ForceStreamChannels() { return db::ForceChannelNames(); }
 /// Channels of the vibration stream.
 inline const std::vector<std::string>& VibrationStreamChannels() {
-  static const std::vector<std::string> k{"acc_mps2"};
+  static const std::vector<std::string> k{std::string(db::kVibrationChannel.name)};
   return k;
 }
 

@@ -22,8 +22,8 @@ struct SimulatedRig {
 };
 
 /// @param device "sim" or "falcon-twin"
-/// @throws std::invalid_argument for another name; std::runtime_error when the twin's
-///         firmware load fails
+/// @throws InputError (file "<command line>", field "device") for another name;
+///         std::runtime_error when the twin's firmware load fails
 std::unique_ptr<SimulatedRig> OpenSimulatedRig(const std::string& device, const RigFile& rig_file,
                                                const sim::SimDeviceModel& generic = {},
                                                const sim::FalconTwinOptions& twin = {});

@@ -1,4 +1,4 @@
-#include "hapticlab/runner/ui_windows.hpp"
+#include "hapticlab/runner_ui/ui_windows.hpp"
 
 #include <GLFW/glfw3.h>
 #include <backends/imgui_impl_opengl2.h>

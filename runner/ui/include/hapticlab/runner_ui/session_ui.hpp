@@ -9,7 +9,7 @@
 
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/runner/study_runner.hpp"
-#include "hapticlab/runner/ui_windows.hpp"
+#include "hapticlab/runner_ui/ui_windows.hpp"
 
 namespace hapticlab::runner::ui {
 

@@ -1,4 +1,4 @@
-#include "hapticlab/runner/screens.hpp"
+#include "hapticlab/runner_ui/screens.hpp"
 
 #include <fmt/format.h>
 #include <imgui.h>

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "hapticlab/runner/screens.hpp"
+#include "hapticlab/runner_ui/screens.hpp"
 
 namespace hapticlab::runner::ui {
 

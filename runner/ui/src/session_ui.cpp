@@ -1,4 +1,4 @@
-#include "hapticlab/runner/session_ui.hpp"
+#include "hapticlab/runner_ui/session_ui.hpp"
 
 #include <fmt/format.h>
 

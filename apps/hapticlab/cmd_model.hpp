@@ -1,0 +1,22 @@
+#pragma once
+// The `model` command group's subcommands, one file per family (private to the CLI).
+
+#include <CLI/CLI.hpp>
+
+#include <string>
+
+namespace hapticlab::cli {
+
+// cmd_model_vibration.cpp
+void AddFitVibration(CLI::App& model);
+void AddFitNeural(CLI::App& model);
+void AddCvVibration(CLI::App& model);
+void AddCutoff(CLI::App& model);
+// cmd_model_contact.cpp
+void AddFitContact(CLI::App& model);
+/// Writes a whole text file; errors (std::runtime_error) name the file.
+void WriteModelText(const std::string& path, const std::string& text);
+// cmd_model_photometric.cpp
+void AddPhotometric(CLI::App& model);
+
+}  // namespace hapticlab::cli

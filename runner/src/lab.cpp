@@ -1,0 +1,105 @@
+#include "lab.hpp"
+
+#include <fmt/format.h>
+
+#include <filesystem>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/sim/simulated_device.hpp"
+
+namespace hapticlab::runner::internal {
+
+namespace fs = std::filesystem;
+
+bool IsSimulated(const std::string& device) { return sim::IsSimulatedDevice(device); }
+
+Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
+  const bool sim = IsSimulated(device);
+  Lab lab;
+  lab.protocol = &p;
+  const fs::path dir = fs::path(p.file).parent_path();
+  Diagnostics d;
+  // Runs `load`; an input or I/O error becomes a diagnostic (at `line`, `field` when the
+  // error names no file of its own).
+  const auto attempt = [&](int line, const std::string& field, const auto& load) {
+    try {
+      load();
+      return true;
+    } catch (const InputError& e) {
+      for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
+    } catch (const std::exception& e) {
+      d.Add(p.file, line, field, e.what());
+    }
+    return false;
+  };
+  const auto where = [&](const std::string& name) {
+    return fmt::format("'{}' (looked up relative to the protocol's folder: {})", name,
+                       fs::absolute(dir / name).lexically_normal().string());
+  };
+  if (p.profiles.empty() && sim)
+    d.Add(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
+  bool have_profiles = false;
+  if (!p.profiles.empty()) {
+    if (!fs::is_regular_file(dir / p.profiles))
+      d.Add(p.file, 0, "study.profiles", "no such file " + where(p.profiles));
+    else
+      have_profiles = attempt(0, "study.profiles", [&] { lab.profiles = sim::LoadProfiles((dir / p.profiles).string()); });
+  }
+  if (!p.observer.empty()) {
+    if (!fs::is_regular_file(dir / p.observer))
+      d.Add(p.file, 0, "study.observer", "no such file " + where(p.observer));
+    else
+      attempt(0, "study.observer", [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
+  }
+  for (const auto& m : p.materials) {
+    const bool placeholder = m.model == "placeholder";
+    if (!placeholder) {
+      if (!fs::is_regular_file(dir / m.model)) {
+        d.Add(p.file, m.line, "material.model", "material '" + m.id + "': no model file " + where(m.model));
+      } else {
+        const std::string path = (dir / m.model).string();
+        attempt(m.line, "material.model", [&] {
+          auto model = renderer::LoadMaterial(path);
+          lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
+          lab.models.emplace(m.id, std::move(model));
+        });
+      }
+      if (!sim) continue;  // hardware: the fitted model is all it needs
+    }
+    // The simulated lab (and a placeholder model) needs the sample's profile.
+    if (p.profiles.empty()) {
+      if (!sim) d.Add(p.file, m.line, "material.model", "material '" + m.id + "': a placeholder model is built from the "
+                                                        "sample's profile, and the protocol names no profiles file");
+      continue;
+    }
+    if (!have_profiles) continue;  // the profiles file's own problem is reported above
+    const auto prof = lab.profiles.profiles.find(m.profile);
+    if (prof == lab.profiles.profiles.end()) {
+      d.Add(p.file, m.line, "material.profile",
+            "material '" + m.id + "': no profile '" + m.profile + "' in " + p.profiles + " (its profiles: " +
+                [&] {
+                  std::string names;
+                  for (const auto& [name, pr] : lab.profiles.profiles) names += (names.empty() ? "" : ", ") + name;
+                  return names.empty() ? std::string("none") : names;
+                }() + ")");
+      continue;
+    }
+    if (placeholder) {
+      auto model = sim::PlaceholderModel(prof->second);
+      lab.model_hashes[m.id] = db::HashText(renderer::MaterialToToml(model));
+      lab.models.emplace(m.id, std::move(model));
+    }
+  }
+  d.ThrowIfAny();
+  return lab;
+}
+
+Stimulus ParseStimulus(const std::string& stimulus) {
+  const auto colon = stimulus.find(':');
+  if (colon == std::string::npos) return {.real = false, .id = stimulus};
+  return {.real = stimulus.compare(0, colon, "real") == 0, .id = stimulus.substr(colon + 1)};
+}
+
+}  // namespace hapticlab::runner::internal

@@ -1,0 +1,39 @@
+#pragma once
+// The lab of a session (private to runner): every material's model and the ground truth of
+// each sample, loaded from the files a protocol names.
+
+#include <map>
+#include <string>
+
+#include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
+
+namespace hapticlab::runner::internal {
+
+// Back-ends whose sessions are simulated (a simulated hand, the simulated observer).
+bool IsSimulated(const std::string& device);
+
+// Everything a session needs besides the database: models, profiles, observer.
+struct Lab {
+  const protocols::Protocol* protocol = nullptr;  // borrowed
+  sim::ProfileSet profiles;
+  std::map<std::string, renderer::MaterialModel> models;  // by material id
+  std::map<std::string, std::string> model_hashes;        // by material id: SHA-256 of the model text
+};
+
+// Loads the profiles (ground truth of each sample) and every material's model. Files are
+// looked up relative to the protocol file's folder. Every problem is collected (file, line,
+// key, and the path looked up), then thrown together as one InputError: `study validate`
+// reports the same.
+Lab LoadLab(const protocols::Protocol& p, const std::string& device);
+
+// One stimulus of a plan ("real:Denim", "virtual:Denim"): which kind, which material id.
+struct Stimulus {
+  bool real = false;
+  std::string id;
+};
+// Splits "<kind>:<id>"; a string without a colon is the id of a virtual stimulus.
+Stimulus ParseStimulus(const std::string& stimulus);
+
+}  // namespace hapticlab::runner::internal
