@@ -28,7 +28,7 @@ constexpr Suffix kSuffixes[] = {{"_mps2", "m/s^2", "acceleration"},
 // Meanings of the runner's channel names (runner::ForceStreamChannels and
 // VibrationStreamChannels); other names get a generic sentence from their unit suffix.
 std::string KnownMeaning(const std::string& name) {
-  static const std::map<std::string, std::string> k{
+  static const std::map<std::string, std::string> kMeanings{
       {"x_m", "stylus tip position, x axis of the device frame"},
       {"y_m", "stylus tip position, y axis of the device frame"},
       {"z_m", "stylus tip position, z axis of the device frame (normal to the sample surface)"},
@@ -48,8 +48,8 @@ std::string KnownMeaning(const std::string& name) {
       {"acc_mps2",
        "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"},
   };
-  const auto it = k.find(name);
-  return it == k.end() ? std::string() : it->second;
+  const auto it = kMeanings.find(name);
+  return it == kMeanings.end() ? std::string() : it->second;
 }
 
 }  // namespace
