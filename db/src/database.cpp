@@ -112,7 +112,7 @@ std::string HashText(const std::string& text) {
   unsigned int len = 0;
   if (EVP_Digest(text.data(), text.size(), md, &len, EVP_sha256(), nullptr) != 1)
     throw std::runtime_error("SHA-256 digest failed");
-  static const char* kHex = "0123456789abcdef";
+  static constexpr const char* kHex = "0123456789abcdef";
   std::string s;
   for (unsigned int i = 0; i < len; ++i) {
     s += kHex[md[i] >> 4];

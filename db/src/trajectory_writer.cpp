@@ -131,7 +131,7 @@ std::size_t TrajectoryWriter::Pass(bool all) {
   for (auto& sp : streams_) {
     TrajectoryStream& s = *sp;
     const double period = 1.0 / s.rate_hz_;
-    TrajectorySample x;
+    TrajectorySample x{};
     while (s.queue_.TryPop(&x)) {
       ++moved;
       // A gap (dropped samples, pause) or a step back in time starts a new chunk.

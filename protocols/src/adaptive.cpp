@@ -12,9 +12,9 @@
 namespace hapticlab::protocols {
 
 const std::vector<std::string>& AdaptiveParameters() {
-  static const std::vector<std::string> k{"vibration.gain", "geometry.amplitude_scale", "contact.K",
+  static const std::vector<std::string> kParameters{"vibration.gain", "geometry.amplitude_scale", "contact.K",
                                           "friction.mu_k", "friction.mu_b_Ns_per_m"};
-  return k;
+  return kParameters;
 }
 
 double AdaptiveParameterMin(const std::string& parameter) {
@@ -118,7 +118,7 @@ class Keys {
   }
   void Known(std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t_)
-      if (std::none_of(keys.begin(), keys.end(), [&](const char* x) { return k.str() == x; }))
+      if (std::none_of(keys.begin(), keys.end(), [&key = k](const char* x) { return key.str() == x; }))
         d_->Add(file_, Line(&v), pre_ + "." + std::string(k.str()), "unknown key (a typo?)");
   }
   const toml::table& table() const { return t_; }

@@ -63,6 +63,7 @@ std::vector<int> WilliamsRow(int n, int r) {
   const int rows = n % 2 ? 2 * n : n;
   r %= rows;
   std::vector<int> row;
+  row.reserve(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) row.push_back((first[static_cast<std::size_t>(i)] + r) % n);
   if (r >= n) std::reverse(row.begin(), row.end());
   return row;

@@ -58,7 +58,7 @@ class Reader {
   }
   void Known(const toml::table& t, const std::string& prefix, std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t) {
-      if (std::none_of(keys.begin(), keys.end(), [&](const char* x) { return k.str() == x; }))
+      if (std::none_of(keys.begin(), keys.end(), [&key = k](const char* x) { return key.str() == x; }))
         Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()), "unknown key (a typo?)");
     }
   }

@@ -21,9 +21,13 @@ PolyphaseUpsampler::PolyphaseUpsampler(int factor, int taps_per_phase) : factor_
       const double t = (n - centre) / factor_;
       const double sinc = std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
       const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * (n + 0.5) / len);
-      sum += h_[static_cast<std::size_t>(p * taps_ + j)] = sinc * w;
+      const int tap = p * taps_ + j;
+      sum += h_[static_cast<std::size_t>(tap)] = sinc * w;
     }
-    for (int j = 0; j < taps_; ++j) h_[static_cast<std::size_t>(p * taps_ + j)] /= sum;  // unit DC gain per phase
+    for (int j = 0; j < taps_; ++j) {  // unit DC gain per phase
+      const int tap = p * taps_ + j;
+      h_[static_cast<std::size_t>(tap)] /= sum;
+    }
   }
 }
 

@@ -21,11 +21,10 @@ void Bracket(const std::vector<double>& axis, double v, int* i, double* frac) no
     *frac = 1;
     return;
   }
-  int k = 0;
-  while (k + 1 < n - 1 && axis[static_cast<std::size_t>(k + 1)] <= v) ++k;
-  *i = k;
-  *frac = (v - axis[static_cast<std::size_t>(k)]) /
-          (axis[static_cast<std::size_t>(k + 1)] - axis[static_cast<std::size_t>(k)]);
+  std::size_t k = 0;
+  while (k + 2 < static_cast<std::size_t>(n) && axis[k + 1] <= v) ++k;
+  *i = static_cast<int>(k);
+  *frac = (v - axis[k]) / (axis[k + 1] - axis[k]);
 }
 
 }  // namespace

@@ -61,7 +61,7 @@ Sphericity FromCov(const MatrixXd& S, double nu, int columns) {
   r.mauchly_defined = true;
   const double det = S.determinant();
   r.W = det / std::pow(tr / p, p);
-  const double logW = std::log(r.W);
+  const double log_w = std::log(r.W);
   // R's mauchly.test (stats:::mauchly.test.SSD): Anderson's second-order approximation.
   // R writes `3 * p` with p = ncol(SSD), the response's column count, where the textbook
   // has the term's df; we follow R (the reference analysts compare with). The first-order
@@ -69,7 +69,7 @@ Sphericity FromCov(const MatrixXd& S, double nu, int columns) {
   const double rho = 1 - (2.0 * p * p + p + 2) / (6.0 * p * nu);
   const double w2 = (p + 2.0) * (p - 1) * (p - 2) * (2.0 * p * p * p + 6.0 * p * p + 3.0 * columns + 2) /
                     (288.0 * std::pow(nu * p * rho, 2));
-  const double z = -nu * rho * logW;
+  const double z = -nu * rho * log_w;
   const double f = p * (p + 1) / 2.0 - 1;
   const double pr1 = PchisqUpper(z, f), pr2 = PchisqUpper(z, f + 4);
   // R does not clamp; near-singular covariances can push the approximation past 1.

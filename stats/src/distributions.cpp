@@ -290,7 +290,7 @@ double TukeyFamily::Upper(double q) const {
   auto log_uf = [&t](double x) {
     if (!(x > 0)) return 0.0;
     if (x < t.median) return std::log1p(-std::clamp(t.lower(x), 0.0, 1.0));
-    return x >= kUpperWMax ? -INFINITY : std::min(0.0, t.log_upper(x));
+    return x >= kUpperWMax ? -std::numeric_limits<double>::infinity() : std::min(0.0, t.log_upper(x));
   };
   auto uf = [&log_uf](double x) { return std::exp(log_uf(x)); };
   if (!(q > 0)) return 1.0;

@@ -158,8 +158,8 @@ struct Minimum {
   bool converged = false;
 };
 
-Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0, const std::vector<double>& lower,
-                   int max_evals) {
+Minimum NelderMead(const std::function<double(const VectorXd&)>& f, const VectorXd& x0,
+                   const std::vector<double>& lower, int max_evals) {
   const Eigen::Index m = x0.size();
   auto project = [&](VectorXd x) {
     for (Eigen::Index i = 0; i < m; ++i) x[i] = std::max(x[i], lower[static_cast<std::size_t>(i)]);

@@ -123,7 +123,7 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
     std::vector<Eigen::VectorXd> code;
     std::vector<std::string> code_names;
     if (c.numeric) {
-      code.push_back(Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
+      code.emplace_back(Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
       code_names.push_back(v);
     } else {
       const int k = static_cast<int>(c.levels.size());
@@ -140,7 +140,7 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
     std::vector<std::string> next_names;
     for (std::size_t b = 0; b < code.size(); ++b)
       for (std::size_t a = 0; a < cur.size(); ++a) {  // earlier variables vary fastest
-        next.push_back(cur[a].cwiseProduct(code[b]));
+        next.emplace_back(cur[a].cwiseProduct(code[b]));
         next_names.push_back(cur_names[a].empty() ? code_names[b] : cur_names[a] + ":" + code_names[b]);
       }
     cur = next;
@@ -262,8 +262,8 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
     LmmDesign::Block b;
     b.group = r.group;
     if (r.intercept) {
-      zc.push_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
-      b.names.push_back("(Intercept)");
+      zc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
+      b.names.emplace_back("(Intercept)");
     }
     const bool full = !r.intercept && r.terms.size() == 1 && r.terms[0].size() == 1 && !cols.at(r.terms[0][0]).numeric;
     for (const auto& t : r.terms) {

@@ -106,10 +106,11 @@ void WilsonInterval(long hits, long n, double* low, double* high) {
     *high = 1;
     return;
   }
-  constexpr double z = 1.959963984540054;  // 97.5 % normal quantile
+  constexpr double kZ = 1.959963984540054;  // 97.5 % normal quantile
   const double nn = static_cast<double>(n), p = static_cast<double>(hits) / nn;
-  const double centre = (p + z * z / (2 * nn)) / (1 + z * z / nn);
-  const double half = z / (1 + z * z / nn) * std::sqrt(p * (1 - p) / nn + z * z / (4 * nn * nn));
+  const double centre = (p + kZ * kZ / (2 * nn)) / (1 + kZ * kZ / nn);
+  const double half =
+      kZ / (1 + kZ * kZ / nn) * std::sqrt(p * (1 - p) / nn + kZ * kZ / (4 * nn * nn));
   *low = std::max(0.0, centre - half);
   *high = std::min(1.0, centre + half);
 }

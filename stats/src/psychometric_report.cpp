@@ -96,7 +96,7 @@ std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const st
 }
 
 PsychometricData BinForPlot(const PsychometricData& pooled, int max_bins) {
-  const PsychometricData d = PoolByStimulus(pooled);
+  PsychometricData d = PoolByStimulus(pooled);  // not const: returned by move below
   if (static_cast<int>(d.x.size()) <= max_bins) return d;
   int total = 0;
   for (int n : d.n) total += n;

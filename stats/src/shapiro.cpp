@@ -35,8 +35,8 @@ ShapiroResult ShapiroWilk(std::vector<double> x) {
     throw std::invalid_argument("Shapiro-Wilk: all values are identical");
 
   // Coefficients a_1..a_{n/2} (Royston's polynomial approximations).
-  static const double c1[] = {0.0, 0.221157, -0.147981, -2.07119, 4.434685, -2.706056};
-  static const double c2[] = {0.0, 0.042981, -0.293762, -1.752461, 5.682633, -3.582633};
+  static const double kC1[] = {0.0, 0.221157, -0.147981, -2.07119, 4.434685, -2.706056};
+  static const double kC2[] = {0.0, 0.042981, -0.293762, -1.752461, 5.682633, -3.582633};
   const int half = n / 2;
   std::vector<double> a(static_cast<std::size_t>(half));
   if (n == 3) {
@@ -52,12 +52,12 @@ ShapiroResult ShapiroWilk(std::vector<double> x) {
     summ2 *= 2;
     const double ssumm2 = std::sqrt(summ2);
     const double rsn = 1.0 / std::sqrt(static_cast<double>(n));
-    const double a1 = Poly(c1, 6, rsn) - m[0] / ssumm2;
+    const double a1 = Poly(kC1, 6, rsn) - m[0] / ssumm2;
     int i1;
     double fac;
     if (n > 5) {
       i1 = 3;
-      const double a2 = -m[1] / ssumm2 + Poly(c2, 6, rsn);
+      const double a2 = -m[1] / ssumm2 + Poly(kC2, 6, rsn);
       fac = std::sqrt((summ2 - 2 * m[0] * m[0] - 2 * m[1] * m[1]) / (1 - 2 * a1 * a1 - 2 * a2 * a2));
       a[1] = a2;
     } else {
@@ -101,26 +101,26 @@ ShapiroResult ShapiroWilk(std::vector<double> x) {
     r.p = std::max(0.0, 6.0 / std::numbers::pi * (std::asin(std::sqrt(r.W)) - std::asin(std::sqrt(0.75))));
     return r;
   }
-  static const double g[] = {-2.273, 0.459};
-  static const double c3[] = {0.544, -0.39978, 0.025054, -6.714e-4};
-  static const double c4[] = {1.3822, -0.77857, 0.062767, -0.0020322};
-  static const double c5[] = {-1.5861, -0.31082, -0.083751, 0.0038915};
-  static const double c6[] = {-0.4803, -0.082676, 0.0030302};
+  static const double kG[] = {-2.273, 0.459};
+  static const double kC3[] = {0.544, -0.39978, 0.025054, -6.714e-4};
+  static const double kC4[] = {1.3822, -0.77857, 0.062767, -0.0020322};
+  static const double kC5[] = {-1.5861, -0.31082, -0.083751, 0.0038915};
+  static const double kC6[] = {-0.4803, -0.082676, 0.0030302};
   double y = std::log(w1);
   const double xx = std::log(static_cast<double>(n));
   double mean, sd;
   if (n <= 11) {
-    const double gamma = Poly(g, 2, n);
+    const double gamma = Poly(kG, 2, n);
     if (y >= gamma) {
       r.p = 1e-99;  // as R: W is so far from 1 that the approximation breaks down
       return r;
     }
     y = -std::log(gamma - y);
-    mean = Poly(c3, 4, n);
-    sd = std::exp(Poly(c4, 4, n));
+    mean = Poly(kC3, 4, n);
+    sd = std::exp(Poly(kC4, 4, n));
   } else {
-    mean = Poly(c5, 4, xx);
-    sd = std::exp(Poly(c6, 3, xx));
+    mean = Poly(kC5, 4, xx);
+    sd = std::exp(Poly(kC6, 3, xx));
   }
   r.p = PnormUpper((y - mean) / sd);
   return r;

@@ -117,7 +117,8 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
     for (std::size_t g = bf + 1; g < a.between.size(); ++g) stride *= a.between_levels[g].size();
     const std::size_t kf = levels.size();
     auto level_of = [&](std::size_t g) { return (g / stride) % kf; };
-    const double per_level = static_cast<double>(ng / kf);
+    // ng is the product of the between factors' level counts, kf one of them: exact division.
+    const double per_level = static_cast<double>(ng / kf);  // NOLINT(bugprone-integer-division)
     const TukeyFamily fam(r.k, r.df);
     const double q_crit = fam.Quantile(conf);
     for (std::size_t i = 0; i < kf; ++i)
@@ -153,14 +154,16 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   std::vector<std::vector<double>> m(n, std::vector<double>(kf, 0.0));
   for (std::size_t s = 0; s < n; ++s) {
     for (std::size_t c = 0; c < nc; ++c) m[s][(c / stride) % kf] += a.cells[s][c];
-    for (auto& v : m[s]) v /= static_cast<double>(nc / kf);
+    // nc is the product of the factors' level counts, kf one of them: exact division.
+    for (auto& v : m[s]) v /= static_cast<double>(nc / kf);  // NOLINT(bugprone-integer-division)
   }
   const AnovaEffect* main = nullptr;
   for (const auto& e : a.effects)
     if (e.effect == factor) main = &e;
   r.mse = main->MSE;
   r.df = multivariate ? nu : main->df2;
-  const double cells_per_level = static_cast<double>(nc / kf);
+  // nc / kf: exact, as above.
+  const double cells_per_level = static_cast<double>(nc / kf);  // NOLINT(bugprone-integer-division)
   const TukeyFamily fam(r.k, r.df);
   const double q_crit = fam.Quantile(conf);
   for (std::size_t i = 0; i < kf; ++i)

@@ -44,7 +44,7 @@ class TrajectoryStream {
   /// when the queue is full; never waits.
   bool Push(double t_s, const float* values) noexcept {
     offered_.fetch_add(1, std::memory_order_relaxed);
-    TrajectorySample s;
+    TrajectorySample s{};
     s.t_s = t_s;
     for (std::size_t i = 0; i < channels_; ++i) s.values[i] = values[i];
     return queue_.TryPush(s);
@@ -134,7 +134,7 @@ class TrajectoryWriter {
   WriterOptions options_;
   struct Retry {
     TrajectoryChunk chunk;
-    TrajectoryStream* origin;
+    TrajectoryStream* origin = nullptr;
   };
   std::mutex streams_mu_;  // guards streams_, retry_, reports_ and each stream's error_
   std::vector<std::unique_ptr<TrajectoryStream>> streams_;

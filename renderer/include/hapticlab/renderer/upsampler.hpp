@@ -27,7 +27,8 @@ class PolyphaseUpsampler {
   /// Takes the next input sample; call it before the L outputs of its period.
   void Push(double x) noexcept {
     head_ = head_ == 0 ? taps_ - 1 : head_ - 1;
-    hist_[static_cast<std::size_t>(head_)] = hist_[static_cast<std::size_t>(head_ + taps_)] = x;
+    const auto h = static_cast<std::size_t>(head_);
+    hist_[h] = hist_[h + static_cast<std::size_t>(taps_)] = x;
   }
   /// Output sample of phase p (0 <= p < factor) of the current input period.
   double Output(int phase) const noexcept {

@@ -26,7 +26,8 @@ struct RtThreadOptions {
   bool lock_memory = false;   ///< mlockall(MCL_CURRENT | MCL_FUTURE) before the loops start
   int cpu = -1;               ///< pin the force loop to this CPU (-1: no pinning)
   double spin_us = kDefaultSpinUs;  ///< busy-wait this long before each force deadline (0: none)
-  std::size_t prefault_stack_bytes = 64 * 1024;  ///< stack touched before the first tick (0: none)
+  /// Stack touched before the first tick (0: none).
+  std::size_t prefault_stack_bytes = std::size_t{64} * 1024;
 };
 
 /// What a thread (or the process, for memory locking) got; strings for people and records.
