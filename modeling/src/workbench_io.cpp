@@ -204,9 +204,7 @@ Model LoadModel(const std::string& path) {
     const auto& e = mm.effects[i];
     const toml::node* at = effects_node && effects_node->as_array() ? effects_node->as_array()->get(i) : effects_node;
     if (!FindEffect(e)) {
-      std::string list;
-      for (const auto& c : Catalogue()) list += (list.empty() ? "" : ", ") + std::string(c->name());
-      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, list));
+      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, CatalogueNames()));
       continue;
     }
     m.effects.push_back(e);
