@@ -48,7 +48,6 @@ Replay Load(const std::string& measurement, const Model* model) {
   return PrepareReplay(m, o);
 }
 
-
 nlohmann::json FitReportJson(const FitReport& rep) {
   nlohmann::json fits = nlohmann::json::array(), est;
   for (const auto& c : rep.channels) {
@@ -58,7 +57,6 @@ nlohmann::json FitReportJson(const FitReport& rep) {
   }
   return {{"fits", fits}, {"estimates", est}, {"usable", rep.IsUsable()}};
 }
-
 
 }  // namespace workbench_cli
 

@@ -135,7 +135,6 @@ std::vector<Failure> LargestFailures(const Comparison& c, std::size_t count) {
   return out;
 }
 
-
 }  // namespace
 
 void AddCompare(CLI::App& app) {

@@ -230,7 +230,8 @@ Model LoadModel(const std::string& path) {
     for (const auto& e : m.effects)
       if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
         diag.Add(path, line(effects_node), "effects",
-                 fmt::format("effect '{}' has no parameters in a renderer material; fit it with 'hapticlab fit --add {}'", e,
+                 fmt::format("effect '{}' has no parameters in a renderer material; a workbench fit with the "
+                             "effect added gives them",
                              e));
     for (auto it = m.params.begin(); it != m.params.end();)
       it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);

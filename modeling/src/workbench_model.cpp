@@ -45,7 +45,6 @@ const Effect* Lookup(std::string_view name) { return name == "core" ? &kCore : F
 
 const Effect& CoreEffect() { return kCore; }
 
-
 std::vector<Resolved> Resolve(const Model& m, const Replay& r, Channel c) {
   std::vector<Resolved> out;
   std::vector<std::string> names;

@@ -12,7 +12,6 @@ namespace hapticlab::modeling::wb {
 
 namespace internal {
 
-
 double NormalForce(const std::vector<Resolved>& eff, const Replay::Sample& s) {
   if (!s.contact) return 0;
   NormalTerms t;

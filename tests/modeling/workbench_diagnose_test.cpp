@@ -26,7 +26,6 @@ std::vector<std::string> Without(std::vector<std::string> v, const std::vector<s
   return v;
 }
 
-
 struct Scenario {
   std::string effect;
   std::string variant;
@@ -143,7 +142,6 @@ TEST_P(NullCase, NoCandidateClaimsAMeaningfulReduction) {
 }
 INSTANTIATE_TEST_SUITE_P(Seeds, NullCase, ::testing::Range(0, 2));
 
-
 // A smooth stiffening (n = 1.8) can be mimicked by a knee (a base under a layer): both reduce
 // the normal-force error and change the prediction alike, so they are reported together.
 TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
@@ -168,7 +166,6 @@ TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
   EXPECT_NE(std::find(exp->confounded_with.begin(), exp->confounded_with.end(), "base-layer"), exp->confounded_with.end());
   EXPECT_NE(knee->evidence.find("confounded with hc-exponent"), std::string::npos) << knee->evidence;
 }
-
 
 // ---------------------------------------------------------------------------------------------
 // What no catalogue effect explains.

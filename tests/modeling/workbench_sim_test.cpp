@@ -12,6 +12,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -43,6 +44,18 @@ TEST(WorkbenchSimulator, TruthModelReproducesTheIndependentSimulator) {
   // What remains: force noise on the measured load that scales the friction, Euler substeps.
   EXPECT_LT(std::sqrt(en / sn), 1e-6);
   EXPECT_LT(std::sqrt(et / st), 0.01);
+}
+
+// The truth's friction law (hapticlab::sim_truth) used by this simulator and the simulated rig:
+// the rig's ratio form maps exactly onto the additive form.
+TEST(WorkbenchSimulator, TruthFrictionLawMapsTheRatioForm) {
+  const auto law = sim_truth::StribeckFriction::FromRatio(0.3, 1.5, 0.004);
+  EXPECT_NEAR(law.dmu_s, 0.15, 1e-15);
+  EXPECT_NEAR(law.Mu(0), 0.45, 1e-15);  // static: mu_k * ratio
+  EXPECT_NEAR(law.Mu(0.004), 0.3 + 0.15 * std::exp(-1.0), 1e-15);
+  EXPECT_NEAR(law.Mu(1.0), 0.3, 1e-15);  // far above v_s: kinetic
+  for (const double v : {0.0, 0.001, 0.003, 0.01})
+    EXPECT_NEAR(law.Mu(v), 0.3 * (1 + 0.5 * std::exp(-std::pow(v / 0.004, 2))), 1e-15) << v;
 }
 
 }  // namespace
