@@ -62,8 +62,8 @@ double RmsNormal(const wb::Model& m, const wb::Replay& r, double max_force_N) {
   const auto p = wb::Predict(m, r);
   double s = 0;
   int n = 0;
-  for (std::size_t i = 0; i < r.s.size(); ++i)
-    if (r.s[i].contact && r.s[i].fn_N <= max_force_N) s += std::pow(r.s[i].fn_N - p.fn_N[i], 2), ++n;
+  for (std::size_t i = 0; i < r.samples().size(); ++i)
+    if (r.samples()[i].contact && r.samples()[i].fn_N <= max_force_N) s += std::pow(r.samples()[i].fn_N - p.fn_N[i], 2), ++n;
   return n ? std::sqrt(s / n) : 0;
 }
 
@@ -89,7 +89,7 @@ void SplitStrokesAndPokes(const Measurement& m, Measurement* strokes, Measuremen
 
 Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const ContactFitOptions& o) {
   Algorithm1Result a;
-  const auto& s = r.s;
+  const auto& s = r.samples();
   auto use = [&](std::size_t i) { return s[i].contact && InSplit(s[i].block, split); };
   for (std::size_t i = 0; i < s.size(); ++i) {
     if (!use(i)) continue;
@@ -187,8 +187,8 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
     const auto p = wb::Predict(model, r);
     double s = 0;
     int n = 0;
-    for (std::size_t i = 0; i < r.s.size(); ++i)
-      if (r.s[i].contact) s += std::pow(r.s[i].ftx_N - p.ftx_N[i], 2) + std::pow(r.s[i].fty_N - p.fty_N[i], 2), ++n;
+    for (std::size_t i = 0; i < r.samples().size(); ++i)
+      if (r.samples()[i].contact) s += std::pow(r.samples()[i].ftx_N - p.ftx_N[i], 2) + std::pow(r.samples()[i].fty_N - p.fty_N[i], 2), ++n;
     out.friction_rms_N = n ? std::sqrt(s / n) : 0;
   }
 

@@ -6,12 +6,13 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/rng.hpp"
 
 namespace hapticlab::modeling {
 
 Mlp::Mlp(std::vector<int> layers, std::uint64_t seed) : layers_(std::move(layers)) {
-  if (layers_.size() < 2 || layers_.back() != 1) throw std::invalid_argument("MLP needs >= 2 layers and one output");
+  HL_REQUIRE(layers_.size() >= 2 && layers_.back() == 1, "MLP needs >= 2 layers and one output");
   Eigen::Index n = 0;
   for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
     offset_.push_back(n);

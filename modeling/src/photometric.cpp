@@ -15,6 +15,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include "hapticlab/core/status.hpp"
+
 namespace hapticlab::modeling {
 namespace {
 
@@ -143,10 +145,10 @@ std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n, con
 PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Light>& lights, const PhotometricOptions& o,
                                     const ImageStack* ref, const std::function<void(double)>& progress) {
   const std::size_t m = lights.size(), npx = static_cast<std::size_t>(st.width) * static_cast<std::size_t>(st.height);
-  if (st.images.size() != m) throw std::invalid_argument("one image per light is needed");
-  if (m < 3) throw std::invalid_argument("photometric stereo needs at least 3 lights");
-  if (ref && ref->images.size() != m) throw std::invalid_argument("one reference image per light is needed");
-  if (!o.mask.empty() && o.mask.size() != npx) throw std::invalid_argument("the mask must have width x height values");
+  HL_REQUIRE(st.images.size() == m, "one image per light is needed");
+  HL_REQUIRE(m >= 3, "photometric stereo needs at least 3 lights");
+  HL_REQUIRE(!ref || ref->images.size() == m, "one reference image per light is needed");
+  HL_REQUIRE(o.mask.empty() || o.mask.size() == npx, "the mask must have width x height values");
   PhotometricResult r;
   r.width = st.width;
   r.height = st.height;
@@ -417,7 +419,7 @@ std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& n
 std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nrm, const std::vector<std::uint8_t>& mask, int w,
                                           int h, double pitch) {
   const auto W = static_cast<std::size_t>(w), H = static_cast<std::size_t>(h), N = W * H;
-  if (nrm.size() != N || mask.size() != N) throw std::invalid_argument("normals and mask must have width x height values");
+  HL_REQUIRE(nrm.size() == N && mask.size() == N, "normals and mask must have width x height values");
   std::vector<double> gx, gy;
   EdgeGradients(nrm, w, h, &gx, &gy);
   constexpr std::size_t kOut = static_cast<std::size_t>(-1);

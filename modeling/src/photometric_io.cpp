@@ -155,6 +155,7 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
         throw InputError(path, l.line, "", fmt::format("{} cells, expected {} ({})", l.cells.size(), cols.size(), fmt::join(cols, ",")));
       Light light;
       light.line = l.line;
+      light.source = path;
       const std::size_t first = named ? 1 : 0;
       if (named) light.file = l.cells[0];
       double v[3] = {0, 0, 0};
@@ -303,7 +304,8 @@ std::vector<float> ReadGreyImage(const std::string& path, int* width, int* heigh
 ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights) {
   ImageStack s;
   for (const auto& l : lights) {
-    if (l.file.empty()) throw InputError("", l.line, "file", "a light has no image name (give an image list)");
+    if (l.file.empty())
+      throw InputError(l.source.empty() ? dir : l.source, l.line, "file", "a light has no image name (give an image list)");
     const std::string path = (std::filesystem::path(dir) / l.file).string();
     int w = 0, h = 0;
     auto img = ReadGreyImage(path, &w, &h);

@@ -16,6 +16,7 @@
 #include <numbers>
 #include <set>
 
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/renderer/ar.hpp"
@@ -179,7 +180,7 @@ std::vector<Recording> LoadRecordings(const std::string& dir) {
 }
 
 std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz, ResampleQuality q) {
-  if (!(from_hz > 0) || !(to_hz > 0)) throw std::invalid_argument("resample rates must be positive");
+  HL_REQUIRE(from_hz > 0 && to_hz > 0, "resample rates must be positive");
   if (from_hz == to_hz) return x;
   std::vector<double> out(static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * to_hz / from_hz)) + 16);
   const unsigned long recipe = q == ResampleQuality::kBest ? SOXR_VHQ : q == ResampleQuality::kFastest ? SOXR_MQ : SOXR_HQ;
@@ -214,7 +215,7 @@ namespace {
 // coefficients, prediction-error variance and criterion in one pass.
 std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCriterion criterion) {
   const int n = static_cast<int>(x.size());
-  if (pmax < 1 || pmax > renderer::kMaxArOrder) throw std::invalid_argument("AR order must be 1..64");
+  HL_REQUIRE(pmax >= 1 && pmax <= renderer::kMaxArOrder, "AR order must be 1..64");
   if (n < 4 * pmax) throw std::invalid_argument(fmt::format("{} samples are too few for order {}", n, pmax));
   double mean = 0;
   for (double v : x) mean += v;
@@ -342,8 +343,8 @@ AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
 
 CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double lo, double hi, double step,
                                 std::size_t max_samples) {
-  if (!(lo > 0) || !(hi >= lo) || !(step > 0) || !(hi < 0.5 * fs))
-    throw std::invalid_argument("cut-off range must satisfy 0 < lo <= hi < fs/2 and step > 0");
+  HL_REQUIRE(lo > 0 && hi >= lo && step > 0 && hi < 0.5 * fs,
+             "cut-off range must satisfy 0 < lo <= hi < fs/2 and step > 0");
   CutoffResult r;
   const std::vector<double> part(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(std::min(x.size(), max_samples)));
   for (double fc = lo; fc <= hi + 1e-9; fc += step) {
@@ -371,7 +372,7 @@ std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o)
 }
 
 renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, const VibrationFitOptions& o) {
-  if (recs.empty()) throw std::invalid_argument("no recordings to fit");
+  HL_REQUIRE(!recs.empty(), "no recordings to fit");
   // Every recording's fits of every order in one Levinson pass each.
   // (in parallel over recordings: each is independent; the first error is rethrown).
   const int pmax = o.order > 0 ? o.order : o.max_order;
@@ -458,7 +459,9 @@ CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<dou
   std::vector<Recording> train;
   for (const auto& r : recs)
     if (near(tv, r.speed_mps) && near(tf, r.force_N)) train.push_back(r);
-  if (train.size() < 3) throw InputError("", 0, "--train-speeds", "fewer than 3 recordings at the training conditions");
+  if (train.size() < 3)
+    throw InputError("<command line>", 0, "training speeds and forces",
+                     fmt::format("{} recordings at the training conditions, at least 3 needed", train.size()));
   const auto bank = FitVibrationBank(train, o);
   renderer::VibrationInterpolator interp(bank);
   CvResult res;

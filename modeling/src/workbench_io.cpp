@@ -204,9 +204,7 @@ Model LoadModel(const std::string& path) {
     const auto& e = mm.effects[i];
     const toml::node* at = effects_node && effects_node->as_array() ? effects_node->as_array()->get(i) : effects_node;
     if (!FindEffect(e)) {
-      std::string list;
-      for (const auto& c : Catalogue()) list += (list.empty() ? "" : ", ") + std::string(c->name());
-      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, list));
+      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, CatalogueNames()));
       continue;
     }
     m.effects.push_back(e);
@@ -232,7 +230,8 @@ Model LoadModel(const std::string& path) {
     for (const auto& e : m.effects)
       if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
         diag.Add(path, line(effects_node), "effects",
-                 fmt::format("effect '{}' has no parameters in a renderer material; fit it with 'hapticlab fit --add {}'", e,
+                 fmt::format("effect '{}' has no parameters in a renderer material; a workbench fit with the "
+                             "effect added gives them",
                              e));
     for (auto it = m.params.begin(); it != m.params.end();)
       it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);

@@ -15,6 +15,7 @@
 #include <Eigen/Dense>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -152,8 +153,10 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
       const double u = x[k] / half, w = y[k] / half;
       S *= 1 + t.tile_amp * (0.8 * u - 0.5 * w + 0.6 * u * w - 0.4 * (1.5 * u * u - 0.5));
     }
-    double mu = t.Has("coulomb") ? t.mu_k * S : 0.0;
-    if (t.Has("stribeck")) mu += t.stribeck_dmu * std::exp(-std::pow(v / t.stribeck_vs_mps, 2));
+    const sim_truth::StribeckFriction law{.mu_k = t.Has("coulomb") ? t.mu_k * S : 0.0,
+                                          .dmu_s = t.Has("stribeck") ? t.stribeck_dmu : 0.0,
+                                          .stribeck_speed_mps = t.stribeck_vs_mps};
+    const double mu = law.Mu(v);
     const double fc = fn * mu;
     if (fc <= 0) {
       Fx = Fy = 0;
@@ -328,7 +331,7 @@ Errors NoiseFloor(const SimulatedMeasurement& sim, const Replay& r, Split split)
 
 Errors CleanSignalErrors(const SimulatedMeasurement& sim, const Replay& r, Split split) {
   Prediction p;
-  for (const auto& s : r.s) {
+  for (const auto& s : r.samples()) {
     p.fn_N.push_back(sim.fn_clean[s.row]);
     p.ftx_N.push_back(sim.ftx_clean[s.row]);
     p.fty_N.push_back(sim.fty_clean[s.row]);

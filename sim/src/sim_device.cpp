@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hapticlab/sim_truth/friction.hpp"
 #include "truth_internal.hpp"
 
 namespace hapticlab::sim {
@@ -42,7 +43,7 @@ TruthSample::Contact TruthSample::At(const Eigen::Vector3d& pos, const Eigen::Ve
   // Real surfaces push along their true normal; friction with Stribeck and load exponent.
   const Eigen::Vector3d normal = Eigen::Vector3d(-hx, -hy, 1.0).normalized();
   const double mu =
-      p_.mu_k * (1 + (p_.stribeck_ratio - 1) * std::exp(-std::pow(c.speed_mps / p_.stribeck_speed_mps, 2)));
+      sim_truth::StribeckFriction::FromRatio(p_.mu_k, p_.stribeck_ratio, p_.stribeck_speed_mps).Mu(c.speed_mps);
   const double ff = c.normal_N > 0 ? mu * std::pow(c.normal_N, p_.load_exponent) * std::tanh(c.speed_mps / 1e-3) : 0.0;
   c.force_N = c.normal_N * normal;
   c.force_N.x() -= ff * ux;

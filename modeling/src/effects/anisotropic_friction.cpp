@@ -19,10 +19,10 @@ class AnisotropicFriction final : public Effect {
            "describes a nap or scales that are smoother one way than the other.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{"a1", "1", 0, -0.9, 0.9, 0.1, true, "cos phi"},
-            {"b1", "1", 0, -0.9, 0.9, 0.1, true, "sin phi"},
-            {"a2", "1", 0, -0.9, 0.9, 0.1, true, "cos 2 phi"},
-            {"b2", "1", 0, -0.9, 0.9, 0.1, true, "sin 2 phi"}};
+    return {{.name = "a1", .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "cos phi"},
+            {.name = "b1", .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "sin phi"},
+            {.name = "a2", .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "cos 2 phi"},
+            {.name = "b2", .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "sin 2 phi"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     const double f = 1 + p[0] * std::cos(s.dir_rad) + p[1] * std::sin(s.dir_rad) + p[2] * std::cos(2 * s.dir_rad) +
@@ -34,8 +34,8 @@ class AnisotropicFriction final : public Effect {
     for (int k = 0; k <= 8; ++k) edges.push_back(-std::numbers::pi + k * std::numbers::pi / 4);
     edges.back() += 1e-9;
     const auto b = BinMeans(
-        r.s.size(), [&](std::size_t i) { return r.s[i].fn_N > 0.05 ? res.friction_N[i] / r.s[i].fn_N : 0; },
-        [&](std::size_t i) { return r.s[i].dir_rad; }, [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; },
+        r.samples().size(), [&](std::size_t i) { return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0; },
+        [&](std::size_t i) { return r.samples()[i].dir_rad; }, [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps; },
         edges);
     const int hi = b.ArgMax(), lo = b.ArgMin();
     if (hi < 0) return {"too few sliding samples to judge", "", false};

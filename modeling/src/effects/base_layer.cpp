@@ -24,24 +24,24 @@ class BaseLayer final : public Effect {
   }
   std::vector<ParamSpec> Params(const Replay& r) const override {
     std::vector<double> d;
-    for (const auto& s : r.s)
+    for (const auto& s : r.samples())
       if (s.contact) d.push_back(s.d_m);
-    return {{"K_b", "N/m", 500, 0, 1e6, 1000, true, "base stiffness"},
-            {"t", "m", Quantile(d, 0.6), 0, 0.01, 1e-3, true, "layer thickness"}};
+    return {{.name = "K_b", .unit = "N/m", .init = 500, .lo = 0, .hi = 1e6, .scale = 1000, .fitted = true, .doc = "base stiffness"},
+            {.name = "t", .unit = "m", .init = Quantile(d, 0.6), .lo = 0, .hi = 0.01, .scale = 1e-3, .fitted = true, .doc = "layer thickness"}};
   }
   void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {
     t.extra_N += p[0] * std::max(0.0, s.d_m - p[1]);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     double dmax = 0;
-    for (const auto& s : r.s)
+    for (const auto& s : r.samples())
       if (s.contact) dmax = std::max(dmax, s.d_m);
     std::vector<double> e;
     for (int k = 0; k <= 8; ++k) e.push_back(dmax * k / 8);
     e.back() += 1e-12;
     const auto b = BinMeans(
-        r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].d_m; },
-        [&](std::size_t i) { return r.s[i].contact; }, e);
+        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.samples()[i].d_m; },
+        [&](std::size_t i) { return r.samples()[i].contact; }, e);
     const int hi = b.Last();
     if (hi < 2) return {"too narrow a range of penetration to judge", "", false};
     // The deepest bin's excess over the trend of the shallower half.

@@ -18,17 +18,17 @@ class Dahl final : public Effect {
            "reversals and starts show a ramp of about f_C / kappa.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{"kappa", "N/m", 2000, 10, 1e6, 1000, true, "pre-sliding stiffness"}};
+    return {{.name = "kappa", .unit = "N/m", .init = 2000, .lo = 10, .hi = 1e6, .scale = 1000, .fitted = true, .doc = "pre-sliding stiffness"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.kappa = p[0]; }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Residual magnitude in pre-sliding / starting samples vs steady sliding.
     double pre = 0, sl = 0;
     int npre = 0, nsl = 0;
-    for (std::size_t i = 0; i < r.s.size(); ++i) {
-      if (!r.s[i].contact) continue;
+    for (std::size_t i = 0; i < r.samples().size(); ++i) {
+      if (!r.samples()[i].contact) continue;
       const double e = res.friction_N[i] * res.friction_N[i];
-      if (r.s[i].speed_mps < kSlidingSpeed_mps) pre += e, ++npre;
+      if (r.samples()[i].speed_mps < kSlidingSpeed_mps) pre += e, ++npre;
       else sl += e, ++nsl;
     }
     if (npre < 10 || nsl < 10) return {"too few pre-sliding or sliding samples to judge", "", false};

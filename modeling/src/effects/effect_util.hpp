@@ -13,8 +13,8 @@
 
 namespace hapticlab::modeling::wb::detail {
 
-inline constexpr double kSlidingSpeed_mps = 3e-3;     // Algorithm 1's T_v2
-inline constexpr double kPreslidingSpeed_mps = 0.5e-3;  // Algorithm 1's T_v1
+using wb::kPreslidingSpeed_mps;
+using wb::kSlidingSpeed_mps;
 
 struct Bins {
   std::vector<double> lo, hi, mean;

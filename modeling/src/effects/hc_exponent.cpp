@@ -7,7 +7,7 @@ using namespace detail;
 
 std::vector<double> DepthEdges(const Replay& r) {
   double dmax = 0;
-  for (const auto& s : r.s)
+  for (const auto& s : r.samples())
     if (s.contact) dmax = std::max(dmax, s.d_m);
   std::vector<double> e;
   for (int k = 0; k <= 6; ++k) e.push_back(dmax * k / 6);
@@ -26,13 +26,13 @@ class HcExponent final : public Effect {
            "under-predicts it deep, with a smooth curvature in between.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{"n", "1", 1.1, 1, 2, 0.1, true, "exponent"}};
+    return {{.name = "n", .unit = "1", .init = 1.1, .lo = 1, .hi = 2, .scale = 0.1, .fitted = true, .doc = "exponent"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.n = p[0]; }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
-        r.s.size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.s[i].d_m; },
-        [&](std::size_t i) { return r.s[i].contact; }, DepthEdges(r));
+        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.samples()[i].d_m; },
+        [&](std::size_t i) { return r.samples()[i].contact; }, DepthEdges(r));
     const int lo = b.First(), hi = b.Last();
     if (lo < 0 || hi - lo < 2) return {"too narrow a range of penetration to judge", "", false};
     const int mid = (lo + hi) / 2;

@@ -17,15 +17,15 @@ class LoadDependentFriction final : public Effect {
            "contact), so the friction coefficient falls as the user presses harder.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{"alpha", "1", 1.0, 0.2, 1.8, 0.1, true, "load exponent (1: Coulomb)"}};
+    return {{.name = "alpha", .unit = "1", .init = 1.0, .lo = 0.2, .hi = 1.8, .scale = 0.1, .fitted = true, .doc = "load exponent (1: Coulomb)"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto use = [&](std::size_t i) { return r.s[i].contact && r.s[i].speed_mps >= kSlidingSpeed_mps; };
+    const auto use = [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps; };
     const auto b = BinMeans(
-        r.s.size(), [&](std::size_t i) { return res.ratio[i]; }, [&](std::size_t i) { return r.s[i].fn_N; }, use,
+        r.samples().size(), [&](std::size_t i) { return res.ratio[i]; }, [&](std::size_t i) { return r.samples()[i].fn_N; }, use,
         {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0 || lo == hi) return {"too narrow a range of loads to judge", "", false};

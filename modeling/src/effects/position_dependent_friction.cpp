@@ -26,13 +26,13 @@ class PositionDependentFriction final : public Effect {
            "surface rather than with speed, load or direction.";
   }
   std::vector<ParamSpec> Params(const Replay& r) const override {
-    std::vector<ParamSpec> p = {{"x0", "m", r.x_min, -1e9, 1e9, 1, false, "area"},
-                                {"x1", "m", r.x_max, -1e9, 1e9, 1, false, "area"},
-                                {"y0", "m", r.y_min, -1e9, 1e9, 1, false, "area"},
-                                {"y1", "m", r.y_max, -1e9, 1e9, 1, false, "area"}};
+    std::vector<ParamSpec> p = {{.name = "x0", .unit = "m", .init = r.x_min, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
+                                {.name = "x1", .unit = "m", .init = r.x_max, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
+                                {.name = "y0", .unit = "m", .init = r.y_min, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
+                                {.name = "y1", .unit = "m", .init = r.y_max, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"}};
     for (int j = 0; j <= kOrder; ++j)
       for (int k = 0; k <= kOrder; ++k)
-        if (j || k) p.push_back({fmt::format("g{}{}", j, k), "1", 0, -0.9, 0.9, 0.1, true, "Legendre coefficient"});
+        if (j || k) p.push_back({.name = fmt::format("g{}{}", j, k), .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "Legendre coefficient"});
     return p;
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
@@ -50,8 +50,8 @@ class PositionDependentFriction final : public Effect {
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Friction-ratio residual per tile of a 3 x 3 grid.
     double m[9] = {}, n[9] = {};
-    for (std::size_t i = 0; i < r.s.size(); ++i) {
-      const auto& s = r.s[i];
+    for (std::size_t i = 0; i < r.samples().size(); ++i) {
+      const auto& s = r.samples()[i];
       if (!s.contact || s.speed_mps < kSlidingSpeed_mps || s.fn_N < 0.05) continue;
       const int tx = std::clamp(static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
       const int ty = std::clamp(static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);

@@ -32,8 +32,8 @@ struct Algorithm1Result {
 };
 
 struct ContactFitOptions {
-  double presliding_speed_mps = 0.5e-3;  ///< Tv1 (Algorithm 1)
-  double sliding_speed_mps = 3e-3;       ///< Tv2
+  double presliding_speed_mps = wb::kPreslidingSpeed_mps;  ///< Tv1 (Algorithm 1)
+  double sliding_speed_mps = wb::kSlidingSpeed_mps;        ///< Tv2
   double convergence = 1e-9;             ///< TC
   double max_force_N = 2.0;              ///< poke samples above this are discarded (ch. IV.3.3)
 };

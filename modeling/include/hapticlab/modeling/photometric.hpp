@@ -25,6 +25,7 @@ struct Light {
   std::string file;  ///< image file name, relative to the images folder (empty: from an image list)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
   int line = 0;      ///< line of the lights file it came from (0 for presets)
+  std::string source;  ///< the lights file it came from (empty for presets)
 };
 
 /// The dissertation's dome: 30 lights at elevations 40°, 55°, 70°, every 36° of azimuth
@@ -129,7 +130,7 @@ inline constexpr double kAxisFlipRatio = 2.0;
 /// lights that the rejection rule keeps; per light, its intensity scale from all pixels;
 /// repeated. `reference` (white-target images, same order) divides each image to remove the
 /// lights' spatial fall-off when given. `progress` gets fractions 0..1.
-/// @throws std::invalid_argument on inconsistent inputs (image count, mask size, an
+/// Preconditions (HL_REQUIRE, PreconditionError) on inconsistent inputs (image count, mask size, an
 /// irregular mask with Frankot-Chellappa).
 PhotometricResult PhotometricStereo(const ImageStack& images, const std::vector<Light>& lights,
                                     const PhotometricOptions& options, const ImageStack* reference = nullptr,

@@ -1,0 +1,131 @@
+// hapticlab fit: fit a model's effects to a measurement (docs/workbench.md).
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <filesystem>
+#include <memory>
+#include <set>
+#include <mutex>
+#include <unistd.h>
+#include <nlohmann/json.hpp>
+
+#include "cli_common.hpp"
+#include "fit_summary_json.hpp"
+#include "commands.hpp"
+#include "workbench_cli.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/stats/plot.hpp"
+
+namespace hapticlab::cli::workbench_cli {
+
+using namespace modeling::wb;
+
+void AddFit(CLI::App& app) {
+  struct O {
+    std::string measurement, model, out;
+    std::vector<std::string> add;
+    bool json = false, quiet = false;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = app.add_subcommand(
+      "fit",
+      "Fit a material model to a measurement: the thesis's baseline (coulomb, viscous, dahl,\n"
+      "hc-damping, hc-exponent, vibration-speed, vibration-force) when no --model is given,\n"
+      "plus every --add effect. The contact channels use the same engine as `model fit-contact`\n"
+      "(Algorithm 1, then a joint Ceres refinement of the vector Dahl replay). Prints the error\n"
+      "(before and after when there is a change), on all data and held out (fitted on the even\n"
+      "1 s blocks, scored on the odd ones), each solve's termination, iterations, cost and\n"
+      "parameters at bounds, the parameters with 95 % intervals (cluster jackknife over\n"
+      "3 s clusters of blocks), and writes the fitted model (a material TOML the renderer plays, with a\n"
+      "[workbench] table of every parameter). Progress goes to stderr unless --quiet.");
+  cmd->add_option("--measurement", o->measurement, "Measurement CSV v1 (with acc_mps2 for the vibration channel)")
+      ->required();
+  cmd->add_option("--model", o->model, "Start from this model (workbench or renderer material TOML)");
+  cmd->add_option("--add", o->add, "Effect to add (repeatable); one of: " + CatalogueNames());
+  cmd->add_option("-o,--out", o->out, "Fitted model to write (.toml)")->required();
+  cmd->add_flag("--json", o->json,
+                "Print {before, after, held_out:{before, after}, effects, params, estimates, fits, usable} as JSON");
+  cmd->add_flag("--quiet", o->quiet, "No progress lines on stderr");
+  cmd->callback([o] {
+    RunGuarded([&] {
+      RequireKnownEffects(o->add, "<command line>", "--add");
+      Progress prog;
+      prog.quiet = o->quiet;
+      Model start;
+      const bool given = !o->model.empty();
+      if (given) start = LoadModel(o->model);
+      prog.Line(fmt::format("fit: reading {}", o->measurement));
+      const auto r = Load(o->measurement, given ? &start : nullptr);
+      if (!given) AddEffects(&start, BaselineEffects(), r);
+      Model after = start;
+      AddEffects(&after, o->add, r);
+      // "Before" is the given model as it is, or (no --model) the baseline fitted; without
+      // --add and --model, before and after are the same fit and are reported once.
+      const bool changes = given || !o->add.empty();
+      prog.Line("fit: fitting on all data (with uncertainties)");
+      const auto rep = Fit(&after, r, {.uncertainty = true});
+      const auto e_after = ComputeErrors(r, Predict(after, r), Split::kAll);
+      Errors e_before = e_after;
+      if (!given && !o->add.empty()) {
+        Model before = start;
+        prog.Line("fit: fitting the baseline on all data");
+        Fit(&before, r);
+        e_before = ComputeErrors(r, Predict(before, r), Split::kAll);
+      } else if (given) {
+        e_before = ComputeErrors(r, Predict(start, r), Split::kAll);
+      }
+      prog.Line("fit: fitting on the training blocks for the held-out errors");
+      Model hb = start, ha = start;
+      AddEffects(&ha, o->add, r);
+      Fit(&ha, r, {.split = Split::kTrain});
+      const auto h_after = ComputeErrors(r, Predict(ha, r), Split::kHeldOut);
+      Errors h_before = h_after;
+      if (!o->add.empty()) {
+        Fit(&hb, r, {.split = Split::kTrain});
+        h_before = ComputeErrors(r, Predict(hb, r), Split::kHeldOut);
+      }
+      if (after.name.empty()) after.name = std::filesystem::path(o->out).stem().string();
+      SaveModel(after, o->out, &r);
+      if (o->json) {
+        nlohmann::json params;
+        for (const auto& [e, ps] : after.params)
+          for (const auto& [k, v] : ps) params[e][k] = v;
+        auto j = nlohmann::json{{"before", ErrorsJson(e_before)},
+                                {"after", ErrorsJson(e_after)},
+                                {"held_out", {{"before", ErrorsJson(h_before)}, {"after", ErrorsJson(h_after)}}},
+                                {"effects", after.effects},
+                                {"params", params},
+                                {"out", o->out}};
+        j.update(FitReportJson(rep));
+        fmt::print("{}\n", j.dump(2));
+      } else {
+        fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
+        if (changes) {
+          fmt::print("before ({}): {}\n", given ? "model as given" : "baseline, fitted", ErrorsLine(e_before));
+          fmt::print("after  (fitted):          {}\n", ErrorsLine(e_after));
+          if (!o->add.empty()) fmt::print("held out, before: {}\n", ErrorsLine(h_before));
+          fmt::print("held out{}: {}\n", o->add.empty() ? "" : ", after ", ErrorsLine(h_after));
+        } else {
+          fmt::print("fitted:   {}\n", ErrorsLine(e_after));
+          fmt::print("held out: {}\n", ErrorsLine(h_after));
+        }
+        for (const auto& c : rep.channels) {
+          fmt::print("{}\n", FitSummaryLine(c.summary));
+          for (const auto& p : c.params)
+            fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name, p.value, p.sd, p.lo95,
+                       p.hi95, p.at_bound ? "  AT A BOUND" : "");
+        }
+        fmt::print("wrote {}\n", o->out);
+      }
+      if (!rep.IsUsable()) {
+        fmt::print(stderr, "fit: a channel's fit is not usable (see the fit lines); {} was written for inspection\n", o->out);
+        return kExitFailure;
+      }
+      return kExitOk;
+    });
+  });
+}
+
+}  // namespace hapticlab::cli::workbench_cli

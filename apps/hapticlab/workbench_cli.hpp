@@ -1,0 +1,38 @@
+#pragma once
+// Shared by the workbench sub-commands (cmd_workbench*.cpp): JSON and text forms of errors and
+// fit reports, measurement loading, progress lines.
+
+#include <CLI/CLI.hpp>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <string>
+
+#include "hapticlab/modeling/workbench.hpp"
+
+namespace hapticlab::cli::workbench_cli {
+
+nlohmann::json ErrorsJson(const modeling::wb::Errors& e);
+std::string ErrorsLine(const modeling::wb::Errors& e);
+/// Reads a measurement CSV and prepares it for replay (in the model's vibration bands).
+modeling::wb::Replay Load(const std::string& measurement, const modeling::wb::Model* model);
+
+// ---------------------------------------------------------------------------------------------
+// Progress lines on stderr (a person waits on fits of a minute); --quiet silences them.
+struct Progress {
+  bool quiet = false;
+  std::mutex mu;
+  void Line(const std::string& s) {
+    if (quiet) return;
+    std::lock_guard<std::mutex> lock(mu);
+    fmt::print(stderr, "{}\n", s);
+    std::fflush(stderr);
+  }
+};
+
+nlohmann::json FitReportJson(const modeling::wb::FitReport& rep);
+
+void AddFit(CLI::App& app);
+void AddCompare(CLI::App& app);
+void AddDiagnose(CLI::App& app);
+
+}  // namespace hapticlab::cli::workbench_cli

@@ -1,0 +1,115 @@
+#pragma once
+/// @file Workbench models (DESIGN.md §4): a material model is a set of named physical effects
+/// with parameters. Each effect adds terms to one channel:
+///  - normal force   f_n = K d^n + B d^n d_dot + extra(d)            (Hunt-Crossley, eq. 4.11)
+///  - friction       the surface's tangential force -(F_D + mu_b v), F_D a vector Dahl bristle
+///                   whose Coulomb level is f_C = f_n,meas (mu_k S + mu_add)   (eqs. 4.6-4.7)
+///  - vibration      log band powers of 0.128 s windows as a linear model in features of the
+///                   window's speed, load and direction.
+/// Units: see each ParamSpec (unit field); lengths in the normal-force terms are relative to
+/// 1 mm of penetration (K1mm_N is the force at 1 mm, not renderer material.hpp's K [N/m^n]).
+
+#include <map>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "hapticlab/modeling/workbench_replay.hpp"
+
+namespace hapticlab::modeling::wb {
+
+enum class Channel { kNormal, kFriction, kVibration };
+const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration"
+
+/// One parameter of an effect. Fitted parameters are optimized (Ceres) within [lo, hi]; fixed
+/// ones (e.g. the tile grid's bounds) are set from the data when the effect is added.
+struct ParamSpec {
+  std::string name, unit;
+  double init = 0, lo = -1e300, hi = 1e300;
+  double scale = 1;     ///< typical magnitude (the optimizer works on value / scale)
+  bool fitted = true;
+  std::string doc;
+};
+
+/// Per-sample terms of the normal-force channel that effects set:
+/// f_n = (d / 1 mm)^n (K + B d_dot) + extra_N, with K the force at 1 mm [N] and B the damping
+/// at 1 mm [N s/m] (well-conditioned for fitting whatever n is).
+struct NormalTerms {
+  double K = 0, n = 1, B = 0, extra_N = 0;
+};
+/// Per-sample terms of the friction channel: f_C = f_n (mu_k * mu_scale + mu_add);
+/// kappa = 0 means no pre-sliding (ideal Coulomb, smoothed over 0.5 mm/s).
+struct FrictionTerms {
+  double mu_k = 0, mu_scale = 1, mu_add = 0, kappa = 0, mu_b = 0;
+};
+
+struct Residuals;
+
+/// What the current model's residuals say about an effect: the pattern as measured, and the
+/// cause it would point to. Reports assert the cause only for supported effects.
+struct EvidenceNote {
+  std::string pattern;      ///< the residual pattern in words with numbers (no causal claim)
+  std::string cause;        ///< what the pattern means when the effect is supported
+  bool contradicts = false; ///< the pattern is not the one this effect produces (or is absent)
+  std::string Sentence(bool supported) const {
+    return supported && !cause.empty() ? pattern + ": " + cause : pattern;
+  }
+};
+
+/// A physical effect of the catalogue. Implementations live in modeling/src/effects/, one
+/// file each, registered in effects/registry.cpp.
+class Effect {
+ public:
+  virtual ~Effect() = default;
+  virtual std::string_view name() const = 0;
+  virtual Channel channel() const = 0;
+  /// One paragraph: the physics, the formula, when it matters.
+  virtual std::string_view description() const = 0;
+  /// Effects this one modifies (e.g. dahl needs coulomb).
+  virtual std::vector<std::string_view> requires_effects() const { return {}; }
+  /// Its parameters with initial (neutral) values from the data.
+  virtual std::vector<ParamSpec> Params(const Replay& r) const = 0;
+  virtual void Normal(const double* /*p*/, const Replay::Sample& /*s*/, NormalTerms& /*t*/) const {}
+  virtual void Friction(const double* /*p*/, const Replay::Sample& /*s*/, FrictionTerms& /*t*/) const {}
+  /// Vibration effects add regression columns for the log band powers.
+  virtual int VibrationColumns() const { return 0; }
+  virtual void VibrationFeatures(const double* /*p*/, const Replay::Window& /*w*/, double* /*out*/) const {}
+  /// What pattern of the current model's residuals points to this effect, and whether the
+  /// residuals show it.
+  virtual EvidenceNote Evidence(const Replay& r, const Residuals& res) const = 0;
+};
+
+/// The catalogue, in a fixed order. The core ("contact": K and the vibration intercept) is
+/// not an entry: every model has it.
+const std::vector<std::unique_ptr<Effect>>& Catalogue();
+/// The entry named `name`, or nullptr.
+const Effect* FindEffect(std::string_view name);
+/// The thesis's model: coulomb, viscous, dahl, hc-damping, hc-exponent, vibration-speed,
+/// vibration-force (Coulomb + viscous + Dahl friction, Hunt-Crossley with damping, AR bank
+/// over speed x force).
+std::vector<std::string> BaselineEffects();
+/// The catalogue's names, comma-separated.
+std::string CatalogueNames();
+/// Checks user-given effect names. @throws InputError (file `source`, e.g. a model file or
+/// "<command line>", and `field`) listing every unknown name and the catalogue.
+void RequireKnownEffects(const std::vector<std::string>& names, const std::string& source, const std::string& field);
+
+/// A model: effect names and every parameter's values (fitted and fixed). Vibration
+/// coefficients are stored as "coef" (bands x columns, row-major) per vibration effect and
+/// under the core; "core" holds K and the intercepts.
+struct Model {
+  std::string name;
+  std::vector<std::string> effects;
+  std::map<std::string, std::map<std::string, double>> params;  ///< effect -> name -> value
+  std::map<std::string, std::vector<double>> coef;              ///< vibration coefficients
+  std::vector<double> band_edges_hz;  ///< bands the vibration coefficients refer to
+  bool HasVibration() const { return coef.count("core") > 0; }
+  bool Has(std::string_view e) const;
+};
+
+/// Adds effects (with their dependencies) to a model, initializing their parameters from the
+/// data. Precondition (HL_REQUIRE): every name is in the catalogue (RequireKnownEffects).
+void AddEffects(Model* m, const std::vector<std::string>& names, const Replay& r);
+
+}  // namespace hapticlab::modeling::wb

@@ -1,0 +1,39 @@
+#pragma once
+// Internal to the workbench sources: the resolved form of a model (each effect with its
+// parameter values in ParamSpec order) and the replay kernels prediction and fitting share.
+
+#include <string>
+#include <vector>
+
+#include "hapticlab/modeling/workbench_fit.hpp"
+
+namespace hapticlab::modeling::wb::internal {
+
+inline constexpr double kMm = 1e-3;
+
+/// The core every model has: the contact stiffness (one parameter, K1mm_N).
+const Effect& CoreEffect();
+
+// An effect with its parameter values in the order of its ParamSpec list.
+struct Resolved {
+  const Effect* e;
+  std::string name;
+  std::vector<ParamSpec> specs;
+  std::vector<double> p;
+};
+
+/// The model's effects of channel c (the core first for the normal channel), values from the
+/// model or the specs' initial values.
+std::vector<Resolved> Resolve(const Model& m, const Replay& r, Channel c);
+/// Writes the resolved values back into the model.
+void Store(Model* m, const std::vector<Resolved>& res);
+/// Normal force of one sample [N] (0 out of contact).
+double NormalForce(const std::vector<Resolved>& eff, const Replay::Sample& s);
+/// Friction force the surface exerts on the tool [N], sample frame, over every sample.
+void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* ftx, double* fty);
+/// Vibration design row: intercept, then every vibration effect's features.
+std::vector<double> VibrationRow(const std::vector<Resolved>& eff, const Replay::Window& w);
+/// Whether a block belongs to the split (even blocks train, odd are held out).
+bool InSplit(int block, Split s);
+
+}  // namespace hapticlab::modeling::wb::internal

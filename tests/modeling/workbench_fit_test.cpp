@@ -1,0 +1,73 @@
+// Workbench fitting: parameters of a simulated truth recovered within their intervals, and the
+// fit's report in the solver summary's terms (core/solver_summary.hpp).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hapticlab/modeling/workbench.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
+  TruthParams t;
+  t.effects = {"coulomb", "viscous", "hc-exponent"};
+  t.mu_k = 0.35;
+  t.mu_b_Ns_per_m = 0.8;
+  t.K1mm_N = 1.7;
+  t.n = 1.4;
+  t.duration_s = 12;
+  t.seed = 7;
+  // Exact kinematics: measured velocities with noise bias mu_k against mu_b (errors in the
+  // regressors), which is the replay's property, not the fitter's.
+  t.pos_noise_m = t.vel_noise_mps = 0;
+  const auto sim = Simulate(t);
+  const auto r = PrepareReplay(sim.m);
+  Model m;
+  AddEffects(&m, {"coulomb", "viscous", "hc-exponent"}, r);
+  const double mu_start = m.params.at("coulomb").at("mu_k");
+  const auto rep = Fit(&m, r, {.vibration = false, .algorithm1_init = false});
+  ASSERT_EQ(rep.channels.size(), 2u);
+  EXPECT_TRUE(rep.IsUsable());
+  for (const auto& c : rep.channels) {
+    const SolverSummary& s = c.summary;  // a FitSummary is a SolverSummary
+    EXPECT_TRUE(s.converged) << c.summary.what << ": " << s.message;
+    EXPECT_GT(s.iterations, 0);
+    EXPECT_LE(s.final_cost, s.initial_cost);
+    EXPECT_EQ(c.summary.termination, "converged");
+  }
+  EXPECT_NE(mu_start, m.params.at("coulomb").at("mu_k"));
+  EXPECT_NEAR(m.params.at("coulomb").at("mu_k"), 0.35, 0.01);
+  EXPECT_NEAR(m.params.at("viscous").at("mu_b"), 0.8, 0.1);
+  EXPECT_NEAR(m.params.at("core").at("K1mm_N"), 1.7, 0.02);
+  EXPECT_NEAR(m.params.at("hc-exponent").at("n"), 1.4, 0.02);
+  const ChannelFit* fr = rep.Find(Channel::kFriction);
+  ASSERT_NE(fr, nullptr);
+  EXPECT_EQ(fr->params.size(), 2u);
+  EXPECT_EQ(rep.Find(Channel::kVibration), nullptr);
+}
+
+TEST(WorkbenchFit, TooFewSamplesIsReportedNotThrown) {
+  TruthParams t;
+  t.effects = {"coulomb"};
+  t.duration_s = 2;
+  const auto sim = Simulate(t);
+  auto r = PrepareReplay(sim.m);
+  // Keep two samples in contact: fewer than three per fitted parameter (mu_k).
+  int kept = 0;
+  for (auto& s : r.mutable_samples())
+    if (s.contact && ++kept > 2) s.contact = false;
+  Model m;
+  AddEffects(&m, {"coulomb"}, r);
+  const auto rep = Fit(&m, r, {.vibration = false});
+  const ChannelFit* fr = rep.Find(Channel::kFriction);
+  ASSERT_NE(fr, nullptr);
+  EXPECT_FALSE(fr->summary.converged);
+  EXPECT_FALSE(fr->summary.usable);
+  EXPECT_EQ(fr->summary.termination, "not run (too few samples)");
+  EXPECT_FALSE(rep.IsUsable());
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling::wb

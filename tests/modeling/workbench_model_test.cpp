@@ -1,0 +1,92 @@
+// Workbench models: the effect catalogue, adding effects, unknown names.
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+TEST(WorkbenchCatalogue, HasEveryNamedEffectWithDescriptionsAndSaneParameters) {
+  const std::vector<std::string> required = {"coulomb", "viscous", "dahl", "stribeck", "anisotropic-friction",
+                                             "load-dependent-friction", "position-dependent-friction", "hc-damping",
+                                             "hc-exponent", "base-layer", "vibration-speed", "vibration-force",
+                                             "vibration-direction"};
+  std::set<std::string> names;
+  for (const auto& e : Catalogue()) EXPECT_TRUE(names.insert(std::string(e->name())).second) << e->name();
+  for (const auto& n : required) EXPECT_TRUE(names.count(n)) << n;
+  TruthParams t;
+  t.duration_s = 10;
+  const auto sim = Simulate(t);
+  const auto r = PrepareReplay(sim.m);
+  for (const auto& e : Catalogue()) {
+    EXPECT_GT(e->description().size(), 150u) << e->name() << ": one paragraph of physics";
+    for (const auto& p : e->Params(r)) {
+      EXPECT_LE(p.lo, p.init) << e->name() << "." << p.name;
+      EXPECT_LE(p.init, p.hi) << e->name() << "." << p.name;
+      EXPECT_GT(p.scale, 0) << e->name() << "." << p.name;
+    }
+    for (const auto dep : e->requires_effects()) EXPECT_NE(FindEffect(dep), nullptr);
+  }
+  Model m;
+  EXPECT_THROW(AddEffects(&m, {"no-such-effect"}, r), PreconditionError);
+  AddEffects(&m, {"stribeck"}, r);  // pulls in its prerequisite
+  EXPECT_TRUE(m.Has("coulomb"));
+}
+
+// User-given names are checked at the edge: every unknown name, with the source and field.
+TEST(WorkbenchCatalogue, UnknownNamesAreInputErrorsNamingSourceAndField) {
+  EXPECT_NO_THROW(RequireKnownEffects({"coulomb", "vibration-force"}, "model.toml", "effects"));
+  try {
+    RequireKnownEffects({"coulomb", "wobble", "drag"}, "<command line>", "--add");
+    FAIL() << "unknown names must throw";
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 2u);
+    EXPECT_EQ(e.diagnostics()[0].file, "<command line>");
+    EXPECT_EQ(e.diagnostics()[0].field, "--add");
+    EXPECT_NE(e.diagnostics()[0].message.find("'wobble'"), std::string::npos);
+    EXPECT_NE(e.diagnostics()[1].message.find("'drag'"), std::string::npos);
+    EXPECT_NE(e.diagnostics()[1].message.find("vibration-direction"), std::string::npos) << "lists the catalogue";
+  }
+}
+
+// The speed and force axes of the vibration bank share one implementation: hat features of
+// ln(speed) or ln(load) that sum to one with the intercept's partner column left out.
+TEST(WorkbenchCatalogue, VibrationAxesUseTheirOwnKeyAndKnots) {
+  const Effect* sp = FindEffect("vibration-speed");
+  const Effect* fo = FindEffect("vibration-force");
+  ASSERT_NE(sp, nullptr);
+  ASSERT_NE(fo, nullptr);
+  EXPECT_EQ(sp->VibrationColumns(), 4);
+  EXPECT_EQ(fo->VibrationColumns(), 2);
+  const double knots_speed[] = {std::log(0.01), std::log(0.02), std::log(0.04), std::log(0.08), std::log(0.16)};
+  const double knots_force[] = {std::log(0.5), std::log(1.0), std::log(2.0)};
+  Replay::Window w{};
+  w.speed_mps = 0.03;  // between knots 1 and 2 of speed: ln-interpolated weights
+  w.force_N = 1.0;     // exactly on knot 1 of force
+  double out_s[4] = {}, out_f[2] = {};
+  sp->VibrationFeatures(knots_speed, w, out_s);
+  fo->VibrationFeatures(knots_force, w, out_f);
+  const double u = (std::log(0.03) - std::log(0.02)) / (std::log(0.04) - std::log(0.02));
+  EXPECT_NEAR(out_s[0], 1 - u, 1e-12);  // hat of knot 1
+  EXPECT_NEAR(out_s[1], u, 1e-12);      // hat of knot 2
+  EXPECT_NEAR(out_s[2], 0, 1e-12);
+  EXPECT_NEAR(out_f[0], 1, 1e-12);
+  EXPECT_NEAR(out_f[1], 0, 1e-12);
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling::wb

@@ -1,0 +1,90 @@
+// Workbench prediction against the channel formulas written out by hand (workbench_model.hpp):
+// f_n = (d / 1 mm)^n (K + B d_dot), and without a Dahl bristle the friction is
+// -(f_C tanh(v / 0.5 mm/s) v / |v| + mu_b v) with f_C = f_load (mu_k + dmu_s exp(-(v / v_s)^2)).
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "hapticlab/modeling/workbench.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+Replay::Sample Touching(double d_m, double ddot_mps, double vx_mps, double vy_mps, double load_N, int block) {
+  Replay::Sample s{};
+  s.d_m = d_m;
+  s.ddot_mps = ddot_mps;
+  s.vx_mps = vx_mps;
+  s.vy_mps = vy_mps;
+  s.speed_mps = std::hypot(vx_mps, vy_mps);
+  s.fn_N = s.fload_N = load_N;
+  s.contact = true;
+  s.block = block;
+  return s;
+}
+
+Model HandModel() {
+  Model m;
+  m.effects = {"coulomb", "viscous", "stribeck", "hc-damping", "hc-exponent"};
+  m.params["core"]["K1mm_N"] = 2.0;
+  m.params["hc-exponent"]["n"] = 1.5;
+  m.params["hc-damping"]["B1mm"] = 10.0;
+  m.params["coulomb"]["mu_k"] = 0.4;
+  m.params["viscous"]["mu_b"] = 0.5;
+  m.params["stribeck"]["dmu_s"] = 0.2;
+  m.params["stribeck"]["v_s"] = 0.01;
+  return m;
+}
+
+TEST(WorkbenchPredict, ForcesFollowTheChannelFormulas) {
+  Replay r;
+  r.mutable_samples().push_back(Touching(0.5e-3, 0.01, 0.02, 0, 1.2, 0));
+  r.mutable_samples().push_back(Touching(1.2e-3, -0.02, 0.006, -0.008, 2.0, 1));
+  Replay::Sample air{};
+  r.mutable_samples().push_back(air);
+  const auto p = Predict(HandModel(), r);
+  ASSERT_EQ(p.fn_N.size(), 3u);
+  for (std::size_t i = 0; i < 2; ++i) {
+    const auto& s = r.samples()[i];
+    const double fn = std::pow(s.d_m / 1e-3, 1.5) * (2.0 + 10.0 * s.ddot_mps);
+    EXPECT_NEAR(p.fn_N[i], fn, 1e-12) << i;
+    const double v = s.speed_mps, mu = 0.4 + 0.2 * std::exp(-std::pow(v / 0.01, 2));
+    const double g = s.fload_N * mu * std::tanh(v / 0.5e-3) / v;
+    EXPECT_NEAR(p.ftx_N[i], -(g * s.vx_mps + 0.5 * s.vx_mps), 1e-12) << i;
+    EXPECT_NEAR(p.fty_N[i], -(g * s.vy_mps + 0.5 * s.vy_mps), 1e-12) << i;
+  }
+  EXPECT_EQ(p.fn_N[2], 0.0);
+  EXPECT_EQ(p.ftx_N[2], 0.0);
+  EXPECT_EQ(p.fty_N[2], 0.0);
+}
+
+TEST(WorkbenchPredict, ErrorsAreNormalisedPerChannelAndSplitByBlock) {
+  Replay r;
+  r.mutable_samples().push_back(Touching(1e-3, 0, 0.02, 0, 1.0, 0));  // train
+  r.mutable_samples().push_back(Touching(1e-3, 0, 0.02, 0, 2.0, 1));  // held out
+  r.mutable_samples()[0].ftx_N = -0.5;
+  r.mutable_samples()[1].ftx_N = -1.0;
+  Prediction p;
+  p.fn_N = {0.9, 2.4};
+  p.ftx_N = {-0.5, -0.7};
+  p.fty_N = {0, 0};
+  const auto all = ComputeErrors(r, p, Split::kAll);
+  // normal: sqrt((0.1^2 + 0.4^2) / (1^2 + 2^2)); friction: sqrt(0.3^2 / (0.5^2 + 1^2)).
+  EXPECT_NEAR(all.channel.at("normal_force"), std::sqrt(0.17 / 5.0), 1e-12);
+  EXPECT_NEAR(all.channel.at("friction"), std::sqrt(0.09 / 1.25), 1e-12);
+  EXPECT_NEAR(all.overall, (std::sqrt(0.17 / 5.0) + std::sqrt(0.09 / 1.25)) / 2, 1e-12);
+  EXPECT_NEAR(all.rms.at("normal_force_N"), std::sqrt(0.17 / 2), 1e-12);
+  const auto train = ComputeErrors(r, p, Split::kTrain);
+  EXPECT_NEAR(train.channel.at("normal_force"), 0.1, 1e-12);
+  EXPECT_NEAR(train.channel.at("friction"), 0.0, 1e-12);
+  const auto held = ComputeErrors(r, p, Split::kHeldOut);
+  EXPECT_NEAR(held.channel.at("normal_force"), 0.2, 1e-12);
+  // Residuals: measured minus predicted, friction along the motion (+x here).
+  const auto res = ComputeResiduals(Model{}, r, p);
+  EXPECT_NEAR(res.normal_N[1], -0.4, 1e-12);
+  EXPECT_NEAR(res.friction_N[1], 1.0 - 0.7, 1e-12);
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling::wb

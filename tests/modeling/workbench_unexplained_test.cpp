@@ -1,0 +1,130 @@
+// Workbench unexplained report: noise floors, residual axes, out-of-catalogue truths.
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <set>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::modeling::wb {
+namespace {
+
+TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths) {
+  for (const double noise : {0.004, 0.012}) {
+    TruthParams t;
+    t.duration_s = 30;
+    t.seed = 41;
+    t.force_noise_N = noise;
+    const auto sim = Simulate(t);
+    const auto r = PrepareReplay(sim.m);
+    const auto model = TruthModel(sim, r);
+    const auto est = EstimateNoiseFloor(r, Split::kHeldOut, &model);
+    const auto truth = NoiseFloor(sim, r, Split::kHeldOut);
+    for (const char* ch : {"normal_force", "friction"}) {
+      ASSERT_TRUE(est.count(ch)) << ch;
+      // 20 %: the estimate sees the force noise and the velocity noise through the model; the
+      // truth's floor also holds the load noise through f_C.
+      EXPECT_NEAR(est.at(ch), truth.channel.at(ch), 0.2 * truth.channel.at(ch)) << ch << " at " << noise << " N";
+    }
+    ASSERT_TRUE(est.count("vibration"));
+    EXPECT_NEAR(est.at("vibration"), truth.channel.at("vibration"), 0.35 * truth.channel.at("vibration"));
+  }
+}
+
+// A residual with a known shape: the axis that carries it is ranked first and described.
+TEST(WorkbenchUnexplained, ResidualAxesRankTheAxisThatCarriesTheResidual) {
+  TruthParams t;
+  t.duration_s = 40;
+  t.seed = 5;
+  const auto sim = Simulate(t);
+  const auto r = PrepareReplay(sim.m);
+  const auto truth = TruthModel(sim, r);
+  // The truth's friction with mu_k lowered by 0.1 on the right third of the area only.
+  auto pred = Predict(truth, r);
+  Model low = truth;
+  low.params["coulomb"]["mu_k"] -= 0.1;
+  const auto plow = Predict(low, r);
+  const double x_split = r.x_min + 2 * (r.x_max - r.x_min) / 3;
+  for (std::size_t i = 0; i < r.samples().size(); ++i)
+    if (r.samples()[i].x_m >= x_split) pred.ftx_N[i] = plow.ftx_N[i], pred.fty_N[i] = plow.fty_N[i];
+  const auto axes = RankResidualAxes(truth, r, pred);
+  ASSERT_FALSE(axes.empty());
+  EXPECT_EQ(axes.front().axis, "position");
+  EXPECT_EQ(axes.front().channel, "friction");
+  EXPECT_GT(axes.front().share, 0.3);
+  EXPECT_NE(axes.front().description.find("right"), std::string::npos) << axes.front().description;
+  for (std::size_t k = 1; k < axes.size(); ++k) EXPECT_LE(axes[k].share, axes[k - 1].share);
+}
+
+// Out-of-catalogue truths: the baseline plus a mechanism no effect of the catalogue models.
+struct OutOfCatalogueCase {
+  std::string name, channel, axis;
+  std::function<void(TruthParams&)> set;
+};
+std::vector<OutOfCatalogueCase> OutOfCatalogueCases() {
+  return {{"friction drifts by 40 % over the recording (a warming or wearing surface)", "friction", "time",
+           [](TruthParams& t) { t.mu_drift = 0.4; }},
+          {"stiffness varies by -+30 % across the surface", "normal_force", "position",
+           [](TruthParams& t) { t.K_position_amp = 0.3; }}};
+}
+
+class OutOfCatalogue : public ::testing::TestWithParam<int> {};
+
+TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
+  const auto oc = OutOfCatalogueCases()[static_cast<std::size_t>(GetParam())];
+  TruthParams t;
+  t.duration_s = 120;
+  t.seed = 700 + static_cast<std::uint64_t>(GetParam());
+  t.effects = BaselineEffects();
+  oc.set(t);
+  const auto sim = Simulate(t);
+  const auto r = PrepareReplay(sim.m);
+  Model m;
+  AddEffects(&m, BaselineEffects(), r);
+  const auto dx = Diagnose(m, r);
+  std::string table;
+  for (const auto& c : dx.candidates)
+    table += fmt::format("  {:28s} {:+.1f} % of {}, t {:.1f}{} | {}\n", c.effect, 100 * c.relative_reduction, c.channel,
+                         c.t_statistic, c.supported ? " SUPPORTED" : "", c.evidence);
+  const auto& u = dx.unexplained;
+  // The residuals of the fitted baseline, for each effect's cause sentence.
+  Model probe;
+  AddEffects(&probe, BaselineEffects(), r);
+  Fit(&probe, r);
+  const auto probe_res = ComputeResiduals(probe, r, Predict(probe, r));
+  for (const auto& c : dx.candidates) {
+    EXPECT_FALSE(c.supported) << oc.name << "\n" << table;
+    // No cause is asserted for an effect that is not supported.
+    const auto note = FindEffect(c.effect)->Evidence(r, probe_res);
+    if (!note.cause.empty()) {
+      EXPECT_EQ(c.evidence.find(note.cause), std::string::npos) << c.effect << ": " << c.evidence;
+    }
+  }
+  EXPECT_TRUE(u.flagged) << u.summary;
+  ASSERT_FALSE(u.channels.empty());
+  EXPECT_EQ(u.channels.front().channel, oc.channel);
+  EXPECT_GE(u.channels.front().ratio, 2.0) << "the error is well above the floor";
+  ASSERT_FALSE(u.axes.empty());
+  EXPECT_EQ(u.axes.front().axis, oc.axis) << u.axes.front().description;
+  EXPECT_EQ(u.axes.front().channel, oc.channel);
+  EXPECT_NE(u.summary.find("No catalogue effect"), std::string::npos) << u.summary;
+  EXPECT_NE(u.summary.find(oc.axis), std::string::npos) << u.summary;
+  fmt::print("[out-of-catalogue] {}: {} error {:.1f}x floor; first axis {} ({:.0f} %): {}\n", oc.name, u.channels.front().channel,
+             u.channels.front().ratio, u.axes.front().axis, 100 * u.axes.front().share, u.axes.front().description);
+}
+INSTANTIATE_TEST_SUITE_P(Cases, OutOfCatalogue, ::testing::Range(0, static_cast<int>(OutOfCatalogueCases().size())),
+                         [](const ::testing::TestParamInfo<int>& i) { return i.param == 0 ? std::string("time_drift")
+                                                                                            : std::string("position_stiffness"); });
+
+}  // namespace
+}  // namespace hapticlab::modeling::wb
