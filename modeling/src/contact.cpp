@@ -168,7 +168,7 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
       "r_g, cov = (G-1)/G sum (d_g - mean)(d_g - mean)'), 95 % intervals with "
       "t(0.975, G-1)";
   // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
-  const auto r = wb::PrepareReplay(m);
+  const auto r = wb::PrepareReplay(m, o.replay);
   out.algorithm1 = AlgorithmOne(r, wb::Split::kAll, o);
   wb::Model model;
   wb::AddEffects(&model, ContactEffects(), r);
@@ -215,7 +215,7 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
     throw InputError(src->file, 0, "fz_N",
                      fmt::format("{} samples in contact at most {:.1f} N for Hunt-Crossley; at least 10 are needed",
                                  in_contact(*src), o.max_force_N));
-  const auto pr = src == &m ? r : wb::PrepareReplay(*src);
+  const auto pr = src == &m ? r : wb::PrepareReplay(*src, o.replay);
   fo.normal = true;
   fo.friction = false;
   fo.max_normal_force_N = o.max_force_N;

@@ -10,9 +10,11 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -183,34 +185,62 @@ TEST(ContactFreeHand, AlgorithmOneStartsNearTheTruthFromSlidingAndTremor) {
 // parameter's interval must cover the truth in at least 18 of them (the 90 %), and
 // every estimate must be within its tolerance. With the plain (J'J)^-1 sigma^2 of the earlier
 // engine, mu_k's interval (+- 0.002) covered the truth in none.
-// KNOWN FAILURE, so disabled (run with --gtest_also_run_disabled_tests, 14 s): mu_b is covered in
-// 16 of 20 seeds only. Its former bias (-1.0 % mean over these seeds: a moving-average load,
-// +1.4 % on noise-free data, and position noise random-walking the bristle, -1.8 points) is gone
-// (-0.3 %), but its error varies by 2.1 % (SD) from seed to seed while the cluster jackknife
-// reports 1.3 % (median): an error that depends on the recording's strokes, which no interval from
-// within one recording sees. K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19 of 20; every estimate
-// is within its tolerance.
-TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
+// KNOWN FAILURE, so disabled (run with --gtest_also_run_disabled_tests, 20 s): mu_b is covered in
+// 16 of 20 seeds (K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19); error mean -0.34 %, SD 2.07 %
+// against a median reported SE of 1.29 %. The cause is the replay's inputs, not the interval
+// method (measured with Experiment, EXP_COVER=1; docs/modeling-geometry-contact.md): with exact
+// positions and velocities replayed at 1 kHz the jackknife's SE matches mu_b's spread (SD 0.86 %,
+// median SE 0.97 %), and what is left is a bias of -1.23 % from the force noise in the load that
+// sets the Coulomb level (errors in variables: -0.66, -1.36, -2.16 % at 4, 8, 12 mN). On the
+// test's inputs the 20 ms position smoothing and the 500 Hz replay add a per-recording error of
+// about 1 % SD (+0.67 % mean) that is systematic within a recording (RMS z 2.0 at 0.5 mN noise),
+// so no resampling of the recording sees it. A wider interval would hide these; they are fixed
+// in the replay or not at all.
+// The coverage experiment over the 20 seeds (100-119, noise from 4-12 mN), printed per seed and
+// summarised: per parameter, how many intervals covered the truth and how many estimates were
+// within tolerance; for mu_b also the mean and SD of the relative error and the median reported SE.
+struct Coverage {
+  std::map<std::string, int> covered, within;
+  double mu_b_mean = 0, mu_b_sd = 0, mu_b_median_se = 0;
+};
+Coverage RunCoverage(const ContactFitOptions& o) {
   const Truth t;
   constexpr int kSeeds = 20;
-  std::map<std::string, int> covered, within;
+  Coverage out;
+  std::vector<double> err, se;
   std::mt19937_64 noise_rng(2024);
   for (int s = 0; s < kSeeds; ++s) {
     const double noise = std::uniform_real_distribution<double>(0.004, 0.012)(noise_rng);
-    const auto f = FitContact(FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true));
-    ASSERT_TRUE(f.IsUsable()) << "seed " << s;
+    const auto f = FitContact(FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true), nullptr, o);
+    EXPECT_TRUE(f.IsUsable()) << "seed " << s;
     std::string line = fmt::format("[coverage] seed {:2d} noise {:.1f} mN:", s, noise * 1e3);
     for (const auto& p : Parameters(f, t)) {
       const bool c = p.est.lo95 <= p.truth && p.truth <= p.est.hi95;
-      covered[p.name] += c;
-      within[p.name] += std::abs(p.est.value - p.truth) <= p.tolerance * p.truth;
+      out.covered[p.name] += c;
+      out.within[p.name] += std::abs(p.est.value - p.truth) <= p.tolerance * p.truth;
       line += fmt::format(" {} {:.4g} [{:.4g}, {:.4g}]{}", p.name, p.est.value, p.est.lo95, p.est.hi95, c ? "" : " MISS");
     }
+    err.push_back(f.mu_b_Ns_per_m.value / t.mu_b_Ns_per_m - 1);
+    se.push_back(f.mu_b_Ns_per_m.sd / t.mu_b_Ns_per_m);
     fmt::print("{}\n", line);
   }
-  for (const auto& [name, c] : covered) {
-    EXPECT_GE(c, 18) << name << ": the 95 % interval covered the truth in " << c << " of " << kSeeds << " seeds";
-    EXPECT_EQ(within[name], kSeeds) << name << " outside its tolerance";
+  for (double e : err) out.mu_b_mean += e / kSeeds;
+  for (double e : err) out.mu_b_sd += std::pow(e - out.mu_b_mean, 2) / (kSeeds - 1);
+  out.mu_b_sd = std::sqrt(out.mu_b_sd);
+  std::nth_element(se.begin(), se.begin() + kSeeds / 2, se.end());
+  out.mu_b_median_se = se[kSeeds / 2];
+  std::string summary = "[coverage] covered:";
+  for (const auto& [name, c] : out.covered) summary += fmt::format(" {} {}/{}", name, c, kSeeds);
+  fmt::print("{}\n[coverage] mu_b error mean {:+.2f} %, SD {:.2f} %, median reported SE {:.2f} %\n", summary,
+             100 * out.mu_b_mean, 100 * out.mu_b_sd, 100 * out.mu_b_median_se);
+  return out;
+}
+
+TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
+  const auto c = RunCoverage({});
+  for (const auto& [name, n] : c.covered) {
+    EXPECT_GE(n, 18) << name << ": the 95 % interval covered the truth in " << n << " of 20 seeds";
+    EXPECT_EQ(c.within.at(name), 20) << name << " outside its tolerance";
   }
 }
 
@@ -218,7 +248,8 @@ TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
 // docs/modeling-geometry-contact.md. Environment: EXP_NOISE (force noise, N), EXP_PNOISE,
 // EXP_VNOISE (position and velocity noise), EXP_RATE, EXP_SMOOTH, EXP_SG, EXP_PSMOOTH, EXP_RES
 // (ReplayOptions), EXP_SEEDS. Prints mu_b's, kappa's and mu_k's mean error, mu_b's RMS error and
-// RMS z (error / reported SD) over the seeds.
+// RMS z (error / reported SD) over the seeds. EXP_COVER=1: instead, the coverage experiment of the
+// test above (seeds 100-119, 4-12 mN, the whole FitContact) with these replay options.
 TEST(ContactFreeHand, DISABLED_Experiment) {
   const Truth t;
   auto env = [](const char* n, double d) { const char* v = std::getenv(n); return v ? std::atof(v) : d; };
@@ -232,6 +263,12 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
   ro.position_smoothing_s = env("EXP_PSMOOTH", 0.02);
   ro.position_resolution_m = env("EXP_RES", 0);
   const int seeds = static_cast<int>(env("EXP_SEEDS", 6));
+  if (env("EXP_COVER", 0) > 0) {  // the coverage experiment with these replay options
+    ContactFitOptions o;
+    o.replay = ro;
+    RunCoverage(o);
+    return;
+  }
   double sum = 0, sumk = 0, summk = 0, sumsq = 0, sumz = 0;
   for (int s = 0; s < seeds; ++s) {
     const auto m = FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true);

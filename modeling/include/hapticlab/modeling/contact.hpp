@@ -36,6 +36,10 @@ struct ContactFitOptions {
   double sliding_speed_mps = wb::kSlidingSpeed_mps;        ///< Tv2
   double convergence = 1e-9;             ///< TC
   double max_force_N = 2.0;              ///< poke samples above this are discarded (ch. IV.3.3)
+  /// How the measurement is replayed (smoothing, rate). The default is the workbench's, so that
+  /// `model fit-contact` and `hapticlab fit` agree; other values are for measuring the effect of
+  /// the preprocessing on the estimates (tests/modeling/contact_test.cpp, Experiment).
+  wb::ReplayOptions replay;
 };
 
 /// Algorithm 1 over the replay's samples in the split.
