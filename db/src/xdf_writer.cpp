@@ -1,4 +1,5 @@
 #include "xdf_writer.hpp"
+#include "hapticlab/core/status.hpp"
 
 #include <cstring>
 #include <stdexcept>
@@ -101,8 +102,7 @@ void XdfWriter::FloatSamples(std::uint32_t id, std::size_t channels, const float
 void XdfWriter::StringSamples(std::uint32_t id, const std::vector<std::string>& values,
                               const std::vector<double>& t_s) {
   if (values.empty()) return;
-  if (values.size() != t_s.size())
-    throw std::invalid_argument("XdfWriter::StringSamples: one timestamp per value");
+  HL_REQUIRE(values.size() == t_s.size(), "XdfWriter::StringSamples: one timestamp per value");
   std::string c;
   Put<std::uint32_t>(&c, id);
   PutVarLen(&c, values.size());

@@ -1,4 +1,6 @@
 #include "hapticlab/psychophysics/quest_plus.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 
 #include <fmt/format.h>
 
@@ -7,6 +9,10 @@
 #include <stdexcept>
 
 namespace hapticlab::psychophysics {
+
+// The "file" of an InputError about replayed trials: the caller knows which database or
+// session they came from; the line is the trial's 1-based position in the record.
+constexpr const char* kRecordedTrials = "<recorded trials>";
 
 bool QuestPlusConfig::IsValid(std::string* why) const {
   std::string w;
@@ -34,7 +40,7 @@ bool QuestPlusConfig::IsValid(std::string* why) const {
 
 QuestPlus::QuestPlus(QuestPlusConfig c) : c_(std::move(c)) {
   std::string why;
-  if (!c_.IsValid(&why)) throw std::invalid_argument("QUEST+: " + why);
+  HL_REQUIRE(c_.IsValid(&why), "QUEST+: " + why);
   const std::size_t K = c_.thresholds.size() * c_.slopes.size() * c_.lapses.size();
   post_.assign(K, 1.0 / static_cast<double>(K));
   psi_.resize(c_.stimuli.size() * K);
@@ -60,7 +66,8 @@ QuestPlusPoint QuestPlus::Point(std::size_t k) const {
 std::size_t QuestPlus::StimulusIndex(double x) const {
   for (std::size_t j = 0; j < c_.stimuli.size(); ++j)
     if (std::abs(c_.stimuli[j] - x) <= 1e-12 * std::max(1.0, std::abs(x))) return j;
-  throw std::invalid_argument(fmt::format("QUEST+: stimulus {} is not in the stimulus domain", x));
+  throw InputError(kRecordedTrials, 0, "stimulus",
+                   fmt::format("a value of the QUEST+ stimulus domain (got {})", x));
 }
 
 void QuestPlus::Update(std::size_t j, bool positive) {
@@ -72,7 +79,7 @@ void QuestPlus::Update(std::size_t j, bool positive) {
     sum += post_[k];
   }
   if (!(sum > 0))
-    throw std::invalid_argument("QUEST+: the answer has zero probability under every grid point");
+    throw std::runtime_error("QUEST+: the answer has zero probability under every grid point");
   for (auto& p : post_) p /= sum;
   ++trials_;
 }

@@ -8,8 +8,14 @@
 #include <stdexcept>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::psychophysics {
+
+// The "file" of an InputError about replayed trials: the caller knows which database or
+// session they came from; the line is the trial's 1-based position in the record.
+constexpr const char* kRecordedTrials = "<recorded trials>";
 
 bool StaircaseConfig::IsValid(std::string* why) const {
   std::string w;
@@ -69,21 +75,22 @@ void Step(const StaircaseConfig& c, TrackState& t, bool positive) {
 std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c,
                                         const std::vector<StaircaseTrial>& trials) {
   std::string why;
-  if (!c.IsValid(&why)) throw std::invalid_argument("staircase: " + why);
+  HL_REQUIRE(c.IsValid(&why), "staircase: " + why);
   std::vector<TrackState> tracks(c.start_levels.size());
   for (std::size_t i = 0; i < tracks.size(); ++i) tracks[i].level = c.start_levels[i];
   for (std::size_t i = 0; i < trials.size(); ++i) {
     const auto& r = trials[i];
     if (r.track < 0 || r.track >= static_cast<int>(tracks.size()))
-      throw std::invalid_argument(
-          fmt::format("staircase: trial {} names track {} of {}", i, r.track, tracks.size()));
+      throw InputError(kRecordedTrials, static_cast<int>(i) + 1, "track",
+                       fmt::format("0 to {} (got {})", tracks.size() - 1, r.track));
     TrackState& t = tracks[static_cast<std::size_t>(r.track)];
     if (t.done)
-      throw std::invalid_argument(fmt::format("staircase: trial {} continues a stopped track", i));
+      throw InputError(kRecordedTrials, static_cast<int>(i) + 1, "track",
+                       fmt::format("a running track (track {} had stopped)", r.track));
     if (std::abs(r.level - t.level) > 1e-9 * std::max(1.0, std::abs(t.level)))
-      throw std::invalid_argument(
-          fmt::format("staircase: trial {} was recorded at level {} but the rules give {}", i,
-                      r.level, t.level));
+      throw InputError(kRecordedTrials, static_cast<int>(i) + 1, "level",
+                       fmt::format("{} as the staircase's rules give (recorded {})", t.level,
+                                   r.level));
     Step(c, t, r.positive);
   }
   return tracks;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -55,7 +56,7 @@ void MulQuadratic(double* poly, std::size_t& n, double b) {
 std::vector<double> ArToLsf(std::span<const double> c) {
   const std::size_t p = c.size();
   if (p == 0) return {};
-  if (!IsStableAr(c)) throw std::invalid_argument("AR filter is not minimum phase: no valid LSFs");
+  HL_REQUIRE(IsStableAr(c), "AR filter is not minimum phase: no valid LSFs");
   // Dense scan of (0, pi) for sign changes of Re g and Im g, then bisection.
   const std::size_t n = 512 * (p + 1);
   std::vector<double> lsf;
@@ -72,8 +73,8 @@ std::vector<double> ArToLsf(std::span<const double> c) {
   }
   std::sort(lsf.begin(), lsf.end());
   if (lsf.size() != p)
-    throw std::invalid_argument("LSF search found " + std::to_string(lsf.size()) +
-                                " frequencies for order " + std::to_string(p));
+    throw std::runtime_error("LSF search found " + std::to_string(lsf.size()) +
+                             " frequencies for order " + std::to_string(p));
   return lsf;
 }
 

@@ -2,14 +2,15 @@
 
 #include <complex>
 #include <stdexcept>
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 namespace {
 
 void Check(double fc, double fs) {
-  if (!(fs > 0) || !(fc > 0) || !(fc < fs / 2))
-    throw std::invalid_argument("biquad cut-off must lie in (0, fs/2); got fc=" +
-                                std::to_string(fc) + " Hz, fs=" + std::to_string(fs) + " Hz");
+  HL_REQUIRE(fs > 0 && fc > 0 && fc < fs / 2,
+             "biquad cut-off must lie in (0, fs/2); got fc=" + std::to_string(fc) +
+                 " Hz, fs=" + std::to_string(fs) + " Hz");
 }
 
 }  // namespace

@@ -8,19 +8,20 @@
 
 extern "C" {
 #include <libqhull_r/qhull_ra.h>
+#include "hapticlab/core/status.hpp"
 }
 
 namespace hapticlab::renderer {
 
 std::vector<std::array<int, 3>> DelaunayTriangulate(const std::vector<double>& x,
                                                     const std::vector<double>& y) {
-  if (x.size() != y.size()) throw std::invalid_argument("Delaunay: x and y differ in length");
+  HL_REQUIRE(x.size() == y.size(), "Delaunay: x and y differ in length");
   const int n = static_cast<int>(x.size());
-  if (n < 3) throw std::invalid_argument("Delaunay: at least 3 points are needed, got " + std::to_string(n));
+  HL_REQUIRE(n >= 3, "Delaunay: at least 3 points are needed, got " + std::to_string(n));
   const auto [xmin, xmax] = std::minmax_element(x.begin(), x.end());
   const auto [ymin, ymax] = std::minmax_element(y.begin(), y.end());
   const double sx = *xmax - *xmin, sy = *ymax - *ymin;
-  if (!(sx > 0) || !(sy > 0)) throw std::invalid_argument("Delaunay: points are collinear (one axis has no spread)");
+  HL_REQUIRE(sx > 0 && sy > 0, "Delaunay: points are collinear (one axis has no spread)");
   std::vector<coordT> pts(2 * x.size());
   for (std::size_t i = 0; i < x.size(); ++i) {
     pts[2 * i] = (x[i] - *xmin) / sx;
@@ -57,7 +58,7 @@ std::vector<std::array<int, 3>> DelaunayTriangulate(const std::vector<double>& x
   const std::string message = err_buf ? std::string(err_buf, err_len) : std::string();
   std::free(err_buf);
   if (code != 0 || tris.empty())
-    throw std::invalid_argument("Delaunay triangulation failed: " + (message.empty() ? "no triangles" : message));
+    throw std::runtime_error("Delaunay triangulation failed: " + (message.empty() ? "no triangles" : message));
   return tris;
 }
 

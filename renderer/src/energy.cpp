@@ -3,6 +3,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
@@ -13,9 +14,8 @@ double ClosedFormEnergyNorm(double k, double a, double l) {
 
 EnergyResult ComputeEnergy(const MaterialModel& material, ForceAlgorithm algorithm,
                            double amplitude_m, double wavelength_m, const EnergyPath& path) {
-  if (!(amplitude_m > 0) || !(wavelength_m > 0))
-    throw std::invalid_argument("sine amplitude and wavelength must be positive");
-  if (path.steps < 10) throw std::invalid_argument("energy path needs at least 10 steps per side");
+  HL_REQUIRE(amplitude_m > 0 && wavelength_m > 0, "sine amplitude and wavelength must be positive");
+  HL_REQUIRE(path.steps >= 10, "energy path needs at least 10 steps per side");
   MaterialModel m = material;
   // h(x) = A + A sin(2 pi x / l) >= 0: the mean surface sits at z = layer + A.
   m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(amplitude_m, wavelength_m, amplitude_m, 8192));

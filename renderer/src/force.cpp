@@ -2,17 +2,18 @@
 
 #include <cmath>
 #include <stdexcept>
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::renderer {
 
-ForceAlgorithm ParseForceAlgorithm(const std::string& name) {
+ForceAlgorithm ParseForceAlgorithm(const std::string& name, const std::string& source) {
   if (name == "wall") return ForceAlgorithm::kWall;
   if (name == "norm") return ForceAlgorithm::kNorm;
   if (name == "fric1") return ForceAlgorithm::kFric1;
   if (name == "fric2") return ForceAlgorithm::kFric2;
   if (name == "none") return ForceAlgorithm::kNone;
-  throw std::invalid_argument("unknown force algorithm '" + name +
-                              "' (expected wall, norm, fric1, fric2 or none)");
+  throw InputError(source, 0, "algorithm",
+                   "wall, norm, fric1, fric2 or none (got '" + name + "')");
 }
 
 const char* ToString(ForceAlgorithm a) {
@@ -37,7 +38,8 @@ ForceModel::ForceModel(const MaterialModel& m, ForceAlgorithm algorithm,
   if (!geometry_) geometry_ = std::make_shared<HeightMap>(HeightMap::Flat());
   if (contact_.base.K == 0) {
     if (!(base_stiffness_N_per_m > 0))
-      throw std::invalid_argument("base stiffness: the material gives none and the device's is not > 0");
+      throw InputError(m.source_path.empty() ? m.name : m.source_path, 0, "contact.base",
+                       "a base stiffness: the material gives none and the device's is not > 0");
     contact_.base = {base_stiffness_N_per_m, 0, 1};
     contact_.base_model = BaseModel::kLinear;
   }

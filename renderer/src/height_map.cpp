@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
@@ -18,17 +19,15 @@ static_assert(std::endian::native == std::endian::little,
 
 HeightMap::HeightMap(int width, int height, double pitch_m, std::vector<float> heights_m)
     : width_(width), height_(height), pitch_m_(pitch_m), data_(std::move(heights_m)) {
-  if (width < 1 || height < 1) throw std::invalid_argument("height map needs width, height >= 1");
-  if (!(pitch_m > 0) || !std::isfinite(pitch_m))
-    throw std::invalid_argument("height map pitch_m must be positive");
-  if (data_.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
-    throw std::invalid_argument("height map has " + std::to_string(data_.size()) +
-                                " values, expected width*height = " +
-                                std::to_string(static_cast<long long>(width) * height));
+  HL_REQUIRE(width >= 1 && height >= 1, "height map needs width, height >= 1");
+  HL_REQUIRE(pitch_m > 0 && std::isfinite(pitch_m), "height map pitch_m must be positive");
+  HL_REQUIRE(data_.size() == static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
+             "height map has " + std::to_string(data_.size()) +
+                 " values, expected width*height = " +
+                 std::to_string(static_cast<long long>(width) * height));
   float lo = data_[0], hi = data_[0];
   for (std::size_t i = 0; i < data_.size(); ++i) {
-    if (!std::isfinite(data_[i]))
-      throw std::invalid_argument("height map value " + std::to_string(i) + " is not finite");
+    HL_REQUIRE(std::isfinite(data_[i]), "height map value " + std::to_string(i) + " is not finite");
     lo = std::min(lo, data_[i]);
     hi = std::max(hi, data_[i]);
   }
@@ -63,11 +62,9 @@ HeightMap HeightMap::LoadRawF32(const std::string& path, int width, int height, 
       throw InputError(path, 0, "", "height at row " + std::to_string(i / static_cast<std::size_t>(width)) +
                                         ", column " + std::to_string(i % static_cast<std::size_t>(width)) +
                                         " is not finite");
-  try {
-    return HeightMap(width, height, pitch_m, std::move(data));
-  } catch (const std::invalid_argument& e) {
-    throw InputError(path, 0, "", e.what());
-  }
+  if (!(pitch_m > 0) || !std::isfinite(pitch_m))
+    throw InputError(path, 0, "pitch_m", "a positive, finite sample pitch [m]");
+  return HeightMap(width, height, pitch_m, std::move(data));
 }
 
 void HeightMap::SaveRawF32(const std::string& path) const {

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
@@ -12,23 +14,31 @@ HybridRenderer::HybridRenderer(const MaterialModel& m, const RenderOptions& o)
       force_(m, o.algorithm, 0.5 * o.device_max_stiffness_N_per_m),
       interp_(m.vibration),
       synth_(o.seed) {
-  if (!(o.force_rate_hz > 0) || !(o.vibration_rate_hz > 0))
-    throw std::invalid_argument("loop rates must be positive");
-  if (!(o.max_force_N > 0)) throw std::invalid_argument("max_force_N must be positive");
+  HL_REQUIRE(o.force_rate_hz > 0 && o.vibration_rate_hz > 0, "loop rates must be positive");
+  HL_REQUIRE(o.max_force_N > 0, "max_force_N must be positive");
+  const std::string source = m.source_path.empty() ? m.name : m.source_path;
   filter_on_ = o.hybrid_filter && cutoff_hz_ > 0;
   if (filter_on_) {
+    const double nyquist_hz = 0.5 * std::min(o.force_rate_hz, o.vibration_rate_hz);
+    if (!(cutoff_hz_ < nyquist_hz))
+      throw InputError(source, 0, "hybrid_cutoff_hz",
+                       "below both loops' Nyquist rate (" + std::to_string(nyquist_hz) + " Hz)");
     const auto lp = BiquadCoeffs::ButterworthLowPass(cutoff_hz_, o.force_rate_hz);
     for (auto& f : force_lp_) f.SetCoeffs(lp);
     vib_hp_.SetCoeffs(BiquadCoeffs::ButterworthHighPass(cutoff_hz_, o.vibration_rate_hz));
   }
   if (o.vibration && m.neural) {
     if (m.neural->sample_rate_hz > o.vibration_rate_hz)
-      throw std::invalid_argument("the neural model's rate exceeds the vibration loop's rate");
+      throw InputError(m.neural_file.empty() ? source : m.neural_file, 0, "sample_rate_hz",
+                       "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) +
+                           " Hz)");
     neural_ = std::make_unique<NeuralSynth>(m.neural, o.seed);
     step_ = m.neural->sample_rate_hz / o.vibration_rate_hz;
   } else if (o.vibration && !m.vibration.empty()) {
     if (m.vibration.sample_rate_hz > o.vibration_rate_hz)
-      throw std::invalid_argument("the vibration bank's rate exceeds the vibration loop's rate");
+      throw InputError(source, 0, "vibration.sample_rate_hz",
+                       "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) +
+                           " Hz)");
     step_ = m.vibration.sample_rate_hz / o.vibration_rate_hz;
   }
   // An integer rate ratio (2 kHz, 1 kHz models at a 10 kHz loop...) upsamples band-limited.

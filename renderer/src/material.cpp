@@ -1,5 +1,6 @@
 #include "hapticlab/renderer/material.hpp"
 
+#include <algorithm>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -322,10 +323,17 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       xs.push_back(c.speed_mps);
       ys.push_back(c.force_N);
     }
-    try {
-      vb.triangles = DelaunayTriangulate(xs, ys);
-    } catch (const std::invalid_argument& e) {
-      diag.Add(name, 0, "vibration.cells", e.what());
+    const auto [x0, x1] = std::minmax_element(xs.begin(), xs.end());
+    const auto [y0, y1] = std::minmax_element(ys.begin(), ys.end());
+    if (!(*x1 > *x0) || !(*y1 > *y0)) {
+      diag.Add(name, 0, "vibration.cells",
+               "cells spread over both speed and force (a triangulation needs them)");
+    } else {
+      try {
+        vb.triangles = DelaunayTriangulate(xs, ys);
+      } catch (const std::runtime_error& e) {
+        diag.Add(name, 0, "vibration.cells", e.what());
+      }
     }
   }
   if (const toml::table* nt = doc["neural"].as_table()) {

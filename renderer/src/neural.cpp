@@ -13,6 +13,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -146,45 +147,51 @@ std::vector<NeuralBand> DefaultNeuralBands() {
   return b;
 }
 
-void ValidateNeuralModel(const NeuralModel& m) {
-  if (m.speeds_mps.empty() || m.forces_N.empty()) throw std::invalid_argument("neural model: empty speed or force grid");
+std::string NeuralModelProblem(const NeuralModel& m) {
+  if (m.speeds_mps.empty() || m.forces_N.empty()) return "neural model: empty speed or force grid";
   for (const auto* g : {&m.speeds_mps, &m.forces_N})
     for (std::size_t i = 1; i < g->size(); ++i)
-      if (!((*g)[i] > (*g)[i - 1])) throw std::invalid_argument("neural model: grid values must be strictly ascending");
-  if (!(m.sample_rate_hz > 0)) throw std::invalid_argument("neural model: sample_rate_hz must be positive");
+      if (!((*g)[i] > (*g)[i - 1])) return "neural model: grid values must be strictly ascending";
+  if (!(m.sample_rate_hz > 0)) return "neural model: sample_rate_hz must be positive";
   if (m.bands.empty() || m.bands.size() > kMaxNeuralBands)
-    throw std::invalid_argument(fmt::format("neural model: {} bands, expected 1 to {}", m.bands.size(), kMaxNeuralBands));
+    return fmt::format("neural model: {} bands, expected 1 to {}", m.bands.size(), kMaxNeuralBands);
   const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
     const auto& band = m.bands[b];
     if (!(band.lo_hz >= 0 && band.hi_hz > band.lo_hz) || (b > 0 && std::abs(band.lo_hz - m.bands[b - 1].hi_hz) > 1e-9))
-      throw std::invalid_argument(fmt::format("neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band below)", b + 1));
+      return fmt::format("neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band below)", b + 1);
     const std::string where = fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
-    if (band.decimation < 1 || band.history < 1) throw std::invalid_argument(where + ": decimation and history must be >= 1");
+    if (band.decimation < 1 || band.history < 1) return where + ": decimation and history must be >= 1";
     if (band.hi_hz > 0.5 * m.sample_rate_hz / band.decimation + 1e-9)
-      throw std::invalid_argument(where + ": the band's upper edge exceeds the Nyquist frequency of its decimated rate");
+      return where + ": the band's upper edge exceeds the Nyquist frequency of its decimated rate";
     const std::size_t want = m.topology == NeuralTopology::kUnified ? 1 : cells;
-    if (band.nets.size() != want) throw std::invalid_argument(fmt::format("{}: {} networks, expected {}", where, band.nets.size(), want));
-    if (band.sigma.size() != cells) throw std::invalid_argument(fmt::format("{}: {} sigma values, expected {}", where, band.sigma.size(), cells));
+    if (band.nets.size() != want) return fmt::format("{}: {} networks, expected {}", where, band.nets.size(), want);
+    if (band.sigma.size() != cells) return fmt::format("{}: {} sigma values, expected {}", where, band.sigma.size(), cells);
     const int inputs = band.history + (m.topology == NeuralTopology::kUnified ? 2 : 0);
     for (const auto& n : band.nets) {
       if (n.layers.size() < 2 || n.layers.front() != inputs || n.layers.back() != 1)
-        throw std::invalid_argument(fmt::format("{}: layers must run from {} inputs to 1 output", where, inputs));
+        return fmt::format("{}: layers must run from {} inputs to 1 output", where, inputs);
       if (n.params.size() != n.ParamCount())
-        throw std::invalid_argument(fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount()));
+        return fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount());
       for (const double p : n.params)
-        if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite weight");
+        if (!std::isfinite(p)) return where + ": non-finite weight";
       const auto H = static_cast<std::size_t>(band.history);
       const bool uni = m.topology == NeuralTopology::kUnified;
       const std::size_t want_lin = H * (uni ? kLinearTerms : 1);
       if (!n.linear.empty() && n.linear.size() != want_lin && !(uni && n.linear.size() == H * kLinearTermsQuadratic))
-        throw std::invalid_argument(fmt::format("{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
-                                                uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : ""));
+        return fmt::format("{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
+                                                uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : "");
       for (const double p : n.linear)
-        if (!std::isfinite(p)) throw std::invalid_argument(where + ": non-finite linear weight");
+        if (!std::isfinite(p)) return where + ": non-finite linear weight";
     }
-    if (!(band.scale > 0)) throw std::invalid_argument(where + ": scale must be positive");
+    if (!(band.scale > 0)) return where + ": scale must be positive";
   }
+  return "";
+}
+
+void ValidateNeuralModel(const NeuralModel& m) {
+  const std::string problem = NeuralModelProblem(m);
+  HL_REQUIRE(problem.empty(), problem);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -286,11 +293,8 @@ NeuralModel LoadNeuralModel(const std::string& path) {
     m.bands.push_back(std::move(b));
   }
   d.ThrowIfAny();
-  try {
-    ValidateNeuralModel(m);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(path, 0, "band", e.what());
-  }
+  if (const std::string problem = NeuralModelProblem(m); !problem.empty())
+    throw InputError(path, 0, "band", problem);
   return m;
 }
 

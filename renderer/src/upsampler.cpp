@@ -4,11 +4,12 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
 PolyphaseUpsampler::PolyphaseUpsampler(int factor, int taps_per_phase) : factor_(factor), taps_(taps_per_phase) {
-  if (factor < 1 || taps_per_phase < 1) throw std::invalid_argument("upsampler: factor and taps per phase must be >= 1");
+  HL_REQUIRE(factor >= 1 && taps_per_phase >= 1, "upsampler: factor and taps per phase must be >= 1");
   if (factor == 1) taps_ = 1;
   hist_.assign(2 * static_cast<std::size_t>(taps_), 0.0);
   h_.assign(static_cast<std::size_t>(taps_) * static_cast<std::size_t>(factor_), 0.0);

@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "hapticlab/stats/distributions.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -39,7 +40,7 @@ std::vector<double> MidRanks(const std::vector<double>& raw) {
 Descriptives Describe(const std::vector<double>& x) {
   Descriptives d;
   d.n = static_cast<int>(x.size());
-  if (x.empty()) throw std::invalid_argument("descriptives of an empty sample");
+  HL_REQUIRE(!x.empty(), "descriptives of an empty sample");
   d.mean = std::accumulate(x.begin(), x.end(), 0.0) / d.n;
   double ss = 0;
   for (double v : x) ss += (v - d.mean) * (v - d.mean);
@@ -53,7 +54,7 @@ Descriptives Describe(const std::vector<double>& x) {
 }
 
 OutlierFence Outliers(const std::vector<double>& x, QuartileRule rule, double coef) {
-  if (x.empty()) throw std::invalid_argument("outliers of an empty sample");
+  HL_REQUIRE(!x.empty(), "outliers of an empty sample");
   std::vector<double> s(x);
   std::sort(s.begin(), s.end());
   const double n = static_cast<double>(s.size());
@@ -86,7 +87,7 @@ OutlierFence Outliers(const std::vector<double>& x, QuartileRule rule, double co
 }
 
 Correlation Pearson(const std::vector<double>& x, const std::vector<double>& y) {
-  if (x.size() != y.size() || x.size() < 3) throw std::invalid_argument("correlation needs paired samples of n >= 3");
+  HL_REQUIRE(x.size() == y.size() && x.size() >= 3, "correlation needs paired samples of n >= 3");
   Correlation c;
   c.n = static_cast<int>(x.size());
   const double mx = std::accumulate(x.begin(), x.end(), 0.0) / c.n;

@@ -1,4 +1,5 @@
 #include "hapticlab/stats/distributions.hpp"
+#include "hapticlab/core/status.hpp"
 
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
@@ -198,9 +199,9 @@ constexpr double kLowerWMax = 15.0;
 constexpr double kUpperWMax = 50.0;
 
 void CheckArgs(double q, int k, double df) {
-  if (k < 2) throw std::invalid_argument("ptukey: k must be >= 2, got " + std::to_string(k));
-  if (!(df >= 1)) throw std::invalid_argument("ptukey: df must be >= 1, got " + std::to_string(df));
-  if (std::isnan(q)) throw std::invalid_argument("ptukey: q is NaN");
+  HL_REQUIRE(k >= 2, "ptukey: k must be >= 2, got " + std::to_string(k));
+  HL_REQUIRE(df >= 1, "ptukey: df must be >= 1, got " + std::to_string(df));
+  HL_REQUIRE(!std::isnan(q), "ptukey: q is NaN");
 }
 
 }  // namespace
@@ -299,7 +300,7 @@ double TukeyFamily::Upper(double q) const {
 }
 
 double TukeyFamily::Quantile(double p) const {
-  if (!(p > 0 && p < 1)) throw std::invalid_argument("qtukey: p must be in (0, 1)");
+  HL_REQUIRE(p > 0 && p < 1, "qtukey: p must be in (0, 1)");
   auto f = [&](double q) { return Lower(q) - p; };
   double lo = 0.0, hi = 4.0;
   while (f(hi) < 0) {

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "hapticlab/stats/descriptive.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -157,12 +158,12 @@ std::vector<std::string> Both(const std::string& base, int w, int h, F draw) {
 }  // namespace
 
 std::vector<std::string> DrawBarChart(const BarChart& c, const std::string& base) {
-  if (c.groups.empty() || c.series.empty()) throw std::invalid_argument("bar chart without data");
+  HL_REQUIRE(!c.groups.empty() && !c.series.empty(), "bar chart without data");
   return Both(base, 900, 520, [&] { DrawBars(c); });
 }
 
 std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base) {
-  if (l.x.empty() || l.series.empty()) throw std::invalid_argument("line plot without data");
+  HL_REQUIRE(!l.x.empty() && !l.series.empty(), "line plot without data");
   return Both(base, 800, 480, [&] {
     std::vector<std::vector<PLFLT>> ys;
     double lo = 1e300, hi = -1e300;
@@ -196,7 +197,7 @@ std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base
 }
 
 std::vector<std::string> DrawBoxPlot(const BoxPlot& b, const std::string& base) {
-  if (b.groups.size() != b.samples.size() || b.groups.empty()) throw std::invalid_argument("box plot without data");
+  HL_REQUIRE(b.groups.size() == b.samples.size() && !b.groups.empty(), "box plot without data");
   return Both(base, 700, 480, [&] { DrawBoxes(b); });
 }
 

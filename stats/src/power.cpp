@@ -42,7 +42,7 @@ std::vector<PowerTally> AnalyseOnce(const LongTable& data, double alpha) {
 }
 
 PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& generate, const PowerOptions& o) {
-  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards) throw InputError("", 0, "--shard", "expected i/N with 0 <= i < N");
+  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards) throw InputError("<command line>", 0, "shard", "expected i/N with 0 <= i < N");
   PowerResult r{.protocol = protocol, .simulations = o.simulations, .seed = o.seed, .shard = o.shard, .shards = o.shards, .rows = {}};
   std::vector<long> mine;  // simulation indices of this shard
   for (long s = o.shard; s < o.simulations; s += o.shards) mine.push_back(s);
@@ -160,7 +160,7 @@ PowerResult PowerFromJson(const std::string& text, const std::string& file) {
 }
 
 PowerResult MergePower(const std::vector<PowerResult>& parts, const std::vector<std::string>& files) {
-  if (parts.empty()) throw InputError("", 0, "--merge", "no files to merge");
+  if (parts.empty()) throw InputError("<command line>", 0, "merge", "no files to merge");
   PowerResult m = parts[0];
   m.shard = 0;
   m.shards = 1;

@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -79,6 +80,7 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
   PsychometricFit f;
   double a = a0, b = b0;
   Eval e = Evaluate(d, gx, s, guess, lapse, a, b);
+  f.initial_cost = -(e.ll + LogChooseSum(d));
   bool converged = false;
   int it = 0;
   for (; it < 200 && !converged; ++it) {
@@ -107,9 +109,11 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
                 std::abs(da) + std::abs(db) < 1e-10 * (1 + std::abs(a) + std::abs(b));
   }
   f.iterations = it;
+  f.converged = converged;
   f.a = a;
   f.b = b;
   f.log_likelihood = e.ll + LogChooseSum(d);
+  f.final_cost = -f.log_likelihood;
   f.params.guess = guess;
   f.params.lapse = lapse;
   f.params.slope = b;
@@ -141,16 +145,20 @@ bool PsychometricFitOptions::IsValid(std::string* why) const {
 
 PsychometricFit FitPsychometric(const PsychometricData& d, const PsychometricFitOptions& o) {
   std::string why;
-  if (!o.IsValid(&why)) throw std::invalid_argument("psychometric fit: " + why);
-  if (d.x.size() != d.n.size() || d.x.size() != d.k.size())
-    throw std::invalid_argument("psychometric fit: x, n and k must have the same length");
+  HL_REQUIRE(o.IsValid(&why), "psychometric fit: " + why);
+  HL_REQUIRE(d.x.size() == d.n.size() && d.x.size() == d.k.size(),
+             "psychometric fit: x, n and k must have the same length");
   std::vector<double> gx;
+  const auto unusable = [](std::string why_not) {
+    PsychometricFit f;
+    f.message = std::move(why_not);
+    return f;
+  };
   for (std::size_t i = 0; i < d.x.size(); ++i) {
     if (d.n[i] < 1 || d.k[i] < 0 || d.k[i] > d.n[i])
-      throw std::invalid_argument(
-          fmt::format("psychometric fit: bin {} has k = {} of n = {}", i, d.k[i], d.n[i]));
+      return unusable(fmt::format("bin {} has k = {} of n = {}", i, d.k[i], d.n[i]));
     if (o.shape == Shape::kWeibull && !(d.x[i] > 0))
-      throw std::invalid_argument("psychometric fit: a Weibull needs stimuli > 0");
+      return unusable("a Weibull needs stimuli > 0");
     gx.push_back(psychophysics::Predictor(o.shape, d.x[i]));
   }
   if (gx.size() < 2 ||
@@ -208,9 +216,9 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d,
                                             const PsychometricFit& fit, int replicates,
                                             std::uint64_t seed, double level,
                                             double jnd_performance) {
-  if (!fit.usable) throw std::invalid_argument("bootstrap: the fit is not usable: " + fit.message);
-  if (replicates < 2 || !(level > 0 && level < 1))
-    throw std::invalid_argument("bootstrap: needs >= 2 replicates and 0 < level < 1");
+  HL_REQUIRE(fit.usable, "bootstrap: the fit is not usable: " + fit.message);
+  HL_REQUIRE(replicates >= 2 && level > 0 && level < 1,
+             "bootstrap: needs >= 2 replicates and 0 < level < 1");
   PsychometricBootstrap out;
   out.level = level;
   out.jnd = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};

@@ -14,6 +14,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -59,11 +60,7 @@ FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a,
   r.who = who;
   r.trials = static_cast<int>(a.size());
   const auto d = ToData(a);
-  try {
-    r.fit = FitPsychometric(d, o);
-  } catch (const std::invalid_argument& e) {
-    r.fit.message = e.what();
-  }
+  r.fit = FitPsychometric(d, o);
   if (r.fit.usable) {
     if (auto x = psychophysics::StimulusAt(o.shape, r.fit.params, spec.jnd_performance)) r.jnd = *x;
     r.boot = BootstrapPsychometric(d, o, r.fit, replicates, seed, 0.95, spec.jnd_performance);
@@ -247,7 +244,7 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
             if (std::isfinite(e)) sum += e, ++n;
           }
           rows.back().staircase = n ? sum / n : NAN;
-        } catch (const std::invalid_argument&) {
+        } catch (const InputError&) {
           // A record that does not follow this protocol's rules gets no staircase estimate.
         }
       }

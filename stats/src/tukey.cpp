@@ -144,7 +144,8 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   r.method = multivariate ? "multivariate" : "univariate";
   std::size_t f = 0;
   while (f < a.factors.size() && a.factors[f] != factor) ++f;
-  if (f == a.factors.size()) throw InputError("", 0, factor, "not a factor of this ANOVA");
+  if (f == a.factors.size())
+    throw InputError("<command line>", 0, "factor", "'" + factor + "' is not a factor of this ANOVA");
   const auto& levels = a.levels[f];
   r.k = static_cast<int>(levels.size());
   // Subject marginal means of each level (averaged over the other factors' cells).

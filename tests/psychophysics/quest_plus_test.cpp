@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {
@@ -87,7 +88,7 @@ TEST(QuestPlus, ReplayReproducesTheIncrementalState) {
   const auto replay = QuestPlus::Replay(Config(), h);
   EXPECT_EQ(replay.posterior(), q.posterior());
   EXPECT_EQ(replay.NextStimulus(), q.NextStimulus());
-  EXPECT_THROW(QuestPlus::Replay(Config(), {{0.0123, true}}), std::invalid_argument);
+  EXPECT_THROW(QuestPlus::Replay(Config(), {{0.0123, true}}), InputError);
 }
 
 // With a simulated observer whose true parameters lie on the grid, the posterior

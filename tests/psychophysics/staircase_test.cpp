@@ -5,6 +5,8 @@
 #include <cmath>
 
 #include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {
@@ -59,11 +61,18 @@ TEST(Staircase, ReplayRejectsARecordThatDoesNotFollowTheRules) {
   StaircaseConfig c;
   std::vector<StaircaseTrial> h{
       {0, 1.0, true}, {0, 1.0, true}, {0, 1.0, true}};  // third should be 0.9
-  EXPECT_THROW(ReplayStaircase(c, h), std::invalid_argument);
+  try {
+    ReplayStaircase(c, h);
+    ADD_FAILURE() << "replayed a record that breaks the rules";
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 1u);
+    EXPECT_EQ(e.diagnostics()[0].line, 3) << "the third trial";
+    EXPECT_EQ(e.diagnostics()[0].field, "level");
+  }
   h = {{3, 1.0, true}};
-  EXPECT_THROW(ReplayStaircase(c, h), std::invalid_argument);
+  EXPECT_THROW(ReplayStaircase(c, h), InputError);
   c.step_sizes = {};
-  EXPECT_THROW(ReplayStaircase(c, {}), std::invalid_argument);
+  EXPECT_THROW(ReplayStaircase(c, {}), PreconditionError);
 }
 
 TEST(Staircase, InterleavedTracksAreChosenReproduciblyAndRunIndependently) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hapticlab/core/status.hpp"
+
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -58,7 +60,7 @@ TEST(Ar, UnstableFiltersAreDetected) {
   EXPECT_FALSE(IsStableAr(std::vector<double>{1.01}));       // pole at 1.01
   EXPECT_FALSE(IsStableAr(std::vector<double>{2.0, -1.0}));  // double pole at 1
   EXPECT_TRUE(IsStableAr(std::vector<double>{0.5, -0.2}));
-  EXPECT_THROW(ArToLsf(std::vector<double>{1.5}), std::invalid_argument);
+  EXPECT_THROW(ArToLsf(std::vector<double>{1.5}), PreconditionError);
 }
 
 TEST(Ar, AnyConvexMixOfLsfsIsStable) {

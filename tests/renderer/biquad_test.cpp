@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hapticlab/core/status.hpp"
+
 #include <cmath>
 #include <numbers>
 
@@ -38,8 +40,8 @@ TEST(Biquad, ButterworthMinus3dBAtCutoff) {
 }
 
 TEST(Biquad, RejectsCutoffAboveNyquist) {
-  EXPECT_THROW(BiquadCoeffs::ButterworthLowPass(600, 1000), std::invalid_argument);
-  EXPECT_THROW(BiquadCoeffs::ButterworthHighPass(0, 1000), std::invalid_argument);
+  EXPECT_THROW(BiquadCoeffs::ButterworthLowPass(600, 1000), PreconditionError);
+  EXPECT_THROW(BiquadCoeffs::ButterworthHighPass(0, 1000), PreconditionError);
 }
 
 }  // namespace

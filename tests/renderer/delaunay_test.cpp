@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hapticlab/core/status.hpp"
+
 #include <cmath>
 #include <random>
 
@@ -48,8 +50,8 @@ TEST(Delaunay, TrianglesTileTheConvexHullWithEmptyCircumcircles) {
 }
 
 TEST(Delaunay, CollinearOrTooFewPointsAreErrors) {
-  EXPECT_THROW(DelaunayTriangulate({0, 1}, {0, 1}), std::invalid_argument);
-  EXPECT_THROW(DelaunayTriangulate({0, 1, 2}, {0, 0, 0}), std::invalid_argument);
+  EXPECT_THROW(DelaunayTriangulate({0, 1}, {0, 1}), PreconditionError);
+  EXPECT_THROW(DelaunayTriangulate({0, 1, 2}, {0, 0, 0}), PreconditionError);
 }
 
 TEST(Delaunay, ScatteredCellsInAModelFileAreTriangulatedOnLoad) {

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hapticlab/core/diagnostics.hpp"
+
 #include <cmath>
 
 namespace hapticlab::renderer {
@@ -135,7 +137,7 @@ TEST(Force, ParsesAlgorithmNames) {
   for (auto a : {ForceAlgorithm::kWall, ForceAlgorithm::kNorm, ForceAlgorithm::kFric1,
                  ForceAlgorithm::kFric2, ForceAlgorithm::kNone})
     EXPECT_EQ(ParseForceAlgorithm(ToString(a)), a);
-  EXPECT_THROW(ParseForceAlgorithm("fric3"), std::invalid_argument);
+  EXPECT_THROW(ParseForceAlgorithm("fric3"), InputError);
 }
 
 }  // namespace

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "hapticlab/core/status.hpp"
+
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -76,7 +78,7 @@ TEST(Upsampler, FactorOnePassesThroughAndOutputsAllocateNothing) {
   one.Push(0.25);
   EXPECT_EQ(one.Output(0), 0.25);
   EXPECT_EQ(one.DelayInputSamples(), 0.0);
-  EXPECT_THROW(PolyphaseUpsampler(0, 8), std::invalid_argument);
+  EXPECT_THROW(PolyphaseUpsampler(0, 8), PreconditionError);
   PolyphaseUpsampler up(5, 32);
   double s = 0;
   {

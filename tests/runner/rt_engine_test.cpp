@@ -49,7 +49,9 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   std::atomic<std::uint64_t> allocations{0};
   std::atomic<int> threads_checked{0};
   EngineOptions eo;
-  eo.on_thread_enter = [] { t_guard.emplace(); };
+  // Both loops guard their own thread; Eigen's heap flag is process-wide, so it is set once
+  // here, before the loops start.
+  eo.on_thread_enter = [] { t_guard.emplace(test::NoAllocGuard::EigenHeap::kLeave); };
   eo.on_thread_exit = [&] {
     allocations += t_guard->count();
     t_guard.reset();
@@ -60,7 +62,10 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   auto* vs = writer.OpenStream(trial, "vibration", ro.vibration_rate_hz, VibrationStreamChannels());
   RtEngine engine(r, dev, &act, eo, fs, vs);
   engine_ptr = &engine;
-  engine.RunFor(std::chrono::seconds(5));  // the replay ends after 0.4 s: disconnect stops it
+  {
+    test::EigenNoMalloc no_eigen_heap;
+    engine.RunFor(std::chrono::seconds(5));  // the replay ends after 0.4 s: disconnect stops it
+  }
   writer.CloseStream(fs);
   writer.CloseStream(vs);
 
@@ -71,10 +76,21 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   EXPECT_GT(st.force_ticks, 100u);
   EXPECT_GT(st.vibration_ticks, 1000u);
   EXPECT_EQ(st.recording_overflows, 0u);
-  // Every commanded force is within the limit, and the last one (after the disconnect) is 0.
-  ASSERT_FALSE(dev.forces().empty());
-  for (const auto& f : dev.forces()) ASSERT_LE(f.norm(), ro.max_force_N * (1 + 1e-12));
-  EXPECT_EQ(dev.forces().back().norm(), 0.0);
+  // Every commanded force is within the limit. The device logged one force per loop tick
+  // (tick k at index k - 1), then Stop's closing zero.
+  const auto& forces = dev.forces();
+  ASSERT_EQ(forces.size(), st.force_ticks + 1);
+  for (const auto& f : forces) ASSERT_LE(f.norm(), ro.max_force_N * (1 + 1e-12));
+  // Tick k wakes no earlier than k ms: from tick 401 on, the replay (0.4 s) has ended and
+  // every read is lost. The loop itself must command zero on each of those ticks, from the
+  // first one on, before the disconnect (the tenth lost read) stops it; Stop's zero is not
+  // among them. Before, the stylus pushed (0.2 mm deep, after the force filter's rise).
+  ASSERT_GT(st.force_ticks, 400u);
+  std::size_t pushing = 0;
+  for (std::size_t k = 100; k <= 400; ++k) pushing += forces[k - 1].norm() > 0.05;
+  EXPECT_GT(pushing, 150u) << "the stroke pushed before the link was lost";
+  for (std::size_t k = 401; k <= st.force_ticks; ++k)
+    ASSERT_EQ(forces[k - 1].norm(), 0.0) << "force tick " << k << " after the replay ended";
   // The recording holds what the loops did.
   db::Database d(dir.File("e.db"));
   std::size_t force_samples = 0, vib_samples = 0;
@@ -100,31 +116,58 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
               static_cast<unsigned long long>(st.vibration_deadline_misses));
 }
 
-// A device whose data never changes its time stamp: the renderer sees it go stale.
+// A device whose data never changes its time stamp: the renderer sees it go stale. Logs
+// every commanded force with the clock's time (preallocated).
 class FrozenDevice : public devices::HapticDevice {
  public:
+  explicit FrozenDevice(const devices::Clock& clock) : clock_(clock) { forces.reserve(1000); }
   devices::DeviceCapabilities Capabilities() const override { return {}; }
   devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
     out->state.p_m = {0, 0, -0.5e-3};
     out->t_s = 0;  // measured once, never again
     return devices::ReadResult::kOk;
   }
-  void WriteForce(const Eigen::Vector3d& f) noexcept override { last = f; ++writes; }
-  Eigen::Vector3d last = Eigen::Vector3d::Ones();
-  std::atomic<int> writes{0};
+  void WriteForce(const Eigen::Vector3d& f) noexcept override {
+    if (forces.size() < forces.capacity()) forces.push_back({clock_.Now(), f.norm()});
+  }
+  std::vector<std::pair<double, double>> forces;  // (tick time [s], |force| [N])
+
+ private:
+  const devices::Clock& clock_;
 };
 
-TEST(RtEngine, StaleDeviceDataDrivesForceToZero) {
+TEST(RtEngine, StaleDeviceDataDrivesForceToZeroOnTheNextTick) {
   const auto m = test::TexturedMaterial();
   renderer::RenderOptions ro;
   ro.vibration = false;
   ro.stale_after_s = 0.01;
   renderer::HybridRenderer r(m, ro);
-  FrozenDevice dev;
-  RtEngine engine(r, dev, nullptr);
-  engine.RunFor(std::chrono::milliseconds(100));
-  EXPECT_GT(r.counters().stale_faults.load(), 0u);
-  EXPECT_EQ(dev.last.norm(), 0.0);
+  devices::VirtualClock clock;
+  FrozenDevice dev(clock);
+  EngineOptions eo;
+  eo.virtual_clock = &clock;
+  RtEngine engine(r, dev, nullptr, eo);
+  engine.Start();
+  {
+    test::NoAllocGuard guard;
+    engine.AdvanceTo(0.1);
+    EXPECT_EQ(guard.count(), 0u);
+  }
+  // The loop's own commands (Stop's closing zero comes later): 100 ticks at 1 kHz.
+  const auto loop_forces = dev.forces;
+  engine.Stop();
+  EXPECT_GT(r.counters().stale_faults.load() + engine.Stats().stale_faults, 0u);
+  ASSERT_EQ(loop_forces.size(), 100u);
+  // The stylus is 0.5 mm in: the first ticks push. From the first tick whose data is older
+  // than 10 ms (t = 11 ms, data stamped 0 s) every command is zero.
+  std::size_t pushing = 0;
+  for (const auto& [t, f] : loop_forces) {
+    if (t < 0.0095) pushing += f > 0;
+    if (t > 0.0105) {
+      EXPECT_EQ(f, 0.0) << "stale data at " << t << " s still pushes";
+    }
+  }
+  EXPECT_GT(pushing, 5u) << "the stylus pushed before its data went stale";
 }
 
 }  // namespace

@@ -47,7 +47,11 @@ void Compare(const std::string& design, bool reml) {
   o.reml = reml;
   const auto r = FitLmm(Load(ref), ref["formula"].get<std::string>(), o);
   const std::string tag = design + (reml ? " REML " : " ML ");
-  EXPECT_TRUE(r.converged) << tag;
+  EXPECT_TRUE(r.converged) << tag << r.BriefReport();
+  // The solver summary: the optimised criterion went down from lme4's start θ to the optimum.
+  EXPECT_EQ(r.final_cost, r.deviance) << tag;
+  EXPECT_LE(r.final_cost, r.initial_cost) << tag;
+  EXPECT_EQ(r.iterations, r.evaluations) << tag;
   EXPECT_EQ(r.singular, w["singular"].get<bool>()) << tag;
   ExpectClose(r.sigma, w["sigma"], tag + "sigma");
   ExpectClose(r.logLik, w["logLik"], tag + "logLik");

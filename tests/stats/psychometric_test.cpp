@@ -10,6 +10,7 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::stats {
@@ -57,17 +58,27 @@ TEST(PsychometricFit, MatchesRGlmOnEcc2) {
     EXPECT_LT(rel(f.log_likelihood, ref.Number(r, ref.Require("loglik"))), kRTol)
         << f.log_likelihood;
     EXPECT_NEAR(f.params.lapse, ref.Number(r, ref.Require("lapse")), kRTol);
+    // The solver summary: the cost is the negative log-likelihood, and Newton lowered it.
+    EXPECT_TRUE(f.converged) << f.BriefReport();
+    EXPECT_EQ(f.final_cost, -f.log_likelihood);
+    EXPECT_GE(f.initial_cost, f.final_cost) << f.BriefReport();
+    EXPECT_GT(f.iterations, 0);
   }
 }
 
 TEST(PsychometricFit, RejectsMalformedData) {
   PsychometricFitOptions o;
-  EXPECT_THROW(FitPsychometric({{1, 2}, {10}, {5, 5}}, o), std::invalid_argument);
-  EXPECT_THROW(FitPsychometric({{1, 2}, {10, 10}, {11, 5}}, o), std::invalid_argument);
+  EXPECT_THROW(FitPsychometric({{1, 2}, {10}, {5, 5}}, o), PreconditionError);
+  const auto k_above_n = FitPsychometric({{1, 2}, {10, 10}, {11, 5}}, o);
+  EXPECT_FALSE(k_above_n.usable);
+  EXPECT_FALSE(k_above_n.converged);
+  EXPECT_EQ(k_above_n.message, "bin 0 has k = 11 of n = 10");
   o.shape = Shape::kWeibull;
-  EXPECT_THROW(FitPsychometric({{0, 2}, {10, 10}, {5, 5}}, o), std::invalid_argument);
+  const auto weibull_at_zero = FitPsychometric({{0, 2}, {10, 10}, {5, 5}}, o);
+  EXPECT_FALSE(weibull_at_zero.usable);
+  EXPECT_EQ(weibull_at_zero.message, "a Weibull needs stimuli > 0");
   o.guess = 1.2;
-  EXPECT_THROW(FitPsychometric({{1, 2}, {10, 10}, {5, 5}}, o), std::invalid_argument);
+  EXPECT_THROW(FitPsychometric({{1, 2}, {10, 10}, {5, 5}}, o), PreconditionError);
   // One stimulus value only: no slope can be estimated.
   EXPECT_FALSE(FitPsychometric({{1, 1}, {10, 10}, {5, 6}}, {}).usable);
 }

@@ -41,10 +41,11 @@ struct QuestPlusPoint {
 
 class QuestPlus {
  public:
-  /// @throws std::invalid_argument when the configuration is not valid
+  /// @throws PreconditionError when the configuration is not valid (protocols validate it)
   explicit QuestPlus(QuestPlusConfig c);
   /// Rebuilds the posterior from recorded (stimulus, positive) trials in order.
-  /// @throws std::invalid_argument when a stimulus is not in the domain
+  /// @throws InputError (file "<recorded trials>", field "stimulus") when a stimulus is not in
+  /// the domain; std::runtime_error when an answer has zero probability everywhere
   static QuestPlus Replay(const QuestPlusConfig& c,
                           const std::vector<std::pair<double, bool>>& trials);
 

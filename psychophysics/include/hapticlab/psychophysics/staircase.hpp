@@ -54,9 +54,10 @@ struct TrackState {
 };
 
 /// Rebuilds every track from the recorded trials (in order).
-/// @throws std::invalid_argument when a recorded level differs (by more than 1e-9 relative)
-/// from the one the rules give, or a track index is out of range: the record does not
-/// belong to this configuration.
+/// @throws InputError (file "<recorded trials>", line = the trial's 1-based position) when a
+/// recorded level differs (by more than 1e-9 relative) from the one the rules give, or a
+/// track index is out of range: the record does not belong to this configuration;
+/// PreconditionError when the configuration is not valid (protocols validate it).
 std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c,
                                         const std::vector<StaircaseTrial>& trials);
 

@@ -26,7 +26,8 @@ namespace hapticlab::renderer {
 inline constexpr int kMaxArOrder = 64;
 
 /// LSFs [rad/sample], ascending, of the AR coefficients `c` (size p).
-/// @throws std::invalid_argument when A(z) is not minimum phase (no valid LSFs exist).
+/// @throws PreconditionError when A(z) is not minimum phase (no valid LSFs exist; check
+/// IsStableAr first).
 std::vector<double> ArToLsf(std::span<const double> c);
 
 /// AR coefficients `c` (size p) from ascending LSFs [rad/sample] in (0, pi).

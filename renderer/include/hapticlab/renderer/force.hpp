@@ -33,8 +33,10 @@ namespace hapticlab::renderer {
 /// Force-texture algorithm (Table 5.1 plus the flat references of the studies).
 enum class ForceAlgorithm { kWall, kNorm, kFric1, kFric2, kNone };
 
-/// Parses "wall", "norm", "fric1", "fric2", "none"; throws std::invalid_argument otherwise.
-ForceAlgorithm ParseForceAlgorithm(const std::string& name);
+/// Parses "wall", "norm", "fric1", "fric2", "none"; throws InputError naming `source` (the
+/// file or "<command line>" the name came from) and the field "algorithm" otherwise.
+ForceAlgorithm ParseForceAlgorithm(const std::string& name,
+                                   const std::string& source = "<command line>");
 const char* ToString(ForceAlgorithm a);
 
 /// sin θ_t of the proposed algorithm (our reading, docs/renderer.md): θ_t is the slope angle

@@ -23,7 +23,7 @@ class HeightMap {
   HeightMap() = default;
   /// @param heights_m row-major, width * height values [m], all finite
   /// @param pitch_m pixel pitch [m], > 0
-  /// @throws std::invalid_argument on size mismatch, non-finite heights or pitch <= 0
+  /// @throws PreconditionError on size mismatch, non-finite heights or pitch <= 0
   HeightMap(int width, int height, double pitch_m, std::vector<float> heights_m);
 
   /// A flat map (height 0 everywhere): one pixel.

@@ -64,7 +64,9 @@ struct RtCounters {
 
 class HybridRenderer {
  public:
-  /// @throws std::invalid_argument on inconsistent options (f_c above a loop's Nyquist rate...)
+  /// @throws PreconditionError on non-positive loop rates or force limit; InputError (naming
+  /// the material's file) when the material does not fit the loops (its cut-off above a
+  /// loop's Nyquist rate, a vibration model sampled faster than the vibration loop).
   HybridRenderer(const MaterialModel& m, const RenderOptions& o);
 
   /// Force thread: one tick at `now_s`. noexcept, allocation-free.

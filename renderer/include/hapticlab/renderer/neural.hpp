@@ -80,8 +80,10 @@ struct NeuralModel {
 /// networks" would alias bands 2-4; see docs/modeling-neural.md).
 std::vector<NeuralBand> DefaultNeuralBands();
 
-/// Validates sizes (layer chains, one net or one per cell, sigma per cell). Throws
-/// std::invalid_argument naming the problem.
+/// Checks sizes (layer chains, one net or one per cell, sigma per cell): "" when the model is
+/// consistent, else the problem (loaders turn it into an InputError naming their file).
+std::string NeuralModelProblem(const NeuralModel& m);
+/// Precondition form of NeuralModelProblem: throws PreconditionError naming the problem.
 void ValidateNeuralModel(const NeuralModel& m);
 
 /// Reads/writes a neural model file (TOML; docs/modeling-neural.md).

@@ -21,7 +21,7 @@ class PolyphaseUpsampler {
   PolyphaseUpsampler() = default;
   /// @param factor L >= 1 (1: the output is the newest input)
   /// @param taps_per_phase >= 1
-  /// @throws std::invalid_argument on factor < 1 or taps_per_phase < 1
+  /// @throws PreconditionError on factor < 1 or taps_per_phase < 1
   PolyphaseUpsampler(int factor, int taps_per_phase);
 
   /// Takes the next input sample; call it before the L outputs of its period.

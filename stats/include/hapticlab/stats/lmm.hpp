@@ -25,6 +25,7 @@
 #include <vector>
 
 #include "hapticlab/stats/long_table.hpp"
+#include "hapticlab/core/solver_summary.hpp"
 
 namespace hapticlab::stats {
 
@@ -75,7 +76,11 @@ struct LmmRandomTerm {
   std::vector<std::vector<double>> corr;  ///< correlation matrix (1 on the diagonal)
 };
 
-struct LmmResult {
+/// A fitted model. Its SolverSummary describes the θ optimisation: converged (the
+/// optimizer met its tolerance within max_evaluations), iterations = deviance evaluations,
+/// initial_cost/final_cost = the criterion (`deviance`) at lme4's start θ and at the optimum,
+/// message = why it stopped.
+struct LmmResult : SolverSummary {
   std::string formula;
   bool reml = true;
   int n = 0;                                   ///< observations
@@ -89,8 +94,7 @@ struct LmmResult {
   double logLik = 0, AIC = 0, BIC = 0;
   int n_parameters = 0;                        ///< β, θ and σ (lme4's df of logLik)
   // Convergence diagnostics.
-  bool converged = false;                      ///< optimizer met its tolerance within max_evaluations
-  int evaluations = 0;
+  int evaluations = 0;                         ///< deviance evaluations (= iterations)
   double gradient_max_abs = 0;                 ///< max |∂ deviance / ∂θ| at the optimum (free θ only)
   bool singular = false;                       ///< a bounded θ below 1e-4 (lme4's isSingular)
   std::string optimizer;                       ///< what ran, for the record

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "hapticlab/psychophysics/psychometric.hpp"
+#include "hapticlab/core/solver_summary.hpp"
 
 namespace hapticlab::stats {
 
@@ -34,17 +35,19 @@ struct PsychometricFitOptions {
   bool IsValid(std::string* why) const;
 };
 
-struct PsychometricFit {
-  bool usable = false;
-  std::string message;                       ///< why not usable (or "converged")
+/// A maximum-likelihood fit: the solver's summary (Newton iterations, cost = negative
+/// log-likelihood including the binomial coefficients, `message` says why it is not usable,
+/// or "converged") and the fitted function.
+struct PsychometricFit : SolverSummary {
+  bool usable = false;  ///< converged, finite and not degenerate (slope 0 or unbounded)
   psychophysics::PsychometricParams params;  ///< threshold, slope, guess, lapse
   double a = 0, b = 0;                       ///< linear predictor eta = a + b g(x)
   double log_likelihood = 0;  ///< including the binomial coefficients (as R's logLik)
-  int iterations = 0;
 };
 
-/// @throws std::invalid_argument when the options are invalid or the data are malformed
-/// (sizes differ, n < 1, k outside 0..n, x <= 0 for a Weibull).
+/// Data the model cannot describe (n < 1, k outside 0..n, x <= 0 for a Weibull, fewer than
+/// two distinct stimuli) give an unusable fit whose `message` names the problem.
+/// @throws PreconditionError when the options are invalid or x, n and k differ in length.
 PsychometricFit FitPsychometric(const PsychometricData& data,
                                 const PsychometricFitOptions& options);
 

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticlab/test/alloc_guard.hpp"
+
 namespace hapticlab::test {
 
 /// True in AddressSanitizer and ThreadSanitizer builds (-O0 or instrumented code runs 10-50x
@@ -30,21 +32,6 @@ class TempDir {
 
  private:
   std::string path_;
-};
-
-/// Counts heap allocations made by the current thread while alive (a global operator new
-/// hook, like Drake's LimitMalloc). Real-time code runs inside one and the test asserts
-/// count() == 0.
-class NoAllocGuard {
- public:
-  NoAllocGuard();
-  ~NoAllocGuard();
-  NoAllocGuard(const NoAllocGuard&) = delete;
-  NoAllocGuard& operator=(const NoAllocGuard&) = delete;
-  std::uint64_t count() const;
-
- private:
-  std::uint64_t start_;
 };
 
 /// Runs a shell command, returns its exit status; stdout+stderr go to *output when given.
