@@ -64,7 +64,8 @@ struct NeuralFitOptions {
 /// (renderer/neural.hpp). Each network learns y[m] from y[m-1..m-M] (Γ_U: and v, f scaled to
 /// [-1, 1]); the last 20 % of every recording is the early-stopping validation set. Sigma
 /// per band and cell: the one-step residual RMS, calibrated so that free-running synthesis
-/// has the recording's power inside the band. Seeded by options.train.seed.
+/// has the recording's power inside the band. The networks' nonlinear part is then kept or
+/// dropped on validation data (validate_nonlinear_part). Seeded by options.train.seed.
 /// @throws InputError when the recordings do not form a full grid (listing what is missing).
 renderer::NeuralModel FitNeural(const std::vector<Recording>& recordings, const NeuralFitOptions& o);
 
