@@ -14,6 +14,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/modeling/cross_validation.hpp"
 
 namespace hapticlab::modeling {
 namespace {
@@ -63,6 +64,8 @@ std::vector<double> BandSplit(const std::vector<double>& x, double fs, double lo
   for (auto& v : out) v /= n;
   return out;
 }
+
+constexpr std::size_t kValidationSegment = 256;  // Welch segment of the validation E_s
 
 }  // namespace
 
@@ -144,6 +147,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     const std::size_t cut = first + n - static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(n)));
     return validation ? std::make_pair(cut, x.size()) : std::make_pair(first, cut);
   };
+  // The same networks without their nonlinear part (output 0: the linear part alone), with
+  // their own calibrated sigma; kept when it synthesizes the validation data better.
+  std::vector<renderer::NeuralBand> linear_only = m.bands;
   std::atomic<std::size_t> next{0}, done{0};
   std::exception_ptr error;
   std::mutex err_mu;
@@ -248,68 +254,87 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
               o.progress(fmt::format("{}: epoch {}/{}, validation MSE {:.4f}", name, epoch, o.train.max_epochs, val_mse),
                          static_cast<int>(done.load()), static_cast<int>(jobs.size()));
           };
+        // Zero output layer: the network starts as exactly the linear part (its output is 0),
+        // so training can only move away from the linear predictor where the data ask for it.
+        if (nlin > 0) net.params().tail(layers[layers.size() - 2] + 1).setZero();
         net.Train(X, y_mlp, to);
-        // Residual RMS per cell (one-step prediction on every row of the cell's recording;
-        // with a linear part on the clean histories the synthesis feeds it).
-        const Eigen::VectorXd p = nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + ylin) : net.PredictRows(X);
-        std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
-        r = 0;
-        for (const bool val : {false, true})
-          for (const auto i : use) {
-            const auto [a, b] = rows_of(j, i, val);
-            for (std::size_t t = a; t < b; ++t, ++r) {
-              const auto c = static_cast<std::size_t>(cell_of[i]);
-              se[c] += (p(r) - y(r)) * (p(r) - y(r));
-              cnt[c] += 1;
-            }
-          }
         renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
                                 std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
         const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
-        auto predict = [&](const Eigen::VectorXd& in, const Eigen::VectorXd& phi) {
-          double v = net.Predict(in);
-          if (nlin > 0) v += (in.head(M).transpose() * W).dot(phi);
-          return v;
-        };
-        for (std::size_t c = 0; c < cells; ++c)
-          if (cnt[c] > 0) band.sigma[c] = std::sqrt(se[c] / cnt[c]);
-        // Calibrate sigma: a trained predictor shrinks toward zero, so free-running synthesis
-        // driven by the one-step residual would have too little power. Scale sigma until the
-        // free-running signal has the recording's RMS inside the band (what the crossovers
-        // pass; three fixed-point passes).
-        const double rate_dec = m.sample_rate_hz / band.decimation;
-        auto in_band_rms = [&](const std::vector<double>& x) {
-          const auto bx = BandSplit(x, rate_dec, band.lo_hz, band.hi_hz);
-          double q = 0;
-          for (const double v : bx) q += v * v;
-          return std::sqrt(q / static_cast<double>(std::max<std::size_t>(1, bx.size())));
-        };
-        for (const auto i : use) {
-          const auto c = static_cast<std::size_t>(cell_of[i]);
-          const double target = in_band_rms(sig[j.band][i]);
-          Rng rng(o.train.seed + 7919 * k + c);
-          Eigen::VectorXd in = Eigen::VectorXd::Zero(inputs);
-          if (unified) {
-            in(M) = m.NormSpeed(recs[i].speed_mps);
-            in(M + 1) = m.NormForce(recs[i].force_N);
-          }
-          const Eigen::VectorXd phi_c = unified ? basis(in(M), in(M + 1)) : basis(0, 0);
-          std::vector<double> run;
-          for (int pass = 0; pass < 3 && target > 0; ++pass) {
-            in.head(M).setZero();
-            run.clear();
-            const int warm = 300, steps = 3000;
-            for (int t = 0; t < warm + steps; ++t) {
-              double yv = predict(in, phi_c) + band.sigma[c] * rng.Normal();
-              yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
-              for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
-              in(0) = yv;
-              if (t >= warm) run.push_back(yv);
+        // Sigma per cell for the network with (mlp) or without its nonlinear part: the one-step
+        // residual RMS on every row of the cell's recording (with a linear part on the clean
+        // histories the synthesis feeds it), then calibrated: a trained predictor shrinks
+        // toward zero, so free-running synthesis driven by the one-step residual would have
+        // too little power. Sigma is scaled until the free-running signal has the recording's
+        // RMS inside the band (what the crossovers pass; three fixed-point passes).
+        auto sigmas = [&](bool mlp) {
+          std::vector<double> sigma(cells, 0.0);
+          const Eigen::VectorXd p = !mlp ? ylin
+                                    : nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + ylin)
+                                               : net.PredictRows(X);
+          std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
+          Eigen::Index row = 0;
+          for (const bool val : {false, true})
+            for (const auto i : use) {
+              const auto [a, b] = rows_of(j, i, val);
+              for (std::size_t t = a; t < b; ++t, ++row) {
+                const auto c = static_cast<std::size_t>(cell_of[i]);
+                se[c] += (p(row) - y(row)) * (p(row) - y(row));
+                cnt[c] += 1;
+              }
             }
-            const double got = in_band_rms(run);
-            if (!(got > 0)) break;
-            band.sigma[c] *= std::clamp(target / got, 0.25, 4.0);
+          for (std::size_t c = 0; c < cells; ++c)
+            if (cnt[c] > 0) sigma[c] = std::sqrt(se[c] / cnt[c]);
+          auto predict = [&](const Eigen::VectorXd& in, const Eigen::VectorXd& phi) {
+            double v = mlp ? net.Predict(in) : 0.0;
+            if (nlin > 0) v += (in.head(M).transpose() * W).dot(phi);
+            return v;
+          };
+          const double rate_dec = m.sample_rate_hz / band.decimation;
+          auto in_band_rms = [&](const std::vector<double>& x) {
+            const auto bx = BandSplit(x, rate_dec, band.lo_hz, band.hi_hz);
+            double q = 0;
+            for (const double v : bx) q += v * v;
+            return std::sqrt(q / static_cast<double>(std::max<std::size_t>(1, bx.size())));
+          };
+          for (const auto i : use) {
+            const auto c = static_cast<std::size_t>(cell_of[i]);
+            const double target = in_band_rms(sig[j.band][i]);
+            Rng rng(o.train.seed + 7919 * k + c);
+            Eigen::VectorXd in = Eigen::VectorXd::Zero(inputs);
+            if (unified) {
+              in(M) = m.NormSpeed(recs[i].speed_mps);
+              in(M + 1) = m.NormForce(recs[i].force_N);
+            }
+            const Eigen::VectorXd phi_c = unified ? basis(in(M), in(M + 1)) : basis(0, 0);
+            std::vector<double> run;
+            for (int pass = 0; pass < 3 && target > 0; ++pass) {
+              in.head(M).setZero();
+              run.clear();
+              const int warm = 300, steps = 3000;
+              for (int t = 0; t < warm + steps; ++t) {
+                double yv = predict(in, phi_c) + sigma[c] * rng.Normal();
+                yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
+                for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
+                in(0) = yv;
+                if (t >= warm) run.push_back(yv);
+              }
+              const double got = in_band_rms(run);
+              if (!(got > 0)) break;
+              sigma[c] *= std::clamp(target / got, 0.25, 4.0);
+            }
           }
+          return sigma;
+        };
+        const auto with_mlp = sigmas(true);
+        for (const auto i : use) band.sigma[static_cast<std::size_t>(cell_of[i])] = with_mlp[static_cast<std::size_t>(cell_of[i])];
+        if (nlin > 0) {
+          const auto without = sigmas(false);
+          for (const auto i : use)
+            linear_only[j.band].sigma[static_cast<std::size_t>(cell_of[i])] = without[static_cast<std::size_t>(cell_of[i])];
+          renderer::NeuralNet lin = out;
+          std::fill(lin.params.begin(), lin.params.end(), 0.0);  // the network's output is 0
+          linear_only[j.band].nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(lin);
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
         if (o.progress) o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
@@ -325,6 +350,33 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   work();
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
+  if (o.linear_part && o.validate_nonlinear_part) {
+    // Model selection on validation data: free-running E_s (the Fig. 3.7 measure) of each
+    // variant against the last validation_fraction of every recording, which no linear part
+    // was fitted on; both variants driven by the same noise (seed per recording).
+    auto validation_es = [&](const std::vector<renderer::NeuralBand>& bands) {
+      renderer::NeuralModel cand = m;
+      cand.bands = bands;
+      double sum = 0;
+      int count = 0;
+      for (std::size_t i = 0; i < recs.size(); ++i) {
+        const auto nval = static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(pre[i].size())));
+        if (nval < 2 * kValidationSegment) continue;
+        const std::vector<double> held(pre[i].end() - static_cast<std::ptrdiff_t>(nval), pre[i].end());
+        const auto synth = SynthesizeNeural(cand, recs[i].speed_mps, recs[i].force_N, 16 * kValidationSegment, o.train.seed + i);
+        sum += SpectralError(held, synth, kValidationSegment);
+        ++count;
+      }
+      return count > 0 ? sum / count : 0.0;
+    };
+    const double es_mlp = validation_es(m.bands), es_lin = validation_es(linear_only);
+    const bool keep = !(es_lin <= es_mlp);
+    if (!keep) m.bands = std::move(linear_only);
+    if (o.progress)
+      o.progress(fmt::format("validation E_s: {:.4f} with the nonlinear part, {:.4f} with the linear part alone: {} kept",
+                             es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone"),
+                 static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
+  }
   renderer::ValidateNeuralModel(m);
   return m;
 }
@@ -341,29 +393,12 @@ std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double v, d
 
 CvResult CrossValidateNeural(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
                              const NeuralFitOptions& o, std::uint64_t seed) {
-  auto near = [](const std::vector<double>& set, double x) {
-    return std::any_of(set.begin(), set.end(), [&](double s) { return Near(x, s); });
-  };
-  std::vector<Recording> train;
-  for (const auto& r : recs)
-    if (near(tv, r.speed_mps) && near(tf, r.force_N)) train.push_back(r);
-  if (train.size() < 3) throw InputError("", 0, "--train-speeds", "fewer than 3 recordings at the training conditions");
-  const auto model = FitNeural(train, o);
-  CvResult res;
-  int ntr = 0, nte = 0;
-  for (std::size_t i = 0; i < recs.size(); ++i) {
-    const auto& r = recs[i];
-    const auto measured = Preprocess(r, o.preprocess);
-    const auto s = SynthesizeNeural(model, r.speed_mps, r.force_N, measured.size(), seed + i);
-    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s),
-              WelchMagnitude(measured), WelchMagnitude(s)};
-    (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
-    (row.train ? ntr : nte)++;
-    res.rows.push_back(row);
-  }
-  if (ntr) res.mean_es_train /= ntr;
-  if (nte) res.mean_es_test /= nte;
-  return res;
+  return CrossValidateModel(recs, tv, tf, o.preprocess, [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
+    auto model = std::make_shared<const renderer::NeuralModel>(FitNeural(train, o));
+    return [model](const Recording& r, std::size_t n, std::uint64_t s) {
+      return SynthesizeNeural(*model, r.speed_mps, r.force_N, n, s);
+    };
+  }, seed);
 }
 
 }  // namespace hapticlab::modeling

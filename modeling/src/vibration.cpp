@@ -1,5 +1,7 @@
 #include "hapticlab/modeling/vibration.hpp"
 
+#include "hapticlab/modeling/cross_validation.hpp"
+
 #include <fftw3.h>
 #include <fmt/format.h>
 #include <soxr.h>
@@ -9,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <atomic>
 #include <exception>
 #include <mutex>
@@ -453,38 +456,22 @@ renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, con
 
 CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
                        const VibrationFitOptions& o, std::uint64_t seed) {
-  auto near = [](const std::vector<double>& set, double x) {
-    return std::any_of(set.begin(), set.end(), [&](double s) { return std::abs(s - x) <= 1e-6 * std::max(1.0, std::abs(s)); });
-  };
-  std::vector<Recording> train;
-  for (const auto& r : recs)
-    if (near(tv, r.speed_mps) && near(tf, r.force_N)) train.push_back(r);
-  if (train.size() < 3)
-    throw InputError("<command line>", 0, "training speeds and forces",
-                     fmt::format("{} recordings at the training conditions, at least 3 needed", train.size()));
-  const auto bank = FitVibrationBank(train, o);
-  renderer::VibrationInterpolator interp(bank);
-  CvResult res;
-  res.order = bank.order();
-  int ntr = 0, nte = 0;
-  for (std::size_t i = 0; i < recs.size(); ++i) {
-    const auto& r = recs[i];
-    const auto measured = Preprocess(r, o);
-    renderer::ArFilter f;
-    interp.Interpolate(r.speed_mps, r.force_N, true, &f);
-    f.active = true;  // synthesize even below the renderer's 1 cm/s switch-off
-    renderer::ArSynth synth(seed + i);
-    std::vector<double> s(measured.size());
-    for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
-    for (auto& v : s) v = synth.Step(f);
-    CvRow row{r.speed_mps, r.force_N, near(tv, r.speed_mps) && near(tf, r.force_N), SpectralError(measured, s),
-              WelchMagnitude(measured), WelchMagnitude(s)};
-    (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
-    (row.train ? ntr : nte)++;
-    res.rows.push_back(row);
-  }
-  if (ntr) res.mean_es_train /= ntr;
-  if (nte) res.mean_es_test /= nte;
+  int order = 0;
+  auto res = CrossValidateModel(recs, tv, tf, o, [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
+    auto interp = std::make_shared<renderer::VibrationInterpolator>(FitVibrationBank(train, o));
+    order = interp->bank().order();
+    return [interp](const Recording& r, std::size_t n, std::uint64_t s) {
+      renderer::ArFilter f;
+      interp->Interpolate(r.speed_mps, r.force_N, true, &f);
+      f.active = true;  // synthesize even below the renderer's 1 cm/s switch-off
+      renderer::ArSynth synth(s);
+      std::vector<double> out(n);
+      for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
+      for (auto& v : out) v = synth.Step(f);
+      return out;
+    };
+  }, seed);
+  res.order = order;
   return res;
 }
 

@@ -161,6 +161,47 @@ TEST(Neural, TrainingReportsProgressPerEpochAndPerNetwork) {
   })) << fmt::format("{}", fmt::join(lines, "\n"));
 }
 
+// The nonlinear part is kept only when the free-running model synthesizes the recordings'
+// validation parts better with it (NeuralFitOptions::validate_nonlinear_part): the decision
+// is reported, and the returned networks are the reported variant (linear part alone: every
+// MLP parameter zero, so the network's output is exactly its linear part).
+TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.12})
+    for (const double f : {0.54, 1.91}) recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
+  NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
+  o.train.max_epochs = 3;
+  o.hidden_large = {6};
+  for (auto& b : o.bands) b.history = 8;
+  std::string decision;
+  o.progress = [&](const std::string& what, int, int) {
+    if (what.rfind("validation E_s: ", 0) == 0) decision = what;
+  };
+  auto mlp_is_zero = [](const renderer::NeuralModel& m) {
+    for (const auto& b : m.bands)
+      for (const auto& n : b.nets) {
+        EXPECT_EQ(n.linear.size(), 9u * static_cast<std::size_t>(b.history));
+        if (std::any_of(n.params.begin(), n.params.end(), [](double p) { return p != 0; })) return false;
+      }
+    return true;
+  };
+  const auto chosen = FitNeural(recs, o);
+  ASSERT_FALSE(decision.empty()) << "the selection is reported";
+  double es_mlp = 0, es_lin = 0;
+  ASSERT_EQ(std::sscanf(decision.c_str(), "validation E_s: %lf with the nonlinear part, %lf", &es_mlp, &es_lin), 2) << decision;
+  const bool linear_kept = decision.find("linear part alone kept") != std::string::npos;
+  EXPECT_EQ(linear_kept, es_lin <= es_mlp) << decision;
+  EXPECT_EQ(mlp_is_zero(chosen), linear_kept) << decision;
+  o.validate_nonlinear_part = false;
+  decision.clear();
+  const auto all = FitNeural(recs, o);
+  EXPECT_TRUE(decision.empty());
+  EXPECT_FALSE(mlp_is_zero(all)) << "trained networks are kept as trained";
+  for (std::size_t b = 0; b < all.bands.size(); ++b)  // the same linear parts either way
+    EXPECT_EQ(all.bands[b].nets[0].linear, chosen.bands[b].nets[0].linear);
+}
+
 TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
   for (const auto t : {renderer::NeuralTopology::kUnified, renderer::NeuralTopology::kDecomposed}) {
     auto m = std::make_shared<renderer::NeuralModel>(SmallModel(t));
@@ -419,23 +460,30 @@ std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
 // Fig. 3.7 on the synthetic AR grids (thesis grid: train 4, 8, 12 cm/s x 0.54, 1.18, 1.91 N,
 // held out 6, 10 cm/s and 0.89, 1.40 N): LPC, Γ_U, Γ_D, training and held-out mean E_s.
 // Issue #19's targets: on the linear grid Γ_U within 0.05 of LPC on training conditions and
-// within 0.1 held out (met with margin on every data seed tried, docs/modeling-neural.md); on
-// the nonlinear grid Γ_U below LPC held out, which Γ_U reaches on 3 of 4 data seeds
-// (differences -0.016 to +0.015, the E_s estimate's own spread): asserted there is what holds
-// on every seed tried, training within 0.05 of LPC and held out within 0.03.
+// within 0.1 held out; on the nonlinear grid Γ_U below LPC held out. With the nonlinear part
+// kept only where validation favours it (NeuralFitOptions::validate_nonlinear_part), Γ_U is
+// below LPC held out on data seeds 40, 41, 43 (by 0.021-0.034) and 0.011 above on seed 42
+// (docs/modeling-neural.md: that gap is the linear parts' interpolation between conditions,
+// not the networks). Asserted is what holds on every seed tried: training within 0.02 of
+// LPC, held out within 0.02.
 TEST(NeuralFig37, LinearAndNonlinearArGrids) {
   const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
   std::printf("AR grid    | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
   for (const bool nonlinear : {false, true}) {
     const auto recs = ArGrid(nonlinear, 40);
     const auto lpc = CrossValidate(recs, tv, tf, {});
-    const auto u = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kUnified));
+    auto uo = Quick(renderer::NeuralTopology::kUnified);
+    std::string decision;
+    uo.progress = [&](const std::string& what, int, int) {
+      if (what.rfind("validation E_s", 0) == 0) decision = what;
+    };
+    const auto u = CrossValidateNeural(recs, tv, tf, uo);
     const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
+    std::printf("%s grid, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear", decision.c_str());
     std::printf("%-10s |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", nonlinear ? "nonlinear" : "linear", lpc.mean_es_train,
                 lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test);
-    EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.05);
-    if (!nonlinear) EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.1);
-    else EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.03);
+    EXPECT_LE(u.mean_es_train, lpc.mean_es_train + (nonlinear ? 0.02 : 0.05));
+    EXPECT_LE(u.mean_es_test, lpc.mean_es_test + (nonlinear ? 0.02 : 0.1));
   }
 }
 
