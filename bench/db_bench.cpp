@@ -150,10 +150,12 @@ int main(int argc, char** argv) {
     if (name.rfind("BM_InsertPerSampleBatched", 0) == 0) bb = v;
   }
   if (w > 0 && b > 0 && bb > 0)
-    std::printf("\nwriter: %.0f samples/s (16 ch)\n"
-                "one INSERT per sample, own transaction: %.0f samples/s, writer is %.1fx faster\n"
-                "one INSERT per sample, batched %d per transaction: %.0f samples/s, writer is "
-                "%.1fx faster\n", w, b, w / b, kBatch, bb, w / bb);
+    std::printf(
+        "\nwriter: %.0f samples/s (16 ch)\n"
+        "one INSERT per sample, own transaction: %.0f samples/s, writer is %.1fx faster\n"
+        "one INSERT per sample, batched %d per transaction: %.0f samples/s, writer is "
+        "%.1fx faster\n",
+        w, b, w / b, kBatch, bb, w / bb);
   benchmark::Shutdown();
   return 0;
 }

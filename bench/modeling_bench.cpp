@@ -1,5 +1,5 @@
-// Vibration modeling throughput (both cores): fitting the AR banks of 100 materials x 25 conditions x 10 s
-// recorded at 10 kHz (resample to 2 kHz, band-limit, Levinson-Durbin with the bank's order
+// Vibration modeling throughput (both cores): fitting the AR banks of 100 materials x 25 conditions
+// x 10 s recorded at 10 kHz (resample to 2 kHz, band-limit, Levinson-Durbin with the bank's order
 // chosen by AIC up to 30). One material's 25 recordings are synthesized once and fitted 100
 // times (the fit, not the synthesis, is measured).
 //
@@ -45,13 +45,17 @@ void Fit(benchmark::State& state, modeling::ResampleQuality q) {
   modeling::VibrationFitOptions o;
   o.resample = q;
   for (auto _ : state) {
-    for (int m = 0; m < 100; ++m) benchmark::DoNotOptimize(modeling::FitVibrationBank(recs, o).cells.data());
+    for (int m = 0; m < 100; ++m)
+      benchmark::DoNotOptimize(modeling::FitVibrationBank(recs, o).cells.data());
   }
-  state.counters["conditions_per_s"] = benchmark::Counter(2500.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["conditions_per_s"] = benchmark::Counter(
+      2500.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
 }
 // The default (medium-quality resampling, 90 % bandwidth) and the fastest converter (80 %).
 void FitHundredMaterialsMedium(benchmark::State& s) { Fit(s, modeling::ResampleQuality::kMedium); }
-void FitHundredMaterialsFastest(benchmark::State& s) { Fit(s, modeling::ResampleQuality::kFastest); }
+void FitHundredMaterialsFastest(benchmark::State& s) {
+  Fit(s, modeling::ResampleQuality::kFastest);
+}
 BENCHMARK(FitHundredMaterialsMedium)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 BENCHMARK(FitHundredMaterialsFastest)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
@@ -65,12 +69,15 @@ void Photometric30x1024(benchmark::State& state) {
     std::vector<float> img(static_cast<std::size_t>(n) * n);
     for (int i = 0; i < n; ++i)
       for (int j = 0; j < n; ++j) {
-        const Eigen::Vector3d nn = Eigen::Vector3d(-0.2 * std::cos(0.05 * j), 0.1 * std::sin(0.03 * i), 1).normalized();
-        img[static_cast<std::size_t>(i) * n + static_cast<std::size_t>(j)] = static_cast<float>(0.8 * std::max(0.0, l.direction.dot(nn)));
+        const Eigen::Vector3d nn =
+            Eigen::Vector3d(-0.2 * std::cos(0.05 * j), 0.1 * std::sin(0.03 * i), 1).normalized();
+        img[static_cast<std::size_t>(i) * n + static_cast<std::size_t>(j)] =
+            static_cast<float>(0.8 * std::max(0.0, l.direction.dot(nn)));
       }
     st.images.push_back(std::move(img));
   }
-  for (auto _ : state) benchmark::DoNotOptimize(modeling::PhotometricStereo(st, lights, {}).height_m.data());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(modeling::PhotometricStereo(st, lights, {}).height_m.data());
 }
 BENCHMARK(Photometric30x1024)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
@@ -82,8 +89,12 @@ void PhotometricSpecularMasked12x512(benchmark::State& state) {
   std::vector<modeling::Light> lights;
   for (double e : {45.0, 60.0, 75.0})
     for (int a = 0; a < 4; ++a) {
-      const double el = e * std::numbers::pi / 180, az = (90.0 * a + (e == 60.0 ? 45 : 0)) * std::numbers::pi / 180;
-      lights.push_back({"", Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)), 0});
+      const double el = e * std::numbers::pi / 180,
+                   az = (90.0 * a + (e == 60.0 ? 45 : 0)) * std::numbers::pi / 180;
+      lights.push_back(
+          {"",
+           Eigen::Vector3d(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)),
+           0});
     }
   modeling::ImageStack st;
   st.width = st.height = n;
@@ -100,11 +111,13 @@ void PhotometricSpecularMasked12x512(benchmark::State& state) {
         o.mask[k] = r2 < 0.81 * R * R ? 1 : 0;
         const Eigen::Vector3d nn = Eigen::Vector3d(x, y, std::sqrt(R * R - r2)).normalized();
         const double d = l.direction.dot(nn);
-        img[k] = static_cast<float>(std::min(1.0, d > 0 ? 0.6 * d + 0.5 * std::pow(std::max(0.0, nn.dot(h)), 40) : 0.0));
+        img[k] = static_cast<float>(
+            std::min(1.0, d > 0 ? 0.6 * d + 0.5 * std::pow(std::max(0.0, nn.dot(h)), 40) : 0.0));
       }
     st.images.push_back(std::move(img));
   }
-  for (auto _ : state) benchmark::DoNotOptimize(modeling::PhotometricStereo(st, lights, o).height_m.data());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(modeling::PhotometricStereo(st, lights, o).height_m.data());
 }
 BENCHMARK(PhotometricSpecularMasked12x512)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 

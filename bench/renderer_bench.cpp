@@ -49,7 +49,8 @@ MaterialModel BenchMaterial(int map_size, int order) {
       ArCell c;
       c.speed_mps = b.grid_speeds_mps[static_cast<std::size_t>(i)];
       c.force_N = b.grid_forces_N[static_cast<std::size_t>(j)];
-      for (int k = 0; k < order; ++k) c.lsf.push_back((k + 0.6 + 0.1 * i + 0.05 * j) * 3.0 / (order + 1));
+      for (int k = 0; k < order; ++k)
+        c.lsf.push_back((k + 0.6 + 0.1 * i + 0.05 * j) * 3.0 / (order + 1));
       c.coeffs = LsfToAr(c.lsf);
       c.variance = 1.0;
       b.cells.push_back(c);
@@ -129,7 +130,8 @@ std::shared_ptr<NeuralModel> BenchNeural(NeuralTopology t) {
     auto& band = m->bands[b];
     const bool large = t == NeuralTopology::kUnified || b == 0;
     std::vector<int> layers{band.history + (t == NeuralTopology::kUnified ? 2 : 0)};
-    for (const int h : large ? std::vector<int>{30, 25, 15, 5} : std::vector<int>{30, 15, 5}) layers.push_back(h);
+    for (const int h : large ? std::vector<int>{30, 25, 15, 5} : std::vector<int>{30, 15, 5})
+      layers.push_back(h);
     layers.push_back(1);
     const std::size_t nets = t == NeuralTopology::kUnified ? 1 : 9;
     for (std::size_t k = 0; k < nets; ++k) {

@@ -45,7 +45,8 @@ BENCHMARK(RmAnovaPlusTukey)->Unit(benchmark::kMillisecond);
 
 void RmAnovaOnly(benchmark::State& state) {
   const auto t = Design();
-  for (auto _ : state) benchmark::DoNotOptimize(RmAnova(t, "subject", {"method", "material"}).effects.data());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(RmAnova(t, "subject", {"method", "material"}).effects.data());
 }
 BENCHMARK(RmAnovaOnly)->Unit(benchmark::kMillisecond);
 

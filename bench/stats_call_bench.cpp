@@ -40,11 +40,16 @@ double MedianSeconds(const std::string& command, int n) {
 int main(int argc, char** argv) {
   const int n = argc > 1 ? std::max(1, std::atoi(argv[1])) : 20;
   const std::string src = HL_SOURCE_DIR, csv = src + "/tests/data/stats/example_raw.csv";
-  const std::string args = " --csv " + csv + " --dv score --subject subject --within method,material --where criterion=realism";
+  const std::string args =
+      " --csv " + csv +
+      " --dv score --subject subject --within method,material --where criterion=realism";
   const std::string lean = HL_STATS_CLI_PATH, full = std::string(HL_CLI_PATH) + " stats";
-  const std::string lean_call = lean + " rm-anova" + args + " && " + lean + " tukey" + args + " --factor method";
-  const std::string full_call = full + " rm-anova" + args + " && " + full + " tukey" + args + " --factor method";
-  fmt::print("one call = rmANOVA (method x material) + Tukey on method, {} runs each, medians:\n", n);
+  const std::string lean_call =
+      lean + " rm-anova" + args + " && " + lean + " tukey" + args + " --factor method";
+  const std::string full_call =
+      full + " rm-anova" + args + " && " + full + " tukey" + args + " --factor method";
+  fmt::print("one call = rmANOVA (method x material) + Tukey on method, {} runs each, medians:\n",
+             n);
   const double t_lean = MedianSeconds(lean_call, n);
   fmt::print("  hapticlab-stats (lean binary)      {:8.4f} s\n", t_lean);
   const double t_help = MedianSeconds(lean + " --help", n);
@@ -58,6 +63,7 @@ int main(int argc, char** argv) {
   }
   const double t_r = MedianSeconds("Rscript " + src + "/bench/stats_call.R " + csv, std::min(n, 5));
   fmt::print("  Rscript afex + emmeans             {:8.4f} s\n", t_r);
-  fmt::print("R / hapticlab-stats = {:.0f}x; R / hapticlab stats = {:.0f}x\n", t_r / t_lean, t_r / t_full);
+  fmt::print("R / hapticlab-stats = {:.0f}x; R / hapticlab stats = {:.0f}x\n", t_r / t_lean,
+             t_r / t_full);
   return 0;
 }

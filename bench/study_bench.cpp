@@ -18,8 +18,11 @@ namespace {
 using namespace hapticlab;
 
 void Session(benchmark::State& state, runner::RecordMode mode) {
-  const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml");
-  const auto db = (std::filesystem::temp_directory_path() / ("hl_study_bench_" + std::to_string(getpid()) + ".db")).string();
+  const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) +
+                                         "/studies/shin2019/ch5-hybrid-realism.toml");
+  const auto db = (std::filesystem::temp_directory_path() /
+                   ("hl_study_bench_" + std::to_string(getpid()) + ".db"))
+                      .string();
   double simulated = 0, wall = 0;
   int i = 0;
   for (auto _ : state) {
@@ -36,8 +39,12 @@ void Session(benchmark::State& state, runner::RecordMode mode) {
   for (const char* suffix : {"", "-wal", "-shm"}) std::filesystem::remove(db + suffix);
 }
 
-void SimulatedSessionNoRecording(benchmark::State& state) { Session(state, runner::RecordMode::kNone); }
-void SimulatedSessionRecordingAll(benchmark::State& state) { Session(state, runner::RecordMode::kAll); }
+void SimulatedSessionNoRecording(benchmark::State& state) {
+  Session(state, runner::RecordMode::kNone);
+}
+void SimulatedSessionRecordingAll(benchmark::State& state) {
+  Session(state, runner::RecordMode::kAll);
+}
 BENCHMARK(SimulatedSessionNoRecording)->Unit(benchmark::kMillisecond)->Iterations(5);
 BENCHMARK(SimulatedSessionRecordingAll)->Unit(benchmark::kMillisecond)->Iterations(3);
 

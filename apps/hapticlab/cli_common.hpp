@@ -2,7 +2,6 @@
 // Shared pieces of the hapticlab command line: exit codes and error reporting.
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <map>
 #include <string>

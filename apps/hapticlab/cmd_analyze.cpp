@@ -31,17 +31,23 @@ void RegisterAnalyze(CLI::App& app) {
   cmd->add_option("--out", o->out, "Report folder (created when missing)")->required();
   cmd->add_flag("--no-figures", o->no_figures, "Tables only");
   cmd->add_flag("--json", o->json, "Print the written files as JSON");
-  cmd->add_flag("--include-simulated", o->include_simulated,
-                "Keep the simulated observer's ratings in a study that also holds ratings by participants\n"
-                "(left out by default; the report says how many)");
+  cmd->add_flag(
+      "--include-simulated", o->include_simulated,
+      "Keep the simulated observer's ratings in a study that also holds ratings by participants\n"
+      "(left out by default; the report says how many)");
   cmd->callback([o] {
     RunGuarded([&] {
-      const auto r = stats::Analyze(o->db, {.out_dir = o->out, .figures = !o->no_figures,
+      const auto r = stats::Analyze(o->db, {.out_dir = o->out,
+                                            .figures = !o->no_figures,
                                             .include_simulated = o->include_simulated});
       if (o->json) {
-        fmt::print("{}\n", nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(2));
+        fmt::print(
+            "{}\n",
+            nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(
+                2));
       } else {
-        fmt::print("report: {} ({} files, studies: {})\n", r.markdown, r.files.size(), fmt::join(r.studies, ", "));
+        fmt::print("report: {} ({} files, studies: {})\n", r.markdown, r.files.size(),
+                   fmt::join(r.studies, ", "));
       }
       return kExitOk;
     });

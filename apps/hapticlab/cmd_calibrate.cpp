@@ -22,9 +22,9 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/calibration.hpp"
 #include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/stats/power.hpp"
-#include "hapticlab/runner/calibration.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -64,18 +64,24 @@ double& Ref(sim::ObserverParams& o, const std::string& name) {
 
 std::string ObserverToml(const sim::ObserverParams& o, const std::string& header) {
   std::string s = header;
-  s += fmt::format("[observer]\nupper = {:.3f}\nlower = {:.3f}\nrange_sd = {:.4f}\nlapse_rate = {:.4f}\n", o.upper, o.lower,
-                   o.range_sd, o.lapse_rate);
-  s += fmt::format("scale_vibration = {:.4f}\nscale_fluctuation = {:.4f}\nscale_friction = {:.4f}\n"
-                   "scale_stiffness = {:.4f}\nscale_pattern = {:.4f}\n",
-                   o.scale_vibration, o.scale_fluctuation, o.scale_friction, o.scale_stiffness, o.scale_pattern);
-  s += fmt::format("sensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = {:.3f}\nmethod_sd = {:.3f}\nnoise_sd = {:.3f}\n",
-                   o.defaults.sensitivity, o.defaults.offset_sd, o.defaults.material_sd, o.defaults.method_sd,
-                   o.defaults.noise_sd);
+  s += fmt::format(
+      "[observer]\nupper = {:.3f}\nlower = {:.3f}\nrange_sd = {:.4f}\nlapse_rate = {:.4f}\n",
+      o.upper, o.lower, o.range_sd, o.lapse_rate);
+  s += fmt::format(
+      "scale_vibration = {:.4f}\nscale_fluctuation = {:.4f}\nscale_friction = {:.4f}\n"
+      "scale_stiffness = {:.4f}\nscale_pattern = {:.4f}\n",
+      o.scale_vibration, o.scale_fluctuation, o.scale_friction, o.scale_stiffness, o.scale_pattern);
+  s += fmt::format(
+      "sensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = {:.3f}\nmethod_sd = "
+      "{:.3f}\nnoise_sd = {:.3f}\n",
+      o.defaults.sensitivity, o.defaults.offset_sd, o.defaults.material_sd, o.defaults.method_sd,
+      o.defaults.noise_sd);
   for (const auto& [name, c] : o.criteria)
-    s += fmt::format("\n[criterion.{}]\nsensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = {:.3f}\nmethod_sd = {:.3f}\n"
-                     "noise_sd = {:.3f}\n",
-                     name, c.sensitivity, c.offset_sd, c.material_sd, c.method_sd, c.noise_sd);
+    s += fmt::format(
+        "\n[criterion.{}]\nsensitivity = {:.4f}\noffset_sd = {:.3f}\nmaterial_sd = "
+        "{:.3f}\nmethod_sd = {:.3f}\n"
+        "noise_sd = {:.3f}\n",
+        name, c.sensitivity, c.offset_sd, c.material_sd, c.method_sd, c.noise_sd);
   return s;
 }
 
@@ -85,13 +91,15 @@ void RegisterCalibrate(CLI::App& study) {
   auto a = std::make_shared<CalArgs>();
   auto* cmd = study.add_subcommand(
       "calibrate",
-      "Fit the simulated observer (range, offsets, participant x material / x method effects, noise,\n"
+      "Fit the simulated observer (range, offsets, participant x material / x method effects, "
+      "noise,\n"
       "criterion sensitivity, perceptual cue scales) to published statistics: partial eta^2,\n"
       "method means, SDs, real-real limits, listed with weights in a targets file\n"
       "(studies/shin2019/calibration.toml). Writes an observer file and prints the targets,\n"
       "weights and achieved values. Reproducible from the targets file's seed.");
   cmd->add_option("TARGETS", a->targets, "Calibration targets (.toml)")->required();
-  cmd->add_option("--out", a->out, "Observer file to write (default: the targets file's `observer`)");
+  cmd->add_option("--out", a->out,
+                  "Observer file to write (default: the targets file's `observer`)");
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");
   cmd->callback([a] {
     RunGuarded([&] {
@@ -126,23 +134,32 @@ void RegisterCalibrate(CLI::App& study) {
         }
         if (!improved)
           for (auto& p : params) p.step *= 0.5;
-        log(fmt::format("sweep {}: loss {:.4f}{}", sweep + 1, best_loss, improved ? "" : " (steps halved)"));
+        log(fmt::format("sweep {}: loss {:.4f}{}", sweep + 1, best_loss,
+                        improved ? "" : " (steps halved)"));
       }
       std::vector<runner::CalibrationRow> rows;
       const double final_loss = runner::EvaluateCalibration(st, spec, best, &rows);
       const std::string header = fmt::format(
           "# The simulated observer of the dissertation's studies (sim::Observer; docs/studies.md\n"
           "# \"The simulated observer\"). WRITTEN BY `hapticlab study calibrate {}`\n"
-          "# (seed {}, {} simulated studies per protocol per evaluation, pools of {}, {} sweeps; loss {:.4f}).\n"
+          "# (seed {}, {} simulated studies per protocol per evaluation, pools of {}, {} sweeps; "
+          "loss {:.4f}).\n"
           "# A rating on criterion c of a trial with material m and method k:\n"
           "#   s0 = lower + (upper - lower) exp(-(sensitivity_c d_c)^2 / 2)     latent similarity\n"
-          "#   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e                  mid = scale midpoint\n"
-          "# r = exp(N(0, range_sd)): the participant's use of the scale's range; o_c ~ N(0, offset_sd),\n"
-          "# u_cm ~ N(0, material_sd), v_ck ~ N(0, method_sd): offset and participant x material / x method\n"
-          "# effects; e ~ N(0, noise_sd) per rating; with probability lapse_rate a rating is uniform on\n"
-          "# the scale. d_c: feature distance of what the hand felt on the two sides (scale_* below).\n"
-          "# Keys in [observer] are the defaults of every criterion without a [criterion.NAME] table.\n\n",
-          fs::path(a->targets).filename().string(), spec.seed, spec.simulations, spec.pool, spec.sweeps, final_loss);
+          "#   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e                  mid = scale "
+          "midpoint\n"
+          "# r = exp(N(0, range_sd)): the participant's use of the scale's range; o_c ~ N(0, "
+          "offset_sd),\n"
+          "# u_cm ~ N(0, material_sd), v_ck ~ N(0, method_sd): offset and participant x material / "
+          "x method\n"
+          "# effects; e ~ N(0, noise_sd) per rating; with probability lapse_rate a rating is "
+          "uniform on\n"
+          "# the scale. d_c: feature distance of what the hand felt on the two sides (scale_* "
+          "below).\n"
+          "# Keys in [observer] are the defaults of every criterion without a [criterion.NAME] "
+          "table.\n\n",
+          fs::path(a->targets).filename().string(), spec.seed, spec.simulations, spec.pool,
+          spec.sweeps, final_loss);
       const std::string out = a->out.empty() ? spec.observer_out : a->out;
       {
         std::ofstream f(out);
@@ -151,7 +168,8 @@ void RegisterCalibrate(CLI::App& study) {
       }
       fmt::print("| protocol | statistic | target | weight | achieved |\n|---|---|---|---|---|\n");
       for (const auto& r : rows)
-        fmt::print("| {} | {} | {:.3f} | {:g} | {:.3f} |\n", r.protocol, r.label, r.target, r.weight, r.achieved);
+        fmt::print("| {} | {} | {:.3f} | {:g} | {:.3f} |\n", r.protocol, r.label, r.target,
+                   r.weight, r.achieved);
       fmt::print("\nloss {:.4f}; observer written to {}\n", final_loss, out);
       return kExitOk;
     });

@@ -7,9 +7,9 @@
 #include <fmt/core.h>
 
 #include <chrono>
-#include <fstream>
 #include <ctime>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -19,11 +19,11 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/export.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
-#include "hapticlab/runner/power_pool.hpp"
-#include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/stats/power.hpp"
 #include "hapticlab/stats/report.hpp"
 
@@ -62,31 +62,42 @@ std::string RealTimeCheck(const std::string& profiles_path) {
   sim::SimActuator act(hand, ro.vibration_rate_hz);
   hand.Begin(sim::DrawStroke(rng), Eigen::Isometry3d::Identity(),
              model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
-             model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz,
-             ro.vibration_rate_hz);
+             model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+             ro.force_rate_hz, ro.vibration_rate_hz);
   runner::RtEngine engine(r, dev, &act);
   engine.RunFor(std::chrono::seconds(1));
   const auto st = engine.Stats();
   const auto& ft = st.force_timing;
-  fmt::print("real-time engine check (Denim, Hybrid, 1 s on the real clock): force loop {:.0f} Hz, vibration loop {:.0f} Hz, "
-             "force wake-up lateness p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us, max {:.1f} us (timer slack {} ns, {}), "
-             "deadline misses {}/{}, in contact {} of {} ticks, faults {}\n",
-             st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, ft.late_p50_s * 1e6, ft.late_p99_s * 1e6,
-             ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_thread.timer_slack_ns, st.force_thread.priority_status,
-             st.force_deadline_misses, st.vibration_deadline_misses, st.contact_ticks, st.force_ticks,
-             r.counters().nan_faults.load() + r.counters().stale_faults.load());
+  fmt::print(
+      "real-time engine check (Denim, Hybrid, 1 s on the real clock): force loop {:.0f} Hz, "
+      "vibration loop {:.0f} Hz, "
+      "force wake-up lateness p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us, max {:.1f} us (timer "
+      "slack {} ns, {}), "
+      "deadline misses {}/{}, in contact {} of {} ticks, faults {}\n",
+      st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, ft.late_p50_s * 1e6,
+      ft.late_p99_s * 1e6, ft.late_p999_s * 1e6, ft.late_max_s * 1e6,
+      st.force_thread.timer_slack_ns, st.force_thread.priority_status, st.force_deadline_misses,
+      st.vibration_deadline_misses, st.contact_ticks, st.force_ticks,
+      r.counters().nan_faults.load() + r.counters().stale_faults.load());
   const auto& vt = st.vibration_timing;
   return fmt::format(
-      "Real-time check on the computer that ran this demo ({}; the simulated participants above ran on a "
-      "virtual clock, so these are the engine's figures on this computer, not the sessions'): the Hybrid method "
-      "(Denim) ran 1 s on the real clock with a simulated hand stroking the virtual sample; the force loop "
-      "(requested {:.0f} Hz) achieved {:.1f} Hz with wake-up lateness p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us "
-      "(max {:.1f} us) and {} deadline misses; the vibration loop (requested {:.0f} Hz) achieved {:.1f} Hz with "
-      "lateness p50 {:.1f} us, p99 {:.1f} us; timer slack {} ns, {}, spin {} us before each force deadline.\n",
-      UtcStamp(), ro.force_rate_hz, st.achieved_force_rate_hz, ft.late_p50_s * 1e6, ft.late_p99_s * 1e6,
-      ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_deadline_misses, ro.vibration_rate_hz,
-      st.achieved_vibration_rate_hz, vt.late_p50_s * 1e6, vt.late_p99_s * 1e6, st.force_thread.timer_slack_ns,
-      st.force_thread.priority_status, runner::EngineOptions{}.rt.spin_us);
+      "Real-time check on the computer that ran this demo ({}; the simulated participants above "
+      "ran on a "
+      "virtual clock, so these are the engine's figures on this computer, not the sessions'): the "
+      "Hybrid method "
+      "(Denim) ran 1 s on the real clock with a simulated hand stroking the virtual sample; the "
+      "force loop "
+      "(requested {:.0f} Hz) achieved {:.1f} Hz with wake-up lateness p50 {:.1f} us, p99 {:.1f} "
+      "us, p99.9 {:.1f} us "
+      "(max {:.1f} us) and {} deadline misses; the vibration loop (requested {:.0f} Hz) achieved "
+      "{:.1f} Hz with "
+      "lateness p50 {:.1f} us, p99 {:.1f} us; timer slack {} ns, {}, spin {} us before each force "
+      "deadline.\n",
+      UtcStamp(), ro.force_rate_hz, st.achieved_force_rate_hz, ft.late_p50_s * 1e6,
+      ft.late_p99_s * 1e6, ft.late_p999_s * 1e6, ft.late_max_s * 1e6, st.force_deadline_misses,
+      ro.vibration_rate_hz, st.achieved_vibration_rate_hz, vt.late_p50_s * 1e6, vt.late_p99_s * 1e6,
+      st.force_thread.timer_slack_ns, st.force_thread.priority_status,
+      runner::EngineOptions{}.rt.spin_us);
 }
 
 // One line of `study power`: participants for 80 % power on the method effect, from the
@@ -104,23 +115,31 @@ void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
   po.effects = {"method"};
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = stats::SimulatePower(
-      p.name, [&pool](int n, Rng& rng) { return runner::SimulateRatings(pool, pool.observer, n, rng, true); }, po);
+      p.name,
+      [&pool](int n, Rng& rng) {
+        return runner::SimulateRatings(pool, pool.observer, n, rng, true);
+      },
+      po);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::string line;
   for (const auto& c : p.criteria) {
     const int n = stats::ParticipantsFor(r, c, "method", 0.8);
-    line += fmt::format("{}{}: {}", line.empty() ? "" : ", ", c, n ? fmt::format("{}", n) : "more than 24");
+    line += fmt::format("{}{}: {}", line.empty() ? "" : ", ", c,
+                        n ? fmt::format("{}", n) : "more than 24");
   }
-  fmt::print("power: participants for 80 % power on the method effect (p < 0.05; {} simulated studies per count, "
-             "{:.1f} s; hapticlab study power): {}\n",
-             po.simulations, s, line);
+  fmt::print(
+      "power: participants for 80 % power on the method effect (p < 0.05; {} simulated studies per "
+      "count, "
+      "{:.1f} s; hapticlab study power): {}\n",
+      po.simulations, s, line);
 }
 
 }  // namespace
 
 void RegisterDemo(CLI::App& app) {
   struct O {
-    std::string out, protocol = std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml";
+    std::string out,
+        protocol = std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml";
     int participants = 8;
     std::string record = "first";
   };
@@ -133,13 +152,16 @@ void RegisterDemo(CLI::App& app) {
       "hand on a simulated device), records everything to a new database, analyses it into a\n"
       "report, and checks the engine on the real clock. Each run writes a new timestamped folder.");
   cmd->add_option("--out", o->out, "Parent folder of the run's output (default: demo-out)");
-  cmd->add_option("--participants", o->participants, "Simulated participants")->capture_default_str()
+  cmd->add_option("--participants", o->participants, "Simulated participants")
+      ->capture_default_str()
       ->check(CLI::Range(2, 100));
   cmd->add_option("--protocol", o->protocol, "Study protocol to run")->capture_default_str();
-  cmd->add_option("--record", o->record,
-                  "Trajectories to record: 'first' (every stream of the first participant, none of\n"
-                  "the others: keeps the database near 30 MB), 'all', 'force', 'none'")
-      ->check(CLI::IsMember({"first", "all", "force", "none"}))->capture_default_str();
+  cmd->add_option(
+         "--record", o->record,
+         "Trajectories to record: 'first' (every stream of the first participant, none of\n"
+         "the others: keeps the database near 30 MB), 'all', 'force', 'none'")
+      ->check(CLI::IsMember({"first", "all", "force", "none"}))
+      ->capture_default_str();
   cmd->callback([o] {
     RunGuarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
@@ -147,8 +169,8 @@ void RegisterDemo(CLI::App& app) {
       fs::create_directories(dir);
       const auto p = protocols::LoadProtocol(o->protocol);
       const std::string db_path = (dir / "study.db").string();
-      fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n", kVersion, kGitSha, p.name,
-                 o->participants, dir.string());
+      fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n",
+                 kVersion, kGitSha, p.name, o->participants, dir.string());
       double stimulus_s = 0;
       // What the simulated participants felt: the physics pool of the power line at the end.
       runner::FeltPool pool;
@@ -162,13 +184,16 @@ void RegisterDemo(CLI::App& app) {
         runner::RunOptions ro;
         ro.db_path = db_path;
         ro.participant = fmt::format("SIM{:02d}", i + 1);
-        ro.record = o->record == "all" || (o->record == "first" && i == 0) ? runner::RecordMode::kAll
-                    : o->record == "force"                                 ? runner::RecordMode::kForce
-                                                                           : runner::RecordMode::kNone;
+        ro.record = o->record == "all" || (o->record == "first" && i == 0)
+                        ? runner::RecordMode::kAll
+                    : o->record == "force" ? runner::RecordMode::kForce
+                                           : runner::RecordMode::kNone;
         ro.on_felt = [&pool, i](const runner::FeltTrial& t) {
           auto& v = pool.participants[static_cast<std::size_t>(i)];
-          if (!v.empty() && v.back().plan_index == t.plan_index) v.back() = t;
-          else v.push_back(t);
+          if (!v.empty() && v.back().plan_index == t.plan_index)
+            v.back() = t;
+          else
+            v.push_back(t);
         };
         const auto s = runner::RunStudy(p, ro);
         stimulus_s += s.simulated_s;
@@ -178,18 +203,24 @@ void RegisterDemo(CLI::App& app) {
       db::Database database(db_path, {.create = false, .read_only = true});
       // Trajectories stay in the database (`hapticlab export` writes them on request).
       const auto files = db::ExportCsv(database, (dir / "export").string(), false);
-      const std::string timing = RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
+      const std::string timing =
+          RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
       {
         std::ofstream md(report.markdown, std::ios::app);
         md << "\n## Real-time check\n\n" << timing;
-        if (!md) throw std::runtime_error("cannot append the real-time check to " + report.markdown);
+        if (!md)
+          throw std::runtime_error("cannot append the real-time check to " + report.markdown);
       }
       PowerLine(p, pool);
-      const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s, wall, stimulus_s / wall);
-      fmt::print("database: {}\nreport:   {}\nexport:   {} ({} CSV files)\n", db_path, report.markdown,
-                 (dir / "export").string(), files.size());
-      fmt::print("Models are placeholders derived from studies/shin2019/profiles.toml (docs/studies.md).\n");
+      const double wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s,
+                 wall, stimulus_s / wall);
+      fmt::print("database: {}\nreport:   {}\nexport:   {} ({} CSV files)\n", db_path,
+                 report.markdown, (dir / "export").string(), files.size());
+      fmt::print(
+          "Models are placeholders derived from studies/shin2019/profiles.toml "
+          "(docs/studies.md).\n");
       return kExitOk;
     });
   });

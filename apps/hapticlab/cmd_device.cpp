@@ -18,7 +18,8 @@ void RegisterDevice(CLI::App& app) {
   grp->require_subcommand(1);
   {
     auto json = std::make_shared<bool>(false);
-    auto* cmd = grp->add_subcommand("list", "Falcons on the USB bus, audio outputs (PortAudio), HID devices (rating boxes)");
+    auto* cmd = grp->add_subcommand(
+        "list", "Falcons on the USB bus, audio outputs (PortAudio), HID devices (rating boxes)");
     cmd->add_flag("--json", *json, "As JSON");
     cmd->callback([json] {
       RunGuarded([&] {
@@ -36,7 +37,8 @@ void RegisterDevice(CLI::App& app) {
           for (auto* d = list; d; d = d->next) {
             std::string product;
             if (d->product_string)
-              for (const wchar_t* c = d->product_string; *c; ++c) product += static_cast<char>(*c < 128 ? *c : '?');
+              for (const wchar_t* c = d->product_string; *c; ++c)
+                product += static_cast<char>(*c < 128 ? *c : '?');
             hids.push_back(fmt::format("{:04x}:{:04x} {}", d->vendor_id, d->product_id, product));
           }
           hid_free_enumeration(list);
@@ -58,7 +60,8 @@ void RegisterDevice(CLI::App& app) {
   }
   {
     auto fw = std::make_shared<std::string>();
-    auto* cmd = grp->add_subcommand("falcon-load", "Load the Falcon's firmware and report each step (to check a rig)");
+    auto* cmd = grp->add_subcommand(
+        "falcon-load", "Load the Falcon's firmware and report each step (to check a rig)");
     cmd->add_option("--firmware", *fw, "Firmware file (yours)")->required();
     cmd->callback([fw] {
       RunGuarded([&] {
@@ -66,7 +69,9 @@ void RegisterDevice(CLI::App& app) {
         auto usb = devices::falcon::OpenLibusb(0);
         const auto r = devices::falcon::LoadFirmware(*usb, bytes);
         std::string trace;
-        for (const auto s : r.trace) trace += fmt::format("{}{}", trace.empty() ? "" : " -> ", devices::falcon::LoadStateName(s));
+        for (const auto s : r.trace)
+          trace +=
+              fmt::format("{}{}", trace.empty() ? "" : " -> ", devices::falcon::LoadStateName(s));
         fmt::print("{} after {} attempt(s): {}\n", r.ok ? "loaded" : "FAILED", r.attempts, trace);
         if (!r.ok) fmt::print("{}\n", r.error);
         return r.ok ? kExitOk : kExitFailure;

@@ -50,9 +50,11 @@ void RegisterExport(CLI::App& app) {
   cmd->callback([o] {
     RunGuarded([&] {
       if (!o->participant.empty() && o->format != "xdf")
-        throw InputError(kCommandLine, 0, "--participant", "only --format xdf selects participants");
+        throw InputError(kCommandLine, 0, "--participant",
+                         "only --format xdf selects participants");
       if (o->no_trajectories && o->format != "csv")
-        throw InputError(kCommandLine, 0, "--no-trajectories", "only --format csv leaves trajectories out");
+        throw InputError(kCommandLine, 0, "--no-trajectories",
+                         "only --format csv leaves trajectories out");
       if (o->format != "xdf" && o->out.ends_with(".xdf"))
         throw InputError(o->out, 0, "--out", "a .xdf file name needs --format xdf");
       // quick_check first: a damaged record is refused, never exported.

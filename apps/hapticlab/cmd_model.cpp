@@ -1,40 +1,39 @@
 // hapticlab model: check, render, energy, import and build material models; the fitting
 // commands live in cmd_model_vibration.cpp, cmd_model_contact.cpp and cmd_model_photometric.cpp.
 
+#include "cmd_model.hpp"
+
 #include <fmt/core.h>
-
-#include <algorithm>
-#include <cstdio>
-#include <regex>
-#include <memory>
-#include <nlohmann/json.hpp>
-
-#include "cli_common.hpp"
-#include "fit_summary_json.hpp"
-#include "commands.hpp"
-#include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
-#include "hapticlab/core/measurement.hpp"
 #include <unistd.h>
-#include "hapticlab/renderer/energy.hpp"
-#include "hapticlab/renderer/material.hpp"
-#include "hapticlab/renderer/penn_import.hpp"
-#include "hapticlab/modeling/contact.hpp"
-#include "hapticlab/modeling/photometric.hpp"
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <limits>
-#include "hapticlab/modeling/vibration.hpp"
-#include "hapticlab/modeling/neural.hpp"
-#include <mutex>
-#include "hapticlab/stats/plot.hpp"
+#include <cstdio>
 #include <filesystem>
-#include "hapticlab/runner/offline.hpp"
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
 
-#include "cmd_model.hpp"
+#include "cli_common.hpp"
+#include "commands.hpp"
+#include "fit_summary_json.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/contact.hpp"
+#include "hapticlab/modeling/neural.hpp"
+#include "hapticlab/modeling/photometric.hpp"
+#include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/energy.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/runner/offline.hpp"
+#include "hapticlab/stats/plot.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -51,19 +50,29 @@ void AddCheck(CLI::App& model) {
   cmd->callback([path, json] {
     RunGuarded([&] {
       const auto m = renderer::LoadMaterial(*path);
-      nlohmann::json j = {{"name", m.name},
-                          {"effects", m.effects},
-                          {"texture", {{"K", m.contact.texture.K}, {"B", m.contact.texture.B}, {"n", m.contact.texture.n}}},
-                          {"friction", {{"kappa_N_per_m", m.friction.kappa_N_per_m}, {"mu_k", m.friction.mu_k},
-                                        {"mu_b_Ns_per_m", m.friction.mu_b_Ns_per_m}}},
-                          {"height_map", {{"width", m.geometry->width()}, {"height", m.geometry->height()},
-                                          {"pitch_m", m.geometry->pitch_m()},
-                                          {"range_m", m.geometry->max_m() - m.geometry->min_m()}}},
-                          {"vibration", {{"cells", m.vibration.cells.size()}, {"order", m.vibration.order()},
-                                         {"sample_rate_hz", m.vibration.sample_rate_hz}}},
-                          {"hybrid_cutoff_hz", m.hybrid_cutoff_hz}};
-      if (*json) fmt::print("{}\n", j.dump(2));
-      else fmt::print("{}: ok\n{}\n", *path, j.dump(2));
+      nlohmann::json j = {
+          {"name", m.name},
+          {"effects", m.effects},
+          {"texture",
+           {{"K", m.contact.texture.K}, {"B", m.contact.texture.B}, {"n", m.contact.texture.n}}},
+          {"friction",
+           {{"kappa_N_per_m", m.friction.kappa_N_per_m},
+            {"mu_k", m.friction.mu_k},
+            {"mu_b_Ns_per_m", m.friction.mu_b_Ns_per_m}}},
+          {"height_map",
+           {{"width", m.geometry->width()},
+            {"height", m.geometry->height()},
+            {"pitch_m", m.geometry->pitch_m()},
+            {"range_m", m.geometry->max_m() - m.geometry->min_m()}}},
+          {"vibration",
+           {{"cells", m.vibration.cells.size()},
+            {"order", m.vibration.order()},
+            {"sample_rate_hz", m.vibration.sample_rate_hz}}},
+          {"hybrid_cutoff_hz", m.hybrid_cutoff_hz}};
+      if (*json)
+        fmt::print("{}\n", j.dump(2));
+      else
+        fmt::print("{}: ok\n{}\n", *path, j.dump(2));
       return kExitOk;
     });
   });
@@ -88,15 +97,20 @@ void AddRender(CLI::App& model) {
   cmd->add_option("--model", o->model, "Material model (.toml)")->required();
   cmd->add_option("--trajectory", o->trajectory, "Trajectory (measurement CSV v1)")->required();
   cmd->add_option("--out", o->out, "Output CSV")->required();
-  cmd->add_option("--vibration-out", o->vib_out, "Also write every vibration sample (CSV t_s,acc_mps2)");
+  cmd->add_option("--vibration-out", o->vib_out,
+                  "Also write every vibration sample (CSV t_s,acc_mps2)");
   cmd->add_option("--algorithm", o->algorithm, "Force algorithm")
-      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))->capture_default_str();
-  cmd->add_option("--vibration-rate", o->vib_rate, "Vibration loop rate [Hz]")->capture_default_str();
+      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--vibration-rate", o->vib_rate, "Vibration loop rate [Hz]")
+      ->capture_default_str();
   cmd->add_option("--max-force", o->max_force, "Device force limit [N]")->capture_default_str();
-  cmd->add_option("--force-source", o->force_source,
-                  "Normal force of the vibration model: auto (the trajectory's when it has forces),\n"
-                  "trajectory (required), model (the rendered normal force)")
-      ->check(CLI::IsMember({"auto", "trajectory", "model"}))->capture_default_str();
+  cmd->add_option(
+         "--force-source", o->force_source,
+         "Normal force of the vibration model: auto (the trajectory's when it has forces),\n"
+         "trajectory (required), model (the rendered normal force)")
+      ->check(CLI::IsMember({"auto", "trajectory", "model"}))
+      ->capture_default_str();
   cmd->add_flag("--no-vibration", o->no_vibration, "Force only");
   cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
   cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
@@ -104,7 +118,8 @@ void AddRender(CLI::App& model) {
     RunGuarded([&] {
       const auto m = renderer::LoadMaterial(o->model);
       const auto traj = ReadMeasurementCsv(o->trajectory, {.kinematics_only = true});
-      if (traj.rows.size() < 2) throw InputError(o->trajectory, 0, "", "needs at least two samples");
+      if (traj.rows.size() < 2)
+        throw InputError(o->trajectory, 0, "", "needs at least two samples");
       renderer::RenderOptions ro;
       ro.algorithm = renderer::ParseForceAlgorithm(o->algorithm);
       ro.vibration = !o->no_vibration;
@@ -113,32 +128,42 @@ void AddRender(CLI::App& model) {
       ro.max_force_N = o->max_force;
       ro.seed = o->seed;
       // The force loop runs at the trajectory's own rate.
-      ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) / (traj.rows.back().t_s - traj.rows.front().t_s);
+      ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) /
+                         (traj.rows.back().t_s - traj.rows.front().t_s);
       ro.stale_after_s = 1e9;  // offline: samples are never stale
       if (o->force_source == "trajectory" && !traj.has_forces)
-        throw InputError(o->trajectory, 0, "fz_N", "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
+        throw InputError(o->trajectory, 0, "fz_N",
+                         "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
       runner::OfflineOptions oo;
       oo.measured_normal_force = o->force_source != "model" && traj.has_forces;
       const auto res = runner::RenderOffline(m, ro, traj, oo);
       FILE* f = std::fopen(o->out.c_str(), "w");
       if (!f) throw std::runtime_error(o->out + ": cannot write");
-      std::fprintf(f, "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,fault,acc_mps2\n");
+      std::fprintf(f,
+                   "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_"
+                   "contact,fault,acc_mps2\n");
       for (const auto& r : res.rows)
-        std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%.9g\n", r.t_s, r.force_N.x(),
-                     r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(), r.command_N.z(),
-                     r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0, r.fault ? 1 : 0, r.acc_mps2);
+        std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%.9g\n", r.t_s,
+                     r.force_N.x(), r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(),
+                     r.command_N.z(), r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0,
+                     r.fault ? 1 : 0, r.acc_mps2);
       if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
       if (!o->vib_out.empty()) {
         FILE* v = std::fopen(o->vib_out.c_str(), "w");
         if (!v) throw std::runtime_error(o->vib_out + ": cannot write");
         std::fprintf(v, "t_s,acc_mps2\n");
         for (std::size_t k = 0; k < res.vibration_mps2.size(); ++k)
-          std::fprintf(v, "%.9g,%.9g\n", traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz, res.vibration_mps2[k]);
+          std::fprintf(v, "%.9g,%.9g\n",
+                       traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz,
+                       res.vibration_mps2[k]);
         if (std::fclose(v) != 0) throw std::runtime_error(o->vib_out + ": write failed");
       }
-      fmt::print(stderr, "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: {}) -> {}\n",
+      fmt::print(stderr,
+                 "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: "
+                 "{}) -> {}\n",
                  res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(),
-                 oo.measured_normal_force ? "the trajectory's fz_N" : "the rendered normal force", o->out);
+                 oo.measured_normal_force ? "the trajectory's fz_N" : "the rendered normal force",
+                 o->out);
       return kExitOk;
     });
   });
@@ -161,10 +186,12 @@ void AddEnergy(CLI::App& model) {
       "a linear texture layer (K = --stiffness, no damping) with friction --mu is used.\n"
       "Positive energy is created by the surface (non-passive).");
   cmd->add_option("--algorithm", o->algorithm, "Force algorithm")
-      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))->capture_default_str();
+      ->check(CLI::IsMember({"wall", "norm", "fric1", "fric2", "none"}))
+      ->capture_default_str();
   cmd->add_option("--sine", o->sine, "AMPLITUDE_M,WAVELENGTH_M of the test texture")->required();
   cmd->add_option("--model", o->model, "Take contact and friction parameters from this model");
-  cmd->add_option("--stiffness", o->stiffness, "Texture stiffness K without --model [N/m]")->capture_default_str();
+  cmd->add_option("--stiffness", o->stiffness, "Texture stiffness K without --model [N/m]")
+      ->capture_default_str();
   cmd->add_option("--mu", o->mu, "Coulomb coefficient without --model")->capture_default_str();
   cmd->add_option("--dx-max", o->dx, "Path B tangential excursion [m]")->capture_default_str();
   cmd->add_option("--dz-max", o->dz, "Path B penetration [m] (default: the amplitude)");
@@ -179,9 +206,11 @@ void AddEnergy(CLI::App& model) {
         a = std::stod(o->sine.substr(0, comma));
         l = std::stod(o->sine.substr(comma + 1));
       } catch (const std::exception&) {
-        throw InputError(kCommandLine, 0, "--sine", "expected AMPLITUDE_M,WAVELENGTH_M, got '" + o->sine + "'");
+        throw InputError(kCommandLine, 0, "--sine",
+                         "expected AMPLITUDE_M,WAVELENGTH_M, got '" + o->sine + "'");
       }
-      if (!(a > 0) || !(l > 0)) throw InputError(kCommandLine, 0, "--sine", "amplitude and wavelength must be > 0");
+      if (!(a > 0) || !(l > 0))
+        throw InputError(kCommandLine, 0, "--sine", "amplitude and wavelength must be > 0");
       renderer::MaterialModel m;
       if (!o->model.empty()) {
         m = renderer::LoadMaterial(o->model);
@@ -193,7 +222,8 @@ void AddEnergy(CLI::App& model) {
       }
       const auto alg = renderer::ParseForceAlgorithm(o->algorithm);
       renderer::EnergyPath path;
-      path.kind = alg == ForceAlgorithm::kNorm ? renderer::EnergyPath::Kind::kA : renderer::EnergyPath::Kind::kB;
+      path.kind = alg == ForceAlgorithm::kNorm ? renderer::EnergyPath::Kind::kA
+                                               : renderer::EnergyPath::Kind::kB;
       path.dx_max_m = o->dx;
       path.dz_max_m = o->dz > 0 ? o->dz : a;
       path.steps = o->steps;
@@ -215,15 +245,17 @@ void AddEnergy(CLI::App& model) {
       if (o->json) {
         fmt::print("{}\n", j.dump(2));
       } else {
-        fmt::print("algorithm {} on path {}: energy {:.6e} J", o->algorithm, j["path"].get<std::string>(), r.energy_J);
+        fmt::print("algorithm {} on path {}: energy {:.6e} J", o->algorithm,
+                   j["path"].get<std::string>(), r.energy_J);
         if (r.has_closed_form && path.kind == renderer::EnergyPath::Kind::kA)
           fmt::print(" (eq. 5.2: {:.6e} J, difference {:.3f} %)", r.closed_form_J,
                      100 * (r.energy_J - r.closed_form_J) / r.closed_form_J);
         fmt::print("\n");
         if (path.kind == renderer::EnergyPath::Kind::kB)
-          fmt::print("normal part {:.3e} J (closed form {:.3e} J), tangential part {:.3e} J;\n"
-                     "eq. (5.3) scale K mu^2 dx dz = {:.3e} J; gain bound = {:.3e} J\n",
-                     r.normal_energy_J, r.closed_form_J, r.tangential_energy_J, r.bound_J, r.gain_bound_J);
+          fmt::print(
+              "normal part {:.3e} J (closed form {:.3e} J), tangential part {:.3e} J;\n"
+              "eq. (5.3) scale K mu^2 dx dz = {:.3e} J; gain bound = {:.3e} J\n",
+              r.normal_energy_J, r.closed_form_J, r.tangential_energy_J, r.bound_J, r.gain_bound_J);
       }
       return kExitOk;
     });
@@ -247,7 +279,8 @@ void AddImportPenn(CLI::App& model) {
   cmd->add_option("--xml", o->xml, "Penn model set XML")->required();
   cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
   cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid cut-off f_c to store [Hz]; 0: no split")
-      ->check(CLI::NonNegativeNumber)->capture_default_str();
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->callback([o] {
     RunGuarded([&] {
       auto r = renderer::ImportPennXml(o->xml);
@@ -255,17 +288,20 @@ void AddImportPenn(CLI::App& model) {
       r.model.effects = {"coulomb", "vibration-speed", "vibration-force"};
       FILE* f = std::fopen(o->out.c_str(), "w");
       if (!f) throw std::runtime_error(o->out + ": cannot write");
-      const std::string text = "# Imported from " + o->xml + " (Penn Haptic Texture Toolkit format).\n" +
+      const std::string text = "# Imported from " + o->xml +
+                               " (Penn Haptic Texture Toolkit format).\n" +
                                renderer::MaterialToToml(r.model);
       std::fputs(text.c_str(), f);
       if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
       const auto& b = r.model.vibration;
-      fmt::print("{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e}; {} -> {}\n", o->xml,
-                 b.cells.size(), r.arma ? "ARMA" : "AR", b.order(), r.model.friction.mu_k,
-                 r.max_lsf_reconstruction_error,
-                 r.has_range ? fmt::format("range {:g} mm/s x {:g} N", b.max_speed_mps * 1e3, b.max_force_N)
-                             : std::string("no maxSpeed/maxForce: no saturation"),
-                 o->out);
+      fmt::print(
+          "{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e}; {} -> {}\n",
+          o->xml, b.cells.size(), r.arma ? "ARMA" : "AR", b.order(), r.model.friction.mu_k,
+          r.max_lsf_reconstruction_error,
+          r.has_range
+              ? fmt::format("range {:g} mm/s x {:g} N", b.max_speed_mps * 1e3, b.max_force_N)
+              : std::string("no maxSpeed/maxForce: no saturation"),
+          o->out);
       return kExitOk;
     });
   });
@@ -278,34 +314,46 @@ void AddBuild(CLI::App& model) {
   };
   auto o = std::make_shared<O>();
   auto* cmd = model.add_subcommand(
-      "build", "Assemble a complete material model from a height map (its .f32.toml from `model photometric`),\n"
-               "a contact fit (`model fit-contact`) and a vibration bank (`model fit-vibration`). Every\n"
-               "fitted effect and parameter of the parts is kept (the contact fit's effects, e.g.\n"
-               "hc-exponent, and the bank's vibration-speed/vibration-force); the bank is written inline.");
+      "build",
+      "Assemble a complete material model from a height map (its .f32.toml from `model "
+      "photometric`),\n"
+      "a contact fit (`model fit-contact`) and a vibration bank (`model fit-vibration`). Every\n"
+      "fitted effect and parameter of the parts is kept (the contact fit's effects, e.g.\n"
+      "hc-exponent, and the bank's vibration-speed/vibration-force); the bank is written inline.");
   cmd->add_option("--name", o->name, "Material name")->required();
-  cmd->add_option("--height", o->height, "Geometry TOML written beside the height map (HEIGHT.f32.toml)")->required();
-  cmd->add_option("--contact", o->contact, "Contact fit from fit-contact (a material TOML, or [contact] and [friction])")
+  cmd->add_option("--height", o->height,
+                  "Geometry TOML written beside the height map (HEIGHT.f32.toml)")
+      ->required();
+  cmd->add_option("--contact", o->contact,
+                  "Contact fit from fit-contact (a material TOML, or [contact] and [friction])")
       ->required();
   cmd->add_option("--vibration", o->vibration, "BANK.toml from fit-vibration")->required();
-  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid filter cut-off f_c [Hz] (see `model cutoff`)")->capture_default_str();
+  cmd->add_option("--cutoff-hz", o->cutoff, "Hybrid filter cut-off f_c [Hz] (see `model cutoff`)")
+      ->capture_default_str();
   cmd->add_option("-o,--out", o->out, "Material model to write (.toml)")->required();
   cmd->callback([o] {
     RunGuarded([&] {
       namespace fs = std::filesystem;
       const auto outdir = fs::absolute(o->out).parent_path();
-      auto rel = [&](const std::string& p) { return fs::relative(fs::absolute(p), outdir).string(); };
+      auto rel = [&](const std::string& p) {
+        return fs::relative(fs::absolute(p), outdir).string();
+      };
       auto quoted = [](const std::string& p) { return nlohmann::json(p).dump(); };
       // Each part is read through the renderer's material parser (its own file named in errors).
       // Parts without the tables a material requires get neutral ones (not used).
       auto parse = [](std::string text, const std::string& path, bool contact_part) {
         static const std::regex kName(R"((^|\n)[ \t]*name[ \t]*=)");
-        if (!contact_part) text = "[contact]\ntexture_K = 1.0\n\n[friction]\nkappa_N_per_m = 1.0\nmu_k = 0.0\n\n" + text;
+        if (!contact_part)
+          text = "[contact]\ntexture_K = 1.0\n\n[friction]\nkappa_N_per_m = 1.0\nmu_k = 0.0\n\n" +
+                 text;
         if (!std::regex_search(text, kName)) text = "name = \"part\"\n" + text;
         return renderer::ParseMaterial(text, path);
       };
       renderer::MaterialModel mm = parse(ReadTextFile(o->contact, "contact fit"), o->contact, true);
       const auto g = parse(ReadTextFile(o->height, "geometry table"), o->height, false);
-      const auto v = parse("[vibration]\nfile = " + quoted(fs::absolute(o->vibration).string()) + "\n", o->vibration, false);
+      const auto v =
+          parse("[vibration]\nfile = " + quoted(fs::absolute(o->vibration).string()) + "\n",
+                o->vibration, false);
       mm.name = o->name;
       mm.source_path.clear();
       mm.geometry = g.geometry;
@@ -320,13 +368,16 @@ void AddBuild(CLI::App& model) {
       }
       if (!mm.vibration.empty())
         for (const char* e : {"vibration-speed", "vibration-force"})
-          if (std::find(mm.effects.begin(), mm.effects.end(), e) == mm.effects.end()) mm.effects.push_back(e);
+          if (std::find(mm.effects.begin(), mm.effects.end(), e) == mm.effects.end())
+            mm.effects.push_back(e);
       // The geometry by reference to its .f32, relative to the model.
-      const auto f32 = (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();
+      const auto f32 =
+          (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();
       WriteModelText(o->out, renderer::MaterialToToml(mm, rel(f32)));
       const auto m = renderer::LoadMaterial(o->out);  // validates the assembled model
-      fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz; effects: {})\n", o->out, m.name, m.geometry->width(),
-                 m.geometry->height(), m.vibration.cells.size(), m.hybrid_cutoff_hz, fmt::join(m.effects, ", "));
+      fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz; effects: {})\n", o->out,
+                 m.name, m.geometry->width(), m.geometry->height(), m.vibration.cells.size(),
+                 m.hybrid_cutoff_hz, fmt::join(m.effects, ", "));
       return kExitOk;
     });
   });
@@ -335,8 +386,9 @@ void AddBuild(CLI::App& model) {
 
 void RegisterModel(CLI::App& app) {
   auto* model = app.add_subcommand(
-      "model", "Material models: check, render offline, stability energy, import Penn XML,\n"
-               "fit and cross-validate vibration banks, find the stationarity cut-off.");
+      "model",
+      "Material models: check, render offline, stability energy, import Penn XML,\n"
+      "fit and cross-validate vibration banks, find the stationarity cut-off.");
   model->require_subcommand(1);
   AddCheck(*model);
   AddRender(*model);

@@ -2,7 +2,6 @@
 // The `model` command group's subcommands, one file per family (private to the CLI).
 
 #include <CLI/CLI.hpp>
-
 #include <string>
 
 namespace hapticlab::cli {

@@ -1,39 +1,37 @@
 // hapticlab model fit-contact: contact and friction parameters from measurements.
 
 #include <fmt/core.h>
-
-#include <algorithm>
-#include <cstdio>
-#include <regex>
-#include <memory>
-#include <nlohmann/json.hpp>
-
-#include "cli_common.hpp"
-#include "fit_summary_json.hpp"
-#include "commands.hpp"
-#include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
-#include "hapticlab/core/measurement.hpp"
 #include <unistd.h>
-#include "hapticlab/renderer/energy.hpp"
-#include "hapticlab/renderer/material.hpp"
-#include "hapticlab/renderer/penn_import.hpp"
-#include "hapticlab/modeling/contact.hpp"
-#include "hapticlab/modeling/photometric.hpp"
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <limits>
-#include "hapticlab/modeling/vibration.hpp"
-#include "hapticlab/modeling/neural.hpp"
-#include <mutex>
-#include "hapticlab/stats/plot.hpp"
+#include <cstdio>
 #include <filesystem>
-#include "hapticlab/runner/offline.hpp"
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
 
+#include "cli_common.hpp"
 #include "cmd_model.hpp"
+#include "commands.hpp"
+#include "fit_summary_json.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/contact.hpp"
+#include "hapticlab/modeling/neural.hpp"
+#include "hapticlab/modeling/photometric.hpp"
+#include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/energy.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/runner/offline.hpp"
+#include "hapticlab/stats/plot.hpp"
 
 namespace hapticlab::cli {
 
@@ -61,11 +59,16 @@ void AddFitContact(CLI::App& model) {
       "Uncertainties: cluster jackknife over 3 s clusters of blocks, 95 % intervals. Prints each\n"
       "solve's termination, iterations, cost and parameters at bounds; exits 1 when a fit is not\n"
       "usable. Writes a material model (effects, [contact], [friction]) for `model build`.");
-  cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")->required();
+  cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")
+      ->required();
   cmd->add_option("--pokes", o->pokes, "Pokes in a separate measurement CSV v1");
-  cmd->add_option("-o,--out", o->out, "Material model TOML to write ([contact], [friction], effects)")->required();
+  cmd->add_option("-o,--out", o->out,
+                  "Material model TOML to write ([contact], [friction], effects)")
+      ->required();
   cmd->add_flag("--json", o->json,
-                "Print {\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b},\"uncertainty\":{...},\"fit\":{friction,"
+                "Print "
+                "{\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b},\"uncertainty\":{...},"
+                "\"fit\":{friction,"
                 "normal_force},\"usable\"}");
   cmd->callback([o] {
     RunGuarded([&] {
@@ -82,54 +85,85 @@ void AddFitContact(CLI::App& model) {
       mm.contact.layer_thickness_m = 0.005;  // no base felt: thicker than any measured penetration
       mm.friction = {f.kappa_N_per_m.value, f.mu_k.value, f.mu_b_Ns_per_m.value};
       auto ci = [](const char* k, const modeling::Estimate& e) {
-        return fmt::format("#   {:14s} {:.6g} +- {:.3g} (95 %: {:.6g} .. {:.6g})\n", k, e.value, e.sd, e.lo95, e.hi95);
+        return fmt::format("#   {:14s} {:.6g} +- {:.3g} (95 %: {:.6g} .. {:.6g})\n", k, e.value,
+                           e.sd, e.lo95, e.hi95);
       };
-      std::string text = fmt::format("# Fitted by hapticlab model fit-contact from {} (SI units).\n# Uncertainty: {}.\n",
-                                     o->measurement, f.uncertainty_method);
-      text += ci("texture_K", f.K) + ci("texture_B", f.B) + ci("texture_n", f.n) + ci("kappa_N_per_m", f.kappa_N_per_m) +
-              ci("mu_k", f.mu_k) + ci("mu_b_Ns_per_m", f.mu_b_Ns_per_m);
+      std::string text = fmt::format(
+          "# Fitted by hapticlab model fit-contact from {} (SI units).\n# Uncertainty: {}.\n",
+          o->measurement, f.uncertainty_method);
+      text += ci("texture_K", f.K) + ci("texture_B", f.B) + ci("texture_n", f.n) +
+              ci("kappa_N_per_m", f.kappa_N_per_m) + ci("mu_k", f.mu_k) +
+              ci("mu_b_Ns_per_m", f.mu_b_Ns_per_m);
       text += renderer::MaterialToToml(mm);
       WriteModelText(o->out, text);
       renderer::LoadMaterial(o->out);  // what was written is a loadable material
       if (o->json) {
         auto est = [](const modeling::Estimate& e) {
-          return nlohmann::json{{"value", e.value}, {"sd", e.sd}, {"lo95", e.lo95}, {"hi95", e.hi95}};
+          return nlohmann::json{
+              {"value", e.value}, {"sd", e.sd}, {"lo95", e.lo95}, {"hi95", e.hi95}};
         };
-        fmt::print("{}\n", nlohmann::json{
-                               {"hunt_crossley", {{"K", f.K.value}, {"B", f.B.value}, {"n", f.n.value},
-                                                  {"K1mm_N", f.K1mm_N.value}, {"B1mm", f.B1mm_Ns_per_m.value}}},
-                               {"dahl", {{"kappa", f.kappa_N_per_m.value}, {"mu_k", f.mu_k.value}, {"mu_b", f.mu_b_Ns_per_m.value}}},
-                               {"uncertainty", {{"K", est(f.K)}, {"B", est(f.B)}, {"n", est(f.n)}, {"K1mm_N", est(f.K1mm_N)},
-                                                {"B1mm", est(f.B1mm_Ns_per_m)}, {"kappa", est(f.kappa_N_per_m)},
-                                                {"mu_k", est(f.mu_k)}, {"mu_b", est(f.mu_b_Ns_per_m)}}},
-                               {"uncertainty_method", f.uncertainty_method},
-                               {"residual_rms_N", {{"hunt_crossley", f.normal_rms_N}, {"dahl", f.friction_rms_N}}},
-                               {"samples", {{"strokes", f.stroke_samples}, {"pokes", f.poke_samples}}},
-                               {"poke_source", f.poke_source},
-                               {"algorithm1", {{"passes", f.algorithm1.passes}, {"converged", f.algorithm1.converged},
-                                               {"kappa", f.algorithm1.kappa_N_per_m}, {"mu_k", f.algorithm1.mu_k},
-                                               {"mu_b", f.algorithm1.mu_b_Ns_per_m}}},
-                               {"fit", {{"friction", FitSummaryJson(f.friction_summary)},
-                                        {"normal_force", FitSummaryJson(f.normal_summary)}}},
-                               {"usable", f.IsUsable()},
-                               {"out", o->out}}
-                               .dump(2));
+        fmt::print(
+            "{}\n",
+            nlohmann::json{
+                {"hunt_crossley",
+                 {{"K", f.K.value},
+                  {"B", f.B.value},
+                  {"n", f.n.value},
+                  {"K1mm_N", f.K1mm_N.value},
+                  {"B1mm", f.B1mm_Ns_per_m.value}}},
+                {"dahl",
+                 {{"kappa", f.kappa_N_per_m.value},
+                  {"mu_k", f.mu_k.value},
+                  {"mu_b", f.mu_b_Ns_per_m.value}}},
+                {"uncertainty",
+                 {{"K", est(f.K)},
+                  {"B", est(f.B)},
+                  {"n", est(f.n)},
+                  {"K1mm_N", est(f.K1mm_N)},
+                  {"B1mm", est(f.B1mm_Ns_per_m)},
+                  {"kappa", est(f.kappa_N_per_m)},
+                  {"mu_k", est(f.mu_k)},
+                  {"mu_b", est(f.mu_b_Ns_per_m)}}},
+                {"uncertainty_method", f.uncertainty_method},
+                {"residual_rms_N", {{"hunt_crossley", f.normal_rms_N}, {"dahl", f.friction_rms_N}}},
+                {"samples", {{"strokes", f.stroke_samples}, {"pokes", f.poke_samples}}},
+                {"poke_source", f.poke_source},
+                {"algorithm1",
+                 {{"passes", f.algorithm1.passes},
+                  {"converged", f.algorithm1.converged},
+                  {"kappa", f.algorithm1.kappa_N_per_m},
+                  {"mu_k", f.algorithm1.mu_k},
+                  {"mu_b", f.algorithm1.mu_b_Ns_per_m}}},
+                {"fit",
+                 {{"friction", FitSummaryJson(f.friction_summary)},
+                  {"normal_force", FitSummaryJson(f.normal_summary)}}},
+                {"usable", f.IsUsable()},
+                {"out", o->out}}
+                .dump(2));
       } else {
         auto pm = [](const modeling::Estimate& e) {
           return fmt::format("{:.5g} +- {:.2g} [{:.5g}, {:.5g}]", e.value, e.sd, e.lo95, e.hi95);
         };
-        fmt::print("Hunt-Crossley ({} samples <= 2 N from {}): K = {} N/m^n, B = {} N s/m^(n+1), n = {}; rms {:.4f} N\n",
-                   f.poke_samples, f.poke_source, pm(f.K), pm(f.B), pm(f.n), f.normal_rms_N);
-        fmt::print("Dahl ({} samples; Algorithm 1: {} passes{}, kappa {:.4g}, mu_k {:.4f}, mu_b {:.4f}): kappa = {} N/m, "
-                   "mu_k = {}, mu_b = {} N s/m; rms {:.4f} N\n",
-                   f.stroke_samples, f.algorithm1.passes, f.algorithm1.converged ? "" : ", not converged",
-                   f.algorithm1.kappa_N_per_m, f.algorithm1.mu_k, f.algorithm1.mu_b_Ns_per_m, pm(f.kappa_N_per_m),
-                   pm(f.mu_k), pm(f.mu_b_Ns_per_m), f.friction_rms_N);
-        fmt::print("{}\n{}\n", FitSummaryLine(f.friction_summary), FitSummaryLine(f.normal_summary));
+        fmt::print(
+            "Hunt-Crossley ({} samples <= 2 N from {}): K = {} N/m^n, B = {} N s/m^(n+1), n = {}; "
+            "rms {:.4f} N\n",
+            f.poke_samples, f.poke_source, pm(f.K), pm(f.B), pm(f.n), f.normal_rms_N);
+        fmt::print(
+            "Dahl ({} samples; Algorithm 1: {} passes{}, kappa {:.4g}, mu_k {:.4f}, mu_b {:.4f}): "
+            "kappa = {} N/m, "
+            "mu_k = {}, mu_b = {} N s/m; rms {:.4f} N\n",
+            f.stroke_samples, f.algorithm1.passes, f.algorithm1.converged ? "" : ", not converged",
+            f.algorithm1.kappa_N_per_m, f.algorithm1.mu_k, f.algorithm1.mu_b_Ns_per_m,
+            pm(f.kappa_N_per_m), pm(f.mu_k), pm(f.mu_b_Ns_per_m), f.friction_rms_N);
+        fmt::print("{}\n{}\n", FitSummaryLine(f.friction_summary),
+                   FitSummaryLine(f.normal_summary));
         fmt::print("uncertainty: {}\nwrote {}\n", f.uncertainty_method, o->out);
       }
       if (!f.IsUsable()) {
-        fmt::print(stderr, "fit-contact: a fit is not usable (see the fit lines); {} was written for inspection\n", o->out);
+        fmt::print(
+            stderr,
+            "fit-contact: a fit is not usable (see the fit lines); {} was written for inspection\n",
+            o->out);
         return kExitFailure;
       }
       return kExitOk;

@@ -1,39 +1,37 @@
 // hapticlab model fit-vibration, fit-neural, cv-vibration, cutoff: vibration banks.
 
 #include <fmt/core.h>
-
-#include <algorithm>
-#include <cstdio>
-#include <regex>
-#include <memory>
-#include <nlohmann/json.hpp>
-
-#include "cli_common.hpp"
-#include "fit_summary_json.hpp"
-#include "commands.hpp"
-#include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
-#include "hapticlab/core/measurement.hpp"
 #include <unistd.h>
-#include "hapticlab/renderer/energy.hpp"
-#include "hapticlab/renderer/material.hpp"
-#include "hapticlab/renderer/penn_import.hpp"
-#include "hapticlab/modeling/contact.hpp"
-#include "hapticlab/modeling/photometric.hpp"
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/core.hpp>
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
-#include <limits>
-#include "hapticlab/modeling/vibration.hpp"
-#include "hapticlab/modeling/neural.hpp"
-#include <mutex>
-#include "hapticlab/stats/plot.hpp"
+#include <cstdio>
 #include <filesystem>
-#include "hapticlab/runner/offline.hpp"
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <regex>
 
+#include "cli_common.hpp"
 #include "cmd_model.hpp"
+#include "commands.hpp"
+#include "fit_summary_json.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/contact.hpp"
+#include "hapticlab/modeling/neural.hpp"
+#include "hapticlab/modeling/photometric.hpp"
+#include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/energy.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/penn_import.hpp"
+#include "hapticlab/runner/offline.hpp"
+#include "hapticlab/stats/plot.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -61,25 +59,33 @@ struct VibArgs {
 };
 
 void AddVibOptions(CLI::App* cmd, VibArgs& a) {
-  cmd->add_option("--recordings", a.recordings,
-                  "Folder of measurement CSV v1 files with acc_mps2, one per (speed, force) condition")
+  cmd->add_option(
+         "--recordings", a.recordings,
+         "Folder of measurement CSV v1 files with acc_mps2, one per (speed, force) condition")
       ->required();
-  cmd->add_option("--rate", a.rate, "Model sample rate [Hz] (2000 in the thesis)")->capture_default_str();
-  cmd->add_option("--order", a.order, "AR order: a number, or auto (information criterion)")->capture_default_str();
-  cmd->add_option("--criterion", a.criterion, "Order criterion")->check(CLI::IsMember({"aic", "bic"}))->capture_default_str();
-  cmd->add_option("--band-low", a.band_lo, "High-pass of the band limit [Hz]")->capture_default_str();
+  cmd->add_option("--rate", a.rate, "Model sample rate [Hz] (2000 in the thesis)")
+      ->capture_default_str();
+  cmd->add_option("--order", a.order, "AR order: a number, or auto (information criterion)")
+      ->capture_default_str();
+  cmd->add_option("--criterion", a.criterion, "Order criterion")
+      ->check(CLI::IsMember({"aic", "bic"}))
+      ->capture_default_str();
+  cmd->add_option("--band-low", a.band_lo, "High-pass of the band limit [Hz]")
+      ->capture_default_str();
 }
 
 modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
   modeling::VibrationFitOptions o;
   o.model_rate_hz = a.rate;
   o.band_lo_hz = a.band_lo;
-  o.criterion = a.criterion == "bic" ? modeling::OrderCriterion::kBic : modeling::OrderCriterion::kAic;
+  o.criterion =
+      a.criterion == "bic" ? modeling::OrderCriterion::kBic : modeling::OrderCriterion::kAic;
   if (a.order != "auto") {
     try {
       o.order = std::stoi(a.order);
     } catch (const std::exception&) {
-      throw InputError(kCommandLine, 0, "--order", "expected a number or auto, got '" + a.order + "'");
+      throw InputError(kCommandLine, 0, "--order",
+                       "expected a number or auto, got '" + a.order + "'");
     }
     if (o.order < 1 || o.order > 64) throw InputError(kCommandLine, 0, "--order", "expected 1..64");
   }
@@ -108,11 +114,14 @@ void AddFitVibration(CLI::App& model) {
       text = text.substr(text.find("[vibration]"));  // the bank alone
       FILE* f = std::fopen(a->out.c_str(), "w");
       if (!f) throw std::runtime_error(a->out + ": cannot write");
-      std::fputs(("# AR bank fitted by hapticlab model fit-vibration from " + a->recordings + "\n").c_str(), f);
+      std::fputs(("# AR bank fitted by hapticlab model fit-vibration from " + a->recordings + "\n")
+                     .c_str(),
+                 f);
       std::fputs(text.c_str(), f);
       if (std::fclose(f) != 0) throw std::runtime_error(a->out + ": write failed");
-      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(), bank.cells.size(),
-                 bank.grid_speeds_mps.empty() ? "triangulated" : "grid", bank.order(), bank.sample_rate_hz, a->out);
+      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(),
+                 bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
+                 bank.order(), bank.sample_rate_hz, a->out);
       return kExitOk;
     });
   });
@@ -130,28 +139,37 @@ void AddFitNeural(CLI::App& model) {
   auto o = std::make_shared<O>();
   auto* cmd = model.add_subcommand(
       "fit-neural",
-      "Train the neural texture model (dissertation ch. III.3, Fig. 3.3) from recordings on a full\n"
+      "Train the neural texture model (dissertation ch. III.3, Fig. 3.3) from recordings on a "
+      "full\n"
       "speed x force grid: four bands (20-100, 100-200, 200-500, 500-1000 Hz; decimation 8, 4,\n"
       "1, 1), an MLP per band with 50 inputs (Γ_U: one per band with v and f as inputs, hidden\n"
       "30-25-15-5; Γ_D: one per band and grid cell, 30-25-15-5 for band 1 and 30-15-5 for the\n"
       "others), Adam with mini-batches and early stopping. Writes a neural model file; reference\n"
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");
-  cmd->add_option("--recordings", o->a.recordings, "Folder of measurement CSV v1 files with acc_mps2, one per condition")
+  cmd->add_option("--recordings", o->a.recordings,
+                  "Folder of measurement CSV v1 files with acc_mps2, one per condition")
       ->required();
   cmd->add_option("--topology", o->topology, "unified (Γ_U) or decomposed (Γ_D)")
       ->check(CLI::IsMember({"unified", "decomposed"}))
       ->capture_default_str();
   cmd->add_option("-o,--out", o->a.out, "Neural model file to write (.toml)")->required();
   cmd->add_option("--rate", o->a.rate, "Model sample rate [Hz]")->capture_default_str();
-  cmd->add_option("--epochs", o->epochs, "Maximum training epochs per network")->capture_default_str()->check(CLI::Range(1, 10000));
-  cmd->add_option("--input-noise", o->input_noise, "Noise on training histories (units of the band RMS)")->capture_default_str();
-  cmd->add_option("--seed", o->seed, "Initialisation, shuffling and noise seed")->capture_default_str();
-  cmd->add_option("--threads", o->threads, "Networks trained in parallel (0: all cores)")->capture_default_str();
+  cmd->add_option("--epochs", o->epochs, "Maximum training epochs per network")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
+  cmd->add_option("--input-noise", o->input_noise,
+                  "Noise on training histories (units of the band RMS)")
+      ->capture_default_str();
+  cmd->add_option("--seed", o->seed, "Initialisation, shuffling and noise seed")
+      ->capture_default_str();
+  cmd->add_option("--threads", o->threads, "Networks trained in parallel (0: all cores)")
+      ->capture_default_str();
   cmd->callback([o] {
     RunGuarded([&] {
       const auto recs = modeling::LoadRecordings(o->a.recordings);
       modeling::NeuralFitOptions no;
-      no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified : renderer::NeuralTopology::kDecomposed;
+      no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified
+                                             : renderer::NeuralTopology::kDecomposed;
       no.preprocess = VibOptions(o->a);
       no.train.max_epochs = o->epochs;
       no.train.seed = o->seed;
@@ -164,8 +182,8 @@ void AddFitNeural(CLI::App& model) {
       };
       const auto m = modeling::FitNeural(recs, no);
       renderer::SaveNeuralModel(m, o->a.out);
-      fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}\n", recs.size(), m.speeds_mps.size(),
-                 m.forces_N.size(), o->topology, m.bands.size(), o->a.out);
+      fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}\n", recs.size(),
+                 m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(), o->a.out);
       return kExitOk;
     });
   });
@@ -186,60 +204,84 @@ void AddCvVibration(CLI::App& model) {
       "E_s (eq. 3.1) of the renderer's interpolated synthesis at every recorded condition;\n"
       "--plots draws measured vs synthesized spectra like Figs. 3.5/3.6.");
   AddVibOptions(cmd, *a);
-  cmd->add_option("--train-speeds", *ts, "Training speeds [m/s], comma-separated")->capture_default_str();
-  cmd->add_option("--train-forces", *tf, "Training forces [N], comma-separated")->capture_default_str();
+  cmd->add_option("--train-speeds", *ts, "Training speeds [m/s], comma-separated")
+      ->capture_default_str();
+  cmd->add_option("--train-forces", *tf, "Training forces [N], comma-separated")
+      ->capture_default_str();
   cmd->add_option("--seed", *seed, "Synthesis seed")->capture_default_str();
-  cmd->add_option("--plots", *plots, "Write measured vs synthesized spectra per condition here (SVG and PNG)");
-  cmd->add_flag("--json", *json_out, "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
-  cmd->add_option("--model-kind", *kind,
-                  "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
-                  "Fig. 3.7: run all three on the same recordings for one E_s table)")
+  cmd->add_option("--plots", *plots,
+                  "Write measured vs synthesized spectra per condition here (SVG and PNG)");
+  cmd->add_flag("--json", *json_out,
+                "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
+  cmd->add_option(
+         "--model-kind", *kind,
+         "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
+         "Fig. 3.7: run all three on the same recordings for one E_s table)")
       ->check(CLI::IsMember({"lpc", "neural-unified", "neural-decomposed"}))
       ->capture_default_str();
-  cmd->add_option("--epochs", *epochs, "Neural models: maximum training epochs")->capture_default_str()->check(CLI::Range(1, 10000));
+  cmd->add_option("--epochs", *epochs, "Neural models: maximum training epochs")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 10000));
   cmd->callback([=] {
     RunGuarded([&] {
       const auto recs = modeling::LoadRecordings(a->recordings);
       modeling::CvResult cv;
       if (*kind == "lpc") {
-        cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"), VibOptions(*a), *seed);
+        cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"),
+                                     ParseList(*tf, "--train-forces"), VibOptions(*a), *seed);
       } else {
         modeling::NeuralFitOptions no;
-        no.topology = *kind == "neural-unified" ? renderer::NeuralTopology::kUnified : renderer::NeuralTopology::kDecomposed;
+        no.topology = *kind == "neural-unified" ? renderer::NeuralTopology::kUnified
+                                                : renderer::NeuralTopology::kDecomposed;
         no.preprocess = VibOptions(*a);
         no.train.max_epochs = *epochs;
         no.train.seed = *seed;
-        cv = modeling::CrossValidateNeural(recs, ParseList(*ts, "--train-speeds"), ParseList(*tf, "--train-forces"), no, *seed);
+        cv = modeling::CrossValidateNeural(recs, ParseList(*ts, "--train-speeds"),
+                                           ParseList(*tf, "--train-forces"), no, *seed);
       }
       if (!plots->empty()) {
         std::filesystem::create_directories(*plots);
         for (const auto& r : cv.rows) {
           stats::LinePlot lp;
-          lp.title = fmt::format("{:.0f} mm/s, {:.2f} N ({}), E_s = {:.3f}", r.speed_mps * 1e3, r.force_N,
-                                 r.train ? "training" : "held out", r.es);
+          lp.title = fmt::format("{:.0f} mm/s, {:.2f} N ({}), E_s = {:.3f}", r.speed_mps * 1e3,
+                                 r.force_N, r.train ? "training" : "held out", r.es);
           lp.x_label = "frequency [Hz]";
           lp.y_label = "|A(f)|";
           lp.log_y = true;
           for (std::size_t k = 0; k < r.measured_spectrum.size(); ++k)
-            lp.x.push_back(static_cast<double>(k) * VibOptions(*a).model_rate_hz / (2.0 * static_cast<double>(r.measured_spectrum.size() - 1)));
+            lp.x.push_back(static_cast<double>(k) * VibOptions(*a).model_rate_hz /
+                           (2.0 * static_cast<double>(r.measured_spectrum.size() - 1)));
           lp.series = {{"measured", r.measured_spectrum}, {"synthesized", r.synthesized_spectrum}};
-          stats::DrawLinePlot(lp, (std::filesystem::path(*plots) / fmt::format("spectrum_v{:.0f}_f{:.0f}", r.speed_mps * 1e3, r.force_N * 100)).string());
+          stats::DrawLinePlot(
+              lp, (std::filesystem::path(*plots) /
+                   fmt::format("spectrum_v{:.0f}_f{:.0f}", r.speed_mps * 1e3, r.force_N * 100))
+                      .string());
         }
       }
       if (*json_out) {
         nlohmann::json rows = nlohmann::json::array();
         for (const auto& r : cv.rows)
-          rows.push_back({{"speed_mps", r.speed_mps}, {"force_N", r.force_N}, {"split", r.train ? "train" : "test"}, {"es", r.es}});
-        fmt::print("{}\n", nlohmann::json{{"model_kind", *kind}, {"conditions", rows}, {"mean_es_train", cv.mean_es_train},
-                                          {"mean_es_test", cv.mean_es_test}, {"order", cv.order}}.dump(2));
+          rows.push_back({{"speed_mps", r.speed_mps},
+                          {"force_N", r.force_N},
+                          {"split", r.train ? "train" : "test"},
+                          {"es", r.es}});
+        fmt::print("{}\n", nlohmann::json{{"model_kind", *kind},
+                                          {"conditions", rows},
+                                          {"mean_es_train", cv.mean_es_train},
+                                          {"mean_es_test", cv.mean_es_test},
+                                          {"order", cv.order}}
+                               .dump(2));
         return kExitOk;
       }
       fmt::print("{:>10} {:>9} {:>6} {:>7}\n", "speed m/s", "force N", "split", "E_s");
       for (const auto& r : cv.rows)
-        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N, r.train ? "train" : "test", r.es);
-      const bool any_test = std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
+        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N,
+                   r.train ? "train" : "test", r.es);
+      const bool any_test =
+          std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
       fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}\n", *kind, cv.mean_es_train,
-                 any_test ? fmt::format("{:.3f}", cv.mean_es_test) : std::string("n/a (no held-out conditions)"),
+                 any_test ? fmt::format("{:.3f}", cv.mean_es_test)
+                          : std::string("n/a (no held-out conditions)"),
                  *kind == "lpc" ? fmt::format(" (AR order {})", cv.order) : std::string());
       return kExitOk;
     });
@@ -248,7 +290,8 @@ void AddCvVibration(CLI::App& model) {
 
 void AddCutoff(CLI::App& model) {
   auto file = std::make_shared<std::string>();
-  auto lo = std::make_shared<double>(50), hi = std::make_shared<double>(150), step = std::make_shared<double>(10);
+  auto lo = std::make_shared<double>(50), hi = std::make_shared<double>(150),
+       step = std::make_shared<double>(10);
   auto json_out = std::make_shared<bool>(false);
   auto* cmd = model.add_subcommand(
       "cutoff",
@@ -267,13 +310,19 @@ void AddCutoff(CLI::App& model) {
       if (*json_out) {
         nlohmann::json tried = nlohmann::json::array();
         for (const auto& [fc, adf] : c.tried)
-          tried.push_back({{"cutoff_hz", fc}, {"adf", adf.statistic}, {"critical_5pct", adf.critical_5pct},
-                           {"lags", adf.lags}, {"stationary", adf.rejects_unit_root}});
-        fmt::print("{}\n", nlohmann::json{{"found", c.found}, {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz) : nlohmann::json()},
-                                          {"tried", tried}}.dump(2));
+          tried.push_back({{"cutoff_hz", fc},
+                           {"adf", adf.statistic},
+                           {"critical_5pct", adf.critical_5pct},
+                           {"lags", adf.lags},
+                           {"stationary", adf.rejects_unit_root}});
+        fmt::print("{}\n", nlohmann::json{{"found", c.found},
+                                          {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz)
+                                                                : nlohmann::json()},
+                                          {"tried", tried}}
+                               .dump(2));
       } else if (c.found) {
-        fmt::print("f_c = {:.1f} Hz (ADF {:.2f} < {:.2f} at 5 %)\n", c.cutoff_hz, c.tried.back().second.statistic,
-                   c.tried.back().second.critical_5pct);
+        fmt::print("f_c = {:.1f} Hz (ADF {:.2f} < {:.2f} at 5 %)\n", c.cutoff_hz,
+                   c.tried.back().second.statistic, c.tried.back().second.critical_5pct);
       } else {
         fmt::print("no cut-off in {:.0f}-{:.0f} Hz makes the recording stationary\n", *lo, *hi);
       }

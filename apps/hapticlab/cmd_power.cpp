@@ -42,11 +42,15 @@ std::vector<int> ParseCounts(const std::string& s) {
     } catch (const std::exception&) {
       n = 0;
     }
-    if (n < 2 || n > 10000) throw InputError(kCommandLine, 0, "--participants", "expected counts 2..10000 such as 8,12,16, got '" + part + "'");
-    if (!out.empty() && n <= out.back()) throw InputError(kCommandLine, 0, "--participants", "expected increasing counts");
+    if (n < 2 || n > 10000)
+      throw InputError(kCommandLine, 0, "--participants",
+                       "expected counts 2..10000 such as 8,12,16, got '" + part + "'");
+    if (!out.empty() && n <= out.back())
+      throw InputError(kCommandLine, 0, "--participants", "expected increasing counts");
     out.push_back(n);
   }
-  if (out.empty()) throw InputError(kCommandLine, 0, "--participants", "expected at least one count");
+  if (out.empty())
+    throw InputError(kCommandLine, 0, "--participants", "expected at least one count");
   return out;
 }
 
@@ -59,7 +63,8 @@ void ParseShard(const std::string& s, int* i, int* n) {
   } catch (const std::exception&) {
     throw InputError(kCommandLine, 0, "--shard", "expected i/N, e.g. 0/8, got '" + s + "'");
   }
-  if (*n < 1 || *i < 0 || *i >= *n) throw InputError(kCommandLine, 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
+  if (*n < 1 || *i < 0 || *i >= *n)
+    throw InputError(kCommandLine, 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
 }
 
 void Emit(const stats::PowerResult& r, const PowerArgs& a) {
@@ -69,8 +74,10 @@ void Emit(const stats::PowerResult& r, const PowerArgs& a) {
     f << js;
     if (!f.flush()) throw std::runtime_error("cannot write " + a.out);
   }
-  if (a.json) fmt::print("{}", js);
-  else fmt::print("{}", stats::PowerTable(r));
+  if (a.json)
+    fmt::print("{}", js);
+  else
+    fmt::print("{}", stats::PowerTable(r));
   if (!a.plot.empty() && r.shards == 1) {
     const auto files = stats::DrawPowerCurves(r, a.plot);
     if (!a.json) fmt::print("power curves: {}\n", fmt::join(files, ", "));
@@ -90,30 +97,42 @@ void RegisterPower(CLI::App& study) {
       "simulated observers (the protocol's observer file). Reproducible from --seed whatever the\n"
       "thread count or sharding.");
   cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml); not with --merge");
-  cmd->add_option("--participants", a->participants, "Participant counts, increasing")->capture_default_str();
+  cmd->add_option("--participants", a->participants, "Participant counts, increasing")
+      ->capture_default_str();
   cmd->add_option("--simulations", a->simulations, "Simulated studies per participant count")
-      ->check(CLI::Range(1L, 10000000L))->capture_default_str();
-  cmd->add_option("--effect", a->effect, "Report only this effect: method, material or method:material");
+      ->check(CLI::Range(1L, 10000000L))
+      ->capture_default_str();
+  cmd->add_option("--effect", a->effect,
+                  "Report only this effect: method, material or method:material");
   cmd->add_option("--seed", a->seed, "Seed of the simulations")->capture_default_str();
-  cmd->add_option("--pool", a->pool, "Simulated participants whose physics is recorded through the runner")
-      ->check(CLI::Range(1, 200))->capture_default_str();
-  cmd->add_option("--threads", a->threads, "Worker threads")->check(CLI::Range(1, 256))->capture_default_str();
+  cmd->add_option("--pool", a->pool,
+                  "Simulated participants whose physics is recorded through the runner")
+      ->check(CLI::Range(1, 200))
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Worker threads")
+      ->check(CLI::Range(1, 256))
+      ->capture_default_str();
   cmd->add_flag("--json", a->json, "Print the result as JSON");
-  cmd->add_option("--out", a->out, "Also write the JSON result to this file (a shard's partial result)");
+  cmd->add_option("--out", a->out,
+                  "Also write the JSON result to this file (a shard's partial result)");
   cmd->add_option("--plot", a->plot, "Power-curve figure: writes F.svg and F.png");
-  cmd->add_option("--shard", a->shard, "Run only shard i of N (simulations s with s mod N == i): i/N");
-  cmd->add_option("--merge", a->merge, "Combine the JSON results of all shards of one run")->expected(1, -1);
+  cmd->add_option("--shard", a->shard,
+                  "Run only shard i of N (simulations s with s mod N == i): i/N");
+  cmd->add_option("--merge", a->merge, "Combine the JSON results of all shards of one run")
+      ->expected(1, -1);
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");
   cmd->callback([a] {
     RunGuarded([&] {
       if (!a->merge.empty()) {
-        if (!a->protocol.empty()) throw InputError(kCommandLine, 0, "PROTOCOL", "give either a protocol or --merge FILES");
+        if (!a->protocol.empty())
+          throw InputError(kCommandLine, 0, "PROTOCOL", "give either a protocol or --merge FILES");
         std::vector<stats::PowerResult> parts;
         for (const auto& f : a->merge) parts.push_back(stats::PowerFromJson(ReadTextFile(f), f));
         Emit(stats::MergePower(parts, a->merge), *a);
         return kExitOk;
       }
-      if (a->protocol.empty()) throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
+      if (a->protocol.empty())
+        throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
       stats::PowerOptions o;
       o.participants = ParseCounts(a->participants);
       o.simulations = a->simulations;
@@ -122,7 +141,8 @@ void RegisterPower(CLI::App& study) {
       if (!a->shard.empty()) ParseShard(a->shard, &o.shard, &o.shards);
       if (!a->effect.empty()) {
         if (a->effect != "method" && a->effect != "material" && a->effect != "method:material")
-          throw InputError(kCommandLine, 0, "--effect", "expected method, material or method:material, got '" + a->effect + "'");
+          throw InputError(kCommandLine, 0, "--effect",
+                           "expected method, material or method:material, got '" + a->effect + "'");
         o.effects = {a->effect};
       }
       const auto p = protocols::LoadProtocol(a->protocol);
@@ -131,7 +151,8 @@ void RegisterPower(CLI::App& study) {
         if (!q) fmt::print(stderr, "{}\n", s);
       };
       const auto pool = runner::RecordFeltPool(p, a->pool, a->threads, log);
-      const double t_pool = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const double t_pool =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       int last = -1;
       if (!a->quiet)
         o.progress = [&last](long done, long total) {
@@ -144,13 +165,21 @@ void RegisterPower(CLI::App& study) {
         };
       const auto obs = pool.observer;
       const auto r = stats::SimulatePower(
-          p.name, [&pool, &obs](int n, Rng& rng) { return runner::SimulateRatings(pool, obs, n, rng, true); }, o);
-      const double t_all = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          p.name,
+          [&pool, &obs](int n, Rng& rng) {
+            return runner::SimulateRatings(pool, obs, n, rng, true);
+          },
+          o);
+      const double t_all =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       long studies = 0;
       for (long s = o.shard; s < o.simulations; s += o.shards) ++studies;
       studies *= static_cast<long>(o.participants.size());
-      log(fmt::format("pool of {} participants through the runner: {:.1f} s; {} simulated studies: {:.1f} s ({:.0f} studies/s)",
-                      a->pool, t_pool, studies, t_all - t_pool, static_cast<double>(studies) / std::max(t_all - t_pool, 1e-9)));
+      log(
+          fmt::format("pool of {} participants through the runner: {:.1f} s; {} simulated studies: "
+                      "{:.1f} s ({:.0f} studies/s)",
+                      a->pool, t_pool, studies, t_all - t_pool,
+                      static_cast<double>(studies) / std::max(t_all - t_pool, 1e-9)));
       Emit(r, *a);
       return kExitOk;
     });

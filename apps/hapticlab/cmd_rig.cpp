@@ -13,13 +13,13 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
+#include "rig_timing.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -51,7 +51,8 @@ std::vector<Eigen::Vector3d> ParsePoints(const std::string& arg) {
     double x, y, z;
     char c1, c2;
     std::istringstream ls(line);
-    if (ls >> x >> c1 >> y >> c2 >> z && c1 == ',' && c2 == ',' && std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) {
+    if (ls >> x >> c1 >> y >> c2 >> z && c1 == ',' && c2 == ',' && std::isfinite(x) &&
+        std::isfinite(y) && std::isfinite(z)) {
       pts.emplace_back(x, y, z);
     } else if (n == 1 && !inline_list && line.find('x') != std::string::npos) {
       continue;  // header
@@ -71,7 +72,9 @@ Eigen::Vector3d HomePosition(const std::string& device) {
 }  // namespace
 
 void RegisterRig(CLI::App& app) {
-  auto* rig = app.add_subcommand("rig", "The rig file: device and sample frames, stylus tip, force calibration (docs/hardware.md)");
+  auto* rig = app.add_subcommand(
+      "rig",
+      "The rig file: device and sample frames, stylus tip, force calibration (docs/hardware.md)");
   rig->require_subcommand(1);
   {
     struct O {
@@ -79,10 +82,12 @@ void RegisterRig(CLI::App& app) {
       bool json = false;
     };
     auto o = std::make_shared<O>();
-    auto* cmd = rig->add_subcommand("show", "Print a rig file's frames: each sample's pose in the world and device frames");
+    auto* cmd = rig->add_subcommand(
+        "show", "Print a rig file's frames: each sample's pose in the world and device frames");
     cmd->add_option("RIG", o->path, "Rig file (.toml); none: the built-in rig of --device");
     cmd->add_option("--device", o->device, "Built-in rig to show when no file is given")
-        ->check(CLI::IsMember({"sim", "falcon", "falcon-twin"}))->capture_default_str();
+        ->check(CLI::IsMember({"sim", "falcon", "falcon-twin"}))
+        ->capture_default_str();
     cmd->add_flag("--json", o->json, "Print as JSON");
     cmd->callback([o] {
       RunGuarded([&] {
@@ -91,8 +96,14 @@ void RegisterRig(CLI::App& app) {
         for (int s = 0; s < 2; ++s) {
           const auto T = r.DeviceFromSample(s);
           const auto& W = r.world_from_sample[static_cast<std::size_t>(s)];
-          sides[kSides[s]] = {{"world", {{"origin_m", Vec(W.translation())}, {"x_axis", Vec(W.linear().col(0))}, {"z_axis", Vec(W.linear().col(2))}}},
-                              {"device", {{"origin_m", Vec(T.translation())}, {"x_axis", Vec(T.linear().col(0))}, {"z_axis", Vec(T.linear().col(2))}}}};
+          sides[kSides[s]] = {{"world",
+                               {{"origin_m", Vec(W.translation())},
+                                {"x_axis", Vec(W.linear().col(0))},
+                                {"z_axis", Vec(W.linear().col(2))}}},
+                              {"device",
+                               {{"origin_m", Vec(T.translation())},
+                                {"x_axis", Vec(T.linear().col(0))},
+                                {"z_axis", Vec(T.linear().col(2))}}}};
         }
         const json j = {{"file", r.path.empty() ? "(built-in " + o->device + " rig)" : r.path},
                         {"sha256", r.sha256},
@@ -105,10 +116,12 @@ void RegisterRig(CLI::App& app) {
           fmt::print("{}\n", j.dump(2));
           return kExitOk;
         }
-        fmt::print("rig {} (sha256 {}), device {}\n", j["file"].get<std::string>(), r.sha256.substr(0, 16), r.device);
-        fmt::print("stylus tip offset {} m (device frame); force calibration {} motor units per N m{}\n",
-                   Vec(r.tip_offset_m).dump(), r.motor_units_per_Nm,
-                   r.max_force_N > 0 ? fmt::format("; force limit {} N", r.max_force_N) : "");
+        fmt::print("rig {} (sha256 {}), device {}\n", j["file"].get<std::string>(),
+                   r.sha256.substr(0, 16), r.device);
+        fmt::print(
+            "stylus tip offset {} m (device frame); force calibration {} motor units per N m{}\n",
+            Vec(r.tip_offset_m).dump(), r.motor_units_per_Nm,
+            r.max_force_N > 0 ? fmt::format("; force limit {} N", r.max_force_N) : "");
         for (int s = 0; s < 2; ++s) {
           const auto T = r.DeviceFromSample(s);
           fmt::print("{:<5} sample: origin {} m, normal {} in the device frame (tip)\n", kSides[s],
@@ -133,30 +146,46 @@ void RegisterRig(CLI::App& app) {
         "reports the ticks, the link's empty and lost reads, contact, and whether the grip's rest\n"
         "pose is already in contact with a sample (a wrong rig file).\n"
         "--clock real: run the force loop (at --rate) and the 10 kHz vibration loop on the real\n"
-        "clock with a resting simulated grip (zero force; --render MODEL: a simulated hand strokes\n"
+        "clock with a resting simulated grip (zero force; --render MODEL: a simulated hand "
+        "strokes\n"
         "the rendered model) and the chosen actuator, and print a\n"
         "histogram of wake-up lateness like cyclictest, what the threads got (priority, memory\n"
         "lock, timer slack) and the verdict for the rate (exit 1: a missed deadline or a rate\n"
         "off by more than 1 %).");
-    cmd->add_option("--device", o->device, "Simulated rig")->check(CLI::IsMember({"sim", "falcon-twin"}))->capture_default_str();
+    cmd->add_option("--device", o->device, "Simulated rig")
+        ->check(CLI::IsMember({"sim", "falcon-twin"}))
+        ->capture_default_str();
     cmd->add_option("--clock", o->clock, "virtual: the stroke check; real: the timing check")
-        ->check(CLI::IsMember({"virtual", "real"}))->capture_default_str();
-    cmd->add_option("--rate", o->timing.rate_hz, "--clock real: force loop rate [Hz]")->check(CLI::Range(100.0, 20000.0))->capture_default_str();
-    cmd->add_option("--actuator", o->timing.actuator, "--clock real: vibrotactile actuator (audio: PortAudio)")
-        ->check(CLI::IsMember({"none", "audio"}))->capture_default_str();
-    cmd->add_option("--audio-device", o->timing.audio_device, "--clock real: PortAudio output device (name substring)");
+        ->check(CLI::IsMember({"virtual", "real"}))
+        ->capture_default_str();
+    cmd->add_option("--rate", o->timing.rate_hz, "--clock real: force loop rate [Hz]")
+        ->check(CLI::Range(100.0, 20000.0))
+        ->capture_default_str();
+    cmd->add_option("--actuator", o->timing.actuator,
+                    "--clock real: vibrotactile actuator (audio: PortAudio)")
+        ->check(CLI::IsMember({"none", "audio"}))
+        ->capture_default_str();
+    cmd->add_option("--audio-device", o->timing.audio_device,
+                    "--clock real: PortAudio output device (name substring)");
     cmd->add_flag("--no-vibration", o->no_vibration, "--clock real: run the force loop only");
-    cmd->add_option("--render", o->timing.render,
-                    "--clock real: render this material model (.toml) while a simulated hand strokes the\n"
-                    "virtual sample (default: a resting grip out of contact, zero force)")
+    cmd->add_option(
+           "--render", o->timing.render,
+           "--clock real: render this material model (.toml) while a simulated hand strokes the\n"
+           "virtual sample (default: a resting grip out of contact, zero force)")
         ->check(CLI::ExistingFile);
     AddRtOptions(cmd, o->timing.rt);
     cmd->add_option("--rig", o->path, "Rig file (default: the device's built-in rig)");
-    cmd->add_option("--seconds", o->seconds, "Stroking time [s] (virtual)")->check(CLI::Range(0.01, 600.0))->capture_default_str();
-    cmd->add_option("--empty-reads", o->empty, "Fraction of link reads with no new data")->check(CLI::Range(0.0, 0.9));
-    cmd->add_option("--split-packets", o->split, "falcon-twin: fraction of status packets split across two reads")
+    cmd->add_option("--seconds", o->seconds, "Stroking time [s] (virtual)")
+        ->check(CLI::Range(0.01, 600.0))
+        ->capture_default_str();
+    cmd->add_option("--empty-reads", o->empty, "Fraction of link reads with no new data")
         ->check(CLI::Range(0.0, 0.9));
-    cmd->add_flag("--json", o->json, "Print {\"device\", \"ticks\", \"empty_reads\", \"lost\", \"home_in_contact\", ...}");
+    cmd->add_option("--split-packets", o->split,
+                    "falcon-twin: fraction of status packets split across two reads")
+        ->check(CLI::Range(0.0, 0.9));
+    cmd->add_flag(
+        "--json", o->json,
+        "Print {\"device\", \"ticks\", \"empty_reads\", \"lost\", \"home_in_contact\", ...}");
     cmd->callback([o] {
       RunGuarded([&] {
         if (o->clock == "real") {
@@ -168,9 +197,10 @@ void RegisterRig(CLI::App& app) {
           return RunTimingCheck(a);
         }
         const auto rf = LoadOrDefault(o->path, o->device == "falcon-twin" ? "falcon" : "sim");
-        auto sr = runner::OpenSimulatedRig(o->device, rf, sim::SimDeviceModel{.empty_read_probability = o->empty},
-                                           sim::FalconTwinOptions{.empty_read_probability = o->empty,
-                                                                  .split_probability = o->split});
+        auto sr = runner::OpenSimulatedRig(
+            o->device, rf, sim::SimDeviceModel{.empty_read_probability = o->empty},
+            sim::FalconTwinOptions{.empty_read_probability = o->empty,
+                                   .split_probability = o->split});
         const auto model = sim::PlaceholderModel(sim::MaterialProfile{.id = "check"});
         renderer::RenderOptions ro;
         ro.device_max_stiffness_N_per_m = sr->rig.device->Capabilities().max_stiffness_N_per_m;
@@ -180,15 +210,17 @@ void RegisterRig(CLI::App& app) {
         for (int s = 0; s < 2; ++s) {
           renderer::HybridRenderer probe(model, ro);
           renderer::DeviceSample ds;
-          ds.state.p_m = sr->rig.device_from_sample[static_cast<std::size_t>(s)].inverse() * HomePosition(o->device);
+          ds.state.p_m = sr->rig.device_from_sample[static_cast<std::size_t>(s)].inverse() *
+                         HomePosition(o->device);
           home_in_contact |= probe.ForceTick(ds, 0).raw.normal_force_N > 0.3;
         }
         renderer::HybridRenderer r(model, ro);
         Rng rng(1);
-        sr->sim->hand.Begin(sim::DrawStroke(rng), sr->sim->true_device_from_sample[0],
-                            model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
-                            model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz,
-                            ro.vibration_rate_hz);
+        sr->sim->hand.Begin(
+            sim::DrawStroke(rng), sr->sim->true_device_from_sample[0],
+            model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
+            model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+            ro.force_rate_hz, ro.vibration_rate_hz);
         if (sr->sim->twin) sr->sim->twin->BeginRun();
         runner::EngineOptions eo;
         eo.virtual_clock = &sr->sim->clock;
@@ -196,26 +228,27 @@ void RegisterRig(CLI::App& app) {
         runner::RtEngine engine(r, *sr->rig.device, &sr->sim->actuator, eo);
         engine.RunFor(std::chrono::duration<double>(o->seconds));
         const auto st = engine.Stats();
-        json j = {{"device", o->device},
-                  {"rig", rf.path.empty() ? "built-in" : rf.path},
-                  {"rig_sha256", rf.sha256},
-                  {"seconds", o->seconds},
-                  {"ticks", st.force_ticks},
-                  {"vibration_ticks", st.vibration_ticks},
-                  {"empty_reads", st.empty_reads},
-                  {"lost", st.lost_reads},
-                  {"faulted", engine.watchdog().tripped()},
-                  {"contact_ticks", st.contact_ticks},
-                  {"home_in_contact", home_in_contact},
-                  // The timing keys of --clock real, for one schema: a virtual clock has no lateness.
-                  {"clock", "virtual"},
-                  {"force_rate_hz", st.achieved_force_rate_hz},
-                  {"jitter_us", {{"p50", 0.0}, {"p99", 0.0}, {"p999", 0.0}, {"max", 0.0}}},
-                  {"misses", st.force_deadline_misses},
-                  {"underruns", st.audio_underruns},
-                  {"priority", "virtual clock"},
-                  {"memory_locked", st.memory.locked},
-                  {"timer_slack_ns", nullptr}};
+        json j = {
+            {"device", o->device},
+            {"rig", rf.path.empty() ? "built-in" : rf.path},
+            {"rig_sha256", rf.sha256},
+            {"seconds", o->seconds},
+            {"ticks", st.force_ticks},
+            {"vibration_ticks", st.vibration_ticks},
+            {"empty_reads", st.empty_reads},
+            {"lost", st.lost_reads},
+            {"faulted", engine.watchdog().tripped()},
+            {"contact_ticks", st.contact_ticks},
+            {"home_in_contact", home_in_contact},
+            // The timing keys of --clock real, for one schema: a virtual clock has no lateness.
+            {"clock", "virtual"},
+            {"force_rate_hz", st.achieved_force_rate_hz},
+            {"jitter_us", {{"p50", 0.0}, {"p99", 0.0}, {"p999", 0.0}, {"max", 0.0}}},
+            {"misses", st.force_deadline_misses},
+            {"underruns", st.audio_underruns},
+            {"priority", "virtual clock"},
+            {"memory_locked", st.memory.locked},
+            {"timer_slack_ns", nullptr}};
         if (sr->falcon) {
           j["falcon_packets"] = sr->falcon->packets();
           j["falcon_empty_reads"] = sr->falcon->empty_reads();
@@ -226,10 +259,11 @@ void RegisterRig(CLI::App& app) {
         if (o->json) {
           fmt::print("{}\n", j.dump(2));
         } else {
-          fmt::print("{} on rig {}: {} ticks, {} empty reads, {} lost, {} in contact, {}; rest pose {}\n", o->device,
-                     j["rig"].get<std::string>(), st.force_ticks, st.empty_reads, st.lost_reads, st.contact_ticks,
-                     engine.watchdog().tripped() ? "FAULTED" : "no fault",
-                     home_in_contact ? "IN CONTACT with a sample (check the rig file)" : "out of contact");
+          fmt::print(
+              "{} on rig {}: {} ticks, {} empty reads, {} lost, {} in contact, {}; rest pose {}\n",
+              o->device, j["rig"].get<std::string>(), st.force_ticks, st.empty_reads, st.lost_reads,
+              st.contact_ticks, engine.watchdog().tripped() ? "FAULTED" : "no fault",
+              home_in_contact ? "IN CONTACT with a sample (check the rig file)" : "out of contact");
         }
         return home_in_contact || engine.watchdog().tripped() ? kExitFailure : kExitOk;
       });
@@ -248,8 +282,12 @@ void RegisterRig(CLI::App& app) {
         "offset is added. +z of the sample is the plane normal on the side of --up (default:\n"
         "the current pose's normal); x points from the first touch to the second.");
     cmd->add_option("RIG", o->path, "Rig file to update (.toml)")->required();
-    cmd->add_option("--side", o->side, "Which sample")->check(CLI::IsMember({"left", "right"}))->capture_default_str();
-    cmd->add_option("--points", o->points, "Touches: a CSV file (x_m,y_m,z_m) or \"x,y,z;x,y,z;...\"")->required();
+    cmd->add_option("--side", o->side, "Which sample")
+        ->check(CLI::IsMember({"left", "right"}))
+        ->capture_default_str();
+    cmd->add_option("--points", o->points,
+                    "Touches: a CSV file (x_m,y_m,z_m) or \"x,y,z;x,y,z;...\"")
+        ->required();
     cmd->add_option("--up", o->up, "Direction out of the sample, device frame: x,y,z");
     cmd->add_option("--out", o->out, "Where to write the updated rig file (default: print it)");
     cmd->callback([o] {
@@ -258,7 +296,10 @@ void RegisterRig(CLI::App& app) {
         const int side = o->side == "left" ? 0 : 1;
         auto pts = ParsePoints(o->points);
         for (auto& p : pts) p += r.tip_offset_m;  // the tip, not the reported point
-        Eigen::Vector3d up = (r.world_from_device.inverse() * r.world_from_sample[static_cast<std::size_t>(side)]).linear().col(2);
+        Eigen::Vector3d up =
+            (r.world_from_device.inverse() * r.world_from_sample[static_cast<std::size_t>(side)])
+                .linear()
+                .col(2);
         if (!o->up.empty()) {
           double x, y, z;
           if (std::sscanf(o->up.c_str(), "%lf,%lf,%lf", &x, &y, &z) != 3)
@@ -266,11 +307,15 @@ void RegisterRig(CLI::App& app) {
           up = {x, y, z};
         }
         const auto fit = runner::FitSamplePlane(pts, up);
-        r.world_from_sample[static_cast<std::size_t>(side)] = r.world_from_device * fit.device_from_sample;
+        r.world_from_sample[static_cast<std::size_t>(side)] =
+            r.world_from_device * fit.device_from_sample;
         const std::string text = runner::RigToToml(r);
-        fmt::print(stderr, "{} sample from {} touches: origin {} m, normal {} (device frame); residual RMS {:.3f} mm, max {:.3f} mm\n",
+        fmt::print(stderr,
+                   "{} sample from {} touches: origin {} m, normal {} (device frame); residual RMS "
+                   "{:.3f} mm, max {:.3f} mm\n",
                    o->side, pts.size(), Vec(fit.device_from_sample.translation()).dump(),
-                   Vec(fit.device_from_sample.linear().col(2)).dump(), fit.rms_residual_m * 1e3, fit.max_residual_m * 1e3);
+                   Vec(fit.device_from_sample.linear().col(2)).dump(), fit.rms_residual_m * 1e3,
+                   fit.max_residual_m * 1e3);
         if (o->out.empty()) {
           fmt::print("{}", text);
         } else {

@@ -36,16 +36,20 @@ struct Common {
 };
 
 void AddCommon(CLI::App* cmd, Common& c) {
-  cmd->add_option("--csv", c.csv, "Long-format CSV (one row per observation)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--csv", c.csv, "Long-format CSV (one row per observation)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--dv", c.dv, "Column of the response (numeric)")->required();
-  cmd->add_option("--where", c.where, "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
+  cmd->add_option("--where", c.where,
+                  "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
   cmd->add_option("--average-by", c.average_by,
                   "Average the response within each combination of these columns first, e.g.\n"
                   "subject,method,material to use cell means (repetitions averaged)");
   cmd->add_flag("--json", c.json, "Print results as JSON");
-  cmd->add_flag("--include-simulated", c.include_simulated,
-                "A CSV with a 'source' column (hapticlab export): keep the simulated observer's rows\n"
-                "although rows rated by participants are present (left out by default, with a note)");
+  cmd->add_flag(
+      "--include-simulated", c.include_simulated,
+      "A CSV with a 'source' column (hapticlab export): keep the simulated observer's rows\n"
+      "although rows rated by participants are present (left out by default, with a note)");
 }
 
 // Reads the CSV with the needed key columns, applies --where and --average-by.
@@ -69,11 +73,13 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
     const CsvTable raw = ReadCsv(c.csv);
     if (const auto sc = raw.Find("source"); sc && !c.include_simulated) {
       std::size_t simulated = 0, human = 0;
-      for (const auto& row : raw.rows) (row[*sc] == "simulated" ? simulated : human) += row[*sc].empty() ? 0 : 1;
+      for (const auto& row : raw.rows)
+        (row[*sc] == "simulated" ? simulated : human) += row[*sc].empty() ? 0 : 1;
       if (simulated && human) {
         keep.not_equal.emplace_back("source", "simulated");
         fmt::print(stderr,
-                   "note: {}: {} rows rated by the simulated observer are left out ({} rated by participants); "
+                   "note: {}: {} rows rated by the simulated observer are left out ({} rated by "
+                   "participants); "
                    "--include-simulated keeps them\n",
                    c.csv, simulated, human);
       }
@@ -124,8 +130,9 @@ void AddRmAnova(CLI::App& s) {
   AddMissing(cmd, c);
   cmd->add_option("--subject", *subject, "Subject column")->required();
   cmd->add_option("--within", *within, "Within factors, comma-separated (A or A,B)");
-  cmd->add_option("--between", *between,
-                  "Between-subject factors, comma-separated (e.g. group): each subject has one level");
+  cmd->add_option(
+      "--between", *between,
+      "Between-subject factors, comma-separated (e.g. group): each subject has one level");
   cmd->callback([=] {
     RunGuarded([&] {
       const auto factors = stats::SplitList(*within);
@@ -139,36 +146,59 @@ void AddRmAnova(CLI::App& s) {
       if (c->json) {
         json effects = json::array();
         for (const auto& e : r.effects)
-          effects.push_back({{"effect", e.effect}, {"df1", e.df1}, {"df2", e.df2}, {"F", e.F}, {"p", e.p},
-                             {"pes", e.pes}, {"SS", e.SS}, {"SS_error", e.SS_error}, {"MSE", e.MSE},
+          effects.push_back({{"effect", e.effect},
+                             {"df1", e.df1},
+                             {"df2", e.df2},
+                             {"F", e.F},
+                             {"p", e.p},
+                             {"pes", e.pes},
+                             {"SS", e.SS},
+                             {"SS_error", e.SS_error},
+                             {"MSE", e.MSE},
                              {"mauchly_W", Num(e.mauchly_W)},
-                             {"mauchly_p", Num(e.mauchly_p)}, {"mauchly_p_firstorder", Num(e.mauchly_p_firstorder)},
-                             {"gg_epsilon", Num(e.gg_epsilon)}, {"p_gg", Num(e.p_gg)},
-                             {"hf_epsilon", Num(e.hf_epsilon)}, {"p_hf", Num(e.p_hf)},
+                             {"mauchly_p", Num(e.mauchly_p)},
+                             {"mauchly_p_firstorder", Num(e.mauchly_p_firstorder)},
+                             {"gg_epsilon", Num(e.gg_epsilon)},
+                             {"p_gg", Num(e.p_gg)},
+                             {"hf_epsilon", Num(e.hf_epsilon)},
+                             {"p_hf", Num(e.p_hf)},
                              {"between_only", e.between_only}});
-        fmt::print("{}\n", json{{"effects", effects}, {"subjects", r.subjects.size()},
-                                {"dropped_subjects", r.dropped_subjects}, {"dropped", DroppedJson(r)}}.dump(2));
+        fmt::print("{}\n", json{{"effects", effects},
+                                {"subjects", r.subjects.size()},
+                                {"dropped_subjects", r.dropped_subjects},
+                                {"dropped", DroppedJson(r)}}
+                               .dump(2));
         return kExitOk;
       }
       fmt::print("{} subjects{}\n", r.subjects.size(),
-                 r.dropped_subjects.empty() ? "" : fmt::format(" ({} dropped for a missing cell)", r.dropped_subjects.size()));
+                 r.dropped_subjects.empty()
+                     ? ""
+                     : fmt::format(" ({} dropped for a missing cell)", r.dropped_subjects.size()));
       PrintDropped(r);
-      fmt::print("{:<24} {:>5} {:>7} {:>10} {:>11} {:>7} {:>9} {:>9} {:>7} {:>10} {:>7} {:>10}\n", "effect", "df1", "df2",
-                 "F", "p", "pes", "Mauchly W", "p", "GG eps", "p GG", "HF eps", "p HF");
+      fmt::print("{:<24} {:>5} {:>7} {:>10} {:>11} {:>7} {:>9} {:>9} {:>7} {:>10} {:>7} {:>10}\n",
+                 "effect", "df1", "df2", "F", "p", "pes", "Mauchly W", "p", "GG eps", "p GG",
+                 "HF eps", "p HF");
       for (const auto& e : r.effects) {
         if (e.between_only) {  // between-subjects term: no sphericity question
-          fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f}\n", e.effect, e.df1, e.df2, e.F, e.p, e.pes);
+          fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f}\n", e.effect, e.df1,
+                     e.df2, e.F, e.p, e.pes);
           continue;
         }
-        fmt::print("{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f} {:>9.4g} {:>9.4g} {:>7.4f} {:>10.4g} {:>7.4f} {:>10.4g}\n",
-                   e.effect, e.df1, e.df2, e.F, e.p, e.pes, e.mauchly_W, e.mauchly_p, e.gg_epsilon, e.p_gg,
-                   e.hf_epsilon, e.p_hf);
+        fmt::print(
+            "{:<24} {:>5.0f} {:>7.0f} {:>10.4f} {:>11.4g} {:>7.3f} {:>9.4g} {:>9.4g} {:>7.4f} "
+            "{:>10.4g} {:>7.4f} {:>10.4g}\n",
+            e.effect, e.df1, e.df2, e.F, e.p, e.pes, e.mauchly_W, e.mauchly_p, e.gg_epsilon, e.p_gg,
+            e.hf_epsilon, e.p_hf);
       }
-      fmt::print("Mauchly p is R's (second-order); nan: the covariance is singular (df > error df),\n"
-                 "so no test exists; epsilons are still defined. HF eps is uncapped; its p uses min(1, eps).\n");
+      fmt::print(
+          "Mauchly p is R's (second-order); nan: the covariance is singular (df > error df),\n"
+          "so no test exists; epsilons are still defined. HF eps is uncapped; its p uses min(1, "
+          "eps).\n");
       if (!groups.empty())
-        fmt::print("Type 3 sums of squares (sum-to-zero contrasts), as afex; error df {:.0f} = subjects - between cells.\n",
-                   r.error_df);
+        fmt::print(
+            "Type 3 sums of squares (sum-to-zero contrasts), as afex; error df {:.0f} = subjects - "
+            "between cells.\n",
+            r.error_df);
       return kExitOk;
     });
   });
@@ -192,24 +222,28 @@ void AddTukey(CLI::App& s) {
   cmd->add_option("--subject", *subject, "Subject column (within-subject comparisons)");
   cmd->add_option("--within", *within, "All within factors of the design (default: --factor)");
   auto between = std::make_shared<std::string>();
-  cmd->add_option("--between", *between,
-                  "Between-subject factors of a mixed design (with --subject); --factor may be one of them");
+  cmd->add_option(
+      "--between", *between,
+      "Between-subject factors of a mixed design (with --subject); --factor may be one of them");
   AddMissing(cmd, c);
-  cmd->add_option("--error", *method, "Within-subject error term")->check(CLI::IsMember({"univariate", "multivariate"}))
+  cmd->add_option("--error", *method, "Within-subject error term")
+      ->check(CLI::IsMember({"univariate", "multivariate"}))
       ->capture_default_str();
   cmd->callback([=] {
     RunGuarded([&] {
       stats::TukeyResult r;
       stats::RmAnovaResult a;
       if (subject->empty()) {
-        if (!between->empty()) throw InputError(c->csv, 0, "--between", "needs --subject (a mixed design)");
+        if (!between->empty())
+          throw InputError(c->csv, 0, "--between", "needs --subject (a mixed design)");
         r = stats::TukeyBetween(Load(*c, {*factor}), *factor);
       } else {
         const auto groups = stats::SplitList(*between);
-        const bool factor_between = std::find(groups.begin(), groups.end(), *factor) != groups.end();
+        const bool factor_between =
+            std::find(groups.begin(), groups.end(), *factor) != groups.end();
         auto factors = !within->empty() ? stats::SplitList(*within)
-                       : factor_between  ? std::vector<std::string>{}
-                                         : std::vector<std::string>{*factor};
+                       : factor_between ? std::vector<std::string>{}
+                                        : std::vector<std::string>{*factor};
         auto keys = factors;
         keys.insert(keys.end(), groups.begin(), groups.end());
         keys.push_back(*subject);
@@ -219,20 +253,34 @@ void AddTukey(CLI::App& s) {
       if (c->json) {
         json pairs = json::array();
         for (const auto& p : r.pairs)
-          pairs.push_back({{"a", p.a}, {"b", p.b}, {"diff", p.diff}, {"lwr", p.lwr}, {"upr", p.upr},
-                           {"p_adj", p.p_adj}, {"se", p.se}, {"df", p.df}, {"q", p.q}});
-        fmt::print("{}\n", json{{"method", r.method}, {"factor", r.factor}, {"comparisons", pairs},
-                                {"dropped_subjects", a.dropped_subjects}, {"dropped", DroppedJson(a)}}.dump(2));
+          pairs.push_back({{"a", p.a},
+                           {"b", p.b},
+                           {"diff", p.diff},
+                           {"lwr", p.lwr},
+                           {"upr", p.upr},
+                           {"p_adj", p.p_adj},
+                           {"se", p.se},
+                           {"df", p.df},
+                           {"q", p.q}});
+        fmt::print("{}\n", json{{"method", r.method},
+                                {"factor", r.factor},
+                                {"comparisons", pairs},
+                                {"dropped_subjects", a.dropped_subjects},
+                                {"dropped", DroppedJson(a)}}
+                               .dump(2));
         return kExitOk;
       }
       if (!subject->empty())
         fmt::print("{} subjects{}\n", a.subjects.size(),
-                   a.dropped_subjects.empty() ? "" : fmt::format(" ({} dropped for a missing cell)", a.dropped_subjects.size()));
+                   a.dropped_subjects.empty() ? ""
+                                              : fmt::format(" ({} dropped for a missing cell)",
+                                                            a.dropped_subjects.size()));
       PrintDropped(a);
       fmt::print("Tukey HSD ({}), factor {}, k = {}, df = {:.0f}\n", r.method, r.factor, r.k, r.df);
       fmt::print("{:<30} {:>10} {:>10} {:>10} {:>12}\n", "a - b", "diff", "lwr", "upr", "p adj");
       for (const auto& p : r.pairs)
-        fmt::print("{:<30} {:>10.4f} {:>10.4f} {:>10.4f} {:>12.4g}\n", p.a + " - " + p.b, p.diff, p.lwr, p.upr, p.p_adj);
+        fmt::print("{:<30} {:>10.4f} {:>10.4f} {:>10.4f} {:>12.4g}\n", p.a + " - " + p.b, p.diff,
+                   p.lwr, p.upr, p.p_adj);
       return kExitOk;
     });
   });
@@ -241,9 +289,10 @@ void AddTukey(CLI::App& s) {
 void AddKruskal(CLI::App& s) {
   auto c = std::make_shared<Common>();
   auto group = std::make_shared<std::string>();
-  auto* cmd = s.add_subcommand("kruskal",
-                               "Kruskal-Wallis with tie correction, then Dunn's test with Bonferroni\n"
-                               "adjustment over all pairs. Values are tied when equal to 9 decimals.");
+  auto* cmd =
+      s.add_subcommand("kruskal",
+                       "Kruskal-Wallis with tie correction, then Dunn's test with Bonferroni\n"
+                       "adjustment over all pairs. Values are tied when equal to 9 decimals.");
   AddCommon(cmd, *c);
   cmd->add_option("--group", *group, "Grouping column")->required();
   cmd->callback([=] {
@@ -253,12 +302,14 @@ void AddKruskal(CLI::App& s) {
         json dunn = json::array();
         for (const auto& d : k.dunn)
           dunn.push_back({{"a", d.a}, {"b", d.b}, {"z", d.z}, {"p", d.p}, {"p_adj", d.p_adj}});
-        fmt::print("{}\n", json{{"H", k.H}, {"df", k.df}, {"p", k.p}, {"N", k.N}, {"dunn", dunn}}.dump(2));
+        fmt::print("{}\n",
+                   json{{"H", k.H}, {"df", k.df}, {"p", k.p}, {"N", k.N}, {"dunn", dunn}}.dump(2));
         return kExitOk;
       }
       fmt::print("Kruskal-Wallis: H({:.0f}) = {:.4f}, p = {:.4g}, N = {}\n", k.df, k.H, k.p, k.N);
       fmt::print("{:<30} {:>9} {:>11} {:>11}\n", "Dunn a vs b", "z", "p", "p (Bonf.)");
-      for (const auto& d : k.dunn) fmt::print("{:<30} {:>9.4f} {:>11.4g} {:>11.4g}\n", d.a + " vs " + d.b, d.z, d.p, d.p_adj);
+      for (const auto& d : k.dunn)
+        fmt::print("{:<30} {:>9.4f} {:>11.4g} {:>11.4g}\n", d.a + " vs " + d.b, d.z, d.p, d.p_adj);
       return kExitOk;
     });
   });
@@ -267,39 +318,50 @@ void AddKruskal(CLI::App& s) {
 void AddShapiro(CLI::App& s) {
   auto c = std::make_shared<Common>();
   auto by = std::make_shared<std::string>();
-  auto* cmd = s.add_subcommand("shapiro", "Shapiro-Wilk normality test (Royston's AS R94, as R), overall or per group");
+  auto* cmd = s.add_subcommand(
+      "shapiro", "Shapiro-Wilk normality test (Royston's AS R94, as R), overall or per group");
   AddCommon(cmd, *c);
   cmd->add_option("--by", *by, "Test each group of this column separately");
   cmd->callback([=] {
     RunGuarded([&] {
-      const auto t = Load(*c, by->empty() ? std::vector<std::string>{} : std::vector<std::string>{*by});
+      const auto t =
+          Load(*c, by->empty() ? std::vector<std::string>{} : std::vector<std::string>{*by});
       json groups = json::array();
       auto one = [&](const std::string& name, const std::vector<double>& y) {
         const auto r = stats::ShapiroWilk(y);
         groups.push_back({{"group", name}, {"n", r.n}, {"W", r.W}, {"p", r.p}});
       };
-      if (by->empty()) one("all", t.y);
+      if (by->empty())
+        one("all", t.y);
       else
         for (const auto& g : t.Levels(*by)) one(g, t.Where({{*by, g}}).y);
       if (c->json) {
         fmt::print("{}\n", json{{"groups", groups}}.dump(2));
       } else {
         for (const auto& g : groups)
-          fmt::print("{:<24} n = {:>5}  W = {:.5f}  p = {:.4g}\n", g["group"].get<std::string>(), g["n"].get<int>(),
-                     g["W"].get<double>(), g["p"].get<double>());
+          fmt::print("{:<24} n = {:>5}  W = {:.5f}  p = {:.4g}\n", g["group"].get<std::string>(),
+                     g["n"].get<int>(), g["W"].get<double>(), g["p"].get<double>());
       }
       return kExitOk;
     });
   });
 }
 
-
 json LmmJson(const stats::LmmResult& r) {
   json fixed = json::array(), anova = json::array(), random = json::array();
   for (const auto& c : r.fixed)
-    fixed.push_back({{"name", c.name}, {"estimate", c.estimate}, {"se", c.se}, {"df", Num(c.df)}, {"t", c.t}, {"p", Num(c.p)}});
+    fixed.push_back({{"name", c.name},
+                     {"estimate", c.estimate},
+                     {"se", c.se},
+                     {"df", Num(c.df)},
+                     {"t", c.t},
+                     {"p", Num(c.p)}});
   for (const auto& t : r.anova)
-    anova.push_back({{"term", t.term}, {"num_df", t.num_df}, {"den_df", Num(t.den_df)}, {"F", t.F}, {"p", Num(t.p)}});
+    anova.push_back({{"term", t.term},
+                     {"num_df", t.num_df},
+                     {"den_df", Num(t.den_df)},
+                     {"F", t.F},
+                     {"p", Num(t.p)}});
   for (const auto& g : r.random) {
     json corr = json::array();
     for (const auto& row : g.corr) {
@@ -307,43 +369,73 @@ json LmmJson(const stats::LmmResult& r) {
       for (double v : row) jr.push_back(Num(v));
       corr.push_back(jr);
     }
-    random.push_back({{"group", g.group}, {"levels", g.levels}, {"names", g.names}, {"variance", g.variance},
-                      {"sd", g.sd}, {"corr", corr}});
+    random.push_back({{"group", g.group},
+                      {"levels", g.levels},
+                      {"names", g.names},
+                      {"variance", g.variance},
+                      {"sd", g.sd},
+                      {"corr", corr}});
   }
-  return json{{"formula", r.formula}, {"method", r.reml ? "REML" : "ML"}, {"n", r.n}, {"fixed", fixed},
-              {"anova_type3", anova}, {"ddf", r.ddf}, {"random", random},
-              {"residual_variance", r.sigma * r.sigma}, {"sigma", r.sigma}, {"theta", r.theta},
-              {r.reml ? "REML_criterion" : "deviance", r.deviance}, {"logLik", r.logLik}, {"AIC", r.AIC}, {"BIC", r.BIC},
+  return json{{"formula", r.formula},
+              {"method", r.reml ? "REML" : "ML"},
+              {"n", r.n},
+              {"fixed", fixed},
+              {"anova_type3", anova},
+              {"ddf", r.ddf},
+              {"random", random},
+              {"residual_variance", r.sigma * r.sigma},
+              {"sigma", r.sigma},
+              {"theta", r.theta},
+              {r.reml ? "REML_criterion" : "deviance", r.deviance},
+              {"logLik", r.logLik},
+              {"AIC", r.AIC},
+              {"BIC", r.BIC},
               {"n_parameters", r.n_parameters},
-              {"convergence", {{"optimizer", r.optimizer}, {"converged", r.converged}, {"evaluations", r.evaluations},
-                               {"gradient_max_abs", r.gradient_max_abs}, {"singular", r.singular}}}};
+              {"convergence",
+               {{"optimizer", r.optimizer},
+                {"converged", r.converged},
+                {"evaluations", r.evaluations},
+                {"gradient_max_abs", r.gradient_max_abs},
+                {"singular", r.singular}}}};
 }
 
 void PrintLmm(const stats::LmmResult& r) {
   fmt::print("Linear mixed model fit by {} (lme4's formulation), {} observations\nFormula: {}\n",
              r.reml ? "REML" : "maximum likelihood", r.n, r.formula);
   fmt::print("{} {:.4f}   logLik {:.4f}   AIC {:.4f}   BIC {:.4f}   ({} parameters)\n\n",
-             r.reml ? "REML criterion" : "deviance", r.deviance, r.logLik, r.AIC, r.BIC, r.n_parameters);
-  fmt::print("Random effects:\n{:<16} {:<22} {:>12} {:>10}  {}\n", "group (levels)", "name", "variance", "SD", "corr");
+             r.reml ? "REML criterion" : "deviance", r.deviance, r.logLik, r.AIC, r.BIC,
+             r.n_parameters);
+  fmt::print("Random effects:\n{:<16} {:<22} {:>12} {:>10}  {}\n", "group (levels)", "name",
+             "variance", "SD", "corr");
   for (const auto& g : r.random)
     for (std::size_t i = 0; i < g.names.size(); ++i) {
       std::string corr;
       for (std::size_t j = 0; j < i; ++j) corr += fmt::format("{:>7.3f}", g.corr[i][j]);
       fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}  {}\n",
-                 i == 0 ? fmt::format("{} ({})", g.group, g.levels) : "", g.names[i], g.variance[i], g.sd[i], corr);
+                 i == 0 ? fmt::format("{} ({})", g.group, g.levels) : "", g.names[i], g.variance[i],
+                 g.sd[i], corr);
     }
   fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}\n\n", "Residual", "", r.sigma * r.sigma, r.sigma);
-  fmt::print("Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n", r.ddf,
-             "name", "estimate", "SE", "df", "t", "p");
+  fmt::print(
+      "Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n",
+      r.ddf, "name", "estimate", "SE", "df", "t", "p");
   for (const auto& c : r.fixed)
-    fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se, c.df, c.t, c.p);
-  fmt::print("\nType III F tests ({} df, as lmerTest anova(m, type = 3) / afex::mixed):\n"
-             "{:<28} {:>6} {:>9} {:>10} {:>11}\n", r.ddf, "term", "num df", "den df", "F", "p");
+    fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se,
+               c.df, c.t, c.p);
+  fmt::print(
+      "\nType III F tests ({} df, as lmerTest anova(m, type = 3) / afex::mixed):\n"
+      "{:<28} {:>6} {:>9} {:>10} {:>11}\n",
+      r.ddf, "term", "num df", "den df", "F", "p");
   for (const auto& t : r.anova)
-    fmt::print("{:<28} {:>6.0f} {:>9.2f} {:>10.4f} {:>11.4g}\n", t.term, t.num_df, t.den_df, t.F, t.p);
-  fmt::print("\nConvergence: {}; {} after {} deviance evaluations; max |d deviance / d theta| = {:.2g}{}\n",
-             r.optimizer, r.converged ? "converged" : "NOT converged", r.evaluations, r.gradient_max_abs,
-             r.singular ? "\nboundary (singular) fit: a variance is 0 or a correlation is +-1 (lme4's isSingular)" : "");
+    fmt::print("{:<28} {:>6.0f} {:>9.2f} {:>10.4f} {:>11.4g}\n", t.term, t.num_df, t.den_df, t.F,
+               t.p);
+  fmt::print(
+      "\nConvergence: {}; {} after {} deviance evaluations; max |d deviance / d theta| = "
+      "{:.2g}{}\n",
+      r.optimizer, r.converged ? "converged" : "NOT converged", r.evaluations, r.gradient_max_abs,
+      r.singular
+          ? "\nboundary (singular) fit: a variance is 0 or a correlation is +-1 (lme4's isSingular)"
+          : "");
 }
 
 void AddLmm(CLI::App& s) {
@@ -354,22 +446,31 @@ void AddLmm(CLI::App& s) {
   auto* cmd = s.add_subcommand(
       "lmm",
       "Linear mixed model, fitted as lme4::lmer (penalised least squares, sparse Cholesky,\n"
-      "profiled REML or ML deviance), with lmerTest's Satterthwaite df for the coefficient t tests\n"
+      "profiled REML or ML deviance), with lmerTest's Satterthwaite df for the coefficient t "
+      "tests\n"
       "and the type 3 F tests (sum-to-zero contrasts, as afex::mixed method \"S\"). Reports the\n"
       "random-effect variances, SDs and correlations, logLik/AIC/BIC and convergence diagnostics.\n"
       "Numeric columns are covariates, text columns factors (as read.csv). Every row is one\n"
       "observation (no averaging).");
-  cmd->add_option("--csv", c->csv, "Long-format CSV (one row per observation)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--csv", c->csv, "Long-format CSV (one row per observation)")
+      ->required()
+      ->check(CLI::ExistingFile);
   cmd->add_option("--formula", *formula,
-                  "lme4 formula, e.g. 'score ~ method * texture + (1 + method | participant) + (1 | material)'")
+                  "lme4 formula, e.g. 'score ~ method * texture + (1 + method | participant) + (1 "
+                  "| material)'")
       ->required();
-  cmd->add_option("--where", c->where, "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
+  cmd->add_option("--where", c->where,
+                  "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
   auto reml = std::make_shared<bool>(false);
-  auto* reml_flag = cmd->add_flag("--reml", *reml, "Restricted maximum likelihood (the default, as lmer)");
-  cmd->add_flag("--ml", *ml, "Maximum likelihood (for comparing fixed effects by likelihood ratio)")->excludes(reml_flag);
-  cmd->add_option("--ddf", *ddf,
-                  "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or kenward-roger\n"
-                  "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)")
+  auto* reml_flag =
+      cmd->add_flag("--reml", *reml, "Restricted maximum likelihood (the default, as lmer)");
+  cmd->add_flag("--ml", *ml, "Maximum likelihood (for comparing fixed effects by likelihood ratio)")
+      ->excludes(reml_flag);
+  cmd->add_option(
+         "--ddf", *ddf,
+         "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or "
+         "kenward-roger\n"
+         "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)")
       ->check(CLI::IsMember({"satterthwaite", "kenward-roger"}))
       ->capture_default_str();
   cmd->add_flag("--json", c->json, "Print results as JSON");
@@ -404,10 +505,11 @@ void AddStatsCommands(CLI::App& group) {
 }
 
 void RegisterStats(CLI::App& app) {
-  auto* s = app.add_subcommand("stats",
-                               "Statistics on any long-format CSV (see docs/analysis.md):\n"
-                               "rm-anova, tukey, kruskal, shapiro, lmm. The same commands, with a fast start\n"
-                               "(no GUI, device or modeling libraries loaded): hapticlab-stats COMMAND");
+  auto* s = app.add_subcommand(
+      "stats",
+      "Statistics on any long-format CSV (see docs/analysis.md):\n"
+      "rm-anova, tukey, kruskal, shapiro, lmm. The same commands, with a fast start\n"
+      "(no GUI, device or modeling libraries loaded): hapticlab-stats COMMAND");
   s->require_subcommand(1);
   AddStatsCommands(*s);
 }

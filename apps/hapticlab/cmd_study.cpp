@@ -11,14 +11,14 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "rig_timing.hpp"
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/devices/factory.hpp"
+#include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner_ui/session_ui.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/runner_ui/session_ui.hpp"
+#include "rig_timing.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -40,19 +40,24 @@ struct RunArgs {
 // Opens the hardware and the windows a run asks for and keeps them alive for the session.
 class Rig {
  public:
-  Rig(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
-    WithFlags({{"device", "--device"}, {"firmware", "--firmware"}, {"rating_box", "--rating-box"},
+  Rig(const RunArgs& a, const std::string& study, const std::string& participant,
+      runner::RunOptions* o) {
+    WithFlags({{"device", "--device"},
+               {"firmware", "--firmware"},
+               {"rating_box", "--rating-box"},
                {"rating_layout", "--rating-layout"}},
               [&] { Open(a, study, participant, o); });
   }
 
  private:
-  void Open(const RunArgs& a, const std::string& study, const std::string& participant, runner::RunOptions* o) {
+  void Open(const RunArgs& a, const std::string& study, const std::string& participant,
+            runner::RunOptions* o) {
     o->device = a.device;
     o->actuator = a.actuator;
     o->rating_input = a.rating_box.empty() ? "window" : "rating-box:" + a.rating_box;
     // Frames and calibration: the rig file, or the back-end's built-in rig.
-    const runner::RigFile rf = a.rig_file.empty() ? runner::DefaultRig(a.device) : runner::LoadRig(a.rig_file);
+    const runner::RigFile rf =
+        a.rig_file.empty() ? runner::DefaultRig(a.device) : runner::LoadRig(a.rig_file);
     rig_.device_from_sample = {rf.DeviceFromSample(0), rf.DeviceFromSample(1)};
     rig_.calibration = rf.text;
     rig_.rig_file_hash = rf.sha256;
@@ -62,13 +67,16 @@ class Rig {
       rig_ = simulated_->rig;
       status = rig_.description;
       if (a.actuator != "none")
-        throw InputError(kCommandLine, 0, "--actuator",
-                         "a simulated rig plays vibration to the simulated hand; use --actuator none");
+        throw InputError(
+            kCommandLine, 0, "--actuator",
+            "a simulated rig plays vibration to the simulated hand; use --actuator none");
     } else {
-      auto opened = devices::OpenRealDevice(
-          {.device = a.device, .firmware = a.firmware, .motor_units_per_Nm = rf.motor_units_per_Nm,
-           .max_force_N = rf.max_force_N},
-          [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
+      auto opened =
+          devices::OpenRealDevice({.device = a.device,
+                                   .firmware = a.firmware,
+                                   .motor_units_per_Nm = rf.motor_units_per_Nm,
+                                   .max_force_N = rf.max_force_N},
+                                  [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
       device_ = std::move(opened.device);
       rig_.device = device_.get();
       status = opened.description;
@@ -81,22 +89,25 @@ class Rig {
       status += "; audio actuator and masking noise";
     }
     if (!rig_.sim)
-      rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) + " (sha256 " +
-                         rf.sha256.substr(0, 16) + ")";
+      rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) +
+                         " (sha256 " + rf.sha256.substr(0, 16) + ")";
     o->rig = &rig_;
     if (!rig_.sim && !a.ui)
-      throw InputError(kCommandLine, 0, "--ui",
-                       "a hardware session takes its ratings from the participant window: add --ui");
+      throw InputError(
+          kCommandLine, 0, "--ui",
+          "a hardware session takes its ratings from the participant window: add --ui");
     if (!a.rating_box.empty()) {
       if (!a.ui)
-        throw InputError(kCommandLine, 0, "--rating-box", "the rating box feeds the participant window: add --ui");
+        throw InputError(kCommandLine, 0, "--rating-box",
+                         "the rating box feeds the participant window: add --ui");
       box_ = devices::OpenRatingBox(a.rating_box, a.rating_layout);
       status += "; rating box " + a.rating_box;
     }
     if (a.ui) {
       runner::ui::WindowOptions wo;
       wo.participant_fullscreen = a.fullscreen;
-      ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo, box_.get());
+      ui_ =
+          std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo, box_.get());
       o->ui = ui_.get();
       o->ui_playback_speed = a.ui_speed;
     }
@@ -118,13 +129,22 @@ runner::RecordMode ParseRecord(const std::string& s) {
 
 void PrintSummary(const runner::RunSummary& s, bool json_out) {
   if (json_out) {
-    fmt::print("{}\n", json{{"participant", s.participant}, {"session", s.session_id}, {"status", s.status},
-                            {"planned", s.planned}, {"completed", s.completed}, {"executed", s.executed},
-                            {"faults", s.faults}, {"simulated_s", s.simulated_s}, {"wall_s", s.wall_s}}
+    fmt::print("{}\n", json{{"participant", s.participant},
+                            {"session", s.session_id},
+                            {"status", s.status},
+                            {"planned", s.planned},
+                            {"completed", s.completed},
+                            {"executed", s.executed},
+                            {"faults", s.faults},
+                            {"simulated_s", s.simulated_s},
+                            {"wall_s", s.wall_s}}
                            .dump(2));
   } else {
-    fmt::print("{}: session {} {} — {}/{} trials completed, {} faults re-queued; {:.0f} s of stimuli in {:.1f} s\n",
-               s.participant, s.session_id, s.status, s.completed, s.planned, s.faults, s.simulated_s, s.wall_s);
+    fmt::print(
+        "{}: session {} {} — {}/{} trials completed, {} faults re-queued; {:.0f} s of stimuli in "
+        "{:.1f} s\n",
+        s.participant, s.session_id, s.status, s.completed, s.planned, s.faults, s.simulated_s,
+        s.wall_s);
   }
 }
 
@@ -141,9 +161,10 @@ extern "C" void OnStopSignal(int sig) {
 }
 
 void InstallStopHandlers() {
-  struct sigaction sa{};
+  struct sigaction sa {};
   sa.sa_handler = OnStopSignal;
-  sa.sa_flags = SA_RESTART;  // other threads' system calls resume; the flag is polled between trials
+  sa.sa_flags =
+      SA_RESTART;  // other threads' system calls resume; the flag is polled between trials
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, nullptr);
   sigaction(SIGTERM, &sa, nullptr);
@@ -180,7 +201,8 @@ void RunStudyGuarded(const std::function<int()>& body) {
 }  // namespace
 
 void RegisterStudy(CLI::App& app) {
-  auto* study = app.add_subcommand("study", "Study protocols: validate, plan, run, resume, status (docs/studies.md)");
+  auto* study = app.add_subcommand(
+      "study", "Study protocols: validate, plan, run, resume, status (docs/studies.md)");
   study->require_subcommand(1);
   RegisterPower(*study);
   RegisterCalibrate(*study);
@@ -199,7 +221,8 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--device", *device, "Check for this back-end (as 'study run --device')")
         ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
         ->capture_default_str();
-    cmd->add_flag("--ui", *ui, "Check for a session rated in the participant window (as 'study run --ui')");
+    cmd->add_flag("--ui", *ui,
+                  "Check for a session rated in the participant window (as 'study run --ui')");
     cmd->callback([=] {
       RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
@@ -208,9 +231,11 @@ void RegisterStudy(CLI::App& app) {
         for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
         int adaptive = 0;  // staircase / quest-plus phases: trials chosen at run time
         for (const auto& ph : p.phases) adaptive += ph.adaptive.has_value();
-        fmt::print("{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per participant{}\n",
-                   *path, p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated,
-                   adaptive ? fmt::format(", {} adaptive phase(s) (staircase/quest-plus)", adaptive) : "");
+        fmt::print(
+            "{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per "
+            "participant{}\n",
+            *path, p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated,
+            adaptive ? fmt::format(", {} adaptive phase(s) (staircase/quest-plus)", adaptive) : "");
         return kExitOk;
       });
     });
@@ -223,13 +248,20 @@ void RegisterStudy(CLI::App& app) {
     auto as_json = std::make_shared<bool>(false);
     auto* cmd = study->add_subcommand(
         "plan",
-        "Print a participant's exact trial list (deterministic from protocol, seed and plan index).\n"
+        "Print a participant's exact trial list (deterministic from protocol, seed and plan "
+        "index).\n"
         "Trials are numbered from 1, as the console and the log number them; plan_index (JSON,\n"
         "exports) counts from 0.");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
-    auto* idx = cmd->add_option("--index", *index, "Plan index of the participant (0-based; 'study run' gives the next free one)")
-                    ->capture_default_str()->check(CLI::NonNegativeNumber);
-    auto* part = cmd->add_option("--participant", *code, "Participant code (e.g. P07) of a participant in --db: their plan index");
+    auto* idx =
+        cmd->add_option(
+               "--index", *index,
+               "Plan index of the participant (0-based; 'study run' gives the next free one)")
+            ->capture_default_str()
+            ->check(CLI::NonNegativeNumber);
+    auto* part =
+        cmd->add_option("--participant", *code,
+                        "Participant code (e.g. P07) of a participant in --db: their plan index");
     cmd->add_option("--db", *db, "Study database, to look up --participant's plan index");
     part->excludes(idx);
     cmd->add_flag("--json", *as_json, "Print the plan as JSON");
@@ -239,28 +271,42 @@ void RegisterStudy(CLI::App& app) {
         if (!code->empty()) {
           if (db->empty())
             throw InputError(kCommandLine, 0, "--participant",
-                             "a participant code is looked up in a study database: add --db (or give --index N)");
+                             "a participant code is looked up in a study database: add --db (or "
+                             "give --index N)");
           *index = runner::ParticipantIndex(*db, p.name, *code);
         }
         const auto plan = protocols::Plan(p, *index);
         if (*as_json) {
           json j = json::array();
           for (const auto& t : plan)
-            j.push_back({{"trial", t.index + 1}, {"plan_index", t.index}, {"phase", protocols::ToString(t.phase)}, {"material", t.material},
-                         {"comparison", t.comparison}, {"method", t.method}, {"repetition", t.repetition},
-                         {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
-          fmt::print("{}\n", json{{"study", p.name}, {"participant_index", *index},
-                                  {"participant_seed", protocols::ParticipantSeed(p, *index)}, {"trials", j}}.dump(2));
+            j.push_back({{"trial", t.index + 1},
+                         {"plan_index", t.index},
+                         {"phase", protocols::ToString(t.phase)},
+                         {"material", t.material},
+                         {"comparison", t.comparison},
+                         {"method", t.method},
+                         {"repetition", t.repetition},
+                         {"left", t.left},
+                         {"right", t.right},
+                         {"rated", t.rated},
+                         {"break_before", t.break_before}});
+          fmt::print("{}\n", json{{"study", p.name},
+                                  {"participant_index", *index},
+                                  {"participant_seed", protocols::ParticipantSeed(p, *index)},
+                                  {"trials", j}}
+                                 .dump(2));
           return kExitOk;
         }
-        fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n", p.name,
-                   code->empty() ? "" : *code + ", ", *index, protocols::ParticipantSeed(p, *index));
-        fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", "#", "phase", "material", "comparison",
-                   "method", "rep", "left", "right");
+        fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n",
+                   p.name, code->empty() ? "" : *code + ", ", *index,
+                   protocols::ParticipantSeed(p, *index));
+        fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", "#", "phase",
+                   "material", "comparison", "method", "rep", "left", "right");
         for (const auto& t : plan) {
           if (t.break_before) fmt::print("      --- break ---\n");
-          fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index + 1, protocols::ToString(t.phase),
-                     t.material, t.comparison, t.method, t.repetition, t.left, t.right);
+          fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index + 1,
+                     protocols::ToString(t.phase), t.material, t.comparison, t.method, t.repetition,
+                     t.left, t.right);
         }
         return kExitOk;
       });
@@ -269,37 +315,51 @@ void RegisterStudy(CLI::App& app) {
 
   // Adds the device/actuator/screen options shared by run and resume.
   auto hardware_options = [](CLI::App* cmd, RunArgs& a) {
-    cmd->add_option("--device", a.device,
-                    "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by the\n"
-                    "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
-                    "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
-                    "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
+    cmd->add_option(
+           "--device", a.device,
+           "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by "
+           "the\n"
+           "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
+           "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
+           "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
         ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
         ->capture_default_str();
     cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
-    cmd->add_option("--actuator", a.actuator, "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
+    cmd->add_option("--actuator", a.actuator,
+                    "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
         ->check(CLI::IsMember({"audio", "none"}))
         ->capture_default_str();
-    cmd->add_option("--audio-device", a.audio_device, "PortAudio output device (name substring; default: the default output)");
-    cmd->add_option("--full-scale", a.full_scale_mps2, "Acceleration at the sound card's full scale [m/s^2] (calibration)")
+    cmd->add_option("--audio-device", a.audio_device,
+                    "PortAudio output device (name substring; default: the default output)");
+    cmd->add_option("--full-scale", a.full_scale_mps2,
+                    "Acceleration at the sound card's full scale [m/s^2] (calibration)")
         ->capture_default_str();
-    cmd->add_option("--noise-rms", a.noise_rms, "Masking noise level (RMS, full-scale units) when the protocol asks for it")
-        ->capture_default_str()->check(CLI::Range(0.0, 0.5));
-    cmd->add_option("--rig", a.rig_file,
-                    "Rig file (TOML): device and sample frames, stylus tip offset, force calibration\n"
-                    "(docs/hardware.md; 'hapticlab rig show'). Default: the back-end's built-in rig");
-    cmd->add_option("--rating-box", a.rating_box, "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
-    cmd->add_option("--rating-layout", a.rating_layout, "TOML layout of the box's reports (docs/hardware.md)");
-    cmd->add_flag("--ui", a.ui, "Participant window and experimenter console (GLFW; needs a display)");
-    cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
+    cmd->add_option("--noise-rms", a.noise_rms,
+                    "Masking noise level (RMS, full-scale units) when the protocol asks for it")
+        ->capture_default_str()
+        ->check(CLI::Range(0.0, 0.5));
+    cmd->add_option(
+        "--rig", a.rig_file,
+        "Rig file (TOML): device and sample frames, stylus tip offset, force calibration\n"
+        "(docs/hardware.md; 'hapticlab rig show'). Default: the back-end's built-in rig");
+    cmd->add_option("--rating-box", a.rating_box,
+                    "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
+    cmd->add_option("--rating-layout", a.rating_layout,
+                    "TOML layout of the box's reports (docs/hardware.md)");
+    cmd->add_flag("--ui", a.ui,
+                  "Participant window and experimenter console (GLFW; needs a display)");
+    cmd->add_flag("--fullscreen", a.fullscreen,
+                  "Participant window full screen on the last monitor");
     cmd->add_option("--ui-speed", a.ui_speed,
                     "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
-        ->capture_default_str()->check(CLI::Range(0.1, 1000.0));
+        ->capture_default_str()
+        ->check(CLI::Range(0.1, 1000.0));
     AddRtOptions(cmd, a.rt);
   };
   // What study run and resume record and print.
   auto session_options = [](CLI::App* cmd, RunArgs& a) {
-    cmd->add_option("--record", a.record, "What to record per trial")->check(CLI::IsMember({"all", "force", "none"}))
+    cmd->add_option("--record", a.record, "What to record per trial")
+        ->check(CLI::IsMember({"all", "force", "none"}))
         ->capture_default_str();
     cmd->add_flag("--json", a.json, "Print the summary as JSON");
     cmd->add_flag("--quiet", a.quiet, "No per-trial progress");
@@ -311,18 +371,23 @@ void RegisterStudy(CLI::App& app) {
         "Run a new participant through the protocol and record everything to the database.\n"
         "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
         "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
-        "participant answers with --ui, else the phase's simulated observer; docs/psychophysics.md).\n"
+        "participant answers with --ui, else the phase's simulated observer; "
+        "docs/psychophysics.md).\n"
         "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
-        "--stop-after, or trials that touched nothing): completed trials are recorded, continue with\n"
+        "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
+        "with\n"
         "'study resume'; 2 bad input; 1 any other failure.");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
-    cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")->required();
-    cmd->add_option("--index", a->index, "Plan index of the participant (default: the next free one)");
+    cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")
+        ->required();
+    cmd->add_option("--index", a->index,
+                    "Plan index of the participant (default: the next free one)");
     hardware_options(cmd, *a);
     session_options(cmd, *a);
     cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
-    cmd->add_option("--inject-faults", a->fault_rate, "Sim: probability of a device fault per trial")
+    cmd->add_option("--inject-faults", a->fault_rate,
+                    "Sim: probability of a device fault per trial")
         ->check(CLI::Range(0.0, 0.9));
     cmd->callback([a] {
       RunStudyGuarded([&] {
@@ -330,7 +395,8 @@ void RegisterStudy(CLI::App& app) {
         runner::RunOptions o;
         o.participant_index = a->index;
         o.fault_rate = a->fault_rate;
-        return RunSession(*a, p.name, o, [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
+        return RunSession(*a, p.name, o,
+                          [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
       });
     });
   }
@@ -338,7 +404,8 @@ void RegisterStudy(CLI::App& app) {
     auto a = std::make_shared<RunArgs>();
     auto* cmd = study->add_subcommand(
         "resume",
-        "Continue a participant's session where a crash, abort or signal left it, in the mode it was\n"
+        "Continue a participant's session where a crash, abort or signal left it, in the mode it "
+        "was\n"
         "recorded in (device, actuator, --ui, rating box): those options default to the recorded\n"
         "ones, and a different mode is refused unless --change-mode is given (then it is logged).\n"
         "Exit status as for 'study run': 0 completed, 3 stopped again.");
@@ -347,50 +414,63 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
     hardware_options(cmd, *a);
     session_options(cmd, *a);
-    cmd->add_flag("--change-mode", a->change_mode,
-                  "Continue in the mode these options give although it differs from the recorded one\n"
-                  "(logged as a 'mode-change' event; every rating records its source)");
+    cmd->add_flag(
+        "--change-mode", a->change_mode,
+        "Continue in the mode these options give although it differs from the recorded one\n"
+        "(logged as a 'mode-change' event; every rating records its source)");
     cmd->callback([a, cmd] {
       RunStudyGuarded([&] {
         // Options not given take the recorded mode's values.
         const auto rec = runner::RecordedMode(a->db, a->participant);
         if (cmd->count("--device") == 0) a->device = rec.device;
-        if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded") a->actuator = rec.actuator;
+        if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded")
+          a->actuator = rec.actuator;
         if (cmd->count("--ui") == 0) a->ui = rec.screens;
         if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
           a->rating_box = rec.rater.substr(std::string("rating-box:").size());
         // Refused before any device or window is opened.
-        runner::CheckResumeMode(rec,
-                                {a->device, a->actuator, a->ui,
-                                 a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
-                                       : std::string("simulated")},
-                                a->change_mode, a->db, a->participant);
+        runner::CheckResumeMode(
+            rec,
+            {a->device, a->actuator, a->ui,
+             a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
+                   : std::string("simulated")},
+            a->change_mode, a->db, a->participant);
         runner::RunOptions o;
         o.change_mode = a->change_mode;
-        return RunSession(*a, "resume", o, [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
+        return RunSession(*a, "resume", o,
+                          [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
       });
     });
   }
   {
     auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand("status", "Progress of each participant: planned, completed, faulted, duplicates");
+    auto* cmd = study->add_subcommand(
+        "status", "Progress of each participant: planned, completed, faulted, duplicates");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Only this participant");
-    cmd->add_flag("--json", a->json, "Print {\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
+    cmd->add_flag(
+        "--json", a->json,
+        "Print "
+        "{\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
     cmd->callback([a] {
       RunStudyGuarded([&] {
         const auto st = runner::StudyStatus(a->db, a->participant);
         if (a->json) {
           json ps = json::array();
           for (const auto& s : st)
-            ps.push_back({{"code", s.code}, {"planned", s.planned}, {"completed", s.completed}, {"faulted", s.faulted},
-                          {"duplicates", s.duplicates}, {"session_status", s.session_status}});
+            ps.push_back({{"code", s.code},
+                          {"planned", s.planned},
+                          {"completed", s.completed},
+                          {"faulted", s.faulted},
+                          {"duplicates", s.duplicates},
+                          {"session_status", s.session_status}});
           fmt::print("{}\n", json{{"participants", ps}}.dump(2));
         } else {
-          fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned", "completed", "faulted", "duplicates", "session");
+          fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned",
+                     "completed", "faulted", "duplicates", "session");
           for (const auto& s : st)
-            fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", s.code, s.planned, s.completed, s.faulted, s.duplicates,
-                       s.session_status);
+            fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", s.code, s.planned, s.completed,
+                       s.faulted, s.duplicates, s.session_status);
         }
         return kExitOk;
       });

@@ -4,21 +4,21 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <memory>
-#include <set>
 #include <mutex>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "cli_common.hpp"
-#include "fit_summary_json.hpp"
 #include "commands.hpp"
-#include "workbench_cli.hpp"
+#include "fit_summary_json.hpp"
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "workbench_cli.hpp"
 
 namespace hapticlab::cli {
 namespace workbench_cli {
@@ -36,8 +36,9 @@ std::string ErrorsLine(const Errors& e) {
   std::string s = fmt::format("overall {:.4f}", e.overall);
   for (const auto& [k, v] : e.channel) s += fmt::format(", {} {:.4f}", k, v);
   if (e.rms.count("normal_force_N"))
-    s += fmt::format(" (rms: normal {:.4f} N, tangential {:.4f} N, friction ratio {:.4f})", e.rms.at("normal_force_N"),
-                     e.rms.at("tangential_N"), e.rms.at("friction_ratio"));
+    s += fmt::format(" (rms: normal {:.4f} N, tangential {:.4f} N, friction ratio {:.4f})",
+                     e.rms.at("normal_force_N"), e.rms.at("tangential_N"),
+                     e.rms.at("friction_ratio"));
   return s;
 }
 
@@ -53,7 +54,11 @@ nlohmann::json FitReportJson(const FitReport& rep) {
   for (const auto& c : rep.channels) {
     fits.push_back(FitSummaryJson(c.summary));
     for (const auto& p : c.params)
-      est[p.effect][p.name] = {{"value", p.value}, {"sd", p.sd}, {"lo95", p.lo95}, {"hi95", p.hi95}, {"at_bound", p.at_bound}};
+      est[p.effect][p.name] = {{"value", p.value},
+                               {"sd", p.sd},
+                               {"lo95", p.lo95},
+                               {"hi95", p.hi95},
+                               {"at_bound", p.at_bound}};
   }
   return {{"fits", fits}, {"estimates", est}, {"usable", rep.IsUsable()}};
 }
@@ -68,7 +73,8 @@ using namespace workbench_cli;
 // ---------------------------------------------------------------------------------------------
 void AddEffectsList(CLI::App& app) {
   auto json = std::make_shared<bool>(false);
-  auto* cmd = app.add_subcommand("effects", "List the workbench's catalogue of physical effects with their parameters");
+  auto* cmd = app.add_subcommand(
+      "effects", "List the workbench's catalogue of physical effects with their parameters");
   cmd->add_flag("--json", *json, "As JSON");
   cmd->callback([json] {
     RunGuarded([&] {
@@ -81,16 +87,25 @@ void AddEffectsList(CLI::App& app) {
           ps.push_back({{"name", p.name}, {"unit", p.unit}, {"fitted", p.fitted}, {"doc", p.doc}});
           if (p.fitted) line += fmt::format("{}{} [{}]", line.empty() ? "" : ", ", p.name, p.unit);
         }
-        if (e->VibrationColumns()) line += fmt::format("{}{} coefficients per band", line.empty() ? "" : ", ", e->VibrationColumns());
-        j.push_back({{"name", e->name()}, {"channel", ChannelName(e->channel())}, {"params", ps},
-                     {"requires", e->requires_effects()}, {"description", e->description()}});
+        if (e->VibrationColumns())
+          line += fmt::format("{}{} coefficients per band", line.empty() ? "" : ", ",
+                              e->VibrationColumns());
+        j.push_back({{"name", e->name()},
+                     {"channel", ChannelName(e->channel())},
+                     {"params", ps},
+                     {"requires", e->requires_effects()},
+                     {"description", e->description()}});
         if (!*json)
           fmt::print("{} ({}{}): {}\n  parameters: {}\n\n", e->name(), ChannelName(e->channel()),
-                     e->requires_effects().empty() ? "" : fmt::format(", needs {}", fmt::join(e->requires_effects(), ", ")),
+                     e->requires_effects().empty()
+                         ? ""
+                         : fmt::format(", needs {}", fmt::join(e->requires_effects(), ", ")),
                      e->description(), line);
       }
-      if (*json) fmt::print("{}\n", j.dump(2));
-      else fmt::print("baseline (the thesis's model): {}\n", fmt::join(BaselineEffects(), ", "));
+      if (*json)
+        fmt::print("{}\n", j.dump(2));
+      else
+        fmt::print("baseline (the thesis's model): {}\n", fmt::join(BaselineEffects(), ", "));
       return kExitOk;
     });
   });
@@ -106,9 +121,10 @@ void AddMeasurement(CLI::App& app) {
       bool json = false;
     };
     auto o = std::make_shared<O>();
-    auto* cmd = grp->add_subcommand("check",
-                                    "Read a measurement CSV v1 (errors name file, line and column) and summarize it:\n"
-                                    "duration, rate, ranges per column, gaps, samples in contact, warnings.");
+    auto* cmd = grp->add_subcommand(
+        "check",
+        "Read a measurement CSV v1 (errors name file, line and column) and summarize it:\n"
+        "duration, rate, ranges per column, gaps, samples in contact, warnings.");
     cmd->add_option("FILE", o->file, "Measurement CSV v1")->required();
     cmd->add_flag("--json", o->json, "As JSON");
     cmd->callback([o] {
@@ -132,10 +148,13 @@ void AddMeasurement(CLI::App& app) {
                                  .dump(2));
           return kExitOk;
         }
-        fmt::print("{}: material '{}', {} samples, {:.3f} s at {:.1f} Hz, {} in contact, {} gap{} (longest {:.4g} s)\n",
-                   o->file, m.material, s.samples, s.duration_s, s.rate_hz, s.contact_samples, s.gaps, s.gaps == 1 ? "" : "s",
-                   s.max_gap_s);
-        for (const auto& [k, v] : s.ranges) fmt::print("  {:9s} {:+.6g} .. {:+.6g}\n", k, v.first, v.second);
+        fmt::print(
+            "{}: material '{}', {} samples, {:.3f} s at {:.1f} Hz, {} in contact, {} gap{} "
+            "(longest {:.4g} s)\n",
+            o->file, m.material, s.samples, s.duration_s, s.rate_hz, s.contact_samples, s.gaps,
+            s.gaps == 1 ? "" : "s", s.max_gap_s);
+        for (const auto& [k, v] : s.ranges)
+          fmt::print("  {:9s} {:+.6g} .. {:+.6g}\n", k, v.first, v.second);
         for (const auto& w : s.warnings) fmt::print("warning: {}\n", w);
         return kExitOk;
       });
@@ -151,14 +170,20 @@ void AddMeasurement(CLI::App& app) {
     auto o = std::make_shared<O>();
     auto* cmd = grp->add_subcommand(
         "simulate",
-        "Write a measurement of simulated human-like strokes (2-150 mm/s, 0.3-2.5 N, pauses, lift-offs)\n"
+        "Write a measurement of simulated human-like strokes (2-150 mm/s, 0.3-2.5 N, pauses, "
+        "lift-offs)\n"
         "on a ground-truth sample with the given effects (default: the baseline's), with sensor\n"
-        "noise. For learning the workbench and testing a pipeline; the seed is recorded in the file.");
+        "noise. For learning the workbench and testing a pipeline; the seed is recorded in the "
+        "file.");
     cmd->add_option("-o,--out", o->out, "Measurement CSV v1 to write")->required();
     cmd->add_option("--effects", o->effects, "The truth's effects (default: the baseline's)");
     cmd->add_option("--add", o->add, "Effects on top of the baseline's (repeatable)");
-    cmd->add_option("--duration", o->duration_s, "Length [s]")->capture_default_str()->check(CLI::Range(5.0, 3600.0));
-    cmd->add_option("--rate", o->rate_hz, "Sample rate [Hz]")->capture_default_str()->check(CLI::Range(1000.0, 20000.0));
+    cmd->add_option("--duration", o->duration_s, "Length [s]")
+        ->capture_default_str()
+        ->check(CLI::Range(5.0, 3600.0));
+    cmd->add_option("--rate", o->rate_hz, "Sample rate [Hz]")
+        ->capture_default_str()
+        ->check(CLI::Range(1000.0, 20000.0));
     cmd->add_option("--seed", o->seed, "Seed of every random draw")->capture_default_str();
     cmd->callback([o] {
       RunGuarded([&] {
@@ -172,8 +197,8 @@ void AddMeasurement(CLI::App& app) {
         auto sim = Simulate(t);
         sim.m.material = "simulated";
         WriteMeasurementCsv(o->out, sim.m);
-        fmt::print("wrote {} ({} samples, truth: {}, seed {})\n", o->out, sim.m.rows.size(), fmt::join(t.effects, ", "),
-                   t.seed);
+        fmt::print("wrote {} ({} samples, truth: {}, seed {})\n", o->out, sim.m.rows.size(),
+                   fmt::join(t.effects, ", "), t.seed);
         return kExitOk;
       });
     });

@@ -3,21 +3,21 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <memory>
-#include <set>
 #include <mutex>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "cli_common.hpp"
-#include "fit_summary_json.hpp"
 #include "commands.hpp"
-#include "workbench_cli.hpp"
+#include "fit_summary_json.hpp"
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "workbench_cli.hpp"
 
 namespace hapticlab::cli::workbench_cli {
 
@@ -28,25 +28,29 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Residual plots; with `before`, its residuals are drawn on the same axes (one plot per
 // dimension and quantity, so before and after share their scales). Speed is on a log axis.
-std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay& r, const std::string& dir,
-                               const Comparison* before, const Model* before_model) {
+std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay& r,
+                               const std::string& dir, const Comparison* before,
+                               const Model* before_model) {
   std::filesystem::create_directories(dir);
   std::vector<std::string> files;
-  static const std::map<std::string, std::string> kUnit = {{"normal_force_N", "normal-force residual [N]"},
-                                                           {"friction_N", "friction residual along the motion [N]"},
-                                                           {"friction_ratio", "friction-ratio residual"},
-                                                           {"vibration_dB", "band-power residual [dB]"}};
-  static const std::map<std::string, std::string> kX = {{"regime", "regime (0 pre-sliding, 1 transition, 2 sliding)"},
-                                                        {"speed", "log10 speed [mm/s]"},
-                                                        {"load", "normal force [N]"},
-                                                        {"direction", "direction of motion [deg]"},
-                                                        {"position", "tile (0-2 front, 3-5 middle, 6-8 back)"},
-                                                        {"time", "time [tenths of the measurement]"},
-                                                        {"band", "band centre [Hz]"}};
+  static const std::map<std::string, std::string> kUnit = {
+      {"normal_force_N", "normal-force residual [N]"},
+      {"friction_N", "friction residual along the motion [N]"},
+      {"friction_ratio", "friction-ratio residual"},
+      {"vibration_dB", "band-power residual [dB]"}};
+  static const std::map<std::string, std::string> kX = {
+      {"regime", "regime (0 pre-sliding, 1 transition, 2 sliding)"},
+      {"speed", "log10 speed [mm/s]"},
+      {"load", "normal force [N]"},
+      {"direction", "direction of motion [deg]"},
+      {"position", "tile (0-2 front, 3-5 middle, 6-8 back)"},
+      {"time", "time [tenths of the measurement]"},
+      {"band", "band centre [Hz]"}};
   for (const auto& [dim, qs] : c.breakdown)
     for (const auto& [q, rows] : qs) {
       const std::vector<BinRow>* brow = nullptr;
-      if (before && before->breakdown.count(dim) && before->breakdown.at(dim).count(q)) brow = &before->breakdown.at(dim).at(q);
+      if (before && before->breakdown.count(dim) && before->breakdown.at(dim).count(q))
+        brow = &before->breakdown.at(dim).at(q);
       stats::LinePlot p;
       p.title = fmt::format("{} by {}", q, dim);
       p.x_label = kX.count(dim) ? kX.at(dim) : dim;
@@ -61,7 +65,8 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
         p.x.push_back(x);
         mean.push_back(rows[k].mean);
         rms.push_back(rows[k].rms);
-        if (brow && k < brow->size()) bmean.push_back((*brow)[k].mean), brms.push_back((*brow)[k].rms);
+        if (brow && k < brow->size())
+          bmean.push_back((*brow)[k].mean), brms.push_back((*brow)[k].rms);
       }
       if (p.x.size() < 2) continue;
       if (brow && bmean.size() == mean.size()) {
@@ -69,7 +74,8 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
       } else {
         p.series = {{"mean", mean}, {"RMS", rms}};
       }
-      for (const auto& f : stats::DrawLinePlot(p, (std::filesystem::path(dir) / fmt::format("residual_{}_{}", dim, q)).string()))
+      for (const auto& f : stats::DrawLinePlot(
+               p, (std::filesystem::path(dir) / fmt::format("residual_{}_{}", dim, q)).string()))
         files.push_back(f);
     }
   // Traces: measured and predicted forces over the first 5 s.
@@ -77,15 +83,18 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
   Prediction bpred;
   if (before_model) bpred = Predict(*before_model, r);
   stats::LinePlot fn{"normal force, measured and model", "time [s]", "force [N]", {}, {}, false};
-  stats::LinePlot ft{"friction along the motion, measured and model", "time [s]", "force [N]", {}, {}, false};
+  stats::LinePlot ft{
+      "friction along the motion, measured and model", "time [s]", "force [N]", {}, {}, false};
   std::vector<double> a, b, b0, c2, d, d0;
-  for (std::size_t i = 0; i < r.samples().size() && r.samples()[i].t_s < r.samples().front().t_s + 5; ++i) {
+  for (std::size_t i = 0;
+       i < r.samples().size() && r.samples()[i].t_s < r.samples().front().t_s + 5; ++i) {
     const auto& s = r.samples()[i];
     fn.x.push_back(s.t_s);
     a.push_back(s.fn_N);
     b.push_back(pred.fn_N[i]);
     ft.x.push_back(s.t_s);
-    const double ux = s.speed_mps > 5e-4 ? s.vx_mps / s.speed_mps : 0, uy = s.speed_mps > 5e-4 ? s.vy_mps / s.speed_mps : 0;
+    const double ux = s.speed_mps > 5e-4 ? s.vx_mps / s.speed_mps : 0,
+                 uy = s.speed_mps > 5e-4 ? s.vy_mps / s.speed_mps : 0;
     c2.push_back(-(s.ftx_N * ux + s.fty_N * uy));
     d.push_back(-(pred.ftx_N[i] * ux + pred.fty_N[i] * uy));
     if (before_model) {
@@ -100,8 +109,12 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
     ft.series.push_back({"model (before)", d0});
   }
   if (fn.x.size() > 1) {
-    for (const auto& f : stats::DrawLinePlot(fn, (std::filesystem::path(dir) / "trace_normal_force").string())) files.push_back(f);
-    for (const auto& f : stats::DrawLinePlot(ft, (std::filesystem::path(dir) / "trace_friction").string())) files.push_back(f);
+    for (const auto& f :
+         stats::DrawLinePlot(fn, (std::filesystem::path(dir) / "trace_normal_force").string()))
+      files.push_back(f);
+    for (const auto& f :
+         stats::DrawLinePlot(ft, (std::filesystem::path(dir) / "trace_friction").string()))
+      files.push_back(f);
   }
   return files;
 }
@@ -127,7 +140,8 @@ std::vector<Failure> LargestFailures(const Comparison& c, std::size_t count) {
         if (row.n >= 50 && ref > 0)
           all.push_back({dim, q, row.label, row.n, row.mean, row.rms, std::abs(row.mean) / ref});
     }
-  std::stable_sort(all.begin(), all.end(), [](const Failure& a, const Failure& b) { return a.score > b.score; });
+  std::stable_sort(all.begin(), all.end(),
+                   [](const Failure& a, const Failure& b) { return a.score > b.score; });
   std::vector<Failure> out;
   std::set<std::pair<std::string, std::string>> seen;  // one bin per dimension and quantity
   for (const auto& f : all)
@@ -155,9 +169,11 @@ void AddCompare(CLI::App& app) {
   cmd->add_option("--model", o->model, "Model (workbench or renderer material TOML)")->required();
   cmd->add_option("--measurement", o->measurement, "Measurement CSV v1")->required();
   cmd->add_flag("--json", o->json,
-                "Print {\"error\": x, \"channels\": {...}, \"summary\": {\"axes\", \"largest\"}, \"breakdown\": {...}}");
+                "Print {\"error\": x, \"channels\": {...}, \"summary\": {\"axes\", \"largest\"}, "
+                "\"breakdown\": {...}}");
   cmd->add_option("--plots", o->plots, "Folder for residual plots (SVG and PNG)");
-  cmd->add_option("--before", o->before, "An earlier model whose residuals the plots show on the same axes");
+  cmd->add_option("--before", o->before,
+                  "An earlier model whose residuals the plots show on the same axes");
   cmd->callback([o] {
     RunGuarded([&] {
       const auto m = LoadModel(o->model);
@@ -180,11 +196,19 @@ void AddCompare(CLI::App& app) {
         for (const auto& [dim, qs] : c.breakdown)
           for (const auto& [q, rows] : qs)
             for (const auto& row : rows)
-              b[dim][q].push_back({{"bin", row.label}, {"n", row.n}, {"mean", row.mean}, {"rms", row.rms}});
+              b[dim][q].push_back(
+                  {{"bin", row.label}, {"n", row.n}, {"mean", row.mean}, {"rms", row.rms}});
         for (const auto& x : axes)
-          ax.push_back({{"axis", x.axis}, {"channel", x.channel}, {"share", x.share}, {"description", x.description}});
+          ax.push_back({{"axis", x.axis},
+                        {"channel", x.channel},
+                        {"share", x.share},
+                        {"description", x.description}});
         for (const auto& f : largest)
-          lg.push_back({{"dimension", f.dimension}, {"quantity", f.quantity}, {"bin", f.bin}, {"n", f.n}, {"mean", f.mean},
+          lg.push_back({{"dimension", f.dimension},
+                        {"quantity", f.quantity},
+                        {"bin", f.bin},
+                        {"n", f.n},
+                        {"mean", f.mean},
                         {"rms", f.rms}});
         auto j = ErrorsJson(c.errors);
         fmt::print("{}\n", nlohmann::json{{"error", c.errors.overall},
@@ -199,16 +223,20 @@ void AddCompare(CLI::App& app) {
       fmt::print("{} on {}: {}\n", o->model, o->measurement, ErrorsLine(c.errors));
       fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
       for (std::size_t k = 0; k < axes.size() && k < 5; ++k)
-        fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, axes[k].channel, 100 * axes[k].share, axes[k].description);
+        fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, axes[k].channel,
+                   100 * axes[k].share, axes[k].description);
       fmt::print("\nlargest systematic residuals:\n");
       for (const auto& f : largest)
-        fmt::print("  {} by {}, {}: mean {:+.4f}, rms {:.4f} (n {})\n", f.quantity, f.dimension, f.bin, f.mean, f.rms, f.n);
+        fmt::print("  {} by {}, {}: mean {:+.4f}, rms {:.4f} (n {})\n", f.quantity, f.dimension,
+                   f.bin, f.mean, f.rms, f.n);
       fmt::print("\ndetail:\n");
       for (const auto& [dim, qs] : c.breakdown)
         for (const auto& [q, rows] : qs) {
           fmt::print("\n{} by {}:\n", q, dim);
           for (const auto& row : rows)
-            if (row.n) fmt::print("  {:28s} n {:6d}  mean {:+.4f}  rms {:.4f}\n", row.label, row.n, row.mean, row.rms);
+            if (row.n)
+              fmt::print("  {:28s} n {:6d}  mean {:+.4f}  rms {:.4f}\n", row.label, row.n, row.mean,
+                         row.rms);
         }
       if (!files.empty()) fmt::print("\nplots: {} files in {}\n", files.size(), o->plots);
       return kExitOk;

@@ -2,21 +2,21 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <memory>
-#include <set>
 #include <mutex>
-#include <unistd.h>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "cli_common.hpp"
-#include "fit_summary_json.hpp"
 #include "commands.hpp"
-#include "workbench_cli.hpp"
+#include "fit_summary_json.hpp"
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "workbench_cli.hpp"
 
 namespace hapticlab::cli::workbench_cli {
 
@@ -38,15 +38,19 @@ void AddFit(CLI::App& app) {
       "(before and after when there is a change), on all data and held out (fitted on the even\n"
       "1 s blocks, scored on the odd ones), each solve's termination, iterations, cost and\n"
       "parameters at bounds, the parameters with 95 % intervals (cluster jackknife over\n"
-      "3 s clusters of blocks), and writes the fitted model (a material TOML the renderer plays, with a\n"
+      "3 s clusters of blocks), and writes the fitted model (a material TOML the renderer plays, "
+      "with a\n"
       "[workbench] table of every parameter). Progress goes to stderr unless --quiet.");
-  cmd->add_option("--measurement", o->measurement, "Measurement CSV v1 (with acc_mps2 for the vibration channel)")
+  cmd->add_option("--measurement", o->measurement,
+                  "Measurement CSV v1 (with acc_mps2 for the vibration channel)")
       ->required();
-  cmd->add_option("--model", o->model, "Start from this model (workbench or renderer material TOML)");
+  cmd->add_option("--model", o->model,
+                  "Start from this model (workbench or renderer material TOML)");
   cmd->add_option("--add", o->add, "Effect to add (repeatable); one of: " + CatalogueNames());
   cmd->add_option("-o,--out", o->out, "Fitted model to write (.toml)")->required();
   cmd->add_flag("--json", o->json,
-                "Print {before, after, held_out:{before, after}, effects, params, estimates, fits, usable} as JSON");
+                "Print {before, after, held_out:{before, after}, effects, params, estimates, fits, "
+                "usable} as JSON");
   cmd->add_flag("--quiet", o->quiet, "No progress lines on stderr");
   cmd->callback([o] {
     RunGuarded([&] {
@@ -92,18 +96,20 @@ void AddFit(CLI::App& app) {
         nlohmann::json params;
         for (const auto& [e, ps] : after.params)
           for (const auto& [k, v] : ps) params[e][k] = v;
-        auto j = nlohmann::json{{"before", ErrorsJson(e_before)},
-                                {"after", ErrorsJson(e_after)},
-                                {"held_out", {{"before", ErrorsJson(h_before)}, {"after", ErrorsJson(h_after)}}},
-                                {"effects", after.effects},
-                                {"params", params},
-                                {"out", o->out}};
+        auto j = nlohmann::json{
+            {"before", ErrorsJson(e_before)},
+            {"after", ErrorsJson(e_after)},
+            {"held_out", {{"before", ErrorsJson(h_before)}, {"after", ErrorsJson(h_after)}}},
+            {"effects", after.effects},
+            {"params", params},
+            {"out", o->out}};
         j.update(FitReportJson(rep));
         fmt::print("{}\n", j.dump(2));
       } else {
         fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
         if (changes) {
-          fmt::print("before ({}): {}\n", given ? "model as given" : "baseline, fitted", ErrorsLine(e_before));
+          fmt::print("before ({}): {}\n", given ? "model as given" : "baseline, fitted",
+                     ErrorsLine(e_before));
           fmt::print("after  (fitted):          {}\n", ErrorsLine(e_after));
           if (!o->add.empty()) fmt::print("held out, before: {}\n", ErrorsLine(h_before));
           fmt::print("held out{}: {}\n", o->add.empty() ? "" : ", after ", ErrorsLine(h_after));
@@ -114,13 +120,16 @@ void AddFit(CLI::App& app) {
         for (const auto& c : rep.channels) {
           fmt::print("{}\n", FitSummaryLine(c.summary));
           for (const auto& p : c.params)
-            fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name, p.value, p.sd, p.lo95,
-                       p.hi95, p.at_bound ? "  AT A BOUND" : "");
+            fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name,
+                       p.value, p.sd, p.lo95, p.hi95, p.at_bound ? "  AT A BOUND" : "");
         }
         fmt::print("wrote {}\n", o->out);
       }
       if (!rep.IsUsable()) {
-        fmt::print(stderr, "fit: a channel's fit is not usable (see the fit lines); {} was written for inspection\n", o->out);
+        fmt::print(stderr,
+                   "fit: a channel's fit is not usable (see the fit lines); {} was written for "
+                   "inspection\n",
+                   o->out);
         return kExitFailure;
       }
       return kExitOk;

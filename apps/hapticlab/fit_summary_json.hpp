@@ -24,8 +24,9 @@ inline nlohmann::json FitSummaryJson(const modeling::wb::FitSummary& s) {
 }
 
 inline std::string FitSummaryLine(const modeling::wb::FitSummary& s) {
-  std::string line = fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}", s.what, s.termination, s.iterations,
-                                 s.initial_cost, s.final_cost, s.usable ? "" : " -- NOT USABLE");
+  std::string line =
+      fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}", s.what, s.termination,
+                  s.iterations, s.initial_cost, s.final_cost, s.usable ? "" : " -- NOT USABLE");
   if (!s.at_bounds.empty()) line += fmt::format("; at a bound: {}", fmt::join(s.at_bounds, ", "));
   return line;
 }

@@ -45,7 +45,10 @@ class RestingDevice final : public devices::HapticDevice {
 };
 
 json Percentiles(const LatencySummary& s) {
-  return {{"p50", s.Quantile(0.5) * 1e6}, {"p99", s.Quantile(0.99) * 1e6}, {"p999", s.Quantile(0.999) * 1e6}, {"max", s.max_s * 1e6}};
+  return {{"p50", s.Quantile(0.5) * 1e6},
+          {"p99", s.Quantile(0.99) * 1e6},
+          {"p999", s.Quantile(0.999) * 1e6},
+          {"max", s.max_s * 1e6}};
 }
 
 // cyclictest-like: count per microsecond of lateness up to the largest non-empty one (at most
@@ -71,22 +74,32 @@ void PrintHistogram(const LatencySummary& s) {
 }  // namespace
 
 void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
-  cmd->add_option("--rt-priority", rt.priority,
-                  "SCHED_FIFO priority of the force loop (the vibration loop gets one less); 0: normal\n"
-                  "scheduling. Needs rtprio in limits.conf or CAP_SYS_NICE (docs/hardware.md); a refusal is\n"
-                  "reported and the loops run at normal priority")
-      ->capture_default_str()->check(CLI::Range(0, 1000));
-  cmd->add_option("--spin-us", rt.spin_us, "Busy-wait this long before each force-loop deadline [us] (0: sleep only)")
-      ->capture_default_str()->check(CLI::Range(0.0, 500.0));
-  cmd->add_flag("--lock-memory", rt.lock_memory, "mlockall(MCL_CURRENT|MCL_FUTURE) before the loops start (needs memlock)");
-  cmd->add_option("--cpu", rt.cpu, "Pin the force loop to this CPU (the vibration loop to the next); -1: no pinning")
-      ->capture_default_str()->check(CLI::Range(-1, 1023));
+  cmd->add_option(
+         "--rt-priority", rt.priority,
+         "SCHED_FIFO priority of the force loop (the vibration loop gets one less); 0: normal\n"
+         "scheduling. Needs rtprio in limits.conf or CAP_SYS_NICE (docs/hardware.md); a refusal "
+         "is\n"
+         "reported and the loops run at normal priority")
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000));
+  cmd->add_option("--spin-us", rt.spin_us,
+                  "Busy-wait this long before each force-loop deadline [us] (0: sleep only)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 500.0));
+  cmd->add_flag("--lock-memory", rt.lock_memory,
+                "mlockall(MCL_CURRENT|MCL_FUTURE) before the loops start (needs memlock)");
+  cmd->add_option("--cpu", rt.cpu,
+                  "Pin the force loop to this CPU (the vibration loop to the next); -1: no pinning")
+      ->capture_default_str()
+      ->check(CLI::Range(-1, 1023));
 }
 
 int RunTimingCheck(const TimingCheckArgs& a) {
-  if (a.device != "sim") throw InputError(kCommandLine, 0, "--device", "with --clock real only --device sim (a resting simulated grip) is supported");
+  if (a.device != "sim")
+    throw InputError(kCommandLine, 0, "--device",
+                     "with --clock real only --device sim (a resting simulated grip) is supported");
   const auto model = a.render.empty() ? sim::PlaceholderModel(sim::MaterialProfile{.id = "check"})
-                                       : renderer::LoadMaterial(a.render);
+                                      : renderer::LoadMaterial(a.render);
   renderer::RenderOptions ro;
   ro.force_rate_hz = a.rate_hz;
   ro.vibration = a.vibration;
@@ -99,12 +112,14 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   if (!a.render.empty()) {
     Rng rng(1);
     sim::Stroke stroke = sim::DrawStroke(rng);
-    const double relief_m = model.geometry ? model.geometry->max_m() - model.geometry->min_m() : 0.0;
+    const double relief_m =
+        model.geometry ? model.geometry->max_m() - model.geometry->min_m() : 0.0;
     hand.Begin(stroke, Eigen::Isometry3d::Identity(), model.contact.layer_thickness_m + relief_m,
-               model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz,
-               ro.vibration_rate_hz);
+               model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+               ro.force_rate_hz, ro.vibration_rate_hz);
   }
-  devices::HapticDevice& dev = a.render.empty() ? static_cast<devices::HapticDevice&>(resting) : stroking;
+  devices::HapticDevice& dev =
+      a.render.empty() ? static_cast<devices::HapticDevice&>(resting) : stroking;
   std::unique_ptr<devices::AudioOutput> audio;
   if (a.actuator == "audio") {
     devices::AudioConfig c;
@@ -124,10 +139,11 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   // The verdict: the loop kept its rate (within 1 %) and never started a tick a whole period late.
   const bool rate_ok = std::abs(st.achieved_force_rate_hz - a.rate_hz) <= 0.01 * a.rate_hz;
   const bool ok = rate_ok && st.force_deadline_misses == 0;
-  const std::string verdict = ok ? fmt::format("ok for {:.0f} Hz", a.rate_hz)
-                                 : fmt::format("NOT ok for {:.0f} Hz ({})", a.rate_hz,
-                                               rate_ok ? fmt::format("{} deadline misses", st.force_deadline_misses)
-                                                       : fmt::format("achieved {:.1f} Hz", st.achieved_force_rate_hz));
+  const std::string verdict =
+      ok ? fmt::format("ok for {:.0f} Hz", a.rate_hz)
+         : fmt::format("NOT ok for {:.0f} Hz ({})", a.rate_hz,
+                       rate_ok ? fmt::format("{} deadline misses", st.force_deadline_misses)
+                               : fmt::format("achieved {:.1f} Hz", st.achieved_force_rate_hz));
   if (a.json) {
     json j = {{"device", a.device},
               {"render", a.render.empty() ? json(nullptr) : json(a.render)},
@@ -151,22 +167,28 @@ int RunTimingCheck(const TimingCheckArgs& a) {
               {"verdict", verdict},
               {"ok", ok}};
     if (a.vibration)
-      j["vibration"] = {{"rate_hz", st.achieved_vibration_rate_hz}, {"jitter_us", Percentiles(tm.vibration_late)},
-                        {"misses", st.vibration_deadline_misses}, {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
+      j["vibration"] = {{"rate_hz", st.achieved_vibration_rate_hz},
+                        {"jitter_us", Percentiles(tm.vibration_late)},
+                        {"misses", st.vibration_deadline_misses},
+                        {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
     fmt::print("{}\n", j.dump(2));
   } else {
-    fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n", st.achieved_force_rate_hz,
-               a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
+    fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n",
+               st.achieved_force_rate_hz, a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
     if (!a.render.empty())
-      fmt::print("rendering {} with a simulated hand stroking it: in contact on {} of {} ticks\n", a.render,
-                 st.contact_ticks, st.force_ticks);
-    fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n", st.force_thread.priority_status,
-               st.force_thread.affinity_status, st.memory.status, st.force_thread.timer_slack_ns);
-    fmt::print("wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses {}\n",
-               tm.force_late.Quantile(0.5) * 1e6, tm.force_late.Quantile(0.99) * 1e6, tm.force_late.Quantile(0.999) * 1e6,
-               tm.force_late.max_s * 1e6, st.force_deadline_misses);
-    fmt::print("tick duration [us]: p50 {:.1f}, p99 {:.1f}, max {:.1f}; audio underruns {}\n", tm.force_tick.Quantile(0.5) * 1e6,
-               tm.force_tick.Quantile(0.99) * 1e6, tm.force_tick.max_s * 1e6, st.audio_underruns);
+      fmt::print("rendering {} with a simulated hand stroking it: in contact on {} of {} ticks\n",
+                 a.render, st.contact_ticks, st.force_ticks);
+    fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n",
+               st.force_thread.priority_status, st.force_thread.affinity_status, st.memory.status,
+               st.force_thread.timer_slack_ns);
+    fmt::print(
+        "wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses "
+        "{}\n",
+        tm.force_late.Quantile(0.5) * 1e6, tm.force_late.Quantile(0.99) * 1e6,
+        tm.force_late.Quantile(0.999) * 1e6, tm.force_late.max_s * 1e6, st.force_deadline_misses);
+    fmt::print("tick duration [us]: p50 {:.1f}, p99 {:.1f}, max {:.1f}; audio underruns {}\n",
+               tm.force_tick.Quantile(0.5) * 1e6, tm.force_tick.Quantile(0.99) * 1e6,
+               tm.force_tick.max_s * 1e6, st.audio_underruns);
     fmt::print("histogram of wake-up lateness (1 us rows, ticks):\n");
     PrintHistogram(tm.force_late);
     fmt::print("verdict: {} (period {:.0f} us)\n", verdict, period_s * 1e6);

@@ -3,7 +3,6 @@
 // force) or, with --render MODEL, a simulated hand stroking the rendered model.
 
 #include <CLI/CLI.hpp>
-
 #include <string>
 
 #include "hapticlab/runner/rt_thread.hpp"
@@ -23,8 +22,8 @@ struct TimingCheckArgs {
   /// so the commanded force is zero.
   std::string render;
   double seconds = 2;
-  double rate_hz = 1000;          ///< force loop rate
-  bool vibration = true;          ///< run the vibration loop (10 kHz)
+  double rate_hz = 1000;  ///< force loop rate
+  bool vibration = true;  ///< run the vibration loop (10 kHz)
   bool json = false;
   runner::RtThreadOptions rt;
 };

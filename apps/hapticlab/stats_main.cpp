@@ -16,7 +16,8 @@ int main(int argc, char** argv) {
       "shapiro, lmm) on any long-format CSV, in a binary that starts fast (see docs/analysis.md).\n"
       "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.",
       "hapticlab-stats"};
-  app.set_version_flag("--version", std::string("hapticlab-stats ") + hapticlab::kVersion + " (" + hapticlab::kGitSha + ")");
+  app.set_version_flag("--version", std::string("hapticlab-stats ") + hapticlab::kVersion + " (" +
+                                        hapticlab::kGitSha + ")");
   app.require_subcommand(1);
   AddStatsCommands(app);
   return ParseAndRun(app, argc, argv);

@@ -97,7 +97,8 @@ CsvTable ParseCsv(const std::string& text, const std::string& name) {
       std::string c = line.substr(1);
       t.comments.push_back(Trim(c));
       const auto colon = c.find(':');
-      if (colon != std::string::npos) t.metadata[Trim(c.substr(0, colon))] = Trim(c.substr(colon + 1));
+      if (colon != std::string::npos)
+        t.metadata[Trim(c.substr(0, colon))] = Trim(c.substr(colon + 1));
       continue;
     }
     auto cells = SplitLine(line, name, lineno);

@@ -18,9 +18,9 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
   m.file = name;
   m.metadata = t.metadata;
   if (auto it = t.metadata.find("material"); it != t.metadata.end()) m.material = it->second;
-  const bool tagged = !t.comments.empty() && t.comments[0].rfind("hapticlab-measurement v1", 0) == 0;
-  if (!tagged)
-    throw InputError(name, 1, "", "first line must be '# hapticlab-measurement v1'");
+  const bool tagged =
+      !t.comments.empty() && t.comments[0].rfind("hapticlab-measurement v1", 0) == 0;
+  if (!tagged) throw InputError(name, 1, "", "first line must be '# hapticlab-measurement v1'");
   const std::size_t ct = t.Require("t_s");
   const std::size_t cx = t.Require("x_m"), cy = t.Require("y_m"), cz = t.Require("z_m");
   const auto cvx = t.Find("vx_mps"), cvy = t.Find("vy_mps"), cvz = t.Find("vz_mps");
@@ -35,7 +35,8 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
   m.row_lines = t.row_lines;
   auto num = [&](std::size_t r, std::size_t c) {
     const double v = t.Number(r, c);
-    if (!std::isfinite(v)) throw InputError(name, t.row_lines[r], t.header[c], "value is not finite");
+    if (!std::isfinite(v))
+      throw InputError(name, t.row_lines[r], t.header[c], "value is not finite");
     return v;
   };
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
@@ -46,15 +47,16 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
     if (m.has_forces) row.f_N = {num(r, *cfx), num(r, *cfy), num(r, *cfz)};
     if (ca) row.acc_mps2 = num(r, *ca);
     if (r > 0 && !(row.t_s > m.rows[r - 1].t_s))
-      throw InputError(name, t.row_lines[r], "t_s",
-                       "time must increase (previous row has t_s = " +
-                           std::to_string(m.rows[r - 1].t_s) + ")");
+      throw InputError(
+          name, t.row_lines[r], "t_s",
+          "time must increase (previous row has t_s = " + std::to_string(m.rows[r - 1].t_s) + ")");
   }
   if (!has_v) {
     const std::size_t n = m.rows.size();
     for (std::size_t r = 0; r < n; ++r) {
       const std::size_t a = r == 0 ? 0 : r - 1, b = r + 1 == n ? r : r + 1;
-      if (a != b) m.rows[r].v_mps = (m.rows[b].p_m - m.rows[a].p_m) / (m.rows[b].t_s - m.rows[a].t_s);
+      if (a != b)
+        m.rows[r].v_mps = (m.rows[b].p_m - m.rows[a].p_m) / (m.rows[b].t_s - m.rows[a].t_s);
     }
   }
   return m;
@@ -70,12 +72,14 @@ void WriteMeasurementCsv(const std::string& path, const Measurement& m) {
   std::fprintf(f, "# hapticlab-measurement v1\n");
   if (!m.material.empty()) std::fprintf(f, "# material: %s\n", m.material.c_str());
   for (const auto& [k, v] : m.metadata)
-    if (k != "material" && k != "hapticlab-measurement v1") std::fprintf(f, "# %s: %s\n", k.c_str(), v.c_str());
+    if (k != "material" && k != "hapticlab-measurement v1")
+      std::fprintf(f, "# %s: %s\n", k.c_str(), v.c_str());
   std::fprintf(f, "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N%s\n",
                m.has_acceleration ? ",acc_mps2" : "");
   for (const auto& r : m.rows) {
     std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", r.t_s, r.p_m.x(),
-                 r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(), r.v_mps.z(), r.f_N.x(), r.f_N.y(), r.f_N.z());
+                 r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(), r.v_mps.z(), r.f_N.x(), r.f_N.y(),
+                 r.f_N.z());
     if (m.has_acceleration) std::fprintf(f, ",%.17g", r.acc_mps2);
     std::fputc('\n', f);
   }

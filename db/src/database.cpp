@@ -2,23 +2,22 @@
 #include "hapticlab/db/database.hpp"
 
 #include <fcntl.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <openssl/evp.h>
 #include <sqlite3.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-#include <fmt/ranges.h>
-
 #include <algorithm>
-#include <chrono>
-#include <thread>
 #include <cctype>
-#include <cmath>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -32,13 +31,14 @@ using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
 
-
 bool IsPseudonymousCode(const std::string& code) {
   if (code.empty() || code.size() > 32) return false;
   bool digit = false;
   for (unsigned char c : code) {
-    if (std::isdigit(c)) digit = true;
-    else if (!std::isalpha(c) && c != '-' && c != '_') return false;
+    if (std::isdigit(c))
+      digit = true;
+    else if (!std::isalpha(c) && c != '-' && c != '_')
+      return false;
   }
   return digit;
 }
@@ -65,7 +65,8 @@ Database OpenForReading(const std::string& path) {
   if (report.size() > 400) report = report.substr(0, 400) + "...";
   throw InputError(path, 0, "",
                    "the database is damaged (SQLite quick_check failed), refused: restore it "
-                   "from a backup; details: " + report);
+                   "from a backup; details: " +
+                       report);
 }
 
 std::string HashText(const std::string& text) {
@@ -90,10 +91,12 @@ namespace {
 void CheckSharedMemoryFile(const std::string& path) {
   const std::string wal = path + "-wal";
   struct stat ws {};
-  if (::stat(wal.c_str(), &ws) == 0 && ((ws.st_mode & 0222) == 0 || ::access(wal.c_str(), W_OK) != 0))
-    throw InputError(wal, 0, "--db",
-                     "the database's write-ahead log is read-only; make it (and the -shm file) "
-                     "writable: it may hold committed trials that are not yet in the database file");
+  if (::stat(wal.c_str(), &ws) == 0 &&
+      ((ws.st_mode & 0222) == 0 || ::access(wal.c_str(), W_OK) != 0))
+    throw InputError(
+        wal, 0, "--db",
+        "the database's write-ahead log is read-only; make it (and the -shm file) "
+        "writable: it may hold committed trials that are not yet in the database file");
   const std::string shm = path + "-shm";
   struct stat st {};
   if (::stat(shm.c_str(), &st) != 0) return;  // none: SQLite creates it
@@ -112,7 +115,8 @@ void CheckSharedMemoryFile(const std::string& path) {
 // processes open one new file at once, all but one get SQLITE_BUSY at once. Retried here
 // for as long as the busy timeout allows.
 void EnterWalMode(sqlite3* db, int busy_timeout_ms) {
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
+  const auto deadline =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(busy_timeout_ms);
   for (;;) {
     const int rc = sqlite3_exec(db, "PRAGMA journal_mode = WAL", nullptr, nullptr, nullptr);
     if (rc == SQLITE_OK) return;
@@ -159,7 +163,8 @@ Database::Database(const std::string& path, const OpenOptions& options) : path_(
 Database::~Database() {
   if (db_) sqlite3_close(db_);
 }
-Database::Database(Database&& o) noexcept : path_(std::move(o.path_)), db_(std::exchange(o.db_, nullptr)) {}
+Database::Database(Database&& o) noexcept
+    : path_(std::move(o.path_)), db_(std::exchange(o.db_, nullptr)) {}
 Database& Database::operator=(Database&& o) noexcept {
   if (this != &o) {
     if (db_) sqlite3_close(db_);
@@ -225,11 +230,12 @@ std::string Database::QuickCheck() const {
 std::vector<std::string> Database::VerifyTrajectories() const {
   std::vector<std::string> out;
   {
-    Stmt q(db_,
-           "SELECT t.id, s.stream, s.samples_written, (SELECT coalesce(sum(c.sample_count), 0) "
-           "FROM trajectory_chunk c WHERE c.trial_id = t.id AND c.attempt = t.completed_attempt "
-           "AND c.stream = s.stream) FROM trial t JOIN trajectory_stream s ON s.trial_id = t.id "
-           "AND s.attempt = t.completed_attempt WHERE t.status = 'completed' ORDER BY t.id, s.stream");
+    Stmt q(
+        db_,
+        "SELECT t.id, s.stream, s.samples_written, (SELECT coalesce(sum(c.sample_count), 0) "
+        "FROM trajectory_chunk c WHERE c.trial_id = t.id AND c.attempt = t.completed_attempt "
+        "AND c.stream = s.stream) FROM trial t JOIN trajectory_stream s ON s.trial_id = t.id "
+        "AND s.attempt = t.completed_attempt WHERE t.status = 'completed' ORDER BY t.id, s.stream");
     while (q.Step())
       if (q.Int(2) != q.Int(3))
         out.push_back(fmt::format("trial {} stream {}: {} samples stored, {} at completion",
@@ -257,11 +263,12 @@ std::string Database::IntegrityCheck() const {
 
 void Database::Backup(const std::string& dest) const {
   // Refuse to overwrite: a backup over an older record (or the source) would lose it.
-  struct ::stat st{};
+  struct ::stat st {};
   if (::stat(dest.c_str(), &st) == 0)
     throw InputError(dest, 0, "DEST", "already exists; a backup never overwrites a file");
   sqlite3* out = nullptr;
-  if (sqlite3_open_v2(dest.c_str(), &out, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) != SQLITE_OK) {
+  if (sqlite3_open_v2(dest.c_str(), &out, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
+      SQLITE_OK) {
     const std::string msg = out ? sqlite3_errmsg(out) : "out of memory";
     sqlite3_close(out);
     throw InputError(dest, 0, "DEST", "cannot create: " + msg);
@@ -288,7 +295,8 @@ void Database::Backup(const std::string& dest) const {
 
 bool Database::Checkpoint() {
   int log_frames = 0, checkpointed = 0;
-  const int rc = sqlite3_wal_checkpoint_v2(db_, "main", SQLITE_CHECKPOINT_TRUNCATE, &log_frames, &checkpointed);
+  const int rc = sqlite3_wal_checkpoint_v2(db_, "main", SQLITE_CHECKPOINT_TRUNCATE, &log_frames,
+                                           &checkpointed);
   return rc == SQLITE_OK;
 }
 
@@ -315,8 +323,9 @@ WriterLease::WriterLease(const std::string& db_path) {
         // An older schema or a database being created: the generic message stands.
       }
       throw InputError(db_path, 0, "--db",
-                       holder + " is writing this study database; one writer at a time: wait "
-                       "for it to finish, or stop it, then resume");
+                       holder +
+                           " is writing this study database; one writer at a time: wait "
+                           "for it to finish, or stop it, then resume");
     }
     throw InputError(db_path, 0, "--db", std::string("cannot lock: ") + std::strerror(err));
   }

@@ -1,28 +1,26 @@
 // Database: studies, participants and sessions.
-#include "hapticlab/db/database.hpp"
-
 #include <fcntl.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <openssl/evp.h>
 #include <sqlite3.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-#include <fmt/ranges.h>
-
 #include <algorithm>
-#include <chrono>
-#include <thread>
 #include <cctype>
-#include <cmath>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/db/database.hpp"
 #include "schema.hpp"
 #include "sqlite_util.hpp"
 
@@ -32,13 +30,14 @@ using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
 
-
 std::int64_t Database::CreateStudy(const Study& st) {
   HL_REQUIRE(!st.name.empty(), "study name must not be empty");
   Stmt s(db_, "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES (?,?,?,?)");
-  s.Bind(1, st.name).Bind(2, st.protocol_toml)
+  s.Bind(1, st.name)
+      .Bind(2, st.protocol_toml)
       .Bind(3, st.protocol_hash.empty() ? HashText(st.protocol_toml) : st.protocol_hash)
-      .Bind(4, static_cast<std::int64_t>(st.seed)).Run();
+      .Bind(4, static_cast<std::int64_t>(st.seed))
+      .Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
@@ -52,18 +51,23 @@ std::vector<Study> Database::Studies() const {
   Stmt s(db_, "SELECT id, name, protocol_toml, protocol_hash, seed FROM study ORDER BY id");
   std::vector<Study> out;
   while (s.Step())
-    out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4))});
+    out.push_back(
+        {s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4))});
   return out;
 }
 
 std::int64_t Database::AddParticipant(const Participant& p) {
   if (!IsPseudonymousCode(p.code))
     throw InputError("<command line>", 0, "participant",
-                     "'" + p.code + "' is not a pseudonymous code: use 1-32 letters, digits, "
-                     "'-' or '_' including at least one digit (e.g. P07); never a name");
+                     "'" + p.code +
+                         "' is not a pseudonymous code: use 1-32 letters, digits, "
+                         "'-' or '_' including at least one digit (e.g. P07); never a name");
   Stmt s(db_, "INSERT INTO participant(study_id, code, idx, seed) VALUES (?,?,?,?)");
-  s.Bind(1, p.study_id).Bind(2, p.code).Bind(3, p.index)
-      .Bind(4, static_cast<std::int64_t>(p.seed)).Run();
+  s.Bind(1, p.study_id)
+      .Bind(2, p.code)
+      .Bind(3, p.index)
+      .Bind(4, static_cast<std::int64_t>(p.seed))
+      .Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
@@ -77,7 +81,8 @@ std::optional<Participant> Database::FindParticipant(std::int64_t study_id,
 }
 
 std::vector<Participant> Database::Participants(std::int64_t study_id) const {
-  Stmt s(db_, "SELECT id, study_id, code, idx, seed FROM participant WHERE study_id=? ORDER BY idx, id");
+  Stmt s(db_,
+         "SELECT id, study_id, code, idx, seed FROM participant WHERE study_id=? ORDER BY idx, id");
   s.Bind(1, study_id);
   std::vector<Participant> out;
   while (s.Step())
@@ -90,19 +95,29 @@ std::int64_t Database::StartSession(const Session& se) {
   Stmt s(db_,
          "INSERT INTO session(participant_id, status, software_version, device, calibration, "
          "provenance_json, plan_json, actuator, screens, rater) VALUES (?,?,?,?,?,?,?,?,?,?)");
-  s.Bind(1, se.participant_id).Bind(2, se.status).Bind(3, se.software_version)
-      .Bind(4, se.device).Bind(5, se.calibration)
+  s.Bind(1, se.participant_id)
+      .Bind(2, se.status)
+      .Bind(3, se.software_version)
+      .Bind(4, se.device)
+      .Bind(5, se.calibration)
       .Bind(6, se.provenance_json.empty() ? std::string("{}") : se.provenance_json)
       .Bind(7, se.plan_json.empty() ? std::string("[]") : se.plan_json)
-      .Bind(8, se.actuator).Bind(9, static_cast<std::int64_t>(se.screens)).Bind(10, se.rater).Run();
+      .Bind(8, se.actuator)
+      .Bind(9, static_cast<std::int64_t>(se.screens))
+      .Bind(10, se.rater)
+      .Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
-void Database::SetSessionMode(std::int64_t session_id, const std::string& device, const std::string& actuator,
-                              bool screens, const std::string& rater) {
+void Database::SetSessionMode(std::int64_t session_id, const std::string& device,
+                              const std::string& actuator, bool screens, const std::string& rater) {
   Stmt s(db_, "UPDATE session SET device=?, actuator=?, screens=?, rater=? WHERE id=?");
-  s.Bind(1, device).Bind(2, actuator).Bind(3, static_cast<std::int64_t>(screens)).Bind(4, rater)
-      .Bind(5, session_id).Run();
+  s.Bind(1, device)
+      .Bind(2, actuator)
+      .Bind(3, static_cast<std::int64_t>(screens))
+      .Bind(4, rater)
+      .Bind(5, session_id)
+      .Run();
 }
 
 void Database::EndSession(std::int64_t session_id, const std::string& status) {

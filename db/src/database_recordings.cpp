@@ -1,28 +1,26 @@
 // Database: material models, measurements and trajectory chunks.
-#include "hapticlab/db/database.hpp"
-
 #include <fcntl.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <openssl/evp.h>
 #include <sqlite3.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-#include <fmt/ranges.h>
-
 #include <algorithm>
-#include <chrono>
-#include <thread>
 #include <cctype>
-#include <cmath>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/db/database.hpp"
 #include "schema.hpp"
 #include "sqlite_util.hpp"
 
@@ -31,7 +29,6 @@ namespace hapticlab::db {
 using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
-
 
 namespace {
 
@@ -69,8 +66,11 @@ std::int64_t Database::SaveMaterialModel(const std::string& name, const std::str
 std::int64_t Database::SaveMeasurement(const std::string& material, const std::string& csv_text,
                                        const std::string& metadata_json) {
   Stmt s(db_, "INSERT INTO measurement(material, hash, csv, metadata_json) VALUES (?,?,?,?)");
-  s.Bind(1, material).Bind(2, HashText(csv_text)).Bind(3, csv_text)
-      .Bind(4, metadata_json.empty() ? std::string("{}") : metadata_json).Run();
+  s.Bind(1, material)
+      .Bind(2, HashText(csv_text))
+      .Bind(3, csv_text)
+      .Bind(4, metadata_json.empty() ? std::string("{}") : metadata_json)
+      .Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
@@ -78,14 +78,20 @@ void Database::InsertTrajectoryChunk(const TrajectoryChunk& c) {
   HL_REQUIRE(c.attempt >= 0, "trajectory chunk attempt must not be negative");
   HL_REQUIRE(!c.channels.empty(), "trajectory chunk needs at least one channel");
   HL_REQUIRE(c.samples.size() % c.channels.size() == 0,
-                  "trajectory chunk sample count is not a multiple of its channel count");
+             "trajectory chunk sample count is not a multiple of its channel count");
   HL_REQUIRE(c.rate_hz > 0, "trajectory chunk rate must be positive");
   Stmt s(db_,
          "INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, "
          "sample_count, samples, attempt) VALUES (?,?,?,?,?,?,?,?)");
-  s.Bind(1, c.trial_id).Bind(2, c.stream).Bind(3, c.start_time_s).Bind(4, c.rate_hz)
-      .Bind(5, JoinChannels(c.channels)).Bind(6, static_cast<std::int64_t>(c.sample_count()))
-      .BindBlob(7, c.samples.data(), c.samples.size() * sizeof(float)).Bind(8, c.attempt).Run();
+  s.Bind(1, c.trial_id)
+      .Bind(2, c.stream)
+      .Bind(3, c.start_time_s)
+      .Bind(4, c.rate_hz)
+      .Bind(5, JoinChannels(c.channels))
+      .Bind(6, static_cast<std::int64_t>(c.sample_count()))
+      .BindBlob(7, c.samples.data(), c.samples.size() * sizeof(float))
+      .Bind(8, c.attempt)
+      .Run();
 }
 
 std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id) const {
@@ -115,7 +121,8 @@ std::vector<TrajectoryChunk> Database::TrajectoryChunks(std::int64_t trial_id, i
         bytes != static_cast<std::size_t>(s.Int(5)) * c.channels.size() * sizeof(float))
       throw std::runtime_error(fmt::format(
           "{}: trajectory chunk of trial {} stream {} is damaged ({} bytes for {} samples of {} "
-          "channels)", path_, trial_id, c.stream, bytes, s.Int(5), c.channels.size()));
+          "channels)",
+          path_, trial_id, c.stream, bytes, s.Int(5), c.channels.size()));
     c.samples.resize(bytes / sizeof(float));
     if (bytes) std::memcpy(c.samples.data(), s.Blob(6), bytes);
     out.push_back(std::move(c));

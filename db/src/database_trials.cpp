@@ -1,28 +1,26 @@
 // Database: trials, ratings and events.
-#include "hapticlab/db/database.hpp"
-
 #include <fcntl.h>
+#include <fmt/format.h>
+#include <fmt/ranges.h>
 #include <openssl/evp.h>
 #include <sqlite3.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include <fmt/format.h>
-#include <fmt/ranges.h>
-
 #include <algorithm>
-#include <chrono>
-#include <thread>
 #include <cctype>
-#include <cmath>
 #include <cerrno>
+#include <chrono>
+#include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <thread>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/db/database.hpp"
 #include "schema.hpp"
 #include "sqlite_util.hpp"
 
@@ -31,7 +29,6 @@ namespace hapticlab::db {
 using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
-
 
 namespace {
 
@@ -60,9 +57,17 @@ constexpr const char* kInsertTrial =
     "INSERT INTO trial(session_id, plan_index, phase, material, comparison, method, repetition, "
     "left_stimulus, right_stimulus, status, attempts) VALUES (?,?,?,?,?,?,?,?,?,?,?)";
 void BindTrial(Stmt& s, const Trial& t) {
-  s.Bind(1, t.session_id).Bind(2, t.plan_index).Bind(3, t.phase).Bind(4, t.material)
-      .Bind(5, t.comparison).Bind(6, t.method).Bind(7, t.repetition).Bind(8, t.left)
-      .Bind(9, t.right).Bind(10, t.status).Bind(11, t.attempts);
+  s.Bind(1, t.session_id)
+      .Bind(2, t.plan_index)
+      .Bind(3, t.phase)
+      .Bind(4, t.material)
+      .Bind(5, t.comparison)
+      .Bind(6, t.method)
+      .Bind(7, t.repetition)
+      .Bind(8, t.left)
+      .Bind(9, t.right)
+      .Bind(10, t.status)
+      .Bind(11, t.attempts);
 }
 }  // namespace
 
@@ -141,14 +146,15 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
       const auto in_db = stored_of(r.stream);
       if (r.samples_written != kept || static_cast<std::uint64_t>(in_db) != r.samples_written)
         problems.push_back(fmt::format(
-            "stream {}: {} samples queued, {} committed by the writer, {} stored{}", r.stream,
-            kept, r.samples_written, in_db, r.error.empty() ? "" : " (" + r.error + ")"));
+            "stream {}: {} samples queued, {} committed by the writer, {} stored{}", r.stream, kept,
+            r.samples_written, in_db, r.error.empty() ? "" : " (" + r.error + ")"));
     }
     for (const auto& [n, c] : stored)
       if (std::find(reported.begin(), reported.end(), n) == reported.end())
-        problems.push_back(fmt::format("stream {}: {} samples stored that no stream of attempt {} "
-                                       "reported (another process wrote this trial)",
-                                       n, c, attempt));
+        problems.push_back(
+            fmt::format("stream {}: {} samples stored that no stream of attempt {} "
+                        "reported (another process wrote this trial)",
+                        n, c, attempt));
     if (!problems.empty())
       throw TrajectoryIncomplete(fmt::format("{}: trial {} attempt {}: trajectories not whole: {}",
                                              path_, trial_id, attempt, fmt::join(problems, "; ")));
@@ -157,7 +163,10 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
              "samples_dropped, samples_written) VALUES (?,?,?,?,?,?,?)");
     for (const auto& r : streams) {
       if (r.trial_id != trial_id || r.attempt != attempt) continue;
-      ins.Bind(1, trial_id).Bind(2, attempt).Bind(3, r.stream).Bind(4, r.rate_hz)
+      ins.Bind(1, trial_id)
+          .Bind(2, attempt)
+          .Bind(3, r.stream)
+          .Bind(4, r.rate_hz)
           .Bind(5, static_cast<std::int64_t>(r.samples_offered))
           .Bind(6, static_cast<std::int64_t>(r.samples_dropped))
           .Bind(7, static_cast<std::int64_t>(r.samples_written));
@@ -166,12 +175,17 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
     }
   }
   // A rating without a source is the session's rater's.
-  Stmt ins(db_,
-           "INSERT INTO rating(trial_id, criterion, score, response_time_s, source) VALUES (?,?,?,?, "
-           "coalesce(nullif(?,''), (SELECT s.rater FROM trial t JOIN session s ON s.id = t.session_id "
-           "WHERE t.id = ?1)))");
+  Stmt ins(
+      db_,
+      "INSERT INTO rating(trial_id, criterion, score, response_time_s, source) VALUES (?,?,?,?, "
+      "coalesce(nullif(?,''), (SELECT s.rater FROM trial t JOIN session s ON s.id = t.session_id "
+      "WHERE t.id = ?1)))");
   for (const auto& r : ratings) {
-    ins.Bind(1, trial_id).Bind(2, r.criterion).Bind(3, r.score).Bind(4, r.response_time_s).Bind(5, r.source);
+    ins.Bind(1, trial_id)
+        .Bind(2, r.criterion)
+        .Bind(3, r.score)
+        .Bind(4, r.response_time_s)
+        .Bind(5, r.source);
     ins.Run();
     ins.Reset();
   }
@@ -220,7 +234,9 @@ std::vector<Trial> Database::Trials(std::int64_t session_id) const {
 }
 
 std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
-  Stmt s(db_, "SELECT criterion, score, response_time_s, source FROM rating WHERE trial_id=? ORDER BY id");
+  Stmt s(
+      db_,
+      "SELECT criterion, score, response_time_s, source FROM rating WHERE trial_id=? ORDER BY id");
   s.Bind(1, trial_id);
   std::vector<Rating> out;
   while (s.Step()) {
@@ -248,15 +264,18 @@ std::vector<std::int64_t> Database::RatedTrialsInCompletionOrder(std::int64_t se
 std::int64_t Database::LogEvent(const Event& e) {
   Stmt s(db_, "INSERT INTO event(session_id, trial_id, kind, detail) VALUES (?,?,?,?)");
   s.Bind(1, e.session_id);
-  if (e.trial_id) s.Bind(2, *e.trial_id);
-  else s.BindNull(2);
+  if (e.trial_id)
+    s.Bind(2, *e.trial_id);
+  else
+    s.BindNull(2);
   s.Bind(3, e.kind).Bind(4, e.detail).Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
 std::vector<Event> Database::Events(std::int64_t session_id) const {
-  Stmt s(db_, "SELECT id, session_id, trial_id, kind, detail, created_at FROM event "
-              "WHERE session_id=? ORDER BY id");
+  Stmt s(db_,
+         "SELECT id, session_id, trial_id, kind, detail, created_at FROM event "
+         "WHERE session_id=? ORDER BY id");
   s.Bind(1, session_id);
   std::vector<Event> out;
   while (s.Step()) {

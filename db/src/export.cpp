@@ -1,14 +1,13 @@
 #include "hapticlab/db/export.hpp"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <cstring>
 #include <map>
 #include <stdexcept>
-
-#include <fmt/ranges.h>
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
@@ -51,7 +50,8 @@ constexpr const char* kTrialJoin =
 
 }  // namespace
 
-std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir, bool trajectories) {
+std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir,
+                                    bool trajectories) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::create_directories(out_dir, ec);

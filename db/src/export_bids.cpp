@@ -116,8 +116,9 @@ ordered_json BehSidecar(const SessionRecord& s) {
                 {"Units", "arbitrary"}};
   j["response_time"] = {{"Description", "from the end of the second stimulus to confirmation"},
                         {"Units", "s"}};
-  j["rating_source"] = {{"Description", "who gave the rating: 'simulated' (the simulated observer) or the "
-                                        "participant's input device ('window', 'rating-box:VID:PID')"}};
+  j["rating_source"] = {{"Description",
+                         "who gave the rating: 'simulated' (the simulated observer) or the "
+                         "participant's input device ('window', 'rating-box:VID:PID')"}};
   j["HapticLab"] = {{"study", s.study.name},
                     {"protocol_sha256", s.study.protocol_hash},
                     {"session_status", s.session.status},

@@ -101,8 +101,8 @@ void ExecSql(sqlite3* db, const char* sql) {
     sqlite3_free(err);
     const std::string plain = Explain(sqlite3_extended_errcode(db));
     throw std::runtime_error(std::string(sqlite3_db_filename(db, "main")) + ": " +
-                             (plain.empty() ? "" : plain + ": ") + msg + " (in: " +
-                             std::string(sql).substr(0, 80) + ")");
+                             (plain.empty() ? "" : plain + ": ") + msg +
+                             " (in: " + std::string(sql).substr(0, 80) + ")");
   }
 }
 

@@ -49,8 +49,7 @@ TrajectoryStream* TrajectoryWriter::OpenStream(std::int64_t trial_id, const std:
                                                double rate_hz,
                                                const std::vector<std::string>& channels) {
   HL_REQUIRE(rate_hz > 0 && std::isfinite(rate_hz), "stream rate must be positive");
-  HL_REQUIRE(!channels.empty() && channels.size() <= kMaxChannels,
-                  "a stream has 1 to 16 channels");
+  HL_REQUIRE(!channels.empty() && channels.size() <= kMaxChannels, "a stream has 1 to 16 channels");
   HL_REQUIRE(!name.empty(), "stream name must not be empty");
   int attempt = 0;
   {

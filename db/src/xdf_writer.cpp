@@ -1,8 +1,9 @@
 #include "xdf_writer.hpp"
-#include "hapticlab/core/status.hpp"
 
 #include <cstring>
 #include <stdexcept>
+
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::db::internal {
 namespace {

@@ -1,33 +1,38 @@
 #include "hapticlab/devices/audio.hpp"
 
+#include <fcntl.h>
 #include <fmt/format.h>
 #include <portaudio.h>
-
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <mutex>
 #include <stdexcept>
 
 namespace hapticlab::devices {
 
 void ValidateAudioConfig(const AudioConfig& c) {
-  if (!(c.sample_rate_hz > 0) || !(c.input_rate_hz > 0)) throw std::invalid_argument("audio: sample_rate_hz and input_rate_hz must be positive");
-  if (c.input_rate_hz > c.sample_rate_hz) throw std::invalid_argument("audio: input_rate_hz must not exceed the device's sample_rate_hz");
+  if (!(c.sample_rate_hz > 0) || !(c.input_rate_hz > 0))
+    throw std::invalid_argument("audio: sample_rate_hz and input_rate_hz must be positive");
+  if (c.input_rate_hz > c.sample_rate_hz)
+    throw std::invalid_argument("audio: input_rate_hz must not exceed the device's sample_rate_hz");
   if (c.channels < 1) throw std::invalid_argument("audio: channels must be >= 1");
   for (const auto* list : {&c.actuator_channels, &c.noise_channels})
     for (const int ch : *list)
       if (ch < 0 || ch >= c.channels)
-        throw std::invalid_argument(fmt::format("audio: channel {} outside 0..{} ({} map)", ch, c.channels - 1,
-                                                list == &c.actuator_channels ? "actuator_channels" : "noise_channels"));
+        throw std::invalid_argument(
+            fmt::format("audio: channel {} outside 0..{} ({} map)", ch, c.channels - 1,
+                        list == &c.actuator_channels ? "actuator_channels" : "noise_channels"));
   for (const int a : c.actuator_channels)
     if (std::find(c.noise_channels.begin(), c.noise_channels.end(), a) != c.noise_channels.end())
-      throw std::invalid_argument(fmt::format("audio: channel {} is both an actuator and a noise channel", a));
-  if (!(c.full_scale_mps2 > 0)) throw std::invalid_argument("audio: full_scale_mps2 must be positive");
-  if (!(c.noise_rms_fs >= 0 && c.noise_rms_fs <= 0.5)) throw std::invalid_argument("audio: noise_rms_fs must be in 0..0.5");
+      throw std::invalid_argument(
+          fmt::format("audio: channel {} is both an actuator and a noise channel", a));
+  if (!(c.full_scale_mps2 > 0))
+    throw std::invalid_argument("audio: full_scale_mps2 must be positive");
+  if (!(c.noise_rms_fs >= 0 && c.noise_rms_fs <= 0.5))
+    throw std::invalid_argument("audio: noise_rms_fs must be in 0..0.5");
 }
 
 AudioOutput::AudioOutput(const AudioConfig& c, std::unique_ptr<AudioStream> stream)
@@ -102,8 +107,10 @@ void AudioOutput::Render(float* out, unsigned long frames) noexcept {
     }
     for (std::size_t k = 0; k < ch; ++k) {
       double s = 0;
-      if (is_actuator_[k]) s = a;
-      else if (is_noise_[k] && rms > 0) s = std::clamp(rms * noise_.Normal(), -1.0, 1.0);
+      if (is_actuator_[k])
+        s = a;
+      else if (is_noise_[k] && rms > 0)
+        s = std::clamp(rms * noise_.Normal(), -1.0, 1.0);
       out[f * ch + k] = static_cast<float>(s);
     }
   }
@@ -154,20 +161,29 @@ class PortAudioStream final : public AudioStream {
       p.device = paNoDevice;
       for (PaDeviceIndex i = 0; i < Pa_GetDeviceCount(); ++i) {
         const PaDeviceInfo* d = Pa_GetDeviceInfo(i);
-        if (d && d->maxOutputChannels > 0 && std::string(d->name).find(c.device) != std::string::npos) p.device = i;
+        if (d && d->maxOutputChannels > 0 &&
+            std::string(d->name).find(c.device) != std::string::npos)
+          p.device = i;
       }
     }
-    if (p.device == paNoDevice) throw std::runtime_error("PortAudio: no output device" + (c.device.empty() ? std::string() : " matching '" + c.device + "'"));
+    if (p.device == paNoDevice)
+      throw std::runtime_error("PortAudio: no output device" +
+                               (c.device.empty() ? std::string() : " matching '" + c.device + "'"));
     p.channelCount = c.channels;
     p.sampleFormat = paFloat32;
     p.suggestedLatency = c.latency_s;
-    const PaError e = Pa_OpenStream(&s_, nullptr, &p, c.sample_rate_hz, paFramesPerBufferUnspecified, paClipOff, &Callback, this);
-    if (e != paNoError) throw std::runtime_error(std::string("PortAudio: cannot open the stream: ") + Pa_GetErrorText(e));
+    const PaError e = Pa_OpenStream(&s_, nullptr, &p, c.sample_rate_hz,
+                                    paFramesPerBufferUnspecified, paClipOff, &Callback, this);
+    if (e != paNoError)
+      throw std::runtime_error(std::string("PortAudio: cannot open the stream: ") +
+                               Pa_GetErrorText(e));
     const PaError e2 = Pa_StartStream(s_);
-    if (e2 != paNoError) throw std::runtime_error(std::string("PortAudio: cannot start: ") + Pa_GetErrorText(e2));
+    if (e2 != paNoError)
+      throw std::runtime_error(std::string("PortAudio: cannot start: ") + Pa_GetErrorText(e2));
     const PaStreamInfo* info = Pa_GetStreamInfo(s_);
-    desc_ = fmt::format("{} at {:.0f} Hz, output latency {:.1f} ms", Pa_GetDeviceInfo(p.device)->name, c.sample_rate_hz,
-                        info ? info->outputLatency * 1e3 : -1.0);
+    desc_ =
+        fmt::format("{} at {:.0f} Hz, output latency {:.1f} ms", Pa_GetDeviceInfo(p.device)->name,
+                    c.sample_rate_hz, info ? info->outputLatency * 1e3 : -1.0);
   }
   void Stop() override {
     if (s_) {
@@ -179,7 +195,8 @@ class PortAudioStream final : public AudioStream {
   std::string Describe() const override { return desc_; }
 
  private:
-  static int Callback(const void*, void* out, unsigned long frames, const PaStreamCallbackTimeInfo*, PaStreamCallbackFlags, void* self) {
+  static int Callback(const void*, void* out, unsigned long frames, const PaStreamCallbackTimeInfo*,
+                      PaStreamCallbackFlags, void* self) {
     static_cast<PortAudioStream*>(self)->render_(static_cast<float*>(out), frames);
     return paContinue;
   }
@@ -198,7 +215,8 @@ std::vector<std::string> ListAudioDevices() {
   for (PaDeviceIndex i = 0; i < Pa_GetDeviceCount(); ++i) {
     const PaDeviceInfo* d = Pa_GetDeviceInfo(i);
     if (d && d->maxOutputChannels > 0)
-      out.push_back(fmt::format("{}: {} ({} channels, {:.0f} Hz)", i, d->name, d->maxOutputChannels, d->defaultSampleRate));
+      out.push_back(fmt::format("{}: {} ({} channels, {:.0f} Hz)", i, d->name, d->maxOutputChannels,
+                                d->defaultSampleRate));
   }
   PaRelease();
   return out;

@@ -17,7 +17,8 @@ class DhdDevice final : public HapticDevice {
  public:
   DhdDevice() {
     id_ = dhdOpen();
-    if (id_ < 0) throw std::runtime_error(std::string("dhd: cannot open a device: ") + dhdErrorGetLastStr());
+    if (id_ < 0)
+      throw std::runtime_error(std::string("dhd: cannot open a device: ") + dhdErrorGetLastStr());
     name_ = std::string("dhd ") + dhdGetSystemName();
     if (dhdEnableForce(DHD_ON, static_cast<char>(id_)) < 0) {
       dhdClose(static_cast<char>(id_));

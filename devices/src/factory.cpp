@@ -18,13 +18,16 @@ constexpr const char* kCommandLine = "<command line>";
 std::unique_ptr<HapticDevice> OpenFalcon(const DeviceRequest& r,
                                          const std::function<void(const std::string&)>& progress) {
   if (r.firmware.empty())
-    throw InputError(kCommandLine, 0, "firmware", "the Falcon needs its firmware file (docs/hardware.md)");
+    throw InputError(kCommandLine, 0, "firmware",
+                     "the Falcon needs its firmware file (docs/hardware.md)");
   const auto fw = falcon::ReadFirmwareFile(r.firmware);
   if (falcon::CountDevices() == 0)
-    throw std::runtime_error("no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48); check the cable, "
-                             "power and the udev rule in docs/hardware.md");
+    throw std::runtime_error(
+        "no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48); check the cable, "
+        "power and the udev rule in docs/hardware.md");
   auto usb = falcon::OpenLibusb(0);
-  if (progress) progress(fmt::format("falcon: loading firmware {} ({} bytes)...", r.firmware, fw.size()));
+  if (progress)
+    progress(fmt::format("falcon: loading firmware {} ({} bytes)...", r.firmware, fw.size()));
   const auto loaded = falcon::LoadFirmware(*usb, fw);
   if (!loaded.ok) throw std::runtime_error("falcon: " + loaded.error);
   if (progress) progress(fmt::format("falcon: firmware running (attempt {})", loaded.attempts));
@@ -40,14 +43,17 @@ bool IsRealDevice(const std::string& device) {
   return device == "falcon" || device == "dhd" || device == "openhaptics";
 }
 
-OpenedDevice OpenRealDevice(const DeviceRequest& r, const std::function<void(const std::string&)>& progress) {
+OpenedDevice OpenRealDevice(const DeviceRequest& r,
+                            const std::function<void(const std::string&)>& progress) {
   if (!IsRealDevice(r.device))
     throw InputError(kCommandLine, 0, "device",
-                     "no real device '" + r.device + "' (falcon, dhd, openhaptics; sim and falcon-twin are simulated)");
+                     "no real device '" + r.device +
+                         "' (falcon, dhd, openhaptics; sim and falcon-twin are simulated)");
   if ((r.device == "dhd" && !HaveDhd()) || (r.device == "openhaptics" && !HaveOpenHaptics()))
     throw InputError(kCommandLine, 0, "device",
-                     "'" + r.device + "' is compiled only when its vendor SDK is found at build time, and this "
-                     "build has none (docs/hardware.md)");
+                     "'" + r.device +
+                         "' is compiled only when its vendor SDK is found at build time, and this "
+                         "build has none (docs/hardware.md)");
   OpenedDevice out;
   if (r.device == "falcon") {
     out.device = OpenFalcon(r, progress);
@@ -59,7 +65,8 @@ OpenedDevice OpenRealDevice(const DeviceRequest& r, const std::function<void(con
   return out;
 }
 
-std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device, double full_scale_mps2) {
+std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device,
+                                               double full_scale_mps2) {
   AudioConfig c;
   c.device = audio_device;
   c.full_scale_mps2 = full_scale_mps2;
@@ -69,14 +76,19 @@ std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device, 
   return audio;
 }
 
-std::unique_ptr<RatingInput> OpenRatingBox(const std::string& vid_pid, const std::string& layout_file) {
+std::unique_ptr<RatingInput> OpenRatingBox(const std::string& vid_pid,
+                                           const std::string& layout_file) {
   unsigned vid = 0, pid = 0;
   char tail = 0;
-  if (std::sscanf(vid_pid.c_str(), "%x:%x%c", &vid, &pid, &tail) != 2 || vid > 0xFFFF || pid > 0xFFFF)
-    throw InputError(kCommandLine, 0, "rating_box", "expected VID:PID in hex (e.g. 046d:c216), got '" + vid_pid + "'");
+  if (std::sscanf(vid_pid.c_str(), "%x:%x%c", &vid, &pid, &tail) != 2 || vid > 0xFFFF ||
+      pid > 0xFFFF)
+    throw InputError(kCommandLine, 0, "rating_box",
+                     "expected VID:PID in hex (e.g. 046d:c216), got '" + vid_pid + "'");
   if (layout_file.empty())
-    throw InputError(kCommandLine, 0, "rating_layout", "the rating box needs its report layout file");
-  return OpenHidRating(static_cast<std::uint16_t>(vid), static_cast<std::uint16_t>(pid), LoadHidLayout(layout_file));
+    throw InputError(kCommandLine, 0, "rating_layout",
+                     "the rating box needs its report layout file");
+  return OpenHidRating(static_cast<std::uint16_t>(vid), static_cast<std::uint16_t>(pid),
+                       LoadHidLayout(layout_file));
 }
 
 }  // namespace hapticlab::devices

@@ -32,11 +32,14 @@ std::array<std::uint8_t, 16> EncodeCommand(const Command& c) {
   p[15] = '>';
   for (int m = 0; m < 3; ++m) {
     const auto v = static_cast<std::uint16_t>(c.motor[static_cast<std::size_t>(m)]);
-    for (int k = 0; k < 4; ++k) p[static_cast<std::size_t>(1 + 4 * m + k)] = static_cast<std::uint8_t>((v >> (4 * k)) & 0xf);
+    for (int k = 0; k < 4; ++k)
+      p[static_cast<std::size_t>(1 + 4 * m + k)] = static_cast<std::uint8_t>((v >> (4 * k)) & 0xf);
   }
   p[13] = static_cast<std::uint8_t>((c.leds & 0x0e) | (c.homing ? 0x01 : 0x00));
   p[14] = 0;
-  for (int i = 1; i < 15; ++i) p[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(p[static_cast<std::size_t>(i)] + 0x41);
+  for (int i = 1; i < 15; ++i)
+    p[static_cast<std::size_t>(i)] =
+        static_cast<std::uint8_t>(p[static_cast<std::size_t>(i)] + 0x41);
   return p;
 }
 
@@ -60,7 +63,8 @@ bool DecodeStatus(const std::uint8_t* d, std::size_t n, Status* out, int* malfor
     }
     for (int m = 0; m < 3; ++m) {
       std::uint16_t v = 0;
-      for (int k = 0; k < 4; ++k) v = static_cast<std::uint16_t>(v | ((d[at + 1 + 4 * m + k] - 0x41) & 0xf) << (4 * k));
+      for (int k = 0; k < 4; ++k)
+        v = static_cast<std::uint16_t>(v | ((d[at + 1 + 4 * m + k] - 0x41) & 0xf) << (4 * k));
       out->encoder[static_cast<std::size_t>(m)] = static_cast<std::int16_t>(v);
     }
     const int info = d[at + 13] - 0x41;
@@ -88,8 +92,8 @@ bool InverseKinematics(const Eigen::Vector3d& p, Eigen::Vector3d* theta) {
     const double c3 = (pv + kF) / kB;
     if (!(std::abs(c3) <= 1)) return false;
     const double th3 = std::acos(c3), s3 = std::sin(th3);
-    const double common = pw * pw + pu * pu + 2 * kC * pu + kA * kA + kC * kC - kD * kD - kE * kE - kB * kB * s3 * s3 -
-                          2 * kB * kE * s3 - 2 * kB * kD * s3 - 2 * kD * kE;
+    const double common = pw * pw + pu * pu + 2 * kC * pu + kA * kA + kC * kC - kD * kD - kE * kE -
+                          kB * kB * s3 * s3 - 2 * kB * kE * s3 - 2 * kB * kD * s3 - 2 * kD * kE;
     const double l0 = common - 2 * kA * pu - 2 * kA * kC;
     const double l1 = -4 * kA * pw;
     const double l2 = common + 2 * kA * pu + 2 * kA * kC;
@@ -115,7 +119,8 @@ bool Jacobian(const Eigen::Vector3d& p, Eigen::Matrix3d* J) {  // d(theta)/d(p)
 }
 }  // namespace
 
-bool ForwardKinematics(const Eigen::Vector3d& theta, const Eigen::Vector3d& guess, Eigen::Vector3d* p) {
+bool ForwardKinematics(const Eigen::Vector3d& theta, const Eigen::Vector3d& guess,
+                       Eigen::Vector3d* p) {
   Eigen::Vector3d x = guess;
   for (int it = 0; it < 20; ++it) {
     Eigen::Vector3d th;
@@ -164,23 +169,25 @@ class LibusbTransport final : public UsbTransport {
     int seen = 0;
     for (ssize_t i = 0; i < n; ++i) {
       libusb_device_descriptor d{};
-      if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == kVendorId && d.idProduct == kProductId &&
-          seen++ == index)
+      if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == kVendorId &&
+          d.idProduct == kProductId && seen++ == index)
         found = list[i];
     }
     int rc = found ? libusb_open(found, &h_) : LIBUSB_ERROR_NOT_FOUND;
     libusb_free_device_list(list, 1);
     if (rc < 0) {
       libusb_exit(ctx_);
-      throw std::runtime_error(fmt::format("falcon: no device {} (vendor 0x{:04x}, product 0x{:04x}): {}", index, kVendorId,
-                                           kProductId, libusb_strerror(rc)));
+      throw std::runtime_error(
+          fmt::format("falcon: no device {} (vendor 0x{:04x}, product 0x{:04x}): {}", index,
+                      kVendorId, kProductId, libusb_strerror(rc)));
     }
     libusb_set_auto_detach_kernel_driver(h_, 1);
     if ((rc = libusb_claim_interface(h_, 0)) < 0) {
       libusb_close(h_);
       libusb_exit(ctx_);
-      throw std::runtime_error(std::string("falcon: cannot claim interface 0 (permissions? docs/hardware.md): ") +
-                               libusb_strerror(rc));
+      throw std::runtime_error(
+          std::string("falcon: cannot claim interface 0 (permissions? docs/hardware.md): ") +
+          libusb_strerror(rc));
     }
   }
   ~LibusbTransport() override {
@@ -188,12 +195,14 @@ class LibusbTransport final : public UsbTransport {
     libusb_close(h_);
     libusb_exit(ctx_);
   }
-  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t index, unsigned timeout_ms) override {
+  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t index,
+              unsigned timeout_ms) override {
     return libusb_control_transfer(h_, type, req, value, index, nullptr, 0, timeout_ms);
   }
   int BulkWrite(const std::uint8_t* data, int n, unsigned timeout_ms) override {
     int done = 0;
-    const int rc = libusb_bulk_transfer(h_, kEndpointOut, const_cast<std::uint8_t*>(data), n, &done, timeout_ms);
+    const int rc = libusb_bulk_transfer(h_, kEndpointOut, const_cast<std::uint8_t*>(data), n, &done,
+                                        timeout_ms);
     return rc < 0 ? rc : done;
   }
   int BulkRead(std::uint8_t* data, int n, unsigned timeout_ms) override {
@@ -209,7 +218,9 @@ class LibusbTransport final : public UsbTransport {
 
 }  // namespace
 
-std::unique_ptr<UsbTransport> OpenLibusb(int index) { return std::make_unique<LibusbTransport>(index); }
+std::unique_ptr<UsbTransport> OpenLibusb(int index) {
+  return std::make_unique<LibusbTransport>(index);
+}
 
 int CountDevices() {
   libusb_context* ctx = nullptr;
@@ -219,7 +230,9 @@ int CountDevices() {
   int count = 0;
   for (ssize_t i = 0; i < n; ++i) {
     libusb_device_descriptor d{};
-    if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == kVendorId && d.idProduct == kProductId) ++count;
+    if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == kVendorId &&
+        d.idProduct == kProductId)
+      ++count;
   }
   if (n >= 0) libusb_free_device_list(list, 1);
   libusb_exit(ctx);
@@ -229,16 +242,26 @@ int CountDevices() {
 // ---------------------------------------------------------------------------------------------
 const char* LoadStateName(LoadState s) {
   switch (s) {
-    case LoadState::kIdle: return "idle";
-    case LoadState::kPurge: return "purge";
-    case LoadState::kLineSetup: return "line set-up";
-    case LoadState::kHandshake: return "bootloader handshake";
-    case LoadState::kBootloader: return "bootloader baud switch";
-    case LoadState::kUpload: return "upload";
-    case LoadState::kNormalMode: return "normal mode";
-    case LoadState::kVerify: return "verify";
-    case LoadState::kDone: return "done";
-    case LoadState::kFailed: return "failed";
+    case LoadState::kIdle:
+      return "idle";
+    case LoadState::kPurge:
+      return "purge";
+    case LoadState::kLineSetup:
+      return "line set-up";
+    case LoadState::kHandshake:
+      return "bootloader handshake";
+    case LoadState::kBootloader:
+      return "bootloader baud switch";
+    case LoadState::kUpload:
+      return "upload";
+    case LoadState::kNormalMode:
+      return "normal mode";
+    case LoadState::kVerify:
+      return "verify";
+    case LoadState::kDone:
+      return "done";
+    case LoadState::kFailed:
+      return "failed";
   }
   return "?";
 }
@@ -279,11 +302,16 @@ struct Attempt {
 
   bool Run(const std::vector<std::uint8_t>& fw) {
     Enter(LoadState::kPurge);
-    if (!Ctl(ftdi::kReset, ftdi::kPurgeRx, "purge rx") || !Ctl(ftdi::kReset, ftdi::kPurgeTx, "purge tx")) return false;
+    if (!Ctl(ftdi::kReset, ftdi::kPurgeRx, "purge rx") ||
+        !Ctl(ftdi::kReset, ftdi::kPurgeTx, "purge tx"))
+      return false;
     Enter(LoadState::kLineSetup);
-    if (!Ctl(ftdi::kLatency, 16, "latency 16 ms") || !Ctl(ftdi::kBaudRate, ftdi::kBaud9600, "9600 baud") ||
-        !Ctl(ftdi::kData, 8, "8N1") || !Ctl(ftdi::kFlowCtrl, 0, "no flow control") || !Ctl(ftdi::kModemCtrl, ftdi::kRtsLow, "RTS low") ||
-        !Ctl(ftdi::kModemCtrl, ftdi::kDtrLow, "DTR low") || !Ctl(ftdi::kModemCtrl, ftdi::kDtrHigh, "DTR high"))
+    if (!Ctl(ftdi::kLatency, 16, "latency 16 ms") ||
+        !Ctl(ftdi::kBaudRate, ftdi::kBaud9600, "9600 baud") || !Ctl(ftdi::kData, 8, "8N1") ||
+        !Ctl(ftdi::kFlowCtrl, 0, "no flow control") ||
+        !Ctl(ftdi::kModemCtrl, ftdi::kRtsLow, "RTS low") ||
+        !Ctl(ftdi::kModemCtrl, ftdi::kDtrLow, "DTR low") ||
+        !Ctl(ftdi::kModemCtrl, ftdi::kDtrHigh, "DTR high"))
       return false;
     Enter(LoadState::kHandshake);
     const std::uint8_t hello[3] = {0x0a, 0x43, 0x0d}, answer[4] = {0x0a, 0x44, 0x2c, 0x0d};
@@ -296,9 +324,14 @@ struct Attempt {
       if (n == 4 && std::memcmp(in, answer, 4) == 0) greeted = true;
       if (n == 5 && in[0] == 0 && std::memcmp(in + 1, answer, 4) == 0) greeted = true;
     }
-    if (!greeted) return Fail(fmt::format("no bootloader answer to 0x0a 'C' 0x0d after {} tries (is the Falcon powered?)", o.handshake_tries));
+    if (!greeted)
+      return Fail(fmt::format(
+          "no bootloader answer to 0x0a 'C' 0x0d after {} tries (is the Falcon powered?)",
+          o.handshake_tries));
     Enter(LoadState::kBootloader);
-    if (!Ctl(ftdi::kModemCtrl, ftdi::kDtrLow, "DTR low") || !Ctl(ftdi::kBaudRate, ftdi::kBaud140000, "140000 baud")) return false;
+    if (!Ctl(ftdi::kModemCtrl, ftdi::kDtrLow, "DTR low") ||
+        !Ctl(ftdi::kBaudRate, ftdi::kBaud140000, "140000 baud"))
+      return false;
     const std::uint8_t a = 'A';
     if (!Write(&a, 1, "bootloader 'A'")) return false;
     std::uint8_t echo[64];
@@ -311,17 +344,22 @@ struct Attempt {
       while (got < n) {
         std::uint8_t in[64];
         const int k = Read(in, n - got);
-        if (k <= 0) return Fail(fmt::format("no echo for firmware bytes {}-{} (time-out {} ms)", at + static_cast<std::size_t>(got),
-                                            at + static_cast<std::size_t>(n), o.timeout_ms));
+        if (k <= 0)
+          return Fail(fmt::format("no echo for firmware bytes {}-{} (time-out {} ms)",
+                                  at + static_cast<std::size_t>(got),
+                                  at + static_cast<std::size_t>(n), o.timeout_ms));
         if (std::memcmp(in, fw.data() + at + got, static_cast<std::size_t>(k)) != 0)
-          return Fail(fmt::format("echo of firmware bytes from {} differs (line noise?)", at + static_cast<std::size_t>(got)));
+          return Fail(fmt::format("echo of firmware bytes from {} differs (line noise?)",
+                                  at + static_cast<std::size_t>(got)));
         got += k;
       }
       at += static_cast<std::size_t>(n);
     }
     Enter(LoadState::kNormalMode);
-    if (!Ctl(ftdi::kLatency, 1, "latency 1 ms") || !Ctl(ftdi::kBaudRate, ftdi::kBaudNormal, "normal baud") ||
-        !Ctl(ftdi::kReset, ftdi::kPurgeRx, "purge rx") || !Ctl(ftdi::kReset, ftdi::kPurgeTx, "purge tx"))
+    if (!Ctl(ftdi::kLatency, 1, "latency 1 ms") ||
+        !Ctl(ftdi::kBaudRate, ftdi::kBaudNormal, "normal baud") ||
+        !Ctl(ftdi::kReset, ftdi::kPurgeRx, "purge rx") ||
+        !Ctl(ftdi::kReset, ftdi::kPurgeTx, "purge tx"))
       return false;
     Enter(LoadState::kVerify);
     const auto packet = EncodeCommand({});
@@ -337,13 +375,15 @@ struct Attempt {
         return true;
       }
     }
-    return Fail(fmt::format("firmware loaded but no valid status packet in {} exchanges", o.verify_tries));
+    return Fail(
+        fmt::format("firmware loaded but no valid status packet in {} exchanges", o.verify_tries));
   }
 };
 
 }  // namespace
 
-LoadResult LoadFirmware(UsbTransport& usb, const std::vector<std::uint8_t>& fw, const LoadOptions& o) {
+LoadResult LoadFirmware(UsbTransport& usb, const std::vector<std::uint8_t>& fw,
+                        const LoadOptions& o) {
   LoadResult r;
   if (fw.empty()) {
     r.error = "empty firmware";
@@ -367,14 +407,18 @@ LoadResult LoadFirmware(UsbTransport& usb, const std::vector<std::uint8_t>& fw, 
 
 std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError(path, 0, "firmware", "cannot open the firmware file (supply the Falcon firmware yourself; docs/hardware.md)");
+  if (!f)
+    throw InputError(
+        path, 0, "firmware",
+        "cannot open the firmware file (supply the Falcon firmware yourself; docs/hardware.md)");
   std::vector<std::uint8_t> d((std::istreambuf_iterator<char>(f)), {});
   if (d.empty()) throw InputError(path, 0, "firmware", "empty firmware file");
   return d;
 }
 
 // ---------------------------------------------------------------------------------------------
-FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock, const FalconOptions& o)
+FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock,
+                           const FalconOptions& o)
     : usb_(std::move(usb)), clock_(std::move(clock)), o_(o) {
   if (!usb_) throw std::invalid_argument("falcon: a transport is required");
 }
@@ -439,13 +483,16 @@ ReadResult FalconDevice::Read(renderer::DeviceSample* out) noexcept {
   }
   ++packets_;
   status_ = st;
-  const Eigen::Vector3d theta(EncoderToAngle(st.encoder[0]), EncoderToAngle(st.encoder[1]), EncoderToAngle(st.encoder[2]));
+  const Eigen::Vector3d theta(EncoderToAngle(st.encoder[0]), EncoderToAngle(st.encoder[1]),
+                              EncoderToAngle(st.encoder[2]));
   Eigen::Vector3d p;
   if (!ForwardKinematics(theta, p_m_, &p)) {
     ++lost_reads_;
     return ReadResult::kLost;
   }
-  const double t = clock_ ? clock_() : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  const double t =
+      clock_ ? clock_()
+             : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   if (have_p_ && t > t_s_) {
     const double dt = t - t_s_, a = 1 - std::exp(-2 * kPi * o_.velocity_cutoff_hz * dt);
     v_mps_ += a * ((p - p_m_) / dt - v_mps_);

@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 #include <hidapi/hidapi.h>
-
 #include <toml++/toml.h>
 
 #include <algorithm>
@@ -22,11 +21,16 @@ RatingEvent ParseHidReport(const HidReportLayout& L, const std::uint8_t* d, std:
     base = 1;
   }
   const std::size_t pos = base + static_cast<std::size_t>(L.position_offset);
-  if (L.position_bytes < 1 || L.position_bytes > 2 || pos + static_cast<std::size_t>(L.position_bytes) > n) return e;
+  if (L.position_bytes < 1 || L.position_bytes > 2 ||
+      pos + static_cast<std::size_t>(L.position_bytes) > n)
+    return e;
   std::uint32_t raw = d[pos];
-  if (L.position_bytes == 2) raw = L.little_endian ? (d[pos] | (d[pos + 1] << 8)) : ((d[pos] << 8) | d[pos + 1]);
+  if (L.position_bytes == 2)
+    raw = L.little_endian ? (d[pos] | (d[pos + 1] << 8)) : ((d[pos] << 8) | d[pos + 1]);
   double v = static_cast<double>(raw);
-  if (L.is_signed) v = L.position_bytes == 2 ? static_cast<double>(static_cast<std::int16_t>(raw)) : static_cast<double>(static_cast<std::int8_t>(raw));
+  if (L.is_signed)
+    v = L.position_bytes == 2 ? static_cast<double>(static_cast<std::int16_t>(raw))
+                              : static_cast<double>(static_cast<std::int8_t>(raw));
   const double span = L.raw_max - L.raw_min;
   if (span == 0) return e;
   const double x = (v - L.raw_min) / span;
@@ -46,7 +50,8 @@ HidReportLayout LoadHidLayout(const std::string& path) {
   try {
     t = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& err) {
-    throw InputError(path, static_cast<int>(err.source().begin.line), "", std::string(err.description()));
+    throw InputError(path, static_cast<int>(err.source().begin.line), "",
+                     std::string(err.description()));
   }
   Diagnostics d;
   HidReportLayout L;
@@ -55,8 +60,11 @@ HidReportLayout LoadHidLayout(const std::string& path) {
   auto num = [&](const char* k, auto* out, double lo, double hi) {
     if (const auto* n = t.get(k)) {
       const auto v = n->value<double>();
-      if (v && *v >= lo && *v <= hi) *out = static_cast<std::remove_pointer_t<decltype(out)>>(*v);
-      else d.Add(path, static_cast<int>(n->source().begin.line), k, fmt::format("expected a number in {}..{}", lo, hi));
+      if (v && *v >= lo && *v <= hi)
+        *out = static_cast<std::remove_pointer_t<decltype(out)>>(*v);
+      else
+        d.Add(path, static_cast<int>(n->source().begin.line), k,
+              fmt::format("expected a number in {}..{}", lo, hi));
     }
   };
   num("report_id", &L.report_id, -1, 255);
@@ -69,12 +77,15 @@ HidReportLayout LoadHidLayout(const std::string& path) {
   if (auto v = t["little_endian"].value<bool>()) L.little_endian = *v;
   if (auto v = t["signed"].value<bool>()) L.is_signed = *v;
   for (const auto& [k, v] : t) {
-    static const char* known[] = {"report_id", "position_offset", "position_bytes", "raw_min", "raw_max", "button_offset",
-                                  "button_bit", "little_endian", "signed", "vendor_id", "product_id", "serial"};
-    if (std::none_of(std::begin(known), std::end(known), [&](const char* x) { return k.str() == x; }))
+    static const char* known[] = {"report_id", "position_offset", "position_bytes", "raw_min",
+                                  "raw_max",   "button_offset",   "button_bit",     "little_endian",
+                                  "signed",    "vendor_id",       "product_id",     "serial"};
+    if (std::none_of(std::begin(known), std::end(known),
+                     [&](const char* x) { return k.str() == x; }))
       d.Add(path, static_cast<int>(v.source().begin.line), std::string(k.str()), "unknown key");
   }
-  if (L.position_bytes != 1 && L.position_bytes != 2) d.Add(path, 0, "position_bytes", "expected 1 or 2");
+  if (L.position_bytes != 1 && L.position_bytes != 2)
+    d.Add(path, 0, "position_bytes", "expected 1 or 2");
   if (L.raw_max == L.raw_min) d.Add(path, 0, "raw_max", "must differ from raw_min");
   if (L.button_bit < 0 || L.button_bit > 7) d.Add(path, 0, "button_bit", "expected 0..7");
   d.ThrowIfAny();
@@ -84,11 +95,15 @@ HidReportLayout LoadHidLayout(const std::string& path) {
 namespace {
 class HidapiRating final : public RatingInput {
  public:
-  HidapiRating(std::uint16_t vid, std::uint16_t pid, const HidReportLayout& L, const std::string& serial) : L_(L) {
+  HidapiRating(std::uint16_t vid, std::uint16_t pid, const HidReportLayout& L,
+               const std::string& serial)
+      : L_(L) {
     if (hid_init() != 0) throw std::runtime_error("hidapi: cannot initialise");
     std::wstring ws(serial.begin(), serial.end());
     h_ = hid_open(vid, pid, serial.empty() ? nullptr : ws.c_str());
-    if (!h_) throw std::runtime_error(fmt::format("rating box {:04x}:{:04x} not found (permissions? docs/hardware.md)", vid, pid));
+    if (!h_)
+      throw std::runtime_error(fmt::format(
+          "rating box {:04x}:{:04x} not found (permissions? docs/hardware.md)", vid, pid));
     hid_set_nonblocking(h_, 1);
   }
   ~HidapiRating() override {
@@ -113,7 +128,8 @@ class HidapiRating final : public RatingInput {
 };
 }  // namespace
 
-std::unique_ptr<RatingInput> OpenHidRating(std::uint16_t vid, std::uint16_t pid, const HidReportLayout& L, const std::string& serial) {
+std::unique_ptr<RatingInput> OpenHidRating(std::uint16_t vid, std::uint16_t pid,
+                                           const HidReportLayout& L, const std::string& serial) {
   return std::make_unique<HidapiRating>(vid, pid, L, serial);
 }
 

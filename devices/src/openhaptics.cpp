@@ -30,7 +30,9 @@ struct Force {
 constexpr long long kForceStale_ns = 5'000'000;  // 5 ms: five servo ticks
 
 long long SteadyNs() noexcept {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(std::chrono::steady_clock::now().time_since_epoch()).count();
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
 }
 
 class OpenHapticsDevice final : public HapticDevice {
@@ -38,7 +40,9 @@ class OpenHapticsDevice final : public HapticDevice {
   explicit OpenHapticsDevice(const std::string& name) {
     hhd_ = hdInitDevice(name.empty() ? HD_DEFAULT_DEVICE : name.c_str());
     HDErrorInfo e = hdGetError();
-    if (HD_DEVICE_ERROR(e)) throw std::runtime_error("openhaptics: cannot initialise the device (error " + std::to_string(e.errorCode) + ")");
+    if (HD_DEVICE_ERROR(e))
+      throw std::runtime_error("openhaptics: cannot initialise the device (error " +
+                               std::to_string(e.errorCode) + ")");
     hdGetDoublev(HD_NOMINAL_MAX_FORCE, &max_force_N_);
     double k_N_per_mm = 0;
     hdGetDoublev(HD_NOMINAL_MAX_STIFFNESS, &k_N_per_mm);
@@ -49,7 +53,8 @@ class OpenHapticsDevice final : public HapticDevice {
     e = hdGetError();
     if (HD_DEVICE_ERROR(e)) {
       hdDisableDevice(hhd_);
-      throw std::runtime_error("openhaptics: cannot start the scheduler (error " + std::to_string(e.errorCode) + ")");
+      throw std::runtime_error("openhaptics: cannot start the scheduler (error " +
+                               std::to_string(e.errorCode) + ")");
     }
   }
   ~OpenHapticsDevice() override {
@@ -66,7 +71,8 @@ class OpenHapticsDevice final : public HapticDevice {
     return c;
   }
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override {
-    t0_ns_.store(std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count());
+    t0_ns_.store(
+        std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count());
   }
   ReadResult Read(renderer::DeviceSample* out) noexcept override {
     const State& s = state_.Read();
@@ -102,7 +108,9 @@ class OpenHapticsDevice final : public HapticDevice {
     State& s = self->state_.WriteSlot();
     for (int i = 0; i < 3; ++i) s.p[i] = p[i] * 1e-3, s.v[i] = v[i] * 1e-3;
     const auto now = std::chrono::steady_clock::now().time_since_epoch();
-    s.t = static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(now).count() - self->t0_ns_.load()) * 1e-9;
+    s.t = static_cast<double>(std::chrono::duration_cast<std::chrono::nanoseconds>(now).count() -
+                              self->t0_ns_.load()) *
+          1e-9;
     s.ok = !HD_DEVICE_ERROR(e);
     self->state_.Publish();
     return HD_CALLBACK_CONTINUE;
@@ -120,6 +128,8 @@ class OpenHapticsDevice final : public HapticDevice {
 }  // namespace
 
 bool HaveOpenHaptics() { return true; }
-std::unique_ptr<HapticDevice> OpenOpenHaptics(const std::string& name) { return std::make_unique<OpenHapticsDevice>(name); }
+std::unique_ptr<HapticDevice> OpenOpenHaptics(const std::string& name) {
+  return std::make_unique<OpenHapticsDevice>(name);
+}
 
 }  // namespace hapticlab::devices

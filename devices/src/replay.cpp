@@ -19,9 +19,12 @@ ReplayDevice::ReplayDevice(std::vector<TrajectorySample> samples, std::function<
 
 const char* ReadResultName(ReadResult r) {
   switch (r) {
-    case ReadResult::kOk: return "ok";
-    case ReadResult::kNoNewData: return "no-new-data";
-    case ReadResult::kLost: return "lost";
+    case ReadResult::kOk:
+      return "ok";
+    case ReadResult::kNoNewData:
+      return "no-new-data";
+    case ReadResult::kLost:
+      return "lost";
   }
   return "?";
 }

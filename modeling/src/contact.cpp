@@ -16,9 +16,12 @@
 namespace hapticlab::modeling {
 namespace {
 
-bool InSplit(int block, wb::Split s) { return s == wb::Split::kAll || (s == wb::Split::kTrain) == (block % 2 == 0); }
+bool InSplit(int block, wb::Split s) {
+  return s == wb::Split::kAll || (s == wb::Split::kTrain) == (block % 2 == 0);
+}
 
-const wb::ParamEstimate* FindParam(const wb::ChannelFit& c, const std::string& effect, const std::string& name, int* at) {
+const wb::ParamEstimate* FindParam(const wb::ChannelFit& c, const std::string& effect,
+                                   const std::string& name, int* at) {
   for (std::size_t k = 0; k < c.params.size(); ++k)
     if (c.params[k].effect == effect && c.params[k].name == name) {
       if (at) *at = static_cast<int>(k);
@@ -35,7 +38,8 @@ Estimate FromParam(const wb::ChannelFit& c, const std::string& effect, const std
 
 // Renderer units: X = X1mm / (1 mm)^n, so ln X = ln X1mm - n ln(1 mm); its variance by the
 // delta method from the channel's covariance, the interval exp(ln X -+ t sd).
-Estimate ToRendererUnits(const wb::ChannelFit& c, const std::string& effect, const std::string& name) {
+Estimate ToRendererUnits(const wb::ChannelFit& c, const std::string& effect,
+                         const std::string& name) {
   Estimate e;
   int i = -1, j = -1;
   const auto* x = FindParam(c, effect, name, &i);
@@ -45,7 +49,8 @@ Estimate ToRendererUnits(const wb::ChannelFit& c, const std::string& effect, con
   e.value = x->value / std::exp(n->value * l);
   const std::size_t np = c.params.size();
   if (c.covariance.size() == np * np && x->value > 0) {
-    const double vx = c.covariance[i * np + i], vn = c.covariance[j * np + j], cxn = c.covariance[i * np + j];
+    const double vx = c.covariance[i * np + i], vn = c.covariance[j * np + j],
+                 cxn = c.covariance[i * np + j];
     const double var_log = vx / (x->value * x->value) + l * l * vn - 2 * l * cxn / x->value;
     const double sd_log = std::sqrt(std::max(var_log, 0.0));
     e.sd = e.value * sd_log;
@@ -63,13 +68,16 @@ double RmsNormal(const wb::Model& m, const wb::Replay& r, double max_force_N) {
   double s = 0;
   int n = 0;
   for (std::size_t i = 0; i < r.samples().size(); ++i)
-    if (r.samples()[i].contact && r.samples()[i].fn_N <= max_force_N) s += std::pow(r.samples()[i].fn_N - p.fn_N[i], 2), ++n;
+    if (r.samples()[i].contact && r.samples()[i].fn_N <= max_force_N)
+      s += std::pow(r.samples()[i].fn_N - p.fn_N[i], 2), ++n;
   return n ? std::sqrt(s / n) : 0;
 }
 
 }  // namespace
 
-std::vector<std::string> ContactEffects() { return {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent"}; }
+std::vector<std::string> ContactEffects() {
+  return {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent"};
+}
 
 void SplitStrokesAndPokes(const Measurement& m, Measurement* strokes, Measurement* pokes) {
   *strokes = m;
@@ -97,20 +105,25 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
     a.sliding_samples += s[i].speed_mps >= o.sliding_speed_mps;
   }
   if (a.sliding_samples < 20 || a.presliding_samples < 5)
-    throw InputError(r.file, 0, "vx_mps",
-                     fmt::format("strokes need sliding (>= {:.1f} mm/s) and pre-sliding (<= {:.1f} mm/s) samples in "
-                                 "contact; found {} and {}",
-                                 o.sliding_speed_mps * 1e3, o.presliding_speed_mps * 1e3, a.sliding_samples,
-                                 a.presliding_samples));
+    throw InputError(
+        r.file, 0, "vx_mps",
+        fmt::format(
+            "strokes need sliding (>= {:.1f} mm/s) and pre-sliding (<= {:.1f} mm/s) samples in "
+            "contact; found {} and {}",
+            o.sliding_speed_mps * 1e3, o.presliding_speed_mps * 1e3, a.sliding_samples,
+            a.presliding_samples));
   // estMu (eq. 4.10, vector form): the surface's force on the tool is -(f_C u + mu_b v) while
   // sliding, with f_C = mu_k f_n and u the previous sample's direction of motion.
   Eigen::Matrix2d A = Eigen::Matrix2d::Zero();
   Eigen::Vector2d b = Eigen::Vector2d::Zero();
   for (std::size_t t = 1; t < s.size(); ++t) {
-    if (!use(t) || !s[t - 1].contact || s[t].speed_mps < o.sliding_speed_mps || s[t - 1].speed_mps < o.sliding_speed_mps)
+    if (!use(t) || !s[t - 1].contact || s[t].speed_mps < o.sliding_speed_mps ||
+        s[t - 1].speed_mps < o.sliding_speed_mps)
       continue;
-    const double ux = s[t - 1].vx_mps / s[t - 1].speed_mps, uy = s[t - 1].vy_mps / s[t - 1].speed_mps;
-    const Eigen::Vector2d ax(s[t - 1].fload_N * ux, s[t].vx_mps), ay(s[t - 1].fload_N * uy, s[t].vy_mps);
+    const double ux = s[t - 1].vx_mps / s[t - 1].speed_mps,
+                 uy = s[t - 1].vy_mps / s[t - 1].speed_mps;
+    const Eigen::Vector2d ax(s[t - 1].fload_N * ux, s[t].vx_mps),
+        ay(s[t - 1].fload_N * uy, s[t].vy_mps);
     A += ax * ax.transpose() + ay * ay.transpose();
     b += ax * -s[t].ftx_N + ay * -s[t].fty_N;
   }
@@ -132,7 +145,8 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
         anchor = t, have_anchor = true;
         continue;
       }
-      const double dx = s[t].x_m - s[anchor].x_m, dy = s[t].y_m - s[anchor].y_m, len = std::hypot(dx, dy);
+      const double dx = s[t].x_m - s[anchor].x_m, dy = s[t].y_m - s[anchor].y_m,
+                   len = std::hypot(dx, dy);
       if (len < r.position_resolution_m) continue;
       const std::size_t a0 = anchor;
       anchor = t;
@@ -140,14 +154,17 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
       const double fc = mu(0) * s[a0].fload_N;
       if (!(fc > 0)) continue;
       const double tx = fc * dx / len, ty = fc * dy / len;
-      const double zx = -s[a0].ftx_N - mu(1) * s[a0].vx_mps - tx, zy = -s[a0].fty_N - mu(1) * s[a0].vy_mps - ty;
-      const double yx = -s[t].ftx_N - mu(1) * s[t].vx_mps - tx, yy = -s[t].fty_N - mu(1) * s[t].vy_mps - ty;
+      const double zx = -s[a0].ftx_N - mu(1) * s[a0].vx_mps - tx,
+                   zy = -s[a0].fty_N - mu(1) * s[a0].vy_mps - ty;
+      const double yx = -s[t].ftx_N - mu(1) * s[t].vx_mps - tx,
+                   yy = -s[t].fty_N - mu(1) * s[t].vy_mps - ty;
       const double wx = len / fc * zx, wy = len / fc * zy;
       num += wx * (zx - yx) + wy * (zy - yy);
       den += wx * wx + wy * wy;
     }
     const double k_new = den > 0 && num > 0 ? num / den : kappa;
-    const double dk = std::abs(k_new - kappa), dmk = std::abs(mu(0) - mu_k), dmb = std::abs(mu(1) - mu_b);
+    const double dk = std::abs(k_new - kappa), dmk = std::abs(mu(0) - mu_k),
+                 dmb = std::abs(mu(1) - mu_b);
     kappa = k_new, mu_k = mu(0), mu_b = mu(1);
     a.passes = pass;
     if (dk < o.convergence && dmk < o.convergence && dmb < o.convergence) {
@@ -161,10 +178,12 @@ Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const Contac
   return a;
 }
 
-ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const ContactFitOptions& o) {
+ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
+                      const ContactFitOptions& o) {
   ContactFit out;
   out.uncertainty_method =
-      "cluster jackknife over 3 s clusters of blocks (delete-one-cluster one-step refits d_g = (J'J - J_g'J_g)^-1 J_g' "
+      "cluster jackknife over 3 s clusters of blocks (delete-one-cluster one-step refits d_g = "
+      "(J'J - J_g'J_g)^-1 J_g' "
       "r_g, cov = (G-1)/G sum (d_g - mean)(d_g - mean)'), 95 % intervals with "
       "t(0.975, G-1)";
   // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
@@ -188,7 +207,10 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
     double s = 0;
     int n = 0;
     for (std::size_t i = 0; i < r.samples().size(); ++i)
-      if (r.samples()[i].contact) s += std::pow(r.samples()[i].ftx_N - p.ftx_N[i], 2) + std::pow(r.samples()[i].fty_N - p.fty_N[i], 2), ++n;
+      if (r.samples()[i].contact)
+        s += std::pow(r.samples()[i].ftx_N - p.ftx_N[i], 2) +
+             std::pow(r.samples()[i].fty_N - p.fty_N[i], 2),
+            ++n;
     out.friction_rms_N = n ? std::sqrt(s / n) : 0;
   }
 
@@ -206,15 +228,18 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in, const C
     out.poke_source = fmt::format("the pokes file {}", pokes_in->file);
   } else if (in_contact(pokes) >= 200) {
     src = &pokes;
-    out.poke_source = fmt::format("the measurement's {} poke rows (vertical motion, tangential speed < 1 mm/s)",
-                                  pokes.rows.size());
+    out.poke_source =
+        fmt::format("the measurement's {} poke rows (vertical motion, tangential speed < 1 mm/s)",
+                    pokes.rows.size());
   } else {
     out.poke_source = "every sample of the measurement in contact (it has no pokes)";
   }
   if (in_contact(*src) < 10)
-    throw InputError(src->file, 0, "fz_N",
-                     fmt::format("{} samples in contact at most {:.1f} N for Hunt-Crossley; at least 10 are needed",
-                                 in_contact(*src), o.max_force_N));
+    throw InputError(
+        src->file, 0, "fz_N",
+        fmt::format(
+            "{} samples in contact at most {:.1f} N for Hunt-Crossley; at least 10 are needed",
+            in_contact(*src), o.max_force_N));
   const auto pr = src == &m ? r : wb::PrepareReplay(*src, o.replay);
   fo.normal = true;
   fo.friction = false;

@@ -10,20 +10,24 @@
 namespace hapticlab::modeling {
 
 bool NearAny(const std::vector<double>& set, double x) {
-  return std::any_of(set.begin(), set.end(),
-                     [&](double s) { return std::abs(s - x) <= 1e-6 * std::max(1.0, std::abs(s)); });
+  return std::any_of(set.begin(), set.end(), [&](double s) {
+    return std::abs(s - x) <= 1e-6 * std::max(1.0, std::abs(s));
+  });
 }
 
 CvResult CrossValidateModel(const std::vector<Recording>& recs, const std::vector<double>& tv,
                             const std::vector<double>& tf, const VibrationFitOptions& preprocess,
                             const CvFit& fit, std::uint64_t seed) {
-  auto training = [&](const Recording& r) { return NearAny(tv, r.speed_mps) && NearAny(tf, r.force_N); };
+  auto training = [&](const Recording& r) {
+    return NearAny(tv, r.speed_mps) && NearAny(tf, r.force_N);
+  };
   std::vector<Recording> train;
   for (const auto& r : recs)
     if (training(r)) train.push_back(r);
   if (train.size() < 3)
     throw InputError("<command line>", 0, "training conditions",
-                     fmt::format("at least 3 recordings at the training speeds x forces, found {}", train.size()));
+                     fmt::format("at least 3 recordings at the training speeds x forces, found {}",
+                                 train.size()));
   const ConditionSynthesizer synthesize = fit(train);
   CvResult res;
   int ntr = 0, nte = 0;
@@ -31,7 +35,11 @@ CvResult CrossValidateModel(const std::vector<Recording>& recs, const std::vecto
     const auto& r = recs[i];
     const auto measured = Preprocess(r, preprocess);
     const auto s = synthesize(r, measured.size(), seed + i);
-    CvRow row{r.speed_mps, r.force_N, training(r), SpectralError(measured, s), WelchMagnitude(measured),
+    CvRow row{r.speed_mps,
+              r.force_N,
+              training(r),
+              SpectralError(measured, s),
+              WelchMagnitude(measured),
               WelchMagnitude(s)};
     (row.train ? res.mean_es_train : res.mean_es_test) += row.es;
     (row.train ? ntr : nte)++;

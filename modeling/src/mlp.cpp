@@ -6,8 +6,8 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::modeling {
 
@@ -24,7 +24,8 @@ Mlp::Mlp(std::vector<int> layers, std::uint64_t seed) : layers_(std::move(layers
   for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
     const int in = layers_[l], out = layers_[l + 1];
     const double a = std::sqrt(6.0 / (in + out));
-    for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(out) * in; ++k) params_(offset_[l] + k) = rng.Uniform(-a, a);
+    for (Eigen::Index k = 0; k < static_cast<Eigen::Index>(out) * in; ++k)
+      params_(offset_[l] + k) = rng.Uniform(-a, a);
     for (int k = 0; k < out; ++k) params_(offset_[l] + static_cast<Eigen::Index>(out) * in + k) = 0;
   }
 }
@@ -34,21 +35,24 @@ double Mlp::Predict(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   for (std::size_t l = 0; l + 1 < layers_.size(); ++l) {
     const int in = layers_[l], out = layers_[l + 1];
     const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
-    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    const Eigen::Map<const Eigen::VectorXd> b(
+        params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
     Eigen::VectorXd z = W * a + b;
     a = l + 2 < layers_.size() ? Eigen::VectorXd(z.array().tanh()) : z;
   }
   return a(0);
 }
 
-double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, Eigen::VectorXd* grad) const {
+double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target,
+                     Eigen::VectorXd* grad) const {
   const std::size_t L = layers_.size() - 1;
   std::vector<Eigen::VectorXd> act(L + 1);
   act[0] = x;
   for (std::size_t l = 0; l < L; ++l) {
     const int in = layers_[l], out = layers_[l + 1];
     const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
-    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    const Eigen::Map<const Eigen::VectorXd> b(
+        params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
     Eigen::VectorXd z = W * act[l] + b;
     act[l + 1] = l + 1 < L ? Eigen::VectorXd(z.array().tanh()) : z;
   }
@@ -58,7 +62,8 @@ double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, 
   for (std::size_t l = L; l-- > 0;) {
     const int in = layers_[l], out = layers_[l + 1];
     Eigen::Map<Eigen::MatrixXd> gW(grad->data() + offset_[l], out, in);
-    Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in,
+                                   out);
     gW = delta * act[l].transpose();
     gb = delta;
     if (l > 0) {
@@ -69,8 +74,8 @@ double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, 
   return 0.5 * err * err;
 }
 
-double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<Eigen::Index>& rows,
-                          Eigen::VectorXd* grad) const {
+double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                          const std::vector<Eigen::Index>& rows, Eigen::VectorXd* grad) const {
   const std::size_t L = layers_.size() - 1;
   const auto B = static_cast<Eigen::Index>(rows.size());
   std::vector<Eigen::MatrixXd> act(L + 1);
@@ -83,7 +88,8 @@ double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, co
   for (std::size_t l = 0; l < L; ++l) {
     const int in = layers_[l], out = layers_[l + 1];
     const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
-    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    const Eigen::Map<const Eigen::VectorXd> b(
+        params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
     act[l + 1].noalias() = W * act[l];
     act[l + 1].colwise() += b;
     if (l + 1 < L) act[l + 1] = act[l + 1].array().tanh().matrix();
@@ -95,7 +101,8 @@ double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, co
   for (std::size_t l = L; l-- > 0;) {
     const int in = layers_[l], out = layers_[l + 1];
     Eigen::Map<Eigen::MatrixXd> gW(grad->data() + offset_[l], out, in);
-    Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in,
+                                   out);
     gW.noalias() = delta * act[l].transpose();
     gb = delta.rowwise().sum();
     if (l > 0) {
@@ -113,7 +120,8 @@ Eigen::VectorXd Mlp::PredictRows(const Eigen::MatrixXd& X) const {
   for (std::size_t l = 0; l < L; ++l) {
     const int in = layers_[l], out = layers_[l + 1];
     const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
-    const Eigen::Map<const Eigen::VectorXd> b(params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
+    const Eigen::Map<const Eigen::VectorXd> b(
+        params_.data() + offset_[l] + static_cast<Eigen::Index>(out) * in, out);
     Eigen::MatrixXd z = W * a;
     z.colwise() += b;
     a = l + 1 < L ? Eigen::MatrixXd(z.array().tanh()) : z;
@@ -121,9 +129,11 @@ Eigen::VectorXd Mlp::PredictRows(const Eigen::MatrixXd& X) const {
   return a.row(0).transpose();
 }
 
-MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const MlpTrainOptions& o) {
+MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                           const MlpTrainOptions& o) {
   const Eigen::Index n = X.rows();
-  const auto nval = static_cast<Eigen::Index>(std::floor(o.validation_fraction * static_cast<double>(n)));
+  const auto nval =
+      static_cast<Eigen::Index>(std::floor(o.validation_fraction * static_cast<double>(n)));
   const Eigen::Index ntr = n - nval;
   if (ntr < o.batch) throw std::invalid_argument("too few samples for one mini-batch");
   auto mse = [&](Eigen::Index from, Eigen::Index to) {
@@ -149,7 +159,8 @@ MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, c
       ++step;
       m = o.beta1 * m + (1 - o.beta1) * g;
       v = o.beta2 * v + (1 - o.beta2) * g.cwiseProduct(g);
-      const double c1 = 1 - std::pow(o.beta1, static_cast<double>(step)), c2 = 1 - std::pow(o.beta2, static_cast<double>(step));
+      const double c1 = 1 - std::pow(o.beta1, static_cast<double>(step)),
+                   c2 = 1 - std::pow(o.beta2, static_cast<double>(step));
       params_.array() -= o.learning_rate * (m.array() / c1) / ((v.array() / c2).sqrt() + o.epsilon);
     }
     s.epochs = epoch;

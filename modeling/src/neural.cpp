@@ -53,7 +53,8 @@ std::vector<double> BandSplit(const std::vector<double>& x, double fs, double lo
   fftw_execute(fwd);
   for (int k = 0; k <= n / 2; ++k) {
     const double f = k * fs / n;
-    if (f < lo || f >= hi) spec[static_cast<std::size_t>(k)][0] = spec[static_cast<std::size_t>(k)][1] = 0;
+    if (f < lo || f >= hi)
+      spec[static_cast<std::size_t>(k)][0] = spec[static_cast<std::size_t>(k)][1] = 0;
   }
   fftw_execute(inv);
   {
@@ -84,17 +85,20 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   std::vector<int> rec_of(cells, -1);
   Diagnostics d;
   for (std::size_t i = 0; i < recs.size(); ++i) {
-    const int c = Index(m.speeds_mps, recs[i].speed_mps) * static_cast<int>(nf) + Index(m.forces_N, recs[i].force_N);
+    const int c = Index(m.speeds_mps, recs[i].speed_mps) * static_cast<int>(nf) +
+                  Index(m.forces_N, recs[i].force_N);
     cell_of[i] = c;
     if (rec_of[static_cast<std::size_t>(c)] >= 0)
-      d.Add(recs[i].file, 0, "speed_mps", fmt::format("a second recording at {} m/s, {} N", recs[i].speed_mps, recs[i].force_N));
+      d.Add(recs[i].file, 0, "speed_mps",
+            fmt::format("a second recording at {} m/s, {} N", recs[i].speed_mps, recs[i].force_N));
     rec_of[static_cast<std::size_t>(c)] = static_cast<int>(i);
   }
   for (std::size_t c = 0; c < cells; ++c)
     if (rec_of[c] < 0)
       d.Add("", 0, "recordings",
-            fmt::format("the neural model needs a full speed x force grid: no recording at {} m/s, {} N",
-                        m.speeds_mps[c / nf], m.forces_N[c % nf]));
+            fmt::format(
+                "the neural model needs a full speed x force grid: no recording at {} m/s, {} N",
+                m.speeds_mps[c / nf], m.forces_N[c % nf]));
   d.ThrowIfAny();
 
   std::vector<std::vector<double>> pre(recs.size());
@@ -114,16 +118,19 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
       // the decimated range, so a predictor fitted to it is ill-conditioned (it needed a
       // dither whose white floor then showed in and around every band). The band itself is
       // selected at synthesis by the crossover filters (renderer/neural.cpp).
-      const auto full = BandSplit(pre[i], m.sample_rate_hz, 0, 0.5 * m.sample_rate_hz / band.decimation);
+      const auto full =
+          BandSplit(pre[i], m.sample_rate_hz, 0, 0.5 * m.sample_rate_hz / band.decimation);
       std::vector<double> dec;
-      for (std::size_t k = 0; k < full.size(); k += static_cast<std::size_t>(band.decimation)) dec.push_back(full[k]);
+      for (std::size_t k = 0; k < full.size(); k += static_cast<std::size_t>(band.decimation))
+        dec.push_back(full[k]);
       for (const double x : dec) ss += x * x, n += 1;
       sig[b].push_back(std::move(dec));
     }
     band.scale = n > 0 && ss > 0 ? std::sqrt(ss / n) : 1.0;
     Rng dither(o.train.seed + 7 * b + 1);
     for (auto& s : sig[b])
-      for (auto& x : s) x = x / band.scale + (o.signal_noise > 0 ? o.signal_noise * dither.Normal() : 0.0);
+      for (auto& x : s)
+        x = x / band.scale + (o.signal_noise > 0 ? o.signal_noise * dither.Normal() : 0.0);
     band.sigma.assign(cells, 0.0);
     band.nets.resize(unified ? 1 : cells);
   }
@@ -135,7 +142,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   };
   std::vector<Job> jobs;
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
-    if (unified) jobs.push_back({b, -1});
+    if (unified)
+      jobs.push_back({b, -1});
     else
       for (std::size_t c = 0; c < cells; ++c) jobs.push_back({b, static_cast<int>(c)});
   }
@@ -143,8 +151,11 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     // Pairs of recording i: training rows are the first 80 %, validation the last 20 %.
     const auto& x = sig[j.band][i];
     const int M = m.bands[j.band].history;
-    const std::size_t first = static_cast<std::size_t>(M), n = x.size() > first ? x.size() - first : 0;
-    const std::size_t cut = first + n - static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(n)));
+    const std::size_t first = static_cast<std::size_t>(M),
+                      n = x.size() > first ? x.size() - first : 0;
+    const std::size_t cut =
+        first + n -
+        static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(n)));
     return validation ? std::make_pair(cut, x.size()) : std::make_pair(first, cut);
   };
   // The same networks without their nonlinear part (output 0: the linear part alone), with
@@ -196,7 +207,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         auto basis = [&](double v, double fo) {
           Eigen::VectorXd phi(terms);
           phi(0) = 1;
-          if (unified) phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
+          if (unified)
+            phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
           return phi;
         };
         Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
@@ -205,16 +217,20 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin);
           Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
           Eigen::Index off = 0;
-          for (const auto i : use) {  // the training rows, recording by recording (as laid out above)
+          for (const auto i :
+               use) {  // the training rows, recording by recording (as laid out above)
             const auto [a, b] = rows_of(j, i, false);
             const auto n = static_cast<Eigen::Index>(b - a);
             const auto Xi = X.block(off, 0, n, M);
             const Eigen::MatrixXd G = Xi.transpose() * Xi;
             const Eigen::VectorXd g = Xi.transpose() * y.segment(off, n);
-            const Eigen::VectorXd phi = unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N)) : basis(0, 0);
+            const Eigen::VectorXd phi =
+                unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N))
+                        : basis(0, 0);
             for (Eigen::Index t = 0; t < terms; ++t) {
               rhs.segment(t * M, M) += phi(t) * g;
-              for (Eigen::Index u = 0; u < terms; ++u) A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
+              for (Eigen::Index u = 0; u < terms; ++u)
+                A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
             }
             off += n;
           }
@@ -222,7 +238,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           A.diagonal().array() += lambda;
           wlin = A.ldlt().solve(rhs);
           // ylin = sum_t phi_t (x . w_t): the histories times the M x terms weight matrix.
-          const Eigen::MatrixXd P = X.leftCols(M) * Eigen::Map<const Eigen::MatrixXd>(wlin.data(), M, terms);
+          const Eigen::MatrixXd P =
+              X.leftCols(M) * Eigen::Map<const Eigen::MatrixXd>(wlin.data(), M, terms);
           for (Eigen::Index rr = 0; rr < total; ++rr)
             ylin(rr) = P.row(rr).dot(unified ? basis(X(rr, M), X(rr, M + 1)) : basis(0, 0));
         }
@@ -241,25 +258,30 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         layers.push_back(1);
         Mlp net(layers, o.train.seed + 1000 * k);
         MlpTrainOptions to = o.train;
-        to.validation_fraction = total > 0 ? static_cast<double>(nval) / static_cast<double>(total) : 0.2;
+        to.validation_fraction =
+            total > 0 ? static_cast<double>(nval) / static_cast<double>(total) : 0.2;
         to.seed = o.train.seed + k;
-        const std::string name = unified ? fmt::format("band {}", j.band + 1)
-                                          : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1,
-                                                        m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
-                                                        m.forces_N[static_cast<std::size_t>(j.cell) % nf]);
+        const std::string name =
+            unified ? fmt::format("band {}", j.band + 1)
+                    : fmt::format("band {} cell ({} m/s, {} N)", j.band + 1,
+                                  m.speeds_mps[static_cast<std::size_t>(j.cell) / nf],
+                                  m.forces_N[static_cast<std::size_t>(j.cell) % nf]);
         to.progress = nullptr;
         if (o.progress)  // every 5th epoch: training can take minutes per network
           to.progress = [&, name](int epoch, double val_mse) {
             if (epoch % 5 == 0)
-              o.progress(fmt::format("{}: epoch {}/{}, validation MSE {:.4f}", name, epoch, o.train.max_epochs, val_mse),
+              o.progress(fmt::format("{}: epoch {}/{}, validation MSE {:.4f}", name, epoch,
+                                     o.train.max_epochs, val_mse),
                          static_cast<int>(done.load()), static_cast<int>(jobs.size()));
           };
         // Zero output layer: the network starts as exactly the linear part (its output is 0),
         // so training can only move away from the linear predictor where the data ask for it.
         if (nlin > 0) net.params().tail(layers[layers.size() - 2] + 1).setZero();
         net.Train(X, y_mlp, to);
-        renderer::NeuralNet out{layers, std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
-                                std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
+        renderer::NeuralNet out{
+            layers,
+            std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
+            std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
         const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
         // Sigma per cell for the network with (mlp) or without its nonlinear part: the one-step
         // residual RMS on every row of the cell's recording (with a linear part on the clean
@@ -269,7 +291,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         // RMS inside the band (what the crossovers pass; three fixed-point passes).
         auto sigmas = [&](bool mlp) {
           std::vector<double> sigma(cells, 0.0);
-          const Eigen::VectorXd p = !mlp ? ylin
+          const Eigen::VectorXd p = !mlp       ? ylin
                                     : nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + ylin)
                                                : net.PredictRows(X);
           std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
@@ -327,17 +349,21 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           return sigma;
         };
         const auto with_mlp = sigmas(true);
-        for (const auto i : use) band.sigma[static_cast<std::size_t>(cell_of[i])] = with_mlp[static_cast<std::size_t>(cell_of[i])];
+        for (const auto i : use)
+          band.sigma[static_cast<std::size_t>(cell_of[i])] =
+              with_mlp[static_cast<std::size_t>(cell_of[i])];
         if (nlin > 0) {
           const auto without = sigmas(false);
           for (const auto i : use)
-            linear_only[j.band].sigma[static_cast<std::size_t>(cell_of[i])] = without[static_cast<std::size_t>(cell_of[i])];
+            linear_only[j.band].sigma[static_cast<std::size_t>(cell_of[i])] =
+                without[static_cast<std::size_t>(cell_of[i])];
           renderer::NeuralNet lin = out;
           std::fill(lin.params.begin(), lin.params.end(), 0.0);  // the network's output is 0
           linear_only[j.band].nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(lin);
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
-        if (o.progress) o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
+        if (o.progress)
+          o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
       } catch (...) {
         std::lock_guard<std::mutex> lock(err_mu);
         if (!error) error = std::current_exception();
@@ -360,10 +386,13 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
       double sum = 0;
       int count = 0;
       for (std::size_t i = 0; i < recs.size(); ++i) {
-        const auto nval = static_cast<std::size_t>(std::floor(o.train.validation_fraction * static_cast<double>(pre[i].size())));
+        const auto nval = static_cast<std::size_t>(
+            std::floor(o.train.validation_fraction * static_cast<double>(pre[i].size())));
         if (nval < 2 * kValidationSegment) continue;
-        const std::vector<double> held(pre[i].end() - static_cast<std::ptrdiff_t>(nval), pre[i].end());
-        const auto synth = SynthesizeNeural(cand, recs[i].speed_mps, recs[i].force_N, 16 * kValidationSegment, o.train.seed + i);
+        const std::vector<double> held(pre[i].end() - static_cast<std::ptrdiff_t>(nval),
+                                       pre[i].end());
+        const auto synth = SynthesizeNeural(cand, recs[i].speed_mps, recs[i].force_N,
+                                            16 * kValidationSegment, o.train.seed + i);
         sum += SpectralError(held, synth, kValidationSegment);
         ++count;
       }
@@ -373,7 +402,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     const bool keep = !(es_lin <= es_mlp);
     if (!keep) m.bands = std::move(linear_only);
     if (o.progress)
-      o.progress(fmt::format("validation E_s: {:.4f} with the nonlinear part, {:.4f} with the linear part alone: {} kept",
+      o.progress(fmt::format("validation E_s: {:.4f} with the nonlinear part, {:.4f} with the "
+                             "linear part alone: {} kept",
                              es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone"),
                  static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
   }
@@ -381,8 +411,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   return m;
 }
 
-std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double v, double f, std::size_t n, std::uint64_t seed,
-                                     std::size_t settle) {
+std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double v, double f,
+                                     std::size_t n, std::uint64_t seed, std::size_t settle) {
   renderer::NeuralSynth s(std::make_shared<renderer::NeuralModel>(m), seed);
   const double vs = std::max(v, m.min_speed_mps);
   for (std::size_t k = 0; k < settle; ++k) s.Step(vs, f, true);
@@ -391,14 +421,18 @@ std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double v, d
   return out;
 }
 
-CvResult CrossValidateNeural(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
-                             const NeuralFitOptions& o, std::uint64_t seed) {
-  return CrossValidateModel(recs, tv, tf, o.preprocess, [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
-    auto model = std::make_shared<const renderer::NeuralModel>(FitNeural(train, o));
-    return [model](const Recording& r, std::size_t n, std::uint64_t s) {
-      return SynthesizeNeural(*model, r.speed_mps, r.force_N, n, s);
-    };
-  }, seed);
+CvResult CrossValidateNeural(const std::vector<Recording>& recs, const std::vector<double>& tv,
+                             const std::vector<double>& tf, const NeuralFitOptions& o,
+                             std::uint64_t seed) {
+  return CrossValidateModel(
+      recs, tv, tf, o.preprocess,
+      [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
+        auto model = std::make_shared<const renderer::NeuralModel>(FitNeural(train, o));
+        return [model](const Recording& r, std::size_t n, std::uint64_t s) {
+          return SynthesizeNeural(*model, r.speed_mps, r.force_N, n, s);
+        };
+      },
+      seed);
 }
 
 }  // namespace hapticlab::modeling

@@ -27,8 +27,8 @@ constexpr double kPi = std::numbers::pi;
 namespace {
 
 // Per pixel: b = argmin sum over used lights of (I_j - L_j . b)^2, with A^-1 for leverages.
-bool SolvePixel(const float* I, const std::uint8_t* use, const std::vector<Eigen::Vector3d>& L, Eigen::Vector3d* b,
-                Eigen::Matrix3d* Ainv) {
+bool SolvePixel(const float* I, const std::uint8_t* use, const std::vector<Eigen::Vector3d>& L,
+                Eigen::Vector3d* b, Eigen::Matrix3d* Ainv) {
   Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
   Eigen::Vector3d y = Eigen::Vector3d::Zero();
   int count = 0;
@@ -52,8 +52,8 @@ struct RobustParams {
 
 // The residual rule for one pixel: starts from the lights in `use` and updates them in place.
 // Returns false when fewer than 3 usable lights remain (b = 0).
-bool RobustPixel(const float* I, std::uint8_t* use, const std::vector<Eigen::Vector3d>& L, const RobustParams& p,
-                 Eigen::Vector3d* b, double* t_out) {
+bool RobustPixel(const float* I, std::uint8_t* use, const std::vector<Eigen::Vector3d>& L,
+                 const RobustParams& p, Eigen::Vector3d* b, double* t_out) {
   const std::size_t m = L.size();
   Eigen::Matrix3d Ainv;
   const double thr = p.threshold * p.sigma;
@@ -117,7 +117,8 @@ double RobustSd(std::vector<float>& v) {
 // Median |curl| of the normals' gradient field over 2x2 cells inside the mask, as given and
 // with the y component mirrored (medians: a few badly solved pixels do not decide); cells
 // with a steep normal (n_z < 0.3) are skipped.
-std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n, const std::vector<std::uint8_t>& mask, int w, int h) {
+std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n,
+                                      const std::vector<std::uint8_t>& mask, int w, int h) {
   std::vector<float> given, mirrored;
   const auto W = static_cast<std::size_t>(w);
   auto grad = [&](std::size_t k) {
@@ -142,9 +143,11 @@ std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n, con
 
 }  // namespace
 
-PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Light>& lights, const PhotometricOptions& o,
-                                    const ImageStack* ref, const std::function<void(double)>& progress) {
-  const std::size_t m = lights.size(), npx = static_cast<std::size_t>(st.width) * static_cast<std::size_t>(st.height);
+PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Light>& lights,
+                                    const PhotometricOptions& o, const ImageStack* ref,
+                                    const std::function<void(double)>& progress) {
+  const std::size_t m = lights.size(),
+                    npx = static_cast<std::size_t>(st.width) * static_cast<std::size_t>(st.height);
   HL_REQUIRE(st.images.size() == m, "one image per light is needed");
   HL_REQUIRE(m >= 3, "photometric stereo needs at least 3 lights");
   HL_REQUIRE(!ref || ref->images.size() == m, "one reference image per light is needed");
@@ -157,7 +160,8 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     for (std::size_t i = 0; i < npx; ++i) r.mask[i] = o.mask[i] ? 1 : 0;
   const bool irregular = std::find(r.mask.begin(), r.mask.end(), 0) != r.mask.end();
   if (irregular && o.integration == Integration::kFrankotChellappa)
-    throw std::invalid_argument("Frankot-Chellappa integrates the whole image; a mask needs the Poisson solve");
+    throw std::invalid_argument(
+        "Frankot-Chellappa integrates the whole image; a mask needs the Poisson solve");
   r.albedo.assign(npx, 0.f);
   r.normals.assign(npx, Eigen::Vector3f::Zero());
   r.light_scale.assign(m, 1.0);
@@ -187,7 +191,9 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     std::size_t drop = 0;
     if (o.rejection == Rejection::kBrightest) {
       std::sort(idx.begin(), idx.end(), [&](auto a, auto c) { return I[a] < I[c]; });
-      drop = idx.size() >= 6 ? static_cast<std::size_t>(std::floor(o.specular_fraction * static_cast<double>(idx.size()))) : 0;
+      drop = idx.size() >= 6 ? static_cast<std::size_t>(std::floor(o.specular_fraction *
+                                                                   static_cast<double>(idx.size())))
+                             : 0;
     }
     for (std::size_t q = 0; q + drop < idx.size(); ++q) use[k * m + idx[q]] = 1;
   }
@@ -200,7 +206,10 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
   const std::size_t stride = std::max<std::size_t>(1, nin / 100000);
   std::vector<float> sample;
   std::vector<double> t(m);
-  RobustParams rp{.sigma = 0, .threshold = o.outlier_sigmas, .shadow_fraction = o.shadow_fraction, .min_lights = std::max(3, o.min_lights)};
+  RobustParams rp{.sigma = 0,
+                  .threshold = o.outlier_sigmas,
+                  .shadow_fraction = o.shadow_fraction,
+                  .min_lights = std::max(3, o.min_lights)};
   // The residual rule's first scale: plain least squares on the starting lights (an
   // overestimate when highlights are common; each alternation below re-estimates it).
   if (o.rejection == Rejection::kResidual) {
@@ -210,8 +219,9 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
       if (!SolvePixel(&inten[k * m], &use[k * m], L, &bb, &Ainv) || !(bb.norm() > 0)) continue;
       for (std::size_t j = 0; j < m; ++j)
         if (use[k * m + j])
-          sample.push_back(static_cast<float>(std::abs(static_cast<double>(inten[k * m + j]) - L[j].dot(bb)) /
-                                              (L[j].norm() * bb.norm()) / std::sqrt(std::max(1 - L[j].dot(Ainv * L[j]), 1e-3))));
+          sample.push_back(static_cast<float>(
+              std::abs(static_cast<double>(inten[k * m + j]) - L[j].dot(bb)) /
+              (L[j].norm() * bb.norm()) / std::sqrt(std::max(1 - L[j].dot(Ainv * L[j]), 1e-3))));
     }
     rp.sigma = std::max(RobustSd(sample), o.noise_floor);
   }
@@ -231,9 +241,11 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
         solved[k] = SolvePixel(&inten[k * m], &use[k * m], L, &b[k], &Ainv) ? 1 : 0;
         if (!solved[k]) b[k].setZero();
       }
-      if (progress && k % 65536 == 0) progress(p0 + (p1 - p0) * static_cast<double>(k) / static_cast<double>(nin));
+      if (progress && k % 65536 == 0)
+        progress(p0 + (p1 - p0) * static_cast<double>(k) / static_cast<double>(nin));
     }
-    if (o.rejection == Rejection::kResidual && !sample.empty()) rp.sigma = std::max(RobustSd(sample), o.noise_floor);
+    if (o.rejection == Rejection::kResidual && !sample.empty())
+      rp.sigma = std::max(RobustSd(sample), o.noise_floor);
   };
   // Alternations on a subsample of at most kAlsPixels pixels (the m light scales need far
   // fewer readings than there are), until no scale changes by more than kAlsTolerance.
@@ -296,15 +308,17 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     }
   }
   for (auto& u : r.light_use) u /= std::max<double>(1, static_cast<double>(nin));
-  const double readings = std::max<double>(1, static_cast<double>(nin - r.unsolved_pixels) * static_cast<double>(m));
+  const double readings =
+      std::max<double>(1, static_cast<double>(nin - r.unsolved_pixels) * static_cast<double>(m));
   r.dropped_bright = static_cast<double>(bright) / readings;
   r.dropped_dark = static_cast<double>(dark) / readings;
   const auto [given, mirrored] = CurlMedians(r.normals, r.mask, r.width, r.height);
   r.mirrored_curl_ratio = mirrored > 0 ? given / mirrored : 1.0;
   r.axis_flip_suspected = r.mirrored_curl_ratio > kAxisFlipRatio;
   if (!irregular) {
-    r.height_m = o.integration == Integration::kPoisson ? IntegrateNormalsPoisson(r.normals, r.width, r.height, o.pitch_m)
-                                                        : IntegrateNormals(r.normals, r.width, r.height, o.pitch_m);
+    r.height_m = o.integration == Integration::kPoisson
+                     ? IntegrateNormalsPoisson(r.normals, r.width, r.height, o.pitch_m)
+                     : IntegrateNormals(r.normals, r.width, r.height, o.pitch_m);
   } else {
     r.height_m = IntegrateNormalsMasked(r.normals, r.mask, r.width, r.height, o.pitch_m);
   }
@@ -312,8 +326,8 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
   return r;
 }
 
-
-std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& nrm, int w, int h, double pitch) {
+std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& nrm, int w, int h,
+                                    double pitch) {
   const int wc = w / 2 + 1;
   static std::mutex mu;  // FFTW planning is not thread-safe
   std::vector<double> p(static_cast<std::size_t>(w) * static_cast<std::size_t>(h)), q(p.size());
@@ -323,23 +337,29 @@ std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& nrm, int
     p[i] = -n.x() / nz;  // dh/dx (height units per pixel unit)
     q[i] = -n.y() / nz;  // dh/dy
   }
-  std::vector<std::complex<double>> P(static_cast<std::size_t>(h) * static_cast<std::size_t>(wc)), Q(P.size()), Z(P.size());
+  std::vector<std::complex<double>> P(static_cast<std::size_t>(h) * static_cast<std::size_t>(wc)),
+      Q(P.size()), Z(P.size());
   std::vector<double> out(p.size());
   fftw_plan fp, fq, iz;
   {
     std::lock_guard lock(mu);
-    fp = fftw_plan_dft_r2c_2d(h, w, p.data(), reinterpret_cast<fftw_complex*>(P.data()), FFTW_ESTIMATE);
-    fq = fftw_plan_dft_r2c_2d(h, w, q.data(), reinterpret_cast<fftw_complex*>(Q.data()), FFTW_ESTIMATE);
-    iz = fftw_plan_dft_c2r_2d(h, w, reinterpret_cast<fftw_complex*>(Z.data()), out.data(), FFTW_ESTIMATE);
+    fp = fftw_plan_dft_r2c_2d(h, w, p.data(), reinterpret_cast<fftw_complex*>(P.data()),
+                              FFTW_ESTIMATE);
+    fq = fftw_plan_dft_r2c_2d(h, w, q.data(), reinterpret_cast<fftw_complex*>(Q.data()),
+                              FFTW_ESTIMATE);
+    iz = fftw_plan_dft_c2r_2d(h, w, reinterpret_cast<fftw_complex*>(Z.data()), out.data(),
+                              FFTW_ESTIMATE);
   }
   fftw_execute(fp);
   fftw_execute(fq);
   for (int v = 0; v < h; ++v)
     for (int u = 0; u < wc; ++u) {
       const double wx = 2 * kPi * u / w, wy = 2 * kPi * (v <= h / 2 ? v : v - h) / h;
-      const std::size_t k = static_cast<std::size_t>(v) * static_cast<std::size_t>(wc) + static_cast<std::size_t>(u);
+      const std::size_t k =
+          static_cast<std::size_t>(v) * static_cast<std::size_t>(wc) + static_cast<std::size_t>(u);
       const double d = wx * wx + wy * wy;
-      Z[k] = d > 0 ? (std::complex<double>(0, -wx) * P[k] + std::complex<double>(0, -wy) * Q[k]) / d : 0.0;
+      Z[k] = d > 0 ? (std::complex<double>(0, -wx) * P[k] + std::complex<double>(0, -wy) * Q[k]) / d
+                   : 0.0;
     }
   fftw_execute(iz);
   {
@@ -359,7 +379,8 @@ namespace {
 // Gradients between 4-neighbours from the normals: gx[k] = h(k + 1) - h(k) along a row and
 // gy[k] = h(k + W) - h(k) down a column (height units per pixel), each the mean of the two
 // pixels' slopes; zero where the pair leaves the image.
-void EdgeGradients(const std::vector<Eigen::Vector3f>& nrm, int w, int h, std::vector<double>* gx, std::vector<double>* gy) {
+void EdgeGradients(const std::vector<Eigen::Vector3f>& nrm, int w, int h, std::vector<double>* gx,
+                   std::vector<double>* gy) {
   const auto W = static_cast<std::size_t>(w), H = static_cast<std::size_t>(h);
   std::vector<double> p(W * H), q(W * H);
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -379,7 +400,8 @@ void EdgeGradients(const std::vector<Eigen::Vector3f>& nrm, int w, int h, std::v
 
 }  // namespace
 
-std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& nrm, int w, int h, double pitch) {
+std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& nrm, int w, int h,
+                                           double pitch) {
   // The least-squares height on the 4-neighbour grid: lap z = div g, with the Laplacian's
   // Neumann boundary diagonalised by the DCT-II [Simchony, Chellappa, Shao 1990,
   // doi:10.1109/34.55103].
@@ -401,7 +423,8 @@ std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& n
   fftw_execute(fwd);
   for (std::size_t i = 0; i < H; ++i)
     for (std::size_t j = 0; j < W; ++j) {
-      const double lam = 2 * std::cos(kPi * static_cast<double>(j) / w) + 2 * std::cos(kPi * static_cast<double>(i) / h) - 4;
+      const double lam = 2 * std::cos(kPi * static_cast<double>(j) / w) +
+                         2 * std::cos(kPi * static_cast<double>(i) / h) - 4;
       z[i * W + j] = (i == 0 && j == 0) ? 0.0 : z[i * W + j] / lam;
     }
   fftw_execute(inv);
@@ -416,10 +439,12 @@ std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& n
   return out;
 }
 
-std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nrm, const std::vector<std::uint8_t>& mask, int w,
-                                          int h, double pitch) {
+std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nrm,
+                                          const std::vector<std::uint8_t>& mask, int w, int h,
+                                          double pitch) {
   const auto W = static_cast<std::size_t>(w), H = static_cast<std::size_t>(h), N = W * H;
-  HL_REQUIRE(nrm.size() == N && mask.size() == N, "normals and mask must have width x height values");
+  HL_REQUIRE(nrm.size() == N && mask.size() == N,
+             "normals and mask must have width x height values");
   std::vector<double> gx, gy;
   EdgeGradients(nrm, w, h, &gx, &gy);
   constexpr std::size_t kOut = static_cast<std::size_t>(-1);
@@ -463,7 +488,8 @@ std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nr
       const std::size_t c = stack.back();
       stack.pop_back();
       const std::size_t ci = c / W, cj = c % W;
-      const std::size_t nb[4] = {cj + 1 < W ? c + 1 : kOut, cj > 0 ? c - 1 : kOut, ci + 1 < H ? c + W : kOut, ci > 0 ? c - W : kOut};
+      const std::size_t nb[4] = {cj + 1 < W ? c + 1 : kOut, cj > 0 ? c - 1 : kOut,
+                                 ci + 1 < H ? c + W : kOut, ci > 0 ? c - W : kOut};
       for (auto q : nb)
         if (q != kOut && mask[q] && region[id[q]] == kOut) {
           region[id[q]] = regions;
@@ -472,11 +498,13 @@ std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nr
     }
     ++regions;
   }
-  for (std::size_t v = 0; v < n; ++v) trip.emplace_back(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(v), diag[v]);
+  for (std::size_t v = 0; v < n; ++v)
+    trip.emplace_back(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(v), diag[v]);
   Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));
   A.setFromTriplets(trip.begin(), trip.end());
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(A);
-  if (solver.info() != Eigen::Success) throw std::runtime_error("masked Poisson integration: factorisation failed");
+  if (solver.info() != Eigen::Success)
+    throw std::runtime_error("masked Poisson integration: factorisation failed");
   const Eigen::VectorXd z = solver.solve(rhs);
   std::vector<double> sum(regions, 0.0), cnt(regions, 0.0);
   for (std::size_t v = 0; v < n; ++v) {
@@ -487,13 +515,13 @@ std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nr
   for (std::size_t k = 0; k < N; ++k) {
     if (!mask[k]) continue;
     const std::size_t v = id[k];
-    out[k] = static_cast<float>((z[static_cast<Eigen::Index>(v)] - sum[region[v]] / cnt[region[v]]) * pitch);
+    out[k] = static_cast<float>(
+        (z[static_cast<Eigen::Index>(v)] - sum[region[v]] / cnt[region[v]]) * pitch);
     lo = std::min(lo, out[k]);
   }
   for (std::size_t k = 0; k < N; ++k)
     if (!mask[k]) out[k] = lo;
   return out;
 }
-
 
 }  // namespace hapticlab::modeling

@@ -93,7 +93,8 @@ std::optional<double> ParseNumber(const std::string& s) {
 bool IsCount(const TextLine& l) {
   if (l.cells.size() != 1) return false;
   const auto& s = l.cells[0];
-  return !s.empty() && std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
+  return !s.empty() &&
+         std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c) != 0; });
 }
 
 std::string Lower(std::string s) {
@@ -107,7 +108,8 @@ std::vector<Light> DomePreset() {
   std::vector<Light> l;
   int k = 0;
   for (double e : {40.0, 55.0, 70.0})
-    for (int a = 0; a < 10; ++a) l.push_back({fmt::format("light_{:02d}.png", k++), FromAngles(e, 36.0 * a), 0});
+    for (int a = 0; a < 10; ++a)
+      l.push_back({fmt::format("light_{:02d}.png", k++), FromAngles(e, 36.0 * a), 0});
   return l;
 }
 
@@ -128,31 +130,41 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
     // Columns: from a header (every cell non-numeric) or from the first row's shape.
     std::vector<std::string> cols;
     if (k < lines.size() &&
-        std::none_of(lines[k].cells.begin(), lines[k].cells.end(), [](const std::string& c) { return ParseNumber(c).has_value(); }) &&
+        std::none_of(lines[k].cells.begin(), lines[k].cells.end(),
+                     [](const std::string& c) { return ParseNumber(c).has_value(); }) &&
         lines[k].cells.size() >= 3) {
       for (const auto& c : lines[k].cells) cols.push_back(Lower(c));
       const std::vector<std::vector<std::string>> known = {
           {"file", "elevation_deg", "azimuth_deg"}, {"file", "lx", "ly", "lz"}, {"lx", "ly", "lz"}};
       if (std::find(known.begin(), known.end(), cols) == known.end())
-        throw InputError(path, lines[k].line, lines[k].cells[0],
-                         "unknown header; expected file,elevation_deg,azimuth_deg or file,lx,ly,lz or lx,ly,lz");
+        throw InputError(
+            path, lines[k].line, lines[k].cells[0],
+            "unknown header; expected file,elevation_deg,azimuth_deg or file,lx,ly,lz or lx,ly,lz");
       ++k;
     } else if (k < lines.size()) {
       const auto& c = lines[k].cells;
       const bool named = !ParseNumber(c[0]).has_value();
-      if (named && c.size() == 3) cols = {"file", "elevation_deg", "azimuth_deg"};
-      else if (named && c.size() == 4) cols = {"file", "lx", "ly", "lz"};
-      else if (!named && c.size() == 3) cols = {"lx", "ly", "lz"};
+      if (named && c.size() == 3)
+        cols = {"file", "elevation_deg", "azimuth_deg"};
+      else if (named && c.size() == 4)
+        cols = {"file", "lx", "ly", "lz"};
+      else if (!named && c.size() == 3)
+        cols = {"lx", "ly", "lz"};
       else
-        throw InputError(path, lines[k].line, "",
-                         fmt::format("{} cells; expected file elevation_deg azimuth_deg, file lx ly lz, or lx ly lz", c.size()));
+        throw InputError(
+            path, lines[k].line, "",
+            fmt::format(
+                "{} cells; expected file elevation_deg azimuth_deg, file lx ly lz, or lx ly lz",
+                c.size()));
     }
     const bool named = cols.size() > 0 && cols[0] == "file";
     const bool angles = cols.size() == 3 && named;
     for (; k < lines.size(); ++k) {
       const auto& l = lines[k];
       if (l.cells.size() != cols.size())
-        throw InputError(path, l.line, "", fmt::format("{} cells, expected {} ({})", l.cells.size(), cols.size(), fmt::join(cols, ",")));
+        throw InputError(path, l.line, "",
+                         fmt::format("{} cells, expected {} ({})", l.cells.size(), cols.size(),
+                                     fmt::join(cols, ",")));
       Light light;
       light.line = l.line;
       light.source = path;
@@ -161,22 +173,28 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
       double v[3] = {0, 0, 0};
       for (std::size_t c = first; c < cols.size(); ++c) {
         const auto x = ParseNumber(l.cells[c]);
-        if (!x || !std::isfinite(*x)) throw InputError(path, l.line, cols[c], fmt::format("'{}' is not a finite number", l.cells[c]));
+        if (!x || !std::isfinite(*x))
+          throw InputError(path, l.line, cols[c],
+                           fmt::format("'{}' is not a finite number", l.cells[c]));
         v[c - first] = *x;
       }
       if (angles) {
         light.direction = FromAngles(v[0], v[1]);
       } else {
         light.direction = Eigen::Vector3d(v[0], v[1], v[2]);
-        if (!(light.direction.norm() > 0)) throw InputError(path, l.line, "lx", "zero light direction");
+        if (!(light.direction.norm() > 0))
+          throw InputError(path, l.line, "lx", "zero light direction");
         light.direction.normalize();
       }
       if (!(light.direction.z() > 0))
-        throw InputError(path, l.line, angles ? "elevation_deg" : "lz", "light at or below the sample plane (z must be > 0)");
+        throw InputError(path, l.line, angles ? "elevation_deg" : "lz",
+                         "light at or below the sample plane (z must be > 0)");
       out.push_back(light);
     }
     if (count && *count != out.size())
-      throw InputError(path, count_line, "", fmt::format("the count line says {} lights, the file has {}", *count, out.size()));
+      throw InputError(
+          path, count_line, "",
+          fmt::format("the count line says {} lights, the file has {}", *count, out.size()));
     if (out.size() < 3) throw InputError(path, 0, "", "photometric stereo needs at least 3 lights");
   }
   if (y_up)
@@ -188,7 +206,8 @@ void ApplyImageList(const std::string& list_path, std::vector<Light>& lights) {
   const auto lines = SplitCells(ReadTextFile(list_path, "image list"), list_path);
   for (const auto& l : lines)
     if (l.cells.size() != 1)
-      throw InputError(list_path, l.line, "", "one file name per line expected (names without spaces or commas)");
+      throw InputError(list_path, l.line, "",
+                       "one file name per line expected (names without spaces or commas)");
   if (lines.size() != lights.size())
     throw InputError(list_path, lines.empty() ? 0 : lines.back().line, "",
                      fmt::format("{} image names for {} lights", lines.size(), lights.size()));
@@ -204,25 +223,32 @@ namespace {
 cv::Mat ReadTga(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, 0, "", "cannot open TGA file");
-  const std::vector<unsigned char> d((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+  const std::vector<unsigned char> d((std::istreambuf_iterator<char>(f)),
+                                     std::istreambuf_iterator<char>());
   auto bad = [&](const std::string& what) { return InputError(path, 0, "", "TGA: " + what); };
   if (d.size() < 18) throw bad("file shorter than its 18-byte header");
   const int id_len = d[0], cmap_type = d[1], type = d[2];
   const int cmap_len = d[5] | (d[6] << 8), cmap_bits = d[7];
   const int w = d[12] | (d[13] << 8), h = d[14] | (d[15] << 8), bpp = d[16], desc = d[17];
   if (type != 2 && type != 3 && type != 10 && type != 11)
-    throw bad(fmt::format("image type {} not supported (2, 3, 10, 11: uncompressed or RLE colour/grey)", type));
+    throw bad(fmt::format(
+        "image type {} not supported (2, 3, 10, 11: uncompressed or RLE colour/grey)", type));
   const bool grey = type == 3 || type == 11;
   if (grey ? bpp != 8 : (bpp != 16 && bpp != 24 && bpp != 32))
-    throw bad(fmt::format("{} bits per pixel not supported for {} images", bpp, grey ? "grey" : "colour"));
+    throw bad(fmt::format("{} bits per pixel not supported for {} images", bpp,
+                          grey ? "grey" : "colour"));
   if (w <= 0 || h <= 0) throw bad("zero width or height");
   std::size_t at = 18 + static_cast<std::size_t>(id_len) +
-                   (cmap_type ? static_cast<std::size_t>(cmap_len) * static_cast<std::size_t>((cmap_bits + 7) / 8) : 0);
-  const std::size_t bytes = static_cast<std::size_t>(bpp / 8), n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+                   (cmap_type ? static_cast<std::size_t>(cmap_len) *
+                                    static_cast<std::size_t>((cmap_bits + 7) / 8)
+                              : 0);
+  const std::size_t bytes = static_cast<std::size_t>(bpp / 8),
+                    n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
   std::vector<unsigned char> px(n * bytes);
   if (type == 2 || type == 3) {
     if (d.size() < at + px.size()) throw bad("pixel data truncated");
-    std::copy(d.begin() + static_cast<std::ptrdiff_t>(at), d.begin() + static_cast<std::ptrdiff_t>(at + px.size()), px.begin());
+    std::copy(d.begin() + static_cast<std::ptrdiff_t>(at),
+              d.begin() + static_cast<std::ptrdiff_t>(at + px.size()), px.begin());
   } else {
     std::size_t o = 0;
     while (o < n) {
@@ -246,8 +272,11 @@ cv::Mat ReadTga(const std::string& path) {
   cv::Mat m(h, w, grey ? CV_8UC1 : (bpp == 32 ? CV_8UC4 : CV_8UC3));
   for (int i = 0; i < h; ++i)
     for (int j = 0; j < w; ++j) {
-      const std::size_t src = static_cast<std::size_t>((top ? i : h - 1 - i) * w + (right_to_left ? w - 1 - j : j)) * bytes;
-      unsigned char* dst = m.ptr<unsigned char>(i) + static_cast<std::size_t>(j) * static_cast<std::size_t>(m.channels());
+      const std::size_t src =
+          static_cast<std::size_t>((top ? i : h - 1 - i) * w + (right_to_left ? w - 1 - j : j)) *
+          bytes;
+      unsigned char* dst = m.ptr<unsigned char>(i) +
+                           static_cast<std::size_t>(j) * static_cast<std::size_t>(m.channels());
       if (bpp == 16) {  // A RRRRR GGGGG BBBBB, little endian
         const int v = px[src] | (px[src + 1] << 8);
         dst[0] = static_cast<unsigned char>(((v & 31) * 255 + 15) / 31);
@@ -271,7 +300,10 @@ cv::Mat ReadAny(const std::string& path) {
   }
   cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (m.empty())
-    throw InputError(path, 0, "", std::filesystem::exists(path) ? "cannot read image (a format OpenCV reads, or TGA)" : "image not found");
+    throw InputError(path, 0, "",
+                     std::filesystem::exists(path)
+                         ? "cannot read image (a format OpenCV reads, or TGA)"
+                         : "image not found");
   return m;
 }
 
@@ -281,31 +313,47 @@ std::vector<float> ReadGreyImage(const std::string& path, int* width, int* heigh
   cv::Mat m = ReadAny(path);
   double scale = 1;
   switch (m.depth()) {
-    case CV_8U: scale = 1.0 / 255; break;
-    case CV_16U: scale = 1.0 / 65535; break;
-    case CV_8S: scale = 1.0 / 127; break;
-    case CV_16S: scale = 1.0 / 32767; break;
-    default: break;  // float (and 32-bit integer) values as stored
+    case CV_8U:
+      scale = 1.0 / 255;
+      break;
+    case CV_16U:
+      scale = 1.0 / 65535;
+      break;
+    case CV_8S:
+      scale = 1.0 / 127;
+      break;
+    case CV_16S:
+      scale = 1.0 / 32767;
+      break;
+    default:
+      break;  // float (and 32-bit integer) values as stored
   }
   cv::Mat f;
   m.convertTo(f, CV_MAKETYPE(CV_32F, m.channels()), scale);
   cv::Mat g;
-  if (f.channels() == 1) g = f;
-  else if (f.channels() == 3) cv::cvtColor(f, g, cv::COLOR_BGR2GRAY);
-  else if (f.channels() == 4) cv::cvtColor(f, g, cv::COLOR_BGRA2GRAY);
-  else if (f.channels() == 2) cv::extractChannel(f, g, 0);  // grey + alpha
-  else throw InputError(path, 0, "", fmt::format("{} channels not supported", f.channels()));
+  if (f.channels() == 1)
+    g = f;
+  else if (f.channels() == 3)
+    cv::cvtColor(f, g, cv::COLOR_BGR2GRAY);
+  else if (f.channels() == 4)
+    cv::cvtColor(f, g, cv::COLOR_BGRA2GRAY);
+  else if (f.channels() == 2)
+    cv::extractChannel(f, g, 0);  // grey + alpha
+  else
+    throw InputError(path, 0, "", fmt::format("{} channels not supported", f.channels()));
   if (!g.isContinuous()) g = g.clone();
   *width = g.cols;
   *height = g.rows;
-  return {g.ptr<float>(), g.ptr<float>() + static_cast<std::size_t>(g.cols) * static_cast<std::size_t>(g.rows)};
+  return {g.ptr<float>(),
+          g.ptr<float>() + static_cast<std::size_t>(g.cols) * static_cast<std::size_t>(g.rows)};
 }
 
 ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights) {
   ImageStack s;
   for (const auto& l : lights) {
     if (l.file.empty())
-      throw InputError(l.source.empty() ? dir : l.source, l.line, "file", "a light has no image name (give an image list)");
+      throw InputError(l.source.empty() ? dir : l.source, l.line, "file",
+                       "a light has no image name (give an image list)");
     const std::string path = (std::filesystem::path(dir) / l.file).string();
     int w = 0, h = 0;
     auto img = ReadGreyImage(path, &w, &h);
@@ -313,7 +361,8 @@ ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights) 
       s.width = w;
       s.height = h;
     } else if (w != s.width || h != s.height) {
-      throw InputError(path, 0, "", fmt::format("image is {}x{}, the first was {}x{}", w, h, s.width, s.height));
+      throw InputError(path, 0, "",
+                       fmt::format("image is {}x{}, the first was {}x{}", w, h, s.width, s.height));
     }
     s.images.push_back(std::move(img));
   }
@@ -323,16 +372,21 @@ ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights) 
 std::vector<std::uint8_t> ReadMask(const std::string& path, int width, int height) {
   const cv::Mat m = ReadAny(path);
   if (m.cols != width || m.rows != height)
-    throw InputError(path, 0, "", fmt::format("mask is {}x{}, the images are {}x{}", m.cols, m.rows, width, height));
+    throw InputError(
+        path, 0, "",
+        fmt::format("mask is {}x{}, the images are {}x{}", m.cols, m.rows, width, height));
   cv::Mat f;
   m.convertTo(f, CV_MAKETYPE(CV_32F, m.channels()));
   const int colour = m.channels() == 4 ? 3 : m.channels() == 2 ? 1 : m.channels();  // alpha ignored
-  std::vector<std::uint8_t> out(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), 0);
+  std::vector<std::uint8_t> out(static_cast<std::size_t>(width) * static_cast<std::size_t>(height),
+                                0);
   for (int i = 0; i < height; ++i) {
     const float* row = f.ptr<float>(i);
     for (int j = 0; j < width; ++j)
       for (int c = 0; c < colour; ++c)
-        if (row[j * f.channels() + c] != 0) out[static_cast<std::size_t>(i) * static_cast<std::size_t>(width) + static_cast<std::size_t>(j)] = 1;
+        if (row[j * f.channels() + c] != 0)
+          out[static_cast<std::size_t>(i) * static_cast<std::size_t>(width) +
+              static_cast<std::size_t>(j)] = 1;
   }
   return out;
 }

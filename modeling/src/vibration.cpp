@@ -1,27 +1,26 @@
 #include "hapticlab/modeling/vibration.hpp"
 
-#include "hapticlab/modeling/cross_validation.hpp"
-
 #include <fftw3.h>
 #include <fmt/format.h>
 #include <soxr.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <exception>
 #include <filesystem>
 #include <map>
 #include <memory>
-#include <atomic>
-#include <exception>
 #include <mutex>
-#include <thread>
 #include <numbers>
 #include <set>
+#include <thread>
 
-#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/measurement.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/modeling/cross_validation.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/biquad.hpp"
 #include "hapticlab/renderer/delaunay.hpp"
@@ -46,21 +45,25 @@ double MetaNumber(const Measurement& m, const char* key, double def) {
 
 Recording LoadRecording(const std::string& path) {
   const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
-  if (!m.has_acceleration) throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
-  if (m.rows.size() < 256) throw InputError(path, 0, "", "too short: at least 256 samples are needed");
+  if (!m.has_acceleration)
+    throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
+  if (m.rows.size() < 256)
+    throw InputError(path, 0, "", "too short: at least 256 samples are needed");
   Recording r;
   r.file = path;
   // Sample rate and uniform sampling.
   std::vector<double> dt;
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
   std::vector<double> sorted(dt);
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2), sorted.end());
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
   const double med = sorted[sorted.size() / 2];
   r.rate_hz = MetaNumber(m, "rate_hz", 1.0 / med);
   for (std::size_t i = 0; i < dt.size(); ++i)
     if (dt[i] > 1.5 / r.rate_hz)
       throw InputError(path, m.row_lines[i + 1], "t_s",
-                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)", dt[i], 1.0 / r.rate_hz));
+                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)",
+                                   dt[i], 1.0 / r.rate_hz));
   double lo = 1e300, hi = -1e300;
   for (const auto& row : m.rows) {
     r.acc.push_back(row.acc_mps2);
@@ -78,7 +81,8 @@ Recording LoadRecording(const std::string& path) {
     for (double a : r.acc) count += a == ext;
     if (count >= 20 && hi > lo)
       throw InputError(path, 0, "acc_mps2",
-                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped", count, ext));
+                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped",
+                                   count, ext));
   }
   // Condition: metadata, or steady per-row kinematics and force.
   const bool meta = m.metadata.count("speed_mps") && m.metadata.count("force_N");
@@ -86,7 +90,8 @@ Recording LoadRecording(const std::string& path) {
     r.speed_mps = MetaNumber(m, "speed_mps", 0);
     r.force_N = MetaNumber(m, "force_N", 0);
   } else {
-    if (!m.has_forces) throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
+    if (!m.has_forces)
+      throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
     std::vector<double> v, f;
     for (const auto& row : m.rows) {
       v.push_back(row.v_mps.head<2>().norm());
@@ -102,9 +107,10 @@ Recording LoadRecording(const std::string& path) {
     const auto [vm, vcv] = mean_cv(v);
     const auto [fm, fcv] = mean_cv(f);
     if (vcv > 0.25 || fcv > 0.25)
-      throw InputError(path, 0, vcv > 0.25 ? "speed" : "force",
-                       "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' and "
-                       "'# force_N:' metadata or cut the file to its steady part");
+      throw InputError(
+          path, 0, vcv > 0.25 ? "speed" : "force",
+          "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' and "
+          "'# force_N:' metadata or cut the file to its steady part");
     r.speed_mps = vm;
     r.force_N = fm;
   }
@@ -116,10 +122,15 @@ Recording LoadRecording(const std::string& path) {
 std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s) {
   const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
   if (m.metadata.count("speed_mps") && m.metadata.count("force_N")) return {LoadRecording(path)};
-  if (!m.has_acceleration) throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
-  if (!m.has_forces) throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
-  if (m.rows.size() < 256) throw InputError(path, 0, "", "too short: at least 256 samples are needed");
-  const double rate = MetaNumber(m, "rate_hz", (static_cast<double>(m.rows.size()) - 1) / (m.rows.back().t_s - m.rows.front().t_s));
+  if (!m.has_acceleration)
+    throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
+  if (!m.has_forces)
+    throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
+  if (m.rows.size() < 256)
+    throw InputError(path, 0, "", "too short: at least 256 samples are needed");
+  const double rate = MetaNumber(
+      m, "rate_hz",
+      (static_cast<double>(m.rows.size()) - 1) / (m.rows.back().t_s - m.rows.front().t_s));
   const auto block = std::max<std::size_t>(16, static_cast<std::size_t>(0.25 * rate));
   struct Block {
     std::size_t begin, end;
@@ -132,17 +143,22 @@ std::vector<Recording> LoadRecordingSegments(const std::string& path, double min
       v += m.rows[i].v_mps.head<2>().norm();
       f += std::abs(m.rows[i].f_N.z());
     }
-    blocks.push_back({b, b + block, v / static_cast<double>(block), f / static_cast<double>(block)});
+    blocks.push_back(
+        {b, b + block, v / static_cast<double>(block), f / static_cast<double>(block)});
   }
   std::vector<Recording> out;
   for (std::size_t g = 0; g < blocks.size();) {
     std::size_t e = g + 1;
-    auto close = [](double a, double ref) { return std::abs(a - ref) <= 0.15 * std::max(ref, 1e-9); };
-    while (e < blocks.size() && close(blocks[e].v, blocks[g].v) && close(blocks[e].f, blocks[g].f)) ++e;
+    auto close = [](double a, double ref) {
+      return std::abs(a - ref) <= 0.15 * std::max(ref, 1e-9);
+    };
+    while (e < blocks.size() && close(blocks[e].v, blocks[g].v) && close(blocks[e].f, blocks[g].f))
+      ++e;
     const double dur = static_cast<double>(blocks[e - 1].end - blocks[g].begin) / rate;
     if (dur >= min_s && blocks[g].v > 0 && blocks[g].f > 0) {
       Recording r;
-      r.file = fmt::format("{} [{:.2f}-{:.2f} s]", path, m.rows[blocks[g].begin].t_s, m.rows[blocks[e - 1].end - 1].t_s);
+      r.file = fmt::format("{} [{:.2f}-{:.2f} s]", path, m.rows[blocks[g].begin].t_s,
+                           m.rows[blocks[e - 1].end - 1].t_s);
       r.rate_hz = rate;
       double v = 0, f = 0;
       for (std::size_t i = blocks[g].begin; i < blocks[e - 1].end; ++i) {
@@ -157,7 +173,9 @@ std::vector<Recording> LoadRecordingSegments(const std::string& path, double min
     g = e;
   }
   if (out.empty())
-    throw InputError(path, 0, "speed", fmt::format("no steady part of at least {:.1f} s (speed and force within 15 %)", min_s));
+    throw InputError(
+        path, 0, "speed",
+        fmt::format("no steady part of at least {:.1f} s (speed and force within 15 %)", min_s));
   return out;
 }
 
@@ -182,16 +200,20 @@ std::vector<Recording> LoadRecordings(const std::string& dir) {
   return out;
 }
 
-std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz, ResampleQuality q) {
+std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz,
+                             ResampleQuality q) {
   HL_REQUIRE(from_hz > 0 && to_hz > 0, "resample rates must be positive");
   if (from_hz == to_hz) return x;
-  std::vector<double> out(static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * to_hz / from_hz)) + 16);
-  const unsigned long recipe = q == ResampleQuality::kBest ? SOXR_VHQ : q == ResampleQuality::kFastest ? SOXR_MQ : SOXR_HQ;
+  std::vector<double> out(
+      static_cast<std::size_t>(std::ceil(static_cast<double>(x.size()) * to_hz / from_hz)) + 16);
+  const unsigned long recipe = q == ResampleQuality::kBest      ? SOXR_VHQ
+                               : q == ResampleQuality::kFastest ? SOXR_MQ
+                                                                : SOXR_HQ;
   const soxr_io_spec_t io = soxr_io_spec(SOXR_FLOAT64_I, SOXR_FLOAT64_I);
   const soxr_quality_spec_t qs = soxr_quality_spec(recipe, 0);
   std::size_t done = 0;
-  const soxr_error_t err = soxr_oneshot(from_hz, to_hz, 1, x.data(), x.size(), nullptr, out.data(), out.size(), &done,
-                                        &io, &qs, nullptr);
+  const soxr_error_t err = soxr_oneshot(from_hz, to_hz, 1, x.data(), x.size(), nullptr, out.data(),
+                                        out.size(), &done, &io, &qs, nullptr);
   if (err) throw std::runtime_error(std::string("soxr: ") + err);
   out.resize(done);
   return out;
@@ -200,7 +222,8 @@ std::vector<double> Resample(const std::vector<double>& x, double from_hz, doubl
 std::vector<double> BandLimit(const std::vector<double>& x, double fs, double lo, double hi) {
   std::vector<renderer::BiquadCoeffs> stages;
   if (lo > 0) stages.insert(stages.end(), 2, renderer::BiquadCoeffs::ButterworthHighPass(lo, fs));
-  if (hi > 0 && hi < 0.5 * fs) stages.insert(stages.end(), 2, renderer::BiquadCoeffs::ButterworthLowPass(hi, fs));
+  if (hi > 0 && hi < 0.5 * fs)
+    stages.insert(stages.end(), 2, renderer::BiquadCoeffs::ButterworthLowPass(hi, fs));
   std::vector<double> y(x);
   for (int pass = 0; pass < 2; ++pass) {  // forward, then backward: zero phase
     for (const auto& c : stages) {
@@ -219,7 +242,8 @@ namespace {
 std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCriterion criterion) {
   const int n = static_cast<int>(x.size());
   HL_REQUIRE(pmax >= 1 && pmax <= renderer::kMaxArOrder, "AR order must be 1..64");
-  if (n < 4 * pmax) throw std::invalid_argument(fmt::format("{} samples are too few for order {}", n, pmax));
+  if (n < 4 * pmax)
+    throw std::invalid_argument(fmt::format("{} samples are too few for order {}", n, pmax));
   double mean = 0;
   for (double v : x) mean += v;
   mean /= n;
@@ -230,7 +254,8 @@ std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCrit
   std::vector<double> r(static_cast<std::size_t>(pmax) + 1, 0.0);
   for (int lag = 0; lag <= pmax; ++lag) {
     double s = 0;
-    for (int i = lag; i < n; ++i) s += xc[static_cast<std::size_t>(i)] * xc[static_cast<std::size_t>(i - lag)];
+    for (int i = lag; i < n; ++i)
+      s += xc[static_cast<std::size_t>(i)] * xc[static_cast<std::size_t>(i - lag)];
     r[static_cast<std::size_t>(lag)] = s / n;
   }
   if (!(r[0] > 0)) throw std::invalid_argument("the recording is constant");
@@ -239,17 +264,22 @@ std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCrit
   std::vector<ArFit> out;
   for (int m = 1; m <= pmax; ++m) {
     double acc = r[static_cast<std::size_t>(m)];
-    for (int i = 1; i < m; ++i) acc -= a[static_cast<std::size_t>(i)] * r[static_cast<std::size_t>(m - i)];
+    for (int i = 1; i < m; ++i)
+      acc -= a[static_cast<std::size_t>(i)] * r[static_cast<std::size_t>(m - i)];
     const double k = acc / err;
     prev = a;
     a[static_cast<std::size_t>(m)] = k;
-    for (int i = 1; i < m; ++i) a[static_cast<std::size_t>(i)] = prev[static_cast<std::size_t>(i)] - k * prev[static_cast<std::size_t>(m - i)];
+    for (int i = 1; i < m; ++i)
+      a[static_cast<std::size_t>(i)] =
+          prev[static_cast<std::size_t>(i)] - k * prev[static_cast<std::size_t>(m - i)];
     err *= 1 - k * k;
     ArFit f;
     f.coeffs.assign(a.begin() + 1, a.begin() + m + 1);
     f.variance = err;
     f.order = m;
-    f.criterion = n * std::log(err) + (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(static_cast<double>(n)));
+    f.criterion =
+        n * std::log(err) +
+        (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(static_cast<double>(n)));
     out.push_back(std::move(f));
   }
   return out;
@@ -260,7 +290,9 @@ std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCrit
 ArFit FitAr(const std::vector<double>& x, int order, int max_order, OrderCriterion criterion) {
   const auto all = LevinsonAll(x, order > 0 ? order : max_order, criterion);
   if (order > 0) return all.back();
-  return *std::min_element(all.begin(), all.end(), [](const ArFit& a, const ArFit& b) { return a.criterion < b.criterion; });
+  return *std::min_element(all.begin(), all.end(), [](const ArFit& a, const ArFit& b) {
+    return a.criterion < b.criterion;
+  });
 }
 
 std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment) {
@@ -268,7 +300,9 @@ std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment) {
     throw std::invalid_argument("spectrum: the signal needs at least one segment of samples");
   const auto n = static_cast<std::size_t>(segment);
   std::vector<double> w(n);
-  for (std::size_t i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    w[i] = 0.5 -
+           0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
   double* in = fftw_alloc_real(n);
   fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
   fftw_plan plan;
@@ -281,7 +315,8 @@ std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment) {
   for (std::size_t s0 = 0; s0 + n <= x.size(); s0 += n / 2, ++segs) {
     for (std::size_t i = 0; i < n; ++i) in[i] = w[i] * x[s0 + i];
     fftw_execute(plan);
-    for (std::size_t k = 0; k < p.size(); ++k) p[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
+    for (std::size_t k = 0; k < p.size(); ++k)
+      p[k] += out[k][0] * out[k][0] + out[k][1] * out[k][1];
   }
   {
     std::lock_guard lock(g_fftw_mu);
@@ -309,7 +344,9 @@ AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
   if (T < 50) throw std::invalid_argument("ADF needs at least 50 samples");
   if (max_lags < 0) max_lags = static_cast<int>(std::floor(12 * std::pow(T / 100.0, 0.25)));
   std::vector<double> dy(static_cast<std::size_t>(T - 1));
-  for (int t = 1; t < T; ++t) dy[static_cast<std::size_t>(t - 1)] = y[static_cast<std::size_t>(t)] - y[static_cast<std::size_t>(t - 1)];
+  for (int t = 1; t < T; ++t)
+    dy[static_cast<std::size_t>(t - 1)] =
+        y[static_cast<std::size_t>(t)] - y[static_cast<std::size_t>(t - 1)];
   // Every lag order is fitted on the same sample (t = max_lags + 1 .. T - 1) so AICs compare.
   const int n = T - 1 - max_lags;
   AdfResult best;
@@ -344,12 +381,13 @@ AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
   return best;
 }
 
-CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double lo, double hi, double step,
-                                std::size_t max_samples) {
+CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double lo, double hi,
+                                double step, std::size_t max_samples) {
   HL_REQUIRE(lo > 0 && hi >= lo && step > 0 && hi < 0.5 * fs,
              "cut-off range must satisfy 0 < lo <= hi < fs/2 and step > 0");
   CutoffResult r;
-  const std::vector<double> part(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(std::min(x.size(), max_samples)));
+  const std::vector<double> part(
+      x.begin(), x.begin() + static_cast<std::ptrdiff_t>(std::min(x.size(), max_samples)));
   for (double fc = lo; fc <= hi + 1e-9; fc += step) {
     const auto adf = AugmentedDickeyFuller(BandLimit(part, fs, fc, 0));
     r.tried.emplace_back(fc, adf);
@@ -367,21 +405,24 @@ std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o)
   // stay proportional to the recording (a --rate of 1e9 would otherwise ask for gigabytes).
   constexpr double kMaxUpsampling = 8;
   if (!(o.model_rate_hz > 0) || !(o.model_rate_hz <= kMaxUpsampling * r.rate_hz))
-    throw InputError(r.file, 0, "--rate",
-                     fmt::format("model rate {} Hz must be in (0, {}] Hz (at most {}x the recording's {} Hz)",
-                                 o.model_rate_hz, kMaxUpsampling * r.rate_hz, kMaxUpsampling, r.rate_hz));
+    throw InputError(
+        r.file, 0, "--rate",
+        fmt::format("model rate {} Hz must be in (0, {}] Hz (at most {}x the recording's {} Hz)",
+                    o.model_rate_hz, kMaxUpsampling * r.rate_hz, kMaxUpsampling, r.rate_hz));
   const auto y = Resample(r.acc, r.rate_hz, o.model_rate_hz, o.resample);
   return BandLimit(y, o.model_rate_hz, o.band_lo_hz, 0.475 * o.model_rate_hz);
 }
 
-renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, const VibrationFitOptions& o) {
+renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs,
+                                         const VibrationFitOptions& o) {
   HL_REQUIRE(!recs.empty(), "no recordings to fit");
   // Every recording's fits of every order in one Levinson pass each.
   // (in parallel over recordings: each is independent; the first error is rethrown).
   const int pmax = o.order > 0 ? o.order : o.max_order;
   std::vector<std::vector<ArFit>> fits(recs.size());
   {
-    const unsigned hw = o.threads > 0 ? static_cast<unsigned>(o.threads) : std::max(1u, std::thread::hardware_concurrency());
+    const unsigned hw = o.threads > 0 ? static_cast<unsigned>(o.threads)
+                                      : std::max(1u, std::thread::hardware_concurrency());
     std::atomic<std::size_t> next{0};
     std::exception_ptr error;
     std::mutex error_mu;
@@ -425,7 +466,8 @@ renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, con
   std::map<std::pair<double, double>, std::size_t> at;
   for (std::size_t i = 0; i < recs.size(); ++i) {
     if (!at.emplace(std::pair{recs[i].speed_mps, recs[i].force_N}, i).second)
-      throw InputError(recs[i].file, 0, "speed_mps", "two recordings share this (speed, force) condition");
+      throw InputError(recs[i].file, 0, "speed_mps",
+                       "two recordings share this (speed, force) condition");
   }
   auto cell = [&](std::size_t i) {
     const ArFit& fit = fits[i][static_cast<std::size_t>(order - 1)];
@@ -454,23 +496,27 @@ renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs, con
   return b;
 }
 
-CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<double>& tv, const std::vector<double>& tf,
-                       const VibrationFitOptions& o, std::uint64_t seed) {
+CvResult CrossValidate(const std::vector<Recording>& recs, const std::vector<double>& tv,
+                       const std::vector<double>& tf, const VibrationFitOptions& o,
+                       std::uint64_t seed) {
   int order = 0;
-  auto res = CrossValidateModel(recs, tv, tf, o, [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
-    auto interp = std::make_shared<renderer::VibrationInterpolator>(FitVibrationBank(train, o));
-    order = interp->bank().order();
-    return [interp](const Recording& r, std::size_t n, std::uint64_t s) {
-      renderer::ArFilter f;
-      interp->Interpolate(r.speed_mps, r.force_N, true, &f);
-      f.active = true;  // synthesize even below the renderer's 1 cm/s switch-off
-      renderer::ArSynth synth(s);
-      std::vector<double> out(n);
-      for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
-      for (auto& v : out) v = synth.Step(f);
-      return out;
-    };
-  }, seed);
+  auto res = CrossValidateModel(
+      recs, tv, tf, o,
+      [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
+        auto interp = std::make_shared<renderer::VibrationInterpolator>(FitVibrationBank(train, o));
+        order = interp->bank().order();
+        return [interp](const Recording& r, std::size_t n, std::uint64_t s) {
+          renderer::ArFilter f;
+          interp->Interpolate(r.speed_mps, r.force_N, true, &f);
+          f.active = true;  // synthesize even below the renderer's 1 cm/s switch-off
+          renderer::ArSynth synth(s);
+          std::vector<double> out(n);
+          for (std::size_t k = 0; k < 4000; ++k) synth.Step(f);  // let the filter settle
+          for (auto& v : out) v = synth.Step(f);
+          return out;
+        };
+      },
+      seed);
   res.order = order;
   return res;
 }

@@ -1,6 +1,8 @@
 // Workbench `compare`: errors overall and residuals binned by regime, speed, load, direction,
 // position, time and frequency band.
 
+#include "hapticlab/modeling/workbench_compare.hpp"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 #include <limits>
 #include <numbers>
 
-#include "hapticlab/modeling/workbench_compare.hpp"
 #include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -24,11 +25,12 @@ struct Dim {
   std::vector<std::string> labels;
 };
 
-std::vector<BinRow> Bin(const Dim& d, const std::vector<double>& key, const std::vector<double>& val,
-                        const std::vector<char>& use) {
+std::vector<BinRow> Bin(const Dim& d, const std::vector<double>& key,
+                        const std::vector<double>& val, const std::vector<char>& use) {
   std::vector<BinRow> rows(d.edges.size() - 1);
   for (std::size_t j = 0; j + 1 < d.edges.size(); ++j) {
-    rows[j].label = d.labels.empty() ? fmt::format("{:g}-{:g}", d.edges[j], d.edges[j + 1]) : d.labels[j];
+    rows[j].label =
+        d.labels.empty() ? fmt::format("{:g}-{:g}", d.edges[j], d.edges[j + 1]) : d.labels[j];
     rows[j].center = std::isfinite(d.edges[j + 1]) ? (d.edges[j] + d.edges[j + 1]) / 2 : d.edges[j];
   }
   for (std::size_t i = 0; i < key.size(); ++i) {
@@ -63,14 +65,17 @@ Comparison Compare(const Model& m, const Replay& r) {
     speed_mm[i] = s.speed_mps * 1e3;
     load[i] = s.fn_N;
     dir[i] = s.dir_rad;
-    const int tx = std::clamp(static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
-    const int ty = std::clamp(static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
+    const int tx = std::clamp(
+        static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
+    const int ty = std::clamp(
+        static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
     tile[i] = 3 * ty + tx;
     time[i] = (s.t_s - T0) / (T1 - T0) * 10;
     regime[i] = s.speed_mps <= kPreslidingSpeed_mps ? 0 : (s.speed_mps < kSlidingSpeed_mps ? 1 : 2);
     contact[i] = s.contact;
     sliding[i] = s.contact && s.speed_mps >= kSlidingSpeed_mps;
-    moving[i] = s.contact && s.speed_mps >= kPreslidingSpeed_mps;  // friction along the motion is defined
+    moving[i] =
+        s.contact && s.speed_mps >= kPreslidingSpeed_mps;  // friction along the motion is defined
   }
   std::vector<double> dir_edges;
   std::vector<std::string> dir_labels;
@@ -80,20 +85,25 @@ Comparison Compare(const Model& m, const Replay& r) {
   for (auto& d : dir)
     if (d >= pi - pi / 8) d -= 2 * pi;
   const Dim dims[] = {
-      {"regime", {0, 1, 2, 3}, {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"}},
+      {"regime",
+       {0, 1, 2, 3},
+       {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"}},
       {"speed", {0, 0.5, 3, 10, 30, 60, 100, 150, inf}, {}},
       {"load", {0, 0.5, 1, 1.5, 2, 3, inf}, {}},
       {"direction", dir_edges, dir_labels},
-      {"position", {0, 1, 2, 3, 4, 5, 6, 7, 8, 9},
-       {"front-left", "front-centre", "front-right", "middle-left", "centre", "middle-right", "back-left", "back-centre",
-        "back-right"}},
+      {"position",
+       {0, 1, 2, 3, 4, 5, 6, 7, 8, 9},
+       {"front-left", "front-centre", "front-right", "middle-left", "centre", "middle-right",
+        "back-left", "back-centre", "back-right"}},
       {"time", {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10}, {}},
   };
   const std::vector<std::vector<double>*> keys = {&regime, &speed_mm, &load, &dir, &tile, &time};
   for (std::size_t d = 0; d < std::size(dims); ++d) {
     c.breakdown[dims[d].name]["normal_force_N"] = Bin(dims[d], *keys[d], res.normal_N, contact);
-    c.breakdown[dims[d].name]["friction_N"] = Bin(dims[d], *keys[d], res.friction_N, d <= 1 ? moving : sliding);
-    if (d != 0) c.breakdown[dims[d].name]["friction_ratio"] = Bin(dims[d], *keys[d], res.ratio, sliding);
+    c.breakdown[dims[d].name]["friction_N"] =
+        Bin(dims[d], *keys[d], res.friction_N, d <= 1 ? moving : sliding);
+    if (d != 0)
+      c.breakdown[dims[d].name]["friction_ratio"] = Bin(dims[d], *keys[d], res.ratio, sliding);
   }
   if (!res.log_band.empty()) {
     const std::size_t nw = r.windows.size(), nb = r.band_lo_hz.size();

@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
-#include <functional>
 #include <numeric>
 #include <set>
 #include <thread>
@@ -62,8 +62,11 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
         c.fit = cf->summary;
         for (const auto& p : cf->params)
           if (p.effect == c.effect && p.at_bound)
-            c.rejected.push_back(fmt::format("its fit ended with {} at a bound ({:.4g})", p.name, p.value));
-        if (!cf->summary.usable) c.rejected.push_back(fmt::format("its fit did not converge ({})", cf->summary.termination));
+            c.rejected.push_back(
+                fmt::format("its fit ended with {} at a bound ({:.4g})", p.name, p.value));
+        if (!cf->summary.usable)
+          c.rejected.push_back(
+              fmt::format("its fit did not converge ({})", cf->summary.termination));
       }
       c.error_after = err.overall;
       c.error_reduction = ebase.overall - err.overall;
@@ -88,7 +91,8 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
       notes[k] = e->Evidence(r, res);
       if (notes[k].contradicts)
         c.rejected.push_back("its own evidence does not show the pattern it produces");
-      const bool numbers = c.relative_reduction >= o.min_relative_reduction && c.t_statistic >= o.min_t;
+      const bool numbers =
+          c.relative_reduction >= o.min_relative_reduction && c.t_statistic >= o.min_t;
       c.supported = numbers && c.rejected.empty();
       if (!numbers) c.rejected.clear();  // the numbers alone say no; the reasons above add nothing
       for (const auto& [name, v] : m.params[c.effect]) c.params[name] = v;
@@ -99,7 +103,8 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
         for (const double x : v) mx = std::max(mx, std::abs(x));
         c.params["max_coefficient_dB"] = mx * 10 / std::log(10.0);
       }
-      if (o.progress) o.progress(c.effect, static_cast<int>(++done), static_cast<int>(cands.size()));
+      if (o.progress)
+        o.progress(c.effect, static_cast<int>(++done), static_cast<int>(cands.size()));
     }
   };
   const int threads = o.threads > 0 ? o.threads : std::max(1u, std::thread::hardware_concurrency());
@@ -135,7 +140,8 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
       if (!out[a].supported || !out[b].supported || out[a].channel != out[b].channel) continue;
       const auto va = change(a), vb = change(b);
       double saa = 0, sbb = 0, sab = 0;
-      for (std::size_t i = 0; i < va.size(); ++i) saa += va[i] * va[i], sbb += vb[i] * vb[i], sab += va[i] * vb[i];
+      for (std::size_t i = 0; i < va.size(); ++i)
+        saa += va[i] * va[i], sbb += vb[i] * vb[i], sab += va[i] * vb[i];
       if (saa > 0 && sbb > 0 && sab / std::sqrt(saa * sbb) > 0.8) {
         out[a].confounded_with.push_back(out[b].effect);
         out[b].confounded_with.push_back(out[a].effect);
@@ -145,21 +151,25 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
   for (std::size_t k = 0; k < out.size(); ++k) {
     auto& c = out[k];
     if (!c.supported) {
-      c.evidence = fmt::format("not supported: held-out {} error {} by {:.1f} % (paired t = {:.1f}){}; residual pattern: {}",
-                               c.channel, c.relative_reduction >= 0 ? "falls" : "rises",
-                               std::abs(c.relative_reduction) * 100, c.t_statistic,
-                               c.rejected.empty() ? "" : fmt::format(", but {}", fmt::join(c.rejected, "; ")),
-                               notes[k].pattern);
+      c.evidence = fmt::format(
+          "not supported: held-out {} error {} by {:.1f} % (paired t = {:.1f}){}; residual "
+          "pattern: {}",
+          c.channel, c.relative_reduction >= 0 ? "falls" : "rises",
+          std::abs(c.relative_reduction) * 100, c.t_statistic,
+          c.rejected.empty() ? "" : fmt::format(", but {}", fmt::join(c.rejected, "; ")),
+          notes[k].pattern);
     } else {
       c.evidence = notes[k].Sentence(true);
       if (!c.confounded_with.empty())
-        c.evidence += fmt::format(" (confounded with {}: they explain the same residual; measure the regime that "
-                                  "separates them)",
-                                  fmt::join(c.confounded_with, ", "));
+        c.evidence += fmt::format(
+            " (confounded with {}: they explain the same residual; measure the regime that "
+            "separates them)",
+            fmt::join(c.confounded_with, ", "));
     }
   }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.error_reduction > b.error_reduction; });
+  std::stable_sort(out.begin(), out.end(), [](const Candidate& a, const Candidate& b) {
+    return a.error_reduction > b.error_reduction;
+  });
   dx.candidates = std::move(out);
 
   // What no candidate explains.

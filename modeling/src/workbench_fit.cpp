@@ -30,19 +30,21 @@ constexpr int kClusterBlocks = 3;
 struct ChannelCost {
   Channel channel;
   const Replay* r;
-  std::vector<int> idx;                          // samples with residuals
+  std::vector<int> idx;  // samples with residuals
   mutable std::vector<Resolved> eff;
-  std::vector<std::pair<int, int>> slots;         // (effect, parameter) per unknown
+  std::vector<std::pair<int, int>> slots;  // (effect, parameter) per unknown
   std::vector<double> scale;
   mutable std::vector<double> ftx, fty;
 
   void Set(const double* x) const {
-    for (std::size_t k = 0; k < slots.size(); ++k) eff[slots[k].first].p[slots[k].second] = x[k] * scale[k];
+    for (std::size_t k = 0; k < slots.size(); ++k)
+      eff[slots[k].first].p[slots[k].second] = x[k] * scale[k];
   }
   bool operator()(double const* const* x, double* res) const {
     Set(x[0]);
     if (channel == Channel::kNormal) {
-      for (std::size_t k = 0; k < idx.size(); ++k) res[k] = NormalForce(eff, r->samples()[idx[k]]) - r->samples()[idx[k]].fn_N;
+      for (std::size_t k = 0; k < idx.size(); ++k)
+        res[k] = NormalForce(eff, r->samples()[idx[k]]) - r->samples()[idx[k]].fn_N;
     } else {
       FrictionForces(eff, *r, ftx.data(), fty.data());
       for (std::size_t k = 0; k < idx.size(); ++k) {
@@ -60,7 +62,8 @@ struct ChannelCost {
 // expansion about the normal quantile; within 1e-3 for dof >= 5).
 double TQuantile975(int dof) {
   const double z = 1.959963984540054, v = std::max(dof, 1);
-  return z + (z * z * z + z) / (4 * v) + (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * v * v) +
+  return z + (z * z * z + z) / (4 * v) +
+         (5 * std::pow(z, 5) + 16 * z * z * z + 3 * z) / (96 * v * v) +
          (3 * std::pow(z, 7) + 19 * std::pow(z, 5) + 17 * z * z * z - 15 * z) / (384 * v * v * v);
 }
 
@@ -69,10 +72,18 @@ FitSummary FromCeres(const std::string& what, const ceres::Solver::Summary& sum)
   f.what = what;
   f.method = "ceres (bounded trust region, numeric derivatives of the replay)";
   switch (sum.termination_type) {
-    case ceres::CONVERGENCE: f.termination = "converged"; break;
-    case ceres::NO_CONVERGENCE: f.termination = "iteration limit"; break;
-    case ceres::USER_SUCCESS: f.termination = "converged"; break;
-    default: f.termination = "failed"; break;
+    case ceres::CONVERGENCE:
+      f.termination = "converged";
+      break;
+    case ceres::NO_CONVERGENCE:
+      f.termination = "iteration limit";
+      break;
+    case ceres::USER_SUCCESS:
+      f.termination = "converged";
+      break;
+    default:
+      f.termination = "failed";
+      break;
   }
   f.message = sum.message;
   f.iterations = sum.num_successful_steps + sum.num_unsuccessful_steps;
@@ -89,7 +100,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   out.summary.what = ChannelName(c);
   auto* cost = new ChannelCost{c, &r, {}, Resolve(*m, r, c), {}, {}, {}, {}};
   for (std::size_t i = 0; i < r.samples().size(); ++i)
-    if (r.samples()[i].contact && InSplit(r.samples()[i].block, o.split) && (c != Channel::kNormal || r.samples()[i].fn_N <= o.max_normal_force_N))
+    if (r.samples()[i].contact && InSplit(r.samples()[i].block, o.split) &&
+        (c != Channel::kNormal || r.samples()[i].fn_N <= o.max_normal_force_N))
       cost->idx.push_back(static_cast<int>(i));
   // Algorithm 1 starts a friction model that has never been fitted (coulomb and dahl at their
   // initial values): the Ceres refinement is then the joint batch step of the dissertation.
@@ -114,8 +126,10 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
       try {
         const auto a = AlgorithmOne(r, o.split);
         if (std::isfinite(a.mu_k) && a.mu_k > 0) *mu_k = std::min(a.mu_k, 3.0);
-        if (std::isfinite(a.kappa_N_per_m) && a.kappa_N_per_m > 0) *kappa = std::clamp(a.kappa_N_per_m, 10.0, 1e6);
-        if (mu_b && std::isfinite(a.mu_b_Ns_per_m)) *mu_b = std::clamp(a.mu_b_Ns_per_m, 0.0, 1000.0);
+        if (std::isfinite(a.kappa_N_per_m) && a.kappa_N_per_m > 0)
+          *kappa = std::clamp(a.kappa_N_per_m, 10.0, 1e6);
+        if (mu_b && std::isfinite(a.mu_b_Ns_per_m))
+          *mu_b = std::clamp(a.mu_b_Ns_per_m, 0.0, 1000.0);
       } catch (const InputError&) {
         // Too few pre-sliding or sliding samples for Algorithm 1: start from the neutral values.
       }
@@ -134,7 +148,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
     }
   out.samples = static_cast<int>(cost->idx.size());
   if (x.empty() || cost->idx.size() < x.size() * 3) {
-    out.summary.termination = x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
+    out.summary.termination =
+        x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
     out.summary.usable = x.empty();
     delete cost;
     return out;
@@ -164,7 +179,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   out.summary = FromCeres(ChannelName(c), sum);
   // Copy the optimum back (the functor's copy holds the last evaluated point, not the best).
   std::vector<Resolved> eff = cost->eff;
-  for (std::size_t k = 0; k < cost->slots.size(); ++k) eff[cost->slots[k].first].p[cost->slots[k].second] = x[k] * cost->scale[k];
+  for (std::size_t k = 0; k < cost->slots.size(); ++k)
+    eff[cost->slots[k].first].p[cost->slots[k].second] = x[k] * cost->scale[k];
   Store(m, eff);
   const std::size_t np = x.size();
   for (std::size_t k = 0; k < np; ++k) {
@@ -181,8 +197,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
     // A bound at exactly zero of a non-negative amplitude (mu_b, B, dmu_s) is its neutral value.
     pe.at_bound = at_hi || (at_lo && lo[k] != 0.0);
     if (pe.at_bound)
-      out.summary.at_bounds.push_back(fmt::format("{}.{} at its {} bound ({:.6g})", pe.effect, pe.name,
-                                                  at_hi ? "upper" : "lower", pe.value));
+      out.summary.at_bounds.push_back(fmt::format("{}.{} at its {} bound ({:.6g})", pe.effect,
+                                                  pe.name, at_hi ? "upper" : "lower", pe.value));
     out.params.push_back(pe);
   }
   if (!o.uncertainty) return out;
@@ -203,8 +219,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
     for (int i = 0; i < nres; ++i) J(i, static_cast<Eigen::Index>(k)) = (rp[i] - rm[i]) / (2 * h);
   }
   // Cluster (delete-one-cluster) jackknife, by the one-step Gauss-Newton update
-  // d_g = (J'J - J_g'J_g)^-1 J_g' r_g of leaving cluster g out: cov = (G-1)/G sum (d_g - d)(d_g - d)'.
-  // The plain CR0 sandwich G/(G-1) (J'J)^-1 sum s_g s_g' (J'J)^-1 is biased low with the ten
+  // d_g = (J'J - J_g'J_g)^-1 J_g' r_g of leaving cluster g out: cov = (G-1)/G sum (d_g - d)(d_g -
+  // d)'. The plain CR0 sandwich G/(G-1) (J'J)^-1 sum s_g s_g' (J'J)^-1 is biased low with the ten
   // clusters of a 30 s recording (it covered the truth in 15-17 of 20 seeds); the jackknife
   // (CR3, MacKinnon & White 1985; Cameron & Miller 2015, sec. VI) corrects for each cluster's
   // leverage.
@@ -212,7 +228,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   std::map<int, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> cl;
   for (int i = 0; i < nres; ++i) {
     const int blk = r.samples()[cost->idx[i / per]].block / kClusterBlocks;
-    auto it = cl.try_emplace(blk, Eigen::MatrixXd::Zero(npi, npi), Eigen::VectorXd::Zero(npi)).first;
+    auto it =
+        cl.try_emplace(blk, Eigen::MatrixXd::Zero(npi, npi), Eigen::VectorXd::Zero(npi)).first;
     it->second.first += J.row(i).transpose() * J.row(i);
     it->second.second += J.row(i).transpose() * r0[static_cast<std::size_t>(i)];
   }
@@ -232,7 +249,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   out.covariance.assign(np * np, 0);
   for (std::size_t a = 0; a < np; ++a)
     for (std::size_t b = 0; b < np; ++b)
-      out.covariance[a * np + b] = cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) * cost->scale[a] * cost->scale[b];
+      out.covariance[a * np + b] = cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) *
+                                   cost->scale[a] * cost->scale[b];
   for (std::size_t k = 0; k < np; ++k) {
     auto& pe = out.params[k];
     pe.sd = std::sqrt(std::max(out.covariance[k * np + k], 0.0));

@@ -3,7 +3,6 @@
 
 #include <fmt/format.h>
 #include <fmt/ranges.h>
-
 #include <toml++/toml.h>
 
 #include <Eigen/Dense>
@@ -35,7 +34,8 @@ double Get(const Model& m, const std::string& e, const std::string& p, double de
 
 // Autocorrelation of a piecewise-constant band spectrum (power per bin as the workbench
 // measures it) at `fs`, then Levinson-Durbin: the AR model whose spectrum matches it.
-renderer::ArCell BandsToAr(const std::vector<double>& edges, const std::vector<double>& power, double fs) {
+renderer::ArCell BandsToAr(const std::vector<double>& edges, const std::vector<double>& power,
+                           double fs) {
   const int M = 4096;  // frequency grid over [0, fs/2]
   std::vector<double> S(M + 1);
   for (int j = 0; j <= M; ++j) {
@@ -156,13 +156,15 @@ void SaveModel(const Model& m, const std::string& path, const Replay* r) {
         }
     }
   }
-  std::string s = "# Written by the HapticLab workbench. [contact], [friction] and [vibration] are what the\n"
-                  "# renderer plays; [workbench] holds every effect's parameters (docs/workbench.md).\n";
+  std::string s =
+      "# Written by the HapticLab workbench. [contact], [friction] and [vibration] are what the\n"
+      "# renderer plays; [workbench] holds every effect's parameters (docs/workbench.md).\n";
   s += renderer::MaterialToToml(mm);
   s += "\n[workbench]\nversion = 1\n";
   if (!m.band_edges_hz.empty()) {
     s += "band_edges_hz = [";
-    for (std::size_t i = 0; i < m.band_edges_hz.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", m.band_edges_hz[i]);
+    for (std::size_t i = 0; i < m.band_edges_hz.size(); ++i)
+      s += fmt::format("{}{:.17g}", i ? ", " : "", m.band_edges_hz[i]);
     s += "]\n";
   }
   for (const auto& [e, ps] : m.params) {
@@ -193,7 +195,8 @@ Model LoadModel(const std::string& path) {
   try {
     doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics diag;
   auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
@@ -202,9 +205,11 @@ Model LoadModel(const std::string& path) {
   const toml::node* effects_node = doc.get("effects");
   for (std::size_t i = 0; i < mm.effects.size(); ++i) {
     const auto& e = mm.effects[i];
-    const toml::node* at = effects_node && effects_node->as_array() ? effects_node->as_array()->get(i) : effects_node;
+    const toml::node* at =
+        effects_node && effects_node->as_array() ? effects_node->as_array()->get(i) : effects_node;
     if (!FindEffect(e)) {
-      diag.Add(path, line(at), "effects", fmt::format("unknown effect '{}'; expected one of: {}", e, CatalogueNames()));
+      diag.Add(path, line(at), "effects",
+               fmt::format("unknown effect '{}'; expected one of: {}", e, CatalogueNames()));
       continue;
     }
     m.effects.push_back(e);
@@ -229,10 +234,12 @@ Model LoadModel(const std::string& path) {
     // model: they are kept and have no coefficients until `hapticlab fit` fits them.
     for (const auto& e : m.effects)
       if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
-        diag.Add(path, line(effects_node), "effects",
-                 fmt::format("effect '{}' has no parameters in a renderer material; a workbench fit with the "
-                             "effect added gives them",
-                             e));
+        diag.Add(
+            path, line(effects_node), "effects",
+            fmt::format(
+                "effect '{}' has no parameters in a renderer material; a workbench fit with the "
+                "effect added gives them",
+                e));
     for (auto it = m.params.begin(); it != m.params.end();)
       it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
     diag.ThrowIfAny();
@@ -253,7 +260,8 @@ Model LoadModel(const std::string& path) {
     for (const auto& [k, v] : *ps) {
       const std::string e(k.str());
       if (e != "core" && !m.Has(e)) {
-        diag.Add(path, line(&v), "workbench.params." + e, "parameters of an effect not listed in effects = [...]");
+        diag.Add(path, line(&v), "workbench.params." + e,
+                 "parameters of an effect not listed in effects = [...]");
         continue;
       }
       const toml::table* t = v.as_table();
@@ -262,7 +270,8 @@ Model LoadModel(const std::string& path) {
         continue;
       }
       std::set<std::string> known;
-      if (e == "core") known.insert("K1mm_N");
+      if (e == "core")
+        known.insert("K1mm_N");
       else
         for (const auto& spec : FindEffect(e)->Params(Replay{})) known.insert(spec.name);
       for (const auto& [pk, pv] : *t) {
@@ -271,17 +280,20 @@ Model LoadModel(const std::string& path) {
           diag.Add(path, line(&pv), fmt::format("workbench.params.{}.{}", e, pk.str()),
                    fmt::format("unknown parameter; {} has: {}", e, fmt::join(known, ", ")));
         else if (!d || !std::isfinite(*d))
-          diag.Add(path, line(&pv), fmt::format("workbench.params.{}.{}", e, pk.str()), "expected a finite number");
+          diag.Add(path, line(&pv), fmt::format("workbench.params.{}.{}", e, pk.str()),
+                   "expected a finite number");
         else
           m.params[e][std::string(pk.str())] = *d;
       }
     }
   }
   if (!m.params.count("core") || !m.params["core"].count("K1mm_N"))
-    diag.Add(path, line(wb), "workbench.params.core.K1mm_N", "missing: the normal force at 1 mm penetration [N]");
+    diag.Add(path, line(wb), "workbench.params.core.K1mm_N",
+             "missing: the normal force at 1 mm penetration [N]");
   for (const auto& e : m.effects)
     if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
-      diag.Add(path, line(wb), "workbench.params." + e, "missing: every listed effect needs its parameters");
+      diag.Add(path, line(wb), "workbench.params." + e,
+               "missing: every listed effect needs its parameters");
   if (const auto* cs = (*wb)["coef"].as_table()) {
     const std::size_t nb = m.band_edges_hz.empty() ? 0 : m.band_edges_hz.size() - 1;
     for (const auto& [k, v] : *cs) {
@@ -293,10 +305,12 @@ Model LoadModel(const std::string& path) {
           if (auto d = x.value<double>()) c.push_back(*d);
       const Effect* ef = FindEffect(e);
       const bool per_band = e == "core" || e == "range_lo" || e == "range_hi";
-      const std::size_t want = per_band ? nb : (ef ? nb * static_cast<std::size_t>(ef->VibrationColumns()) : 0);
+      const std::size_t want =
+          per_band ? nb : (ef ? nb * static_cast<std::size_t>(ef->VibrationColumns()) : 0);
       if (!a || c.size() != a->size() || c.size() != want || (!per_band && !m.Has(e)))
         diag.Add(path, line(&v), "workbench.coef." + e,
-                 fmt::format("expected {} numbers (bands x columns) for a listed vibration effect", want));
+                 fmt::format("expected {} numbers (bands x columns) for a listed vibration effect",
+                             want));
       else
         m.coef[e] = std::move(c);
     }

@@ -8,7 +8,6 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
-
 #include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -32,7 +31,14 @@ class Core final : public Effect {
       std::nth_element(k.begin(), k.begin() + k.size() / 2, k.end());
       init = std::max(k[k.size() / 2], 1e-3);
     }
-    return {{.name = "K1mm_N", .unit = "N", .init = init, .lo = 1e-6, .hi = 1e6, .scale = init, .fitted = true, .doc = "normal force at 1 mm penetration"}};
+    return {{.name = "K1mm_N",
+             .unit = "N",
+             .init = init,
+             .lo = 1e-6,
+             .hi = 1e6,
+             .scale = init,
+             .fitted = true,
+             .doc = "normal force at 1 mm penetration"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.K = p[0]; }
   EvidenceNote Evidence(const Replay&, const Residuals&) const override { return {}; }
@@ -81,9 +87,12 @@ using internal::CoreEffect;
 
 const char* ChannelName(Channel c) {
   switch (c) {
-    case Channel::kNormal: return "normal_force";
-    case Channel::kFriction: return "friction";
-    case Channel::kVibration: return "vibration";
+    case Channel::kNormal:
+      return "normal_force";
+    case Channel::kFriction:
+      return "friction";
+    case Channel::kVibration:
+      return "vibration";
   }
   return "?";
 }
@@ -95,10 +104,13 @@ const Effect* FindEffect(std::string_view name) {
 }
 
 std::vector<std::string> BaselineEffects() {
-  return {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent", "vibration-speed", "vibration-force"};
+  return {"coulomb",     "viscous",         "dahl",           "hc-damping",
+          "hc-exponent", "vibration-speed", "vibration-force"};
 }
 
-bool Model::Has(std::string_view e) const { return std::find(effects.begin(), effects.end(), e) != effects.end(); }
+bool Model::Has(std::string_view e) const {
+  return std::find(effects.begin(), effects.end(), e) != effects.end();
+}
 
 std::string CatalogueNames() {
   std::string list;
@@ -106,10 +118,13 @@ std::string CatalogueNames() {
   return list;
 }
 
-void RequireKnownEffects(const std::vector<std::string>& names, const std::string& source, const std::string& field) {
+void RequireKnownEffects(const std::vector<std::string>& names, const std::string& source,
+                         const std::string& field) {
   Diagnostics d;
   for (const auto& n : names)
-    if (!FindEffect(n)) d.Add(source, 0, field, fmt::format("unknown effect '{}'; the catalogue has: {}", n, CatalogueNames()));
+    if (!FindEffect(n))
+      d.Add(source, 0, field,
+            fmt::format("unknown effect '{}'; the catalogue has: {}", n, CatalogueNames()));
   d.ThrowIfAny();
 }
 
@@ -118,7 +133,9 @@ void AddEffects(Model* m, const std::vector<std::string>& names, const Replay& r
   std::vector<std::string> todo;
   std::function<void(const std::string&)> add = [&](const std::string& n) {
     const Effect* e = FindEffect(n);
-    HL_REQUIRE(e != nullptr, fmt::format("AddEffects: unknown effect '{}' (check names with RequireKnownEffects)", n));
+    HL_REQUIRE(
+        e != nullptr,
+        fmt::format("AddEffects: unknown effect '{}' (check names with RequireKnownEffects)", n));
     for (const auto dep : e->requires_effects()) add(std::string(dep));
     if (!m->Has(n) && std::find(todo.begin(), todo.end(), n) == todo.end()) todo.push_back(n);
   };

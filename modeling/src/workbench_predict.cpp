@@ -103,8 +103,10 @@ Prediction Predict(const Model& m, const Replay& r) {
     const auto& core = m.coef.at("core");
     const std::size_t nb = r.band_lo_hz.size();
     if (core.size() != nb)
-      throw InputError(r.file, 0, "acc_mps2",
-                       fmt::format("the model's vibration has {} bands, the measurement's analysis {}", core.size(), nb));
+      throw InputError(
+          r.file, 0, "acc_mps2",
+          fmt::format("the model's vibration has {} bands, the measurement's analysis {}",
+                      core.size(), nb));
     for (const auto& w : r.windows) {
       const auto row = VibrationRow(vib, w);
       std::vector<double> bp(nb);
@@ -147,7 +149,8 @@ Residuals ComputeResiduals(const Model&, const Replay& r, const Prediction& p) {
   }
   for (std::size_t w = 0; w < p.band_power.size(); ++w) {
     std::vector<double> lb;
-    for (std::size_t b = 0; b < p.band_power[w].size(); ++b) lb.push_back(std::log(r.windows[w].band_power[b] / p.band_power[w][b]));
+    for (std::size_t b = 0; b < p.band_power[w].size(); ++b)
+      lb.push_back(std::log(r.windows[w].band_power[b] / p.band_power[w][b]));
     res.log_band.push_back(std::move(lb));
   }
   return res;

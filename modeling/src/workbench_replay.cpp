@@ -1,6 +1,8 @@
 // Workbench replay: a measurement prepared for replay (decimated force samples, smoothed load
 // and position, steady vibration windows with band powers), and `measurement check`.
 
+#include "hapticlab/modeling/workbench_replay.hpp"
+
 #include <fftw3.h>
 #include <fmt/format.h>
 
@@ -10,7 +12,6 @@
 #include <numbers>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/modeling/workbench_replay.hpp"
 
 namespace hapticlab::modeling::wb {
 
@@ -20,10 +21,12 @@ namespace {
 // weights (3 (3h^2 + 3h - 1) - 15 j^2) / ((2h-1)(2h+1)(2h+3)), hand-written: a few lines); false,
 // *out untouched, where the window leaves the measurement or a row fails `use`.
 template <class Value, class Use>
-bool SavGol2(const Measurement& m, std::size_t i, std::size_t h, Value value, Use use, double* out) {
+bool SavGol2(const Measurement& m, std::size_t i, std::size_t h, Value value, Use use,
+             double* out) {
   if (h < 2 || i < h || i + h >= m.rows.size()) return false;
   const double hm = static_cast<double>(h);
-  const double norm = (2 * hm - 1) * (2 * hm + 1) * (2 * hm + 3), c0 = 3 * (3 * hm * hm + 3 * hm - 1);
+  const double norm = (2 * hm - 1) * (2 * hm + 1) * (2 * hm + 3),
+               c0 = 3 * (3 * hm * hm + 3 * hm - 1);
   double sg = 0;
   for (std::size_t k = i - h; k <= i + h; ++k) {
     if (!use(m.rows[k])) return false;
@@ -53,7 +56,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     }
     r.position_resolution_m = 1e-6;
     if (d2.size() >= 200) {
-      std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2), d2.end());
+      std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2),
+                       d2.end());
       const double sigma = d2[d2.size() / 2] / 0.674489750196 / std::sqrt(6.0);
       r.position_resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
     }
@@ -63,15 +67,19 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
   std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
   double rate = 1.0 / dt[dt.size() / 2];
-  if (std::abs(rate - std::round(rate)) < 1e-6 * rate) rate = std::round(rate);  // time stamps' rounding
+  if (std::abs(rate - std::round(rate)) < 1e-6 * rate)
+    rate = std::round(rate);  // time stamps' rounding
   const int stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
-  const auto half_load = static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.load_smoothing_s * rate)));
-  const auto half_pos = static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.position_smoothing_s * rate)));
+  const auto half_load =
+      static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.load_smoothing_s * rate)));
+  const auto half_pos =
+      static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.position_smoothing_s * rate)));
   if (!(o.position_resolution_m > 0) && half_pos >= 2) {
     // The smoothed positions' noise: the centre weight is the variance factor of the SG fit.
     const double hm = static_cast<double>(half_pos);
-    r.position_resolution_m = std::max(0.05e-6, r.position_resolution_m * std::sqrt(3 * (3 * hm * hm + 3 * hm - 1) /
-                                                                        ((2 * hm - 1) * (2 * hm + 1) * (2 * hm + 3))));
+    r.position_resolution_m = std::max(
+        0.05e-6, r.position_resolution_m * std::sqrt(3 * (3 * hm * hm + 3 * hm - 1) /
+                                                     ((2 * hm - 1) * (2 * hm + 1) * (2 * hm + 3))));
   }
   r.rate_hz = rate / stride;
   const double t0 = m.rows.front().t_s;
@@ -85,8 +93,10 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     s.y_m = row.p_m.y();
     {
       const auto all = [](const MeasurementRow&) { return true; };
-      SavGol2(m, i, half_pos, [](const MeasurementRow& w) { return w.p_m.x(); }, all, &s.x_m);
-      SavGol2(m, i, half_pos, [](const MeasurementRow& w) { return w.p_m.y(); }, all, &s.y_m);
+      SavGol2(
+          m, i, half_pos, [](const MeasurementRow& w) { return w.p_m.x(); }, all, &s.x_m);
+      SavGol2(
+          m, i, half_pos, [](const MeasurementRow& w) { return w.p_m.y(); }, all, &s.y_m);
     }
     s.d_m = std::max(0.0, -row.p_m.z());
     s.ddot_mps = -row.v_mps.z();
@@ -104,7 +114,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
       // in contact.
       double sum = 0;
       int count = 0;
-      const std::size_t lo = i >= half_load ? i - half_load : 0, hi = std::min(m.rows.size() - 1, i + half_load);
+      const std::size_t lo = i >= half_load ? i - half_load : 0,
+                        hi = std::min(m.rows.size() - 1, i + half_load);
       for (std::size_t k = lo; k <= hi; ++k)
         if (m.rows[k].f_N.z() > o.contact_force_N) sum += m.rows[k].f_N.z(), ++count;
       s.fload_N = count ? sum / count : s.fn_N;
@@ -127,7 +138,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     r.mutable_samples().push_back(s);
   }
   if (!any)
-    throw InputError(m.file, 0, "fz_N", fmt::format("no sample in contact (fz_N > {} N)", o.contact_force_N));
+    throw InputError(m.file, 0, "fz_N",
+                     fmt::format("no sample in contact (fz_N > {} N)", o.contact_force_N));
 
   if (!m.has_acceleration) return r;
   r.has_vibration = true;
@@ -137,10 +149,12 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   const double fmax = std::min(1000.0, 0.45 * rate);
   if (!o.band_edges_hz.empty()) {
     if (o.band_edges_hz.back() > 0.5 * rate)
-      throw InputError(m.file, 0, "acc_mps2",
-                       fmt::format("the model's vibration bands reach {:.0f} Hz, above this measurement's Nyquist "
-                                   "frequency {:.0f} Hz",
-                                   o.band_edges_hz.back(), 0.5 * rate));
+      throw InputError(
+          m.file, 0, "acc_mps2",
+          fmt::format(
+              "the model's vibration bands reach {:.0f} Hz, above this measurement's Nyquist "
+              "frequency {:.0f} Hz",
+              o.band_edges_hz.back(), 0.5 * rate));
     r.band_lo_hz.assign(o.band_edges_hz.begin(), o.band_edges_hz.end() - 1);
     r.band_hi_hz.assign(o.band_edges_hz.begin() + 1, o.band_edges_hz.end());
   } else {
@@ -158,8 +172,9 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
       if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
     }
     if (bins[b].empty())
-      bins[b].push_back(std::clamp(static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)),
-                                   1, n / 2 - 1));
+      bins[b].push_back(std::clamp(
+          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
+          n / 2 - 1));
   }
   std::vector<double> win(n);
   double wss = 0;
@@ -188,14 +203,16 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
       mean += row.acc_mps2;
       if (v > 1e-4) {
         const double ph = std::atan2(row.v_mps.y(), row.v_mps.x());
-        d[0] += v * std::cos(ph), d[1] += v * std::sin(ph), d[2] += v * std::cos(2 * ph), d[3] += v * std::sin(2 * ph);
+        d[0] += v * std::cos(ph), d[1] += v * std::sin(ph), d[2] += v * std::cos(2 * ph),
+            d[3] += v * std::sin(2 * ph);
         wsum += v;
       }
     }
     sp /= n, f /= n, mean /= n;
     if (!contact || sp < o.min_speed_mps) continue;
     // Only steady windows: a spectrum is a property of a condition, not of a transition.
-    const double sv = std::sqrt(std::max(0.0, sp2 / n - sp * sp)), sf = std::sqrt(std::max(0.0, f2 / n - f * f));
+    const double sv = std::sqrt(std::max(0.0, sp2 / n - sp * sp)),
+                 sf = std::sqrt(std::max(0.0, f2 / n - f * f));
     if (sv > o.max_variation * sp || sf > o.max_variation * f) continue;
     for (auto& x : d) x /= std::max(wsum, 1e-12);
     for (int k = 0; k < n; ++k) in[k] = (m.rows[w0 + k].acc_mps2 - mean) * win[k];
@@ -243,26 +260,33 @@ MeasurementSummary Summarize(const Measurement& m) {
     s.max_gap_s = std::max(s.max_gap_s, dt[i]);
     if (dt[i] > 1.5 * med) {
       if (s.gaps < 5)
-        s.warnings.push_back(fmt::format("line {}: gap of {:.4g} s ({:.1f} sample periods)", m.row_lines[i + 1], dt[i],
-                                         dt[i] / med));
+        s.warnings.push_back(fmt::format("line {}: gap of {:.4g} s ({:.1f} sample periods)",
+                                         m.row_lines[i + 1], dt[i], dt[i] / med));
       ++s.gaps;
     }
   }
-  const char* names[] = {"x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "fx_N", "fy_N", "fz_N", "acc_mps2"};
+  const char* names[] = {"x_m",    "y_m",  "z_m",  "vx_mps", "vy_mps",
+                         "vz_mps", "fx_N", "fy_N", "fz_N",   "acc_mps2"};
   for (const auto& r : m.rows) {
-    const double v[] = {r.p_m.x(), r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(), r.v_mps.z(),
-                        r.f_N.x(), r.f_N.y(), r.f_N.z(), r.acc_mps2};
+    const double v[] = {r.p_m.x(),   r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(),
+                        r.v_mps.z(), r.f_N.x(), r.f_N.y(), r.f_N.z(),   r.acc_mps2};
     for (int k = 0; k < (m.has_acceleration ? 10 : 9); ++k) {
       auto [it, fresh] = s.ranges.try_emplace(names[k], v[k], v[k]);
-      if (!fresh) it->second.first = std::min(it->second.first, v[k]), it->second.second = std::max(it->second.second, v[k]);
+      if (!fresh)
+        it->second.first = std::min(it->second.first, v[k]),
+        it->second.second = std::max(it->second.second, v[k]);
     }
     s.contact_samples += r.f_N.z() > 0.02;
   }
   if (s.contact_samples == 0) s.warnings.push_back("no sample in contact (fz_N > 0.02 N)");
-  if (!m.has_acceleration) s.warnings.push_back("no acc_mps2 column: the vibration channel cannot be compared");
-  else if (s.rate_hz < 2000) s.warnings.push_back(fmt::format("rate {:.0f} Hz: vibration above {:.0f} Hz is not measured", s.rate_hz, s.rate_hz / 2));
+  if (!m.has_acceleration)
+    s.warnings.push_back("no acc_mps2 column: the vibration channel cannot be compared");
+  else if (s.rate_hz < 2000)
+    s.warnings.push_back(fmt::format("rate {:.0f} Hz: vibration above {:.0f} Hz is not measured",
+                                     s.rate_hz, s.rate_hz / 2));
   if (s.ranges.count("fz_N") && s.ranges["fz_N"].second > 10)
-    s.warnings.push_back("fz_N exceeds 10 N: check the sign convention (force of the surface on the tool, +z)");
+    s.warnings.push_back(
+        "fz_N exceeds 10 N: check the sign convention (force of the surface on the tool, +z)");
   return s;
 }
 

@@ -4,19 +4,18 @@
 // substeps, the normal law inverted for a commanded load, vibration from a resonance at the
 // surface's spatial frequency) so the hidden-effect tests do not test the model against itself.
 
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <complex>
 #include <numbers>
 
-#include <fmt/format.h>
-#include <fmt/ranges.h>
-
-#include <Eigen/Dense>
-
 #include "hapticlab/core/rng.hpp"
-#include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/sim_truth/friction.hpp"
 
 namespace hapticlab::modeling::wb {
 
@@ -82,7 +81,8 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
     const double fl = rng.Uniform(1, 3), ph = rng.Uniform(0, 2 * kPi);
     const std::size_t n = std::max<std::size_t>(2, static_cast<std::size_t>(T * fs));
     for (std::size_t k = 0; k < n && i < N; ++k, ++i) {
-      const double tau = static_cast<double>(k) / static_cast<double>(n), s = len * (10 * std::pow(tau, 3) - 15 * std::pow(tau, 4) + 6 * std::pow(tau, 5));
+      const double tau = static_cast<double>(k) / static_cast<double>(n),
+                   s = len * (10 * std::pow(tau, 3) - 15 * std::pow(tau, 4) + 6 * std::pow(tau, 5));
       x[i] = px + s * std::cos(phi);
       y[i] = py + s * std::sin(phi);
       load[i] = L0 * (1 + 0.2 * std::sin(2 * kPi * fl * static_cast<double>(k) * dt + ph));
@@ -146,8 +146,8 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
     const double v = std::hypot(vx[k], vy[k]), dir = dirs[k];
     double S = 1 + t.mu_drift * (static_cast<double>(k) / static_cast<double>(N) - 0.5);
     if (t.Has("anisotropic-friction"))
-      S *= 1 + t.aniso[0] * std::cos(dir) + t.aniso[1] * std::sin(dir) + t.aniso[2] * std::cos(2 * dir) +
-           t.aniso[3] * std::sin(2 * dir);
+      S *= 1 + t.aniso[0] * std::cos(dir) + t.aniso[1] * std::sin(dir) +
+           t.aniso[2] * std::cos(2 * dir) + t.aniso[3] * std::sin(2 * dir);
     if (t.Has("load-dependent-friction")) S *= std::pow(fn, t.load_alpha - 1);
     if (t.Has("position-dependent-friction")) {
       const double u = x[k] / half, w = y[k] / half;
@@ -164,7 +164,8 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
       if (k == 0 || out.fn_clean[k - 1] <= 0) {
         Fx = Fy = 0;
       } else {
-        const double sx = (x[k] - x[k - 1]) / 20, sy = (y[k] - y[k - 1]) / 20, sl = std::hypot(sx, sy);
+        const double sx = (x[k] - x[k - 1]) / 20, sy = (y[k] - y[k - 1]) / 20,
+                     sl = std::hypot(sx, sy);
         for (int j = 0; j < 20; ++j) {
           Fx += t.kappa_N_per_m * (sx - sl * Fx / fc);
           Fy += t.kappa_N_per_m * (sy - sl * Fy / fc);
@@ -191,22 +192,22 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
   const double r = 0.85;
   for (std::size_t k = 0; k < N; ++k) {
     const double fn = out.fn_clean[k], v = std::hypot(vx[k], vy[k]);
-    const double fr = t.Has("vibration-speed") ? std::clamp(v / t.wavelength_m, 30.0, 0.4 * fs) : 200.0;
+    const double fr =
+        t.Has("vibration-speed") ? std::clamp(v / t.wavelength_m, 30.0, 0.4 * fs) : 200.0;
     const double a1 = 2 * r * std::cos(2 * kPi * fr / fs), a2 = -r * r;
     double pw = 0;
     if (fn > 0 && v > 1e-3) {
       pw = t.vib_sigma * t.vib_sigma;
       if (t.Has("vibration-speed")) pw *= std::pow(v / 0.05, 2 * t.vib_speed_exp);
       if (t.Has("vibration-force")) pw *= std::pow(fn, 2 * t.vib_force_exp);
-      if (t.Has("vibration-direction")) pw *= std::exp(t.vib_dir_amp * std::cos(2 * (dirs[k] - 0.3)));
+      if (t.Has("vibration-direction"))
+        pw *= std::exp(t.vib_dir_amp * std::cos(2 * (dirs[k] - 0.3)));
       pw *= (1 - r);
     }
     const double prev1 = k ? acc[k - 1] : 0, prev2 = k > 1 ? acc[k - 2] : 0;
     acc[k] = a1 * prev1 + a2 * prev2 + std::sqrt(pw) * rng.Normal();
     out.acc_state[k] = {pw, a1, a2, t.acc_noise * t.acc_noise};
-
   }
-  
 
   // 5. The measurement, with sensor noise.
   auto& m = out.m;
@@ -221,10 +222,12 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
   for (std::size_t k = 0; k < N; ++k) {
     auto& row = m.rows[k];
     row.t_s = static_cast<double>(k) * dt;
-    row.p_m = {x[k] + t.pos_noise_m * rng.Normal(), y[k] + t.pos_noise_m * rng.Normal(), -d[k] + t.pos_noise_m * rng.Normal()};
+    row.p_m = {x[k] + t.pos_noise_m * rng.Normal(), y[k] + t.pos_noise_m * rng.Normal(),
+               -d[k] + t.pos_noise_m * rng.Normal()};
     row.v_mps = {vx[k] + t.vel_noise_mps * rng.Normal(), vy[k] + t.vel_noise_mps * rng.Normal(),
                  -dd[k] + t.vel_noise_mps * rng.Normal()};
-    row.f_N = {out.ftx_clean[k] + t.force_noise_N * rng.Normal(), out.fty_clean[k] + t.force_noise_N * rng.Normal(),
+    row.f_N = {out.ftx_clean[k] + t.force_noise_N * rng.Normal(),
+               out.fty_clean[k] + t.force_noise_N * rng.Normal(),
                out.fn_clean[k] + t.force_noise_N * rng.Normal()};
     row.acc_mps2 = acc[k] + t.acc_noise * rng.Normal();
     m.row_lines[k] = static_cast<int>(k) + 1;
@@ -234,7 +237,8 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
 
 namespace {
 // Expected band powers of every window (analytic AR(2) spectrum, Hann-weighted over the window).
-std::vector<std::vector<double>> ExpectedBandPower(const SimulatedMeasurement& sim, const Replay& r) {
+std::vector<std::vector<double>> ExpectedBandPower(const SimulatedMeasurement& sim,
+                                                   const Replay& r) {
   std::vector<std::vector<double>> out;
   if (r.has_vibration) {
     const double fs = r.acc_rate_hz;
@@ -242,15 +246,17 @@ std::vector<std::vector<double>> ExpectedBandPower(const SimulatedMeasurement& s
       const int n = w.rows;
       std::vector<double> win(n);
       double wss = 0;
-      for (int k = 0; k < n; ++k) win[k] = 0.5 - 0.5 * std::cos(2 * kPi * k / n), wss += win[k] * win[k];
+      for (int k = 0; k < n; ++k)
+        win[k] = 0.5 - 0.5 * std::cos(2 * kPi * k / n), wss += win[k] * win[k];
       std::vector<double> bp;
       for (std::size_t b = 0; b < r.band_lo_hz.size(); ++b) {
         std::vector<int> bins;
         for (int k = 1; k < n / 2; ++k)
           if (k * fs / n >= r.band_lo_hz[b] && k * fs / n < r.band_hi_hz[b]) bins.push_back(k);
         if (bins.empty())
-          bins.push_back(std::clamp(static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / fs)), 1,
-                                    n / 2 - 1));
+          bins.push_back(std::clamp(
+              static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / fs)),
+              1, n / 2 - 1));
         double acc = 0;
         for (const int kb : bins) {
           const double om = 2 * kPi * kb / n;
@@ -276,7 +282,8 @@ Model TruthModel(const SimulatedMeasurement& sim, const Replay& r) {
   Model m;
   std::vector<std::string> force_effects;
   for (const auto& e : t.effects)
-    if (FindEffect(e) && FindEffect(e)->channel() != Channel::kVibration) force_effects.push_back(e);
+    if (FindEffect(e) && FindEffect(e)->channel() != Channel::kVibration)
+      force_effects.push_back(e);
   AddEffects(&m, force_effects, r);
   m.params["core"]["K1mm_N"] = t.K1mm_N;
   m.params["hc-exponent"]["n"] = t.Has("hc-exponent") ? t.n : 1.0;

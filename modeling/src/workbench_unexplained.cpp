@@ -7,9 +7,9 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
-#include <functional>
 #include <numeric>
 #include <set>
 #include <thread>
@@ -21,7 +21,9 @@ namespace {
 
 constexpr int kMinBinCount = 20;  // bins with fewer samples are left out of the variance shares
 
-bool InSplit(int block, Split s) { return s == Split::kAll || (s == Split::kTrain) == (block % 2 == 0); }
+bool InSplit(int block, Split s) {
+  return s == Split::kAll || (s == Split::kTrain) == (block % 2 == 0);
+}
 
 // Robust SD of white noise on a smooth signal: the second difference of three samples has
 // variance 6 sigma^2; its median absolute value is 0.6745 of its SD.
@@ -43,7 +45,8 @@ struct AxisBins {
   std::vector<double> centers;  // for the linear trend of ordinal axes
 };
 
-AxisBins MakeAxis(const std::string& axis, const std::string& unit, const std::vector<double>& edges, bool log_scale) {
+AxisBins MakeAxis(const std::string& axis, const std::string& unit,
+                  const std::vector<double>& edges, bool log_scale) {
   AxisBins a;
   a.axis = axis;
   a.unit = unit;
@@ -53,7 +56,8 @@ AxisBins MakeAxis(const std::string& axis, const std::string& unit, const std::v
   for (std::size_t j = 0; j + 1 < edges.size(); ++j) {
     const double lo = edges[j], hi = edges[j + 1];
     const bool open = !(hi < 1e8);
-    a.labels.push_back(open ? fmt::format(">= {:g} {}", lo, unit) : fmt::format("{:g}-{:g} {}", lo, hi, unit));
+    a.labels.push_back(open ? fmt::format(">= {:g} {}", lo, unit)
+                            : fmt::format("{:g}-{:g} {}", lo, hi, unit));
     double c = open ? 1.5 * lo : 0.5 * (lo + hi);
     if (log_scale) c = open ? lo * 1.5 : (lo > 0 ? std::sqrt(lo * hi) : 0.5 * hi);
     a.centers.push_back(log_scale ? std::log10(std::max(c, 1e-9)) : c);
@@ -77,8 +81,8 @@ struct Quantity {
 
 // Share of the variance of `value` (over the samples with use) explained by the bins of `key`,
 // and the shape of the dependence in words.
-ResidualAxis Analyze(const Quantity& q, const AxisBins& a, const std::vector<double>& key, const std::vector<double>& value,
-                     const std::vector<char>& use) {
+ResidualAxis Analyze(const Quantity& q, const AxisBins& a, const std::vector<double>& key,
+                     const std::vector<double>& value, const std::vector<char>& use) {
   ResidualAxis out;
   out.axis = a.axis;
   out.channel = q.channel;
@@ -125,22 +129,26 @@ ResidualAxis Analyze(const Quantity& q, const AxisBins& a, const std::vector<dou
       const double x0 = a.centers[bins.front()], x1 = a.centers[bins.back()];
       const double span = slope * (x1 - x0);
       const std::string over =
-          a.log_scale ? fmt::format("{} per decade of {} ({} over {}..{})", q.fmt(slope), a.axis, q.fmt(span),
-                                    a.labels[bins.front()], a.labels[bins.back()])
+          a.log_scale ? fmt::format("{} per decade of {} ({} over {}..{})", q.fmt(slope), a.axis,
+                                    q.fmt(span), a.labels[bins.front()], a.labels[bins.back()])
                       : fmt::format("{} over {:.3g}-{:.3g} {}", q.fmt(span), a.edges[bins.front()],
                                     std::min(a.edges[bins.back() + 1], 1e8), a.unit);
-      out.description = fmt::format("{} {} linearly with {}{}, {}", q.name, slope > 0 ? "rises" : "falls",
-                                    a.log_scale ? "log " : "", a.axis, over);
+      out.description =
+          fmt::format("{} {} linearly with {}{}, {}", q.name, slope > 0 ? "rises" : "falls",
+                      a.log_scale ? "log " : "", a.axis, over);
       return out;
     }
   }
-  out.description = fmt::format("{} is highest at {} ({}) and lowest at {} ({})", q.name, a.labels[jmax],
-                                q.fmt(sum[jmax] / n[jmax]), a.labels[jmin], q.fmt(sum[jmin] / n[jmin]));
+  out.description =
+      fmt::format("{} is highest at {} ({}) and lowest at {} ({})", q.name, a.labels[jmax],
+                  q.fmt(sum[jmax] / n[jmax]), a.labels[jmin], q.fmt(sum[jmin] / n[jmin]));
   return out;
 }
 
 std::string Hint(const std::string& axis) {
-  if (axis == "time") return "that changes over the recording (a drifting coefficient: warming, wear, creep, humidity)";
+  if (axis == "time")
+    return "that changes over the recording (a drifting coefficient: warming, wear, creep, "
+           "humidity)";
   if (axis == "speed") return "that depends on the sliding speed";
   if (axis == "load") return "that depends on the normal load";
   if (axis == "direction") return "that depends on the direction of motion";
@@ -209,7 +217,8 @@ std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, c
           bins += f >= r.band_lo_hz[b] && f < r.band_hi_hz[b];
         }
         const double k_eff = std::max(1.0, bins / 1.5);
-        const double c = 2 - 2 * std::exp(std::lgamma(k_eff + 0.5) - std::lgamma(k_eff)) / std::sqrt(k_eff);
+        const double c =
+            2 - 2 * std::exp(std::lgamma(k_eff + 0.5) - std::lgamma(k_eff)) / std::sqrt(k_eff);
         num += w.band_power[b] * c, den += w.band_power[b];
       }
       if (den > 0) se += std::sqrt(num / den), ++nw;
@@ -227,7 +236,8 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
   std::vector<double> tedges;
   for (int k = 0; k <= 10; ++k) tedges.push_back((T1 - T0) * k / 10 + (k == 10 ? 1e-9 : 0));
   const AxisBins time = MakeAxis("time", "s", tedges, false);
-  const AxisBins speed = MakeAxis("speed", "mm/s", {0, 0.5, 1, 2, 3, 5, 10, 20, 50, 100, 200, 1e9}, true);
+  const AxisBins speed =
+      MakeAxis("speed", "mm/s", {0, 0.5, 1, 2, 3, 5, 10, 20, 50, 100, 200, 1e9}, true);
   const AxisBins load = MakeAxis("load", "N", {0, 0.25, 0.5, 0.75, 1, 1.5, 2, 3, 1e9}, false);
   const AxisBins dir = [&] {
     AxisBins a = Categorical("direction", {});
@@ -237,9 +247,11 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
     a.centers.assign(8, 0);
     return a;
   }();
-  const AxisBins pos = Categorical("position", {"front-left", "front-centre", "front-right", "middle-left", "centre",
-                                                "middle-right", "back-left", "back-centre", "back-right"});
-  const AxisBins regime = Categorical("regime", {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"});
+  const AxisBins pos =
+      Categorical("position", {"front-left", "front-centre", "front-right", "middle-left", "centre",
+                               "middle-right", "back-left", "back-centre", "back-right"});
+  const AxisBins regime = Categorical(
+      "regime", {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"});
   auto wrap = [&](double d) { return d >= pi - pi / 8 ? d - 2 * pi : d; };
 
   // Keys of the force samples.
@@ -250,24 +262,34 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
     ks[i] = s.speed_mps * 1e3;
     kl[i] = s.fn_N;
     kd[i] = wrap(s.dir_rad);
-    const int tx = std::clamp(static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
-    const int ty = std::clamp(static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
+    const int tx = std::clamp(
+        static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
+    const int ty = std::clamp(
+        static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
     kp[i] = 3 * ty + tx;
     kr[i] = s.speed_mps <= kPreslidingSpeed_mps ? 0 : (s.speed_mps < kSlidingSpeed_mps ? 1 : 2);
   }
   // Normal force: every sample in contact.
   {
-    const Quantity q{"normal_force", "normal-force residual", [](double v) { return fmt::format("{:+.4f} N", v); }};
+    const Quantity q{"normal_force", "normal-force residual",
+                     [](double v) { return fmt::format("{:+.4f} N", v); }};
     std::vector<char> use(n);
     for (std::size_t i = 0; i < n; ++i) use[i] = r.samples()[i].contact;
     for (const auto* a : {&time, &speed, &load, &dir, &pos, &regime})
-      out.push_back(Analyze(q, *a, a == &time ? kt : a == &speed ? ks : a == &load ? kl : a == &dir ? kd : a == &pos ? kp : kr,
+      out.push_back(Analyze(q, *a,
+                            a == &time    ? kt
+                            : a == &speed ? ks
+                            : a == &load  ? kl
+                            : a == &dir   ? kd
+                            : a == &pos   ? kp
+                                          : kr,
                             res.normal_N, use));
   }
   // Friction: the friction ratio along the motion (friction / measured load) where the motion
   // has a direction.
   {
-    const Quantity q{"friction", "friction-ratio residual", [](double v) { return fmt::format("{:+.3f}", v); }};
+    const Quantity q{"friction", "friction-ratio residual",
+                     [](double v) { return fmt::format("{:+.3f}", v); }};
     std::vector<char> use(n);
     std::vector<double> v(n, 0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -276,20 +298,28 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
       if (use[i]) v[i] = res.friction_N[i] / s.fn_N;
     }
     for (const auto* a : {&time, &speed, &load, &dir, &pos, &regime})
-      out.push_back(
-          Analyze(q, *a, a == &time ? kt : a == &speed ? ks : a == &load ? kl : a == &dir ? kd : a == &pos ? kp : kr, v, use));
+      out.push_back(Analyze(q, *a,
+                            a == &time    ? kt
+                            : a == &speed ? ks
+                            : a == &load  ? kl
+                            : a == &dir   ? kd
+                            : a == &pos   ? kp
+                                          : kr,
+                            v, use));
   }
   // Vibration: the window's mean band-power residual over time, speed, load and direction; each
   // band's residual over the bands.
   if (!res.log_band.empty()) {
-    const Quantity q{"vibration", "band-power residual", [](double v) { return fmt::format("{:+.1f} dB", v); }};
+    const Quantity q{"vibration", "band-power residual",
+                     [](double v) { return fmt::format("{:+.1f} dB", v); }};
     const std::size_t nw = r.windows.size(), nb = r.band_lo_hz.size();
     const double db = 10 / std::log(10.0);
     std::vector<double> wt(nw), wsp(nw), wl(nw), wd(nw), wv(nw);
     std::vector<char> all(nw, 1);
     for (std::size_t w = 0; w < nw; ++w) {
       const auto& x = r.windows[w];
-      wt[w] = x.t_s - T0, wsp[w] = x.speed_mps * 1e3, wl[w] = x.force_N, wd[w] = wrap(std::atan2(x.dir[1], x.dir[0]));
+      wt[w] = x.t_s - T0, wsp[w] = x.speed_mps * 1e3, wl[w] = x.force_N,
+      wd[w] = wrap(std::atan2(x.dir[1], x.dir[0]));
       double s = 0;
       for (const double e : res.log_band[w]) s += e;
       wv[w] = s / static_cast<double>(nb) * db;
@@ -299,20 +329,23 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
     out.push_back(Analyze(q, load, wl, wv, all));
     out.push_back(Analyze(q, dir, wd, wv, all));
     std::vector<std::string> labels;
-    for (std::size_t b = 0; b < nb; ++b) labels.push_back(fmt::format("{:.0f}-{:.0f} Hz", r.band_lo_hz[b], r.band_hi_hz[b]));
+    for (std::size_t b = 0; b < nb; ++b)
+      labels.push_back(fmt::format("{:.0f}-{:.0f} Hz", r.band_lo_hz[b], r.band_hi_hz[b]));
     const AxisBins band = Categorical("band", labels);
     std::vector<double> bk, bv;
     for (std::size_t w = 0; w < nw; ++w)
-      for (std::size_t b = 0; b < nb; ++b) bk.push_back(static_cast<double>(b)), bv.push_back(res.log_band[w][b] * db);
+      for (std::size_t b = 0; b < nb; ++b)
+        bk.push_back(static_cast<double>(b)), bv.push_back(res.log_band[w][b] * db);
     out.push_back(Analyze(q, band, bk, bv, std::vector<char>(bk.size(), 1)));
   }
-  std::stable_sort(out.begin(), out.end(), [](const ResidualAxis& a, const ResidualAxis& b) { return a.share > b.share; });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const ResidualAxis& a, const ResidualAxis& b) { return a.share > b.share; });
   return out;
 }
 
 // ---------------------------------------------------------------------------------------------
-Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction& pbase, const Errors& ebase,
-                            bool any_supported, double unexplained_ratio) {
+Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction& pbase,
+                            const Errors& ebase, bool any_supported, double unexplained_ratio) {
   Unexplained u;
   const auto floor = EstimateNoiseFloor(r, Split::kHeldOut, &base);
   std::set<std::string> above;
@@ -322,8 +355,9 @@ Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction
     if (x.ratio >= unexplained_ratio) above.insert(ch);
     u.channels.push_back(x);
   }
-  std::stable_sort(u.channels.begin(), u.channels.end(),
-                   [](const UnexplainedChannel& a, const UnexplainedChannel& b) { return a.ratio > b.ratio; });
+  std::stable_sort(
+      u.channels.begin(), u.channels.end(),
+      [](const UnexplainedChannel& a, const UnexplainedChannel& b) { return a.ratio > b.ratio; });
   u.axes = RankResidualAxes(base, r, pbase);
   std::stable_sort(u.axes.begin(), u.axes.end(), [&](const ResidualAxis& a, const ResidualAxis& b) {
     const bool ia = above.count(a.channel) > 0, ib = above.count(b.channel) > 0;
@@ -340,18 +374,24 @@ Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction
       }
     if (u.flagged && top) {
       u.summary = fmt::format(
-          "No catalogue effect explains the residual: the held-out {} error is {:.1f}x its noise floor ({:.4f} against "
-          "{:.4f}). It lives mostly along {} ({:.0f} % of its variance): {}. An effect of the {} channel {} is needed; "
+          "No catalogue effect explains the residual: the held-out {} error is {:.1f}x its noise "
+          "floor ({:.4f} against "
+          "{:.4f}). It lives mostly along {} ({:.0f} % of its variance): {}. An effect of the {} "
+          "channel {} is needed; "
           "docs/workbench.md, \"Adding an effect\", shows how to add one.",
-          worst.channel, worst.ratio, worst.error, worst.noise_floor, top->axis, 100 * top->share, top->description,
-          worst.channel, Hint(top->axis));
+          worst.channel, worst.ratio, worst.error, worst.noise_floor, top->axis, 100 * top->share,
+          top->description, worst.channel, Hint(top->axis));
     } else if (!above.empty() && top) {
-      u.summary = fmt::format("The held-out {} error is {:.1f}x its noise floor; most of its residual variance is along "
-                              "{} ({:.0f} %): {}.",
-                              worst.channel, worst.ratio, top->axis, 100 * top->share, top->description);
+      u.summary = fmt::format(
+          "The held-out {} error is {:.1f}x its noise floor; most of its residual variance is "
+          "along "
+          "{} ({:.0f} %): {}.",
+          worst.channel, worst.ratio, top->axis, 100 * top->share, top->description);
     } else {
-      u.summary = fmt::format("Every channel's held-out error is within {:.1f}x its noise floor (largest: {} at {:.2f}x).",
-                              unexplained_ratio, worst.channel, worst.ratio);
+      u.summary = fmt::format(
+          "Every channel's held-out error is within {:.1f}x its noise floor (largest: {} at "
+          "{:.2f}x).",
+          unexplained_ratio, worst.channel, worst.ratio);
     }
   }
   return u;

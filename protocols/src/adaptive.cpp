@@ -12,8 +12,9 @@
 namespace hapticlab::protocols {
 
 const std::vector<std::string>& AdaptiveParameters() {
-  static const std::vector<std::string> kParameters{"vibration.gain", "geometry.amplitude_scale", "contact.K",
-                                          "friction.mu_k", "friction.mu_b_Ns_per_m"};
+  static const std::vector<std::string> kParameters{"vibration.gain", "geometry.amplitude_scale",
+                                                    "contact.K", "friction.mu_k",
+                                                    "friction.mu_b_Ns_per_m"};
   return kParameters;
 }
 
@@ -118,7 +119,8 @@ class Keys {
   }
   void Known(std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t_)
-      if (std::none_of(keys.begin(), keys.end(), [&key = k](const char* x) { return key.str() == x; }))
+      if (std::none_of(keys.begin(), keys.end(),
+                       [&key = k](const char* x) { return key.str() == x; }))
         d_->Add(file_, Line(&v), pre_ + "." + std::string(k.str()), "unknown key (a typo?)");
   }
   const toml::table& table() const { return t_; }

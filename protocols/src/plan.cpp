@@ -18,8 +18,8 @@ struct Item {
 // Orders `items` randomly such that no two consecutive items share a key (and the first
 // differs from `prev`). Greedy with the majority rule: when a key holds more than half of
 // what is left it must go next; this succeeds whenever any valid order exists.
-std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev, bool constrained, Rng& rng,
-                                const Protocol& p, const Phase& ph) {
+std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev, bool constrained,
+                                Rng& rng, const Protocol& p, const Phase& ph) {
   if (!constrained) {
     rng.Shuffle(items);
     return items;
@@ -33,20 +33,25 @@ std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev
     // A key with c > ceil(rem / 2) cannot be placed at all; one with 2c - 1 == rem must go now.
     for (const auto& [k, c] : count) {
       if (2 * c - 1 > rem || (2 * c - 1 == rem && k == last))
-        throw InputError(p.file, ph.line, "randomization.no_immediate_repeat",
-                         fmt::format("the {} phase cannot avoid immediate repeats: '{}' fills {} of the {} remaining "
-                                     "trials{}", ToString(ph.kind), k, c, rem,
-                                     k == last ? " and also ended the previous block" : ""));
+        throw InputError(
+            p.file, ph.line, "randomization.no_immediate_repeat",
+            fmt::format(
+                "the {} phase cannot avoid immediate repeats: '{}' fills {} of the {} remaining "
+                "trials{}",
+                ToString(ph.kind), k, c, rem,
+                k == last ? " and also ended the previous block" : ""));
     }
     std::string forced;
     for (const auto& [k, c] : count)
       if (2 * c - 1 == rem) forced = k;
     std::vector<std::size_t> candidates;
     for (std::size_t i = 0; i < items.size(); ++i)
-      if (items[i].key != last && (forced.empty() || items[i].key == forced)) candidates.push_back(i);
+      if (items[i].key != last && (forced.empty() || items[i].key == forced))
+        candidates.push_back(i);
     if (candidates.empty())
-      throw InputError(p.file, ph.line, "randomization.no_immediate_repeat",
-                       fmt::format("the {} phase cannot avoid immediate repeats", ToString(ph.kind)));
+      throw InputError(
+          p.file, ph.line, "randomization.no_immediate_repeat",
+          fmt::format("the {} phase cannot avoid immediate repeats", ToString(ph.kind)));
     const std::size_t pick = candidates[rng.Below(candidates.size())];
     last = items[pick].key;
     out.push_back(std::move(items[pick]));
@@ -59,7 +64,8 @@ std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev
 // follows every other equally often across rows (2n rows for odd n).
 std::vector<int> WilliamsRow(int n, int r) {
   std::vector<int> first;
-  for (int i = 0, lo = 1, hi = n - 1; i < n; ++i) first.push_back(i == 0 ? 0 : (i % 2 ? lo++ : hi--));
+  for (int i = 0, lo = 1, hi = n - 1; i < n; ++i)
+    first.push_back(i == 0 ? 0 : (i % 2 ? lo++ : hi--));
   const int rows = n % 2 ? 2 * n : n;
   r %= rows;
   std::vector<int> row;
@@ -72,7 +78,8 @@ std::vector<int> WilliamsRow(int n, int r) {
 // Real on the left in half the rated trials (the rest on the right), in random order.
 void BalanceSides(std::vector<Item>& items, bool balance, Rng& rng) {
   std::vector<bool> real_left(items.size());
-  for (std::size_t i = 0; i < items.size(); ++i) real_left[i] = balance ? i < items.size() / 2 : rng.Below(2) == 0;
+  for (std::size_t i = 0; i < items.size(); ++i)
+    real_left[i] = balance ? i < items.size() / 2 : rng.Below(2) == 0;
   if (balance) {
     // An odd count gets its extra trial on a random side.
     if (items.size() % 2) real_left.back() = rng.Below(2) == 0;
@@ -106,7 +113,10 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
     if (ph.kind == PhaseKind::kTraining) {
       for (const auto& m : p.materials)
         // Each virtual sample in turn (ch. V.2.1), on the left square; nothing on the right.
-        items.push_back({{.phase = ph.kind, .material = m.id, .method = ph.method, .left = "virtual:" + m.id,
+        items.push_back({{.phase = ph.kind,
+                          .material = m.id,
+                          .method = ph.method,
+                          .left = "virtual:" + m.id,
                           .rated = false},
                          m.id});
       rng.Shuffle(items);
@@ -122,23 +132,34 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
       } else if (ph.different_pairs > 0) {
         std::vector<std::pair<std::string, std::string>> all;
         for (std::size_t i = 0; i < p.materials.size(); ++i)
-          for (std::size_t j = i + 1; j < p.materials.size(); ++j) all.emplace_back(p.materials[i].id, p.materials[j].id);
+          for (std::size_t j = i + 1; j < p.materials.size(); ++j)
+            all.emplace_back(p.materials[i].id, p.materials[j].id);
         study_rng.Shuffle(all);
         pairs.insert(pairs.end(), all.begin(), all.begin() + ph.different_pairs);
       }
       for (int rep = 0; rep < ph.repetitions; ++rep)
         for (const auto& [a, b] : pairs)
-          items.push_back({{.phase = ph.kind, .material = a, .comparison = b, .repetition = rep,
-                            .left = "real:" + a, .right = "real:" + b},
+          items.push_back({{.phase = ph.kind,
+                            .material = a,
+                            .comparison = b,
+                            .repetition = rep,
+                            .left = "real:" + a,
+                            .right = "real:" + b},
                            a});
-      items = NoRepeatOrder(std::move(items), plan.empty() ? "" : plan.back().material, constrained, rng, p, ph);
+      items = NoRepeatOrder(std::move(items), plan.empty() ? "" : plan.back().material, constrained,
+                            rng, p, ph);
     } else {
       std::vector<Item> all;
       for (int rep = 0; rep < ph.repetitions; ++rep)
         for (const auto& m : p.materials)
           for (const auto& me : p.methods)
-            all.push_back({{.phase = ph.kind, .material = m.id, .comparison = "virtual", .method = me.name,
-                            .repetition = rep, .left = "real:" + m.id, .right = "virtual:" + m.id},
+            all.push_back({{.phase = ph.kind,
+                            .material = m.id,
+                            .comparison = "virtual",
+                            .method = me.name,
+                            .repetition = rep,
+                            .left = "real:" + m.id,
+                            .right = "virtual:" + m.id},
                            m.id});
       const std::string prev0 = plan.empty() ? "" : plan.back().material;
       if (p.randomization.scheme == Scheme::kFull) {
@@ -153,14 +174,18 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
           for (const auto& m : p.materials) blocks.push_back(m.id);
         std::vector<int> order(blocks.size());
         for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-        if (p.randomization.scheme == Scheme::kBlocked) rng.Shuffle(order);
-        else order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
+        if (p.randomization.scheme == Scheme::kBlocked)
+          rng.Shuffle(order);
+        else
+          order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
         std::string prev = prev0;
         std::vector<std::size_t> starts;  // positions in `items` where a block begins
         for (int b : order) {
           std::vector<Item> block;
           for (const auto& it : all)
-            if ((by_method ? it.trial.method : it.trial.material) == blocks[static_cast<std::size_t>(b)]) block.push_back(it);
+            if ((by_method ? it.trial.method : it.trial.material) ==
+                blocks[static_cast<std::size_t>(b)])
+              block.push_back(it);
           auto ordered = NoRepeatOrder(std::move(block), prev, constrained, rng, p, ph);
           if (!ordered.empty()) {
             prev = ordered.back().key;

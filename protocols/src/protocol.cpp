@@ -1,6 +1,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <cctype>
@@ -8,7 +9,6 @@
 #include <regex>
 #include <set>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "adaptive_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
@@ -22,11 +22,13 @@ class Reader {
  public:
   Reader(std::string file, Diagnostics* d) : file_(std::move(file)), d_(d) {}
   static int Line(const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; }
-  void Error(const toml::node* n, const std::string& key, const std::string& msg) { d_->Add(file_, Line(n), key, msg); }
+  void Error(const toml::node* n, const std::string& key, const std::string& msg) {
+    d_->Add(file_, Line(n), key, msg);
+  }
 
   template <class T>
-  std::optional<T> Get(const toml::table& t, const std::string& prefix, const char* key, bool required,
-                       const char* expected) {
+  std::optional<T> Get(const toml::table& t, const std::string& prefix, const char* key,
+                       bool required, const char* expected) {
     const toml::node* n = t.get(key);
     const std::string full = prefix.empty() ? key : prefix + "." + key;
     if (!n) {
@@ -37,7 +39,8 @@ class Reader {
     Error(n, full, std::string("expected ") + expected);
     return std::nullopt;
   }
-  std::vector<std::string> Strings(const toml::table& t, const std::string& prefix, const char* key, bool required) {
+  std::vector<std::string> Strings(const toml::table& t, const std::string& prefix, const char* key,
+                                   bool required) {
     std::vector<std::string> out;
     const toml::node* n = t.get(key);
     const std::string full = prefix.empty() ? key : prefix + "." + key;
@@ -51,15 +54,20 @@ class Reader {
       return out;
     }
     for (const auto& x : *a) {
-      if (auto s = x.value<std::string>()) out.push_back(*s);
-      else Error(&x, full, "expected strings");
+      if (auto s = x.value<std::string>())
+        out.push_back(*s);
+      else
+        Error(&x, full, "expected strings");
     }
     return out;
   }
-  void Known(const toml::table& t, const std::string& prefix, std::initializer_list<const char*> keys) {
+  void Known(const toml::table& t, const std::string& prefix,
+             std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t) {
-      if (std::none_of(keys.begin(), keys.end(), [&key = k](const char* x) { return key.str() == x; }))
-        Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()), "unknown key (a typo?)");
+      if (std::none_of(keys.begin(), keys.end(),
+                       [&key = k](const char* x) { return key.str() == x; }))
+        Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()),
+              "unknown key (a typo?)");
     }
   }
   Diagnostics& diag() { return *d_; }
@@ -78,17 +86,23 @@ std::string MaterialIds(const Protocol& p) {
 }
 
 const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
-const std::set<std::string> kAnalyses{"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro", "lmm"};
+const std::set<std::string> kAnalyses{"rm-anova",  "tukey",       "kruskal", "grouping",
+                                      "aggregate", "correlation", "shapiro", "lmm"};
 
 }  // namespace
 
 const char* ToString(PhaseKind k) {
   switch (k) {
-    case PhaseKind::kTraining: return "training";
-    case PhaseKind::kReference: return "reference";
-    case PhaseKind::kMain: return "main";
-    case PhaseKind::kStaircase: return "staircase";
-    case PhaseKind::kQuestPlus: return "quest-plus";
+    case PhaseKind::kTraining:
+      return "training";
+    case PhaseKind::kReference:
+      return "reference";
+    case PhaseKind::kMain:
+      return "main";
+    case PhaseKind::kStaircase:
+      return "staircase";
+    case PhaseKind::kQuestPlus:
+      return "quest-plus";
   }
   return "?";
 }
@@ -120,9 +134,10 @@ bool ValidCodePattern(const std::string& pattern, std::string* why) {
 }
 
 void CheckParticipantCode(const Protocol& p, const std::string& code) {
-  const std::string rule = "a pseudonymous code matching " + p.participant_code +
-                           " (e.g. P07; 'hapticlab participant new' hands out the next free one), never a name, "
-                           "birth date or phone number";
+  const std::string rule =
+      "a pseudonymous code matching " + p.participant_code +
+      " (e.g. P07; 'hapticlab participant new' hands out the next free one), never a name, "
+      "birth date or phone number";
   // The code must be short and plain before the pattern is even tried.
   bool plain = !code.empty() && code.size() <= 32;
   for (unsigned char c : code) plain = plain && (std::isalnum(c) || c == '-' || c == '_');
@@ -136,19 +151,23 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   try {
     doc = toml::parse(text, file);
   } catch (const toml::parse_error& e) {
-    throw InputError(file, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(file, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics diag;
   Reader r(file, &diag);
   Protocol p;
   p.file = file;
   p.text = text;
-  r.Known(doc, "", {"study", "material", "method", "phase", "randomization", "breaks", "masking_noise", "analysis"});
+  r.Known(doc, "",
+          {"study", "material", "method", "phase", "randomization", "breaks", "masking_noise",
+           "analysis"});
 
   // [study]
   if (const toml::table* s = doc["study"].as_table()) {
-    r.Known(*s, "study", {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles",
-                           "observer", "participant_code"});
+    r.Known(*s, "study",
+            {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles",
+             "observer", "participant_code"});
     p.name = r.Get<std::string>(*s, "study", "name", true, "a string").value_or("");
     p.description = r.Get<std::string>(*s, "study", "description", false, "a string").value_or("");
     if (auto seed = r.Get<std::int64_t>(*s, "study", "seed", true, "a non-negative integer")) {
@@ -156,7 +175,8 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       p.seed = static_cast<std::uint64_t>(*seed);
     }
     p.criteria = r.Strings(*s, "study", "criteria", true);
-    if (p.criteria.empty() && s->contains("criteria")) r.Error(s->get("criteria"), "study.criteria", "needs at least one criterion");
+    if (p.criteria.empty() && s->contains("criteria"))
+      r.Error(s->get("criteria"), "study.criteria", "needs at least one criterion");
     if (const toml::node* sc = s->get("scale")) {
       const toml::array* a = sc->as_array();
       if (!a || a->size() != 2 || !(*a)[0].value<double>() || !(*a)[1].value<double>() ||
@@ -167,15 +187,20 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         p.scale_max = *(*a)[1].value<double>();
       }
     }
-    p.stimulus_duration_s = r.Get<double>(*s, "study", "stimulus_duration_s", false, "a number").value_or(2.0);
+    p.stimulus_duration_s =
+        r.Get<double>(*s, "study", "stimulus_duration_s", false, "a number").value_or(2.0);
     if (!(p.stimulus_duration_s > 0 && p.stimulus_duration_s <= 600))
-      r.Error(s->get("stimulus_duration_s"), "study.stimulus_duration_s", "expected 0 < seconds <= 600");
+      r.Error(s->get("stimulus_duration_s"), "study.stimulus_duration_s",
+              "expected 0 < seconds <= 600");
     p.profiles = r.Get<std::string>(*s, "study", "profiles", false, "a file name").value_or("");
     p.observer = r.Get<std::string>(*s, "study", "observer", false, "a file name").value_or("");
-    if (auto pat = r.Get<std::string>(*s, "study", "participant_code", false, "a regular expression")) {
+    if (auto pat =
+            r.Get<std::string>(*s, "study", "participant_code", false, "a regular expression")) {
       std::string why;
-      if (!ValidCodePattern(*pat, &why)) r.Error(s->get("participant_code"), "study.participant_code", why);
-      else p.participant_code = *pat;
+      if (!ValidCodePattern(*pat, &why))
+        r.Error(s->get("participant_code"), "study.participant_code", why);
+      else
+        p.participant_code = *pat;
     }
   } else {
     diag.Add(file, 1, "study", "missing [study] table");
@@ -196,10 +221,12 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       m.line = Reader::Line(t);
       m.id = r.Get<std::string>(*t, pre, "id", true, "a string").value_or("");
       m.sample = r.Get<std::string>(*t, pre, "sample", false, "a string").value_or(m.id);
-      m.model = r.Get<std::string>(*t, pre, "model", false, "a file or \"placeholder\"").value_or("placeholder");
+      m.model = r.Get<std::string>(*t, pre, "model", false, "a file or \"placeholder\"")
+                    .value_or("placeholder");
       m.profile = r.Get<std::string>(*t, pre, "profile", false, "a string").value_or(m.id);
       m.group = r.Get<std::string>(*t, pre, "group", false, "a string").value_or("");
-      if (!m.id.empty() && !ids.insert(m.id).second) r.Error(t->get("id"), pre + ".id", "duplicate material id '" + m.id + "'");
+      if (!m.id.empty() && !ids.insert(m.id).second)
+        r.Error(t->get("id"), pre + ".id", "duplicate material id '" + m.id + "'");
       p.materials.push_back(m);
     }
   }
@@ -219,12 +246,17 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       Method m;
       m.line = Reader::Line(t);
       m.name = r.Get<std::string>(*t, pre, "name", true, "a string").value_or("");
-      m.algorithm = r.Get<std::string>(*t, pre, "algorithm", true, "wall, norm, fric1, fric2 or none").value_or("");
+      m.algorithm =
+          r.Get<std::string>(*t, pre, "algorithm", true, "wall, norm, fric1, fric2 or none")
+              .value_or("");
       if (!m.algorithm.empty() && !kAlgorithms.count(m.algorithm))
-        r.Error(t->get("algorithm"), pre + ".algorithm", "expected wall, norm, fric1, fric2 or none, got '" + m.algorithm + "'");
+        r.Error(t->get("algorithm"), pre + ".algorithm",
+                "expected wall, norm, fric1, fric2 or none, got '" + m.algorithm + "'");
       m.vibration = r.Get<bool>(*t, pre, "vibration", false, "true or false").value_or(true);
-      m.hybrid_filter = r.Get<bool>(*t, pre, "hybrid_filter", false, "true or false").value_or(true);
-      if (!m.name.empty() && !names.insert(m.name).second) r.Error(t->get("name"), pre + ".name", "duplicate method '" + m.name + "'");
+      m.hybrid_filter =
+          r.Get<bool>(*t, pre, "hybrid_filter", false, "true or false").value_or(true);
+      if (!m.name.empty() && !names.insert(m.name).second)
+        r.Error(t->get("name"), pre + ".name", "duplicate method '" + m.name + "'");
       p.methods.push_back(m);
     }
   }
@@ -250,23 +282,34 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         p.phases.push_back(ph);
         continue;
       }
-      r.Known(*t, pre, {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs", "method"});
+      r.Known(*t, pre,
+              {"kind", "repetitions", "duration_s", "same_pairs", "different_pairs", "method"});
       const std::string kind =
-          r.Get<std::string>(*t, pre, "kind", true, "training, reference, main, staircase or quest-plus").value_or("main");
-      if (kind == "training") ph.kind = PhaseKind::kTraining;
-      else if (kind == "reference") ph.kind = PhaseKind::kReference;
-      else if (kind == "main") ph.kind = PhaseKind::kMain;
-      else r.Error(t->get("kind"), pre + ".kind", "expected training, reference, main, staircase or quest-plus, got '" + kind + "'");
+          r.Get<std::string>(*t, pre, "kind", true,
+                             "training, reference, main, staircase or quest-plus")
+              .value_or("main");
+      if (kind == "training")
+        ph.kind = PhaseKind::kTraining;
+      else if (kind == "reference")
+        ph.kind = PhaseKind::kReference;
+      else if (kind == "main")
+        ph.kind = PhaseKind::kMain;
+      else
+        r.Error(t->get("kind"), pre + ".kind",
+                "expected training, reference, main, staircase or quest-plus, got '" + kind + "'");
       has_main = has_main || ph.kind == PhaseKind::kMain;
       if (auto rep = r.Get<std::int64_t>(*t, pre, "repetitions", false, "an integer 1..100")) {
-        if (*rep < 1 || *rep > 100) r.Error(t->get("repetitions"), pre + ".repetitions", "expected an integer 1..100");
-        else ph.repetitions = static_cast<int>(*rep);
+        if (*rep < 1 || *rep > 100)
+          r.Error(t->get("repetitions"), pre + ".repetitions", "expected an integer 1..100");
+        else
+          ph.repetitions = static_cast<int>(*rep);
       }
       ph.method = r.Get<std::string>(*t, pre, "method", false, "a [[method]] name").value_or("");
       if (ph.kind == PhaseKind::kTraining) {
         if (ph.method.empty() && !p.methods.empty()) ph.method = p.methods.back().name;
         if (ph.method.empty())
-          r.Error(t, pre + ".method", "a training phase renders virtual samples and needs a [[method]]");
+          r.Error(t, pre + ".method",
+                  "a training phase renders virtual samples and needs a [[method]]");
         else if (!p.FindMethod(ph.method))
           r.Error(t->get("method"), pre + ".method", "unknown method '" + ph.method + "'");
       } else if (t->get("method")) {
@@ -279,15 +322,18 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         if (auto n = dp->value<std::int64_t>()) {
           const auto nm = static_cast<std::int64_t>(p.materials.size());
           if (*n < 0 || *n > nm * (nm - 1) / 2)
-            r.Error(dp, pre + ".different_pairs", fmt::format("expected 0..{} (pairs of {} materials)", nm * (nm - 1) / 2, nm));
-          else ph.different_pairs = static_cast<int>(*n);
+            r.Error(dp, pre + ".different_pairs",
+                    fmt::format("expected 0..{} (pairs of {} materials)", nm * (nm - 1) / 2, nm));
+          else
+            ph.different_pairs = static_cast<int>(*n);
         } else if (const toml::array* a = dp->as_array()) {
           for (const auto& x : *a) {
             const toml::array* pair = x.as_array();
             auto a0 = pair && pair->size() == 2 ? (*pair)[0].value<std::string>() : std::nullopt;
             auto a1 = pair && pair->size() == 2 ? (*pair)[1].value<std::string>() : std::nullopt;
             if (!a0 || !a1)
-              r.Error(&x, pre + ".different_pairs", "expected [\"A\", \"B\"] with two different material ids");
+              r.Error(&x, pre + ".different_pairs",
+                      "expected [\"A\", \"B\"] with two different material ids");
             else if (!p.FindMaterial(*a0) || !p.FindMaterial(*a1))
               r.Error(&x, pre + ".different_pairs",
                       fmt::format("unknown material id '{}' (the [[material]] ids are: {})",
@@ -295,47 +341,70 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
             else if (*a0 == *a1)
               r.Error(&x, pre + ".different_pairs",
                       fmt::format("a pair needs two different materials, got '{}' twice", *a0));
-            else ph.explicit_pairs.emplace_back(*a0, *a1);
+            else
+              ph.explicit_pairs.emplace_back(*a0, *a1);
           }
         } else {
-          r.Error(dp, pre + ".different_pairs", "expected a count or a list of [\"A\", \"B\"] pairs");
+          r.Error(dp, pre + ".different_pairs",
+                  "expected a count or a list of [\"A\", \"B\"] pairs");
         }
       }
       p.phases.push_back(ph);
     }
   }
-  if (!has_main && !has_adaptive && !p.methods.empty()) diag.Add(file, 0, "phase", "no [[phase]] with kind = \"main\": the methods are never shown");
-  if (has_main && p.methods.empty()) diag.Add(file, 0, "method", "a main phase needs at least one [[method]]");
+  if (!has_main && !has_adaptive && !p.methods.empty())
+    diag.Add(file, 0, "phase", "no [[phase]] with kind = \"main\": the methods are never shown");
+  if (has_main && p.methods.empty())
+    diag.Add(file, 0, "method", "a main phase needs at least one [[method]]");
 
   if (const toml::table* t = doc["randomization"].as_table()) {
     r.Known(*t, "randomization", {"scheme", "block_by", "no_immediate_repeat", "balance_sides"});
-    const std::string scheme = r.Get<std::string>(*t, "randomization", "scheme", false, "full, blocked or latin-square").value_or("full");
-    if (scheme == "full") p.randomization.scheme = Scheme::kFull;
-    else if (scheme == "blocked") p.randomization.scheme = Scheme::kBlocked;
-    else if (scheme == "latin-square") p.randomization.scheme = Scheme::kLatinSquare;
-    else r.Error(t->get("scheme"), "randomization.scheme", "expected full, blocked or latin-square, got '" + scheme + "'");
-    p.randomization.block_by = r.Get<std::string>(*t, "randomization", "block_by", false, "method or material").value_or("method");
+    const std::string scheme =
+        r.Get<std::string>(*t, "randomization", "scheme", false, "full, blocked or latin-square")
+            .value_or("full");
+    if (scheme == "full")
+      p.randomization.scheme = Scheme::kFull;
+    else if (scheme == "blocked")
+      p.randomization.scheme = Scheme::kBlocked;
+    else if (scheme == "latin-square")
+      p.randomization.scheme = Scheme::kLatinSquare;
+    else
+      r.Error(t->get("scheme"), "randomization.scheme",
+              "expected full, blocked or latin-square, got '" + scheme + "'");
+    p.randomization.block_by =
+        r.Get<std::string>(*t, "randomization", "block_by", false, "method or material")
+            .value_or("method");
     if (p.randomization.block_by != "method" && p.randomization.block_by != "material")
       r.Error(t->get("block_by"), "randomization.block_by", "expected method or material");
-    p.randomization.no_immediate_repeat = r.Get<bool>(*t, "randomization", "no_immediate_repeat", false, "true or false").value_or(true);
-    p.randomization.balance_sides = r.Get<bool>(*t, "randomization", "balance_sides", false, "true or false").value_or(true);
+    p.randomization.no_immediate_repeat =
+        r.Get<bool>(*t, "randomization", "no_immediate_repeat", false, "true or false")
+            .value_or(true);
+    p.randomization.balance_sides =
+        r.Get<bool>(*t, "randomization", "balance_sides", false, "true or false").value_or(true);
     if (p.randomization.block_by == "material" && p.randomization.no_immediate_repeat &&
         p.randomization.scheme != Scheme::kFull)
       r.Error(t->get("block_by"), "randomization.block_by",
-              "blocks by material put the same material on consecutive trials: infeasible with no_immediate_repeat");
+              "blocks by material put the same material on consecutive trials: infeasible with "
+              "no_immediate_repeat");
   }
   if (const toml::table* t = doc["breaks"].as_table()) {
     r.Known(*t, "breaks", {"every_trials", "duration_s"});
     // Range-checked before the narrowing cast (4294967296 must not wrap to 0, "no breaks").
-    const auto every = r.Get<std::int64_t>(*t, "breaks", "every_trials", false, "an integer").value_or(0);
-    if (every < 0 || every > 10000) r.Error(t->get("every_trials"), "breaks.every_trials", "expected an integer 0..10000 (0: no breaks)");
-    else p.break_every_trials = static_cast<int>(every);
+    const auto every =
+        r.Get<std::int64_t>(*t, "breaks", "every_trials", false, "an integer").value_or(0);
+    if (every < 0 || every > 10000)
+      r.Error(t->get("every_trials"), "breaks.every_trials",
+              "expected an integer 0..10000 (0: no breaks)");
+    else
+      p.break_every_trials = static_cast<int>(every);
     p.break_duration_s = r.Get<double>(*t, "breaks", "duration_s", false, "a number").value_or(60);
   }
   if (const toml::table* t = doc["masking_noise"].as_table()) {
     r.Known(*t, "masking_noise", {"enabled", "level_dB"});
-    p.masking_noise = r.Get<bool>(*t, "masking_noise", "enabled", false, "true or false").value_or(true);
-    p.masking_level_dB = r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
+    p.masking_noise =
+        r.Get<bool>(*t, "masking_noise", "enabled", false, "true or false").value_or(true);
+    p.masking_level_dB =
+        r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
   }
   if (const toml::table* t = doc["analysis"].as_table()) {
     r.Known(*t, "analysis", {"tests", "lmm_formula"});
@@ -343,14 +412,20 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     for (const auto& a : p.analyses)
       if (!kAnalyses.count(a))
         r.Error(t->get("tests"), "analysis.tests",
-                "unknown analysis '" + a + "' (expected rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm)");
+                "unknown analysis '" + a +
+                    "' (expected rm-anova, tukey, kruskal, grouping, aggregate, correlation, "
+                    "shapiro, lmm)");
     // The formula's columns are checked when the report fits it (the stats module parses it).
-    p.lmm_formula = r.Get<std::string>(*t, "analysis", "lmm_formula", false, "an lme4 formula").value_or(p.lmm_formula);
-    if (p.lmm_formula.find('~') == std::string::npos || p.lmm_formula.find('|') == std::string::npos)
+    p.lmm_formula = r.Get<std::string>(*t, "analysis", "lmm_formula", false, "an lme4 formula")
+                        .value_or(p.lmm_formula);
+    if (p.lmm_formula.find('~') == std::string::npos ||
+        p.lmm_formula.find('|') == std::string::npos)
       r.Error(t->get("lmm_formula"), "analysis.lmm_formula",
-              "expected an lme4 formula 'score ~ fixed terms + (1 | participant)', got '" + p.lmm_formula + "'");
+              "expected an lme4 formula 'score ~ fixed terms + (1 | participant)', got '" +
+                  p.lmm_formula + "'");
   } else {
-    p.analyses = {"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro"};
+    p.analyses = {"rm-anova",  "tukey",       "kruskal", "grouping",
+                  "aggregate", "correlation", "shapiro"};
   }
   diag.ThrowIfAny();
   // Feasibility: plan the first participants now, so an impossible constraint set is an
@@ -359,6 +434,8 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   return p;
 }
 
-Protocol LoadProtocol(const std::string& path) { return ParseProtocol(ReadTextFile(path, "protocol"), path); }
+Protocol LoadProtocol(const std::string& path) {
+  return ParseProtocol(ReadTextFile(path, "protocol"), path);
+}
 
 }  // namespace hapticlab::protocols

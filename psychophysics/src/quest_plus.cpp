@@ -1,12 +1,13 @@
 #include "hapticlab/psychophysics/quest_plus.hpp"
-#include "hapticlab/core/status.hpp"
-#include "hapticlab/core/diagnostics.hpp"
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::psychophysics {
 

@@ -7,9 +7,9 @@
 #include <limits>
 #include <stdexcept>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
-#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::psychophysics {
 
@@ -88,9 +88,9 @@ std::vector<TrackState> ReplayStaircase(const StaircaseConfig& c,
       throw InputError(kRecordedTrials, static_cast<int>(i) + 1, "track",
                        fmt::format("a running track (track {} had stopped)", r.track));
     if (std::abs(r.level - t.level) > 1e-9 * std::max(1.0, std::abs(t.level)))
-      throw InputError(kRecordedTrials, static_cast<int>(i) + 1, "level",
-                       fmt::format("{} as the staircase's rules give (recorded {})", t.level,
-                                   r.level));
+      throw InputError(
+          kRecordedTrials, static_cast<int>(i) + 1, "level",
+          fmt::format("{} as the staircase's rules give (recorded {})", t.level, r.level));
     Step(c, t, r.positive);
   }
   return tracks;

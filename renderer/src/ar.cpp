@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+
 #include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
@@ -78,7 +79,8 @@ std::vector<double> ArToLsf(std::span<const double> c) {
   return lsf;
 }
 
-void LsfToAr(std::span<const double> lsf, std::span<double> c_out, std::span<double> work) noexcept {
+void LsfToAr(std::span<const double> lsf, std::span<double> c_out,
+             std::span<double> work) noexcept {
   // P(z) has the LSFs of odd rank (1st, 3rd, ...), Q(z) those of even rank.
   // Trivial roots: p even -> P has (1 + z^-1), Q has (1 - z^-1); p odd -> Q has (1 - z^-2).
   const std::size_t p = lsf.size();
@@ -88,8 +90,10 @@ void LsfToAr(std::span<const double> lsf, std::span<double> c_out, std::span<dou
   P[0] = 1;
   Q[0] = 1;
   for (std::size_t i = 0; i < p; ++i) {
-    if (i % 2 == 0) MulQuadratic(P, np, -2.0 * std::cos(lsf[i]));
-    else MulQuadratic(Q, nq, -2.0 * std::cos(lsf[i]));
+    if (i % 2 == 0)
+      MulQuadratic(P, np, -2.0 * std::cos(lsf[i]));
+    else
+      MulQuadratic(Q, nq, -2.0 * std::cos(lsf[i]));
   }
   if (p % 2 == 0) {
     // multiply P by (1 + z^-1) and Q by (1 - z^-1)

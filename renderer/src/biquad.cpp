@@ -2,6 +2,7 @@
 
 #include <complex>
 #include <stdexcept>
+
 #include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {

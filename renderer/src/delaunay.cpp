@@ -8,6 +8,7 @@
 
 extern "C" {
 #include <libqhull_r/qhull_ra.h>
+
 #include "hapticlab/core/status.hpp"
 }
 
@@ -58,7 +59,8 @@ std::vector<std::array<int, 3>> DelaunayTriangulate(const std::vector<double>& x
   const std::string message = err_buf ? std::string(err_buf, err_len) : std::string();
   std::free(err_buf);
   if (code != 0 || tris.empty())
-    throw std::runtime_error("Delaunay triangulation failed: " + (message.empty() ? "no triangles" : message));
+    throw std::runtime_error("Delaunay triangulation failed: " +
+                             (message.empty() ? "no triangles" : message));
   return tris;
 }
 

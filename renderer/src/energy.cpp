@@ -3,13 +3,15 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+
 #include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
 double ClosedFormEnergyNorm(double k, double a, double l) {
   const double pi = std::numbers::pi;
-  return k * a * a / 2.0 + k * l * l / (4 * pi * pi) * (1.0 - std::sqrt(l * l + 4 * a * a * pi * pi) / l);
+  return k * a * a / 2.0 +
+         k * l * l / (4 * pi * pi) * (1.0 - std::sqrt(l * l + 4 * a * a * pi * pi) / l);
 }
 
 EnergyResult ComputeEnergy(const MaterialModel& material, ForceAlgorithm algorithm,
@@ -18,7 +20,8 @@ EnergyResult ComputeEnergy(const MaterialModel& material, ForceAlgorithm algorit
   HL_REQUIRE(path.steps >= 10, "energy path needs at least 10 steps per side");
   MaterialModel m = material;
   // h(x) = A + A sin(2 pi x / l) >= 0: the mean surface sits at z = layer + A.
-  m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(amplitude_m, wavelength_m, amplitude_m, 8192));
+  m.geometry =
+      std::make_shared<HeightMap>(HeightMap::Sine(amplitude_m, wavelength_m, amplitude_m, 8192));
   const double z_mean = m.contact.layer_thickness_m + amplitude_m;
   // Keep the base out of reach of path A so only the texture layer acts (as in eq. 5.2).
   ForceModel model(m, algorithm, /*base stiffness*/ 1.0);
@@ -66,7 +69,8 @@ EnergyResult ComputeEnergy(const MaterialModel& material, ForceAlgorithm algorit
   r.tangential_energy_J = work_x;
   const auto& hc = m.contact.texture;
   const bool linear = hc.n == 1.0 && hc.B == 0.0;
-  const bool friction_alg = algorithm == ForceAlgorithm::kFric1 || algorithm == ForceAlgorithm::kFric2;
+  const bool friction_alg =
+      algorithm == ForceAlgorithm::kFric1 || algorithm == ForceAlgorithm::kFric2;
   if (algorithm == ForceAlgorithm::kNorm && path.kind == EnergyPath::Kind::kA && linear &&
       m.friction.mu_k == 0.0 && m.friction.mu_b_Ns_per_m == 0.0) {
     r.has_closed_form = true;
@@ -75,11 +79,13 @@ EnergyResult ComputeEnergy(const MaterialModel& material, ForceAlgorithm algorit
   const double pi = std::numbers::pi;
   if (path.kind == EnergyPath::Kind::kB) {
     r.bound_J = hc.K * m.friction.mu_k * m.friction.mu_k * path.dx_max_m * path.dz_max_m;
-    r.gain_bound_J = hc.K * (2 * pi * amplitude_m / wavelength_m) * path.dx_max_m * path.dz_max_m + r.bound_J;
+    r.gain_bound_J =
+        hc.K * (2 * pi * amplitude_m / wavelength_m) * path.dx_max_m * path.dz_max_m + r.bound_J;
     if (friction_alg && linear) {
       // Normal part on path B: down at x = 0, up at x = dx (T(dx) - T(0) = A sin(2 pi dx / l)).
       r.has_closed_form = true;
-      r.closed_form_J = hc.K * amplitude_m * std::sin(2 * pi * path.dx_max_m / wavelength_m) * path.dz_max_m;
+      r.closed_form_J =
+          hc.K * amplitude_m * std::sin(2 * pi * path.dx_max_m / wavelength_m) * path.dz_max_m;
     }
   }
   return r;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <stdexcept>
+
 #include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::renderer {
@@ -12,17 +13,21 @@ ForceAlgorithm ParseForceAlgorithm(const std::string& name, const std::string& s
   if (name == "fric1") return ForceAlgorithm::kFric1;
   if (name == "fric2") return ForceAlgorithm::kFric2;
   if (name == "none") return ForceAlgorithm::kNone;
-  throw InputError(source, 0, "algorithm",
-                   "wall, norm, fric1, fric2 or none (got '" + name + "')");
+  throw InputError(source, 0, "algorithm", "wall, norm, fric1, fric2 or none (got '" + name + "')");
 }
 
 const char* ToString(ForceAlgorithm a) {
   switch (a) {
-    case ForceAlgorithm::kWall: return "wall";
-    case ForceAlgorithm::kNorm: return "norm";
-    case ForceAlgorithm::kFric1: return "fric1";
-    case ForceAlgorithm::kFric2: return "fric2";
-    case ForceAlgorithm::kNone: return "none";
+    case ForceAlgorithm::kWall:
+      return "wall";
+    case ForceAlgorithm::kNorm:
+      return "norm";
+    case ForceAlgorithm::kFric1:
+      return "fric1";
+    case ForceAlgorithm::kFric2:
+      return "fric2";
+    case ForceAlgorithm::kNone:
+      return "none";
   }
   return "?";
 }
@@ -100,9 +105,9 @@ ForceOutput ForceModel::Step(const ToolState& s) noexcept {
   }
   prev_xy_m_ = xy;
   had_contact_ = out.in_contact;
-  const Eigen::Vector2d f_f =
-      out.in_contact ? Eigen::Vector2d(-(dahl_N_ + friction_.mu_b_Ns_per_m * v_t))
-                     : Eigen::Vector2d::Zero();
+  const Eigen::Vector2d f_f = out.in_contact
+                                  ? Eigen::Vector2d(-(dahl_N_ + friction_.mu_b_Ns_per_m * v_t))
+                                  : Eigen::Vector2d::Zero();
 
   // Force-texture algorithm.
   double gain = 1.0;
@@ -121,7 +126,8 @@ ForceOutput ForceModel::Step(const ToolState& s) noexcept {
       break;
     case ForceAlgorithm::kFric2: {
       const double speed = out.tangential_speed_mps;
-      const double sin_t = speed > 0 ? SinThetaT(hs.dhdx, hs.dhdy, v_t.x() / speed, v_t.y() / speed) : 0.0;
+      const double sin_t =
+          speed > 0 ? SinThetaT(hs.dhdx, hs.dhdy, v_t.x() / speed, v_t.y() / speed) : 0.0;
       gain = 1.0 + sin_t;
       break;
     }

@@ -48,20 +48,23 @@ HeightMap HeightMap::LoadRawF32(const std::string& path, int width, int height, 
   std::error_code ec;
   const auto bytes = std::filesystem::file_size(path, ec);
   if (ec) throw InputError(path, 0, "", "cannot read height map: " + ec.message());
-  const auto expected = static_cast<std::uintmax_t>(width) * static_cast<std::uintmax_t>(height) * 4u;
+  const auto expected =
+      static_cast<std::uintmax_t>(width) * static_cast<std::uintmax_t>(height) * 4u;
   if (width < 1 || height < 1 || bytes != expected)
-    throw InputError(path, 0, "", "height map has " + std::to_string(bytes) + " bytes; width " +
-                                      std::to_string(width) + " x height " + std::to_string(height) +
-                                      " float32 needs " + std::to_string(expected));
+    throw InputError(path, 0, "",
+                     "height map has " + std::to_string(bytes) + " bytes; width " +
+                         std::to_string(width) + " x height " + std::to_string(height) +
+                         " float32 needs " + std::to_string(expected));
   std::vector<float> data(static_cast<std::size_t>(width) * static_cast<std::size_t>(height));
   std::ifstream f(path, std::ios::binary);
   f.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(expected));
   if (!f) throw InputError(path, 0, "", "short read");
   for (std::size_t i = 0; i < data.size(); ++i)
     if (!std::isfinite(data[i]))
-      throw InputError(path, 0, "", "height at row " + std::to_string(i / static_cast<std::size_t>(width)) +
-                                        ", column " + std::to_string(i % static_cast<std::size_t>(width)) +
-                                        " is not finite");
+      throw InputError(path, 0, "",
+                       "height at row " + std::to_string(i / static_cast<std::size_t>(width)) +
+                           ", column " + std::to_string(i % static_cast<std::size_t>(width)) +
+                           " is not finite");
   if (!(pitch_m > 0) || !std::isfinite(pitch_m))
     throw InputError(path, 0, "pitch_m", "a positive, finite sample pitch [m]");
   return HeightMap(width, height, pitch_m, std::move(data));
@@ -87,8 +90,9 @@ HeightSample HeightMap::Sample(double x_m, double y_m) const noexcept {
   const int i1 = i0 + 1 == height_ ? 0 : i0 + 1;
   const double fu = u - j0, fv = v - i0;
   auto at = [&](int i, int j) {
-    return static_cast<double>(data_[static_cast<std::size_t>(i) * static_cast<std::size_t>(width_) +
-                                     static_cast<std::size_t>(j)]);
+    return static_cast<double>(
+        data_[static_cast<std::size_t>(i) * static_cast<std::size_t>(width_) +
+              static_cast<std::size_t>(j)]);
   };
   const double h00 = at(i0, j0), h01 = at(i0, j1), h10 = at(i1, j0), h11 = at(i1, j1);
   HeightSample s;

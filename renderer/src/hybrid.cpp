@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
 
@@ -29,23 +30,25 @@ HybridRenderer::HybridRenderer(const MaterialModel& m, const RenderOptions& o)
   }
   if (o.vibration && m.neural) {
     if (m.neural->sample_rate_hz > o.vibration_rate_hz)
-      throw InputError(m.neural_file.empty() ? source : m.neural_file, 0, "sample_rate_hz",
-                       "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) +
-                           " Hz)");
+      throw InputError(
+          m.neural_file.empty() ? source : m.neural_file, 0, "sample_rate_hz",
+          "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) + " Hz)");
     neural_ = std::make_unique<NeuralSynth>(m.neural, o.seed);
     step_ = m.neural->sample_rate_hz / o.vibration_rate_hz;
   } else if (o.vibration && !m.vibration.empty()) {
     if (m.vibration.sample_rate_hz > o.vibration_rate_hz)
-      throw InputError(source, 0, "vibration.sample_rate_hz",
-                       "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) +
-                           " Hz)");
+      throw InputError(
+          source, 0, "vibration.sample_rate_hz",
+          "at most the vibration loop's rate (" + std::to_string(o.vibration_rate_hz) + " Hz)");
     step_ = m.vibration.sample_rate_hz / o.vibration_rate_hz;
   }
   // An integer rate ratio (2 kHz, 1 kHz models at a 10 kHz loop...) upsamples band-limited.
   const double ratio = 1.0 / step_;
   const double rounded = std::round(ratio);
-  if (std::abs(ratio - rounded) <= 1e-9 * ratio) up_ = PolyphaseUpsampler(static_cast<int>(rounded), kUpsampleTapsPerPhase);
-  else up_ = PolyphaseUpsampler();  // factor 1, unused: linear interpolation instead
+  if (std::abs(ratio - rounded) <= 1e-9 * ratio)
+    up_ = PolyphaseUpsampler(static_cast<int>(rounded), kUpsampleTapsPerPhase);
+  else
+    up_ = PolyphaseUpsampler();  // factor 1, unused: linear interpolation instead
   upsample_ = std::abs(ratio - rounded) <= 1e-9 * ratio;
 }
 
@@ -114,7 +117,8 @@ double HybridRenderer::VibrationTick() noexcept {
   // Run the model at its rate; upsample band-limited (integer ratio) or linearly.
   double a;
   if (upsample_) {
-    if (up_phase_ == 0) up_.Push(neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f));
+    if (up_phase_ == 0)
+      up_.Push(neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f));
     a = up_.Output(up_phase_);
     up_phase_ = up_phase_ + 1 == up_.factor() ? 0 : up_phase_ + 1;
   } else {
@@ -128,8 +132,10 @@ double HybridRenderer::VibrationTick() noexcept {
   }
   if (!f.active) {
     // Clear the model's state now (both calls do nothing when it is already clear).
-    if (neural_) neural_->Step(0, 0, false);
-    else synth_.StepWith(f, 0.0);
+    if (neural_)
+      neural_->Step(0, 0, false);
+    else
+      synth_.StepWith(f, 0.0);
     prev_ = next_ = 0;
     up_.Reset();
     up_phase_ = 0;

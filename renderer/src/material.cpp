@@ -1,14 +1,14 @@
 #include "hapticlab/renderer/material.hpp"
 
-#include <algorithm>
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -133,16 +133,18 @@ void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::p
   Diagnostics inner;
   Reader ri(path.string(), &inner);
   const toml::table* vt = doc["vibration"].as_table();
-  if (!vt) inner.Add(path.string(), 0, "vibration", "missing [vibration] table");
-  else ReadVibration(ri, *vt, path.parent_path(), bank, depth + 1);
+  if (!vt)
+    inner.Add(path.string(), 0, "vibration", "missing [vibration] table");
+  else
+    ReadVibration(ri, *vt, path.parent_path(), bank, depth + 1);
   for (const auto& d : inner.items()) r.diag().Add(d.file, d.line, d.field, d.message);
 }
 
 void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
                    VibrationBank* bank, int depth) {
   CheckKnownKeys(r, t, "vibration",
-                 {"file", "sample_rate_hz", "min_speed_mps", "max_speed_mps", "max_force_N", "speeds_mps",
-                  "forces_N", "cells", "triangles"});
+                 {"file", "sample_rate_hz", "min_speed_mps", "max_speed_mps", "max_force_N",
+                  "speeds_mps", "forces_N", "cells", "triangles"});
   if (auto f = r.String(t, "vibration", "file", false)) {
     ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
     return;
@@ -175,8 +177,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
     const int line = r.Line(c);
     if (cell.variance < 0) r.diag().Add(r.file(), line, prefix + ".variance", "must be >= 0");
     if (cell.coeffs.empty() || cell.coeffs.size() > static_cast<std::size_t>(kMaxArOrder)) {
-      r.diag().Add(r.file(), line, prefix + ".ar",
-                   fmt::format("order must be 1..{}", kMaxArOrder));
+      r.diag().Add(r.file(), line, prefix + ".ar", fmt::format("order must be 1..{}", kMaxArOrder));
     } else if (!IsStableAr(cell.coeffs)) {
       r.diag().Add(r.file(), line, prefix + ".ar",
                    "unstable AR filter (a root of A(z) on or outside the unit circle)");
@@ -186,8 +187,11 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       const auto stored = r.Numbers(*c, prefix, "lsf", false);
       if (!stored.empty()) {
         bool same = stored.size() == cell.lsf.size();
-        for (std::size_t k = 0; same && k < stored.size(); ++k) same = std::abs(stored[k] - cell.lsf[k]) < 1e-6;
-        if (!same) r.diag().Add(r.file(), line, prefix + ".lsf", "does not match the AR coefficients of the cell");
+        for (std::size_t k = 0; same && k < stored.size(); ++k)
+          same = std::abs(stored[k] - cell.lsf[k]) < 1e-6;
+        if (!same)
+          r.diag().Add(r.file(), line, prefix + ".lsf",
+                       "does not match the AR coefficients of the cell");
       }
     }
     cell.ma = r.Numbers(*c, prefix, "ma", false);
@@ -196,8 +200,9 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       std::vector<double> neg(cell.ma.size());
       for (std::size_t k = 0; k < neg.size(); ++k) neg[k] = -cell.ma[k];
       if (cell.ma.size() > static_cast<std::size_t>(kMaxArOrder) || !IsStableAr(neg))
-        r.diag().Add(r.file(), line, prefix + ".ma",
-                     "MA part must have order <= 64 and be minimum phase (roots inside the unit circle)");
+        r.diag().Add(
+            r.file(), line, prefix + ".ma",
+            "MA part must have order <= 64 and be minimum phase (roots inside the unit circle)");
       else
         cell.ma_lsf = ArToLsf(neg);
     }
@@ -218,7 +223,8 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       if (!ok)
         r.Error(&(*arr)[i], fmt::format("vibration.triangles[{}]", i),
                 fmt::format("expected three 0-based cell indices below {}", bank->cells.size()));
-      else bank->triangles.push_back(idx);
+      else
+        bank->triangles.push_back(idx);
     }
   }
 }
@@ -239,14 +245,17 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
   const auto base = std::filesystem::path(name).parent_path();
   MaterialModel m;
   m.source_path = name;
-  CheckKnownKeys(r, doc, "", {"name", "effects", "contact", "friction", "geometry", "vibration",
-                              "hybrid", "notes", "workbench", "neural"});
+  CheckKnownKeys(r, doc, "",
+                 {"name", "effects", "contact", "friction", "geometry", "vibration", "hybrid",
+                  "notes", "workbench", "neural"});
   m.name = r.String(doc, "", "name", true).value_or("");
   if (const toml::node* e = doc.get("effects")) {
     if (const toml::array* arr = e->as_array()) {
       for (const auto& x : *arr) {
-        if (auto s = x.value<std::string>()) m.effects.push_back(*s);
-        else r.Error(&x, "effects", "expected strings");
+        if (auto s = x.value<std::string>())
+          m.effects.push_back(*s);
+        else
+          r.Error(&x, "effects", "expected strings");
       }
     } else {
       r.Error(e, "effects", "expected an array of effect names");
@@ -258,12 +267,17 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
                     "base_n", "layer_thickness_m"});
     m.contact.texture = ReadHc(r, *c, "texture", m.contact.texture, true);
     if (auto bm = r.String(*c, "contact", "base_model", false)) {
-      if (*bm == "linear") m.contact.base_model = BaseModel::kLinear;
-      else if (*bm == "hunt-crossley") m.contact.base_model = BaseModel::kHuntCrossley;
-      else r.Error(c->get("base_model"), "contact.base_model", "expected \"linear\" or \"hunt-crossley\"");
+      if (*bm == "linear")
+        m.contact.base_model = BaseModel::kLinear;
+      else if (*bm == "hunt-crossley")
+        m.contact.base_model = BaseModel::kHuntCrossley;
+      else
+        r.Error(c->get("base_model"), "contact.base_model",
+                "expected \"linear\" or \"hunt-crossley\"");
     }
     m.contact.base = ReadHc(r, *c, "base", m.contact.base, false);
-    if (auto v = r.Number(*c, "contact", "layer_thickness_m", false)) m.contact.layer_thickness_m = *v;
+    if (auto v = r.Number(*c, "contact", "layer_thickness_m", false))
+      m.contact.layer_thickness_m = *v;
   } else {
     diag.Add(name, 0, "contact", "missing [contact] table");
   }
@@ -278,8 +292,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
   if (const toml::table* g = doc["geometry"].as_table()) {
     CheckKnownKeys(r, *g, "geometry",
                    {"kind", "file", "width", "height", "pitch_m", "amplitude_m", "wavelength_m"});
-    const std::string kind = r.String(*g, "geometry", "kind", false).value_or(
-        g->contains("file") ? "file" : "flat");
+    const std::string kind =
+        r.String(*g, "geometry", "kind", false).value_or(g->contains("file") ? "file" : "flat");
     if (kind == "file") {
       const auto file = r.String(*g, "geometry", "file", true);
       const auto w = r.Number(*g, "geometry", "width", true);
@@ -291,7 +305,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       bool sides_ok = true;
       for (const auto& [key, v] : {std::pair{"width", w}, std::pair{"height", h}})
         if (v && !(*v >= 1 && *v <= kMaxSide && *v == std::floor(*v))) {
-          r.Error(g->get(key), std::string("geometry.") + key, "must be a whole number of samples in 1..1048576");
+          r.Error(g->get(key), std::string("geometry.") + key,
+                  "must be a whole number of samples in 1..1048576");
           sides_ok = false;
         }
       if (file && w && h && p && *p > 0 && sides_ok) {
@@ -307,17 +322,21 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto a = r.Number(*g, "geometry", "amplitude_m", true);
       const auto l = r.Number(*g, "geometry", "wavelength_m", true);
       if (a && l) {
-        if (*a < 0 || *l <= 0) r.Error(g, "geometry", "amplitude_m must be >= 0 and wavelength_m > 0");
-        else m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
+        if (*a < 0 || *l <= 0)
+          r.Error(g, "geometry", "amplitude_m must be >= 0 and wavelength_m > 0");
+        else
+          m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
       }
     } else if (kind != "flat") {
       r.Error(g->get("kind"), "geometry.kind", "expected \"file\", \"sine\" or \"flat\"");
     }
   }
-  if (const toml::table* v = doc["vibration"].as_table()) ReadVibration(r, *v, base, &m.vibration, 0);
+  if (const toml::table* v = doc["vibration"].as_table())
+    ReadVibration(r, *v, base, &m.vibration, 0);
   // Scattered cells without a triangulation: compute the Delaunay triangulation.
   auto& vb = m.vibration;
-  if (vb.cells.size() >= 3 && vb.grid_speeds_mps.empty() && vb.grid_forces_N.empty() && vb.triangles.empty()) {
+  if (vb.cells.size() >= 3 && vb.grid_speeds_mps.empty() && vb.grid_forces_N.empty() &&
+      vb.triangles.empty()) {
     std::vector<double> xs, ys;
     for (const auto& c : vb.cells) {
       xs.push_back(c.speed_mps);
@@ -340,12 +359,14 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
     CheckKnownKeys(r, *nt, "neural", {"file"});
     if (const auto file = r.String(*nt, "neural", "file", true)) {
       m.neural_file = *file;
-      const auto p = std::filesystem::path(*file).is_absolute() ? std::filesystem::path(*file) : base / *file;
+      const auto p =
+          std::filesystem::path(*file).is_absolute() ? std::filesystem::path(*file) : base / *file;
       try {
         m.neural = std::make_shared<NeuralModel>(LoadNeuralModel(p.string()));
       } catch (const InputError& e) {
         for (const auto& x : e.diagnostics()) diag.Add(x.file, x.line, x.field, x.message);
-        diag.Add(name, r.Line(nt->get("file")), "neural.file", "the neural model could not be loaded");
+        diag.Add(name, r.Line(nt->get("file")), "neural.file",
+                 "the neural model could not be loaded");
       }
     }
   }
@@ -377,22 +398,27 @@ void ValidateMaterial(const MaterialModel& m) {
   if (!(m.friction.kappa_N_per_m > 0)) d.Add(f, 0, "friction.kappa_N_per_m", "must be > 0");
   if (!(m.friction.mu_k >= 0)) d.Add(f, 0, "friction.mu_k", "must be >= 0");
   if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
-  if (!(m.hybrid_cutoff_hz >= 0)) d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
+  if (!(m.hybrid_cutoff_hz >= 0))
+    d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
   const auto& b = m.vibration;
   if (!b.empty()) {
     if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
     if (!(b.min_speed_mps >= 0)) d.Add(f, 0, "vibration.min_speed_mps", "must be >= 0");
     if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
-      d.Add(f, 0, "vibration.max_speed_mps", fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
+      d.Add(f, 0, "vibration.max_speed_mps",
+            fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
     if (!(b.max_force_N == 0 || b.max_force_N > kSaturationMarginForce_N))
-      d.Add(f, 0, "vibration.max_force_N", fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginForce_N));
+      d.Add(f, 0, "vibration.max_force_N",
+            fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginForce_N));
     const std::size_t p = b.cells[0].coeffs.size();
     for (std::size_t i = 0; i < b.cells.size(); ++i) {
       if (b.cells[i].coeffs.size() != p)
-        d.Add(f, 0, fmt::format("vibration.cells[{}].ar", i),
-              fmt::format("order {} differs from the first cell's {}", b.cells[i].coeffs.size(), p));
+        d.Add(
+            f, 0, fmt::format("vibration.cells[{}].ar", i),
+            fmt::format("order {} differs from the first cell's {}", b.cells[i].coeffs.size(), p));
       if (b.cells[i].ma.size() != b.cells[0].ma.size())
-        d.Add(f, 0, fmt::format("vibration.cells[{}].ma", i), "MA order differs from the first cell's");
+        d.Add(f, 0, fmt::format("vibration.cells[{}].ma", i),
+              "MA order differs from the first cell's");
       if (b.cells[i].lsf.size() != b.cells[i].coeffs.size() ||
           b.cells[i].ma_lsf.size() != b.cells[i].ma.size())
         d.Add(f, 0, fmt::format("vibration.cells[{}]", i), "LSFs missing (unstable filter?)");
@@ -422,10 +448,12 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
   std::string s;
   s += fmt::format("name = \"{}\"\n", m.name);
   s += "effects = [";
-  for (std::size_t i = 0; i < m.effects.size(); ++i) s += fmt::format("{}\"{}\"", i ? ", " : "", m.effects[i]);
+  for (std::size_t i = 0; i < m.effects.size(); ++i)
+    s += fmt::format("{}\"{}\"", i ? ", " : "", m.effects[i]);
   s += "]\n\n[contact]\n";
-  s += fmt::format("texture_K = {:.17g}  # N/m^n\ntexture_B = {:.17g}  # N s/m^(n+1)\ntexture_n = {:.17g}\n",
-                   m.contact.texture.K, m.contact.texture.B, m.contact.texture.n);
+  s += fmt::format(
+      "texture_K = {:.17g}  # N/m^n\ntexture_B = {:.17g}  # N s/m^(n+1)\ntexture_n = {:.17g}\n",
+      m.contact.texture.K, m.contact.texture.B, m.contact.texture.n);
   s += fmt::format("base_model = \"{}\"\nbase_K = {:.17g}\nbase_B = {:.17g}\nbase_n = {:.17g}\n",
                    m.contact.base_model == BaseModel::kLinear ? "linear" : "hunt-crossley",
                    m.contact.base.K, m.contact.base.B, m.contact.base.n);
@@ -433,8 +461,10 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
   s += fmt::format("kappa_N_per_m = {:.17g}\nmu_k = {:.17g}\nmu_b_Ns_per_m = {:.17g}\n\n",
                    m.friction.kappa_N_per_m, m.friction.mu_k, m.friction.mu_b_Ns_per_m);
   if (!geometry_file.empty() && m.geometry) {
-    s += fmt::format("[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = {}\npitch_m = {:.17g}\n\n",
-                     geometry_file, m.geometry->width(), m.geometry->height(), m.geometry->pitch_m());
+    s += fmt::format(
+        "[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = {}\npitch_m = "
+        "{:.17g}\n\n",
+        geometry_file, m.geometry->width(), m.geometry->height(), m.geometry->pitch_m());
   } else {
     s += "[geometry]\nkind = \"flat\"\n\n";
   }
@@ -463,8 +493,9 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
       s += "]\n";
     }
     for (const auto& c : b.cells) {
-      s += fmt::format("\n[[vibration.cells]]\nspeed_mps = {:.17g}\nforce_N = {:.17g}\nvariance = {:.17g}\n",
-                       c.speed_mps, c.force_N, c.variance);
+      s += fmt::format(
+          "\n[[vibration.cells]]\nspeed_mps = {:.17g}\nforce_N = {:.17g}\nvariance = {:.17g}\n",
+          c.speed_mps, c.force_N, c.variance);
       s += "ar = " + list(c.coeffs) + "\n";
       if (!c.lsf.empty()) s += "lsf = " + list(c.lsf) + "  # rad/sample, derived from ar\n";
       if (!c.ma.empty()) s += "ma = " + list(c.ma) + fmt::format("\ngain = {:.17g}\n", c.gain);

@@ -1,7 +1,6 @@
 #include "hapticlab/renderer/neural.hpp"
 
 #include <fmt/format.h>
-
 #include <toml++/toml.h>
 
 #include <Eigen/Core>
@@ -19,7 +18,8 @@ namespace hapticlab::renderer {
 namespace {
 
 // Bilinear weights on the grid (clamped at the edges): up to four cells, speed-major index.
-int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, double v, double f, int* cell, double* w) {
+int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, double v, double f,
+                int* cell, double* w) {
   auto axis = [](const std::vector<double>& g, double x, int* i0, double* t) {
     if (g.size() < 2 || x <= g.front()) {
       *i0 = 0;
@@ -34,7 +34,8 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
     int i = 0;
     while (x > g[static_cast<std::size_t>(i) + 1]) ++i;
     *i0 = i;
-    *t = (x - g[static_cast<std::size_t>(i)]) / (g[static_cast<std::size_t>(i) + 1] - g[static_cast<std::size_t>(i)]);
+    *t = (x - g[static_cast<std::size_t>(i)]) /
+         (g[static_cast<std::size_t>(i) + 1] - g[static_cast<std::size_t>(i)]);
   };
   int iv, jf;
   double tv, tf;
@@ -81,7 +82,8 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
   for (std::size_t l = 0; l < L; ++l) {
     const int ni = n.layers[l], no = n.layers[l + 1];
     const Eigen::Map<const Eigen::MatrixXd> W(n.params.data() + off, no, ni);
-    const Eigen::Map<const Eigen::VectorXd> bias(n.params.data() + off + static_cast<std::size_t>(no * ni), no);
+    const Eigen::Map<const Eigen::VectorXd> bias(
+        n.params.data() + off + static_cast<std::size_t>(no * ni), no);
     const Eigen::Map<const Eigen::VectorXd> xin(x, ni);
     Eigen::Map<Eigen::VectorXd> out(dst, no);
     out.noalias() = W * xin;
@@ -97,7 +99,8 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
   // The linear part over the M history inputs; Γ_U's coefficients are biquadratic in the
   // scaled condition (v', f'), the last two inputs (kLinearTerms; 6-term files: quadratic).
   if (!n.linear.empty()) {
-    const std::size_t M = unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
+    const std::size_t M =
+        unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
     const double* w = n.linear.data();
     double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0, 0, 0, 0};
     std::size_t terms = 1;
@@ -158,29 +161,40 @@ std::string NeuralModelProblem(const NeuralModel& m) {
   const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
     const auto& band = m.bands[b];
-    if (!(band.lo_hz >= 0 && band.hi_hz > band.lo_hz) || (b > 0 && std::abs(band.lo_hz - m.bands[b - 1].hi_hz) > 1e-9))
-      return fmt::format("neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band below)", b + 1);
-    const std::string where = fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
-    if (band.decimation < 1 || band.history < 1) return where + ": decimation and history must be >= 1";
+    if (!(band.lo_hz >= 0 && band.hi_hz > band.lo_hz) ||
+        (b > 0 && std::abs(band.lo_hz - m.bands[b - 1].hi_hz) > 1e-9))
+      return fmt::format(
+          "neural model band {}: bands must be ascending and contiguous (lo_hz = hi_hz of the band "
+          "below)",
+          b + 1);
+    const std::string where =
+        fmt::format("neural model band {} ({:g}-{:g} Hz)", b + 1, band.lo_hz, band.hi_hz);
+    if (band.decimation < 1 || band.history < 1)
+      return where + ": decimation and history must be >= 1";
     if (band.hi_hz > 0.5 * m.sample_rate_hz / band.decimation + 1e-9)
       return where + ": the band's upper edge exceeds the Nyquist frequency of its decimated rate";
     const std::size_t want = m.topology == NeuralTopology::kUnified ? 1 : cells;
-    if (band.nets.size() != want) return fmt::format("{}: {} networks, expected {}", where, band.nets.size(), want);
-    if (band.sigma.size() != cells) return fmt::format("{}: {} sigma values, expected {}", where, band.sigma.size(), cells);
+    if (band.nets.size() != want)
+      return fmt::format("{}: {} networks, expected {}", where, band.nets.size(), want);
+    if (band.sigma.size() != cells)
+      return fmt::format("{}: {} sigma values, expected {}", where, band.sigma.size(), cells);
     const int inputs = band.history + (m.topology == NeuralTopology::kUnified ? 2 : 0);
     for (const auto& n : band.nets) {
       if (n.layers.size() < 2 || n.layers.front() != inputs || n.layers.back() != 1)
         return fmt::format("{}: layers must run from {} inputs to 1 output", where, inputs);
       if (n.params.size() != n.ParamCount())
-        return fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(), n.ParamCount());
+        return fmt::format("{}: {} parameters, the layers need {}", where, n.params.size(),
+                           n.ParamCount());
       for (const double p : n.params)
         if (!std::isfinite(p)) return where + ": non-finite weight";
       const auto H = static_cast<std::size_t>(band.history);
       const bool uni = m.topology == NeuralTopology::kUnified;
       const std::size_t want_lin = H * (uni ? kLinearTerms : 1);
-      if (!n.linear.empty() && n.linear.size() != want_lin && !(uni && n.linear.size() == H * kLinearTermsQuadratic))
-        return fmt::format("{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
-                                                uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : "");
+      if (!n.linear.empty() && n.linear.size() != want_lin &&
+          !(uni && n.linear.size() == H * kLinearTermsQuadratic))
+        return fmt::format(
+            "{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
+            uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : "");
       for (const double p : n.linear)
         if (!std::isfinite(p)) return where + ": non-finite linear weight";
     }
@@ -199,16 +213,21 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
   ValidateNeuralModel(m);
   auto list = [](const auto& v) {
     std::string s = "[";
-    for (std::size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{:.17g}", i ? ", " : "", static_cast<double>(v[i]));
+    for (std::size_t i = 0; i < v.size(); ++i)
+      s += fmt::format("{}{:.17g}", i ? ", " : "", static_cast<double>(v[i]));
     return s + "]";
   };
-  std::string s = "# HapticLab neural texture model (dissertation ch. III.3; docs/modeling-neural.md)\n";
+  std::string s =
+      "# HapticLab neural texture model (dissertation ch. III.3; docs/modeling-neural.md)\n";
   s += fmt::format("topology = \"{}\"\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
-                   m.topology == NeuralTopology::kUnified ? "unified" : "decomposed", m.sample_rate_hz, m.min_speed_mps);
+                   m.topology == NeuralTopology::kUnified ? "unified" : "decomposed",
+                   m.sample_rate_hz, m.min_speed_mps);
   s += "speeds_mps = " + list(m.speeds_mps) + "\nforces_N = " + list(m.forces_N) + "\n";
   for (const auto& b : m.bands) {
-    s += fmt::format("\n[[band]]\nlo_hz = {:.17g}\nhi_hz = {:.17g}\ndecimation = {}\nhistory = {}\nscale = {:.17g}\n", b.lo_hz,
-                     b.hi_hz, b.decimation, b.history, b.scale);
+    s += fmt::format(
+        "\n[[band]]\nlo_hz = {:.17g}\nhi_hz = {:.17g}\ndecimation = {}\nhistory = {}\nscale = "
+        "{:.17g}\n",
+        b.lo_hz, b.hi_hz, b.decimation, b.history, b.scale);
     s += "layers = " + list(b.nets.front().layers) + "\nsigma = " + list(b.sigma) + "\nnets = [\n";
     for (const auto& n : b.nets) s += "  " + list(n.params) + ",\n";
     s += "]\n";
@@ -230,7 +249,8 @@ NeuralModel LoadNeuralModel(const std::string& path) {
   try {
     doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics d;
   auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
@@ -251,9 +271,12 @@ NeuralModel LoadNeuralModel(const std::string& path) {
   };
   NeuralModel m;
   const auto topo = doc["topology"].value<std::string>();
-  if (topo == "unified") m.topology = NeuralTopology::kUnified;
-  else if (topo == "decomposed") m.topology = NeuralTopology::kDecomposed;
-  else d.Add(path, line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
+  if (topo == "unified")
+    m.topology = NeuralTopology::kUnified;
+  else if (topo == "decomposed")
+    m.topology = NeuralTopology::kDecomposed;
+  else
+    d.Add(path, line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
   m.sample_rate_hz = doc["sample_rate_hz"].value_or(0.0);
   m.min_speed_mps = doc["min_speed_mps"].value_or(0.01);
   numbers(doc.get("speeds_mps"), "speeds_mps", &m.speeds_mps);
@@ -286,7 +309,8 @@ NeuralModel LoadNeuralModel(const std::string& path) {
     }
     if (const auto* lin = (*t)["linear"].as_array()) {
       if (lin->size() != b.nets.size())
-        d.Add(path, line(t->get("linear")), k + ".linear", fmt::format("expected one array per network ({})", b.nets.size()));
+        d.Add(path, line(t->get("linear")), k + ".linear",
+              fmt::format("expected one array per network ({})", b.nets.size()));
       for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
         numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
     }
@@ -299,7 +323,8 @@ NeuralModel LoadNeuralModel(const std::string& path) {
 }
 
 // ---------------------------------------------------------------------------------------------
-NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t seed) : m_(std::move(model)), noise_(seed) {
+NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t seed)
+    : m_(std::move(model)), noise_(seed) {
   ValidateNeuralModel(*m_);
   std::size_t widest = 1;
   for (const auto& b : m_->bands) {
@@ -307,7 +332,8 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
-    if (&b == &m_->bands.front()) s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
+    if (&b == &m_->bands.front())
+      s.hp.SetCoeffs(BiquadCoeffs::ButterworthHighPass(0.5 * b.lo_hz, rate));
     s.up = PolyphaseUpsampler(b.decimation, kTaps);
     // The crossovers (docs/modeling-neural.md): fourth-order Butterworth pairs at every band
     // boundary below the Nyquist frequency; band b takes the high-pass of every boundary below
@@ -316,10 +342,14 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
     for (const auto& lower : m_->bands) {
       if (&lower == &b) break;
       if (lower.hi_hz < nyq)
-        for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(lower.hi_hz, m_->sample_rate_hz, q, true));
+        for (const double q : kButterworth4Q)
+          s.xover[static_cast<std::size_t>(s.nxover++)] =
+              Biquad(ButterworthSection(lower.hi_hz, m_->sample_rate_hz, q, true));
     }
     if (b.hi_hz < nyq)
-      for (const double q : kButterworth4Q) s.xover[static_cast<std::size_t>(s.nxover++)] = Biquad(ButterworthSection(b.hi_hz, m_->sample_rate_hz, q, false));
+      for (const double q : kButterworth4Q)
+        s.xover[static_cast<std::size_t>(s.nxover++)] =
+            Biquad(ButterworthSection(b.hi_hz, m_->sample_rate_hz, q, false));
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
     bands_.push_back(std::move(s));
@@ -340,7 +370,8 @@ void NeuralSynth::Reset() noexcept {
 }
 
 double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept {
-  return Forward(m_->bands[band].nets[cell], m_->topology == NeuralTopology::kUnified, input, act_a_.data(), act_b_.data());
+  return Forward(m_->bands[band].nets[cell], m_->topology == NeuralTopology::kUnified, input,
+                 act_a_.data(), act_b_.data());
 }
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
@@ -360,7 +391,8 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
     BandState& s = bands_[b];
     const auto M = static_cast<std::size_t>(band.history);
     if (s.phase == 0) {
-      std::copy(s.hist.begin() + s.head, s.hist.begin() + s.head + static_cast<std::ptrdiff_t>(M), s.input.begin());
+      std::copy(s.hist.begin() + s.head, s.hist.begin() + s.head + static_cast<std::ptrdiff_t>(M),
+                s.input.begin());
       if (unified) {
         s.input[M] = m.NormSpeed(speed_mps);
         s.input[M + 1] = m.NormForce(force_N);
@@ -369,7 +401,8 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       if (unified) y = Forward(band.nets[0], true, s.input.data(), act_a_.data(), act_b_.data());
       for (int k = 0; k < nw; ++k) {
         const auto c = static_cast<std::size_t>(cell[k]);
-        if (!unified) y += w[k] * Forward(band.nets[c], false, s.input.data(), act_a_.data(), act_b_.data());
+        if (!unified)
+          y += w[k] * Forward(band.nets[c], false, s.input.data(), act_a_.data(), act_b_.data());
         sig += w[k] * band.sigma[c];
       }
       y += sig * noise_.Normal();

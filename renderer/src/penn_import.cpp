@@ -14,7 +14,8 @@ namespace {
 
 class XmlReader {
  public:
-  XmlReader(std::string file, Diagnostics* d, const std::string& text) : file_(std::move(file)), d_(d) {
+  XmlReader(std::string file, Diagnostics* d, const std::string& text)
+      : file_(std::move(file)), d_(d) {
     // Offsets of line starts, to turn pugixml's byte offsets into line numbers.
     line_starts_.push_back(0);
     for (std::size_t i = 0; i < text.size(); ++i)
@@ -48,15 +49,18 @@ class XmlReader {
     return v;
   }
   // An integer element in [lo, hi] (checked before any conversion to int).
-  int Integer(const pugi::xml_node& parent, const char* name, bool required, int lo, int hi, int def) {
+  int Integer(const pugi::xml_node& parent, const char* name, bool required, int lo, int hi,
+              int def) {
     const pugi::xml_node n = parent.child(name);
     if (!n) {
-      if (required) Error(parent, name, fmt::format("missing element; expected an integer in {}..{}", lo, hi));
+      if (required)
+        Error(parent, name, fmt::format("missing element; expected an integer in {}..{}", lo, hi));
       return def;
     }
     const double v = Parse(n, name);
     if (!(v >= lo && v <= hi && v == std::floor(v))) {
-      Error(n, name, fmt::format("expected an integer in {}..{}, got '{}'", lo, hi, n.text().as_string()));
+      Error(n, name,
+            fmt::format("expected an integer in {}..{}, got '{}'", lo, hi, n.text().as_string()));
       return def;
     }
     return static_cast<int>(v);
@@ -97,7 +101,10 @@ PennImport ImportPennXml(const std::string& path) {
   if (!res) {
     pugi::xml_node dummy;
     const auto at = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, res.offset));
-    const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(std::min(at, text.size())), '\n'));
+    const int line =
+        1 + static_cast<int>(std::count(
+                text.begin(), text.begin() + static_cast<std::ptrdiff_t>(std::min(at, text.size())),
+                '\n'));
     throw InputError(path, line, "", std::string("not well-formed XML: ") + res.description());
   }
   const pugi::xml_node set = doc.child("modelSet");
@@ -119,13 +126,17 @@ PennImport ImportPennXml(const std::string& path) {
   // The modelled range (mm/s, N): the toolkit saturates speed and force just inside it.
   if (set.child("maxSpeed")) {
     const double v = r.Number(set, "maxSpeed", true);
-    if (!(v * 1e-3 > kSaturationMarginSpeed_mps)) r.Error(set.child("maxSpeed"), "maxSpeed", "must be > 0.01 mm/s");
-    else bank.max_speed_mps = v * 1e-3;
+    if (!(v * 1e-3 > kSaturationMarginSpeed_mps))
+      r.Error(set.child("maxSpeed"), "maxSpeed", "must be > 0.01 mm/s");
+    else
+      bank.max_speed_mps = v * 1e-3;
   }
   if (set.child("maxForce")) {
     const double v = r.Number(set, "maxForce", true);
-    if (!(v > kSaturationMarginForce_N)) r.Error(set.child("maxForce"), "maxForce", "must be > 0.01 N");
-    else bank.max_force_N = v;
+    if (!(v > kSaturationMarginForce_N))
+      r.Error(set.child("maxForce"), "maxForce", "must be > 0.01 N");
+    else
+      bank.max_force_N = v;
   }
   out.has_range = bank.max_speed_mps > 0 && bank.max_force_N > 0;
   const auto speeds_mmps = r.Values(set, "speedList", true);
@@ -140,18 +151,23 @@ PennImport ImportPennXml(const std::string& path) {
     bool ok = true;
     for (const auto& v : tri.children("value")) {
       const double x = r.Parse(v, "tri");
-      const bool in_range = x >= 1 && x <= num_mod && x == std::floor(x);  // checked before the cast
-      if (k < 3 && in_range) t[static_cast<std::size_t>(k)] = static_cast<int>(x) - 1;  // 1-based in the file
+      const bool in_range =
+          x >= 1 && x <= num_mod && x == std::floor(x);  // checked before the cast
+      if (k < 3 && in_range)
+        t[static_cast<std::size_t>(k)] = static_cast<int>(x) - 1;  // 1-based in the file
       ok = ok && in_range;
       ++k;
     }
-    if (k != 3 || !ok) r.Error(tri, "tri", fmt::format("expected three 1-based model indices in 1..{}", num_mod));
-    else bank.triangles.push_back(t);
+    if (k != 3 || !ok)
+      r.Error(tri, "tri", fmt::format("expected three 1-based model indices in 1..{}", num_mod));
+    else
+      bank.triangles.push_back(t);
   }
   for (const auto& model : set.children("model")) {
     const int idx = r.Integer(model, "modNum", true, 1, std::max(1, num_mod), 0) - 1;
     ArCell cell;
-    if (idx >= 0 && idx < static_cast<int>(speeds_mmps.size()) && idx < static_cast<int>(forces.size())) {
+    if (idx >= 0 && idx < static_cast<int>(speeds_mmps.size()) &&
+        idx < static_cast<int>(forces.size())) {
       cell.speed_mps = speeds_mmps[static_cast<std::size_t>(idx)] * 1e-3;
       cell.force_N = forces[static_cast<std::size_t>(idx)];
     }  // else: Integer() or the speedList/forceList check has reported it
@@ -201,7 +217,8 @@ PennImport ImportPennXml(const std::string& path) {
     bank.cells.push_back(std::move(cell));
   }
   if (static_cast<int>(bank.cells.size()) != num_mod)
-    r.Error(set, "model", fmt::format("numMod says {} models, found {}", num_mod, bank.cells.size()));
+    r.Error(set, "model",
+            fmt::format("numMod says {} models, found {}", num_mod, bank.cells.size()));
   if (static_cast<int>(bank.cells.size()) == num_mod) {
     // A triangle whose vertices are collinear or repeated cannot weight a point.
     for (const auto& t : bank.triangles) {
@@ -211,9 +228,12 @@ PennImport ImportPennXml(const std::string& path) {
       const double det = (b.speed_mps - a.speed_mps) * (c.force_N - a.force_N) -
                          (c.speed_mps - a.speed_mps) * (b.force_N - a.force_N);
       if (det == 0)
-        r.Error(set, "tri", fmt::format("triangle {} {} {} (1-based) has no area", t[0] + 1, t[1] + 1, t[2] + 1));
+        r.Error(
+            set, "tri",
+            fmt::format("triangle {} {} {} (1-based) has no area", t[0] + 1, t[1] + 1, t[2] + 1));
     }
-    if (num_mod > 1 && bank.triangles.empty()) r.Error(set, "tri", "no triangles: the models cannot be interpolated");
+    if (num_mod > 1 && bank.triangles.empty())
+      r.Error(set, "tri", "no triangles: the models cannot be interpolated");
   }
   diag.ThrowIfAny();
   // The toolkit renders down to 0.05 mm/s; below it it interpolates at speed ~0, where its

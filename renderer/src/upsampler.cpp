@@ -4,12 +4,15 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+
 #include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 
-PolyphaseUpsampler::PolyphaseUpsampler(int factor, int taps_per_phase) : factor_(factor), taps_(taps_per_phase) {
-  HL_REQUIRE(factor >= 1 && taps_per_phase >= 1, "upsampler: factor and taps per phase must be >= 1");
+PolyphaseUpsampler::PolyphaseUpsampler(int factor, int taps_per_phase)
+    : factor_(factor), taps_(taps_per_phase) {
+  HL_REQUIRE(factor >= 1 && taps_per_phase >= 1,
+             "upsampler: factor and taps per phase must be >= 1");
   if (factor == 1) taps_ = 1;
   hist_.assign(2 * static_cast<std::size_t>(taps_), 0.0);
   h_.assign(static_cast<std::size_t>(taps_) * static_cast<std::size_t>(factor_), 0.0);
@@ -20,7 +23,8 @@ PolyphaseUpsampler::PolyphaseUpsampler(int factor, int taps_per_phase) : factor_
     for (int j = 0; j < taps_; ++j) {
       const int n = p + j * factor_;  // index within the full filter
       const double t = (n - centre) / factor_;
-      const double sinc = std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
+      const double sinc =
+          std::abs(t) < 1e-12 ? 1.0 : std::sin(std::numbers::pi * t) / (std::numbers::pi * t);
       const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * (n + 0.5) / len);
       const int tap = p * taps_ + j;
       sum += h_[static_cast<std::size_t>(tap)] = sinc * w;

@@ -72,9 +72,11 @@ CellWeights VibrationInterpolator::Weights(double speed_mps, double force_N) con
                        (c.speed_mps - bb.speed_mps) * (a.force_N - c.force_N);
     if (std::abs(det) < 1e-300) continue;
     const double l1 = ((bb.force_N - c.force_N) * (speed_mps - c.speed_mps) +
-                       (c.speed_mps - bb.speed_mps) * (force_N - c.force_N)) / det;
+                       (c.speed_mps - bb.speed_mps) * (force_N - c.force_N)) /
+                      det;
     const double l2 = ((c.force_N - a.force_N) * (speed_mps - c.speed_mps) +
-                       (a.speed_mps - c.speed_mps) * (force_N - c.force_N)) / det;
+                       (a.speed_mps - c.speed_mps) * (force_N - c.force_N)) /
+                      det;
     const double l3 = 1 - l1 - l2;
     const double worst = std::min({l1, l2, l3});
     if (worst > best) {
@@ -99,7 +101,9 @@ CellWeights VibrationInterpolator::Weights(double speed_mps, double force_N) con
     return w;
   }
   double sum = 0;
-  for (int k = 0; k < 3; ++k) sum += (w.weight[static_cast<std::size_t>(k)] = std::max(0.0, w.weight[static_cast<std::size_t>(k)]));
+  for (int k = 0; k < 3; ++k)
+    sum += (w.weight[static_cast<std::size_t>(k)] =
+                std::max(0.0, w.weight[static_cast<std::size_t>(k)]));
   for (int k = 0; k < 3; ++k) w.weight[static_cast<std::size_t>(k)] /= sum;
   return w;
 }
@@ -114,8 +118,10 @@ void VibrationInterpolator::Interpolate(double speed_mps, double force_N, bool i
     return;
   }
   // The modelled range: saturate just inside it (the Penn toolkit's rule).
-  if (bank_.max_speed_mps > 0 && speed_mps > bank_.max_speed_mps) speed_mps = bank_.max_speed_mps - kSaturationMarginSpeed_mps;
-  if (bank_.max_force_N > 0 && force_N > bank_.max_force_N) force_N = bank_.max_force_N - kSaturationMarginForce_N;
+  if (bank_.max_speed_mps > 0 && speed_mps > bank_.max_speed_mps)
+    speed_mps = bank_.max_speed_mps - kSaturationMarginSpeed_mps;
+  if (bank_.max_force_N > 0 && force_N > bank_.max_force_N)
+    force_N = bank_.max_force_N - kSaturationMarginForce_N;
   const CellWeights w = Weights(speed_mps, force_N);
   std::fill(lsf_.begin(), lsf_.end(), 0.0);
   std::fill(ma_lsf_.begin(), ma_lsf_.end(), 0.0);

@@ -74,10 +74,12 @@ struct Presented {
 // shown (2AFC: interval 1 left, 2 right; else left). The first interval stops at a fault.
 // The generator's draws (strokes, render seeds, the injected fault) come first and in a fixed
 // order, so the answer drawn after the presentation does not depend on how it went.
-Presented PresentIntervals(const std::vector<renderer::MaterialModel>& intervals, const protocols::Method& method,
-                           const protocols::Protocol& p, const db::Trial& t, const RunOptions& opt,
-                           HardwareRig& rig, Rng& rng, db::TrajectoryWriter* writer, db::Database& database,
-                           std::int64_t session, TrialScreen* screen, const std::string& kind, double* stimulus_s) {
+Presented PresentIntervals(const std::vector<renderer::MaterialModel>& intervals,
+                           const protocols::Method& method, const protocols::Protocol& p,
+                           const db::Trial& t, const RunOptions& opt, HardwareRig& rig, Rng& rng,
+                           db::TrajectoryWriter* writer, db::Database& database,
+                           std::int64_t session, TrialScreen* screen, const std::string& kind,
+                           double* stimulus_s) {
   Presented out;
   const std::size_t m = intervals.size();
   std::vector<sim::Stroke> strokes(m);
@@ -115,7 +117,8 @@ Presented PresentIntervals(const std::vector<renderer::MaterialModel>& intervals
     }
     if (r.untouched) {
       out.fault = out.untouched = true;
-      out.detail = "nothing was touched: " + r.detail + "; check the rig's sample poses (hapticlab rig show); trial repeated";
+      out.detail = "nothing was touched: " + r.detail +
+                   "; check the rig's sample poses (hapticlab rig show); trial repeated";
       return out;
     }
   }
@@ -246,15 +249,19 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
       screen.left = screen.right = fmt::format("virtual:{}", a.material);
       screen.method = a.method;
       screen.placement = "nothing to place: every interval is virtual";
-      screen.question = m == 1 ? "Did you feel it?"
-                               : (m == 2 ? "Which interval was stronger?" : "Which interval differed?");
-      if (m == 1) screen.answers = {"yes", "no"};
+      screen.question =
+          m == 1 ? "Did you feel it?"
+                 : (m == 2 ? "Which interval was stronger?" : "Which interval differed?");
+      if (m == 1)
+        screen.answers = {"yes", "no"};
       else
         for (int k = 0; k < m; ++k) screen.answers.push_back(std::to_string(k + 1));
-      const Presented shown = PresentIntervals(intervals, method, p, t, opt, rig, rng, writer, database, session,
-                                               &screen, protocols::ToString(ph.kind), &out.stimulus_s);
+      const Presented shown =
+          PresentIntervals(intervals, method, p, t, opt, rig, rng, writer, database, session,
+                           &screen, protocols::ToString(ph.kind), &out.stimulus_s);
       const auto abort = [&](const std::string& why) {
-        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "abort", .detail = why});
+        database.LogEvent(
+            {.session_id = session, .trial_id = t.id, .kind = "abort", .detail = why});
         database.EndSession(session, "aborted");
         out.aborted = true;
       };
@@ -270,11 +277,14 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                            .trial_id = t.id,
                            .kind = "device-fault",
                            .detail = shown.detail});
-        if (opt.ui) opt.ui->Event(fmt::format("{} trial {}: {}", protocols::ToString(ph.kind), done.size() + 1, shown.detail));
+        if (opt.ui)
+          opt.ui->Event(fmt::format("{} trial {}: {}", protocols::ToString(ph.kind),
+                                    done.size() + 1, shown.detail));
         if (untouched_in_a_row >= opt.max_untouched_trials) {
-          abort(fmt::format("{} trials in a row touched nothing: the rig's sample poses are probably wrong "
-                            "(hapticlab rig show / rig calibrate)",
-                            untouched_in_a_row));
+          abort(fmt::format(
+              "{} trials in a row touched nothing: the rig's sample poses are probably wrong "
+              "(hapticlab rig show / rig calibrate)",
+              untouched_in_a_row));
           return out;
         }
         continue;  // the same trial (same level) runs again
@@ -290,7 +300,8 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
           abort("the experimenter aborted; 'study resume' continues with this trial");
           return out;
         }
-        response_time_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
+        response_time_s =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - asked).count();
         ans.positive = m == 1 ? *choice == 0 : *choice == comparison;
         ans.response = m == 1 ? (*choice == 0 ? 1 : 0) : *choice;
       } else {
@@ -299,7 +310,8 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
       }
       database.CompleteTrial(
           t.id, {{kLevel, x, 0},
-                 {kResponse, static_cast<double>(m == 1 ? ans.response : ans.response + 1), response_time_s},
+                 {kResponse, static_cast<double>(m == 1 ? ans.response : ans.response + 1),
+                  response_time_s},
                  {kCorrect, ans.positive ? 1.0 : 0.0, 0},
                  {kInterval, m == 1 ? 0.0 : comparison + 1.0, 0},
                  {kPhase, static_cast<double>(pi), 0}});

@@ -1,6 +1,7 @@
 #include "hapticlab/runner/calibration.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <atomic>
 #include <cmath>
@@ -8,7 +9,6 @@
 #include <map>
 #include <optional>
 #include <thread>
-#include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -47,8 +47,8 @@ stats::LongTable MainOnly(const stats::LongTable& t) {
   m.key_names = {"participant", "criterion", "method", "material"};
   m.keys.assign(4, {});
   m.y_name = t.y_name;
-  const std::size_t P = t.Key("participant"), C = t.Key("criterion"), Ph = t.Key("phase"), Me = t.Key("method"),
-                    Ma = t.Key("material");
+  const std::size_t P = t.Key("participant"), C = t.Key("criterion"), Ph = t.Key("phase"),
+                    Me = t.Key("method"), Ma = t.Key("material");
   for (std::size_t i = 0; i < t.rows(); ++i) {
     if (t.keys[Ph][i] != "main") continue;
     m.keys[0].push_back(t.keys[P][i]);
@@ -61,12 +61,13 @@ stats::LongTable MainOnly(const stats::LongTable& t) {
 }
 
 // Each target's statistic in one simulated study (NaN where it does not exist).
-std::vector<double> Statistics(const stats::LongTable& t, const std::vector<const CalibrationTarget*>& targets) {
+std::vector<double> Statistics(const stats::LongTable& t,
+                               const std::vector<const CalibrationTarget*>& targets) {
   std::vector<double> out(targets.size(), NAN);
   std::vector<stats::PowerTally> anova;
   bool analysed = false;
-  const std::size_t C = t.Key("criterion"), Ph = t.Key("phase"), Me = t.Key("method"), Ma = t.Key("material"),
-                    Co = t.Key("comparison");
+  const std::size_t C = t.Key("criterion"), Ph = t.Key("phase"), Me = t.Key("method"),
+                    Ma = t.Key("material"), Co = t.Key("comparison");
   for (std::size_t k = 0; k < targets.size(); ++k) {
     const auto& g = *targets[k];
     if (g.statistic == "pes") {
@@ -83,10 +84,14 @@ std::vector<double> Statistics(const stats::LongTable& t, const std::vector<cons
     for (std::size_t i = 0; i < t.rows(); ++i) {
       if (t.keys[C][i] != g.criterion) continue;
       bool use = false;
-      if (g.statistic == "method_mean") use = t.keys[Ph][i] == "main" && t.keys[Me][i] == g.method;
-      else if (g.statistic == "sd") use = t.keys[Ph][i] == "main";
-      else if (g.statistic == "upper_limit") use = t.keys[Ph][i] == "reference" && t.keys[Ma][i] == t.keys[Co][i];
-      else if (g.statistic == "lower_limit") use = t.keys[Ph][i] == "reference" && t.keys[Ma][i] != t.keys[Co][i];
+      if (g.statistic == "method_mean")
+        use = t.keys[Ph][i] == "main" && t.keys[Me][i] == g.method;
+      else if (g.statistic == "sd")
+        use = t.keys[Ph][i] == "main";
+      else if (g.statistic == "upper_limit")
+        use = t.keys[Ph][i] == "reference" && t.keys[Ma][i] == t.keys[Co][i];
+      else if (g.statistic == "lower_limit")
+        use = t.keys[Ph][i] == "reference" && t.keys[Ma][i] != t.keys[Co][i];
       if (!use) continue;
       s += t.y[i];
       s2 += t.y[i] * t.y[i];
@@ -94,8 +99,10 @@ std::vector<double> Statistics(const stats::LongTable& t, const std::vector<cons
     }
     if (n < 2) continue;
     const double mean = s / static_cast<double>(n);
-    out[k] = g.statistic == "sd" ? std::sqrt(std::max(0.0, (s2 - static_cast<double>(n) * mean * mean) / static_cast<double>(n - 1)))
-                                 : mean;
+    out[k] = g.statistic == "sd"
+                 ? std::sqrt(std::max(0.0, (s2 - static_cast<double>(n) * mean * mean) /
+                                               static_cast<double>(n - 1)))
+                 : mean;
   }
   return out;
 }
@@ -112,13 +119,15 @@ CalibrationSpec LoadCalibration(const std::string& path) {
   try {
     doc = toml::parse(ReadTomlFile(path, "calibration targets file"), path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics d;
   CalibrationSpec s;
   s.path = path;
   const fs::path dir = fs::path(path).parent_path();
-  auto str = [&](const toml::table& t, const std::string& pre, const char* key, bool required) -> std::string {
+  auto str = [&](const toml::table& t, const std::string& pre, const char* key,
+                 bool required) -> std::string {
     const toml::node* n = t.get(key);
     if (!n) {
       if (required) d.Add(path, Line(&t), pre + "." + key, "missing; expected a string");
@@ -128,11 +137,13 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     d.Add(path, Line(n), pre + "." + key, "expected a string");
     return "";
   };
-  auto num = [&](const toml::table& t, const std::string& pre, const char* key, double lo, double hi, bool required,
-                 double def) -> double {
+  auto num = [&](const toml::table& t, const std::string& pre, const char* key, double lo,
+                 double hi, bool required, double def) -> double {
     const toml::node* n = t.get(key);
     if (!n) {
-      if (required) d.Add(path, Line(&t), pre + "." + key, fmt::format("missing; expected a number in [{}, {}]", lo, hi));
+      if (required)
+        d.Add(path, Line(&t), pre + "." + key,
+              fmt::format("missing; expected a number in [{}, {}]", lo, hi));
       return def;
     }
     auto v = n->value<double>();
@@ -142,7 +153,8 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     }
     return *v;
   };
-  auto known = [&](const toml::table& t, const std::string& pre, std::initializer_list<const char*> keys) {
+  auto known = [&](const toml::table& t, const std::string& pre,
+                   std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t)
       if (std::none_of(keys.begin(), keys.end(), [&](const char* x) { return k.str() == x; }))
         d.Add(path, Line(&v), pre + "." + std::string(k.str()), "unknown key (a typo?)");
@@ -164,7 +176,8 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     std::vector<std::pair<const toml::table*, std::string>> out;
     if (const toml::array* a = doc[name].as_array())
       for (std::size_t i = 0; i < a->size(); ++i)
-        if (const toml::table* t = (*a)[i].as_table()) out.emplace_back(t, fmt::format("{}[{}]", name, i));
+        if (const toml::table* t = (*a)[i].as_table())
+          out.emplace_back(t, fmt::format("{}[{}]", name, i));
     return out;
   };
   for (const auto& [t, pre] : tables("protocol")) {
@@ -176,7 +189,8 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     s.protocols.push_back(p);
   }
   if (s.protocols.empty()) d.Add(path, 1, "protocol", "no [[protocol]] tables");
-  static const char* kFields[] = {"sensitivity", "offset_sd", "material_sd", "method_sd", "noise_sd"};
+  static const char* kFields[] = {"sensitivity", "offset_sd", "material_sd", "method_sd",
+                                  "noise_sd"};
   for (const auto& [t, pre] : tables("param")) {
     known(*t, pre, {"name", "lo", "hi", "step"});
     CalibrationParam p;
@@ -202,23 +216,30 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     s.params.push_back(p);
   }
   for (const auto& [t, pre] : tables("target")) {
-    known(*t, pre, {"protocol", "statistic", "criterion", "effect", "method", "value", "weight", "source"});
+    known(*t, pre,
+          {"protocol", "statistic", "criterion", "effect", "method", "value", "weight", "source"});
     CalibrationTarget g;
     g.line = Line(t);
     g.protocol = str(*t, pre, "protocol", true);
     if (!g.protocol.empty() &&
-        std::none_of(s.protocols.begin(), s.protocols.end(), [&](const CalibrationProtocol& p) { return p.id == g.protocol; }))
-      d.Add(path, Line(t->get("protocol")), pre + ".protocol", "no [[protocol]] with id '" + g.protocol + "'");
+        std::none_of(s.protocols.begin(), s.protocols.end(),
+                     [&](const CalibrationProtocol& p) { return p.id == g.protocol; }))
+      d.Add(path, Line(t->get("protocol")), pre + ".protocol",
+            "no [[protocol]] with id '" + g.protocol + "'");
     g.statistic = str(*t, pre, "statistic", true);
     g.criterion = str(*t, pre, "criterion", true);
     if (g.statistic == "pes") {
       g.effect = str(*t, pre, "effect", true);
-      if (!g.effect.empty() && g.effect != "method" && g.effect != "material" && g.effect != "method:material")
-        d.Add(path, Line(t->get("effect")), pre + ".effect", "expected method, material or method:material");
+      if (!g.effect.empty() && g.effect != "method" && g.effect != "material" &&
+          g.effect != "method:material")
+        d.Add(path, Line(t->get("effect")), pre + ".effect",
+              "expected method, material or method:material");
     } else if (g.statistic == "method_mean") {
       g.method = str(*t, pre, "method", true);
-    } else if (!g.statistic.empty() && g.statistic != "sd" && g.statistic != "upper_limit" && g.statistic != "lower_limit") {
-      d.Add(path, Line(t->get("statistic")), pre + ".statistic", "expected pes, method_mean, sd, upper_limit or lower_limit");
+    } else if (!g.statistic.empty() && g.statistic != "sd" && g.statistic != "upper_limit" &&
+               g.statistic != "lower_limit") {
+      d.Add(path, Line(t->get("statistic")), pre + ".statistic",
+            "expected pes, method_mean, sd, upper_limit or lower_limit");
     }
     g.value = num(*t, pre, "value", -1e6, 1e6, true, 0);
     g.weight = num(*t, pre, "weight", 0, 1e9, true, 1);
@@ -229,19 +250,23 @@ CalibrationSpec LoadCalibration(const std::string& path) {
   return s;
 }
 
-CalibrationState PrepareCalibration(const CalibrationSpec& spec, const std::function<void(const std::string&)>& log) {
+CalibrationState PrepareCalibration(const CalibrationSpec& spec,
+                                    const std::function<void(const std::string&)>& log) {
   CalibrationState st;
   for (const auto& p : spec.protocols) {
     const auto proto = protocols::LoadProtocol(p.file);
-    if (log) log(fmt::format("recording the physics of {} ({} participants through the runner)", p.id, spec.pool));
+    if (log)
+      log(fmt::format("recording the physics of {} ({} participants through the runner)", p.id,
+                      spec.pool));
     st.pools.push_back(RecordFeltPool(proto, spec.pool, 2, log, spec.pool_first));
   }
   st.start = spec.start.empty() ? st.pools.front().observer : sim::LoadObserver(spec.start);
   return st;
 }
 
-double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& spec, const sim::ObserverParams& observer,
-                           std::vector<CalibrationRow>* rows, int threads) {
+double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& spec,
+                           const sim::ObserverParams& observer, std::vector<CalibrationRow>* rows,
+                           int threads) {
   double loss = 0;
   if (rows) rows->clear();
   for (std::size_t pi = 0; pi < spec.protocols.size(); ++pi) {
@@ -277,7 +302,8 @@ double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& sp
       const double achieved = n ? sum / n : NAN;
       const auto& g = *targets[k];
       // A statistic the design cannot produce counts as a large miss.
-      loss += std::isfinite(achieved) ? g.weight * (achieved - g.value) * (achieved - g.value) : 1e6;
+      loss +=
+          std::isfinite(achieved) ? g.weight * (achieved - g.value) * (achieved - g.value) : 1e6;
       if (rows) {
         std::string label = g.statistic + " " + g.criterion;
         if (!g.effect.empty()) label += " " + g.effect;

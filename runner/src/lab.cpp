@@ -39,25 +39,30 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
                        fs::absolute(dir / name).lexically_normal().string());
   };
   if (p.profiles.empty() && sim)
-    d.Add(p.file, 0, "study.profiles", "the simulated lab needs a profiles file (ground truth of each sample)");
+    d.Add(p.file, 0, "study.profiles",
+          "the simulated lab needs a profiles file (ground truth of each sample)");
   bool have_profiles = false;
   if (!p.profiles.empty()) {
     if (!fs::is_regular_file(dir / p.profiles))
       d.Add(p.file, 0, "study.profiles", "no such file " + where(p.profiles));
     else
-      have_profiles = attempt(0, "study.profiles", [&] { lab.profiles = sim::LoadProfiles((dir / p.profiles).string()); });
+      have_profiles = attempt(0, "study.profiles", [&] {
+        lab.profiles = sim::LoadProfiles((dir / p.profiles).string());
+      });
   }
   if (!p.observer.empty()) {
     if (!fs::is_regular_file(dir / p.observer))
       d.Add(p.file, 0, "study.observer", "no such file " + where(p.observer));
     else
-      attempt(0, "study.observer", [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
+      attempt(0, "study.observer",
+              [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
   }
   for (const auto& m : p.materials) {
     const bool placeholder = m.model == "placeholder";
     if (!placeholder) {
       if (!fs::is_regular_file(dir / m.model)) {
-        d.Add(p.file, m.line, "material.model", "material '" + m.id + "': no model file " + where(m.model));
+        d.Add(p.file, m.line, "material.model",
+              "material '" + m.id + "': no model file " + where(m.model));
       } else {
         const std::string path = (dir / m.model).string();
         attempt(m.line, "material.model", [&] {
@@ -70,20 +75,27 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
     }
     // The simulated lab (and a placeholder model) needs the sample's profile.
     if (p.profiles.empty()) {
-      if (!sim) d.Add(p.file, m.line, "material.model", "material '" + m.id + "': a placeholder model is built from the "
-                                                        "sample's profile, and the protocol names no profiles file");
+      if (!sim)
+        d.Add(p.file, m.line, "material.model",
+              "material '" + m.id +
+                  "': a placeholder model is built from the "
+                  "sample's profile, and the protocol names no profiles file");
       continue;
     }
     if (!have_profiles) continue;  // the profiles file's own problem is reported above
     const auto prof = lab.profiles.profiles.find(m.profile);
     if (prof == lab.profiles.profiles.end()) {
-      d.Add(p.file, m.line, "material.profile",
-            "material '" + m.id + "': no profile '" + m.profile + "' in " + p.profiles + " (its profiles: " +
-                [&] {
-                  std::string names;
-                  for (const auto& [name, pr] : lab.profiles.profiles) names += (names.empty() ? "" : ", ") + name;
-                  return names.empty() ? std::string("none") : names;
-                }() + ")");
+      d.Add(
+          p.file, m.line, "material.profile",
+          "material '" + m.id + "': no profile '" + m.profile + "' in " + p.profiles +
+              " (its profiles: " +
+              [&] {
+                std::string names;
+                for (const auto& [name, pr] : lab.profiles.profiles)
+                  names += (names.empty() ? "" : ", ") + name;
+                return names.empty() ? std::string("none") : names;
+              }() +
+              ")");
       continue;
     }
     if (placeholder) {

@@ -19,7 +19,7 @@ struct Lab {
   const protocols::Protocol* protocol = nullptr;  // borrowed
   sim::ProfileSet profiles;
   std::map<std::string, renderer::MaterialModel> models;  // by material id
-  std::map<std::string, std::string> model_hashes;        // by material id: SHA-256 of the model text
+  std::map<std::string, std::string> model_hashes;  // by material id: SHA-256 of the model text
 };
 
 // Loads the profiles (ground truth of each sample) and every material's model. Files are

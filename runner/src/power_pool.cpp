@@ -1,13 +1,13 @@
 #include "hapticlab/runner/power_pool.hpp"
 
 #include <fmt/format.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <exception>
 #include <filesystem>
 #include <mutex>
 #include <thread>
-#include <unistd.h>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
@@ -35,8 +35,9 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
   pool.participants.resize(static_cast<std::size_t>(pool_size));
   // One temporary database per pool participant: sessions run in parallel (one writer each).
   static std::atomic<int> counter{0};
-  const fs::path tmp = fs::temp_directory_path() /
-                       fmt::format("hapticlab-power-{}-{}", static_cast<long>(::getpid()), counter.fetch_add(1));
+  const fs::path tmp =
+      fs::temp_directory_path() /
+      fmt::format("hapticlab-power-{}-{}", static_cast<long>(::getpid()), counter.fetch_add(1));
   fs::create_directories(tmp);
   struct Cleanup {
     fs::path dir;
@@ -67,10 +68,12 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
           out.push_back(t);
         };
         const auto s = RunStudy(p, o);
-        if (s.status != "completed") throw std::runtime_error(fmt::format("pool participant {} did not complete", i));
+        if (s.status != "completed")
+          throw std::runtime_error(fmt::format("pool participant {} did not complete", i));
         if (log) {
           const std::lock_guard lock(m);
-          log(fmt::format("pool participant {} of {}: {} trials recorded", i + 1, pool_size, out.size()));
+          log(fmt::format("pool participant {} of {}: {} trials recorded", i + 1, pool_size,
+                          out.size()));
         }
       } catch (...) {
         const std::lock_guard lock(m);
@@ -87,13 +90,15 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
   return pool;
 }
 
-stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams& observer, int participants, Rng& rng,
-                                 bool main_only) {
+stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams& observer,
+                                 int participants, Rng& rng, bool main_only) {
   stats::LongTable t;
   t.source = "simulated " + pool.protocol;
   t.y_name = "score";
-  t.key_names = main_only ? std::vector<std::string>{"participant", "criterion", "method", "material"}
-                          : std::vector<std::string>{"participant", "criterion", "phase", "material", "comparison", "method"};
+  t.key_names = main_only
+                    ? std::vector<std::string>{"participant", "criterion", "method", "material"}
+                    : std::vector<std::string>{"participant", "criterion",  "phase",
+                                               "material",    "comparison", "method"};
   t.keys.assign(t.key_names.size(), {});
   HL_REQUIRE(!pool.participants.empty(), "SimulateRatings needs a non-empty pool");
   for (int i = 0; i < participants; ++i) {
@@ -104,8 +109,8 @@ stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams
     for (const auto& tr : trials) {
       if (main_only && tr.phase != "main") continue;
       for (std::size_t c = 0; c < pool.criteria.size() && c < tr.distances.size(); ++c) {
-        const double y = obs.RateDistance(pool.criteria[c], tr.material, tr.method, tr.distances[c], pool.scale_min,
-                                          pool.scale_max, rng);
+        const double y = obs.RateDistance(pool.criteria[c], tr.material, tr.method, tr.distances[c],
+                                          pool.scale_min, pool.scale_max, rng);
         if (main_only) {
           t.keys[0].push_back(code);
           t.keys[1].push_back(pool.criteria[c]);

@@ -1,12 +1,12 @@
 #include "hapticlab/runner/rig.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -17,15 +17,18 @@ namespace {
 
 const char* kSideNames[2] = {"left", "right"};
 
-std::string Vec(const Eigen::Vector3d& v) { return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z()); }
+std::string Vec(const Eigen::Vector3d& v) {
+  return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z());
+}
 
 // Reads [x, y, z] at `t[key]`; reports a problem and keeps `*out` when malformed.
-void ReadVec(const toml::table& t, const std::string& table, const char* key, Eigen::Vector3d* out, Diagnostics& d,
-             const std::string& path, bool required) {
+void ReadVec(const toml::table& t, const std::string& table, const char* key, Eigen::Vector3d* out,
+             Diagnostics& d, const std::string& path, bool required) {
   const toml::node* n = t.get(key);
   const std::string field = table + "." + key;
   if (!n) {
-    if (required) d.Add(path, static_cast<int>(t.source().begin.line), field, "missing; expected [x, y, z]");
+    if (required)
+      d.Add(path, static_cast<int>(t.source().begin.line), field, "missing; expected [x, y, z]");
     return;
   }
   const toml::array* a = n->as_array();
@@ -47,8 +50,8 @@ void ReadVec(const toml::table& t, const std::string& table, const char* key, Ei
 }
 
 // A pose table {origin_m, x_axis, z_axis}.
-void ReadPose(const toml::table& root, const std::string& name, Eigen::Isometry3d* out, Diagnostics& d,
-              const std::string& path, bool required) {
+void ReadPose(const toml::table& root, const std::string& name, Eigen::Isometry3d* out,
+              Diagnostics& d, const std::string& path, bool required) {
   const toml::node* n = root.at_path(name).node();
   if (!n) {
     if (required) d.Add(path, 1, name, "missing table [" + name + "] {origin_m, x_axis, z_axis}");
@@ -56,12 +59,14 @@ void ReadPose(const toml::table& root, const std::string& name, Eigen::Isometry3
   }
   const toml::table* t = n->as_table();
   if (!t) {
-    d.Add(path, static_cast<int>(n->source().begin.line), name, "expected a table {origin_m, x_axis, z_axis}");
+    d.Add(path, static_cast<int>(n->source().begin.line), name,
+          "expected a table {origin_m, x_axis, z_axis}");
     return;
   }
   for (const auto& [k, v] : *t)
     if (k.str() != "origin_m" && k.str() != "x_axis" && k.str() != "z_axis")
-      d.Add(path, static_cast<int>(v.source().begin.line), name + "." + std::string(k.str()), "unknown key (a typo?)");
+      d.Add(path, static_cast<int>(v.source().begin.line), name + "." + std::string(k.str()),
+            "unknown key (a typo?)");
   Eigen::Vector3d o = out->translation(), x = out->linear().col(0), z = out->linear().col(2);
   const std::size_t before = d.size();
   ReadVec(*t, name, "origin_m", &o, d, path, true);
@@ -77,7 +82,8 @@ void ReadPose(const toml::table& root, const std::string& name, Eigen::Isometry3
 
 }  // namespace
 
-Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis, const Eigen::Vector3d& z_axis) {
+Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis,
+                               const Eigen::Vector3d& z_axis) {
   if (!(z_axis.norm() > 1e-9)) throw std::invalid_argument("z_axis is zero");
   const Eigen::Vector3d z = z_axis.normalized();
   const Eigen::Vector3d xp = x_axis - x_axis.dot(z) * z;
@@ -105,7 +111,8 @@ RigFile ParseRig(const std::string& text, const std::string& path) {
   try {
     doc = toml::parse(text, path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics d;
   RigFile r = DefaultRig("sim");
@@ -114,15 +121,21 @@ RigFile ParseRig(const std::string& text, const std::string& path) {
   r.sha256 = db::HashText(text);
   for (const auto& [k, v] : doc) {
     static const char* known[] = {"device", "device_pose", "stylus", "force", "sample"};
-    if (std::none_of(std::begin(known), std::end(known), [&](const char* x) { return k.str() == x; }))
-      d.Add(path, static_cast<int>(v.source().begin.line), std::string(k.str()), "unknown key (a typo?)");
+    if (std::none_of(std::begin(known), std::end(known),
+                     [&](const char* x) { return k.str() == x; }))
+      d.Add(path, static_cast<int>(v.source().begin.line), std::string(k.str()),
+            "unknown key (a typo?)");
   }
   if (const toml::node* n = doc.get("device")) {
-    if (auto s = n->value<std::string>()) r.device = *s;
-    else d.Add(path, static_cast<int>(n->source().begin.line), "device", "expected a string (sim, falcon, ...)");
+    if (auto s = n->value<std::string>())
+      r.device = *s;
+    else
+      d.Add(path, static_cast<int>(n->source().begin.line), "device",
+            "expected a string (sim, falcon, ...)");
   }
   ReadPose(doc, "device_pose", &r.world_from_device, d, path, false);
-  if (const toml::table* s = doc["stylus"].as_table()) ReadVec(*s, "stylus", "tip_offset_m", &r.tip_offset_m, d, path, false);
+  if (const toml::table* s = doc["stylus"].as_table())
+    ReadVec(*s, "stylus", "tip_offset_m", &r.tip_offset_m, d, path, false);
   if (const toml::table* f = doc["force"].as_table()) {
     auto num = [&](const char* key, double* out, double lo, double hi) {
       const toml::node* n = f->get(key);
@@ -131,14 +144,15 @@ RigFile ParseRig(const std::string& text, const std::string& path) {
       if (!v || !(*v >= lo && *v <= hi))
         d.Add(path, static_cast<int>(n->source().begin.line), std::string("force.") + key,
               fmt::format("expected a number in [{}, {}]", lo, hi));
-      else *out = *v;
+      else
+        *out = *v;
     };
     num("motor_units_per_Nm", &r.motor_units_per_Nm, 1, 1e7);
     num("max_force_N", &r.max_force_N, 0, 100);
   }
   for (int side = 0; side < 2; ++side)
-    ReadPose(doc, std::string("sample.") + kSideNames[side], &r.world_from_sample[static_cast<std::size_t>(side)], d, path,
-             true);
+    ReadPose(doc, std::string("sample.") + kSideNames[side],
+             &r.world_from_sample[static_cast<std::size_t>(side)], d, path, true);
   d.ThrowIfAny();
   return r;
 }
@@ -147,19 +161,27 @@ RigFile LoadRig(const std::string& path) { return ParseRig(ReadTextFile(path), p
 
 std::string RigToToml(const RigFile& r) {
   auto pose = [](const std::string& name, const Eigen::Isometry3d& T) {
-    return fmt::format("[{}]\norigin_m = {}\nx_axis = {}\nz_axis = {}\n", name, Vec(T.translation()), Vec(T.linear().col(0)),
-                       Vec(T.linear().col(2)));
+    return fmt::format("[{}]\norigin_m = {}\nx_axis = {}\nz_axis = {}\n", name,
+                       Vec(T.translation()), Vec(T.linear().col(0)), Vec(T.linear().col(2)));
   };
-  std::string s = "# HapticLab rig file: frames and calibration (docs/hardware.md). Lengths in metres.\n";
+  std::string s =
+      "# HapticLab rig file: frames and calibration (docs/hardware.md). Lengths in metres.\n";
   s += fmt::format("device = \"{}\"\n\n", r.device);
-  s += "# The device frame in the world (lab) frame.\n" + pose("device_pose", r.world_from_device) + "\n";
-  s += fmt::format("[stylus]\n# From the point the device reports to the stylus tip, device frame.\ntip_offset_m = {}\n\n",
-                   Vec(r.tip_offset_m));
-  s += fmt::format("[force]\nmotor_units_per_Nm = {:.8g}   # Falcon force calibration (docs/hardware.md)\n", r.motor_units_per_Nm);
+  s += "# The device frame in the world (lab) frame.\n" + pose("device_pose", r.world_from_device) +
+       "\n";
+  s += fmt::format(
+      "[stylus]\n# From the point the device reports to the stylus tip, device "
+      "frame.\ntip_offset_m = {}\n\n",
+      Vec(r.tip_offset_m));
+  s += fmt::format(
+      "[force]\nmotor_units_per_Nm = {:.8g}   # Falcon force calibration (docs/hardware.md)\n",
+      r.motor_units_per_Nm);
   if (r.max_force_N > 0) s += fmt::format("max_force_N = {:.6g}\n", r.max_force_N);
   s += "\n# Each sample's frame in the world frame: origin on its surface, z out of it.\n";
   for (int side = 0; side < 2; ++side)
-    s += pose(std::string("sample.") + kSideNames[side], r.world_from_sample[static_cast<std::size_t>(side)]) + "\n";
+    s += pose(std::string("sample.") + kSideNames[side],
+              r.world_from_sample[static_cast<std::size_t>(side)]) +
+         "\n";
   return s;
 }
 
@@ -180,7 +202,9 @@ RigFile DefaultRig(const std::string& device) {
 }
 
 PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& up_hint) {
-  if (pts.size() < 3) throw std::invalid_argument(fmt::format("a plane needs at least 3 touches, got {}", pts.size()));
+  if (pts.size() < 3)
+    throw std::invalid_argument(
+        fmt::format("a plane needs at least 3 touches, got {}", pts.size()));
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const auto& p : pts) c += p;
   c /= static_cast<double>(pts.size());
@@ -189,11 +213,14 @@ PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S);
   // Eigenvalues ascending: the smallest is the normal; the middle one must not vanish.
   const double spread = std::sqrt(es.eigenvalues()[1] / static_cast<double>(pts.size()));
-  if (!(spread > 1e-4)) throw std::invalid_argument("the touches lie on a line (or one point): touch three spread-out points");
+  if (!(spread > 1e-4))
+    throw std::invalid_argument(
+        "the touches lie on a line (or one point): touch three spread-out points");
   Eigen::Vector3d n = es.eigenvectors().col(0);
   if (n.dot(up_hint) < 0) n = -n;
   Eigen::Vector3d x = pts[1] - pts[0];
-  if ((x - x.dot(n) * n).norm() < 1e-4) x = es.eigenvectors().col(2);  // first two touches too close
+  if ((x - x.dot(n) * n).norm() < 1e-4)
+    x = es.eigenvectors().col(2);  // first two touches too close
   PlaneFit f;
   f.device_from_sample = PoseFromAxes(c, x, n);
   double ss = 0;

@@ -4,9 +4,9 @@
 #include <sched.h>
 #include <time.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
-#include <algorithm>
 #include <cstring>
 #include <stdexcept>
 #include <thread>
@@ -19,7 +19,8 @@ using Clock = std::chrono::steady_clock;
 // Sleeps until an absolute CLOCK_MONOTONIC deadline (std::chrono::steady_clock's clock on
 // Linux), retrying on signals. No allocation, no locks.
 void SleepUntil(Clock::time_point deadline) noexcept {
-  const auto ns = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
+  const auto ns =
+      std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
   timespec ts;
   ts.tv_sec = static_cast<time_t>(ns / 1000000000);
   ts.tv_nsec = static_cast<long>(ns % 1000000000);
@@ -48,7 +49,8 @@ void WaitUntil(Clock::time_point deadline, Clock::duration spin) noexcept {
   }
 }
 
-LoopTiming Summarize(const LatencySummary& late, const LatencySummary& tick, std::uint64_t ticks, std::uint64_t misses) {
+LoopTiming Summarize(const LatencySummary& late, const LatencySummary& tick, std::uint64_t ticks,
+                     std::uint64_t misses) {
   LoopTiming t;
   t.ticks = ticks;
   t.misses = misses;
@@ -180,17 +182,21 @@ void RtEngine::RunFor(std::chrono::duration<double> duration) {
   }
   Start();
   const auto end = Clock::now() + std::chrono::duration_cast<Clock::duration>(duration);
-  while (Clock::now() < end && !device_lost_.load()) std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  while (Clock::now() < end && !device_lost_.load())
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
   Stop();
 }
 
 void RtEngine::ForceLoop() {
-  force_report_ = ConfigureRtThread(options_.rt.priority, options_.rt.cpu, options_.rt.prefault_stack_bytes);
+  force_report_ =
+      ConfigureRtThread(options_.rt.priority, options_.rt.cpu, options_.rt.prefault_stack_bytes);
   threads_configured_.fetch_add(1, std::memory_order_release);
   if (options_.on_thread_enter) options_.on_thread_enter();
   const double rate = renderer_.options().force_rate_hz;
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
-  const auto spin = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(std::max(0.0, options_.rt.spin_us) * 1e-6));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  const auto spin = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(std::max(0.0, options_.rt.spin_us) * 1e-6));
   std::uint64_t k = 0;
   while (running_.load(std::memory_order_relaxed)) {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
@@ -214,7 +220,8 @@ void RtEngine::Record(db::TrajectoryStream* s, double t_s, const float* v) noexc
 
 void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept {
   const double rate = renderer_.options().force_rate_hz;
-  force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s, std::memory_order_relaxed);
+  force_jitter_sum_.store(force_jitter_sum_.load(std::memory_order_relaxed) + late_s,
+                          std::memory_order_relaxed);
   AtomicMax(force_jitter_max_, late_s);
   if (late_s > 1.0 / rate) force_misses_.fetch_add(1, std::memory_order_relaxed);
   renderer::DeviceSample fresh;
@@ -228,7 +235,8 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
     last_good_.t_s = fresh.t_s;
     have_good_ = true;
     auto& snap = last_sample_.WriteSlot();
-    for (int i = 0; i < 3; ++i) snap.p[i] = last_good_.state.p_m[i], snap.v[i] = last_good_.state.v_mps[i];
+    for (int i = 0; i < 3; ++i)
+      snap.p[i] = last_good_.state.p_m[i], snap.v[i] = last_good_.state.v_mps[i];
     snap.t = last_good_.t_s;
     last_sample_.Publish();
   } else if (rr == devices::ReadResult::kNoNewData) {
@@ -240,8 +248,8 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   if (render) cmd = renderer_.ForceTick(sample, now_s);
   if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
   // The watchdog has the last word: zero force on any fault or lost read, this very tick.
-  const Eigen::Vector3d command =
-      watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate, render ? cmd.force_N : Eigen::Vector3d::Zero());
+  const Eigen::Vector3d command = watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate,
+                                                  render ? cmd.force_N : Eigen::Vector3d::Zero());
   const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault || !render;
   if (watchdog_.last() == FaultKind::kDisconnect) {
     disconnects_.fetch_add(1, std::memory_order_relaxed);
@@ -287,7 +295,8 @@ void RtEngine::VibrationLoop() {
   threads_configured_.fetch_add(1, std::memory_order_release);
   if (options_.on_thread_enter) options_.on_thread_enter();
   const double rate = renderer_.options().vibration_rate_hz;
-  const auto period = std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate));
   std::uint64_t k = 0;
   while (running_.load(std::memory_order_relaxed)) {
     const auto deadline = t0_ + period * static_cast<std::int64_t>(++k);
@@ -331,7 +340,8 @@ EngineStats RtEngine::Stats() const {
   s.stale_faults = watchdog_.count(FaultKind::kStale);
   s.bad_commands = watchdog_.count(FaultKind::kBadCommand);
   s.force_jitter_max_s = force_jitter_max_.load();
-  s.force_jitter_mean_s = s.force_ticks ? force_jitter_sum_.load() / static_cast<double>(s.force_ticks) : 0;
+  s.force_jitter_mean_s =
+      s.force_ticks ? force_jitter_sum_.load() / static_cast<double>(s.force_ticks) : 0;
   s.vibration_jitter_max_s = vibration_jitter_max_.load();
   const double tf = force_last_s_.load(), tv = vibration_last_s_.load();
   s.achieved_force_rate_hz = tf > 0 ? static_cast<double>(s.force_ticks) / tf : 0;
@@ -348,20 +358,25 @@ EngineStats RtEngine::Stats() const {
     s.force_thread = force_report_;
     s.vibration_thread = vibration_report_;
     s.priority_status = "force: " + force_report_.priority_status;
-    if (threads_started_ > 1) s.priority_status += "; vibration: " + vibration_report_.priority_status;
+    if (threads_started_ > 1)
+      s.priority_status += "; vibration: " + vibration_report_.priority_status;
     if (pulled_) s.priority_status += "; vibration: paced by the actuator's callback";
   } else {
     s.priority_status = priority_status_;
   }
-  s.audio_underruns = running_.load() ? (actuator_ ? actuator_->Underruns() - underruns_at_start_ : 0) : underruns_at_stop_.load();
+  s.audio_underruns = running_.load()
+                          ? (actuator_ ? actuator_->Underruns() - underruns_at_start_ : 0)
+                          : underruns_at_stop_.load();
   const EngineTiming t = Timing();
   s.force_timing = Summarize(t.force_late, t.force_tick, s.force_ticks, s.force_deadline_misses);
-  s.vibration_timing = Summarize(t.vibration_late, t.vibration_tick, s.vibration_ticks, s.vibration_deadline_misses);
+  s.vibration_timing =
+      Summarize(t.vibration_late, t.vibration_tick, s.vibration_ticks, s.vibration_deadline_misses);
   return s;
 }
 
 EngineTiming RtEngine::Timing() const {
-  return {force_late_.Snapshot(), force_tick_.Snapshot(), vibration_late_.Snapshot(), vibration_tick_.Snapshot()};
+  return {force_late_.Snapshot(), force_tick_.Snapshot(), vibration_late_.Snapshot(),
+          vibration_tick_.Snapshot()};
 }
 
 }  // namespace hapticlab::runner

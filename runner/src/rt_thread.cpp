@@ -38,7 +38,10 @@ MemoryLockReport LockMemory(bool requested) {
     r.status = "locked (mlockall MCL_CURRENT|MCL_FUTURE)";
   } else {
     const int e = errno;
-    r.status = Refused(e) + (e == ENOMEM || e == EPERM ? " (raise RLIMIT_MEMLOCK: memlock in limits.conf, or CAP_IPC_LOCK)" : "");
+    r.status =
+        Refused(e) + (e == ENOMEM || e == EPERM
+                          ? " (raise RLIMIT_MEMLOCK: memlock in limits.conf, or CAP_IPC_LOCK)"
+                          : "");
   }
   return r;
 }
@@ -53,7 +56,8 @@ RtThreadReport ConfigureRtThread(int priority, int cpu, std::size_t prefault_sta
   } else {
     const int lo = sched_get_priority_min(SCHED_FIFO), hi = sched_get_priority_max(SCHED_FIFO);
     if (priority < lo || priority > hi) {
-      r.priority_status = fmt::format("refused: SCHED_FIFO priority {} outside {}..{} (normal scheduling)", priority, lo, hi);
+      r.priority_status = fmt::format(
+          "refused: SCHED_FIFO priority {} outside {}..{} (normal scheduling)", priority, lo, hi);
     } else {
       sched_param sp{};
       sp.sched_priority = priority;
@@ -63,8 +67,9 @@ RtThreadReport ConfigureRtThread(int priority, int cpu, std::size_t prefault_sta
         r.priority = priority;
         r.priority_status = fmt::format("SCHED_FIFO {}", priority);
       } else {
-        r.priority_status = fmt::format("refused: SCHED_FIFO {}: {}{} (normal scheduling)", priority, std::strerror(rc),
-                                        rc == EPERM ? "; grant rtprio in limits.conf or CAP_SYS_NICE" : "");
+        r.priority_status = fmt::format(
+            "refused: SCHED_FIFO {}: {}{} (normal scheduling)", priority, std::strerror(rc),
+            rc == EPERM ? "; grant rtprio in limits.conf or CAP_SYS_NICE" : "");
       }
     }
   }

@@ -8,11 +8,11 @@
 #include <optional>
 #include <set>
 
+#include "adaptive_phase.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/sim/sim_device.hpp"
-#include "adaptive_phase.hpp"
 #include "trial.hpp"
 
 namespace hapticlab::runner::internal {
@@ -26,8 +26,8 @@ void Log(const RunOptions& o, const std::string& s) {
 
 }  // namespace
 
-RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t session, const db::Participant& part,
-                          const RunOptions& opt) {
+RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t session,
+                          const db::Participant& part, const RunOptions& opt) {
   const auto& p = *lab.protocol;
   const auto t0 = std::chrono::steady_clock::now();
   RunSummary sum;
@@ -53,8 +53,10 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   HardwareRig own_rig;
   HardwareRig* rig = opt.rig;
   if (!rig) {
-    HL_REQUIRE(opt.device == "sim", "a session on device '" + opt.device + "' needs RunOptions::rig (the opened device)");
-    own_sim = std::make_unique<sim::SimRig>(sim::SimDeviceModel{.seed = DeriveSeed(part.seed, 0x51D)}, sim::DefaultSamplePoses());
+    HL_REQUIRE(opt.device == "sim", "a session on device '" + opt.device +
+                                        "' needs RunOptions::rig (the opened device)");
+    own_sim = std::make_unique<sim::SimRig>(
+        sim::SimDeviceModel{.seed = DeriveSeed(part.seed, 0x51D)}, sim::DefaultSamplePoses());
     own_rig.device = own_sim->device;
     own_rig.actuator = &own_sim->actuator;
     own_rig.device_from_sample = own_sim->true_device_from_sample;
@@ -65,7 +67,8 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   HL_REQUIRE(rig->device != nullptr, "RunOptions::rig has no device");
   HL_REQUIRE(rig->sim != nullptr || opt.ui != nullptr,
              "a hardware session needs RunOptions::ui (the participant window gives the ratings)");
-  if (opt.device != "sim" || opt.rig) database.LogEvent({.session_id = session, .kind = "device", .detail = rig->description});
+  if (opt.device != "sim" || opt.rig)
+    database.LogEvent({.session_id = session, .kind = "device", .detail = rig->description});
   // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
   struct Noise {
     devices::MaskingNoise* n;
@@ -103,7 +106,8 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   } ui_events{opt.ui};
   if (opt.ui)
     opt.ui->log_event = [&](const std::string& kind, const std::string& detail) {
-      database.LogEvent({.session_id = session, .trial_id = trial_under_way, .kind = kind, .detail = detail});
+      database.LogEvent(
+          {.session_id = session, .trial_id = trial_under_way, .kind = kind, .detail = detail});
     };
   const bool constrained = p.randomization.no_immediate_repeat;
   int untouched_in_a_row = 0;
@@ -113,7 +117,8 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   for (const char* phase : {"training", "reference", "main"}) {
     std::vector<db::Trial> queue;
     for (const auto& t : trials)
-      if (t.phase == phase && t.status != db::kTrialCompleted && t.status != db::kTrialFaulted) queue.push_back(t);
+      if (t.phase == phase && t.status != db::kTrialCompleted && t.status != db::kTrialFaulted)
+        queue.push_back(t);
     for (const auto& t : trials)  // faulted before a crash: retried at the phase's end
       if (t.phase == phase && t.status == db::kTrialFaulted) queue.push_back(t);
     while (!queue.empty()) {
@@ -126,29 +131,41 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
             break;
           }
         if (pick == 0 && queue.size() > 1)
-          database.LogEvent({.session_id = session, .trial_id = queue[0].id, .kind = "constraint-relaxed",
+          database.LogEvent({.session_id = session,
+                             .trial_id = queue[0].id,
+                             .kind = "constraint-relaxed",
                              .detail = "only trials of the same material remain in the phase"});
       }
       db::Trial t = queue[pick];
       queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
       if (const int sig = StopRequested()) {
-        return abort({.trial_id = t.id, .kind = "interrupted",
-                      .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study resume' "
-                                            "continues with it",
-                                            sig, sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "signal")});
+        return abort(
+            {.trial_id = t.id,
+             .kind = "interrupted",
+             .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study resume' "
+                                   "continues with it",
+                                   sig,
+                                   sig == SIGINT    ? "SIGINT"
+                                   : sig == SIGTERM ? "SIGTERM"
+                                                    : "signal")});
       }
       if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
         return abort({.detail = "stopped after the requested number of trials"});
       }
       const bool requested = opt.ui && opt.ui->TakeBreakNow();
-      if (opt.ui && (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
+      if (opt.ui &&
+          (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
         // A simulated session played faster (--ui-speed) shortens its breaks alike.
         const double speed = rig->sim ? opt.ui_playback_speed : 1.0;
         const double break_s = p.break_duration_s / speed;
-        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "break",
-                           .detail = fmt::format("{:.0f} s break ({}{})", break_s,
-                                                 requested ? "requested by the experimenter" : "planned",
-                                                 speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : "")});
+        database.LogEvent(
+            {.session_id = session,
+             .trial_id = t.id,
+             .kind = "break",
+             .detail = fmt::format(
+                 "{:.0f} s break ({}{})", break_s,
+                 requested ? "requested by the experimenter" : "planned",
+                 speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : "")});
         trial_under_way = t.id;
         if (!opt.ui->Break(break_s)) {
           return abort({.detail = "the experimenter aborted during a break"});
@@ -158,31 +175,40 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       ++t.attempts;
       ++sum.executed;
       const bool training = t.phase == std::string("training");
-      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1, training ? training_total : rated_total);
+      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1,
+                             training ? training_total : rated_total);
       screen.training = training;
       screen.rated_done = rated_done;
       screen.rated_total = rated_total;
       screen.training_done = training_done;
       screen.training_total = training_total;
       trial_under_way = t.id;
-      const Outcome o = ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
+      const Outcome o =
+          ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
       sum.simulated_s += o.stimulus_s;
       untouched_in_a_row = o.untouched ? untouched_in_a_row + 1 : 0;
       if (o.aborted) {
         return abort({.trial_id = t.id,
-                      .detail = "the experimenter aborted in the console; 'study resume' continues with this trial"});
+                      .detail = "the experimenter aborted in the console; 'study resume' continues "
+                                "with this trial"});
       }
       if (o.fault) {
         ++sum.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
-        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault", .detail = o.fault_detail});
-        if (opt.ui) opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial", screen.index, o.fault_detail));
+        database.LogEvent({.session_id = session,
+                           .trial_id = t.id,
+                           .kind = "device-fault",
+                           .detail = o.fault_detail});
+        if (opt.ui)
+          opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial",
+                                    screen.index, o.fault_detail));
         t.status = db::kTrialFaulted;
         queue.push_back(t);
         if (untouched_in_a_row >= opt.max_untouched_trials) {
-          return abort({.detail = fmt::format("{} trials in a row touched nothing: the rig's sample poses are "
-                                              "probably wrong (hapticlab rig show / rig calibrate)",
-                                              untouched_in_a_row)});
+          return abort({.detail = fmt::format(
+                            "{} trials in a row touched nothing: the rig's sample poses are "
+                            "probably wrong (hapticlab rig show / rig calibrate)",
+                            untouched_in_a_row)});
         }
         continue;
       }
@@ -193,13 +219,19 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       } catch (const db::TrajectoryIncomplete& e) {
         ++sum.faults;
         database.SetTrialStatus(t.id, db::kTrialFaulted);
-        database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "trajectory-fault", .detail = e.what()});
-        if (opt.ui) opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)", training ? "training trial" : "trial", screen.index));
+        database.LogEvent({.session_id = session,
+                           .trial_id = t.id,
+                           .kind = "trajectory-fault",
+                           .detail = e.what()});
+        if (opt.ui)
+          opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)",
+                                    training ? "training trial" : "trial", screen.index));
         if (++trajectory_faults >= kMaxTrajectoryFaults) {
           database.EndSession(session, "aborted");
-          throw std::runtime_error(fmt::format("{} trials in a row could not store their trajectories; last: {}; "
-                                               "fix the cause, then 'hapticlab study resume'",
-                                               trajectory_faults, e.what()));
+          throw std::runtime_error(
+              fmt::format("{} trials in a row could not store their trajectories; last: {}; "
+                          "fix the cause, then 'hapticlab study resume'",
+                          trajectory_faults, e.what()));
         }
         t.status = db::kTrialFaulted;
         queue.push_back(t);
@@ -208,20 +240,21 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       ++sum.completed;
       (training ? training_done : rated_done) += 1;
       last_material = t.material;
-      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned, t.phase, t.material,
-                           t.method.empty() ? t.comparison : t.method));
+      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned,
+                           t.phase, t.material, t.method.empty() ? t.comparison : t.method));
     }
   }
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
-  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed, opt, *rig, &writer, &sum.executed);
+  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed,
+                                                    opt, *rig, &writer, &sum.executed);
   sum.planned += adaptive.added;
   sum.completed += adaptive.completed;
   sum.faults += adaptive.faults;
   sum.simulated_s += adaptive.stimulus_s;
-  if (adaptive.aborted) return finish("aborted");  // RunAdaptivePhases logged it and ended the session
+  if (adaptive.aborted)
+    return finish("aborted");  // RunAdaptivePhases logged it and ended the session
   database.EndSession(session, "completed");
   return finish("completed");
 }
-
 
 }  // namespace hapticlab::runner::internal

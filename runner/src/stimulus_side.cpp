@@ -60,9 +60,10 @@ void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, cons
   }
 }
 
-SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s, const RunOptions& opt,
-                            db::TrajectoryWriter* writer, db::Database& database, std::int64_t session,
-                            const db::Trial& t, const TrialScreen& screen, int screen_side) {
+SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s,
+                            const RunOptions& opt, db::TrajectoryWriter* writer,
+                            db::Database& database, std::int64_t session, const db::Trial& t,
+                            const TrialScreen& screen, int screen_side) {
   SideOutcome out;
   const double dur = duration_s;
   const auto sample = static_cast<std::size_t>(side.sample);
@@ -77,7 +78,8 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     ro = side.options;
     const auto caps = rig.device->Capabilities();
     ro.max_force_N = std::min(ro.max_force_N, caps.max_force_N);
-    ro.device_max_stiffness_N_per_m = caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
+    ro.device_max_stiffness_N_per_m =
+        caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
   }
   renderer::HybridRenderer r(model, ro);
   // The simulated hand: strokes the sample where it truly is; on a real side it touches the
@@ -86,15 +88,16 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
   if (simrig) {
     double top_m, stiffness;
     if (side.real) {
-      truth = std::make_unique<sim::TruthSample>(*side.truth, side.truth_seed, ro.vibration_rate_hz);
+      truth =
+          std::make_unique<sim::TruthSample>(*side.truth, side.truth_seed, ro.vibration_rate_hz);
       top_m = truth->top_m();
       stiffness = truth->profile().stiffness_N_per_m;
     } else {
       top_m = model.contact.layer_thickness_m + (model.geometry->max_m() - model.geometry->min_m());
       stiffness = model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m;
     }
-    simrig->hand.Begin(side.stroke, simrig->true_device_from_sample[sample], top_m, stiffness, truth.get(),
-                       ro.force_rate_hz, ro.vibration_rate_hz);
+    simrig->hand.Begin(side.stroke, simrig->true_device_from_sample[sample], top_m, stiffness,
+                       truth.get(), ro.force_rate_hz, ro.vibration_rate_hz);
     if (simrig->generic) {
       simrig->generic->Reset();
       if (side.dropout_at_s >= 0) simrig->generic->InjectDropout(side.dropout_at_s, 0.05);
@@ -108,7 +111,8 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
   if (writer && opt.record != RecordMode::kNone)
     fs = writer->OpenStream(t.id, side.stream + "_force", ro.force_rate_hz, ForceStreamChannels());
   if (writer && opt.record == RecordMode::kAll && ro.vibration && rig.actuator)
-    vs = writer->OpenStream(t.id, side.stream + "_vibration", ro.vibration_rate_hz, VibrationStreamChannels());
+    vs = writer->OpenStream(t.id, side.stream + "_vibration", ro.vibration_rate_hz,
+                            VibrationStreamChannels());
   EngineOptions eo;
   eo.virtual_clock = simrig ? &simrig->clock : nullptr;
   eo.rt = opt.rt;
@@ -124,7 +128,9 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     const auto t0 = std::chrono::steady_clock::now();
     const double speed = engine.is_virtual() ? opt.ui_playback_speed : 1.0;
     for (;;) {
-      const double el = std::min(dur, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
+      const double el = std::min(
+          dur,
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
       if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
       const auto s = engine.LastSample();
       if (opt.ui && !opt.ui->Stimulus(screen, screen_side, s.state.p_m, dur - el)) {
@@ -140,23 +146,33 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
   if (vs) writer->CloseStream(vs);
   FaultEvent e;
   while (engine.watchdog().PopEvent(&e))
-    database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
-                       .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind), e.t_s, side.label, e.tick)});
+    database.LogEvent({.session_id = session,
+                       .trial_id = t.id,
+                       .kind = "device-fault",
+                       .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
+                                             e.t_s, side.label, e.tick)});
   const auto st = engine.Stats();
   out.stats = st;
   SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
   if (engine.watchdog().tripped()) {
     out.fault = true;
-    out.detail = fmt::format("{}: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", side.label,
-                             st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults);
-  } else if (static_cast<double>(st.contact_ticks) < kMinContactFraction * static_cast<double>(st.force_ticks)) {
+    out.detail =
+        fmt::format("{}: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", side.label,
+                    st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults);
+  } else if (static_cast<double>(st.contact_ticks) <
+             kMinContactFraction * static_cast<double>(st.force_ticks)) {
     out.untouched = true;
-    out.detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks", side.label, side.stimulus,
-                             st.contact_ticks, st.force_ticks);
+    out.detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks",
+                             side.label, side.stimulus, st.contact_ticks, st.force_ticks);
   }
   if (opt.on_side)
-    opt.on_side({.plan_index = t.plan_index, .side = side.report_side, .attempt = t.attempts, .stimulus = side.stimulus,
-                 .engine = st, .hand_ticks = simrig ? simrig->hand.ticks() : 0, .contact_ticks = st.contact_ticks});
+    opt.on_side({.plan_index = t.plan_index,
+                 .side = side.report_side,
+                 .attempt = t.attempts,
+                 .stimulus = side.stimulus,
+                 .engine = st,
+                 .hand_ticks = simrig ? simrig->hand.ticks() : 0,
+                 .contact_ticks = st.contact_ticks});
   if (simrig) out.felt = simrig->hand.Finish();
   out.aborted = !go_on;
   return out;

@@ -56,7 +56,7 @@ struct SideOutcome {
   bool untouched = false;  // the stylus was inside the surface on < kMinContactFraction of ticks
   std::string detail;      // for a fault or an untouched side: what happened
   EngineStats stats;
-  sim::Features felt;      // simulated rig: what the hand felt
+  sim::Features felt;  // simulated rig: what the hand felt
 };
 
 // Stores the engine's timing of one side (db::SideTiming rows: force, and vibration when it ran).
@@ -69,8 +69,9 @@ void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, cons
 // frames (the engine's last sample) go to SessionUi::Stimulus with `screen` and
 // `screen_side`, in real time (a virtual clock runs opt.ui_playback_speed times faster);
 // at least one frame is shown.
-SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s, const RunOptions& opt,
-                            db::TrajectoryWriter* writer, db::Database& database, std::int64_t session,
-                            const db::Trial& t, const TrialScreen& screen, int screen_side);
+SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s,
+                            const RunOptions& opt, db::TrajectoryWriter* writer,
+                            db::Database& database, std::int64_t session, const db::Trial& t,
+                            const TrialScreen& screen, int screen_side);
 
 }  // namespace hapticlab::runner::internal

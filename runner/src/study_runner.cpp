@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "adaptive_phase.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/rng.hpp"
@@ -16,7 +17,6 @@
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
-#include "adaptive_phase.hpp"
 #include "lab.hpp"
 #include "session_queue.hpp"
 
@@ -24,9 +24,9 @@ namespace hapticlab::runner {
 namespace {
 
 namespace fs = std::filesystem;
-using nlohmann::json;
 using internal::Lab;
 using internal::LoadLab;
+using nlohmann::json;
 
 // The stop request of RequestStop (a signal number; 0: none). Lock-free, so a signal
 // handler may store to it.
@@ -38,12 +38,16 @@ void Log(const RunOptions& o, const std::string& s) {
 }
 
 // Breaks and phase changes are logged as the plan reaches them.
-void LogPlanEvents(db::Database& database, std::int64_t session, const std::vector<protocols::PlannedTrial>& plan,
+void LogPlanEvents(db::Database& database, std::int64_t session,
+                   const std::vector<protocols::PlannedTrial>& plan,
                    const std::vector<std::int64_t>& ids, const protocols::Protocol& p) {
   for (std::size_t i = 0; i < plan.size(); ++i)
     if (plan[i].break_before)
-      database.LogEvent({.session_id = session, .trial_id = ids[i], .kind = "break-planned",
-                         .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s)});
+      database.LogEvent(
+          {.session_id = session,
+           .trial_id = ids[i],
+           .kind = "break-planned",
+           .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s)});
 }
 
 // Checkpoints the WAL into the main file when a session ends, however it ends (completed,
@@ -62,8 +66,9 @@ struct CheckpointAtEnd {
 }  // namespace
 
 std::string SessionMode::Describe() const {
-  return fmt::format("device {}, actuator {}, screens {}, ratings {}", device, actuator, screens ? "on" : "off",
-                     rater == db::kRaterSimulated ? "simulated" : "by the participant (" + rater + ")");
+  return fmt::format(
+      "device {}, actuator {}, screens {}, ratings {}", device, actuator, screens ? "on" : "off",
+      rater == db::kRaterSimulated ? "simulated" : "by the participant (" + rater + ")");
 }
 
 bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool change_mode,
@@ -72,16 +77,18 @@ bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool c
                        now.rater != recorded.rater ||
                        (recorded.actuator != "unrecorded" && now.actuator != recorded.actuator);
   if (differs && !change_mode)
-    throw InputError(db_path, 0, "change_mode",
-                     fmt::format("{}'s session was recorded in mode [{}]; this resume asks for [{}]. Resume "
-                                 "in the recorded mode, or allow the change to continue in the new one (logged; "
-                                 "each rating records its source)",
-                                 participant, recorded.Describe(), now.Describe()));
+    throw InputError(
+        db_path, 0, "change_mode",
+        fmt::format("{}'s session was recorded in mode [{}]; this resume asks for [{}]. Resume "
+                    "in the recorded mode, or allow the change to continue in the new one (logged; "
+                    "each rating records its source)",
+                    participant, recorded.Describe(), now.Describe()));
   return differs;
 }
 
 SessionMode ModeOf(const RunOptions& o) {
-  return {o.device, o.actuator, o.ui != nullptr, o.ui ? o.rating_input : std::string(db::kRaterSimulated)};
+  return {o.device, o.actuator, o.ui != nullptr,
+          o.ui ? o.rating_input : std::string(db::kRaterSimulated)};
 }
 
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant) {
@@ -94,7 +101,8 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
       const auto& se = sessions.back();
       return {se.device, se.actuator, se.screens, se.rater};
     }
-  throw InputError(db_path, 0, "participant", "no participant " + participant + " with a session in this database");
+  throw InputError(db_path, 0, "participant",
+                   "no participant " + participant + " with a session in this database");
 }
 
 void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool ui) {
@@ -102,7 +110,8 @@ void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool
   (void)LoadLab(p, device);
 }
 
-int ParticipantIndex(const std::string& db_path, const std::string& study, const std::string& code) {
+int ParticipantIndex(const std::string& db_path, const std::string& study,
+                     const std::string& code) {
   if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);
   const auto st = database.FindStudy(study);
@@ -110,8 +119,9 @@ int ParticipantIndex(const std::string& db_path, const std::string& study, const
   const auto part = database.FindParticipant(st->id, code);
   if (!part)
     throw InputError(db_path, 0, "participant",
-                     "no participant " + code + " in study '" + study + "' (a code not yet run has no plan index; "
-                     "give its plan index)");
+                     "no participant " + code + " in study '" + study +
+                         "' (a code not yet run has no plan index; "
+                         "give its plan index)");
   return part->index;
 }
 
@@ -129,18 +139,25 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   std::int64_t study_id;
   if (auto s = database.FindStudy(p.name)) {
     if (s->protocol_hash != hash)
-      throw InputError(opt.db_path, 0, "study",
-                       "study '" + p.name + "' in this database was run with a different protocol text (hash " +
-                           s->protocol_hash.substr(0, 12) + "); use a new database or restore the protocol");
+      throw InputError(
+          opt.db_path, 0, "study",
+          "study '" + p.name + "' in this database was run with a different protocol text (hash " +
+              s->protocol_hash.substr(0, 12) + "); use a new database or restore the protocol");
     study_id = s->id;
   } else {
-    study_id = database.CreateStudy({.name = p.name, .protocol_toml = p.text, .protocol_hash = hash, .seed = p.seed});
+    study_id = database.CreateStudy(
+        {.name = p.name, .protocol_toml = p.text, .protocol_hash = hash, .seed = p.seed});
   }
   if (database.FindParticipant(study_id, opt.participant))
     throw InputError(opt.db_path, 0, "participant",
-                     "participant " + opt.participant + " already has a session; continue it with 'hapticlab study resume'");
-  const int index = opt.participant_index >= 0 ? opt.participant_index : static_cast<int>(database.Participants(study_id).size());
-  const db::Participant part{.study_id = study_id, .code = opt.participant, .index = index,
+                     "participant " + opt.participant +
+                         " already has a session; continue it with 'hapticlab study resume'");
+  const int index = opt.participant_index >= 0
+                        ? opt.participant_index
+                        : static_cast<int>(database.Participants(study_id).size());
+  const db::Participant part{.study_id = study_id,
+                             .code = opt.participant,
+                             .index = index,
                              .seed = protocols::ParticipantSeed(p, index)};
   const auto plan = protocols::Plan(p, index);
   // Provenance: everything needed to reproduce this session.
@@ -148,56 +165,74 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   for (const auto& [id, h] : lab.model_hashes) models[id] = h;
   json plan_json = json::array();
   for (const auto& t : plan)
-    plan_json.push_back({{"index", t.index}, {"phase", protocols::ToString(t.phase)}, {"material", t.material},
-                         {"comparison", t.comparison}, {"method", t.method}, {"repetition", t.repetition},
-                         {"left", t.left}, {"right", t.right}, {"rated", t.rated}, {"break_before", t.break_before}});
-  const json prov = {{"protocol_hash", hash},
-                     // Relative to the database's folder (an absolute path would carry a user name).
-                     {"protocol_path", fs::weakly_canonical(fs::absolute(p.file))
-                                           .lexically_relative(fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path())
-                                           .string()},
-                     {"study_seed", p.seed},
-                     {"participant_index", index},
-                     {"participant_seed", part.seed},
-                     {"software", std::string(kVersion) + "+" + kGitSha},
-                     {"device", opt.device},
-                     {"rig", opt.rig ? json{{"description", opt.rig->description},
-                                            {"file_sha256", opt.rig->rig_file_hash},
-                                            {"content", opt.rig->calibration}}
-                                     : json{{"description", "generic simulated rig"}}},
-                     {"model_hashes", models},
-                     {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
+    plan_json.push_back({{"index", t.index},
+                         {"phase", protocols::ToString(t.phase)},
+                         {"material", t.material},
+                         {"comparison", t.comparison},
+                         {"method", t.method},
+                         {"repetition", t.repetition},
+                         {"left", t.left},
+                         {"right", t.right},
+                         {"rated", t.rated},
+                         {"break_before", t.break_before}});
+  const json prov = {
+      {"protocol_hash", hash},
+      // Relative to the database's folder (an absolute path would carry a user name).
+      {"protocol_path",
+       fs::weakly_canonical(fs::absolute(p.file))
+           .lexically_relative(fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path())
+           .string()},
+      {"study_seed", p.seed},
+      {"participant_index", index},
+      {"participant_seed", part.seed},
+      {"software", std::string(kVersion) + "+" + kGitSha},
+      {"device", opt.device},
+      {"rig", opt.rig ? json{{"description", opt.rig->description},
+                             {"file_sha256", opt.rig->rig_file_hash},
+                             {"content", opt.rig->calibration}}
+                      : json{{"description", "generic simulated rig"}}},
+      {"model_hashes", models},
+      {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
   database.Exec("BEGIN IMMEDIATE");
   std::int64_t session;
   std::vector<std::int64_t> ids;
   try {
     const auto pid = database.AddParticipant(part);
-    session = database.StartSession({.participant_id = pid,
-                                     .software_version = std::string(kVersion) + "+" + kGitSha,
-                                     .device = opt.device,
-                                     .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
-                                     .provenance_json = prov.dump(),
-                                     .plan_json = plan_json.dump(),
-                                     .actuator = mode.actuator,
-                                     .screens = mode.screens,
-                                     .rater = mode.rater});
+    session = database.StartSession(
+        {.participant_id = pid,
+         .software_version = std::string(kVersion) + "+" + kGitSha,
+         .device = opt.device,
+         .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
+         .provenance_json = prov.dump(),
+         .plan_json = plan_json.dump(),
+         .actuator = mode.actuator,
+         .screens = mode.screens,
+         .rater = mode.rater});
     std::vector<db::Trial> rows;
     for (const auto& t : plan)
-      rows.push_back({.session_id = session, .plan_index = t.index, .phase = protocols::ToString(t.phase),
-                      .material = t.material, .comparison = t.comparison, .method = t.method,
-                      .repetition = t.repetition, .left = t.left, .right = t.right});
+      rows.push_back({.session_id = session,
+                      .plan_index = t.index,
+                      .phase = protocols::ToString(t.phase),
+                      .material = t.material,
+                      .comparison = t.comparison,
+                      .method = t.method,
+                      .repetition = t.repetition,
+                      .left = t.left,
+                      .right = t.right});
     for (const auto& r : rows) ids.push_back(database.AddTrial(r));
-    database.LogEvent({.session_id = session, .kind = "consent",
-                       .detail = mode.rater == db::kRaterSimulated ? "simulated participant" : "consent form signed"});
+    database.LogEvent({.session_id = session,
+                       .kind = "consent",
+                       .detail = mode.rater == db::kRaterSimulated ? "simulated participant"
+                                                                   : "consent form signed"});
     LogPlanEvents(database, session, plan, ids, p);
     database.Exec("COMMIT");
   } catch (...) {
     database.Exec("ROLLBACK");
     throw;
   }
-  Log(opt, fmt::format("{}: session {} with {} planned trials ({})", opt.participant, session, plan.size(),
-                       mode.Describe()));
+  Log(opt, fmt::format("{}: session {} with {} planned trials ({})", opt.participant, session,
+                       plan.size(), mode.Describe()));
   db::Participant stored = *database.FindParticipant(study_id, opt.participant);
   const CheckpointAtEnd checkpoint{&database};
   return internal::ExecuteSession(database, lab, session, stored, opt);
@@ -211,50 +246,64 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     const auto part = database.FindParticipant(st.id, opt.participant);
     if (!part) continue;
     const auto sessions = database.Sessions(part->id);
-    if (sessions.empty()) throw InputError(opt.db_path, 0, "participant", opt.participant + " has no session");
+    if (sessions.empty())
+      throw InputError(opt.db_path, 0, "participant", opt.participant + " has no session");
     const auto& se = sessions.back();
     if (se.status == "completed")
-      throw InputError(opt.db_path, 0, "participant", opt.participant + "'s session is already completed");
+      throw InputError(opt.db_path, 0, "participant",
+                       opt.participant + "'s session is already completed");
     const json prov = json::parse(se.provenance_json);
     // Stored relative to the database's folder (older sessions: absolute).
     const std::string stored = prov.value("protocol_path", "");
     const std::string path =
         stored.empty() ? stored
-                       : (fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path() / stored).lexically_normal().string();
+                       : (fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path() / stored)
+                             .lexically_normal()
+                             .string();
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
     if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
-      Log(opt, "note: the protocol file on disk changed since the session began; resuming with the recorded text");
+      Log(opt,
+          "note: the protocol file on disk changed since the session began; resuming with the "
+          "recorded text");
     // The recorded mode, or with --change-mode the new one (logged).
     const SessionMode recorded{se.device, se.actuator, se.screens, se.rater};
     const SessionMode now = ModeOf(opt);
-    const bool differs = CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
+    const bool differs =
+        CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
     const Lab lab = LoadLab(p, opt.device);
     if (differs) {
-      database.LogEvent({.session_id = se.id, .kind = "mode-change",
-                         .detail = fmt::format("resumed in a new mode: [{}] -> [{}]", recorded.Describe(),
-                                               now.Describe())});
+      database.LogEvent({.session_id = se.id,
+                         .kind = "mode-change",
+                         .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
+                                               recorded.Describe(), now.Describe())});
       database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
-      Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant, recorded.Describe(), now.Describe()));
+      Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant,
+                           recorded.Describe(), now.Describe()));
     } else if (recorded.actuator == "unrecorded") {
       database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
     }
     const RunOptions& o = opt;
-    database.Exec(fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
+    database.Exec(
+        fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
     int done = 0;
     for (const auto& t : database.Trials(se.id)) done += t.status == db::kTrialCompleted;
-    database.LogEvent({.session_id = se.id, .kind = "resume",
-                       .detail = fmt::format("resumed with {} of {} trials completed", done, database.Trials(se.id).size())});
-    Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant, se.id, done,
-                         now.Describe()));
+    database.LogEvent({.session_id = se.id,
+                       .kind = "resume",
+                       .detail = fmt::format("resumed with {} of {} trials completed", done,
+                                             database.Trials(se.id).size())});
+    Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant,
+                         se.id, done, now.Describe()));
     const CheckpointAtEnd checkpoint{&database};
     return internal::ExecuteSession(database, lab, se.id, *part, o);
   }
-  throw InputError(opt.db_path, 0, "participant", "no participant " + opt.participant + " in this database");
+  throw InputError(opt.db_path, 0, "participant",
+                   "no participant " + opt.participant + " in this database");
 }
 
-std::vector<ParticipantStatus> StudyStatus(const std::string& db_path, const std::string& participant) {
+std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
+                                           const std::string& participant) {
   if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
   std::vector<ParticipantStatus> out;
@@ -279,7 +328,8 @@ std::vector<ParticipantStatus> StudyStatus(const std::string& db_path, const std
       out.push_back(s);
     }
   if (!participant.empty() && out.empty())
-    throw InputError(db_path, 0, "participant", "no participant " + participant + " in this database");
+    throw InputError(db_path, 0, "participant",
+                     "no participant " + participant + " in this database");
   return out;
 }
 

@@ -19,8 +19,8 @@ namespace {
 
 // The participant's ratings from the UI, clamped to the scale, with the response time from
 // the rating screen's appearance; false when the experimenter aborted.
-bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protocol& p, const std::string& source,
-              std::vector<db::Rating>* out) {
+bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protocol& p,
+              const std::string& source, std::vector<db::Rating>* out) {
   const auto shown = std::chrono::steady_clock::now();
   const auto r = ui.Rate(screen);
   if (!r || r->size() != p.criteria.size()) return false;
@@ -52,13 +52,15 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
   return s;
 }
 
-Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& t, std::uint64_t participant_seed,
-                     const RunOptions& opt, HardwareRig& rig, db::TrajectoryWriter* writer, const TrialScreen& screen,
+Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& t,
+                     std::uint64_t participant_seed, const RunOptions& opt, HardwareRig& rig,
+                     db::TrajectoryWriter* writer, const TrialScreen& screen,
                      db::Database& database, std::int64_t session) {
   const auto& p = *lab.protocol;
   Outcome out;
   const std::uint64_t trial_seed =
-      DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 + static_cast<std::uint64_t>(t.attempts));
+      DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 +
+                                       static_cast<std::uint64_t>(t.attempts));
   Rng rng(trial_seed);
   const double dur = p.stimulus_duration_s;
   const bool simulated = rig.sim != nullptr;
@@ -87,14 +89,18 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     s.label = "training sample";
     s.stimulus = t.left;
     const double train_s = phase ? phase->duration_s : dur;
-    const auto r = internal::RunStimulusSide(s, rig, train_s, opt, writer, database, session, t, screen, 0);
+    const auto r =
+        internal::RunStimulusSide(s, rig, train_s, opt, writer, database, session, t, screen, 0);
     out.aborted = r.aborted;
     out.stimulus_s = train_s;
     // A fault while training is logged (the watchdog zeroed the force) but the unrated trial
     // is not repeated: a device that keeps faulting is caught by the rated trials.
     if (r.fault) {
-      database.LogEvent({.session_id = session, .trial_id = t.id, .kind = "device-fault",
-                         .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated"});
+      database.LogEvent(
+          {.session_id = session,
+           .trial_id = t.id,
+           .kind = "device-fault",
+           .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated"});
       if (opt.ui) opt.ui->Event(fmt::format("training trial {}: {}", t.plan_index + 1, r.detail));
     }
     return out;
@@ -116,7 +122,8 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     s.model = &lab.models.at(id);
     s.real = real;
     if (!s.real)
-      s.options = internal::MethodOptions(*p.FindMethod(t.method), DeriveSeed(trial_seed, static_cast<std::uint64_t>(side)));
+      s.options = internal::MethodOptions(*p.FindMethod(t.method),
+                                          DeriveSeed(trial_seed, static_cast<std::uint64_t>(side)));
     s.sample = side;
     s.stroke = strokes[static_cast<std::size_t>(side)];
     if (simulated && s.real) {
@@ -128,7 +135,8 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     s.label = s.stream + " side";
     s.stimulus = stim;
     s.report_side = side;
-    const auto r = internal::RunStimulusSide(s, rig, dur, opt, writer, database, session, t, screen, side);
+    const auto r =
+        internal::RunStimulusSide(s, rig, dur, opt, writer, database, session, t, screen, side);
     if (r.fault) faults.push_back(r.detail);
     if (r.untouched) untouched.push_back(r.detail);
     felt[static_cast<std::size_t>(side)] = r.felt;
@@ -140,7 +148,8 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
   }
   if (!faults.empty()) {
     out.fault = true;
-    out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) + "; force was zeroed, trial re-queued";
+    out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) +
+                       "; force was zeroed, trial re-queued";
     return out;
   }
   if (!untouched.empty()) {
@@ -154,14 +163,21 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
     return out;
   }
   if (opt.on_felt) {
-    FeltTrial ft{.plan_index = t.plan_index, .phase = t.phase, .material = t.material, .comparison = t.comparison,
-                 .method = t.method, .repetition = t.repetition, .distances = {}, .felt = felt};
+    FeltTrial ft{.plan_index = t.plan_index,
+                 .phase = t.phase,
+                 .material = t.material,
+                 .comparison = t.comparison,
+                 .method = t.method,
+                 .repetition = t.repetition,
+                 .distances = {},
+                 .felt = felt};
     for (const auto& c : p.criteria) ft.distances.push_back(observer.Distance(c, felt[0], felt[1]));
     opt.on_felt(ft);
   }
   for (const auto& c : p.criteria)
-    out.ratings.push_back({c, observer.Rate(c, t.material, t.method, felt[0], felt[1], p.scale_min, p.scale_max, rng),
-                           Observer::ResponseTime(rng), db::kRaterSimulated});
+    out.ratings.push_back(
+        {c, observer.Rate(c, t.material, t.method, felt[0], felt[1], p.scale_min, p.scale_max, rng),
+         Observer::ResponseTime(rng), db::kRaterSimulated});
   return out;
 }
 

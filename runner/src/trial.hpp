@@ -36,7 +36,7 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
 // rating what the hand felt.
 Outcome ExecuteTrial(const Lab& lab, const sim::Observer& observer, const db::Trial& t,
                      std::uint64_t participant_seed, const RunOptions& opt, HardwareRig& rig,
-                     db::TrajectoryWriter* writer, const TrialScreen& screen, db::Database& database,
-                     std::int64_t session);
+                     db::TrajectoryWriter* writer, const TrialScreen& screen,
+                     db::Database& database, std::int64_t session);
 
 }  // namespace hapticlab::runner::internal

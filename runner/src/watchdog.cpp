@@ -6,12 +6,18 @@ namespace hapticlab::runner {
 
 const char* FaultName(FaultKind k) {
   switch (k) {
-    case FaultKind::kNone: return "none";
-    case FaultKind::kDisconnect: return "disconnect";
-    case FaultKind::kNaN: return "nan";
-    case FaultKind::kStale: return "stale";
-    case FaultKind::kDeadlineMiss: return "deadline-miss";
-    case FaultKind::kBadCommand: return "bad-command";
+    case FaultKind::kNone:
+      return "none";
+    case FaultKind::kDisconnect:
+      return "disconnect";
+    case FaultKind::kNaN:
+      return "nan";
+    case FaultKind::kStale:
+      return "stale";
+    case FaultKind::kDeadlineMiss:
+      return "deadline-miss";
+    case FaultKind::kBadCommand:
+      return "bad-command";
   }
   return "?";
 }
@@ -27,8 +33,9 @@ void Watchdog::Reset() noexcept {
   last_ok_s_ = 0;
 }
 
-Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s, double late_s,
-                                double period_s, const Eigen::Vector3d& force) noexcept {
+Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const renderer::DeviceSample& s,
+                                double now_s, double late_s, double period_s,
+                                const Eigen::Vector3d& force) noexcept {
   ++tick_;
   misses_ = late_s > period_s ? misses_ + 1 : 0;
   FaultKind k = FaultKind::kNone;
@@ -46,16 +53,21 @@ Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const renderer::Device
       return Eigen::Vector3d::Zero();
     }
     k = FaultKind::kDisconnect;
-  } else if (!s.state.p_m.allFinite() || !s.state.v_mps.allFinite() || !std::isfinite(s.t_s)) k = FaultKind::kNaN;
-  else if (now_s - s.t_s > o_.stale_after_s) k = FaultKind::kStale;
-  else if (misses_ >= o_.max_consecutive_misses) k = FaultKind::kDeadlineMiss;
-  else if (!force.allFinite() || force.norm() > o_.max_force_N * (1 + 1e-9)) k = FaultKind::kBadCommand;
+  } else if (!s.state.p_m.allFinite() || !s.state.v_mps.allFinite() || !std::isfinite(s.t_s))
+    k = FaultKind::kNaN;
+  else if (now_s - s.t_s > o_.stale_after_s)
+    k = FaultKind::kStale;
+  else if (misses_ >= o_.max_consecutive_misses)
+    k = FaultKind::kDeadlineMiss;
+  else if (!force.allFinite() || force.norm() > o_.max_force_N * (1 + 1e-9))
+    k = FaultKind::kBadCommand;
   run_ = k != FaultKind::kNone && k == last_ ? run_ + 1 : 0;
   last_ = k;
   if (k == FaultKind::kNone) return force;
   counts_[static_cast<std::size_t>(k)].fetch_add(1, std::memory_order_relaxed);
   tripped_.store(true, std::memory_order_release);
-  if (run_ % 1000 == 0 && !events_.TryPush({k, now_s, tick_})) dropped_.fetch_add(1, std::memory_order_relaxed);
+  if (run_ % 1000 == 0 && !events_.TryPush({k, now_s, tick_}))
+    dropped_.fetch_add(1, std::memory_order_relaxed);
   return Eigen::Vector3d::Zero();
 }
 

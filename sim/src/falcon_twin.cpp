@@ -27,11 +27,13 @@ Eigen::Vector3d FalconHomePosition() { return {0, 0, 0.125}; }
 
 std::vector<std::uint8_t> FalconTwinFirmware() {
   std::vector<std::uint8_t> fw(1024);
-  for (std::size_t i = 0; i < fw.size(); ++i) fw[i] = static_cast<std::uint8_t>((i * 131 + 7) & 0xff);
+  for (std::size_t i = 0; i < fw.size(); ++i)
+    fw[i] = static_cast<std::uint8_t>((i * 131 + 7) & 0xff);
   return fw;
 }
 
-FalconTwinTransport::FalconTwinTransport(Hand& hand, const devices::Clock& clock, const FalconTwinOptions& o)
+FalconTwinTransport::FalconTwinTransport(Hand& hand, const devices::Clock& clock,
+                                         const FalconTwinOptions& o)
     : hand_(hand), clock_(clock), o_(o), rng_(o.seed), grip_m_(FalconHomePosition()) {}
 
 bool FalconTwinTransport::DroppedOut() const {
@@ -49,7 +51,8 @@ void FalconTwinTransport::Reply(const std::uint8_t* d, std::size_t n) {
   out_n_ += n;
 }
 
-int FalconTwinTransport::Control(std::uint8_t, std::uint8_t req, std::uint16_t value, std::uint16_t, unsigned) {
+int FalconTwinTransport::Control(std::uint8_t, std::uint8_t req, std::uint16_t value, std::uint16_t,
+                                 unsigned) {
   if (DroppedOut()) return kUsbErrorIo;
   if (req == fal::ftdi::kBaudRate) baud_ = value;
   if (req == fal::ftdi::kModemCtrl && value == fal::ftdi::kDtrHigh) dtr_ = true;
@@ -61,7 +64,8 @@ int FalconTwinTransport::Control(std::uint8_t, std::uint8_t req, std::uint16_t v
 int FalconTwinTransport::BulkWrite(const std::uint8_t* d, int n, unsigned) {
   if (DroppedOut()) return kUsbErrorIo;
   const auto un = static_cast<std::size_t>(n);
-  if (baud_ == fal::ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 && d[2] == 0x0d) {
+  if (baud_ == fal::ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 &&
+      d[2] == 0x0d) {
     const std::uint8_t answer[4] = {0x0a, 0x44, 0x2c, 0x0d};  // the bootloader's greeting
     Reply(answer, 4);
   } else if (baud_ == fal::ftdi::kBaud140000 && !loading_ && n == 1 && d[0] == 'A') {
@@ -76,12 +80,14 @@ int FalconTwinTransport::BulkWrite(const std::uint8_t* d, int n, unsigned) {
     Eigen::Vector3d tau;
     for (int k = 0; k < 3; ++k) {
       std::uint16_t v = 0;
-      for (int j = 0; j < 4; ++j) v = static_cast<std::uint16_t>(v | ((d[1 + 4 * k + j] - 0x41) & 0xf) << (4 * j));
+      for (int j = 0; j < 4; ++j)
+        v = static_cast<std::uint16_t>(v | ((d[1 + 4 * k + j] - 0x41) & 0xf) << (4 * j));
       tau[k] = -static_cast<double>(static_cast<std::int16_t>(v)) / o_.motor_units_per_Nm;
     }
     if (holding_) {
       Eigen::Matrix3d J;
-      hand_.Push(Jacobian(grip_m_, &J) ? Eigen::Vector3d(J.transpose() * tau) : Eigen::Vector3d::Zero());
+      hand_.Push(Jacobian(grip_m_, &J) ? Eigen::Vector3d(J.transpose() * tau)
+                                       : Eigen::Vector3d::Zero());
       grip_m_ = hand_.Step(clock_.Now()).p_m;
     }
     // The encoders of the grip's position (unchanged where the arms cannot reach).

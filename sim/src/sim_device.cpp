@@ -20,11 +20,13 @@ TruthSample::TruthSample(const MaterialProfile& p, std::uint64_t seed, double vi
   internal::Resonator(p.vibration_peak_hz, p.vibration_q, vibration_rate_hz, &c1_, &c2_, &var_);
 }
 
-TruthSample::Contact TruthSample::At(const Eigen::Vector3d& pos, const Eigen::Vector3d& vel) const noexcept {
+TruthSample::Contact TruthSample::At(const Eigen::Vector3d& pos,
+                                     const Eigen::Vector3d& vel) const noexcept {
   Contact c;
   const double x = pos.x(), y = pos.y(), z = pos.z(), vx = vel.x(), vy = vel.y(), vz = vel.z();
   c.speed_mps = std::hypot(vx, vy);
-  const double ux = c.speed_mps > 0 ? vx / c.speed_mps : 0, uy = c.speed_mps > 0 ? vy / c.speed_mps : 0;
+  const double ux = c.speed_mps > 0 ? vx / c.speed_mps : 0,
+               uy = c.speed_mps > 0 ? vy / c.speed_mps : 0;
   double h, hx, hy;
   geo_->Full(x, y, ux, uy, &h, &hx, &hy, &c.micro_dd);
   const double top = p_.layer_thickness_m + offset_m_ + h;
@@ -43,8 +45,11 @@ TruthSample::Contact TruthSample::At(const Eigen::Vector3d& pos, const Eigen::Ve
   // Real surfaces push along their true normal; friction with Stribeck and load exponent.
   const Eigen::Vector3d normal = Eigen::Vector3d(-hx, -hy, 1.0).normalized();
   const double mu =
-      sim_truth::StribeckFriction::FromRatio(p_.mu_k, p_.stribeck_ratio, p_.stribeck_speed_mps).Mu(c.speed_mps);
-  const double ff = c.normal_N > 0 ? mu * std::pow(c.normal_N, p_.load_exponent) * std::tanh(c.speed_mps / 1e-3) : 0.0;
+      sim_truth::StribeckFriction::FromRatio(p_.mu_k, p_.stribeck_ratio, p_.stribeck_speed_mps)
+          .Mu(c.speed_mps);
+  const double ff =
+      c.normal_N > 0 ? mu * std::pow(c.normal_N, p_.load_exponent) * std::tanh(c.speed_mps / 1e-3)
+                     : 0.0;
   c.force_N = c.normal_N * normal;
   c.force_N.x() -= ff * ux;
   c.force_N.y() -= ff * uy;
@@ -65,8 +70,8 @@ double TruthSample::Vibration(const Contact& c) noexcept {
 Hand::Hand() : Hand(Options{}) {}
 Hand::Hand(const Options& o) : o_(o) {}
 
-void Hand::Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, double top_m, double stiffness,
-                 TruthSample* truth, double fr, double vr) {
+void Hand::Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, double top_m,
+                 double stiffness, TruthSample* truth, double fr, double vr) {
   s_ = s;
   device_from_sample_ = device_from_sample;
   top_m_ = top_m;
@@ -84,7 +89,8 @@ void Hand::Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, d
   vr_ = vr;
   vib_per_tick_ = std::max(1, static_cast<int>(std::lround(vr / fr)));
   acc_ = FeatureAccumulator(fr, vr);
-  for (auto& b : shake_hp_) b = renderer::Biquad(renderer::BiquadCoeffs::ButterworthHighPass(40.0, fr));
+  for (auto& b : shake_hp_)
+    b = renderer::Biquad(renderer::BiquadCoeffs::ButterworthHighPass(40.0, fr));
   shake_last_ = 0;
   contact_ = {};
   contact_ticks_ = ticks_ = 0;
@@ -104,7 +110,8 @@ void Hand::FlushInterval() noexcept {
     acc_.AddVibration(a + shake_last_ + (truth_ ? truth_->Vibration(contact_) : 0.0));
     ++n;
   }
-  for (; n < vib_per_tick_; ++n) acc_.AddVibration(shake_last_ + (truth_ ? truth_->Vibration(contact_) : 0.0));
+  for (; n < vib_per_tick_; ++n)
+    acc_.AddVibration(shake_last_ + (truth_ ? truth_->Vibration(contact_) : 0.0));
 }
 
 renderer::ToolState Hand::Step(double t_s) noexcept {
@@ -150,7 +157,8 @@ void Hand::Push(const Eigen::Vector3d& force_device_N) noexcept {
   if (fn_felt_N_ > kContactReport_N) ++contact_ticks_;
   const double speed = std::hypot(v_.x(), v_.y());
   const double ux = speed > 0 ? v_.x() / speed : 0, uy = speed > 0 ? v_.y() / speed : 0;
-  const double ax = shake_hp_[0].Step(f.x()), ay = shake_hp_[1].Step(f.y()), az = shake_hp_[2].Step(f.z());
+  const double ax = shake_hp_[0].Step(f.x()), ay = shake_hp_[1].Step(f.y()),
+               az = shake_hp_[2].Step(f.z());
   shake_last_ = (ax * ux + ay * uy + az) / o_.mass_kg;
   interval_open_ = true;
 }
@@ -178,7 +186,8 @@ devices::DeviceCapabilities SimDevice::Capabilities() const {
 void SimDevice::SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept { t0_ = t0; }
 
 double SimDevice::Time() const noexcept {
-  return clock_ ? clock_->Now() : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  return clock_ ? clock_->Now()
+                : std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
 }
 
 void SimDevice::Reset() noexcept {
@@ -227,7 +236,8 @@ void SimDevice::WriteForce(const Eigen::Vector3d& force_N) noexcept {
 }
 
 // ---------------------------------------------------------------------------------------------
-SimRig::SimRig(const SimDeviceModel& m, const std::array<Eigen::Isometry3d, 2>& poses, double vibration_rate_hz)
+SimRig::SimRig(const SimDeviceModel& m, const std::array<Eigen::Isometry3d, 2>& poses,
+               double vibration_rate_hz)
     : actuator(hand, vibration_rate_hz),
       generic(std::make_unique<SimDevice>(m, hand, &clock)),
       device(generic.get()),

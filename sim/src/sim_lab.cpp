@@ -1,6 +1,7 @@
 #include "hapticlab/sim/sim_lab.hpp"
 
 #include <fmt/format.h>
+#include <toml++/toml.h>
 
 #include <algorithm>
 #include <array>
@@ -8,7 +9,6 @@
 #include <fstream>
 #include <numbers>
 #include <sstream>
-#include <toml++/toml.h>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -137,26 +137,29 @@ renderer::MaterialModel PlaceholderModel(const MaterialProfile& p) {
 
 namespace {
 
-void Number(const toml::table& t, const std::string& path, const std::string& pre, const char* key, double* out, double lo,
-            double hi, Diagnostics& diag) {
+void Number(const toml::table& t, const std::string& path, const std::string& pre, const char* key,
+            double* out, double lo, double hi, Diagnostics& diag) {
   const toml::node* n = t.get(key);
   if (!n) return;
   auto v = n->value<double>();
   if (!v || !(*v >= lo && *v <= hi))
-    diag.Add(path, static_cast<int>(n->source().begin.line), pre + "." + key, fmt::format("expected a number in [{}, {}]", lo, hi));
-  else *out = *v;
+    diag.Add(path, static_cast<int>(n->source().begin.line), pre + "." + key,
+             fmt::format("expected a number in [{}, {}]", lo, hi));
+  else
+    *out = *v;
 }
 
-void CheckKeys(const toml::table& t, const std::string& path, const std::string& pre, std::initializer_list<const char*> known,
-               Diagnostics& diag) {
+void CheckKeys(const toml::table& t, const std::string& path, const std::string& pre,
+               std::initializer_list<const char*> known, Diagnostics& diag) {
   for (const auto& [k, v] : t)
     if (std::none_of(known.begin(), known.end(), [&](const char* x) { return k.str() == x; }))
-      diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()), "unknown key (a typo?)");
+      diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
+               "unknown key (a typo?)");
 }
 
 // Per-criterion keys; `bias_sd` is the older name of offset_sd (profiles files).
-void ParseCriterion(const toml::table& t, const std::string& path, const std::string& pre, Diagnostics& diag,
-                    CriterionObserver* c) {
+void ParseCriterion(const toml::table& t, const std::string& path, const std::string& pre,
+                    Diagnostics& diag, CriterionObserver* c) {
   Number(t, path, pre, "sensitivity", &c->sensitivity, 0, 100, diag);
   Number(t, path, pre, "bias_sd", &c->offset_sd, 0, 100, diag);
   Number(t, path, pre, "offset_sd", &c->offset_sd, 0, 100, diag);
@@ -165,10 +168,12 @@ void ParseCriterion(const toml::table& t, const std::string& path, const std::st
   Number(t, path, pre, "noise_sd", &c->noise_sd, 0, 100, diag);
 }
 
-void ParseObserverTable(const toml::table& o, const std::string& path, Diagnostics& diag, ObserverParams* ob) {
+void ParseObserverTable(const toml::table& o, const std::string& path, Diagnostics& diag,
+                        ObserverParams* ob) {
   CheckKeys(o, path, "observer",
-            {"upper", "lower", "range_sd", "lapse_rate", "sensitivity", "bias_sd", "offset_sd", "material_sd", "method_sd",
-             "noise_sd", "scale_vibration", "scale_fluctuation", "scale_friction", "scale_stiffness", "scale_pattern"},
+            {"upper", "lower", "range_sd", "lapse_rate", "sensitivity", "bias_sd", "offset_sd",
+             "material_sd", "method_sd", "noise_sd", "scale_vibration", "scale_fluctuation",
+             "scale_friction", "scale_stiffness", "scale_pattern"},
             diag);
   Number(o, path, "observer", "upper", &ob->upper, 0, 1000, diag);
   Number(o, path, "observer", "lower", &ob->lower, 0, 1000, diag);
@@ -181,7 +186,8 @@ void ParseObserverTable(const toml::table& o, const std::string& path, Diagnosti
   Number(o, path, "observer", "scale_stiffness", &ob->scale_stiffness, 1e-3, 10, diag);
   Number(o, path, "observer", "scale_pattern", &ob->scale_pattern, 1e-3, 10, diag);
   if (const toml::node* u = o.get("upper"); u && !(ob->lower < ob->upper))
-    diag.Add(path, static_cast<int>(u->source().begin.line), "observer.upper", "expected upper > lower");
+    diag.Add(path, static_cast<int>(u->source().begin.line), "observer.upper",
+             "expected upper > lower");
 }
 
 }  // namespace
@@ -191,25 +197,32 @@ ObserverParams LoadObserver(const std::string& path) {
   try {
     doc = toml::parse(ReadTomlFile(path, "observer file"), path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics diag;
   ObserverParams ob;
   CheckKeys(doc, path, "", {"observer", "criterion"}, diag);
-  if (const toml::table* o = doc["observer"].as_table()) ParseObserverTable(*o, path, diag, &ob);
-  else diag.Add(path, 1, "observer", "missing [observer] table");
+  if (const toml::table* o = doc["observer"].as_table())
+    ParseObserverTable(*o, path, diag, &ob);
+  else
+    diag.Add(path, 1, "observer", "missing [observer] table");
   if (const toml::node* cn = doc.get("criterion")) {
     const toml::table* ct = cn->as_table();
-    if (!ct) diag.Add(path, static_cast<int>(cn->source().begin.line), "criterion", "expected [criterion.NAME] tables");
+    if (!ct)
+      diag.Add(path, static_cast<int>(cn->source().begin.line), "criterion",
+               "expected [criterion.NAME] tables");
     static const toml::table kEmpty;
-    for (const auto& [k, v] : ct ? *ct : kEmpty) {  // a reference: a copy would lose the source lines
+    for (const auto& [k, v] :
+         ct ? *ct : kEmpty) {  // a reference: a copy would lose the source lines
       const std::string pre = "criterion." + std::string(k.str());
       const toml::table* t = v.as_table();
       if (!t) {
         diag.Add(path, static_cast<int>(v.source().begin.line), pre, "expected a table");
         continue;
       }
-      CheckKeys(*t, path, pre, {"sensitivity", "offset_sd", "material_sd", "method_sd", "noise_sd"}, diag);
+      CheckKeys(*t, path, pre, {"sensitivity", "offset_sd", "material_sd", "method_sd", "noise_sd"},
+                diag);
       CriterionObserver c = ob.defaults;
       ParseCriterion(*t, path, pre, diag, &c);
       ob.criteria[std::string(k.str())] = c;
@@ -224,13 +237,13 @@ ProfileSet LoadProfiles(const std::string& path) {
   try {
     doc = toml::parse(ReadTomlFile(path), path);
   } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "", std::string(e.description()));
+    throw InputError(path, static_cast<int>(e.source().begin.line), "",
+                     std::string(e.description()));
   }
   Diagnostics diag;
   ProfileSet set;
-  auto num = [&](const toml::table& t, const std::string& pre, const char* key, double* out, double lo, double hi) {
-    Number(t, path, pre, key, out, lo, hi, diag);
-  };
+  auto num = [&](const toml::table& t, const std::string& pre, const char* key, double* out,
+                 double lo, double hi) { Number(t, path, pre, key, out, lo, hi, diag); };
   const toml::array* ps = doc["profile"].as_array();
   if (!ps) diag.Add(path, 1, "profile", "no [[profile]] tables");
   for (std::size_t i = 0; ps && i < ps->size(); ++i) {
@@ -239,15 +252,33 @@ ProfileSet LoadProfiles(const std::string& path) {
     if (!t) continue;
     MaterialProfile p;
     p.line = static_cast<int>(t->source().begin.line);
-    if (auto id = (*t)["id"].value<std::string>()) p.id = *id;
-    else diag.Add(path, p.line, pre + ".id", "missing; expected a string");
+    if (auto id = (*t)["id"].value<std::string>())
+      p.id = *id;
+    else
+      diag.Add(path, p.line, pre + ".id", "missing; expected a string");
     for (const auto& [k, v] : *t) {
-      static const char* known[] = {"id", "roughness_m", "wavelength_m", "anisotropy", "inhomogeneity", "micro_roughness_m",
-                                    "stiffness_N_per_m", "hc_n", "damping", "layer_thickness_m", "mu_k", "stribeck_ratio",
-                                    "stribeck_speed_mps", "load_exponent", "vibration_rms_mps2", "vibration_peak_hz",
-                                    "vibration_q", "notes"};
-      if (std::none_of(std::begin(known), std::end(known), [&](const char* x) { return k.str() == x; }))
-        diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()), "unknown key (a typo?)");
+      static const char* known[] = {"id",
+                                    "roughness_m",
+                                    "wavelength_m",
+                                    "anisotropy",
+                                    "inhomogeneity",
+                                    "micro_roughness_m",
+                                    "stiffness_N_per_m",
+                                    "hc_n",
+                                    "damping",
+                                    "layer_thickness_m",
+                                    "mu_k",
+                                    "stribeck_ratio",
+                                    "stribeck_speed_mps",
+                                    "load_exponent",
+                                    "vibration_rms_mps2",
+                                    "vibration_peak_hz",
+                                    "vibration_q",
+                                    "notes"};
+      if (std::none_of(std::begin(known), std::end(known),
+                       [&](const char* x) { return k.str() == x; }))
+        diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
+                 "unknown key (a typo?)");
     }
     num(*t, pre, "roughness_m", &p.roughness_m, 0, 1e-3);
     num(*t, pre, "wavelength_m", &p.wavelength_m, 1e-5, 0.05);
@@ -268,19 +299,22 @@ ProfileSet LoadProfiles(const std::string& path) {
     if (!p.id.empty() && !set.profiles.emplace(p.id, p).second)
       diag.Add(path, p.line, pre + ".id", "duplicate profile '" + p.id + "'");
   }
-  if (const toml::table* o = doc["observer"].as_table()) ParseObserverTable(*o, path, diag, &set.observer);
+  if (const toml::table* o = doc["observer"].as_table())
+    ParseObserverTable(*o, path, diag, &set.observer);
   diag.ThrowIfAny();
   return set;
 }
 
-Observer::Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria)
+Observer::Observer(const ObserverParams& p, std::uint64_t seed,
+                   const std::vector<std::string>& criteria)
     : p_(p), seed_(seed) {
   Rng rng(seed);
   for (const auto& c : criteria) offset_[c] = rng.Normal(0, p_.For(c).offset_sd);
   range_ = std::exp(rng.Normal(0, p_.range_sd));
 }
 
-double Observer::Effect(const char* kind, const std::string& c, const std::string& level, double sd) const {
+double Observer::Effect(const char* kind, const std::string& c, const std::string& level,
+                        double sd) const {
   if (sd <= 0 || level.empty()) return 0;
   Rng rng(DeriveSeed(seed_, internal::HashId(std::string(kind) + "\x1f" + c + "\x1f" + level)));
   return rng.Normal(0, sd);
@@ -302,13 +336,15 @@ double Observer::Distance(const std::string& c, const Features& a, const Feature
   return std::sqrt((rough * rough + dm * dm + dk * dk + geometry * geometry) / 4);
 }
 
-double Observer::Rate(const std::string& c, const std::string& material, const std::string& method, const Features& a,
-                      const Features& b, double lo, double hi, Rng& noise) const {
+double Observer::Rate(const std::string& c, const std::string& material, const std::string& method,
+                      const Features& a, const Features& b, double lo, double hi,
+                      Rng& noise) const {
   return RateDistance(c, material, method, Distance(c, a, b), lo, hi, noise);
 }
 
-double Observer::RateDistance(const std::string& c, const std::string& material, const std::string& method, double d,
-                              double lo, double hi, Rng& noise) const {
+double Observer::RateDistance(const std::string& c, const std::string& material,
+                              const std::string& method, double d, double lo, double hi,
+                              Rng& noise) const {
   const CriterionObserver& co = p_.For(c);
   const double g = co.sensitivity * d;
   const double latent = p_.lower + (p_.upper - p_.lower) * std::exp(-0.5 * g * g);
@@ -318,7 +354,8 @@ double Observer::RateDistance(const std::string& c, const std::string& material,
   // Both draws always happen, so a lapse does not shift the rest of the trial's stream.
   const double lapse = noise.Uniform(), e = noise.Normal(0, co.noise_sd), any = noise.Uniform();
   if (lapse < p_.lapse_rate) return lo + (hi - lo) * any;
-  const double s = mid + range_ * (latent - mid) + offset + Effect("material", c, material, co.material_sd) +
+  const double s = mid + range_ * (latent - mid) + offset +
+                   Effect("material", c, material, co.material_sd) +
                    Effect("method", c, method, co.method_sd) + e;
   return std::clamp(s, lo, hi);
 }

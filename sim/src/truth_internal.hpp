@@ -39,8 +39,8 @@ class TruthGeometry {
       macro_.push_back({iso_w, k * std::cos(th), k * std::sin(th), rng.Uniform(0, 2 * kPi)});
     }
     const double dir = rng.Uniform(0, kPi);
-    macro_.push_back({p.anisotropy * p.roughness_m * std::sqrt(2.0), k0 * std::cos(dir), k0 * std::sin(dir),
-                      rng.Uniform(0, 2 * kPi)});
+    macro_.push_back({p.anisotropy * p.roughness_m * std::sqrt(2.0), k0 * std::cos(dir),
+                      k0 * std::sin(dir), rng.Uniform(0, 2 * kPi)});
     beta_ = p.inhomogeneity;
     kp_ = k0 / 10;
     pp_ = rng.Uniform(0, 2 * kPi);
@@ -49,7 +49,8 @@ class TruthGeometry {
     // stroking speeds.
     for (int j = 0; j < 4; ++j) {
       const double k = 2 * kPi / rng.Uniform(0.25e-3, 0.5e-3), th = rng.Uniform(0, kPi);
-      micro_.push_back({p.micro_roughness_m / std::sqrt(2.0), k * std::cos(th), k * std::sin(th), rng.Uniform(0, 2 * kPi)});
+      micro_.push_back({p.micro_roughness_m / std::sqrt(2.0), k * std::cos(th), k * std::sin(th),
+                        rng.Uniform(0, 2 * kPi)});
     }
     bound_ = 0;
     for (const auto& w : macro_) bound_ += std::abs(w.a);
@@ -74,7 +75,8 @@ class TruthGeometry {
   }
   // Full height with micro-roughness, its gradient, and the second derivative along (ux, uy)
   // of the micro part (the stylus acceleration it imposes at speed 1 m/s).
-  void Full(double x, double y, double ux, double uy, double* h, double* hx, double* hy, double* micro_dd) const {
+  void Full(double x, double y, double ux, double uy, double* h, double* hx, double* hy,
+            double* micro_dd) const {
     Macro(x, y, h, hx, hy);
     double dd = 0;
     for (const auto& w : micro_) {
@@ -96,7 +98,8 @@ class TruthGeometry {
 
 // Contact vibration level of the truth at (speed, load) [m/s^2 RMS].
 inline double VibrationRms(const MaterialProfile& p, double v, double f) {
-  return p.vibration_rms_mps2 * std::pow(std::max(v, 0.0) / 0.08, 0.8) * std::pow(std::max(f, 0.0) / 1.2, 0.5);
+  return p.vibration_rms_mps2 * std::pow(std::max(v, 0.0) / 0.08, 0.8) *
+         std::pow(std::max(f, 0.0) / 1.2, 0.5);
 }
 
 // AR(2) resonator at f0 with quality Q at rate fs: c1, c2 and the stationary variance of its
@@ -107,6 +110,5 @@ inline void Resonator(double f0, double q, double fs, double* c1, double* c2, do
   *c2 = -r * r;
   *var = (1 - *c2) / ((1 + *c2) * ((1 - *c2) * (1 - *c2) - *c1 * *c1));
 }
-
 
 }  // namespace hapticlab::sim::internal

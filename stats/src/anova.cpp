@@ -29,7 +29,8 @@ MatrixXd Helmert(int k) {
 MatrixXd Kron(const MatrixXd& a, const MatrixXd& b) {
   MatrixXd r(a.rows() * b.rows(), a.cols() * b.cols());
   for (Eigen::Index i = 0; i < a.rows(); ++i)
-    for (Eigen::Index j = 0; j < a.cols(); ++j) r.block(i * b.rows(), j * b.cols(), b.rows(), b.cols()) = a(i, j) * b;
+    for (Eigen::Index j = 0; j < a.cols(); ++j)
+      r.block(i * b.rows(), j * b.cols(), b.rows(), b.cols()) = a(i, j) * b;
   return r;
 }
 
@@ -67,7 +68,8 @@ Sphericity FromCov(const MatrixXd& S, double nu, int columns) {
   // has the term's df; we follow R (the reference analysts compare with). The first-order
   // p-value (SPSS) is reported beside it.
   const double rho = 1 - (2.0 * p * p + p + 2) / (6.0 * p * nu);
-  const double w2 = (p + 2.0) * (p - 1) * (p - 2) * (2.0 * p * p * p + 6.0 * p * p + 3.0 * columns + 2) /
+  const double w2 = (p + 2.0) * (p - 1) * (p - 2) *
+                    (2.0 * p * p * p + 6.0 * p * p + 3.0 * columns + 2) /
                     (288.0 * std::pow(nu * p * rho, 2));
   const double z = -nu * rho * log_w;
   const double f = p * (p + 1) / 2.0 - 1;
@@ -93,7 +95,8 @@ std::vector<int> Terms(int n) {
   std::vector<int> t;
   for (int m = 1; m < (1 << n); ++m) t.push_back(m);
   std::stable_sort(t.begin(), t.end(), [](int a, int b) {
-    return __builtin_popcount(static_cast<unsigned>(a)) < __builtin_popcount(static_cast<unsigned>(b));
+    return __builtin_popcount(static_cast<unsigned>(a)) <
+           __builtin_popcount(static_cast<unsigned>(b));
   });
   return t;
 }
@@ -111,7 +114,8 @@ Sphericity SphericityFromLevelCovariance(const std::vector<std::vector<double>>&
   const auto k = static_cast<Eigen::Index>(S.size());
   MatrixXd m(k, k);
   for (Eigen::Index i = 0; i < k; ++i)
-    for (Eigen::Index j = 0; j < k; ++j) m(i, j) = S[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
+    for (Eigen::Index j = 0; j < k; ++j)
+      m(i, j) = S[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)];
   const MatrixXd c = Helmert(static_cast<int>(k));
   return FromCov(c.transpose() * m * c, n - 1.0, static_cast<int>(k));
 }
@@ -122,7 +126,8 @@ OneWayResult OneWayAnova(const LongTable& data, const std::string& factor) {
   for (std::size_t i = 0; i < data.rows(); ++i) groups[data.keys[c][i]].push_back(data.y[i]);
   const std::size_t k = groups.size();
   const std::size_t n = data.rows();
-  if (k < 2 || n <= k) throw InputError(data.source, 0, factor, "one-way ANOVA needs >= 2 groups and N > groups");
+  if (k < 2 || n <= k)
+    throw InputError(data.source, 0, factor, "one-way ANOVA needs >= 2 groups and N > groups");
   double grand = 0;
   for (double v : data.y) grand += v;
   grand /= static_cast<double>(n);
@@ -146,9 +151,11 @@ OneWayResult OneWayAnova(const LongTable& data, const std::string& factor) {
 }
 
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
-                      const std::vector<std::string>& within, const std::vector<std::string>& between) {
+                      const std::vector<std::string>& within,
+                      const std::vector<std::string>& between) {
   if (within.empty() && between.empty())
-    throw InputError(data.source, 0, "within", "at least one within- or between-subject factor is needed");
+    throw InputError(data.source, 0, "within",
+                     "at least one within- or between-subject factor is needed");
   RmAnovaResult res;
   res.factors = within;
   res.between = between;
@@ -183,7 +190,8 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     if (!varies)
       throw InputError(data.source, 0, within[f],
                        "'" + within[f] + "' is a between-subjects factor (every " + subject +
-                           " has one level of it): give it with --between " + within[f] + ", not as a within factor");
+                           " has one level of it): give it with --between " + within[f] +
+                           ", not as a within factor");
   }
   int ncells = 1;
   for (int l : nlev) ncells *= l;
@@ -219,7 +227,8 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       }
       throw InputError(data.source, 0, between[f],
                        "'" + between[f] + "' varies within " + subject + " " + s +
-                           ": a between factor must be constant per " + subject + " (give it with --within)");
+                           ": a between factor must be constant per " + subject +
+                           " (give it with --within)");
     }
     a.group = group;
     auto& c = a.cell[static_cast<std::size_t>(cell)];
@@ -235,7 +244,8 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     std::string s;
     for (int f = static_cast<int>(within.size()) - 1; f >= 0; --f) {
       const auto uf = static_cast<std::size_t>(f);
-      s = within[uf] + "=" + res.levels[uf][static_cast<std::size_t>(c % nlev[uf])] + (s.empty() ? "" : ",") + s;
+      s = within[uf] + "=" + res.levels[uf][static_cast<std::size_t>(c % nlev[uf])] +
+          (s.empty() ? "" : ",") + s;
       c /= nlev[uf];
     }
     return s;
@@ -256,8 +266,9 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
         why += "missing " + (data.y_name.empty() ? std::string("response") : data.y_name);
         for (std::size_t i = 0; i < a.missing_rows.size(); ++i) {
           const std::size_t r = a.missing_rows[i];
-          why += (i ? ", " : " at ") +
-                 (r < data.lines.size() ? data.source + ":" + std::to_string(data.lines[r]) : "row " + std::to_string(r + 1));
+          why += (i ? ", " : " at ") + (r < data.lines.size()
+                                            ? data.source + ":" + std::to_string(data.lines[r])
+                                            : "row " + std::to_string(r + 1));
         }
       }
       res.dropped_subjects.push_back(s);
@@ -272,25 +283,29 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     res.cells.push_back(std::move(row));
   }
   const int n = static_cast<int>(res.subjects.size());
-  if (n < 2) throw InputError(data.source, 0, subject, "fewer than 2 subjects with every cell observed");
+  if (n < 2)
+    throw InputError(data.source, 0, subject, "fewer than 2 subjects with every cell observed");
   for (int g = 0; g < ngroups; ++g)
     if (res.group_sizes[static_cast<std::size_t>(g)] == 0) {
       std::string name;
       int c = g;
       for (int f = static_cast<int>(between.size()) - 1; f >= 0; --f) {
         const auto uf = static_cast<std::size_t>(f);
-        name = between[uf] + "=" + res.between_levels[uf][static_cast<std::size_t>(c % nblev[uf])] + (name.empty() ? "" : ",") + name;
+        name = between[uf] + "=" + res.between_levels[uf][static_cast<std::size_t>(c % nblev[uf])] +
+               (name.empty() ? "" : ",") + name;
         c /= nblev[uf];
       }
       throw InputError(data.source, 0, between.empty() ? subject : between[0],
                        "no " + subject + " with every cell observed in the between cell " + name);
     }
   if (n <= ngroups)
-    throw InputError(data.source, 0, subject, "no error degrees of freedom: " + std::to_string(n) + " subjects in " +
-                                                  std::to_string(ngroups) + " between cells");
+    throw InputError(data.source, 0, subject,
+                     "no error degrees of freedom: " + std::to_string(n) + " subjects in " +
+                         std::to_string(ngroups) + " between cells");
   MatrixXd Y(n, ncells);
   for (int s = 0; s < n; ++s)
-    for (int c = 0; c < ncells; ++c) Y(s, c) = res.cells[static_cast<std::size_t>(s)][static_cast<std::size_t>(c)];
+    for (int c = 0; c < ncells; ++c)
+      Y(s, c) = res.cells[static_cast<std::size_t>(s)][static_cast<std::size_t>(c)];
 
   // Between design: intercept, then every between term (sum-to-zero codes, full factorial).
   const int nb = static_cast<int>(between.size());
@@ -337,7 +352,8 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
     for (int f = 0; f < nf; ++f) {
       const bool in = (wmask >> f) & 1;
       P = Kron(P, in ? Helmert(nlev[static_cast<std::size_t>(f)])
-                     : MatrixXd::Constant(nlev[static_cast<std::size_t>(f)], 1, 1.0 / std::sqrt(nlev[static_cast<std::size_t>(f)])));
+                     : MatrixXd::Constant(nlev[static_cast<std::size_t>(f)], 1,
+                                          1.0 / std::sqrt(nlev[static_cast<std::size_t>(f)])));
     }
     const MatrixXd Z = Y * P;
     const MatrixXd B = XtXi * (X.transpose() * Z);

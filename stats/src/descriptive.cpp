@@ -5,8 +5,8 @@
 #include <numeric>
 #include <stdexcept>
 
-#include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/stats/distributions.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -60,7 +60,8 @@ OutlierFence Outliers(const std::vector<double>& x, QuartileRule rule, double co
   const double n = static_cast<double>(s.size());
   OutlierFence f;
   auto at = [&](double pos1) {  // 1-based position, may be fractional
-    const auto lo = static_cast<std::size_t>(std::floor(pos1)) - 1, hi = static_cast<std::size_t>(std::ceil(pos1)) - 1;
+    const auto lo = static_cast<std::size_t>(std::floor(pos1)) - 1,
+               hi = static_cast<std::size_t>(std::ceil(pos1)) - 1;
     return 0.5 * (s[lo] + s[hi]);
   };
   if (rule == QuartileRule::kHinges) {

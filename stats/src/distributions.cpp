@@ -1,6 +1,7 @@
 #include "hapticlab/stats/distributions.hpp"
-#include "hapticlab/core/status.hpp"
 
+#include <algorithm>
+#include <array>
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/normal.hpp>
@@ -8,14 +9,14 @@
 #include <boost/math/quadrature/gauss.hpp>
 #include <boost/math/special_functions/erf.hpp>
 #include <boost/math/tools/roots.hpp>
-#include <algorithm>
-#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -76,7 +77,8 @@ double RangeUpper(double w, int k) {
 // Log density of s = sqrt(chi2_df / df).
 double LogChiMeanDensity(double s, double df) {
   if (!(s > 0)) return -std::numeric_limits<double>::infinity();
-  const double logc = 0.5 * df * std::log(df) - std::lgamma(0.5 * df) - (0.5 * df - 1) * std::log(2.0);
+  const double logc =
+      0.5 * df * std::log(df) - std::lgamma(0.5 * df) - (0.5 * df - 1) * std::log(2.0);
   return logc + (df - 1) * std::log(s) - 0.5 * df * s * s;
 }
 
@@ -91,8 +93,12 @@ double LogChiMeanDensity(double s, double df) {
 // function has it (checked against 25-digit quadrature in tests/stats/tukey_accuracy_test.cpp).
 template <class Inner, class LogInner>
 double OuterIntegral(double q, double df, Inner inner, LogInner log_inner) {
-  auto logg = [&](double s) { return s > 0 ? LogChiMeanDensity(s, df) + log_inner(q * s) : -INFINITY; };
-  auto g = [&](double s) { return s > 0 ? std::exp(LogChiMeanDensity(s, df)) * inner(q * s) : 0.0; };
+  auto logg = [&](double s) {
+    return s > 0 ? LogChiMeanDensity(s, df) + log_inner(q * s) : -INFINITY;
+  };
+  auto g = [&](double s) {
+    return s > 0 ? std::exp(LogChiMeanDensity(s, df)) * inner(q * s) : 0.0;
+  };
   const double mode = std::sqrt(std::max(df - 1, 0.0) / df), sd = 1.0 / std::sqrt(2.0 * df);
   // Golden-section search for the maximum of logg on (0, hi].
   double a = 0, b = mode + 40 * sd + 2;
@@ -173,7 +179,8 @@ class Cheb {
     }
     for (int i = 0; i < kN; ++i) {
       double sum = 0;
-      for (int j = 0; j < kN; ++j) sum += v[static_cast<std::size_t>(j)] * std::cos(std::numbers::pi * i * (j + 0.5) / kN);
+      for (int j = 0; j < kN; ++j)
+        sum += v[static_cast<std::size_t>(j)] * std::cos(std::numbers::pi * i * (j + 0.5) / kN);
       c_[static_cast<std::size_t>(i)] = 2.0 * sum / kN;
     }
   }
@@ -277,13 +284,17 @@ TukeyFamily::TukeyFamily(int k, double df) : k_(k), df_(df) {
 
 double TukeyFamily::Lower(double q) const {
   const Cheb& w = tables_->lower;
-  auto wf = [&w](double x) { return !(x > 0) ? 0.0 : x >= kLowerWMax ? 1.0 : std::clamp(w(x), 0.0, 1.0); };
+  auto wf = [&w](double x) {
+    return !(x > 0) ? 0.0 : x >= kLowerWMax ? 1.0 : std::clamp(w(x), 0.0, 1.0);
+  };
   if (!(q > 0)) return 0.0;
   if (std::isinf(df_)) return wf(q);
   // The smaller tail directly, the other as its complement.
   const double up = Upper(q);
   if (up <= 0.5) return 1.0 - up;
-  return std::min(1.0, OuterIntegral(q, df_, wf, [&wf](double x) { return std::log(std::max(wf(x), 1e-300)); }));
+  return std::min(1.0, OuterIntegral(q, df_, wf, [&wf](double x) {
+                    return std::log(std::max(wf(x), 1e-300));
+                  }));
 }
 
 double TukeyFamily::Upper(double q) const {
@@ -291,7 +302,8 @@ double TukeyFamily::Upper(double q) const {
   auto log_uf = [&t](double x) {
     if (!(x > 0)) return 0.0;
     if (x < t.median) return std::log1p(-std::clamp(t.lower(x), 0.0, 1.0));
-    return x >= kUpperWMax ? -std::numeric_limits<double>::infinity() : std::min(0.0, t.log_upper(x));
+    return x >= kUpperWMax ? -std::numeric_limits<double>::infinity()
+                           : std::min(0.0, t.log_upper(x));
   };
   auto uf = [&log_uf](double x) { return std::exp(log_uf(x)); };
   if (!(q > 0)) return 1.0;

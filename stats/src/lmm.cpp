@@ -114,7 +114,8 @@ class Pls {
     const int p = d_.blocks[block].p;
     MatrixXd T = MatrixXd::Zero(p, p);
     for (std::size_t t = 0; t < entries_.size(); ++t)
-      if (static_cast<std::size_t>(entries_[t].block) == block) T(entries_[t].i, entries_[t].j) = theta[static_cast<Eigen::Index>(t)];
+      if (static_cast<std::size_t>(entries_[t].block) == block)
+        T(entries_[t].i, entries_[t].j) = theta[static_cast<Eigen::Index>(t)];
     return T;
   }
 
@@ -125,7 +126,8 @@ class Pls {
       const auto& e = entries_[t];
       const auto& b = d_.blocks[static_cast<std::size_t>(e.block)];
       for (int l = 0; l < b.levels; ++l)
-        trip.emplace_back(b.offset + l * b.p + e.i, b.offset + l * b.p + e.j, theta[static_cast<Eigen::Index>(t)]);
+        trip.emplace_back(b.offset + l * b.p + e.i, b.offset + l * b.p + e.j,
+                          theta[static_cast<Eigen::Index>(t)]);
     }
     SpMat L(d_.Z.cols(), d_.Z.cols());
     L.setFromTriplets(trip.begin(), trip.end());
@@ -152,7 +154,6 @@ using lmm_internal::Jacobian;
 using lmm_internal::Minimum;
 using lmm_internal::NelderMead;
 
-
 // lmerTest's get_Fstat_ddf: the F denominator df from the per-direction df.
 double FStatDdf(const std::vector<double>& nu) {
   if (nu.size() == 1) return nu[0];
@@ -176,16 +177,19 @@ double FStatDdf(const std::vector<double>& nu) {
 // among the p coefficients (with sum-to-zero contrasts, lmerTest's type 3 contrasts).
 MatrixXd Selector(const std::vector<int>& columns, Eigen::Index p) {
   MatrixXd L = MatrixXd::Zero(static_cast<Eigen::Index>(columns.size()), p);
-  for (std::size_t i = 0; i < columns.size(); ++i) L(static_cast<Eigen::Index>(i), columns[i]) = 1.0;
+  for (std::size_t i = 0; i < columns.size(); ++i)
+    L(static_cast<Eigen::Index>(i), columns[i]) = 1.0;
   return L;
 }
 
-void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorXd& beta, LmmResult& r) {
+void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorXd& beta,
+                  LmmResult& r) {
   std::vector<double> gamma;
   for (const auto& t : r.random) {
     const auto k = t.names.size();
     for (std::size_t j = 0; j < k; ++j)
-      for (std::size_t i = j; i < k; ++i) gamma.push_back(i == j ? t.variance[i] : t.corr[i][j] * t.sd[i] * t.sd[j]);
+      for (std::size_t i = j; i < k; ++i)
+        gamma.push_back(i == j ? t.variance[i] : t.corr[i][j] * t.sd[i] * t.sd[j]);
   }
   for (double& g : gamma)
     if (!std::isfinite(g)) g = 0;  // a correlation with a zero variance: the covariance is 0
@@ -222,22 +226,27 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   const LmmFormula f = ParseLmmFormula(formula, data.source);
   const detail::LmmDesign d = detail::BuildLmmDesign(data, f);
   for (double v : data.y)
-    if (!std::isfinite(v)) throw InputError(data.source, 0, f.response, "missing response values are not supported");
+    if (!std::isfinite(v))
+      throw InputError(data.source, 0, f.response, "missing response values are not supported");
   const Eigen::Index p = d.X.cols();
   {
     Eigen::ColPivHouseholderQR<MatrixXd> qr(d.X);
     if (qr.rank() < p)
       throw InputError(data.source, 0, "--formula",
-                       "the fixed-effects design is rank deficient (rank " + std::to_string(qr.rank()) + " < " +
-                           std::to_string(p) + " columns): a cell of the design has no data?");
+                       "the fixed-effects design is rank deficient (rank " +
+                           std::to_string(qr.rank()) + " < " + std::to_string(p) +
+                           " columns): a cell of the design has no data?");
   }
-  if (d.X.rows() <= p) throw InputError(data.source, 0, "--formula", "fewer observations than fixed effects");
+  if (d.X.rows() <= p)
+    throw InputError(data.source, 0, "--formula", "fewer observations than fixed effects");
   if (options.kenward_roger && !options.reml)
-    throw InputError(data.source, 0, "--ddf", "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest): drop --ml");
+    throw InputError(data.source, 0, "--ddf",
+                     "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest): drop --ml");
   if (options.kenward_roger && d.X.rows() > kKenwardRogerMaxRows)
     throw InputError(data.source, 0, "--ddf",
-                     "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) + " observations exceed " +
-                         std::to_string(kKenwardRogerMaxRows) + " (use satterthwaite)");
+                     "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) +
+                         " observations exceed " + std::to_string(kKenwardRogerMaxRows) +
+                         " (use satterthwaite)");
 
   Pls pls(d, options.reml);
   LmmResult r;
@@ -246,7 +255,8 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   r.ddf = options.kenward_roger ? "Kenward-Roger" : "Satterthwaite";
   r.n = static_cast<int>(d.y.size());
   VectorXd theta0(pls.ntheta());
-  for (int t = 0; t < pls.ntheta(); ++t) theta0[t] = pls.lower()[static_cast<std::size_t>(t)] == 0.0 ? 1.0 : 0.0;
+  for (int t = 0; t < pls.ntheta(); ++t)
+    theta0[t] = pls.lower()[static_cast<std::size_t>(t)] == 0.0 ? 1.0 : 0.0;
   auto dev = [&](const VectorXd& th) { return pls.Deviance(th); };
   r.initial_cost = dev(theta0);
   const Minimum opt = NelderMead(dev, theta0, pls.lower(), options.max_evaluations);
@@ -296,7 +306,8 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
       rt.variance.push_back(S(i, i));
       rt.sd.push_back(std::sqrt(S(i, i)));
     }
-    rt.corr.assign(static_cast<std::size_t>(b.p), std::vector<double>(static_cast<std::size_t>(b.p), 1.0));
+    rt.corr.assign(static_cast<std::size_t>(b.p),
+                   std::vector<double>(static_cast<std::size_t>(b.p), 1.0));
     for (int i = 0; i < b.p; ++i)
       for (int j = 0; j < b.p; ++j)
         if (i != j) {

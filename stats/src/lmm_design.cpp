@@ -49,14 +49,16 @@ bool ValidName(const std::string& s) {
 }
 
 // "a*b:c" -> terms a, b:c, a:b:c ("*" expands to all interactions of its operands).
-void AddTerms(const std::string& piece, std::vector<std::vector<std::string>>& terms, const std::string& source) {
+void AddTerms(const std::string& piece, std::vector<std::vector<std::string>>& terms,
+              const std::string& source) {
   const auto factors = SplitTop(piece, '*');
   std::vector<std::vector<std::string>> ops;
   for (const auto& f : factors) {
     auto vars = SplitTop(f, ':');
     for (const auto& v : vars)
       if (!ValidName(v))
-        throw InputError(source, 0, "--formula", "expected a column name, got '" + v + "' in '" + piece + "'");
+        throw InputError(source, 0, "--formula",
+                         "expected a column name, got '" + v + "' in '" + piece + "'");
     ops.push_back(vars);
   }
   const std::size_t m = ops.size();
@@ -76,7 +78,8 @@ void Canonical(std::vector<std::vector<std::string>>& terms) {
     std::set<std::string> k(t.begin(), t.end());
     if (seen.insert(k).second) out.push_back(t);
   }
-  std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.size() < b.size(); });
+  std::stable_sort(out.begin(), out.end(),
+                   [](const auto& a, const auto& b) { return a.size() < b.size(); });
   terms = out;
 }
 
@@ -106,16 +109,20 @@ Column ReadColumn(const LongTable& data, const std::string& name, bool force_fac
   col.value.clear();
   col.levels = data.Levels(name);
   if (col.levels.size() < 2)
-    throw InputError(data.source, 0, name, "a factor needs at least 2 levels, found " + std::to_string(col.levels.size()));
+    throw InputError(
+        data.source, 0, name,
+        "a factor needs at least 2 levels, found " + std::to_string(col.levels.size()));
   for (const auto& s : raw)
-    col.level.push_back(static_cast<int>(std::lower_bound(col.levels.begin(), col.levels.end(), s) - col.levels.begin()));
+    col.level.push_back(static_cast<int>(std::lower_bound(col.levels.begin(), col.levels.end(), s) -
+                                         col.levels.begin()));
   return col;
 }
 
 // Columns of a term (product of its variables' codings, first variable fastest) in `out`.
 // `full`: a lone factor without an intercept gets one indicator per level (as R).
-void TermColumns(const std::vector<std::string>& term, std::map<std::string, Column>& cols, std::size_t n, bool full,
-                 std::vector<Eigen::VectorXd>& out, std::vector<std::string>& names) {
+void TermColumns(const std::vector<std::string>& term, std::map<std::string, Column>& cols,
+                 std::size_t n, bool full, std::vector<Eigen::VectorXd>& out,
+                 std::vector<std::string>& names) {
   std::vector<Eigen::VectorXd> cur{Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n))};
   std::vector<std::string> cur_names{""};
   for (const auto& v : term) {
@@ -123,7 +130,8 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
     std::vector<Eigen::VectorXd> code;
     std::vector<std::string> code_names;
     if (c.numeric) {
-      code.emplace_back(Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
+      code.emplace_back(
+          Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
       code_names.push_back(v);
     } else {
       const int k = static_cast<int>(c.levels.size());
@@ -131,9 +139,11 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
       for (int j = 0; j < ncol; ++j) {
         Eigen::VectorXd x(static_cast<Eigen::Index>(n));
         for (std::size_t r = 0; r < n; ++r)
-          x[static_cast<Eigen::Index>(r)] = c.level[r] == j ? 1.0 : (!full && c.level[r] == k - 1 ? -1.0 : 0.0);
+          x[static_cast<Eigen::Index>(r)] =
+              c.level[r] == j ? 1.0 : (!full && c.level[r] == k - 1 ? -1.0 : 0.0);
         code.push_back(x);
-        code_names.push_back(full ? v + c.levels[static_cast<std::size_t>(j)] : v + std::to_string(j + 1));
+        code_names.push_back(full ? v + c.levels[static_cast<std::size_t>(j)]
+                                  : v + std::to_string(j + 1));
       }
     }
     std::vector<Eigen::VectorXd> next;
@@ -141,7 +151,8 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
     for (std::size_t b = 0; b < code.size(); ++b)
       for (std::size_t a = 0; a < cur.size(); ++a) {  // earlier variables vary fastest
         next.emplace_back(cur[a].cwiseProduct(code[b]));
-        next_names.push_back(cur_names[a].empty() ? code_names[b] : cur_names[a] + ":" + code_names[b]);
+        next_names.push_back(cur_names[a].empty() ? code_names[b]
+                                                  : cur_names[a] + ":" + code_names[b]);
       }
     cur = next;
     cur_names = next_names;
@@ -180,20 +191,26 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
     throw InputError(source, 0, "--formula", "expected 'response ~ terms', got '" + formula + "'");
   LmmFormula f;
   f.response = s.substr(0, tilde);
-  if (!ValidName(f.response)) throw InputError(source, 0, "--formula", "expected a response column before '~'");
+  if (!ValidName(f.response))
+    throw InputError(source, 0, "--formula", "expected a response column before '~'");
   if (s.find('-') != std::string::npos)
-    throw InputError(source, 0, "--formula", "'-' is not supported (the fixed part always has an intercept)");
+    throw InputError(source, 0, "--formula",
+                     "'-' is not supported (the fixed part always has an intercept)");
   for (const auto& piece : SplitTop(s.substr(tilde + 1), '+')) {
     if (piece.empty()) throw InputError(source, 0, "--formula", "empty term in '" + formula + "'");
     if (piece.front() == '(') {
-      if (piece.back() != ')') throw InputError(source, 0, "--formula", "unbalanced parentheses in '" + piece + "'");
+      if (piece.back() != ')')
+        throw InputError(source, 0, "--formula", "unbalanced parentheses in '" + piece + "'");
       const std::string in = piece.substr(1, piece.size() - 2);
       const auto bar = in.find('|');
       if (bar == std::string::npos || in.find('|', bar + 1) != std::string::npos)
-        throw InputError(source, 0, "--formula", "expected '(terms | group)', got '" + piece + "' ('||' is not supported)");
+        throw InputError(source, 0, "--formula",
+                         "expected '(terms | group)', got '" + piece + "' ('||' is not supported)");
       LmmFormula::Random r;
       r.group = in.substr(bar + 1);
-      if (!ValidName(r.group)) throw InputError(source, 0, "--formula", "expected a grouping column after '|' in '" + piece + "'");
+      if (!ValidName(r.group))
+        throw InputError(source, 0, "--formula",
+                         "expected a grouping column after '|' in '" + piece + "'");
       bool saw_zero = false;
       for (const auto& t : SplitTop(in.substr(0, bar), '+')) {
         if (t == "1") continue;
@@ -205,18 +222,22 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
       }
       r.intercept = !saw_zero;
       Canonical(r.terms);
-      if (!r.intercept && r.terms.empty()) throw InputError(source, 0, "--formula", "random term '" + piece + "' is empty");
+      if (!r.intercept && r.terms.empty())
+        throw InputError(source, 0, "--formula", "random term '" + piece + "' is empty");
       f.random.push_back(r);
     } else if (piece == "1") {
       continue;
     } else if (piece == "0") {
-      throw InputError(source, 0, "--formula", "a fixed part without intercept ('0') is not supported");
+      throw InputError(source, 0, "--formula",
+                       "a fixed part without intercept ('0') is not supported");
     } else {
       AddTerms(piece, f.fixed, source);
     }
   }
   if (f.random.empty())
-    throw InputError(source, 0, "--formula", "no random term such as '(1 | participant)': use rm-anova for a fixed-effects model");
+    throw InputError(
+        source, 0, "--formula",
+        "no random term such as '(1 | participant)': use rm-anova for a fixed-effects model");
   Canonical(f.fixed);
   return f;
 }
@@ -229,7 +250,8 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
   std::set<std::string> groups;
   for (const auto& r : f.random) groups.insert(r.group);
   for (const auto& name : f.Columns())
-    if (name != f.response && !cols.count(name)) cols.emplace(name, ReadColumn(data, name, groups.count(name) > 0));
+    if (name != f.response && !cols.count(name))
+      cols.emplace(name, ReadColumn(data, name, groups.count(name) > 0));
   for (const auto& g : groups)
     if (cols.at(g).numeric) throw InputError(data.source, 0, g, "grouping column must be a factor");
   LmmDesign d;
@@ -238,7 +260,8 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
   d.x_names = {"(Intercept)"};
   for (const auto& t : f.fixed) {
     for (const auto& v : t)
-      if (groups.count(v) && cols.at(v).numeric) throw InputError(data.source, 0, v, "grouping column used as a number");
+      if (groups.count(v) && cols.at(v).numeric)
+        throw InputError(data.source, 0, v, "grouping column used as a number");
     LmmDesign::Term term{Join(t), {}};
     const auto before = xc.size();
     TermColumns(t, cols, n, false, xc, d.x_names);
@@ -265,13 +288,15 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
       zc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
       b.names.emplace_back("(Intercept)");
     }
-    const bool full = !r.intercept && r.terms.size() == 1 && r.terms[0].size() == 1 && !cols.at(r.terms[0][0]).numeric;
+    const bool full = !r.intercept && r.terms.size() == 1 && r.terms[0].size() == 1 &&
+                      !cols.at(r.terms[0][0]).numeric;
     for (const auto& t : r.terms) {
       bool has_factor = false;
       for (const auto& v : t) has_factor = has_factor || !cols.at(v).numeric;
       if (!r.intercept && has_factor && !full)
-        throw InputError(data.source, 0, "--formula",
-                         "a random term without intercept may hold numeric columns or one factor only");
+        throw InputError(
+            data.source, 0, "--formula",
+            "a random term without intercept may hold numeric columns or one factor only");
       TermColumns(t, cols, n, full, zc, b.names);
     }
     const Column& g = cols.at(r.group);

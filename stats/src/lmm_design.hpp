@@ -12,20 +12,20 @@ namespace hapticlab::stats::detail {
 
 struct LmmDesign {
   Eigen::VectorXd y;
-  Eigen::MatrixXd X;                       ///< n x p, intercept first, R's column order
+  Eigen::MatrixXd X;  ///< n x p, intercept first, R's column order
   std::vector<std::string> x_names;
   struct Term {
     std::string name;
-    std::vector<int> columns;              ///< of X
+    std::vector<int> columns;  ///< of X
   };
-  std::vector<Term> x_terms;               ///< fixed terms (no intercept), for the F tests
-  Eigen::SparseMatrix<double> Z;           ///< n x q; block k: level-major, p_k columns per level
+  std::vector<Term> x_terms;      ///< fixed terms (no intercept), for the F tests
+  Eigen::SparseMatrix<double> Z;  ///< n x q; block k: level-major, p_k columns per level
   struct Block {
     std::string group;
-    int levels = 0, p = 0, offset = 0;     ///< offset: first column in Z
+    int levels = 0, p = 0, offset = 0;  ///< offset: first column in Z
     std::vector<std::string> names;
   };
-  std::vector<Block> blocks;               ///< lme4's order: most levels first
+  std::vector<Block> blocks;  ///< lme4's order: most levels first
 };
 
 /// @throws hapticlab::InputError (data.source, column) for a missing column, a factor with one
@@ -34,13 +34,14 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f);
 
 /// pbkrtest's vcovAdj: the Kenward-Roger adjusted cov(β̂) and what the df need.
 struct KrAdjusted {
-  Eigen::MatrixXd PhiA;               ///< adjusted covariance of β̂
-  std::vector<Eigen::MatrixXd> P;     ///< -X'V⁻¹ G_r V⁻¹ X
-  Eigen::MatrixXd W;                  ///< 2 × inverse expected information of γ
+  Eigen::MatrixXd PhiA;            ///< adjusted covariance of β̂
+  std::vector<Eigen::MatrixXd> P;  ///< -X'V⁻¹ G_r V⁻¹ X
+  Eigen::MatrixXd W;               ///< 2 × inverse expected information of γ
 };
 /// @param gamma the variance-covariance elements (per block its covariance's lower
 ///        triangle, column-major; then σ²) @param Phi unadjusted cov(β̂) = (X'V⁻¹X)⁻¹
-KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma, const Eigen::MatrixXd& Phi);
+KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma,
+                            const Eigen::MatrixXd& Phi);
 
 struct KrTest {
   double ddf = 0, F = 0, scaling = 1;  ///< F already scaled (pbkrtest's Fstat)

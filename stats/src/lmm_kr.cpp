@@ -17,7 +17,8 @@ namespace hapticlab::stats::detail {
 using Eigen::MatrixXd;
 using SpMat = Eigen::SparseMatrix<double>;
 
-KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma, const MatrixXd& Phi) {
+KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma,
+                            const MatrixXd& Phi) {
   const Eigen::Index n = d.X.rows();
   // G_r: for term k and element (i, j) of its covariance, Z_i Z_j' + Z_j Z_i' (i ≠ j) or
   // Z_i Z_i', where Z_i holds column i of the term for every level.
@@ -28,7 +29,8 @@ KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma
       std::vector<Eigen::Triplet<double>> t;
       for (int l = 0; l < b.levels; ++l) {
         const int col = b.offset + l * b.p + i;
-        for (SpMat::InnerIterator it(d.Z, col); it; ++it) t.emplace_back(static_cast<int>(it.row()), l, it.value());
+        for (SpMat::InnerIterator it(d.Z, col); it; ++it)
+          t.emplace_back(static_cast<int>(it.row()), l, it.value());
       }
       SpMat z(n, b.levels);
       z.setFromTriplets(t.begin(), t.end());
@@ -36,7 +38,8 @@ KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma
     }
     for (int j = 0; j < b.p; ++j)
       for (int i = j; i < b.p; ++i) {
-        SpMat g = Zc[static_cast<std::size_t>(i)] * SpMat(Zc[static_cast<std::size_t>(j)].transpose());
+        SpMat g =
+            Zc[static_cast<std::size_t>(i)] * SpMat(Zc[static_cast<std::size_t>(j)].transpose());
         if (i != j) g = SpMat(g + SpMat(g.transpose()));
         G.push_back(g);
       }
@@ -67,7 +70,8 @@ KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma
     const MatrixXd PhiP = Phi * a.P[r];
     for (std::size_t s = r; s < m; ++s) {
       const double ktrace = H[r].transpose().cwiseProduct(H[s]).sum();
-      const double v = ktrace - 2.0 * Phi.cwiseProduct(Q[r][s]).sum() + PhiP.cwiseProduct(a.P[s] * Phi).sum();
+      const double v =
+          ktrace - 2.0 * Phi.cwiseProduct(Q[r][s]).sum() + PhiP.cwiseProduct(a.P[s] * Phi).sum();
       IE2(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) = v;
       IE2(static_cast<Eigen::Index>(s), static_cast<Eigen::Index>(r)) = v;
     }
@@ -78,23 +82,28 @@ KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma
     a.W = 2.0 * IE2.inverse();
   } else {  // pbkrtest: 2 * MASS::ginv(IE2)
     Eigen::VectorXd inv = eig.eigenvalues();
-    const double tol = std::sqrt(std::numeric_limits<double>::epsilon()) * eig.eigenvalues().cwiseAbs().maxCoeff();
-    for (Eigen::Index i = 0; i < inv.size(); ++i) inv[i] = std::abs(inv[i]) > tol ? 1.0 / inv[i] : 0.0;
+    const double tol =
+        std::sqrt(std::numeric_limits<double>::epsilon()) * eig.eigenvalues().cwiseAbs().maxCoeff();
+    for (Eigen::Index i = 0; i < inv.size(); ++i)
+      inv[i] = std::abs(inv[i]) > tol ? 1.0 / inv[i] : 0.0;
     a.W = 2.0 * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
   }
   const Eigen::Index p = d.X.cols();
   MatrixXd U = MatrixXd::Zero(p, p);
   for (std::size_t r = 0; r + 1 < m; ++r)
     for (std::size_t s = r + 1; s < m; ++s)
-      U += a.W(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) * (Q[r][s] - a.P[r] * Phi * a.P[s]);
+      U += a.W(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(s)) *
+           (Q[r][s] - a.P[r] * Phi * a.P[s]);
   U = MatrixXd(U + U.transpose());
   for (std::size_t r = 0; r < m; ++r)
-    U += a.W(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) * (Q[r][r] - a.P[r] * Phi * a.P[r]);
+    U += a.W(static_cast<Eigen::Index>(r), static_cast<Eigen::Index>(r)) *
+         (Q[r][r] - a.P[r] * Phi * a.P[r]);
   a.PhiA = Phi + 2.0 * Phi * U * Phi;
   return a;
 }
 
-KrTest KenwardRogerTest(const KrAdjusted& a, const MatrixXd& Phi, const MatrixXd& L, const Eigen::VectorXd& beta) {
+KrTest KenwardRogerTest(const KrAdjusted& a, const MatrixXd& Phi, const MatrixXd& L,
+                        const Eigen::VectorXd& beta) {
   const MatrixXd Theta = L.transpose() * (L * Phi * L.transpose()).ldlt().solve(L);
   const MatrixXd ThetaPhi = Theta * Phi;
   double A1 = 0, A2 = 0;
@@ -119,7 +128,8 @@ KrTest KenwardRogerTest(const KrAdjusted& a, const MatrixXd& Phi, const MatrixXd
   const double V2 = 1 - c3 * B;
   if (std::abs(V0) < 1e-10) V0 = 0;
   const double x = 1 - A2 / q;
-  const double ratio = (std::abs(x) < 1e-14 && std::abs(V1) < 1e-14) ? 1.0 : x / V1;  // pbkrtest's .divZero
+  const double ratio =
+      (std::abs(x) < 1e-14 && std::abs(V1) < 1e-14) ? 1.0 : x / V1;  // pbkrtest's .divZero
   const double rho = ratio * ratio * V0 / V2 / q;
   KrTest t;
   t.ddf = 4 + (q + 2) / (q * rho - 1);

@@ -11,9 +11,8 @@ namespace hapticlab::stats::lmm_internal {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-
-Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0, const std::vector<double>& lower,
-                   int max_evals) {
+Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0,
+                   const std::vector<double>& lower, int max_evals) {
   const Eigen::Index m = x0.size();
   auto project = [&](VectorXd x) {
     for (Eigen::Index i = 0; i < m; ++i) x[i] = std::max(x[i], lower[static_cast<std::size_t>(i)]);
@@ -47,7 +46,8 @@ Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0,
       sx = s2;
       fx = f2;
       double extent = 0;
-      for (std::size_t i = 1; i < sx.size(); ++i) extent = std::max(extent, (sx[i] - sx[0]).lpNorm<Eigen::Infinity>());
+      for (std::size_t i = 1; i < sx.size(); ++i)
+        extent = std::max(extent, (sx[i] - sx[0]).lpNorm<Eigen::Infinity>());
       if (fx.back() - fx.front() <= 1e-12 * (1.0 + std::abs(fx.front())) && extent < 1e-9) {
         done = true;
         break;
@@ -76,7 +76,8 @@ Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0,
         fx.back() = fr;
       } else {
         const bool outside = fr < fx.back();
-        const VectorXd xc = project(outside ? VectorXd(c + 0.5 * (xr - c)) : VectorXd(c + 0.5 * (sx.back() - c)));
+        const VectorXd xc =
+            project(outside ? VectorXd(c + 0.5 * (xr - c)) : VectorXd(c + 0.5 * (sx.back() - c)));
         const double fc = eval(xc);
         if (fc < std::min(fr, fx.back())) {
           sx.back() = xc;
@@ -151,7 +152,8 @@ MatrixXd Hessian(const std::function<double(const VectorXd&)>& f, const VectorXd
 }
 
 // d C / d x_i for a matrix-valued C(x), each by Richardson-extrapolated central differences.
-std::vector<MatrixXd> Jacobian(const std::function<MatrixXd(const VectorXd&)>& C, const VectorXd& x) {
+std::vector<MatrixXd> Jacobian(const std::function<MatrixXd(const VectorXd&)>& C,
+                               const VectorXd& x) {
   std::vector<MatrixXd> J;
   for (Eigen::Index i = 0; i < x.size(); ++i) {
     const double h0 = Step0(x[i]);

@@ -63,7 +63,8 @@ KruskalResult KruskalWallis(const LongTable& data, const std::string& factor) {
       d.b = r.groups[static_cast<std::size_t>(j)];
       d.n_a = gi.second;
       d.n_b = gj.second;
-      d.z = (gj.first / gj.second - gi.first / gi.second) / std::sqrt(var * (1.0 / gi.second + 1.0 / gj.second));
+      d.z = (gj.first / gj.second - gi.first / gi.second) /
+            std::sqrt(var * (1.0 / gi.second + 1.0 / gj.second));
       d.p = PnormTwoSided(d.z);
       d.p_adj = std::min(1.0, d.p * m);
       r.dunn.push_back(d);

@@ -6,15 +6,15 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "hapticlab/stats/descriptive.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/stats/descriptive.hpp"
 
 namespace hapticlab::stats {
 namespace {
 
 // Colour-blind-safe palette (Okabe-Ito), slots 1.. of colour map 0.
-constexpr int kPalette[][3] = {{0, 114, 178}, {230, 159, 0}, {0, 158, 115}, {204, 121, 167},
-                               {86, 180, 233}, {213, 94, 0}, {240, 228, 66}, {120, 120, 120}};
+constexpr int kPalette[][3] = {{0, 114, 178},  {230, 159, 0}, {0, 158, 115},  {204, 121, 167},
+                               {86, 180, 233}, {213, 94, 0},  {240, 228, 66}, {120, 120, 120}};
 
 // Opens one PLplot stream on a cairo device; plend() closes it.
 void Begin(const char* device, const std::string& file, int width, int height) {
@@ -54,14 +54,17 @@ void DrawBars(const BarChart& c) {
   // A single unnamed group: each bar is labelled with its series name.
   if (ng == 1 && c.groups[0].empty())
     for (int s = 0; s < ns; ++s)
-      plmtex("b", 1.5, (-0.4 + (s + 0.45) * w + 0.6) / (ng + 0.2), 0.5, c.series[static_cast<std::size_t>(s)].name.c_str());
+      plmtex("b", 1.5, (-0.4 + (s + 0.45) * w + 0.6) / (ng + 0.2), 0.5,
+             c.series[static_cast<std::size_t>(s)].name.c_str());
   for (int g = 0; g < ng; ++g) {
     // Group label below the axis: vertical when there are many groups.
     const double x = g;
     plcol0(15);
     const double pos = (g + 0.6) / (ng + 0.2);  // the window spans [-0.6, ng - 0.4]
-    if (ng > 4) plmtex("bv", 0.5, pos, 1.0, c.groups[static_cast<std::size_t>(g)].c_str());
-    else plmtex("b", 1.5, pos, 0.5, c.groups[static_cast<std::size_t>(g)].c_str());
+    if (ng > 4)
+      plmtex("bv", 0.5, pos, 1.0, c.groups[static_cast<std::size_t>(g)].c_str());
+    else
+      plmtex("b", 1.5, pos, 0.5, c.groups[static_cast<std::size_t>(g)].c_str());
     double top = c.y_min;
     for (int s = 0; s < ns; ++s) {
       const auto& se = c.series[static_cast<std::size_t>(s)];
@@ -78,9 +81,11 @@ void DrawBars(const BarChart& c) {
       }
       top = std::max(top, m + (std::isfinite(e) ? e : 0));
     }
-    if (g < static_cast<int>(c.group_marks.size()) && !c.group_marks[static_cast<std::size_t>(g)].empty()) {
+    if (g < static_cast<int>(c.group_marks.size()) &&
+        !c.group_marks[static_cast<std::size_t>(g)].empty()) {
       plcol0(15);
-      plptex(x, top + 0.04 * (c.y_max - c.y_min), 1, 0, 0.5, c.group_marks[static_cast<std::size_t>(g)].c_str());
+      plptex(x, top + 0.04 * (c.y_max - c.y_min), 1, 0, 0.5,
+             c.group_marks[static_cast<std::size_t>(g)].c_str());
     }
   }
   // Significance brackets (single-group charts: between series).
@@ -96,9 +101,11 @@ void DrawBars(const BarChart& c) {
   }
   // Legend: coloured squares with series names along the top.
   for (int s = 0; s < ns; ++s) {
-    const double lx = -0.5 + s * (ng + 0.1) / std::max(ns, 1), ly = c.y_max - 0.04 * (c.y_max - c.y_min);
+    const double lx = -0.5 + s * (ng + 0.1) / std::max(ns, 1),
+                 ly = c.y_max - 0.04 * (c.y_max - c.y_min);
     plcol0(1 + s % 8);
-    Rect(lx, lx + 0.05 * (ng + 0.2) / 4, ly - 0.02 * (c.y_max - c.y_min), ly + 0.01 * (c.y_max - c.y_min));
+    Rect(lx, lx + 0.05 * (ng + 0.2) / 4, ly - 0.02 * (c.y_max - c.y_min),
+         ly + 0.01 * (c.y_max - c.y_min));
     plcol0(15);
     std::string label = c.series[static_cast<std::size_t>(s)].name;
     if (s == 0 && !c.error_label.empty()) label += "   (bars: " + c.error_label + ")";

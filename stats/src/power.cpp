@@ -35,15 +35,25 @@ std::vector<PowerTally> AnalyseOnce(const LongTable& data, double alpha) {
     if (within.empty()) continue;
     const auto a = RmAnova(cm, "participant", within);
     for (const auto& e : a.effects)
-      out.push_back({.criterion = crit, .effect = e.effect, .hits = e.p < alpha ? 1 : 0, .runs = 1,
+      out.push_back({.criterion = crit,
+                     .effect = e.effect,
+                     .hits = e.p < alpha ? 1 : 0,
+                     .runs = 1,
                      .sum_pes = std::isfinite(e.pes) ? e.pes : 0});
   }
   return out;
 }
 
-PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& generate, const PowerOptions& o) {
-  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards) throw InputError("<command line>", 0, "shard", "expected i/N with 0 <= i < N");
-  PowerResult r{.protocol = protocol, .simulations = o.simulations, .seed = o.seed, .shard = o.shard, .shards = o.shards, .rows = {}};
+PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& generate,
+                          const PowerOptions& o) {
+  if (o.shards < 1 || o.shard < 0 || o.shard >= o.shards)
+    throw InputError("<command line>", 0, "shard", "expected i/N with 0 <= i < N");
+  PowerResult r{.protocol = protocol,
+                .simulations = o.simulations,
+                .seed = o.seed,
+                .shard = o.shard,
+                .shards = o.shards,
+                .rows = {}};
   std::vector<long> mine;  // simulation indices of this shard
   for (long s = o.shard; s < o.simulations; s += o.shards) mine.push_back(s);
   const long total = static_cast<long>(mine.size() * o.participants.size());
@@ -57,7 +67,8 @@ PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& gen
     // Simulation i of this shard; an error stops every worker and is rethrown below.
     auto simulate = [&](std::size_t i) {
       try {
-        Rng rng(DeriveSeed(DeriveSeed(o.seed, static_cast<std::uint64_t>(n)), static_cast<std::uint64_t>(mine[i])));
+        Rng rng(DeriveSeed(DeriveSeed(o.seed, static_cast<std::uint64_t>(n)),
+                           static_cast<std::uint64_t>(mine[i])));
         per[i] = AnalyseOnce(generate(n, rng), o.alpha);
       } catch (...) {
         const std::lock_guard lock(error_mutex);
@@ -84,9 +95,12 @@ PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& gen
     PowerRow row{.participants = n, .effects = {}};
     for (const auto& sim : per)
       for (const auto& t : sim) {
-        if (!o.effects.empty() && std::find(o.effects.begin(), o.effects.end(), t.effect) == o.effects.end()) continue;
-        auto it = std::find_if(row.effects.begin(), row.effects.end(),
-                               [&](const PowerTally& x) { return x.criterion == t.criterion && x.effect == t.effect; });
+        if (!o.effects.empty() &&
+            std::find(o.effects.begin(), o.effects.end(), t.effect) == o.effects.end())
+          continue;
+        auto it = std::find_if(row.effects.begin(), row.effects.end(), [&](const PowerTally& x) {
+          return x.criterion == t.criterion && x.effect == t.effect;
+        });
         if (it == row.effects.end()) {
           row.effects.push_back(t);
         } else {
@@ -122,13 +136,20 @@ std::string PowerToJson(const PowerResult& r) {
     for (const auto& t : row.effects) {
       double lo, hi;
       WilsonInterval(t.hits, t.runs, &lo, &hi);
-      effects.push_back({{"criterion", t.criterion}, {"effect", t.effect}, {"power", t.power()}, {"ci_low", lo},
-                         {"ci_high", hi}, {"mean_pes", t.mean_pes()}, {"hits", t.hits}, {"runs", t.runs},
+      effects.push_back({{"criterion", t.criterion},
+                         {"effect", t.effect},
+                         {"power", t.power()},
+                         {"ci_low", lo},
+                         {"ci_high", hi},
+                         {"mean_pes", t.mean_pes()},
+                         {"hits", t.hits},
+                         {"runs", t.runs},
                          {"sum_pes", t.sum_pes}});
     }
     rows.push_back({{"participants", row.participants}, {"effects", effects}});
   }
-  json j = {{"protocol", r.protocol}, {"simulations", r.simulations}, {"seed", r.seed}, {"rows", rows}};
+  json j = {
+      {"protocol", r.protocol}, {"simulations", r.simulations}, {"seed", r.seed}, {"rows", rows}};
   if (r.shards > 1) {
     j["shard"] = r.shard;
     j["shards"] = r.shards;
@@ -148,18 +169,22 @@ PowerResult PowerFromJson(const std::string& text, const std::string& file) {
     for (const auto& row : j.at("rows")) {
       PowerRow pr{.participants = row.at("participants").get<int>(), .effects = {}};
       for (const auto& e : row.at("effects"))
-        pr.effects.push_back({.criterion = e.at("criterion").get<std::string>(), .effect = e.at("effect").get<std::string>(),
-                              .hits = e.at("hits").get<long>(), .runs = e.at("runs").get<long>(),
+        pr.effects.push_back({.criterion = e.at("criterion").get<std::string>(),
+                              .effect = e.at("effect").get<std::string>(),
+                              .hits = e.at("hits").get<long>(),
+                              .runs = e.at("runs").get<long>(),
                               .sum_pes = e.at("sum_pes").get<double>()});
       r.rows.push_back(std::move(pr));
     }
   } catch (const json::exception& e) {
-    throw InputError(file, 0, "", std::string("not a study power result (written with --json): ") + e.what());
+    throw InputError(file, 0, "",
+                     std::string("not a study power result (written with --json): ") + e.what());
   }
   return r;
 }
 
-PowerResult MergePower(const std::vector<PowerResult>& parts, const std::vector<std::string>& files) {
+PowerResult MergePower(const std::vector<PowerResult>& parts,
+                       const std::vector<std::string>& files) {
   if (parts.empty()) throw InputError("<command line>", 0, "merge", "no files to merge");
   PowerResult m = parts[0];
   m.shard = 0;
@@ -168,19 +193,25 @@ PowerResult MergePower(const std::vector<PowerResult>& parts, const std::vector<
   for (std::size_t i = 0; i < parts.size(); ++i) {
     const auto& p = parts[i];
     const std::string& f = i < files.size() ? files[i] : std::string();
-    if (p.protocol != m.protocol || p.seed != m.seed || p.simulations != m.simulations || p.shards != parts[0].shards)
-      throw InputError(f, 0, "protocol/seed/simulations/shards", "does not belong to the same run as " + files[0]);
-    if (!seen.insert(p.shard).second) throw InputError(f, 0, "shard", fmt::format("shard {} given twice", p.shard));
-    if (p.rows.size() != m.rows.size()) throw InputError(f, 0, "rows", "different participant counts");
+    if (p.protocol != m.protocol || p.seed != m.seed || p.simulations != m.simulations ||
+        p.shards != parts[0].shards)
+      throw InputError(f, 0, "protocol/seed/simulations/shards",
+                       "does not belong to the same run as " + files[0]);
+    if (!seen.insert(p.shard).second)
+      throw InputError(f, 0, "shard", fmt::format("shard {} given twice", p.shard));
+    if (p.rows.size() != m.rows.size())
+      throw InputError(f, 0, "rows", "different participant counts");
     if (i == 0) continue;
     for (std::size_t r = 0; r < p.rows.size(); ++r) {
       if (p.rows[r].participants != m.rows[r].participants)
         throw InputError(f, 0, "rows", "different participant counts");
       for (const auto& t : p.rows[r].effects) {
         auto& effs = m.rows[r].effects;
-        auto it = std::find_if(effs.begin(), effs.end(),
-                               [&](const PowerTally& x) { return x.criterion == t.criterion && x.effect == t.effect; });
-        if (it == effs.end()) throw InputError(f, 0, "effects", "an effect the first file lacks: " + t.effect);
+        auto it = std::find_if(effs.begin(), effs.end(), [&](const PowerTally& x) {
+          return x.criterion == t.criterion && x.effect == t.effect;
+        });
+        if (it == effs.end())
+          throw InputError(f, 0, "effects", "an effect the first file lacks: " + t.effect);
         it->hits += t.hits;
         it->runs += t.runs;
         it->sum_pes += t.sum_pes;
@@ -188,20 +219,21 @@ PowerResult MergePower(const std::vector<PowerResult>& parts, const std::vector<
     }
   }
   if (static_cast<int>(seen.size()) != parts[0].shards)
-    throw InputError(files[0], 0, "shards", fmt::format("{} of {} shards given", seen.size(), parts[0].shards));
+    throw InputError(files[0], 0, "shards",
+                     fmt::format("{} of {} shards given", seen.size(), parts[0].shards));
   return m;
 }
 
 std::string PowerTable(const PowerResult& r) {
   std::ostringstream os;
-  os << fmt::format("{:>12} {:>10} {:>16} {:>7} {:>17} {:>9}\n", "participants", "criterion", "effect", "power",
-                    "95% CI (Wilson)", "mean pes");
+  os << fmt::format("{:>12} {:>10} {:>16} {:>7} {:>17} {:>9}\n", "participants", "criterion",
+                    "effect", "power", "95% CI (Wilson)", "mean pes");
   for (const auto& row : r.rows)
     for (const auto& t : row.effects) {
       double lo, hi;
       WilsonInterval(t.hits, t.runs, &lo, &hi);
-      os << fmt::format("{:>12} {:>10} {:>16} {:>7.3f}    [{:.3f}, {:.3f}] {:>9.3f}\n", row.participants, t.criterion,
-                        t.effect, t.power(), lo, hi, t.mean_pes());
+      os << fmt::format("{:>12} {:>10} {:>16} {:>7.3f}    [{:.3f}, {:.3f}] {:>9.3f}\n",
+                        row.participants, t.criterion, t.effect, t.power(), lo, hi, t.mean_pes());
     }
   return os.str();
 }
@@ -226,10 +258,12 @@ std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string
   return DrawLinePlot(l, base);
 }
 
-int ParticipantsFor(const PowerResult& r, const std::string& criterion, const std::string& effect, double target) {
+int ParticipantsFor(const PowerResult& r, const std::string& criterion, const std::string& effect,
+                    double target) {
   for (const auto& row : r.rows)
     for (const auto& t : row.effects)
-      if (t.criterion == criterion && t.effect == effect && t.power() >= target) return row.participants;
+      if (t.criterion == criterion && t.effect == effect && t.power() >= target)
+        return row.participants;
   return 0;
 }
 

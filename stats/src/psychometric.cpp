@@ -157,8 +157,7 @@ PsychometricFit FitPsychometric(const PsychometricData& d, const PsychometricFit
   for (std::size_t i = 0; i < d.x.size(); ++i) {
     if (d.n[i] < 1 || d.k[i] < 0 || d.k[i] > d.n[i])
       return unusable(fmt::format("bin {} has k = {} of n = {}", i, d.k[i], d.n[i]));
-    if (o.shape == Shape::kWeibull && !(d.x[i] > 0))
-      return unusable("a Weibull needs stimuli > 0");
+    if (o.shape == Shape::kWeibull && !(d.x[i] > 0)) return unusable("a Weibull needs stimuli > 0");
     gx.push_back(psychophysics::Predictor(o.shape, d.x[i]));
   }
   if (gx.size() < 2 ||

@@ -10,11 +10,11 @@
 #include <map>
 #include <sstream>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
-#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -278,7 +278,8 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
                                 ? psychophysics::StimulusAt(so.shape, truth, a.jnd_performance)
                                 : std::nullopt;
       md << fmt::format(
-          "\nSessions run with `--device sim` and no `--ui` answered from the simulated observer: {} threshold "
+          "\nSessions run with `--device sim` and no `--ui` answered from the simulated observer: "
+          "{} threshold "
           "{}, slope {}, lapse "
           "{}; its true JND is {}{}.\n",
           psychophysics::ToString(so.shape), so.threshold, so.slope, so.lapse,

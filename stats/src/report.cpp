@@ -25,13 +25,11 @@
 #include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
-
 #include "report_internal.hpp"
 
 namespace hapticlab::stats {
 
 using namespace report_internal;
-
 
 ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
   RatingSources sources;
@@ -43,9 +41,12 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
   db::Database d(db_path, {.create = false, .read_only = true});
   auto md = w.Open("report.md");
   md << "# HapticLab analysis report\n\nDatabase: `" << db_path << "`\n\n"
-     << "Scores are similarity ratings on the protocol's scale. Repetitions are averaged per participant x cell "
-        "before repeated-measures ANOVA (as afex does). Tukey comparisons of a within-subject factor use the pooled "
-        "error of its effect (emmeans `model = \"univariate\"`). Error bars are 95 % confidence intervals of "
+     << "Scores are similarity ratings on the protocol's scale. Repetitions are averaged per "
+        "participant x cell "
+        "before repeated-measures ANOVA (as afex does). Tukey comparisons of a within-subject "
+        "factor use the pooled "
+        "error of its effect (emmeans `model = \"univariate\"`). Error bars are 95 % confidence "
+        "intervals of "
         "participant means. Outliers (1.5 IQR, Tukey's hinges) are counted, not removed.\n";
   for (const auto& st : d.Studies()) {
     const auto proto = protocols::ParseProtocol(st.protocol_toml, "(protocol of " + st.name + ")");
@@ -54,8 +55,10 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     if (study.rows() == 0) continue;
     res.studies.push_back(st.name);
     const std::string sid = Safe(st.name);
-    md << "\n## Study `" << st.name << "`\n\n" << proto.description << "\n\n"
-       << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows() << "\n";
+    md << "\n## Study `" << st.name << "`\n\n"
+       << proto.description << "\n\n"
+       << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows()
+       << "\n";
     {
       // Where the ratings came from: a person's input device or the simulated observer.
       const auto count = [&](const std::map<std::string, std::size_t>& m) {
@@ -65,11 +68,14 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       const std::size_t human = count(sources.human), kept = count(sources.simulated_kept),
                         excluded = count(sources.simulated_excluded);
       if (excluded)
-        md << "\n**Simulated ratings excluded:** " << excluded << " ratings of the simulated observer (sessions or "
-           << "parts of sessions run without a person rating) are left out of this study's " << human
+        md << "\n**Simulated ratings excluded:** " << excluded
+           << " ratings of the simulated observer (sessions or "
+           << "parts of sessions run without a person rating) are left out of this study's "
+           << human
            << " ratings by participants; `hapticlab analyze --include-simulated` keeps them.\n";
       else if (kept && human)
-        md << "\n**Simulated ratings included** (`--include-simulated`): " << kept << " ratings of the simulated "
+        md << "\n**Simulated ratings included** (`--include-simulated`): " << kept
+           << " ratings of the simulated "
            << "observer are analysed together with " << human << " ratings by participants.\n";
       else if (kept)
         md << "\nAll ratings come from the simulated observer (a simulated study).\n";
@@ -77,15 +83,17 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     md << "\n" << TimingMethodsSentence(d, st.id);
     // Adaptive phases (staircase, QUEST+): psychometric fits, JND and Weber fraction.
     md << AdaptiveReport(db_path, st.name, st.protocol_toml, o.out_dir, o.figures, &w.files_);
-    if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0) continue;
+    if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0)
+      continue;
     const auto main = study.Where({{"phase", "main"}});
     const auto ref = study.Where({{"phase", "reference"}});
     std::vector<std::string> proto_methods, proto_materials;
     for (const auto& m : proto.methods) proto_methods.push_back(m.name);
     for (const auto& m : proto.materials) proto_materials.push_back(m.id);
-    const auto methods = main.rows() ? InProtocolOrder(proto_methods, main.Levels("method")) : std::vector<std::string>{};
-    const auto materials =
-        main.rows() ? InProtocolOrder(proto_materials, main.Levels("material")) : std::vector<std::string>{};
+    const auto methods = main.rows() ? InProtocolOrder(proto_methods, main.Levels("method"))
+                                     : std::vector<std::string>{};
+    const auto materials = main.rows() ? InProtocolOrder(proto_materials, main.Levels("material"))
+                                       : std::vector<std::string>{};
     // Aggregated score tables for every criterion (Tables 4.1, 5.4, 5.5).
     std::ofstream agg;
     if (tests.count("aggregate")) {
@@ -105,22 +113,27 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         same.y.clear();
         diff = same;
         for (std::size_t i = 0; i < rc.rows(); ++i) {
-          auto& dst = rc.keys[rc.Key("material")][i] == rc.keys[rc.Key("comparison")][i] ? same : diff;
-          for (std::size_t c = 0; c < rc.key_names.size(); ++c) dst.keys[c].push_back(rc.keys[c][i]);
+          auto& dst =
+              rc.keys[rc.Key("material")][i] == rc.keys[rc.Key("comparison")][i] ? same : diff;
+          for (std::size_t c = 0; c < rc.key_names.size(); ++c)
+            dst.keys[c].push_back(rc.keys[c][i]);
           dst.y.push_back(rc.y[i]);
         }
         if (same.rows()) upper = Describe(same.y).mean;
         if (diff.rows()) lower = Describe(diff.y).mean;
-        md << fmt::format("\nReal-real limits: upper {:.2f} (same material, n = {}), lower {:.2f} (different "
-                          "materials, n = {}).\n",
-                          upper, same.rows(), lower, diff.rows());
+        md << fmt::format(
+            "\nReal-real limits: upper {:.2f} (same material, n = {}), lower {:.2f} (different "
+            "materials, n = {}).\n",
+            upper, same.rows(), lower, diff.rows());
       }
       if (cm.rows() == 0) {
-        md << "\nNo main-phase ratings of " << crit << " yet: the aggregate table, ANOVA, Tukey, grouping, "
+        md << "\nNo main-phase ratings of " << crit
+           << " yet: the aggregate table, ANOVA, Tukey, grouping, "
            << "Kruskal-Wallis and Shapiro-Wilk analyses need them.\n";
         continue;
       }
-      if (tests.count("aggregate")) AggregateTables(md, agg, proto, crit, cm, methods, materials, upper);
+      if (tests.count("aggregate"))
+        AggregateTables(md, agg, proto, crit, cm, methods, materials, upper);
       // Repeated-measures ANOVA (Tables 5.2, 5.3); Tukey needs its error term.
       std::vector<std::string> within;
       if (methods.size() >= 2) within.push_back("method");
@@ -131,7 +144,9 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       std::string anova_why;
       if (tests.count("rm-anova") || tests.count("tukey")) {
         if (within.empty())
-          anova_why = "it needs a within factor with two or more levels (this study has one method and one material)";
+          anova_why =
+              "it needs a within factor with two or more levels (this study has one method and one "
+              "material)";
         else if (n_participants < 2)
           anova_why = fmt::format("it needs two or more participants ({} so far)", n_participants);
         else
@@ -153,14 +168,18 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       // Tukey on method + the bar chart of Figs. 5.7/5.8.
       if (tests.count("tukey")) {
         if (methods.size() < 2) {
-          NotRun(md, "tukey", fmt::format("it compares methods and this study has {} method", methods.size()));
+          NotRun(md, "tukey",
+                 fmt::format("it compares methods and this study has {} method", methods.size()));
         } else if (!anova) {
-          NotRun(md, "tukey", "it uses the repeated-measures ANOVA's error term, which could not be computed: " + anova_why);
+          NotRun(md, "tukey",
+                 "it uses the repeated-measures ANOVA's error term, which could not be computed: " +
+                     anova_why);
         } else {
           const auto tk = TukeyWithin(*anova, "method", false);
           auto tcsv = w.Open(fmt::format("{}_{}_tukey.csv", sid, Safe(crit)));
           tcsv << "a,b,diff,lwr,upr,p_adj\n";
-          md << "\nTukey HSD on method (univariate error of the method effect, df = " << tk.df << "):\n\n"
+          md << "\nTukey HSD on method (univariate error of the method effect, df = " << tk.df
+             << "):\n\n"
              << "| pair | diff | 95 % CI | p adj |\n|---|---|---|---|\n";
           BarChart bc;
           bc.title = fmt::format("{}: {} similarity", st.name, crit);
@@ -173,19 +192,23 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             bc.series.push_back({me, {m}, {ci}});
           }
           for (const auto& pr : tk.pairs) {
-            md << fmt::format("| {} - {} | {:.2f} | [{:.2f}, {:.2f}] | {}{} |\n", pr.a, pr.b, pr.diff, pr.lwr, pr.upr,
-                              P(pr.p_adj), Stars(pr.p_adj));
-            tcsv << fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", pr.a, pr.b, pr.diff, pr.lwr, pr.upr, pr.p_adj);
+            md << fmt::format("| {} - {} | {:.2f} | [{:.2f}, {:.2f}] | {}{} |\n", pr.a, pr.b,
+                              pr.diff, pr.lwr, pr.upr, P(pr.p_adj), Stars(pr.p_adj));
+            tcsv << fmt::format("{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", pr.a, pr.b, pr.diff,
+                                pr.lwr, pr.upr, pr.p_adj);
             if (pr.p_adj < 0.05) {
               const auto ia = std::find(methods.begin(), methods.end(), pr.a) - methods.begin();
               const auto ib = std::find(methods.begin(), methods.end(), pr.b) - methods.begin();
-              bc.marks.push_back({static_cast<int>(std::min(ia, ib)), static_cast<int>(std::max(ia, ib)), Stars(pr.p_adj)});
+              bc.marks.push_back({static_cast<int>(std::min(ia, ib)),
+                                  static_cast<int>(std::max(ia, ib)), Stars(pr.p_adj)});
             }
           }
           if (o.figures) {
-            const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_methods", sid, Safe(crit))).string();
+            const auto base =
+                (fs::path(w.dir()) / fmt::format("{}_{}_methods", sid, Safe(crit))).string();
             w.Add(DrawBarChart(bc, base));
-            md << "\n![" << crit << " by method](" << fs::path(base).filename().string() << ".png)\n"
+            md << "\n![" << crit << " by method](" << fs::path(base).filename().string()
+               << ".png)\n"
                << "\n(* p < 0.05, ** p < 0.01, Tukey HSD.)\n";
           }
         }
@@ -193,7 +216,8 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       // Linear mixed model of the protocol's [analysis] lmm_formula (every rating, no averaging).
       if (tests.count("lmm")) {
         md << "\nLinear mixed model `" << proto.lmm_formula
-           << "` (REML, lme4's fit; Satterthwaite df, type 3 tests with sum-to-zero contrasts, as lmerTest / "
+           << "` (REML, lme4's fit; Satterthwaite df, type 3 tests with sum-to-zero contrasts, as "
+              "lmerTest / "
               "afex::mixed):\n\n";
         try {
           const auto m = FitLmm(cm, proto.lmm_formula);
@@ -201,19 +225,24 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
           csv << "kind,name,estimate_or_F,se,num_df,den_df,t,p\n";
           md << "| term | df | F | p |\n|---|---|---|---|\n";
           for (const auto& t : m.anova) {
-            md << fmt::format("| {}{} | {:.0f}, {:.2f} | {:.3f} | {} |\n", t.term, t.p < 0.05 ? "*" : "", t.num_df, t.den_df,
-                              t.F, P(t.p));
-            csv << fmt::format("F,{},{:.10g},,{:.0f},{:.10g},,{:.10g}\n", t.term, t.F, t.num_df, t.den_df, t.p);
+            md << fmt::format("| {}{} | {:.0f}, {:.2f} | {:.3f} | {} |\n", t.term,
+                              t.p < 0.05 ? "*" : "", t.num_df, t.den_df, t.F, P(t.p));
+            csv << fmt::format("F,{},{:.10g},,{:.0f},{:.10g},,{:.10g}\n", t.term, t.F, t.num_df,
+                               t.den_df, t.p);
           }
           for (const auto& c : m.fixed)
-            csv << fmt::format("coefficient,{},{:.10g},{:.10g},1,{:.10g},{:.10g},{:.10g}\n", c.name, c.estimate, c.se, c.df,
-                               c.t, c.p);
+            csv << fmt::format("coefficient,{},{:.10g},{:.10g},1,{:.10g},{:.10g},{:.10g}\n", c.name,
+                               c.estimate, c.se, c.df, c.t, c.p);
           md << "\n| random effect | SD |\n|---|---|\n";
           for (const auto& g : m.random)
-            for (std::size_t i = 0; i < g.names.size(); ++i) md << fmt::format("| {} {} | {:.3f} |\n", g.group, g.names[i], g.sd[i]);
+            for (std::size_t i = 0; i < g.names.size(); ++i)
+              md << fmt::format("| {} {} | {:.3f} |\n", g.group, g.names[i], g.sd[i]);
           md << fmt::format("| residual | {:.3f} |\n", m.sigma);
-          if (m.singular) md << "\nBoundary (singular) fit: a variance is 0 or a correlation is +-1; simplify the random terms.\n";
-          if (!m.converged) md << "\nThe optimizer did not converge; the numbers above are unreliable.\n";
+          if (m.singular)
+            md << "\nBoundary (singular) fit: a variance is 0 or a correlation is +-1; simplify "
+                  "the random terms.\n";
+          if (!m.converged)
+            md << "\nThe optimizer did not converge; the numbers above are unreliable.\n";
         } catch (const InputError& e) {
           md << "Not fitted: " << e.what() << "\n";
         }
@@ -238,9 +267,10 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       if (tests.count("grouping")) {
         if (methods.size() != 1) {
           NotRun(md, "grouping",
-                 fmt::format("it compares the materials of a single method against the real-real limits "
-                             "(ch. IV.5.2), and this study has {} methods (see Tukey HSD for them)",
-                             methods.size()));
+                 fmt::format(
+                     "it compares the materials of a single method against the real-real limits "
+                     "(ch. IV.5.2), and this study has {} methods (see Tukey HSD for them)",
+                     methods.size()));
         } else if (!same.rows() || !diff.rows()) {
           NotRun(md, "grouping",
                  "it needs the real-real limits: a reference phase with both same-material and "
@@ -259,15 +289,21 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
           }
           const auto kw = KruskalWallis(g, "material");
           const auto letters = GroupAgainstLimits(g, "material", "upper limit", "lower limit");
-          md << fmt::format("\nKruskal-Wallis over materials and limits: H({:.0f}) = {:.2f}, p = {}. Dunn-Bonferroni "
-                            "letters: A differs from the lower limit only, B from the upper only, C from neither, D "
-                            "from both.\n\n| material | letter | p adj vs upper | p adj vs lower |\n|---|---|---|---|\n",
-                            kw.df, kw.H, P(kw.p));
+          md << fmt::format(
+              "\nKruskal-Wallis over materials and limits: H({:.0f}) = {:.2f}, p = {}. "
+              "Dunn-Bonferroni "
+              "letters: A differs from the lower limit only, B from the upper only, C from "
+              "neither, D "
+              "from both.\n\n| material | letter | p adj vs upper | p adj vs lower "
+              "|\n|---|---|---|---|\n",
+              kw.df, kw.H, P(kw.p));
           auto lcsv = w.Open(fmt::format("{}_{}_grouping.csv", sid, Safe(crit)));
           lcsv << "material,letter,p_adj_vs_upper,p_adj_vs_lower\n";
           for (const auto& l : letters) {
-            md << fmt::format("| {} | {} | {} | {} |\n", l.material, l.letter, P(l.p_adj_vs_upper), P(l.p_adj_vs_lower));
-            lcsv << fmt::format("{},{},{:.10g},{:.10g}\n", l.material, l.letter, l.p_adj_vs_upper, l.p_adj_vs_lower);
+            md << fmt::format("| {} | {} | {} | {} |\n", l.material, l.letter, P(l.p_adj_vs_upper),
+                              P(l.p_adj_vs_lower));
+            lcsv << fmt::format("{},{},{:.10g},{:.10g}\n", l.material, l.letter, l.p_adj_vs_upper,
+                                l.p_adj_vs_lower);
             const auto it = std::find(bm.groups.begin(), bm.groups.end(), l.material);
             if (it != bm.groups.end()) {
               bm.group_marks.resize(bm.groups.size());
@@ -292,12 +328,13 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
           NotRun(md, "kruskal", "it needs two or more methods or materials");
         else {
           const auto kw = KruskalWallis(cells, by);
-          md << fmt::format("\nKruskal-Wallis on cell means by {}: H({:.0f}) = {:.2f}, {}.\n", by, kw.df, kw.H,
-                            PEq(kw.p));
+          md << fmt::format("\nKruskal-Wallis on cell means by {}: H({:.0f}) = {:.2f}, {}.\n", by,
+                            kw.df, kw.H, PEq(kw.p));
         }
       }
       if (o.figures) {
-        const auto base = (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();
+        const auto base =
+            (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();
         w.Add(DrawBarChart(bm, base));
         md << "\n![" << crit << " by material](" << fs::path(base).filename().string() << ".png)\n";
         BoxPlot bp;
@@ -314,12 +351,14 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       }
       // Normality (of the participant x cell means the ANOVA uses) and outliers per method.
       if (tests.count("shapiro")) {
-        md << "\n| method | Shapiro-Wilk W (cell means) | p | normality | boxplot outliers (raw) |\n|---|---|---|---|---|\n";
+        md << "\n| method | Shapiro-Wilk W (cell means) | p | normality | boxplot outliers (raw) "
+              "|\n|---|---|---|---|---|\n";
         std::vector<std::string> flags;
         for (const auto& me : methods) {
           const auto c = cells.Where({{"method", me}});
           const auto raw = cm.Where({{"method", me}});
-          std::string wcell = "n/a", pcell = "n/a", verdict = "not tested (fewer than 3 cell means or no spread)";
+          std::string wcell = "n/a", pcell = "n/a",
+                      verdict = "not tested (fewer than 3 cell means or no spread)";
           if (c.rows() >= 3 && c.rows() <= 5000) {
             try {
               const auto s = ShapiroWilk(c.y);
@@ -327,10 +366,11 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
               pcell = P(s.p);
               verdict = s.p < 0.05 ? "**violated**" : "not rejected";
               if (s.p < 0.05)
-                flags.push_back(fmt::format("**Normality violated** for method {}: Shapiro-Wilk W = {:.4f}, {} "
-                                            "(< 0.05) on its {} cell means. The ANOVA's p-values may be off; the "
-                                            "rank-based Kruskal-Wallis test (`kruskal`) does not assume normality.",
-                                            me, s.W, PEq(s.p), c.rows()));
+                flags.push_back(fmt::format(
+                    "**Normality violated** for method {}: Shapiro-Wilk W = {:.4f}, {} "
+                    "(< 0.05) on its {} cell means. The ANOVA's p-values may be off; the "
+                    "rank-based Kruskal-Wallis test (`kruskal`) does not assume normality.",
+                    me, s.W, PEq(s.p), c.rows()));
             } catch (const std::invalid_argument&) {
             }
           }
@@ -342,13 +382,18 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     }
     // Correlation of overall similarity with the criteria (Table 4.2), on trial ratings.
     if (tests.count("correlation")) {
-      if (!std::count(proto.criteria.begin(), proto.criteria.end(), "overall") || proto.criteria.size() < 2) {
+      if (!std::count(proto.criteria.begin(), proto.criteria.end(), "overall") ||
+          proto.criteria.size() < 2) {
         md << "\n### Correlation of overall similarity (Table 4.2)\n";
-        NotRun(md, "correlation", "it needs an `overall` criterion and at least one other criterion");
+        NotRun(md, "correlation",
+               "it needs an `overall` criterion and at least one other criterion");
       } else {
-        std::map<std::tuple<std::string, std::string, std::string, std::string, std::string>, std::map<std::string, double>> trials;
+        std::map<std::tuple<std::string, std::string, std::string, std::string, std::string>,
+                 std::map<std::string, double>>
+            trials;
         for (std::size_t i = 0; i < main.rows(); ++i)
-          trials[{main.keys[1][i], main.keys[3][i], main.keys[4][i], main.keys[5][i], main.keys[6][i]}][main.keys[7][i]] = main.y[i];
+          trials[{main.keys[1][i], main.keys[3][i], main.keys[4][i], main.keys[5][i],
+                  main.keys[6][i]}][main.keys[7][i]] = main.y[i];
         std::map<std::string, std::vector<double>> col;
         for (const auto& [k, m] : trials) {
           if (m.size() != proto.criteria.size()) continue;
@@ -373,9 +418,11 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             md << fmt::format("| {} | {:.3f} | {} |\n", name, c.r, P(c.p));
           }
         } else {
-          NotRun(md, "correlation",
-                 fmt::format("it needs three or more main-phase trials rated on every criterion ({} so far)",
-                             col["overall"].size()));
+          NotRun(
+              md, "correlation",
+              fmt::format(
+                  "it needs three or more main-phase trials rated on every criterion ({} so far)",
+                  col["overall"].size()));
         }
       }
     }

@@ -1,6 +1,4 @@
 // The report's shared helpers and tables (report_internal.hpp).
-#include "hapticlab/stats/report.hpp"
-
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -24,9 +22,9 @@
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include "hapticlab/stats/psychometric_report.hpp"
+#include "hapticlab/stats/report.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
-
 #include "report_internal.hpp"
 
 namespace hapticlab::stats::report_internal {
@@ -41,8 +39,6 @@ std::string Safe(const std::string& s) {
   return o;
 }
 
-
-
 // Mean and 95 % CI half-width of participant means (the error bars of Figs. 5.7/5.8).
 std::pair<double, double> MeanCi(const LongTable& t) {
   const auto per = t.Average({"participant"});
@@ -52,7 +48,8 @@ std::pair<double, double> MeanCi(const LongTable& t) {
 }
 
 // Levels of `present` in the protocol's order (`order`), then any others (sorted).
-std::vector<std::string> InProtocolOrder(const std::vector<std::string>& order, const std::vector<std::string>& present) {
+std::vector<std::string> InProtocolOrder(const std::vector<std::string>& order,
+                                         const std::vector<std::string>& present) {
   std::vector<std::string> out;
   for (const auto& x : order)
     if (std::find(present.begin(), present.end(), x) != present.end()) out.push_back(x);
@@ -68,8 +65,9 @@ void NotRun(std::ostream& md, const std::string& test, const std::string& why) {
 
 // Aggregate tables in the layout of the dissertation's Tables 5.4/5.5: methods as rows in
 // protocol order, materials as columns in protocol order, one table per material group.
-void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Protocol& proto, const std::string& crit,
-                     const LongTable& cm, const std::vector<std::string>& methods,
+void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Protocol& proto,
+                     const std::string& crit, const LongTable& cm,
+                     const std::vector<std::string>& methods,
                      const std::vector<std::string>& materials, double upper) {
   std::vector<std::string> groups;  // in the order the protocol first names them
   std::map<std::string, std::vector<std::string>> by_group;
@@ -98,9 +96,10 @@ void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Proto
         }
         const auto ds = Describe(cell.y);
         const double ratio = std::isfinite(upper) ? ds.mean / upper : NAN;
-        md << fmt::format(" {:.2f}{} |", ds.mean, std::isfinite(ratio) ? fmt::format(" ({:.2f})", ratio) : "");
-        agg << fmt::format("{},{},{},{},{:.6f},{:.6f},{},{}\n", crit, g, ma, me, ds.mean, ds.sd, ds.n,
-                           std::isfinite(ratio) ? fmt::format("{:.6f}", ratio) : "");
+        md << fmt::format(" {:.2f}{} |", ds.mean,
+                          std::isfinite(ratio) ? fmt::format(" ({:.2f})", ratio) : "");
+        agg << fmt::format("{},{},{},{},{:.6f},{:.6f},{},{}\n", crit, g, ma, me, ds.mean, ds.sd,
+                           ds.n, std::isfinite(ratio) ? fmt::format("{:.6f}", ratio) : "");
       }
       md << "\n";
     }
@@ -111,7 +110,9 @@ void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Proto
 // said in words with the correction used.
 void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
   md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
-     << (a.dropped_subjects.empty() ? "" : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
+     << (a.dropped_subjects.empty()
+             ? ""
+             : fmt::format(", {} dropped for missing cells", a.dropped_subjects.size()))
      << "):\n\n";
   // Every dropped participant named, with the cells it lacks.
   for (std::size_t i = 0; i < a.dropped_subjects.size(); ++i)
@@ -123,26 +124,36 @@ void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
   for (const auto& e : a.effects) {
     const bool violated = e.mauchly_defined && e.df1 > 1 && e.mauchly_p < 0.05;
     const double p_used = violated ? e.p_gg : e.p;
-    const std::string W = e.between_only || e.df1 <= 1 ? "-" : e.mauchly_defined ? fmt::format("{:.3f}", e.mauchly_W) : "n/a";
-    const std::string pW = e.between_only || e.df1 <= 1 ? "-" : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "") : "n/a";
-    md << fmt::format("| {}{} | {:.0f}, {:.0f} | {} | {} | {:.3f} | {} | {} | {:.3f} | {} |\n", e.effect,
-                      p_used < 0.05 ? "*" : "", e.df1, e.df2, e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F),
-                      P(e.p), e.pes, W, pW, e.gg_epsilon, P(e.p_gg));
-    csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n", e.effect, e.df1,
-                       e.df2, e.F, e.p, e.pes, std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
-                       std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "", e.gg_epsilon, e.p_gg,
-                       e.hf_epsilon, e.p_hf);
+    const std::string W = e.between_only || e.df1 <= 1 ? "-"
+                          : e.mauchly_defined          ? fmt::format("{:.3f}", e.mauchly_W)
+                                                       : "n/a";
+    const std::string pW = e.between_only || e.df1 <= 1 ? "-"
+                           : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "")
+                                               : "n/a";
+    md << fmt::format("| {}{} | {:.0f}, {:.0f} | {} | {} | {:.3f} | {} | {} | {:.3f} | {} |\n",
+                      e.effect, p_used < 0.05 ? "*" : "", e.df1, e.df2,
+                      e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F), P(e.p),
+                      e.pes, W, pW, e.gg_epsilon, P(e.p_gg));
+    csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n",
+                       e.effect, e.df1, e.df2, e.F, e.p, e.pes,
+                       std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
+                       std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "",
+                       e.gg_epsilon, e.p_gg, e.hf_epsilon, e.p_hf);
     if (violated)
-      notes.push_back(fmt::format("**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The Greenhouse-Geisser "
-                                  "correction is used (epsilon = {:.3f}, corrected {}).",
-                                  e.effect, e.mauchly_W, PEq(e.mauchly_p), e.gg_epsilon, PEq(e.p_gg)));
+      notes.push_back(fmt::format(
+          "**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The Greenhouse-Geisser "
+          "correction is used (epsilon = {:.3f}, corrected {}).",
+          e.effect, e.mauchly_W, PEq(e.mauchly_p), e.gg_epsilon, PEq(e.p_gg)));
     else if (!e.between_only && e.df1 > 1 && !e.mauchly_defined)
-      notes.push_back(fmt::format("Mauchly's test does not exist for {} (more levels than participants - 1); read "
-                                  "the Greenhouse-Geisser corrected p.",
-                                  e.effect));
+      notes.push_back(fmt::format(
+          "Mauchly's test does not exist for {} (more levels than participants - 1); read "
+          "the Greenhouse-Geisser corrected p.",
+          e.effect));
   }
-  md << "\nSignificant factors (p < 0.05; the Greenhouse-Geisser p where sphericity is violated) are marked by *. "
-        "Mauchly's test is shown for factors with more than two levels (with two, sphericity holds trivially).\n";
+  md << "\nSignificant factors (p < 0.05; the Greenhouse-Geisser p where sphericity is violated) "
+        "are marked by *. "
+        "Mauchly's test is shown for factors with more than two levels (with two, sphericity holds "
+        "trivially).\n";
   for (const auto& n : notes) md << "\n" << n << "\n";
 }
 

@@ -1,7 +1,7 @@
 #include "hapticlab/stats/shapiro.hpp"
 
-#include <boost/math/distributions/normal.hpp>
 #include <algorithm>
+#include <boost/math/distributions/normal.hpp>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -19,7 +19,9 @@ double Poly(const double* c, int n, double x) {
   return r;
 }
 
-double Qnorm(double p) { return boost::math::quantile(boost::math::normal_distribution<double>(), p); }
+double Qnorm(double p) {
+  return boost::math::quantile(boost::math::normal_distribution<double>(), p);
+}
 
 }  // namespace
 
@@ -58,14 +60,16 @@ ShapiroResult ShapiroWilk(std::vector<double> x) {
     if (n > 5) {
       i1 = 3;
       const double a2 = -m[1] / ssumm2 + Poly(kC2, 6, rsn);
-      fac = std::sqrt((summ2 - 2 * m[0] * m[0] - 2 * m[1] * m[1]) / (1 - 2 * a1 * a1 - 2 * a2 * a2));
+      fac =
+          std::sqrt((summ2 - 2 * m[0] * m[0] - 2 * m[1] * m[1]) / (1 - 2 * a1 * a1 - 2 * a2 * a2));
       a[1] = a2;
     } else {
       i1 = 2;
       fac = std::sqrt((summ2 - 2 * m[0] * m[0]) / (1 - 2 * a1 * a1));
     }
     a[0] = a1;
-    for (int i = i1; i <= half; ++i) a[static_cast<std::size_t>(i - 1)] = -m[static_cast<std::size_t>(i - 1)] / fac;
+    for (int i = i1; i <= half; ++i)
+      a[static_cast<std::size_t>(i - 1)] = -m[static_cast<std::size_t>(i - 1)] / fac;
   }
 
   // W as the squared correlation of the data with the full (antisymmetric) coefficients;
@@ -98,7 +102,8 @@ ShapiroResult ShapiroWilk(std::vector<double> x) {
 
   // p-value: exact for n = 3, Royston's normalizing transformations otherwise.
   if (n == 3) {
-    r.p = std::max(0.0, 6.0 / std::numbers::pi * (std::asin(std::sqrt(r.W)) - std::asin(std::sqrt(0.75))));
+    r.p = std::max(
+        0.0, 6.0 / std::numbers::pi * (std::asin(std::sqrt(r.W)) - std::asin(std::sqrt(0.75))));
     return r;
   }
   static const double kG[] = {-2.273, 0.459};

@@ -62,7 +62,8 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
   return r;
 }
 
-TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool multivariate, double conf) {
+TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool multivariate,
+                        double conf) {
   TukeyResult r;
   r.factor = factor;
   const std::size_t n = a.subjects.size(), nc = a.cells.empty() ? 0 : a.cells[0].size();
@@ -83,7 +84,8 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
     for (std::size_t g = 0; g < ng; ++g) mean += sum[g] / size_of(g);
     if (resid_var) {
       double ss = 0;
-      for (std::size_t s = 0; s < n; ++s) ss += std::pow(v[s] - sum[group_of(s)] / size_of(group_of(s)), 2);
+      for (std::size_t s = 0; s < n; ++s)
+        ss += std::pow(v[s] - sum[group_of(s)] / size_of(group_of(s)), 2);
       *resid_var = ss / nu;
     }
     return mean / static_cast<double>(ng);
@@ -128,7 +130,9 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
         p.b = levels[i];
         double est = 0, var = 0;
         for (std::size_t g = 0; g < ng; ++g) {
-          const double c = level_of(g) == j ? 1 / per_level : level_of(g) == i ? -1 / per_level : 0.0;
+          const double c = level_of(g) == j   ? 1 / per_level
+                           : level_of(g) == i ? -1 / per_level
+                                              : 0.0;
           est += c * mu[g];
           var += c * c / size_of(g);
         }
@@ -145,7 +149,8 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   std::size_t f = 0;
   while (f < a.factors.size() && a.factors[f] != factor) ++f;
   if (f == a.factors.size())
-    throw InputError("<command line>", 0, "factor", "'" + factor + "' is not a factor of this ANOVA");
+    throw InputError("<command line>", 0, "factor",
+                     "'" + factor + "' is not a factor of this ANOVA");
   const auto& levels = a.levels[f];
   r.k = static_cast<int>(levels.size());
   // Subject marginal means of each level (averaged over the other factors' cells).

@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <set>
 #include <string>
@@ -68,8 +67,9 @@ TEST(Cli, EveryCommandOfTheRealTreeHasHelpAndRefusesAnUnknownOption) {
   std::set<std::string> names;
   for (const auto& c : commands) names.insert(Joined(c.path));
   // The walk reaches the leaves of every group (the hand list this replaces missed some).
-  for (const char* leaf : {"model photometric", "model build", "model fit-contact", "model fit-neural", "study run",
-                           "study power", "study calibrate", "rig check", "db backup", "measurement check", "effects"})
+  for (const char* leaf :
+       {"model photometric", "model build", "model fit-contact", "model fit-neural", "study run",
+        "study power", "study calibrate", "rig check", "db backup", "measurement check", "effects"})
     EXPECT_EQ(names.count(leaf), 1u) << leaf << " is not in the command tree";
   for (const auto& c : commands) {
     std::string out;
@@ -88,7 +88,8 @@ TEST(Cli, TheBinaryRunsTheSameTree) {
   CLI::App app;
   cli::BuildApp(app);
   for (CLI::App* group : app.get_subcommands([](CLI::App*) { return true; }))
-    EXPECT_NE(out.find(group->get_name()), std::string::npos) << group->get_name() << " missing from the binary's help";
+    EXPECT_NE(out.find(group->get_name()), std::string::npos)
+        << group->get_name() << " missing from the binary's help";
 }
 
 TEST(Cli, BadUsageExitsWithTwo) {
@@ -102,8 +103,9 @@ TEST(Cli, BadUsageExitsWithTwo) {
 TEST(Cli, ExportOfAMissingDatabaseNamesTheFileAndExitsWithTwo) {
   test::TempDir dir;
   std::string out;
-  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + dir.File("nope.db") + " --out " +
-                                 dir.File("o"), &out), 2);
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " export --db " + dir.File("nope.db") + " --out " + dir.File("o"), &out),
+            2);
   EXPECT_NE(out.find("nope.db"), std::string::npos) << out;
 }
 
@@ -118,8 +120,11 @@ TEST(Cli, ExportWritesTables) {
     d.CompleteTrial(t, {{"overall", 55, 1}});
   }
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " export --json --db " + dir.File("s.db") + " --out " +
-                                 dir.File("o"), &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --json --db " + dir.File("s.db") + " --out " + dir.File("o"), &out),
+      0)
+      << out;
   EXPECT_NE(out.find("\"rows\": 1"), std::string::npos) << out;
   const auto csv = test::ReadFile(dir.File("o/ratings.csv"));
   EXPECT_NE(csv.find("P01"), std::string::npos);

@@ -96,15 +96,18 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   std::string out;
   // Whether P01's session exists yet (a kill may come before the run created it).
   auto started = [&] {
-    return test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out) == 0;
+    return test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json",
+                            &out) == 0;
   };
   for (int round = 0; round < 3; ++round) {
-    const std::string cmd = started() ? Cli() + " study resume --db " + db + " --participant P01 --quiet"
-                                      : RunCmd(db, "P01");
+    const std::string cmd = started()
+                                ? Cli() + " study resume --db " + db + " --participant P01 --quiet"
+                                : RunCmd(db, "P01");
     const pid_t pid = fork();
     ASSERT_GE(pid, 0);
     if (pid == 0) {
-      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(), static_cast<char*>(nullptr));
+      execl("/bin/sh", "sh", "-c", ("exec " + cmd + " >/dev/null 2>&1").c_str(),
+            static_cast<char*>(nullptr));
       _exit(127);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
@@ -117,7 +120,10 @@ TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   if (!started()) {
     ASSERT_EQ(test::RunCommand(RunCmd(db, "P01"), &out), 0) << out;
   } else if (json::parse(out)["participants"][0]["session_status"] != "completed") {
-    ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
+    ASSERT_EQ(
+        test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out),
+        0)
+        << out;
   }
   EXPECT_GT(killed, 0) << "no run was killed: the test tests nothing";
   ExpectEveryTrialWhole(db, 1);
@@ -133,7 +139,8 @@ TEST(FaultCli, ASecondWriterIsRefusedNamingTheHolder) {
     EXPECT_NE(out.find("process " + std::to_string(getpid())), std::string::npos) << out;
     EXPECT_NE(out.find(db), std::string::npos) << out;
   }
-  EXPECT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 2", &out), 3) << out;  // stopped: exit 3
+  EXPECT_EQ(test::RunCommand(RunCmd(db, "P01") + " --stop-after 2", &out), 3)
+      << out;  // stopped: exit 3
 }
 
 TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {

@@ -66,11 +66,10 @@ class Interchange : public ::testing::Test {
     // The whole small session (26 trials): training, reference and main trials. Real sides
     // record only force (the device measures); vibration streams come from the virtual sides
     // of Hybrid trials, so the session must reach some.
-    ASSERT_EQ(
-        test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") + " --db " +
-                             db_ + " --participant P01 --record all --quiet",
-                         &out),
-        0)
+    ASSERT_EQ(test::RunCommand(Cli() + " study run " + test::DataPath("protocols/small.toml") +
+                                   " --db " + db_ + " --participant P01 --record all --quiet",
+                               &out),
+              0)
         << out;
     db::Database d(db_, {.create = false, .read_only = true});
     const auto st = d.Studies().at(0);
@@ -421,7 +420,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                            .rate_hz = 100,
                            .channels = {"fz_N"},
                            .samples = ramp(7, 50),
-                             .attempt = 1});
+                           .attempt = 1});
   d.SetTrialStatus(faulted, db::kTrialFaulted);
   d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
   // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of

@@ -2,13 +2,12 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
-#include <filesystem>
-
+#include "../renderer/penn_xml.hpp"
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
-#include "../renderer/penn_xml.hpp"
 
 namespace hapticlab {
 namespace {
@@ -41,7 +40,9 @@ variance = 0.2
 
 TEST(ModelCli, EnergyOfNormMatchesEquation52WithinOnePercent) {
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " model energy --algorithm norm --sine 1e-4,1e-3 --json", &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " model energy --algorithm norm --sine 1e-4,1e-3 --json", &out), 0)
+      << out;
   const auto j = nlohmann::json::parse(out);
   const double e = j["energy_J"], c = j["closed_form_J"];
   EXPECT_GT(c, 0);
@@ -65,12 +66,16 @@ TEST(ModelCli, RenderWritesOneRowPerTrajectorySample) {
   test::TempDir dir;
   test::WriteFile(dir.File("m.toml"), kModel);
   std::string traj = "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n";
-  for (int k = 0; k < 500; ++k) traj += std::to_string(k * 1e-3) + "," + std::to_string(0.05 * k * 1e-3) + ",0,3e-4\n";
+  for (int k = 0; k < 500; ++k)
+    traj += std::to_string(k * 1e-3) + "," + std::to_string(0.05 * k * 1e-3) + ",0,3e-4\n";
   test::WriteFile(dir.File("t.csv"), traj);
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("m.toml") + " --trajectory " +
-                                 dir.File("t.csv") + " --out " + dir.File("r.csv") + " --vibration-out " +
-                                 dir.File("v.csv"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("m.toml") +
+                                 " --trajectory " + dir.File("t.csv") + " --out " +
+                                 dir.File("r.csv") + " --vibration-out " + dir.File("v.csv"),
+                             &out),
+            0)
+      << out;
   const auto r = ReadCsv(dir.File("r.csv"));
   ASSERT_EQ(r.rows.size(), 500u);
   // Under the layer top: pushed up with about K d (d = 0.5 mm - 0.3 mm + h), never faulted.
@@ -81,8 +86,11 @@ TEST(ModelCli, RenderWritesOneRowPerTrajectorySample) {
   EXPECT_GT(v.rows.size(), 4900u);
   // A missing column is a usage error naming the file.
   test::WriteFile(dir.File("bad.csv"), "# hapticlab-measurement v1\nt_s,x_m\n0,0\n");
-  EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("m.toml") + " --trajectory " +
-                                 dir.File("bad.csv") + " --out " + dir.File("r2.csv"), &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " model render --model " + dir.File("m.toml") + " --trajectory " +
+                           dir.File("bad.csv") + " --out " + dir.File("r2.csv"),
+                       &out),
+      2);
   EXPECT_NE(out.find("bad.csv"), std::string::npos) << out;
 }
 
@@ -98,8 +106,11 @@ TEST(ModelCli, ImportPennWritesALoadableModel) {
 <speedMod>100.0</speedMod><forceMod>1.0</forceMod></model></modelSet>
 )");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " model import-penn --xml " + dir.File("Models_X.xml") + " -o " +
-                                 dir.File("x.toml"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model import-penn --xml " + dir.File("Models_X.xml") +
+                                 " -o " + dir.File("x.toml"),
+                             &out),
+            0)
+      << out;
   ASSERT_EQ(test::RunCommand(Cli() + " model check --json " + dir.File("x.toml"), &out), 0) << out;
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["vibration"]["cells"], 1);
@@ -114,35 +125,49 @@ TEST(ModelCli, ImportPennThenRenderWithTheTrajectorysForce) {
   const auto spec = test::MakePennSet(false);
   test::WriteFile(dir.File("Models_G.xml"), test::PennXml(spec));
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " model import-penn --xml " + dir.File("Models_G.xml") + " -o " + dir.File("g.toml"), &out), 0)
+  ASSERT_EQ(test::RunCommand(Cli() + " model import-penn --xml " + dir.File("Models_G.xml") +
+                                 " -o " + dir.File("g.toml"),
+                             &out),
+            0)
       << out;
   EXPECT_NE(out.find("range 250 mm/s x 2.5 N"), std::string::npos) << out;
   const std::string toml = test::ReadFile(dir.File("g.toml"));
-  for (const char* line : {"cutoff_hz = 0\n", "max_speed_mps = 0.25\n", "max_force_N = 2.5\n", "min_speed_mps = 5.0000000000000002e-05\n"})
+  for (const char* line : {"cutoff_hz = 0\n", "max_speed_mps = 0.25\n", "max_force_N = 2.5\n",
+                           "min_speed_mps = 5.0000000000000002e-05\n"})
     EXPECT_NE(toml.find(line), std::string::npos) << line << " in\n" << toml;
   // 3 s at 140 mm/s pressing 1.5 N, the tool 1 mm above the flat geometry: only the
   // trajectory's force says it touches.
-  std::string traj = "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
+  std::string traj =
+      "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
   for (int k = 0; k <= 3000; ++k)
     traj += fmt::format("{:.6f},{:.9f},0,0.001,0.14,0,0,0,0,1.5\n", k * 1e-3, 0.14 * k * 1e-3);
   test::WriteFile(dir.File("t.csv"), traj);
   auto vibration_rms = [&](const std::string& extra) {
-    EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") + " --trajectory " + dir.File("t.csv") +
-                                   " --out " + dir.File("r.csv") + " --vibration-out " + dir.File("v.csv") + extra, &out), 0)
+    EXPECT_EQ(
+        test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") + " --trajectory " +
+                             dir.File("t.csv") + " --out " + dir.File("r.csv") +
+                             " --vibration-out " + dir.File("v.csv") + extra,
+                         &out),
+        0)
         << out;
     const auto v = ReadCsv(dir.File("v.csv"));
     double s = 0;
     int n = 0;
-    for (std::size_t i = 2000; i < v.rows.size(); ++i, ++n) s += std::pow(v.Number(i, v.Require("acc_mps2")), 2);
+    for (std::size_t i = 2000; i < v.rows.size(); ++i, ++n)
+      s += std::pow(v.Number(i, v.Require("acc_mps2")), 2);
     return std::sqrt(s / std::max(1, n));
   };
   const double expected = std::sqrt(test::PennExpected(spec, 140, 1.5).Power());
   EXPECT_NEAR(vibration_rms("") / expected, 1.0, 0.1);
   EXPECT_EQ(vibration_rms(" --force-source model"), 0.0);  // the rendered force: not in contact
   // Asking for the trajectory's force on a trajectory without one is a usage error.
-  test::WriteFile(dir.File("k.csv"), "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.001,0.0001,0,0\n");
-  EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") + " --trajectory " + dir.File("k.csv") +
-                                 " --out " + dir.File("r.csv") + " --force-source trajectory", &out), 2);
+  test::WriteFile(dir.File("k.csv"),
+                  "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.001,0.0001,0,0\n");
+  EXPECT_EQ(test::RunCommand(Cli() + " model render --model " + dir.File("g.toml") +
+                                 " --trajectory " + dir.File("k.csv") + " --out " +
+                                 dir.File("r.csv") + " --force-source trajectory",
+                             &out),
+            2);
   EXPECT_NE(out.find("fz_N"), std::string::npos) << out;
 }
 
@@ -157,8 +182,8 @@ void WriteGrid(const std::string& dir) {
   int k = 0;
   for (double v : {0.04, 0.08, 0.12})
     for (double f : {0.54, 1.18, 1.91}) {
-      std::string s = "# hapticlab-measurement v1\n# speed_mps: " + std::to_string(v) + "\n# force_N: " + std::to_string(f) +
-                      "\nt_s,x_m,y_m,z_m,acc_mps2\n";
+      std::string s = "# hapticlab-measurement v1\n# speed_mps: " + std::to_string(v) +
+                      "\n# force_N: " + std::to_string(f) + "\nt_s,x_m,y_m,z_m,acc_mps2\n";
       double a1 = 0, a2 = 0;
       std::uint64_t state = 12345 + static_cast<std::uint64_t>(k);
       for (int i = 0; i < 6000; ++i) {
@@ -178,28 +203,43 @@ TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
   std::filesystem::create_directory(dir.File("rec"));
   WriteGrid(dir.File("rec"));
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") + " -o " + dir.File("bank.toml") +
-                                 " --order 4", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") +
+                                 " -o " + dir.File("bank.toml") + " --order 4",
+                             &out),
+            0)
+      << out;
   // The bank plugs into a material model through [vibration] file = ...
-  test::WriteFile(dir.File("m.toml"), "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
-                                      "mu_k = 0.2\n[vibration]\nfile = \"bank.toml\"\n");
+  test::WriteFile(dir.File("m.toml"),
+                  "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
+                  "mu_k = 0.2\n[vibration]\nfile = \"bank.toml\"\n");
   ASSERT_EQ(test::RunCommand(Cli() + " model check --json " + dir.File("m.toml"), &out), 0) << out;
   const auto j = nlohmann::json::parse(out);
   EXPECT_EQ(j["vibration"]["cells"], 9);
   EXPECT_EQ(j["vibration"]["order"], 4);
-  ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --order 4 --json --plots " +
-                                 dir.File("plots"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") +
+                                 " --order 4 --json --plots " + dir.File("plots"),
+                             &out),
+            0)
+      << out;
   EXPECT_TRUE(std::filesystem::exists(dir.File("plots/spectrum_v80_f118.png")));
   EXPECT_GT(std::filesystem::file_size(dir.File("plots/spectrum_v80_f118.svg")), 1000u);
   const auto cv = nlohmann::json::parse(out);
   EXPECT_EQ(cv["conditions"].size(), 9u);
-  for (const char* k : {"speed_mps", "force_N", "split", "es"}) EXPECT_TRUE(cv["conditions"][0].contains(k)) << k;
+  for (const char* k : {"speed_mps", "force_N", "split", "es"})
+    EXPECT_TRUE(cv["conditions"][0].contains(k)) << k;
   EXPECT_TRUE(cv.contains("mean_es_train"));
-  ASSERT_EQ(test::RunCommand(Cli() + " model cutoff --recording " + dir.File("rec/r0.csv") + " --json", &out), 0) << out;
-  EXPECT_EQ(nlohmann::json::parse(out)["cutoff_hz"], 50.0);  // already stationary at the first cut-off
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " model cutoff --recording " + dir.File("rec/r0.csv") + " --json", &out),
+            0)
+      << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["cutoff_hz"],
+            50.0);  // already stationary at the first cut-off
   // A folder without recordings is bad input.
   std::filesystem::create_directory(dir.File("empty"));
-  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("empty") + " -o " + dir.File("b.toml"), &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("empty") +
+                                 " -o " + dir.File("b.toml"),
+                             &out),
+            2);
 }
 
 TEST(ModelCli, FitNeuralAndCrossValidateEveryModelKind) {
@@ -209,21 +249,25 @@ TEST(ModelCli, FitNeuralAndCrossValidateEveryModelKind) {
   std::string out;
   for (const char* topo : {"unified", "decomposed"}) {
     const auto file = dir.File(std::string("n_") + topo + ".toml");
-    ASSERT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") + " --topology " + topo +
-                                   " --epochs 2 -o " + file,
+    ASSERT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") +
+                                   " --topology " + topo + " --epochs 2 -o " + file,
                                &out),
               0)
         << out;
     EXPECT_NE(out.find("networks trained"), std::string::npos) << "progress: " << out;
-    test::WriteFile(dir.File("m.toml"), "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
-                                        "mu_k = 0.2\n[neural]\nfile = \"" + std::string("n_") + topo + ".toml\"\n");
+    test::WriteFile(
+        dir.File("m.toml"),
+        "name = \"x\"\n[contact]\ntexture_K = 100.0\n[friction]\nkappa_N_per_m = 100.0\n"
+        "mu_k = 0.2\n[neural]\nfile = \"" +
+            std::string("n_") + topo + ".toml\"\n");
     EXPECT_EQ(test::RunCommand(Cli() + " model check " + dir.File("m.toml"), &out), 0) << out;
   }
   // One E_s table for the three kinds (Fig. 3.7): same conditions, same keys.
   for (const char* kind : {"lpc", "neural-unified", "neural-decomposed"}) {
-    ASSERT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind " + kind +
-                                   " --epochs 2 --train-speeds 0.04,0.12 --train-forces 0.54,1.91 --json",
-                               &out),
+    ASSERT_EQ(test::RunCommand(
+                  Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind " +
+                      kind + " --epochs 2 --train-speeds 0.04,0.12 --train-forces 0.54,1.91 --json",
+                  &out),
               0)
         << out;
     const auto j = nlohmann::json::parse(out.substr(out.find('{')));
@@ -231,10 +275,15 @@ TEST(ModelCli, FitNeuralAndCrossValidateEveryModelKind) {
     EXPECT_EQ(j["conditions"].size(), 9u);
     EXPECT_TRUE(j["mean_es_test"].get<double>() > 0);
   }
-  EXPECT_EQ(test::RunCommand(Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind nn", &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(
+          Cli() + " model cv-vibration --recordings " + dir.File("rec") + " --model-kind nn", &out),
+      2);
   // A grid with a hole cannot train Γ_D.
   std::filesystem::remove(dir.File("rec/r4.csv"));
-  EXPECT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") + " --epochs 1 -o " + dir.File("x.toml"), &out),
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-neural --recordings " + dir.File("rec") +
+                                 " --epochs 1 -o " + dir.File("x.toml"),
+                             &out),
             2);
   EXPECT_NE(out.find("full speed x force grid"), std::string::npos) << out;
 }

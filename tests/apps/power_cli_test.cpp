@@ -32,19 +32,22 @@ TEST(PowerCli, JsonShardsMergeAndThreads) {
   EXPECT_EQ(j["rows"][0]["participants"], 3);
   ASSERT_FALSE(j["rows"][0]["effects"].empty());
   for (const auto& e : j["rows"][1]["effects"]) {
-    for (const char* k : {"criterion", "effect", "power", "ci_low", "ci_high", "mean_pes"}) EXPECT_TRUE(e.contains(k)) << k;
+    for (const char* k : {"criterion", "effect", "power", "ci_low", "ci_high", "mean_pes"})
+      EXPECT_TRUE(e.contains(k)) << k;
     EXPECT_LE(e["ci_low"].get<double>(), e["power"].get<double>());
     EXPECT_GE(e["ci_high"].get<double>(), e["power"].get<double>());
   }
   for (int s = 0; s < 2; ++s)
-    ASSERT_EQ(test::RunCommand(Power() + " --shard " + std::to_string(s) + "/2 --out " + dir.File("part" + std::to_string(s) + ".json"),
+    ASSERT_EQ(test::RunCommand(Power() + " --shard " + std::to_string(s) + "/2 --out " +
+                                   dir.File("part" + std::to_string(s) + ".json"),
                                &out),
               0)
         << out;
-  ASSERT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " study power --merge " + dir.File("part0.json") + " " +
-                                 dir.File("part1.json") + " --json --plot " + dir.File("curves"),
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(std::string(HL_CLI_PATH) + " study power --merge " + dir.File("part0.json") +
+                           " " + dir.File("part1.json") + " --json --plot " + dir.File("curves"),
+                       &out),
+      0)
       << out;
   const json m = json::parse(out);
   ASSERT_EQ(m["rows"].size(), j["rows"].size());
@@ -63,7 +66,10 @@ TEST(PowerCli, JsonShardsMergeAndThreads) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir.File("curves.svg")));
   // Only one of the shards: refused.
-  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " study power --merge " + dir.File("part0.json"), &out), 2) << out;
+  EXPECT_EQ(test::RunCommand(
+                std::string(HL_CLI_PATH) + " study power --merge " + dir.File("part0.json"), &out),
+            2)
+      << out;
   EXPECT_EQ(test::RunCommand(Power() + " --shard 2/2", &out), 2) << out;
 }
 

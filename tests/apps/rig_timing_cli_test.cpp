@@ -12,7 +12,8 @@ namespace {
 
 nlohmann::json RunJson(const std::string& args, int* rc) {
   std::string out;
-  *rc = test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device sim --clock real --json " + args, &out);
+  *rc = test::RunCommand(
+      std::string(HL_CLI_PATH) + " rig check --device sim --clock real --json " + args, &out);
   const auto at = out.find('{');
   EXPECT_NE(at, std::string::npos) << out;
   return at == std::string::npos ? nlohmann::json() : nlohmann::json::parse(out.substr(at));
@@ -24,7 +25,8 @@ TEST(RigTimingCli, JsonHasTheTimingKeys) {
   // 0: the verdict held; 1: a deadline was missed on this shared machine. Either is a report.
   EXPECT_TRUE(rc == 0 || rc == 1) << rc;
   EXPECT_EQ(j["ok"].get<bool>(), rc == 0);
-  for (const char* k : {"force_rate_hz", "jitter_us", "misses", "underruns", "priority", "memory_locked", "timer_slack_ns"})
+  for (const char* k : {"force_rate_hz", "jitter_us", "misses", "underruns", "priority",
+                        "memory_locked", "timer_slack_ns"})
     EXPECT_TRUE(j.contains(k)) << k;
   for (const char* k : {"p50", "p99", "p999", "max"}) ASSERT_TRUE(j["jitter_us"].contains(k)) << k;
   EXPECT_LE(j["jitter_us"]["p50"].get<double>(), j["jitter_us"]["p99"].get<double>());
@@ -41,7 +43,8 @@ TEST(RigTimingCli, JsonHasTheTimingKeys) {
 
 TEST(RigTimingCli, ARefusedPriorityIsReportedAndTheCheckRuns) {
   int rc = -1;
-  const auto j = RunJson("--seconds 0.1 --rate 4000 --rt-priority 1000 --spin-us 0 --no-vibration", &rc);
+  const auto j =
+      RunJson("--seconds 0.1 --rate 4000 --rt-priority 1000 --spin-us 0 --no-vibration", &rc);
   EXPECT_TRUE(rc == 0 || rc == 1) << rc;
   EXPECT_EQ(j["priority_granted"], false);
   EXPECT_NE(j["priority"].get<std::string>().find("refused"), std::string::npos) << j["priority"];
@@ -77,13 +80,21 @@ wavelength_m = 1e-3
   EXPECT_EQ(without["contact_ticks"], 0) << without.dump();
   EXPECT_TRUE(without["render"].is_null());
   std::string out;
-  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device sim --clock real --render " +
-                                 dir.File("missing.toml"), &out), 2) << out;
+  EXPECT_EQ(
+      test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device sim --clock real --render " +
+                           dir.File("missing.toml"),
+                       &out),
+      2)
+      << out;
 }
 
 TEST(RigTimingCli, OnlyTheSimulatedGripRunsOnTheRealClock) {
   std::string out;
-  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " rig check --device falcon-twin --clock real --seconds 0.1", &out), 2) << out;
+  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) +
+                                 " rig check --device falcon-twin --clock real --seconds 0.1",
+                             &out),
+            2)
+      << out;
 }
 
 }  // namespace

@@ -28,46 +28,67 @@ json Stats(const std::string& args) {
 }
 
 TEST(StatsCli, RmAnovaJson) {
-  const auto j = Stats("rm-anova --csv " + Csv() + " --dv score --subject subject --within method,material --where criterion=realism");
+  const auto j =
+      Stats("rm-anova --csv " + Csv() +
+            " --dv score --subject subject --within method,material --where criterion=realism");
   const auto r = Ref()["two_way_rm"];
   ASSERT_EQ(j["effects"].size(), 3u);
   EXPECT_EQ(j["effects"][2]["effect"], "method:material");
   for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(j["effects"][i]["F"].get<double>(), r["none"][i]["F"].get<double>(), 1e-6 * r["none"][i]["F"].get<double>());
-    EXPECT_NEAR(j["effects"][i]["p"].get<double>(), r["none"][i]["p"].get<double>(), 1e-6 * r["none"][i]["p"].get<double>());
+    EXPECT_NEAR(j["effects"][i]["F"].get<double>(), r["none"][i]["F"].get<double>(),
+                1e-6 * r["none"][i]["F"].get<double>());
+    EXPECT_NEAR(j["effects"][i]["p"].get<double>(), r["none"][i]["p"].get<double>(),
+                1e-6 * r["none"][i]["p"].get<double>());
   }
-  for (const char* key : {"df1", "df2", "pes", "mauchly_W", "mauchly_p", "gg_epsilon", "p_gg", "hf_epsilon", "p_hf"})
+  for (const char* key :
+       {"df1", "df2", "pes", "mauchly_W", "mauchly_p", "gg_epsilon", "p_gg", "hf_epsilon", "p_hf"})
     EXPECT_TRUE(j["effects"][0].contains(key)) << key;
   EXPECT_TRUE(j["effects"][2]["mauchly_W"].is_null());  // singular: no test
-  EXPECT_NEAR(j["effects"][0]["mauchly_p"].get<double>(), r["mauchly"][0]["p_R"].get<double>(), 1e-8);
+  EXPECT_NEAR(j["effects"][0]["mauchly_p"].get<double>(), r["mauchly"][0]["p_R"].get<double>(),
+              1e-8);
 }
 
 TEST(StatsCli, TukeyKruskalShapiroJson) {
-  const auto t = Stats("tukey --csv " + Csv() + " --dv score --factor method --where criterion=realism --average-by subject,method");
+  const auto t =
+      Stats("tukey --csv " + Csv() +
+            " --dv score --factor method --where criterion=realism --average-by subject,method");
   ASSERT_EQ(t["comparisons"].size(), 3u);
   const auto ref = Ref()["tukey_hsd_between"]["on_subject_means"]["pairs"][0];
-  EXPECT_EQ(t["comparisons"][0]["a"].get<std::string>() + "-" + t["comparisons"][0]["b"].get<std::string>(),
+  EXPECT_EQ(t["comparisons"][0]["a"].get<std::string>() + "-" +
+                t["comparisons"][0]["b"].get<std::string>(),
             ref["contrast"].get<std::string>());
   EXPECT_NEAR(t["comparisons"][0]["lwr"].get<double>(), ref["lwr"].get<double>(), 1e-6);
   EXPECT_NEAR(t["comparisons"][0]["p_adj"].get<double>(), ref["p_adj"].get<double>(), 1e-9);
-  const auto k = Stats("kruskal --csv " + Csv() + " --dv score --group method --where criterion=realism --average-by subject,method,material");
-  EXPECT_NEAR(k["H"].get<double>(), Ref()["kruskal_wallis"]["on_cell_means"]["H"].get<double>(), 1e-6);
+  const auto k = Stats(
+      "kruskal --csv " + Csv() +
+      " --dv score --group method --where criterion=realism --average-by subject,method,material");
+  EXPECT_NEAR(k["H"].get<double>(), Ref()["kruskal_wallis"]["on_cell_means"]["H"].get<double>(),
+              1e-6);
   EXPECT_EQ(k["dunn"].size(), 3u);
-  for (const char* key : {"a", "b", "z", "p", "p_adj"}) EXPECT_TRUE(k["dunn"][0].contains(key)) << key;
+  for (const char* key : {"a", "b", "z", "p", "p_adj"})
+    EXPECT_TRUE(k["dunn"][0].contains(key)) << key;
   const auto s = Stats("shapiro --csv " + Csv() + " --dv score --where criterion=realism");
-  EXPECT_NEAR(s["groups"][0]["W"].get<double>(), Ref()["shapiro"]["all_raw"]["W"].get<double>(), 1e-9);
+  EXPECT_NEAR(s["groups"][0]["W"].get<double>(), Ref()["shapiro"]["all_raw"]["W"].get<double>(),
+              1e-9);
   EXPECT_EQ(s["groups"][0]["n"], 900);
 }
 
 TEST(StatsCli, BadInputExitsWithTwoAndNamesIt) {
   std::string out;
-  EXPECT_EQ(test::RunCommand(Cli() + " stats kruskal --csv " + Csv() + " --dv nope --group method", &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " stats kruskal --csv " + Csv() + " --dv nope --group method", &out),
+      2);
   EXPECT_NE(out.find("nope"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " stats kruskal --csv " + Csv() + " --dv score --group method --where criterion", &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " stats kruskal --csv " + Csv() +
+                                 " --dv score --group method --where criterion",
+                             &out),
+            2);
   EXPECT_NE(out.find("--where"), std::string::npos) << out;
   test::TempDir dir;
   test::WriteFile(dir.File("bad.csv"), "subject,cond,score\nS1,a,1\nS1,b,x\n");
-  EXPECT_EQ(test::RunCommand(Cli() + " stats shapiro --csv " + dir.File("bad.csv") + " --dv score", &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " stats shapiro --csv " + dir.File("bad.csv") + " --dv score", &out),
+      2);
   EXPECT_NE(out.find("bad.csv:3: score"), std::string::npos) << out;
 }
 
@@ -79,12 +100,14 @@ json MixedRef() {
 }
 
 TEST(StatsCli, MixedAnovaWithBetweenAgreesWithAfexAndNamesTheDroppedSubject) {
-  const auto j = Stats("rm-anova --csv " + Mixed() + " --dv score --subject subject --within method --between group");
+  const auto j = Stats("rm-anova --csv " + Mixed() +
+                       " --dv score --subject subject --within method --between group");
   const auto ref = MixedRef()["anova"];
   ASSERT_EQ(j["effects"].size(), ref.size());
   for (std::size_t i = 0; i < ref.size(); ++i) {
     EXPECT_EQ(j["effects"][i]["effect"], ref[i]["effect"]);
-    EXPECT_NEAR(j["effects"][i]["F"].get<double>(), ref[i]["F"].get<double>(), 1e-10 * ref[i]["F"].get<double>());
+    EXPECT_NEAR(j["effects"][i]["F"].get<double>(), ref[i]["F"].get<double>(),
+                1e-10 * ref[i]["F"].get<double>());
   }
   EXPECT_TRUE(j["effects"][0]["between_only"].get<bool>());
   EXPECT_EQ(j["dropped"][0]["subject"], "S17");
@@ -96,11 +119,16 @@ TEST(StatsCli, MixedAnovaWithBetweenAgreesWithAfexAndNamesTheDroppedSubject) {
       << out;
   EXPECT_NE(out.find("dropped S17: no rating for method=visual"), std::string::npos) << out;
   // Tukey on the within factor names the dropped subject in its text output too.
-  ASSERT_EQ(test::RunCommand(Cli() + " stats tukey --csv " + Mixed() + " --dv score --subject subject --factor method", &out), 0)
+  ASSERT_EQ(test::RunCommand(Cli() + " stats tukey --csv " + Mixed() +
+                                 " --dv score --subject subject --factor method",
+                             &out),
+            0)
       << out;
   EXPECT_NE(out.find("dropped S17: no rating for method=visual"), std::string::npos) << out;
   // Tukey on the between factor of the mixed design (emmeans: expert - novice).
-  const auto t = Stats("tukey --csv " + Mixed() + " --dv score --subject subject --within method --between group --factor group");
+  const auto t =
+      Stats("tukey --csv " + Mixed() +
+            " --dv score --subject subject --within method --between group --factor group");
   ASSERT_EQ(t["comparisons"].size(), 1u);
   const auto tr = MixedRef()["tukey_group"][0];
   EXPECT_EQ(t["comparisons"][0]["a"], "novice");  // a - b = novice - expert = -(expert - novice)
@@ -120,32 +148,42 @@ TEST(StatsCli, ABetweenFactorGivenAsWithinExitsWithTwoAndSaysSo) {
 
 TEST(StatsCli, MissingScoresAreAnErrorOrDropTheirSubjectByName) {
   test::TempDir dir;
-  test::WriteFile(dir.File("na.csv"),
-                  "subject,cond,score\nS1,a,1\nS1,b,3\nS2,a,2\nS2,b,NA\nS3,a,4\nS3,b,7\nS4,a,1\nS4,b,2\n");
+  test::WriteFile(
+      dir.File("na.csv"),
+      "subject,cond,score\nS1,a,1\nS1,b,3\nS2,a,2\nS2,b,NA\nS3,a,4\nS3,b,7\nS4,a,1\nS4,b,2\n");
   std::string out;
-  const std::string cmd = Cli() + " stats rm-anova --csv " + dir.File("na.csv") + " --dv score --subject subject --within cond";
+  const std::string cmd = Cli() + " stats rm-anova --csv " + dir.File("na.csv") +
+                          " --dv score --subject subject --within cond";
   EXPECT_EQ(test::RunCommand(cmd, &out), 2);
   EXPECT_NE(out.find("na.csv:5: score"), std::string::npos) << out;
   ASSERT_EQ(test::RunCommand(cmd + " --missing drop-subject", &out), 0) << out;
-  EXPECT_NE(out.find("dropped S2: missing score at " + dir.File("na.csv") + ":5"), std::string::npos) << out;
+  EXPECT_NE(out.find("dropped S2: missing score at " + dir.File("na.csv") + ":5"),
+            std::string::npos)
+      << out;
   EXPECT_NE(out.find("3 subjects"), std::string::npos) << out;
 }
 
 // The lean binary runs the same commands with the same output, and its start-up loads none of
 // the heavy libraries of the full CLI.
 TEST(StatsCli, LeanBinaryGivesTheSameAnswersWithoutTheHeavyLibraries) {
-  const std::string args = " rm-anova --csv " + Mixed() + " --dv score --subject subject --within method --between group --json";
+  const std::string args = " rm-anova --csv " + Mixed() +
+                           " --dv score --subject subject --within method --between group --json";
   std::string full, lean;
   ASSERT_EQ(test::RunCommand(Cli() + " stats" + args, &full), 0) << full;
   ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + args, &lean), 0) << lean;
   EXPECT_EQ(full, lean);
   std::string needed;
-  ASSERT_EQ(test::RunCommand("readelf -d " + std::string(HL_STATS_CLI_PATH) + " | grep NEEDED", &needed), 0) << needed;
-  for (const char* lib : {"opencv", "ceres", "portaudio", "glfw", "plplot", "sqlite", "GL", "usb", "hidapi", "fftw", "ssl", "crypto"})
+  ASSERT_EQ(
+      test::RunCommand("readelf -d " + std::string(HL_STATS_CLI_PATH) + " | grep NEEDED", &needed),
+      0)
+      << needed;
+  for (const char* lib : {"opencv", "ceres", "portaudio", "glfw", "plplot", "sqlite", "GL", "usb",
+                          "hidapi", "fftw", "ssl", "crypto"})
     EXPECT_EQ(needed.find(lib), std::string::npos) << lib << " in\n" << needed;
   std::string heavy;
   ASSERT_EQ(test::RunCommand("readelf -d " + Cli() + " | grep NEEDED", &heavy), 0);
-  EXPECT_NE(heavy.find("opencv"), std::string::npos) << "the check above would not notice: " << heavy;
+  EXPECT_NE(heavy.find("opencv"), std::string::npos)
+      << "the check above would not notice: " << heavy;
 }
 
 // The analysis report names a participant the rmANOVA dropped, with the cells it lacks.
@@ -154,11 +192,20 @@ TEST(StatsCli, ReportNamesADroppedParticipant) {
   const std::string db = dir.File("s.db"), proto = test::DataPath("protocols/small.toml");
   std::string out;
   for (const char* p : {"P01", "P02"})
-    ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " + p + " --quiet", &out), 0)
+    ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " +
+                                   p + " --quiet",
+                               &out),
+              0)
         << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant P03 --quiet --stop-after 15", &out), 3)
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db +
+                                 " --participant P03 --quiet --stop-after 15",
+                             &out),
+            3)
       << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out),
+            0)
+      << out;
   const auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());
   const auto at = md.find("- dropped P03: no rating for ");
   ASSERT_NE(at, std::string::npos) << md;
@@ -170,8 +217,9 @@ TEST(StatsCli, LmmJsonAgreesWithLmerTest) {
   std::ifstream f(test::DataPath("stats/lmm_reference.json"));
   const json ref = json::parse(f)["unbalanced"];
   std::string out;
-  ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + " lmm --csv " + test::DataPath("stats/lmm_unbalanced.csv") +
-                                 " --formula '" + ref["formula"].get<std::string>() + "' --ml --json",
+  ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + " lmm --csv " +
+                                 test::DataPath("stats/lmm_unbalanced.csv") + " --formula '" +
+                                 ref["formula"].get<std::string>() + "' --ml --json",
                              &out),
             0)
       << out;
@@ -181,11 +229,14 @@ TEST(StatsCli, LmmJsonAgreesWithLmerTest) {
   ASSERT_EQ(j["anova_type3"].size(), w["anova"].size());
   for (std::size_t i = 0; i < w["anova"].size(); ++i) {
     for (const char* k : {"den_df", "F", "p"})
-      EXPECT_NEAR(j["anova_type3"][i][k].get<double>(), w["anova"][i][k].get<double>(), 1e-4 * w["anova"][i][k].get<double>())
+      EXPECT_NEAR(j["anova_type3"][i][k].get<double>(), w["anova"][i][k].get<double>(),
+                  1e-4 * w["anova"][i][k].get<double>())
           << i << " " << k;
   }
-  EXPECT_NEAR(j["deviance"].get<double>(), w["deviance"].get<double>(), 1e-4 * w["deviance"].get<double>());
-  for (const char* key : {"fixed", "random", "sigma", "logLik", "AIC", "BIC", "theta", "convergence"})
+  EXPECT_NEAR(j["deviance"].get<double>(), w["deviance"].get<double>(),
+              1e-4 * w["deviance"].get<double>());
+  for (const char* key :
+       {"fixed", "random", "sigma", "logLik", "AIC", "BIC", "theta", "convergence"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_FALSE(j["convergence"]["singular"].get<bool>());
   EXPECT_TRUE(j["convergence"]["converged"].get<bool>());
@@ -194,12 +245,20 @@ TEST(StatsCli, LmmJsonAgreesWithLmerTest) {
 TEST(StatsCli, LmmBadFormulaExitsWithTwoAndNamesFileAndField) {
   const std::string csv = test::DataPath("stats/lmm_singular.csv");
   std::string out;
-  EXPECT_EQ(test::RunCommand(Cli() + " stats lmm --csv " + csv + " --formula 'score ~ methd + (1 | participant)'", &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " stats lmm --csv " + csv +
+                                 " --formula 'score ~ methd + (1 | participant)'",
+                             &out),
+            2);
   EXPECT_NE(out.find("lmm_singular.csv"), std::string::npos) << out;
   EXPECT_NE(out.find("methd"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " stats lmm --csv " + csv + " --formula 'score ~ method'", &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " stats lmm --csv " + csv + " --formula 'score ~ method'", &out), 2);
   EXPECT_NE(out.find("--formula"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " stats lmm --csv " + csv + " --formula 'score ~ method + (1 | participant)' --ddf kenward-roger --ml", &out), 2);
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " stats lmm --csv " + csv +
+                    " --formula 'score ~ method + (1 | participant)' --ddf kenward-roger --ml",
+                &out),
+            2);
   EXPECT_NE(out.find("--ddf"), std::string::npos) << out;  // Kenward-Roger needs REML, as lmerTest
 }
 
@@ -207,17 +266,27 @@ TEST(StatsCli, LmmBadFormulaExitsWithTwoAndNamesFileAndField) {
 TEST(StatsCli, ReportFitsTheProtocolsLmm) {
   test::TempDir dir;
   const std::string db = dir.File("s.db"), proto = dir.File("small.toml");
-  test::WriteFile(dir.File("profiles.toml"), test::ReadFile(test::DataPath("protocols/profiles.toml")));
-  test::WriteFile(proto, test::ReadFile(test::DataPath("protocols/small.toml")) +
-                             "\n[analysis]\ntests = [\"lmm\"]\n"
-                             "lmm_formula = \"score ~ method + (1 | participant) + (1 | material)\"\n");
+  test::WriteFile(dir.File("profiles.toml"),
+                  test::ReadFile(test::DataPath("protocols/profiles.toml")));
+  test::WriteFile(proto,
+                  test::ReadFile(test::DataPath("protocols/small.toml")) +
+                      "\n[analysis]\ntests = [\"lmm\"]\n"
+                      "lmm_formula = \"score ~ method + (1 | participant) + (1 | material)\"\n");
   std::string out;
   for (const char* p : {"P01", "P02"})
-    ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " + p + " --quiet", &out), 0)
+    ASSERT_EQ(test::RunCommand(Cli() + " study run " + proto + " --db " + db + " --participant " +
+                                   p + " --quiet",
+                               &out),
+              0)
         << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out),
+            0)
+      << out;
   const auto md = test::ReadFile(json::parse(out)["report"].get<std::string>());
-  EXPECT_NE(md.find("Linear mixed model `score ~ method + (1 | participant) + (1 | material)`"), std::string::npos) << md;
+  EXPECT_NE(md.find("Linear mixed model `score ~ method + (1 | participant) + (1 | material)`"),
+            std::string::npos)
+      << md;
   EXPECT_NE(md.find("| method"), std::string::npos) << md;
   EXPECT_NE(md.find("| participant (Intercept) |"), std::string::npos) << md;
   EXPECT_EQ(md.find("Not fitted"), std::string::npos) << md;

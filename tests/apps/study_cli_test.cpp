@@ -40,25 +40,51 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
   const std::string db = dir.File("s.db");
   std::string out;
   // A stopped session exits 3 (docs/studies.md), with what it completed recorded.
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet --stop-after 9", &out), 3) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db +
+                                 " --participant P01 --quiet --stop-after 9",
+                             &out),
+            3)
+      << out;
   ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --json", &out), 0) << out;
   auto st = json::parse(out)["participants"][0];
   EXPECT_EQ(st["code"], "P01");
   EXPECT_EQ(st["completed"], 9);
   EXPECT_EQ(st["planned"], 26);
   EXPECT_EQ(st["duplicates"], 0);
-  for (const char* k : {"code", "planned", "completed", "faulted", "duplicates"}) EXPECT_TRUE(st.contains(k)) << k;
-  ASSERT_EQ(test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P02 --quiet", &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P03 --quiet", &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out), 0) << out;
+  for (const char* k : {"code", "planned", "completed", "faulted", "duplicates"})
+    EXPECT_TRUE(st.contains(k)) << k;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0)
+      << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " study run " + Small() + " --db " + db + " --participant P02 --quiet", &out),
+      0)
+      << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " study run " + Small() + " --db " + db + " --participant P03 --quiet", &out),
+      0)
+      << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json", &out), 0)
+      << out;
   EXPECT_EQ(json::parse(out)["participants"][0]["completed"], 26);
   // Running an existing participant again, or with a name, is refused with exit code 2.
-  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet", &out), 2);
-  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + db + " --participant Alice --quiet", &out), 2);
+  EXPECT_EQ(
+      test::RunCommand(
+          Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet", &out),
+      2);
+  EXPECT_EQ(
+      test::RunCommand(
+          Cli() + " study run " + Small() + " --db " + db + " --participant Alice --quiet", &out),
+      2);
   EXPECT_NE(out.find("pseudonymous"), std::string::npos) << out;
   // The analysis report.
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --json", &out),
+            0)
+      << out;
   const auto r = json::parse(out);
   EXPECT_TRUE(std::filesystem::exists(r["report"].get<std::string>()));
   int png = 0, svg = 0;
@@ -79,7 +105,11 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
   const auto agg = ReadCsv(dir.File("rep/test-small_aggregate.csv"));
   EXPECT_EQ(agg.rows.size(), 2u * 4u * 2u);  // criteria x materials x methods
   // Export round trip of the ratings count.
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db + " --out " + dir.File("x") + " --no-trajectories", &out),
+      0)
+      << out;
   const auto ratings = ReadCsv(dir.File("x/ratings.csv"));
   EXPECT_EQ(ratings.rows.size(), 3u * 22u * 2u);  // participants x rated trials x criteria
 }
@@ -88,25 +118,31 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
   test::TempDir dir;
   std::string out;
   // No display: a clear error, and no database created.
-  EXPECT_EQ(test::RunCommand("env -u DISPLAY " + Cli() + " study run " + Small() + " --db " + dir.File("a.db") +
-                                 " --participant P01 --ui",
+  EXPECT_EQ(test::RunCommand("env -u DISPLAY " + Cli() + " study run " + Small() + " --db " +
+                                 dir.File("a.db") + " --participant P01 --ui",
                              &out),
             1);
   EXPECT_NE(out.find("no display"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir.File("a.db")));
   // Hardware without its inputs: named errors.
-  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") + " --participant P01 --device falcon --ui",
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") +
+                                 " --participant P01 --device falcon --ui",
                              &out),
             2);
   EXPECT_NE(out.find("--firmware"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") + " --participant P01 --device dhd", &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") +
+                                 " --participant P01 --device dhd",
+                             &out),
+            2);
   EXPECT_NE(out.find("SDK"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir.File("b.db")));
   // With a display (Xvfb), the windows open and the session runs (the first trials are
   // unrated training, so no one needs to click).
   if (test::RunCommand("command -v xvfb-run") == 0) {
-    // (Leak checking off for this child under ASan: Mesa's unloaded driver, see tests/CMakeLists.txt.)
-    ASSERT_EQ(test::RunCommand("ASAN_OPTIONS=detect_leaks=0 xvfb-run -a " + Cli() + " study run " + Small() + " --db " + dir.File("c.db") +
+    // (Leak checking off for this child under ASan: Mesa's unloaded driver, see
+    // tests/CMakeLists.txt.)
+    ASSERT_EQ(test::RunCommand("ASAN_OPTIONS=detect_leaks=0 xvfb-run -a " + Cli() + " study run " +
+                                   Small() + " --db " + dir.File("c.db") +
                                    " --participant P01 --ui --stop-after 3 --quiet",
                                &out),
               3)
@@ -118,7 +154,8 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
 TEST(StudyCli, DemoRunsEndToEnd) {
   test::TempDir dir;
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " demo --participants 2 --out " + dir.File("d"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " demo --participants 2 --out " + dir.File("d"), &out), 0)
+      << out;
   EXPECT_NE(out.find("report:"), std::string::npos) << out;
   EXPECT_NE(out.find("real-time engine check"), std::string::npos) << out;
   std::string report;
@@ -131,8 +168,8 @@ TEST(StudyCli, DemoRunsEndToEnd) {
   EXPECT_NE(md.find("virtual clock"), std::string::npos) << md;
   const auto at = md.find("## Real-time check");
   ASSERT_NE(at, std::string::npos) << md;
-  for (const char* s : {"requested 1000 Hz) achieved", "wake-up lateness p50", "p99.9", "deadline misses",
-                        "requested 10000 Hz) achieved", "timer slack 1 ns"})
+  for (const char* s : {"requested 1000 Hz) achieved", "wake-up lateness p50", "p99.9",
+                        "deadline misses", "requested 10000 Hz) achieved", "timer slack 1 ns"})
     EXPECT_NE(md.find(s, at), std::string::npos) << s << "\n" << md.substr(at);
 }
 
@@ -147,8 +184,13 @@ std::string RigCli() { return std::string(HL_CLI_PATH); }
 TEST(RigCli, CheckShowAndCalibrate) {
   test::TempDir dir;
   std::string out;
-  // The Falcon twin through the engine: JSON with the link's counters; the rest pose is out of contact.
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig check --device falcon-twin --seconds 1 --empty-reads 0.1 --json", &out), 0) << out;
+  // The Falcon twin through the engine: JSON with the link's counters; the rest pose is out of
+  // contact.
+  ASSERT_EQ(
+      test::RunCommand(
+          RigCli() + " rig check --device falcon-twin --seconds 1 --empty-reads 0.1 --json", &out),
+      0)
+      << out;
   const auto j = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_EQ(j["device"], "falcon-twin");
   EXPECT_EQ(j["ticks"], 1000);
@@ -159,29 +201,44 @@ TEST(RigCli, CheckShowAndCalibrate) {
   EXPECT_GT(j["contact_ticks"].get<int>(), 500);
   // A rig file whose left sample sits where the grip rests: the check says so (exit 1).
   ASSERT_EQ(test::RunCommand(RigCli() + " rig show --device falcon > /dev/null", &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("none.toml") + " --points '-0.01,0,0;0.01,0,0;0,0.01,0'", &out), 2) << out;
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("none.toml") +
+                                 " --points '-0.01,0,0;0.01,0,0;0,0.01,0'",
+                             &out),
+            2)
+      << out;
   // Calibrate the left sample from four touches on the plane y = 0.01 (above the grip's rest pose).
-  test::WriteFile(dir.File("touches.csv"), "x_m,y_m,z_m\n-0.03,0.01,0.10\n0.0,0.01,0.10\n-0.03,0.01,0.14\n0.0,0.01,0.14\n");
-  test::WriteFile(dir.File("rig.toml"),
-                  "device = \"falcon\"\n[sample.left]\norigin_m = [-0.025, -0.04, 0.125]\nx_axis = [1, 0, 0]\nz_axis = [0, 1, 0]\n"
-                  "[sample.right]\norigin_m = [0.025, -0.04, 0.125]\nx_axis = [1, 0, 0]\nz_axis = [0, 1, 0]\n");
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") + " --side left --points " +
-                                 dir.File("touches.csv") + " --out " + dir.File("new.toml"),
+  test::WriteFile(dir.File("touches.csv"),
+                  "x_m,y_m,z_m\n-0.03,0.01,0.10\n0.0,0.01,0.10\n-0.03,0.01,0.14\n0.0,0.01,0.14\n");
+  test::WriteFile(
+      dir.File("rig.toml"),
+      "device = \"falcon\"\n[sample.left]\norigin_m = [-0.025, -0.04, 0.125]\nx_axis = [1, 0, "
+      "0]\nz_axis = [0, 1, 0]\n"
+      "[sample.right]\norigin_m = [0.025, -0.04, 0.125]\nx_axis = [1, 0, 0]\nz_axis = [0, 1, 0]\n");
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") +
+                                 " --side left --points " + dir.File("touches.csv") + " --out " +
+                                 dir.File("new.toml"),
                              &out),
             0)
       << out;
   EXPECT_NE(out.find("residual RMS 0.000 mm"), std::string::npos) << out;
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + dir.File("new.toml") + " --json", &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + dir.File("new.toml") + " --json", &out), 0)
+      << out;
   const auto s = nlohmann::json::parse(out.substr(out.find('{')));
   EXPECT_NEAR(s["samples"]["left"]["device"]["origin_m"][1].get<double>(), 0.01, 1e-9);
   EXPECT_NEAR(s["samples"]["left"]["device"]["z_axis"][1].get<double>(), 1.0, 1e-9);
   // The left sample now sits where the grip rests: rig check refuses it.
-  EXPECT_EQ(test::RunCommand(RigCli() + " rig check --device falcon-twin --seconds 0.1 --rig " + dir.File("new.toml"), &out), 1)
+  EXPECT_EQ(test::RunCommand(RigCli() + " rig check --device falcon-twin --seconds 0.1 --rig " +
+                                 dir.File("new.toml"),
+                             &out),
+            1)
       << out;
   EXPECT_NE(out.find("IN CONTACT"), std::string::npos) << out;
   // A malformed touch names the file and line.
   test::WriteFile(dir.File("bad.csv"), "0,0,0\n0.01,0,zero\n");
-  EXPECT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") + " --points " + dir.File("bad.csv"), &out), 2);
+  EXPECT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") + " --points " +
+                                 dir.File("bad.csv"),
+                             &out),
+            2);
   EXPECT_NE(out.find("bad.csv:2"), std::string::npos) << out;
 }
 

@@ -5,8 +5,8 @@
 
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <nlohmann/json.hpp>
+#include <set>
 
 #include "hapticlab/test/test_util.hpp"
 
@@ -25,9 +25,12 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
   test::TempDir dir;
   const auto meas = dir.File("meas.csv");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " measurement simulate --add load-dependent-friction --duration 60 --seed 3 -o " + meas,
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " measurement simulate --add load-dependent-friction --duration 60 --seed 3 -o " +
+              meas,
+          &out),
+      0)
       << out;
   const auto check = Json(Cli() + " measurement check --json " + meas);
   EXPECT_NEAR(check["rate_hz"].get<double>(), 2000, 1e-6);
@@ -43,20 +46,25 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
   ASSERT_EQ(fit["fits"].size(), 3u);
   for (const auto& f : fit["fits"]) {
     EXPECT_EQ(f["termination"], "converged") << f.dump();
-    for (const char* k : {"iterations", "final_cost", "at_bounds", "usable"}) EXPECT_TRUE(f.contains(k)) << k;
+    for (const char* k : {"iterations", "final_cost", "at_bounds", "usable"})
+      EXPECT_TRUE(f.contains(k)) << k;
   }
   const auto& mu = fit["estimates"]["coulomb"]["mu_k"];
   EXPECT_LT(mu["lo95"].get<double>(), mu["value"].get<double>());
   EXPECT_GT(mu["hi95"].get<double>(), mu["value"].get<double>());
   // Without --add nothing changes: one line for the fit, one held out; progress on stderr
   // unless --quiet.
-  ASSERT_EQ(test::RunCommand(Cli() + " fit --measurement " + meas + " -o " + dir.File("b2.toml"), &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " fit --measurement " + meas + " -o " + dir.File("b2.toml"), &out),
+      0)
+      << out;
   EXPECT_EQ(out.find("before"), std::string::npos) << out;
   EXPECT_NE(out.find("fitted:"), std::string::npos) << out;
   EXPECT_NE(out.find("fit: fitting on all data"), std::string::npos) << out;
   EXPECT_NE(out.find("friction fit: converged"), std::string::npos) << out;
 
-  const auto dx = Json(Cli() + " diagnose --json --quiet --model " + base + " --measurement " + meas);
+  const auto dx =
+      Json(Cli() + " diagnose --json --quiet --model " + base + " --measurement " + meas);
   ASSERT_FALSE(dx["candidates"].empty());
   const auto& top = dx["candidates"][0];
   EXPECT_EQ(top["effect"], "load-dependent-friction") << dx.dump(2);
@@ -64,17 +72,22 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
   EXPECT_LT(top["params"]["alpha"].get<double>(), 1.0);  // the truth's friction grows like f_n^0.7
   EXPECT_GT(top["error_reduction"].get<double>(), 0);
   for (std::size_t i = 1; i < dx["candidates"].size(); ++i)
-    EXPECT_LE(dx["candidates"][i]["error_reduction"].get<double>(), dx["candidates"][i - 1]["error_reduction"].get<double>());
-  EXPECT_NEAR(dx["baseline_error"].get<double>(), top["error_after"].get<double>() + top["error_reduction"].get<double>(), 1e-12);
+    EXPECT_LE(dx["candidates"][i]["error_reduction"].get<double>(),
+              dx["candidates"][i - 1]["error_reduction"].get<double>());
+  EXPECT_NEAR(dx["baseline_error"].get<double>(),
+              top["error_after"].get<double>() + top["error_reduction"].get<double>(), 1e-12);
   // The unexplained report, keys as documented.
   ASSERT_TRUE(dx.contains("unexplained"));
   ASSERT_FALSE(dx["unexplained"]["channels"].empty());
   for (const auto& c : dx["unexplained"]["channels"])
-    for (const char* k : {"channel", "error", "noise_floor", "ratio"}) EXPECT_TRUE(c.contains(k)) << k;
+    for (const char* k : {"channel", "error", "noise_floor", "ratio"})
+      EXPECT_TRUE(c.contains(k)) << k;
   ASSERT_FALSE(dx["unexplained"]["axes"].empty());
-  const std::set<std::string> axes = {"time", "speed", "load", "direction", "position", "regime", "band"};
+  const std::set<std::string> axes = {"time",     "speed",  "load", "direction",
+                                      "position", "regime", "band"};
   for (const auto& a : dx["unexplained"]["axes"]) {
-    for (const char* k : {"axis", "channel", "share", "description"}) EXPECT_TRUE(a.contains(k)) << k;
+    for (const char* k : {"axis", "channel", "share", "description"})
+      EXPECT_TRUE(a.contains(k)) << k;
     EXPECT_TRUE(axes.count(a["axis"].get<std::string>())) << a.dump();
   }
   EXPECT_FALSE(dx["unexplained"]["flagged"].get<bool>()) << "an effect is supported";
@@ -86,13 +99,15 @@ TEST(WorkbenchCli, FromRawMeasurementToImprovedModel) {
             0.5 * fit2["held_out"]["before"]["channels"]["friction"].get<double>());
 
   const auto plots = dir.File("plots");
-  const auto cmp = Json(Cli() + " compare --json --model " + better + " --measurement " + meas + " --plots " + plots +
-                        " --before " + base);
+  const auto cmp = Json(Cli() + " compare --json --model " + better + " --measurement " + meas +
+                        " --plots " + plots + " --before " + base);
   EXPECT_GT(cmp["error"].get<double>(), 0);
   EXPECT_FALSE(cmp["summary"]["axes"].empty());
   EXPECT_FALSE(cmp["summary"]["largest"].empty());
   // The text report opens with the summary, the bin-by-bin detail after it.
-  ASSERT_EQ(test::RunCommand(Cli() + " compare --model " + base + " --measurement " + meas, &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " compare --model " + base + " --measurement " + meas, &out),
+            0)
+      << out;
   const auto where = out.find("where the residual lives"), detail = out.find("detail:");
   ASSERT_NE(where, std::string::npos) << out;
   ASSERT_NE(detail, std::string::npos) << out;
@@ -110,14 +125,20 @@ TEST(WorkbenchCli, BadInputIsReportedWithFileLineAndColumn) {
   test::TempDir dir;
   const auto meas = dir.File("m.csv");
   test::WriteFile(meas,
-                  "# hapticlab-measurement v1\n# material: x\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n"
+                  "# hapticlab-measurement v1\n# material: "
+                  "x\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n"
                   "0,0,0,-0.001,0.01,0,0,-0.3,0,1\n0.001,0.00001,0,-0.001,0.01,0,0,-0.3,zero,1\n");
   std::string out;
   EXPECT_EQ(test::RunCommand(Cli() + " measurement check " + meas, &out), 2);
   EXPECT_NE(out.find("m.csv:5"), std::string::npos) << out;
   EXPECT_NE(out.find("fy_N"), std::string::npos) << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " fit --measurement " + meas + " --add no-such-effect -o " + dir.File("o.toml"), &out), 2);
-  EXPECT_EQ(test::RunCommand(Cli() + " measurement simulate --add no-such-effect -o " + dir.File("s.csv"), &out), 2);
+  EXPECT_EQ(test::RunCommand(Cli() + " fit --measurement " + meas + " --add no-such-effect -o " +
+                                 dir.File("o.toml"),
+                             &out),
+            2);
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " measurement simulate --add no-such-effect -o " + dir.File("s.csv"), &out),
+            2);
   EXPECT_NE(out.find("stribeck"), std::string::npos) << "lists the catalogue: " << out;
   EXPECT_EQ(test::RunCommand(Cli() + " effects", &out), 0);
   EXPECT_NE(out.find("position-dependent-friction"), std::string::npos);

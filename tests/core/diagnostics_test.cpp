@@ -26,7 +26,8 @@ TEST(Diagnostics, CollectsEveryProblemAndThrowsOnceWithAllOfThem) {
     ASSERT_EQ(e.diagnostics().size(), 2u);
     EXPECT_EQ(e.diagnostics()[1].line, 9);
     EXPECT_EQ(e.diagnostics()[1].field, "phase.trials");
-    EXPECT_STREQ(e.what(), "p.toml:4: seed: expected an integer\np.toml:9: phase.trials: expected >= 1");
+    EXPECT_STREQ(e.what(),
+                 "p.toml:4: seed: expected an integer\np.toml:9: phase.trials: expected >= 1");
   }
 }
 

@@ -29,30 +29,36 @@ TEST(Measurement, ReadsAndRoundTrips) {
 }
 
 TEST(Measurement, KinematicsOnlyDifferentiatesPositions) {
-  const auto m = ParseMeasurementCsv("# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n1,3,0,0\n",
-                                     "k.csv", {.kinematics_only = true});
+  const auto m = ParseMeasurementCsv(
+      "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n1,3,0,0\n", "k.csv",
+      {.kinematics_only = true});
   EXPECT_FALSE(m.has_forces);
   EXPECT_DOUBLE_EQ(m.rows[1].v_mps.x(), 3.0);
   EXPECT_DOUBLE_EQ(m.rows[0].v_mps.x(), 2.0);
 }
 
 TEST(Measurement, ErrorsNameFileLineAndColumn) {
-  const std::string head = "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
+  const std::string head =
+      "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\n";
   try {
     ParseMeasurementCsv(head + "0,0,0,0,0,0,0,0,0,0\n0,0,0,0,0,0,0,0,0,0\n", "t.csv");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("t.csv:4: t_s: time must increase"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("t.csv:4: t_s: time must increase"), std::string::npos)
+        << e.what();
   }
   try {
     ParseMeasurementCsv(head + "0,0,0,nan,0,0,0,0,0,0\n", "n.csv");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("n.csv:3: z_m: value is not finite"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("n.csv:3: z_m: value is not finite"), std::string::npos)
+        << e.what();
   }
   EXPECT_THROW(ParseMeasurementCsv("t_s,x_m\n0,0\n", "h.csv"), InputError);  // no v1 tag
   try {
-    ParseMeasurementCsv("# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0,0,0,0,0,0,0\n", "f.csv");
+    ParseMeasurementCsv(
+        "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps\n0,0,0,0,0,0,0\n",
+        "f.csv");
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("fx_N: column is missing"), std::string::npos) << e.what();

@@ -46,8 +46,10 @@ TEST(SpscQueue, TwoThreadsTransferEveryElementInOrder) {
   constexpr std::uint64_t kCount = 2'000'000;
   std::thread producer([&] {
     for (std::uint64_t i = 0; i < kCount;) {
-      if (q.TryPush(i)) ++i;
-      else std::this_thread::yield();  // on a loaded machine the consumer may be descheduled
+      if (q.TryPush(i))
+        ++i;
+      else
+        std::this_thread::yield();  // on a loaded machine the consumer may be descheduled
     }
   });
   std::uint64_t expected = 0;

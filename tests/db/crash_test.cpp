@@ -22,7 +22,9 @@ constexpr int kCriteria = 8;  // ratings per trial
   try {
     Database db(path);
     for (int i = 0;; ++i) {
-      const auto id = db.AddTrial({.session_id = session, .plan_index = i, .phase = "main",
+      const auto id = db.AddTrial({.session_id = session,
+                                   .plan_index = i,
+                                   .phase = "main",
                                    .material = "m" + std::to_string(i % 10)});
       db.StartTrial(id);
       std::vector<Rating> r;

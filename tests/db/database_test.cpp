@@ -14,7 +14,9 @@ void Populate(Database& db, int version) {
   db.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11)");
   db.Exec("INSERT INTO session(participant_id) VALUES (1)");
   db.Exec("INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','Denim')");
-  db.Exec("INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (1,'overall',61.5,2.0)");
+  db.Exec(
+      "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
+      "(1,'overall',61.5,2.0)");
   if (version >= 2) db.Exec("INSERT INTO event(session_id, kind) VALUES (1,'break')");
 }
 
@@ -96,8 +98,9 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto ids = db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
-                                 {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
+  const auto ids =
+      db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
+                    {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);
@@ -109,7 +112,8 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   EXPECT_THROW(db.CompleteTrial(ids[0], {{"hardness", 10, 1}}), std::runtime_error);
   EXPECT_EQ(db.Ratings(ids[0]).size(), 2u);
   // A failing rating (duplicate criterion) rolls back the whole trial.
-  EXPECT_THROW(db.CompleteTrial(ids[1], {{"overall", 1, 1}, {"overall", 2, 1}}), std::runtime_error);
+  EXPECT_THROW(db.CompleteTrial(ids[1], {{"overall", 1, 1}, {"overall", 2, 1}}),
+               std::runtime_error);
   EXPECT_TRUE(db.Ratings(ids[1]).empty());
   EXPECT_EQ(db.Trials(se)[1].status, kTrialPlanned);
 }
@@ -128,8 +132,12 @@ TEST(Database, StoresModelsMeasurementsEventsAndChunks) {
   db.LogEvent({.session_id = se, .trial_id = t, .kind = "device-fault", .detail = "stale"});
   ASSERT_EQ(db.Events(se).size(), 1u);
   EXPECT_EQ(*db.Events(se)[0].trial_id, t);
-  TrajectoryChunk c{.trial_id = t, .stream = "force", .start_time_s = 1.25, .rate_hz = 1000,
-                    .channels = {"x_m", "fz_N"}, .samples = {1.f, 2.f, 3.f, 4.f, 5.f, 6.f}};
+  TrajectoryChunk c{.trial_id = t,
+                    .stream = "force",
+                    .start_time_s = 1.25,
+                    .rate_hz = 1000,
+                    .channels = {"x_m", "fz_N"},
+                    .samples = {1.f, 2.f, 3.f, 4.f, 5.f, 6.f}};
   db.InsertTrajectoryChunk(c);
   const auto back = db.TrajectoryChunks(t);
   ASSERT_EQ(back.size(), 1u);
@@ -147,12 +155,16 @@ TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
   {
     Database old(path, {.migrate_to = 3});
     Populate(old, 3);  // trial 1: never started, one rating
-    old.Exec("INSERT INTO trial(session_id, plan_index, phase, material, status, attempts) VALUES "
-             "(1,1,'main','A','completed',1), (1,2,'main','B','completed',2), (1,3,'main','C','completed',2)");
+    old.Exec(
+        "INSERT INTO trial(session_id, plan_index, phase, material, status, attempts) VALUES "
+        "(1,1,'main','A','completed',1), (1,2,'main','B','completed',2), "
+        "(1,3,'main','C','completed',2)");
     auto chunk = [&](int trial, double t0) {
-      old.Exec("INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, sample_count, "
-               "samples) VALUES (" + std::to_string(trial) + ",'force'," + std::to_string(t0) +
-               ",1000,'fz_N',1,x'0000803f')");
+      old.Exec(
+          "INSERT INTO trajectory_chunk(trial_id, stream, start_time_s, rate_hz, channels, "
+          "sample_count, "
+          "samples) VALUES (" +
+          std::to_string(trial) + ",'force'," + std::to_string(t0) + ",1000,'fz_N',1,x'0000803f')");
     };
     chunk(2, 0);
     chunk(2, 1);  // trial 2: one attempt, two chunks
@@ -171,7 +183,8 @@ TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
   EXPECT_EQ(db.TrajectoryChunks(4).size(), 2u);
   EXPECT_EQ(db.TrajectoryChunks(4)[0].attempt, 2);
   int unattributed = 0;
-  for (const auto& e : db.Events(1)) unattributed += e.kind == "trajectory-unattributed" && e.trial_id == 3;
+  for (const auto& e : db.Events(1))
+    unattributed += e.kind == "trajectory-unattributed" && e.trial_id == 3;
   EXPECT_EQ(unattributed, 1);
   EXPECT_EQ(db.IntegrityCheck(), "ok");
 }
@@ -199,17 +212,34 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   EXPECT_EQ(db.StartTrial(t), 1);
   EXPECT_EQ(db.StartTrial(t), 2);
   // Attempt 1 left a chunk behind; attempt 2 wrote 3 samples of "force".
-  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {9, 9}, .attempt = 1});
-  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {1, 2, 3}, .attempt = 2});
-  StreamReport ok{.trial_id = t, .attempt = 2, .stream = "force", .rate_hz = 1000,
-                  .samples_offered = 4, .samples_dropped = 1, .samples_written = 3};
+  db.InsertTrajectoryChunk({.trial_id = t,
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {9, 9},
+                            .attempt = 1});
+  db.InsertTrajectoryChunk({.trial_id = t,
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {1, 2, 3},
+                            .attempt = 2});
+  StreamReport ok{.trial_id = t,
+                  .attempt = 2,
+                  .stream = "force",
+                  .rate_hz = 1000,
+                  .samples_offered = 4,
+                  .samples_dropped = 1,
+                  .samples_written = 3};
   StreamReport lost = ok;
   lost.samples_dropped = 0;  // 4 queued, 3 written: one chunk lost
   EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {lost}), TrajectoryIncomplete);
-  StreamReport missing{.trial_id = t, .attempt = 2, .stream = "vibration", .rate_hz = 10000,
-                       .samples_offered = 5, .samples_written = 5};  // writer says 5, db has none
+  StreamReport missing{.trial_id = t,
+                       .attempt = 2,
+                       .stream = "vibration",
+                       .rate_hz = 10000,
+                       .samples_offered = 5,
+                       .samples_written = 5};  // writer says 5, db has none
   EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {ok, missing}), TrajectoryIncomplete);
   EXPECT_TRUE(db.Ratings(t).empty());
   EXPECT_NE(db.Trials(se)[0].status, kTrialCompleted);
@@ -228,10 +258,18 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   db.Exec("DELETE FROM trajectory_chunk WHERE attempt = 2");
   ASSERT_EQ(db.VerifyTrajectories().size(), 1u);
   EXPECT_NE(db.VerifyTrajectories()[0].find("stream force"), std::string::npos);
-  db.InsertTrajectoryChunk({.trial_id = t, .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {1, 2, 3}, .attempt = 2});
-  db.InsertTrajectoryChunk({.trial_id = t, .stream = "extra", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {1}, .attempt = 2});
+  db.InsertTrajectoryChunk({.trial_id = t,
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {1, 2, 3},
+                            .attempt = 2});
+  db.InsertTrajectoryChunk({.trial_id = t,
+                            .stream = "extra",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {1},
+                            .attempt = 2});
   ASSERT_EQ(db.VerifyTrajectories().size(), 1u);
   EXPECT_NE(db.VerifyTrajectories()[0].find("stream extra"), std::string::npos);
 }
@@ -261,7 +299,8 @@ TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
     Database db(path);
     Populate(db, kSchemaVersion);
     for (int i = 0; i < 200; ++i)
-      db.Exec("INSERT INTO event(session_id, kind, detail) VALUES (1, 'x', '" + std::string(400, 'e') + "')");
+      db.Exec("INSERT INTO event(session_id, kind, detail) VALUES (1, 'x', '" +
+              std::string(400, 'e') + "')");
     db.Exec("PRAGMA wal_checkpoint(TRUNCATE)");
   }
   EXPECT_NO_THROW(OpenForReading(path));

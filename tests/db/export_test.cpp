@@ -19,17 +19,28 @@ TEST(Export, TablesRoundTripThroughCsv) {
   const auto st = db.CreateStudy({.name = "ch5, hybrid", .protocol_toml = "x", .seed = 3});
   const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto ids = db.AddTrials(
-      {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim",
-        .comparison = "virtual", .method = "hybrid", .left = "real", .right = "virtual"},
-       {.session_id = se, .plan_index = 1, .phase = "reference", .material = "Cork",
-        .comparison = "Velvet"}});
+  const auto ids = db.AddTrials({{.session_id = se,
+                                  .plan_index = 0,
+                                  .phase = "main",
+                                  .material = "Denim",
+                                  .comparison = "virtual",
+                                  .method = "hybrid",
+                                  .left = "real",
+                                  .right = "virtual"},
+                                 {.session_id = se,
+                                  .plan_index = 1,
+                                  .phase = "reference",
+                                  .material = "Cork",
+                                  .comparison = "Velvet"}});
   db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
   db.LogEvent({.session_id = se, .kind = "break", .detail = "after \"block\" 1"});
   std::vector<float> samples;
   for (int i = 0; i < 30; ++i) samples.push_back(std::sin(0.1f * static_cast<float>(i)) * 1e-3f);
-  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .start_time_s = 0.5,
-                            .rate_hz = 1000, .channels = {"x_m", "y_m", "fz_N"},
+  db.InsertTrajectoryChunk({.trial_id = ids[0],
+                            .stream = "force",
+                            .start_time_s = 0.5,
+                            .rate_hz = 1000,
+                            .channels = {"x_m", "y_m", "fz_N"},
                             .samples = samples});
 
   const auto files = ExportCsv(db, dir.File("out"));
@@ -42,7 +53,8 @@ TEST(Export, TablesRoundTripThroughCsv) {
   EXPECT_EQ(ratings.rows[0][ratings.Require("method")], "hybrid");
   std::map<std::string, double> score;
   for (std::size_t r = 0; r < ratings.rows.size(); ++r)
-    score[ratings.rows[r][ratings.Require("criterion")]] = ratings.Number(r, ratings.Require("score"));
+    score[ratings.rows[r][ratings.Require("criterion")]] =
+        ratings.Number(r, ratings.Require("score"));
   EXPECT_EQ(score["roughness"], 71.25);
   EXPECT_EQ(score["overall"], 0.1);  // exact: 17 significant digits
 
@@ -70,20 +82,37 @@ TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 3});
   const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto ids = db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
-                                 {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
+  const auto ids =
+      db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
+                    {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
   db.StartTrial(ids[0]);  // attempt 1: interrupted after one chunk
-  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {7, 7, 7}, .attempt = 1});
+  db.InsertTrajectoryChunk({.trial_id = ids[0],
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {7, 7, 7},
+                            .attempt = 1});
   db.StartTrial(ids[0]);  // attempt 2 completes
-  db.InsertTrajectoryChunk({.trial_id = ids[0], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {1, 2}, .attempt = 2});
+  db.InsertTrajectoryChunk({.trial_id = ids[0],
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {1, 2},
+                            .attempt = 2});
   db.CompleteTrial(ids[0], {{"overall", 50, 1}},
-                   {{.trial_id = ids[0], .attempt = 2, .stream = "force", .rate_hz = 1000, .samples_offered = 2,
+                   {{.trial_id = ids[0],
+                     .attempt = 2,
+                     .stream = "force",
+                     .rate_hz = 1000,
+                     .samples_offered = 2,
                      .samples_written = 2}});
   db.StartTrial(ids[1]);  // started, never completed: not exported
-  db.InsertTrajectoryChunk({.trial_id = ids[1], .stream = "force", .rate_hz = 1000, .channels = {"fz_N"},
-                            .samples = {9}, .attempt = 1});
+  db.InsertTrajectoryChunk({.trial_id = ids[1],
+                            .stream = "force",
+                            .rate_hz = 1000,
+                            .channels = {"fz_N"},
+                            .samples = {9},
+                            .attempt = 1});
   ExportCsv(db, dir.File("out"));
   const auto traj = ReadCsv(dir.File("out/trajectory_force.csv"));
   ASSERT_EQ(traj.rows.size(), 2u);

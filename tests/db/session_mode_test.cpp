@@ -30,7 +30,8 @@ int CountRatings(const std::string& path, const std::string& where = "1") {
 
 // A study with one participant, one session in `device`'s mode and `trials` main trials.
 std::int64_t OneSession(Database& db, const Session& mode, int trials) {
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "p", .protocol_hash = "h", .seed = 1});
+  const auto st =
+      db.CreateStudy({.name = "s", .protocol_toml = "p", .protocol_hash = "h", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01", .index = 0, .seed = 2});
   Session se = mode;
   se.participant_id = p;
@@ -46,11 +47,16 @@ TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   {
     Database old(path, {.migrate_to = 4});
     old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-    old.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
+    old.Exec(
+        "INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
     old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'sim'), (2,'falcon')");
-    old.Exec("INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','A'), (2,0,'main','A')");
-    old.Exec("INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES (1,'overall',50,1), "
-             "(2,'overall',60,1)");
+    old.Exec(
+        "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','A'), "
+        "(2,0,'main','A')");
+    old.Exec(
+        "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
+        "(1,'overall',50,1), "
+        "(2,'overall',60,1)");
   }
   Database db(path);
   ASSERT_EQ(db.SchemaVersion(), kSchemaVersion);
@@ -63,14 +69,16 @@ TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   EXPECT_EQ(db.Ratings(1).at(0).source, "simulated");
   EXPECT_EQ(db.Ratings(2).at(0).source, "window");
   int inferred = 0;
-  for (const auto& e : db.Events(2)) inferred += e.kind == "mode-inferred" && e.detail.find("falcon") != std::string::npos;
+  for (const auto& e : db.Events(2))
+    inferred += e.kind == "mode-inferred" && e.detail.find("falcon") != std::string::npos;
   EXPECT_EQ(inferred, 1);
 }
 
 TEST(SessionMode, RatingsTakeTheSessionsRaterUnlessTheyNameTheirSource) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
-  const auto session = OneSession(db, {.device = "sim", .actuator = "none", .screens = true, .rater = "window"}, 3);
+  const auto session =
+      OneSession(db, {.device = "sim", .actuator = "none", .screens = true, .rater = "window"}, 3);
   const auto trials = db.Trials(session);
   db.StartTrial(trials[0].id);
   db.CompleteTrial(trials[0].id, {{"overall", 40, 1.5, ""}});
@@ -118,7 +126,8 @@ TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
   db.Backup(dir.File("b.db"));
   EXPECT_FALSE(fs::exists(dir.File("b.db-wal")) && fs::file_size(dir.File("b.db-wal")) > 0);
   EXPECT_EQ(CountRatings(dir.File("b.db")), 8);
-  EXPECT_EQ(Database(dir.File("b.db"), {.create = false, .read_only = true}).IntegrityCheck(), "ok");
+  EXPECT_EQ(Database(dir.File("b.db"), {.create = false, .read_only = true}).IntegrityCheck(),
+            "ok");
   // An existing destination is refused and left alone.
   const auto before = fs::file_size(dir.File("b.db"));
   EXPECT_THROW(db.Backup(dir.File("b.db")), InputError);

@@ -43,8 +43,10 @@ TEST(Audio, ActuatorChannelCarriesTheSignalAndHeadphonesTheNoise) {
     // The vibration loop and the callback take turns, 10 ms at a time, as they would run.
     test::NoAllocGuard guard;
     for (int chunk = 0; chunk < n_in / 100; ++chunk) {
-      for (int k = chunk * 100; k < chunk * 100 + 100; ++k) out.Write(10 * std::sin(2 * std::numbers::pi * 250 * k / 10000.0));
-      s->render(buf.data() + static_cast<std::ptrdiff_t>(chunk) * 400 * 3, chunk + 1 < n_in / 100 ? 400 : 392);
+      for (int k = chunk * 100; k < chunk * 100 + 100; ++k)
+        out.Write(10 * std::sin(2 * std::numbers::pi * 250 * k / 10000.0));
+      s->render(buf.data() + static_cast<std::ptrdiff_t>(chunk) * 400 * 3,
+                chunk + 1 < n_in / 100 ? 400 : 392);
     }
     EXPECT_EQ(guard.count(), 0u) << "Write and the callback allocate nothing";
   }
@@ -90,7 +92,9 @@ TEST(Audio, UnderflowsAndClippingAreCountedNeverHeld) {
   EXPECT_FLOAT_EQ(buf[1], 1.f);
   EXPECT_FLOAT_EQ(buf[2], 0.5f);
   EXPECT_EQ(out.underflows(), 8u);  // frames 2-9 each needed a new input sample
-  for (int k = 3; k < 10; ++k) EXPECT_EQ(buf[static_cast<std::size_t>(k)], 0.f) << "an empty queue is silence, not the last value";
+  for (int k = 3; k < 10; ++k)
+    EXPECT_EQ(buf[static_cast<std::size_t>(k)], 0.f)
+        << "an empty queue is silence, not the last value";
   // A full queue drops (and counts) instead of waiting.
   for (int k = 0; k < 10000; ++k) out.Write(0.1);
   EXPECT_GT(out.overflows(), 0u);
@@ -149,7 +153,8 @@ TEST(Audio, BadConfigurationsNameTheField) {
     ValidateAudioConfig(c);
     FAIL();
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("both an actuator and a noise channel"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("both an actuator and a noise channel"),
+              std::string::npos);
   }
   c = {};
   c.input_rate_hz = 96000;

@@ -1,12 +1,13 @@
 // The device factory (devices/src/factory.cpp): requests that cannot name a usable device are
 // InputErrors on "<command line>" naming the request's field, before any hardware is touched.
 
+#include "hapticlab/devices/factory.hpp"
+
 #include <gtest/gtest.h>
 
 #include <string>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/devices/factory.hpp"
 #include "hapticlab/devices/vendor.hpp"
 
 namespace hapticlab::devices {

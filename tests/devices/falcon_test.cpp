@@ -5,12 +5,11 @@
 
 #include <gtest/gtest.h>
 
-#include <utility>
-
 #include <cstring>
 #include <deque>
 #include <fstream>
 #include <sstream>
+#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -36,16 +35,17 @@ class FakeFalcon : public UsbTransport {
  public:
   std::vector<std::pair<int, int>> controls;  // (request, value)
   std::vector<std::uint8_t> uploaded;
-  int drop_handshakes = 0;         // ignore this many handshake messages
-  int corrupt_echo_at = -1;        // corrupt the echo of this upload byte (once)
-  bool dead = false;               // never answers
-  bool firmware_runs = true;       // answers status packets after loading
-  bool unplugged = false;          // reads fail with a USB error
-  int split_replies_at = 0;        // > 0: the next read returns only this many payload bytes
+  int drop_handshakes = 0;    // ignore this many handshake messages
+  int corrupt_echo_at = -1;   // corrupt the echo of this upload byte (once)
+  bool dead = false;          // never answers
+  bool firmware_runs = true;  // answers status packets after loading
+  bool unplugged = false;     // reads fail with a USB error
+  int split_replies_at = 0;   // > 0: the next read returns only this many payload bytes
   std::array<std::int16_t, 3> encoders{0, 0, 0};
   std::vector<std::array<std::int16_t, 3>> motors;  // commands seen in normal mode
 
-  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t, unsigned) override {
+  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t,
+              unsigned) override {
     EXPECT_EQ(type, 0x40);
     controls.emplace_back(req, value);
     if (req == ftdi::kBaudRate) baud_ = value;
@@ -55,7 +55,8 @@ class FakeFalcon : public UsbTransport {
   }
   int BulkWrite(const std::uint8_t* d, int n, unsigned) override {
     if (dead) return n;
-    if (baud_ == ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 && d[2] == 0x0d) {
+    if (baud_ == ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 &&
+        d[2] == 0x0d) {
       if (drop_handshakes > 0) {
         --drop_handshakes;
         return n;
@@ -80,7 +81,8 @@ class FakeFalcon : public UsbTransport {
       std::array<std::int16_t, 3> m{};
       for (int k = 0; k < 3; ++k) {
         std::uint16_t v = 0;
-        for (int j = 0; j < 4; ++j) v = static_cast<std::uint16_t>(v | (d[1 + 4 * k + j] - 0x41) << (4 * j));
+        for (int j = 0; j < 4; ++j)
+          v = static_cast<std::uint16_t>(v | (d[1 + 4 * k + j] - 0x41) << (4 * j));
         m[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(v);
       }
       motors.push_back(m);
@@ -93,15 +95,18 @@ class FakeFalcon : public UsbTransport {
   }
   int BulkRead(std::uint8_t* d, int n, unsigned) override {
     if (unplugged) return -4;  // LIBUSB_ERROR_NO_DEVICE
-    d[0] = 0x31;  // FTDI modem status bytes
+    d[0] = 0x31;               // FTDI modem status bytes
     d[1] = 0x60;
     if (replies_.empty()) return 2;
     auto r = replies_.front();
     int k = std::min(static_cast<int>(r.size()), n - 2);
-    if (split_replies_at > 0) k = std::min(k, std::exchange(split_replies_at, 0));  // one split read
+    if (split_replies_at > 0)
+      k = std::min(k, std::exchange(split_replies_at, 0));  // one split read
     std::memcpy(d + 2, r.data(), static_cast<std::size_t>(k));
-    if (k < static_cast<int>(r.size())) replies_.front().erase(replies_.front().begin(), replies_.front().begin() + k);
-    else replies_.pop_front();
+    if (k < static_cast<int>(r.size()))
+      replies_.front().erase(replies_.front().begin(), replies_.front().begin() + k);
+    else
+      replies_.pop_front();
     return k + 2;
   }
 
@@ -124,7 +129,8 @@ TEST(Falcon, PacketsEncodeAndDecodeAgainstFixtures) {
   c.leds = 0x04;
   c.homing = true;
   const auto p = EncodeCommand(c);
-  const std::uint8_t want[16] = {'<', 0x44, 0x43, 0x42, 0x41, 0x4f, 0x50, 0x50, 0x50, 0x41, 0x41, 0x41, 0x49, 0x46, 0x41, '>'};
+  const std::uint8_t want[16] = {'<',  0x44, 0x43, 0x42, 0x41, 0x4f, 0x50, 0x50,
+                                 0x50, 0x41, 0x41, 0x41, 0x49, 0x46, 0x41, '>'};
   EXPECT_EQ(std::memcmp(p.data(), want, 16), 0);
   const auto stream = Hex(std::string(HL_TEST_DATA_DIR) + "/falcon/status_stream.hex");
   ASSERT_EQ(stream.size(), 52u);
@@ -160,8 +166,9 @@ TEST(Falcon, FirmwareLoadFollowsTheRecordedSequence) {
       want.emplace_back(a, b);
     }
   EXPECT_EQ(usb.controls, want);
-  const std::vector<LoadState> trace = {LoadState::kPurge,  LoadState::kLineSetup,  LoadState::kHandshake, LoadState::kBootloader,
-                                        LoadState::kUpload, LoadState::kNormalMode, LoadState::kVerify,    LoadState::kDone};
+  const std::vector<LoadState> trace = {
+      LoadState::kPurge,  LoadState::kLineSetup,  LoadState::kHandshake, LoadState::kBootloader,
+      LoadState::kUpload, LoadState::kNormalMode, LoadState::kVerify,    LoadState::kDone};
   EXPECT_EQ(r.trace, trace);
 }
 
@@ -230,13 +237,15 @@ TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
   ASSERT_TRUE(InverseKinematics(p0, &th));
   const double per_count = EncoderToAngle(1) - EncoderToAngle(0);
   for (int k = 0; k < 3; ++k)
-    usb->encoders[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(std::lround((th[k] - EncoderToAngle(0)) / per_count));
+    usb->encoders[static_cast<std::size_t>(k)] =
+        static_cast<std::int16_t>(std::lround((th[k] - EncoderToAngle(0)) / per_count));
   double t = 0;
   FalconDevice dev(std::move(fake), [&] { return t; });
   renderer::DeviceSample s;
   ASSERT_EQ(dev.Read(&s), ReadResult::kOk);
   EXPECT_LT((s.state.p_m - p0).norm(), 2e-4) << "within the encoder quantization";
-  const Eigen::Vector3d q(EncoderToAngle(usb->encoders[0]), EncoderToAngle(usb->encoders[1]), EncoderToAngle(usb->encoders[2]));
+  const Eigen::Vector3d q(EncoderToAngle(usb->encoders[0]), EncoderToAngle(usb->encoders[1]),
+                          EncoderToAngle(usb->encoders[2]));
   Eigen::Vector3d fk;
   ASSERT_TRUE(ForwardKinematics(q, p0, &fk));
   EXPECT_LT((s.state.p_m - fk).norm(), 1e-9);
@@ -247,7 +256,8 @@ TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
   Eigen::Vector3d tau;
   ASSERT_TRUE(ForceToTorque(s.state.p_m, Eigen::Vector3d(0, 0, 2.0), &tau));
   ASSERT_EQ(usb->motors.size(), 2u);
-  for (int k = 0; k < 3; ++k) EXPECT_NEAR(usb->motors[1][static_cast<std::size_t>(k)], -tau[k] * 10000, 1.0);
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(usb->motors[1][static_cast<std::size_t>(k)], -tau[k] * 10000, 1.0);
   // Non-finite force: zero effort.
   dev.WriteForce(Eigen::Vector3d(std::nan(""), 0, 0));
   ASSERT_EQ(dev.Read(&s), ReadResult::kOk);

@@ -21,11 +21,11 @@ TEST(HidRating, ParsesReportsOfASliderBox) {
   L.raw_max = 1023;
   L.button_offset = 2;
   L.button_bit = 0;
-  const std::uint8_t mid[] = {0x01, 0x00, 0x02, 0x00};     // 512, not pressed
-  const std::uint8_t top[] = {0x01, 0xff, 0x03, 0x01};     // 1023, confirm
-  const std::uint8_t other[] = {0x02, 0xff, 0x03, 0x01};   // another report id
-  const std::uint8_t shorty[] = {0x01, 0x00};              // truncated
-  const std::uint8_t wild[] = {0x01, 0xff, 0x7f, 0x00};    // 32767: wrong layout or a glitch
+  const std::uint8_t mid[] = {0x01, 0x00, 0x02, 0x00};    // 512, not pressed
+  const std::uint8_t top[] = {0x01, 0xff, 0x03, 0x01};    // 1023, confirm
+  const std::uint8_t other[] = {0x02, 0xff, 0x03, 0x01};  // another report id
+  const std::uint8_t shorty[] = {0x01, 0x00};             // truncated
+  const std::uint8_t wild[] = {0x01, 0xff, 0x7f, 0x00};   // 32767: wrong layout or a glitch
   auto e = ParseHidReport(L, mid, sizeof mid);
   ASSERT_TRUE(e.valid);
   EXPECT_NEAR(e.position, 512.0 / 1023, 1e-12);
@@ -59,7 +59,8 @@ TEST(HidRating, ParsesAReversedSignedKnob) {
 
 TEST(HidRating, LayoutFilesAreCheckedWithFileLineAndKey) {
   test::TempDir dir;
-  test::WriteFile(dir.File("box.toml"), "report_id = 1\nposition_bytes = 2\nraw_max = 4095\nbutton_bit = 2\n");
+  test::WriteFile(dir.File("box.toml"),
+                  "report_id = 1\nposition_bytes = 2\nraw_max = 4095\nbutton_bit = 2\n");
   const auto L = LoadHidLayout(dir.File("box.toml"));
   EXPECT_EQ(L.report_id, 1);
   EXPECT_EQ(L.raw_max, 4095);
@@ -78,7 +79,8 @@ TEST(HidRating, LayoutFilesAreCheckedWithFileLineAndKey) {
 TEST(HidRating, OffsetsOutsideAReportAreRefusedBeforeTheyIndexIt) {
   // -1 or 1e10 used to be cast to int unchecked and then index a 64-byte report.
   test::TempDir dir;
-  for (const char* bad : {"position_offset = -1\n", "position_offset = 1e10\n", "button_offset = 64\n", "report_id = 4294967296\n"}) {
+  for (const char* bad : {"position_offset = -1\n", "position_offset = 1e10\n",
+                          "button_offset = 64\n", "report_id = 4294967296\n"}) {
     SCOPED_TRACE(bad);
     test::WriteFile(dir.File("o.toml"), bad);
     try {

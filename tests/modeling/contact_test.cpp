@@ -15,6 +15,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
 
@@ -24,8 +25,6 @@
 #include "hapticlab/renderer/force.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
-
-#include <nlohmann/json.hpp>
 
 namespace hapticlab::modeling {
 namespace {
@@ -46,7 +45,8 @@ struct Truth {
 // the load is 0.4-2 N with a slow wobble. Between strokes the hand rests with a 5 um, 9 Hz
 // tremor (pre-sliding), sometimes lifts off, and, with `pokes`, sometimes presses straight down
 // to 1.6-2.6 N and releases.
-Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, double noise_N, bool pokes) {
+Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, double noise_N,
+                     bool pokes) {
   std::mt19937_64 rng(seed);
   auto U = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
   std::normal_distribution<double> gauss(0, 1);
@@ -57,11 +57,14 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
   double px = 0, py = 0;
   while (i < N) {
     // A stroke.
-    const double len = U(0.004, 0.025), vp = std::exp(U(std::log(0.003), std::log(0.12))), T = 2 * len / vp;
+    const double len = U(0.004, 0.025), vp = std::exp(U(std::log(0.003), std::log(0.12))),
+                 T = 2 * len / vp;
     double th = U(-kPi, kPi);
     const double turn = U(-1.5, 1.5);
-    if (std::hypot(px + len * std::cos(th), py + len * std::sin(th)) > box) th = std::atan2(-py, -px) + U(-0.5, 0.5);
-    const double L0 = std::exp(U(std::log(0.4), std::log(2.0))), wob = U(0.5, 3), ph = U(0, 2 * kPi);
+    if (std::hypot(px + len * std::cos(th), py + len * std::sin(th)) > box)
+      th = std::atan2(-py, -px) + U(-0.5, 0.5);
+    const double L0 = std::exp(U(std::log(0.4), std::log(2.0))), wob = U(0.5, 3),
+                 ph = U(0, 2 * kPi);
     const std::size_t n = static_cast<std::size_t>(T * fs);
     for (std::size_t k = 0; k < n && i < N; ++k, ++i) {
       const double tau = static_cast<double>(k) / static_cast<double>(n);
@@ -78,7 +81,8 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
     const bool lift = u < 0.1, poke = pokes && u > 0.8;
     const double peak = U(1.6, 2.6);
     for (std::size_t k = 0; k < nr && i < N; ++k, ++i) {
-      const double tk = static_cast<double>(k) * dt, s = std::sin(kPi * static_cast<double>(k) / static_cast<double>(nr));
+      const double tk = static_cast<double>(k) * dt,
+                   s = std::sin(kPi * static_cast<double>(k) / static_cast<double>(nr));
       x[i] = px + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::cos(th));
       y[i] = py + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::sin(th));
       load[i] = lift ? -0.4 : (poke ? 0.1 + (peak - 0.1) * s * s : L0);
@@ -100,15 +104,19 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
     const std::size_t k0 = k ? k - 1 : k, k1 = k + 1 < N ? k + 1 : k;
     const double h = static_cast<double>(k1 - k0) * dt;
     const double vx = (x[k1] - x[k0]) / h, vy = (y[k1] - y[k0]) / h, dd = (d[k1] - d[k0]) / h;
-    const double fn = d[k] > 0 ? std::max(0.0, std::pow(d[k] / 1e-3, tr.n) * (tr.K1mm_N + tr.B1mm_Ns_per_m * dd)) : 0.0;
+    const double fn =
+        d[k] > 0 ? std::max(0.0, std::pow(d[k] / 1e-3, tr.n) * (tr.K1mm_N + tr.B1mm_Ns_per_m * dd))
+                 : 0.0;
     const double fc = tr.mu_k * fn;
     if (fc <= 0 || !was_in_contact || k == 0) {
       Fx = Fy = 0;
     } else {
       // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 400 explicit Euler substeps.
-      const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps, sl = std::hypot(sx, sy);
+      const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps,
+                   sl = std::hypot(sx, sy);
       for (int j = 0; j < kSubsteps; ++j) {
-        const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc), gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
+        const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc),
+                     gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
         Fx += gx, Fy += gy;
       }
       const double mag = std::hypot(Fx, Fy);
@@ -117,10 +125,11 @@ Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, dou
     was_in_contact = fc > 0;
     MeasurementRow r;
     r.t_s = static_cast<double>(k) * dt;
-    r.p_m = {x[k] + g_pnoise * gauss(rng), y[k] + g_pnoise * gauss(rng), -d[k] + g_pnoise * gauss(rng)};
+    r.p_m = {x[k] + g_pnoise * gauss(rng), y[k] + g_pnoise * gauss(rng),
+             -d[k] + g_pnoise * gauss(rng)};
     r.v_mps = {vx + g_vnoise * gauss(rng), vy + g_vnoise * gauss(rng), -dd + g_vnoise * gauss(rng)};
-    r.f_N = {-(Fx + tr.mu_b_Ns_per_m * vx) + noise_N * gauss(rng), -(Fy + tr.mu_b_Ns_per_m * vy) + noise_N * gauss(rng),
-             fn + noise_N * gauss(rng)};
+    r.f_N = {-(Fx + tr.mu_b_Ns_per_m * vx) + noise_N * gauss(rng),
+             -(Fy + tr.mu_b_Ns_per_m * vy) + noise_N * gauss(rng), fn + noise_N * gauss(rng)};
     m.rows.push_back(r);
     m.row_lines.push_back(static_cast<int>(k) + 4);
   }
@@ -135,16 +144,20 @@ struct Compared {
 };
 std::vector<Compared> Parameters(const ContactFit& f, const Truth& t) {
   // Tolerances of the issue: 10 %, the weakly identified mu_b and B 25 %.
-  return {{"K1mm_N", f.K1mm_N, t.K1mm_N, 0.10},          {"n", f.n, t.n, 0.10},
-          {"B1mm", f.B1mm_Ns_per_m, t.B1mm_Ns_per_m, 0.25}, {"kappa", f.kappa_N_per_m, t.kappa_N_per_m, 0.10},
-          {"mu_k", f.mu_k, t.mu_k, 0.10},                  {"mu_b", f.mu_b_Ns_per_m, t.mu_b_Ns_per_m, 0.25}};
+  return {{"K1mm_N", f.K1mm_N, t.K1mm_N, 0.10},
+          {"n", f.n, t.n, 0.10},
+          {"B1mm", f.B1mm_Ns_per_m, t.B1mm_Ns_per_m, 0.25},
+          {"kappa", f.kappa_N_per_m, t.kappa_N_per_m, 0.10},
+          {"mu_k", f.mu_k, t.mu_k, 0.10},
+          {"mu_b", f.mu_b_Ns_per_m, t.mu_b_Ns_per_m, 0.25}};
 }
 
 TEST(ContactFreeHand, EveryParameterRecoveredWithUsableFits) {
   const Truth t;
   const auto m = FreeHand(t, 11, 60, 0.008, true);
   const auto f = FitContact(m);
-  EXPECT_TRUE(f.IsUsable()) << f.friction_summary.termination << " / " << f.normal_summary.termination;
+  EXPECT_TRUE(f.IsUsable()) << f.friction_summary.termination << " / "
+                            << f.normal_summary.termination;
   EXPECT_EQ(f.friction_summary.termination, "converged");
   EXPECT_TRUE(f.friction_summary.at_bounds.empty());
   EXPECT_GT(f.friction_summary.iterations, 0);
@@ -211,14 +224,16 @@ Coverage RunCoverage(const ContactFitOptions& o) {
   std::mt19937_64 noise_rng(2024);
   for (int s = 0; s < kSeeds; ++s) {
     const double noise = std::uniform_real_distribution<double>(0.004, 0.012)(noise_rng);
-    const auto f = FitContact(FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true), nullptr, o);
+    const auto f =
+        FitContact(FreeHand(t, 100 + static_cast<std::uint64_t>(s), 30, noise, true), nullptr, o);
     EXPECT_TRUE(f.IsUsable()) << "seed " << s;
     std::string line = fmt::format("[coverage] seed {:2d} noise {:.1f} mN:", s, noise * 1e3);
     for (const auto& p : Parameters(f, t)) {
       const bool c = p.est.lo95 <= p.truth && p.truth <= p.est.hi95;
       out.covered[p.name] += c;
       out.within[p.name] += std::abs(p.est.value - p.truth) <= p.tolerance * p.truth;
-      line += fmt::format(" {} {:.4g} [{:.4g}, {:.4g}]{}", p.name, p.est.value, p.est.lo95, p.est.hi95, c ? "" : " MISS");
+      line += fmt::format(" {} {:.4g} [{:.4g}, {:.4g}]{}", p.name, p.est.value, p.est.lo95,
+                          p.est.hi95, c ? "" : " MISS");
     }
     err.push_back(f.mu_b_Ns_per_m.value / t.mu_b_Ns_per_m - 1);
     se.push_back(f.mu_b_Ns_per_m.sd / t.mu_b_Ns_per_m);
@@ -231,8 +246,8 @@ Coverage RunCoverage(const ContactFitOptions& o) {
   out.mu_b_median_se = se[kSeeds / 2];
   std::string summary = "[coverage] covered:";
   for (const auto& [name, c] : out.covered) summary += fmt::format(" {} {}/{}", name, c, kSeeds);
-  fmt::print("{}\n[coverage] mu_b error mean {:+.2f} %, SD {:.2f} %, median reported SE {:.2f} %\n", summary,
-             100 * out.mu_b_mean, 100 * out.mu_b_sd, 100 * out.mu_b_median_se);
+  fmt::print("{}\n[coverage] mu_b error mean {:+.2f} %, SD {:.2f} %, median reported SE {:.2f} %\n",
+             summary, 100 * out.mu_b_mean, 100 * out.mu_b_sd, 100 * out.mu_b_median_se);
   return out;
 }
 
@@ -252,7 +267,10 @@ TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
 // test above (seeds 100-119, 4-12 mN, the whole FitContact) with these replay options.
 TEST(ContactFreeHand, DISABLED_Experiment) {
   const Truth t;
-  auto env = [](const char* n, double d) { const char* v = std::getenv(n); return v ? std::atof(v) : d; };
+  auto env = [](const char* n, double d) {
+    const char* v = std::getenv(n);
+    return v ? std::atof(v) : d;
+  };
   g_pnoise = env("EXP_PNOISE", 1e-7);
   g_vnoise = env("EXP_VNOISE", 1e-4);
   const double noise = env("EXP_NOISE", 0.008);
@@ -286,13 +304,17 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
       if (p.name == "kappa") kp = p.value;
       if (p.name == "mu_k") mk = p.value;
     }
-    fmt::print("seed {} mu_b {:+.3f}% (sd {:.3f}%) kappa {:+.3f}% mu_k {:+.4f}% res {}\n", s, 100 * (mb / t.mu_b_Ns_per_m - 1),
-               100 * sdb / t.mu_b_Ns_per_m, 100 * (kp / t.kappa_N_per_m - 1), 100 * (mk / t.mu_k - 1), r.position_resolution_m);
-    sumsq += std::pow(mb / t.mu_b_Ns_per_m - 1, 2), sumz += std::pow((mb - t.mu_b_Ns_per_m) / sdb, 2);
+    fmt::print("seed {} mu_b {:+.3f}% (sd {:.3f}%) kappa {:+.3f}% mu_k {:+.4f}% res {}\n", s,
+               100 * (mb / t.mu_b_Ns_per_m - 1), 100 * sdb / t.mu_b_Ns_per_m,
+               100 * (kp / t.kappa_N_per_m - 1), 100 * (mk / t.mu_k - 1), r.position_resolution_m);
+    sumsq += std::pow(mb / t.mu_b_Ns_per_m - 1, 2),
+        sumz += std::pow((mb - t.mu_b_Ns_per_m) / sdb, 2);
     sum += mb / t.mu_b_Ns_per_m - 1, sumk += kp / t.kappa_N_per_m - 1, summk += mk / t.mu_k - 1;
   }
-  fmt::print("RMS mu_b error {:.3f}%, RMS z {:.2f}\n", 100 * std::sqrt(sumsq / seeds), std::sqrt(sumz / seeds));
-  fmt::print("MEAN mu_b {:+.3f}% kappa {:+.3f}% mu_k {:+.4f}%\n", 100 * sum / seeds, 100 * sumk / seeds, 100 * summk / seeds);
+  fmt::print("RMS mu_b error {:.3f}%, RMS z {:.2f}\n", 100 * std::sqrt(sumsq / seeds),
+             std::sqrt(sumz / seeds));
+  fmt::print("MEAN mu_b {:+.3f}% kappa {:+.3f}% mu_k {:+.4f}%\n", 100 * sum / seeds,
+             100 * sumk / seeds, 100 * summk / seeds);
 }
 
 TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
@@ -324,7 +346,8 @@ TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
       r.t_s = t;
       r.p_m = s.p_m;
       r.v_mps = s.v_mps;
-      r.f_N = f.force_N + Eigen::Vector3d(rng.Normal(0, 0.005), rng.Normal(0, 0.005), rng.Normal(0, 0.005));
+      r.f_N = f.force_N +
+              Eigen::Vector3d(rng.Normal(0, 0.005), rng.Normal(0, 0.005), rng.Normal(0, 0.005));
       strokes.rows.push_back(r);
     }
   }
@@ -356,7 +379,8 @@ TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
   int above = 0;
   for (const auto& r : pokes.rows) above += r.f_N.z() > 2.0;
   EXPECT_GT(above, 0);
-  EXPECT_LT(f.poke_samples, static_cast<int>(pokes.rows.size() - above) / 2 + 1);  // decimated to 500 Hz
+  EXPECT_LT(f.poke_samples,
+            static_cast<int>(pokes.rows.size() - above) / 2 + 1);  // decimated to 500 Hz
 }
 
 TEST(ContactOneLine, RefusesTooLittleDataNamingTheFile) {
@@ -391,8 +415,10 @@ TEST(ContactCli, FitContactAndWorkbenchFitAgreeAndBuildKeepsEveryEffect) {
   const Truth t;
   WriteMeasurementCsv(dir.File("m.csv"), FreeHand(t, 31, 40, 0.008, true));
   const std::string cli = HL_CLI_PATH;
-  const auto c = RunJson(cli + " model fit-contact --json --measurement " + dir.File("m.csv") + " -o " + dir.File("c.toml"));
-  const auto w = RunJson(cli + " fit --json --quiet --measurement " + dir.File("m.csv") + " -o " + dir.File("w.toml"));
+  const auto c = RunJson(cli + " model fit-contact --json --measurement " + dir.File("m.csv") +
+                         " -o " + dir.File("c.toml"));
+  const auto w = RunJson(cli + " fit --json --quiet --measurement " + dir.File("m.csv") + " -o " +
+                         dir.File("w.toml"));
   EXPECT_TRUE(c["usable"].get<bool>());
   EXPECT_TRUE(w["usable"].get<bool>());
   EXPECT_EQ(c["fit"]["friction"]["termination"], "converged");
@@ -412,25 +438,31 @@ TEST(ContactCli, FitContactAndWorkbenchFitAgreeAndBuildKeepsEveryEffect) {
   for (int k = 0; k < 256; ++k) h[static_cast<std::size_t>(k)] = 1e-5f * static_cast<float>(k % 16);
   {
     std::ofstream f(dir.File("h.f32"), std::ios::binary);
-    f.write(reinterpret_cast<const char*>(h.data()), static_cast<std::streamsize>(h.size() * sizeof(float)));
+    f.write(reinterpret_cast<const char*>(h.data()),
+            static_cast<std::streamsize>(h.size() * sizeof(float)));
   }
-  test::WriteFile(dir.File("h.f32.toml"), "[geometry]\nkind = \"file\"\nfile = \"h.f32\"\nwidth = 16\nheight = 16\npitch_m = 1e-4\n");
-  test::WriteFile(dir.File("bank.toml"),
-                  "[vibration]\nsample_rate_hz = 2000.0\nspeeds_mps = [0.05, 0.1]\nforces_N = [0.5, 1.5]\n"
-                  "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 0.5\nar = [0.5, -0.2]\nvariance = 1.0\n"
-                  "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 1.5\nar = [0.4, -0.2]\nvariance = 2.0\n"
-                  "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 0.5\nar = [0.3, -0.1]\nvariance = 3.0\n"
-                  "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 1.5\nar = [0.2, -0.1]\nvariance = 4.0\n");
+  test::WriteFile(
+      dir.File("h.f32.toml"),
+      "[geometry]\nkind = \"file\"\nfile = \"h.f32\"\nwidth = 16\nheight = 16\npitch_m = 1e-4\n");
+  test::WriteFile(
+      dir.File("bank.toml"),
+      "[vibration]\nsample_rate_hz = 2000.0\nspeeds_mps = [0.05, 0.1]\nforces_N = [0.5, 1.5]\n"
+      "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 0.5\nar = [0.5, -0.2]\nvariance = 1.0\n"
+      "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 1.5\nar = [0.4, -0.2]\nvariance = 2.0\n"
+      "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 0.5\nar = [0.3, -0.1]\nvariance = 3.0\n"
+      "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 1.5\nar = [0.2, -0.1]\nvariance = 4.0\n");
   std::string out;
-  ASSERT_EQ(test::RunCommand(cli + " model build --name Built --height " + dir.File("h.f32.toml") + " --contact " +
-                                 dir.File("c.toml") + " --vibration " + dir.File("bank.toml") + " --cutoff-hz 90 -o " +
-                                 dir.File("built.toml"),
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(cli + " model build --name Built --height " + dir.File("h.f32.toml") +
+                           " --contact " + dir.File("c.toml") + " --vibration " +
+                           dir.File("bank.toml") + " --cutoff-hz 90 -o " + dir.File("built.toml"),
+                       &out),
+      0)
       << out;
   const auto built = renderer::LoadMaterial(dir.File("built.toml"));
   const auto part = renderer::LoadMaterial(dir.File("c.toml"));
-  for (const char* e : {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent", "vibration-speed", "vibration-force"})
+  for (const char* e : {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent",
+                        "vibration-speed", "vibration-force"})
     EXPECT_NE(std::find(built.effects.begin(), built.effects.end(), e), built.effects.end()) << e;
   // Every parameter exactly as fitted (the file carries 17 significant digits).
   EXPECT_DOUBLE_EQ(built.contact.texture.K, c["hunt_crossley"]["K"].get<double>());

@@ -69,10 +69,13 @@ TEST(CrossValidation, FewerThanThreeTrainingRecordingsIsBadInput) {
   const auto recs = Grid();
   bool fitted = false;
   try {
-    CrossValidateModel(recs, {0.04}, {0.5, 1.0}, {}, [&](const std::vector<Recording>&) -> ConditionSynthesizer {
-      fitted = true;
-      return {};
-    }, 1);
+    CrossValidateModel(
+        recs, {0.04}, {0.5, 1.0}, {},
+        [&](const std::vector<Recording>&) -> ConditionSynthesizer {
+          fitted = true;
+          return {};
+        },
+        1);
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("training conditions"), std::string::npos) << e.what();

@@ -37,7 +37,8 @@ TEST(Mlp, LearnsANonlinearArProcessBetterThanALinearFit) {
   Rng rng(7);
   std::vector<double> x(30000, 0.0);
   for (std::size_t k = 2; k < x.size(); ++k)
-    x[k] = 0.5 * x[k - 1] - 0.4 * x[k - 2] + 0.8 * std::tanh(3 * x[k - 1]) * x[k - 2] + 0.3 * rng.Normal();
+    x[k] = 0.5 * x[k - 1] - 0.4 * x[k - 2] + 0.8 * std::tanh(3 * x[k - 1]) * x[k - 2] +
+           0.3 * rng.Normal();
   const int M = 4;
   const Eigen::Index n = static_cast<Eigen::Index>(x.size()) - M;
   Eigen::MatrixXd X(n, M);
@@ -49,7 +50,8 @@ TEST(Mlp, LearnsANonlinearArProcessBetterThanALinearFit) {
   // Train on the first 20000 samples (with its own validation split); test on the rest.
   const Eigen::Index ntr = 20000;
   Mlp net({M, 16, 8, 1}, 11);
-  const auto s = net.Train(X.topRows(ntr), y.head(ntr), {.max_epochs = 60, .batch = 32, .learning_rate = 3e-3, .seed = 5});
+  const auto s = net.Train(X.topRows(ntr), y.head(ntr),
+                           {.max_epochs = 60, .batch = 32, .learning_rate = 3e-3, .seed = 5});
   // Linear AR(M) fit by Levinson-Durbin on the same training samples.
   const std::vector<double> train(x.begin(), x.begin() + ntr + M);
   const auto ar = FitAr(train, M);
@@ -62,8 +64,8 @@ TEST(Mlp, LearnsANonlinearArProcessBetterThanALinearFit) {
   }
   mlp_mse /= static_cast<double>(n - ntr);
   lin_mse /= static_cast<double>(n - ntr);
-  std::printf("held-out one-step MSE: MLP %.4f, linear AR(%d) %.4f, noise floor %.4f (%d epochs)\n", mlp_mse, M, lin_mse, 0.09,
-              s.epochs);
+  std::printf("held-out one-step MSE: MLP %.4f, linear AR(%d) %.4f, noise floor %.4f (%d epochs)\n",
+              mlp_mse, M, lin_mse, 0.09, s.epochs);
   EXPECT_LT(mlp_mse, 0.9 * lin_mse);
   EXPECT_LT(mlp_mse, 0.09 * 1.15);  // close to the innovation variance
 }

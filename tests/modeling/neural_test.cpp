@@ -8,8 +8,8 @@
 #include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <numbers>
@@ -37,7 +37,8 @@ Recording Texture(double v, double f, double period_m, std::uint64_t seed, doubl
   const std::size_t len = static_cast<std::size_t>(v * seconds / dx) + 16;
   const double r = 0.995, th = 2 * kPi * dx / period_m;
   std::vector<double> h(len, 0.0);
-  for (std::size_t i = 2; i < len; ++i) h[i] = 2 * r * std::cos(th) * h[i - 1] - r * r * h[i - 2] + 1e-8 * rng.Normal();
+  for (std::size_t i = 2; i < len; ++i)
+    h[i] = 2 * r * std::cos(th) * h[i - 1] - r * r * h[i - 2] + 1e-8 * rng.Normal();
   auto z = [&](double x) {
     const double u = x / dx;
     const auto i = static_cast<std::size_t>(u);
@@ -68,7 +69,8 @@ std::vector<Recording> TextureGrid(double period_m, std::uint64_t seed) {
   std::vector<Recording> recs;
   int k = 0;
   for (const double v : {0.04, 0.06, 0.08, 0.10, 0.12})
-    for (const double f : {0.54, 0.89, 1.18, 1.40, 1.91}) recs.push_back(Texture(v, f, period_m, seed + static_cast<std::uint64_t>(k++)));
+    for (const double f : {0.54, 0.89, 1.18, 1.40, 1.91})
+      recs.push_back(Texture(v, f, period_m, seed + static_cast<std::uint64_t>(k++)));
   return recs;
 }
 
@@ -87,7 +89,8 @@ const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t) {
     std::vector<Recording> recs;
     int k = 0;
     for (const double v : {0.04, 0.12})
-      for (const double f : {0.54, 1.91}) recs.push_back(Texture(v, f, 0.5e-3, 50 + static_cast<std::uint64_t>(k++), 1.0));
+      for (const double f : {0.54, 1.91})
+        recs.push_back(Texture(v, f, 0.5e-3, 50 + static_cast<std::uint64_t>(k++), 1.0));
     NeuralFitOptions o = Quick(topo);
     o.train.max_epochs = 5;
     o.hidden_large = {8, 4};
@@ -95,7 +98,8 @@ const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t) {
     for (auto& b : o.bands) b.history = 12;
     return FitNeural(recs, o);
   };
-  static const auto u = make(renderer::NeuralTopology::kUnified), d = make(renderer::NeuralTopology::kDecomposed);
+  static const auto u = make(renderer::NeuralTopology::kUnified),
+                    d = make(renderer::NeuralTopology::kDecomposed);
   return t == renderer::NeuralTopology::kUnified ? u : d;
 }
 
@@ -109,7 +113,8 @@ TEST(Neural, ModelHasTheThesisStructure) {
     EXPECT_EQ(o.bands[b].hi_hz, hi[b]);
     EXPECT_EQ(o.bands[b].decimation, g[b]);
     EXPECT_EQ(o.bands[b].history, 50);
-    EXPECT_LE(hi[b], 2000.0 / (2 * g[b])) << "band " << b << " must not alias at its decimated rate";
+    EXPECT_LE(hi[b], 2000.0 / (2 * g[b]))
+        << "band " << b << " must not alias at its decimated rate";
     // The interpolator (flat to 0.4 of its input rate) must pass a decimated band whole.
     if (g[b] > 1) {
       EXPECT_LE(hi[b], 0.4 * 2000.0 / g[b]) << "band " << b;
@@ -121,7 +126,8 @@ TEST(Neural, ModelHasTheThesisStructure) {
   const auto& d = SmallModel(renderer::NeuralTopology::kDecomposed);
   for (const auto& b : u.bands) {
     EXPECT_EQ(b.nets.size(), 1u);
-    EXPECT_EQ(b.nets[0].layers.front(), b.history + 2) << "speed and force are two extra inputs of Γ_U";
+    EXPECT_EQ(b.nets[0].layers.front(), b.history + 2)
+        << "speed and force are two extra inputs of Γ_U";
   }
   for (const auto& b : d.bands) {
     EXPECT_EQ(b.nets.size(), 4u) << "one network per cell of the 2 x 2 grid";
@@ -135,7 +141,8 @@ TEST(Neural, TrainingReportsProgressPerEpochAndPerNetwork) {
   std::vector<Recording> recs;
   int k = 0;
   for (const double v : {0.04, 0.12})
-    for (const double f : {0.54, 1.91}) recs.push_back(Texture(v, f, 0.5e-3, 70 + static_cast<std::uint64_t>(k++), 1.0));
+    for (const double f : {0.54, 1.91})
+      recs.push_back(Texture(v, f, 0.5e-3, 70 + static_cast<std::uint64_t>(k++), 1.0));
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 5;
   o.train.patience = 10;  // all five epochs run
@@ -169,7 +176,8 @@ TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
   std::vector<Recording> recs;
   int k = 0;
   for (const double v : {0.04, 0.12})
-    for (const double f : {0.54, 1.91}) recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
+    for (const double f : {0.54, 1.91})
+      recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 3;
   o.hidden_large = {6};
@@ -182,14 +190,18 @@ TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
     for (const auto& b : m.bands)
       for (const auto& n : b.nets) {
         EXPECT_EQ(n.linear.size(), 9u * static_cast<std::size_t>(b.history));
-        if (std::any_of(n.params.begin(), n.params.end(), [](double p) { return p != 0; })) return false;
+        if (std::any_of(n.params.begin(), n.params.end(), [](double p) { return p != 0; }))
+          return false;
       }
     return true;
   };
   const auto chosen = FitNeural(recs, o);
   ASSERT_FALSE(decision.empty()) << "the selection is reported";
   double es_mlp = 0, es_lin = 0;
-  ASSERT_EQ(std::sscanf(decision.c_str(), "validation E_s: %lf with the nonlinear part, %lf", &es_mlp, &es_lin), 2) << decision;
+  ASSERT_EQ(std::sscanf(decision.c_str(), "validation E_s: %lf with the nonlinear part, %lf",
+                        &es_mlp, &es_lin),
+            2)
+      << decision;
   const bool linear_kept = decision.find("linear part alone kept") != std::string::npos;
   EXPECT_EQ(linear_kept, es_lin <= es_mlp) << decision;
   EXPECT_EQ(mlp_is_zero(chosen), linear_kept) << decision;
@@ -215,7 +227,8 @@ TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
       }
       EXPECT_EQ(guard.count(), 0u);
     }
-    for (std::size_t k = 0; k < xb.size(); ++k) xb[k] = b.Step(0.04 + 0.08 * static_cast<double>(k) / 4000.0, 1.0, true);
+    for (std::size_t k = 0; k < xb.size(); ++k)
+      xb[k] = b.Step(0.04 + 0.08 * static_cast<double>(k) / 4000.0, 1.0, true);
     EXPECT_EQ(xa, xb);
     double p = 0;
     for (const double x : xa) {
@@ -223,8 +236,8 @@ TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
       p += x * x;
     }
     EXPECT_GT(p, 0);
-    EXPECT_EQ(a.Step(0.08, 1.0, false), 0.0);   // out of contact
-    EXPECT_EQ(a.Step(0.005, 1.0, true), 0.0);   // below the minimum speed
+    EXPECT_EQ(a.Step(0.08, 1.0, false), 0.0);  // out of contact
+    EXPECT_EQ(a.Step(0.005, 1.0, true), 0.0);  // below the minimum speed
   }
 }
 
@@ -234,12 +247,14 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
   const auto path = dir.File("n.toml");
   renderer::SaveNeuralModel(m, path);
   const auto back = renderer::LoadNeuralModel(path);
-  renderer::NeuralSynth a(std::make_shared<renderer::NeuralModel>(m), 4), b(std::make_shared<renderer::NeuralModel>(back), 4);
+  renderer::NeuralSynth a(std::make_shared<renderer::NeuralModel>(m), 4),
+      b(std::make_shared<renderer::NeuralModel>(back), 4);
   for (int k = 0; k < 2000; ++k) ASSERT_EQ(a.Step(0.07, 1.1, true), b.Step(0.07, 1.1, true));
 
   // A material referencing it: the vibration loop synthesizes with the networks.
-  test::WriteFile(dir.File("mat.toml"), "name = \"n\"\n[contact]\ntexture_K = 2000\n[friction]\nkappa_N_per_m = 2000\n"
-                                         "mu_k = 0.3\n[neural]\nfile = \"n.toml\"\n");
+  test::WriteFile(dir.File("mat.toml"),
+                  "name = \"n\"\n[contact]\ntexture_K = 2000\n[friction]\nkappa_N_per_m = 2000\n"
+                  "mu_k = 0.3\n[neural]\nfile = \"n.toml\"\n");
   const auto mat = renderer::LoadMaterial(dir.File("mat.toml"));
   ASSERT_TRUE(mat.neural);
   renderer::HybridRenderer r(mat, {});
@@ -287,7 +302,8 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
     renderer::LoadNeuralModel(dir.File("lin.toml"));
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("linear weights, expected 0 or"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("linear weights, expected 0 or"), std::string::npos)
+        << e.what();
   }
 }
 
@@ -330,7 +346,9 @@ TEST(Neural, BandCrossoversArePowerComplementary) {
     const double db = 10 * std::log10(p / 4 / (white * white));
     if (std::abs(db) > std::abs(worst_db)) worst_db = db, worst_hz = f0;
   }
-  std::printf("sum of the silent bands: largest departure from white %.2f dB at %.0f Hz (20-950 Hz)\n", worst_db, worst_hz);
+  std::printf(
+      "sum of the silent bands: largest departure from white %.2f dB at %.0f Hz (20-950 Hz)\n",
+      worst_db, worst_hz);
   EXPECT_LT(std::abs(worst_db), 0.75) << "at " << worst_hz << " Hz";
 }
 
@@ -341,18 +359,21 @@ TEST(Neural, FreeRunningMlpMatchesANonlinearProcessBetterThanLinearAr) {
   Rng rng(21);
   std::vector<double> x(60000, 0.0);
   for (std::size_t k = 2; k < x.size(); ++k)
-    x[k] = 0.5 * x[k - 1] - 0.4 * x[k - 2] + 0.8 * std::tanh(3 * x[k - 1]) * x[k - 2] + 0.3 * rng.Normal();
+    x[k] = 0.5 * x[k - 1] - 0.4 * x[k - 2] + 0.8 * std::tanh(3 * x[k - 1]) * x[k - 2] +
+           0.3 * rng.Normal();
   const int M = 6;
   const std::size_t ntr = 30000;
   Eigen::MatrixXd X(static_cast<Eigen::Index>(ntr - M), M);
   Eigen::VectorXd y(static_cast<Eigen::Index>(ntr - M));
   for (std::size_t i = M; i < ntr; ++i) {
-    for (int j = 0; j < M; ++j) X(static_cast<Eigen::Index>(i - M), j) = x[i - 1 - static_cast<std::size_t>(j)];
+    for (int j = 0; j < M; ++j)
+      X(static_cast<Eigen::Index>(i - M), j) = x[i - 1 - static_cast<std::size_t>(j)];
     y(static_cast<Eigen::Index>(i - M)) = x[i];
   }
   Mlp net({M, 16, 8, 1}, 5);
   net.Train(X, y, {.max_epochs = 40, .batch = 64, .learning_rate = 3e-3, .seed = 2});
-  const double sigma = std::sqrt((net.PredictRows(X) - y).squaredNorm() / static_cast<double>(y.size()));
+  const double sigma =
+      std::sqrt((net.PredictRows(X) - y).squaredNorm() / static_cast<double>(y.size()));
   const auto ar = FitAr(std::vector<double>(x.begin(), x.begin() + ntr), M);
   const std::vector<double> held(x.begin() + ntr, x.end());
   // Free-run both, driven by their residual noise.
@@ -363,18 +384,22 @@ TEST(Neural, FreeRunningMlpMatchesANonlinearProcessBetterThanLinearAr) {
     for (int j = 0; j < M; ++j) in(j) = s_mlp[k - 1 - static_cast<std::size_t>(j)];
     s_mlp[k] = net.Predict(in) + sigma * n1.Normal();
     double a = 0;
-    for (int j = 0; j < M; ++j) a += ar.coeffs[static_cast<std::size_t>(j)] * s_ar[k - 1 - static_cast<std::size_t>(j)];
+    for (int j = 0; j < M; ++j)
+      a += ar.coeffs[static_cast<std::size_t>(j)] * s_ar[k - 1 - static_cast<std::size_t>(j)];
     s_ar[k] = a + std::sqrt(ar.variance) * n2.Normal();
   }
-  const std::vector<double> m1(s_mlp.begin() + 2000, s_mlp.end()), m2(s_ar.begin() + 2000, s_ar.end());
+  const std::vector<double> m1(s_mlp.begin() + 2000, s_mlp.end()),
+      m2(s_ar.begin() + 2000, s_ar.end());
   const double es_mlp = SpectralError(held, m1, 256), es_ar = SpectralError(held, m2, 256);
   auto rms = [](const std::vector<double>& v) {
     double q = 0;
     for (const double a : v) q += a * a;
     return std::sqrt(q / static_cast<double>(v.size()));
   };
-  std::printf("held-out E_s: free-running MLP %.3f, linear AR(%d) %.3f (rms held %.3f mlp %.3f ar %.3f, sigma %.3f)\n", es_mlp, M,
-              es_ar, rms(held), rms(m1), rms(m2), sigma);
+  std::printf(
+      "held-out E_s: free-running MLP %.3f, linear AR(%d) %.3f (rms held %.3f mlp %.3f ar %.3f, "
+      "sigma %.3f)\n",
+      es_mlp, M, es_ar, rms(held), rms(m1), rms(m2), sigma);
   EXPECT_LT(es_mlp, es_ar);
 }
 
@@ -392,12 +417,13 @@ TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
     const auto lpc = CrossValidate(recs, tv, tf, {});
     const auto u = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kUnified));
     const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
-    rows.push_back({period, lpc.mean_es_train, lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test});
+    rows.push_back({period, lpc.mean_es_train, lpc.mean_es_test, u.mean_es_train, u.mean_es_test,
+                    d.mean_es_train, d.mean_es_test});
   }
   std::printf("texture period | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
   for (const auto& r : rows) {
-    std::printf("  %.2f mm      |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", r.period_m * 1e3, r.lpc_tr, r.lpc_cv, r.u_tr, r.u_cv,
-                r.d_tr, r.d_cv);
+    std::printf("  %.2f mm      |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", r.period_m * 1e3,
+                r.lpc_tr, r.lpc_cv, r.u_tr, r.u_cv, r.d_tr, r.d_cv);
     for (const double e : {r.lpc_tr, r.lpc_cv, r.u_tr, r.u_cv, r.d_tr, r.d_cv}) EXPECT_LT(e, 0.5);
     // These textures are close to a linear process driven by noise (LPC's home ground): the
     // unified network must come as close to LPC held out as on the linear AR grid (issue #19).
@@ -410,11 +436,14 @@ TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
 // adds a bounded bilinear term, 0.8 s tanh(x[k-1] / s) tanh(x[k-2] / s) with s the linear
 // part's RMS: sum and difference frequencies of the resonances, a process no linear AR model
 // is (and still stable: the term is bounded and the linear part is).
-Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed, double seconds = 2.5) {
+Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed,
+                          double seconds = 2.5) {
   const double fs = 2000;
   const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
   const double r1 = 0.97 - 0.02 * f, r2 = 0.9;
-  auto poly = [&](double fr, double r) { return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r}; };
+  auto poly = [&](double fr, double r) {
+    return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r};
+  };
   const auto [a1, a2] = poly(f1, r1);
   const auto [b1, b2] = poly(f2, r2);
   const double c[4] = {a1 + b1, a2 + b2 - a1 * b1, -a1 * b2 - a2 * b1, -a2 * b2};
@@ -436,7 +465,8 @@ Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed
   }
   for (std::size_t k = 4; k < x.size(); ++k) {
     double a = c[0] * x[k - 1] + c[1] * x[k - 2] + c[2] * x[k - 3] + c[3] * x[k - 4] + rng.Normal();
-    if (nonlinear) a += 0.8 * lin_rms * std::tanh(x[k - 1] / lin_rms) * std::tanh(x[k - 2] / lin_rms);
+    if (nonlinear)
+      a += 0.8 * lin_rms * std::tanh(x[k - 1] / lin_rms) * std::tanh(x[k - 2] / lin_rms);
     x[k] = a;
   }
   Recording rec;
@@ -480,8 +510,9 @@ TEST(NeuralFig37, LinearAndNonlinearArGrids) {
     const auto u = CrossValidateNeural(recs, tv, tf, uo);
     const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
     std::printf("%s grid, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear", decision.c_str());
-    std::printf("%-10s |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", nonlinear ? "nonlinear" : "linear", lpc.mean_es_train,
-                lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test);
+    std::printf("%-10s |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n",
+                nonlinear ? "nonlinear" : "linear", lpc.mean_es_train, lpc.mean_es_test,
+                u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test);
     EXPECT_LE(u.mean_es_train, lpc.mean_es_train + (nonlinear ? 0.02 : 0.05));
     EXPECT_LE(u.mean_es_test, lpc.mean_es_test + (nonlinear ? 0.02 : 0.1));
   }

@@ -26,7 +26,9 @@ std::vector<double> TrueCoeffs(double v, double f, double fs) {
   const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;  // Hz
   const double r1 = 0.97 - 0.02 * f, r2 = 0.9;
   std::vector<double> lsf;  // build A(z) from poles, return c
-  auto poly = [&](double fr, double r) { return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r}; };
+  auto poly = [&](double fr, double r) {
+    return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r};
+  };
   const auto [a1, a2] = poly(f1, r1);
   const auto [b1, b2] = poly(f2, r2);
   // (1 - a1 z^-1 - a2 z^-2)(1 - b1 z^-1 - b2 z^-2) = 1 - c1 z^-1 - ...
@@ -34,7 +36,8 @@ std::vector<double> TrueCoeffs(double v, double f, double fs) {
 }
 double TrueVariance(double v, double f) { return 0.5 * std::pow(v / 0.08, 1.6) * (f / 1.2); }
 
-std::vector<double> Synthesize(const std::vector<double>& c, double var, std::size_t n, std::uint64_t seed) {
+std::vector<double> Synthesize(const std::vector<double>& c, double var, std::size_t n,
+                               std::uint64_t seed) {
   renderer::ArFilter fl;
   fl.order = static_cast<int>(c.size());
   for (std::size_t i = 0; i < c.size(); ++i) fl.c[i] = c[i];
@@ -47,9 +50,11 @@ std::vector<double> Synthesize(const std::vector<double>& c, double var, std::si
   return x;
 }
 
-void WriteRecording(const std::string& path, const std::vector<double>& acc, double fs, double v, double f) {
+void WriteRecording(const std::string& path, const std::vector<double>& acc, double fs, double v,
+                    double f) {
   std::ofstream o(path);
-  o << "# hapticlab-measurement v1\n# material: synthetic\n" << fmt::format("# speed_mps: {}\n# force_N: {}\n", v, f);
+  o << "# hapticlab-measurement v1\n# material: synthetic\n"
+    << fmt::format("# speed_mps: {}\n# force_N: {}\n", v, f);
   o << "t_s,x_m,y_m,z_m,acc_mps2\n";
   for (std::size_t i = 0; i < acc.size(); ++i) {
     const double t = static_cast<double>(i) / fs;
@@ -59,12 +64,14 @@ void WriteRecording(const std::string& path, const std::vector<double>& acc, dou
 
 TEST(Vibration, ResamplerReproducesAnAnalyticSine) {
   std::vector<double> x(20000);
-  for (std::size_t i = 0; i < x.size(); ++i) x[i] = std::sin(2 * kPi * 100 * static_cast<double>(i) / 5000.0);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    x[i] = std::sin(2 * kPi * 100 * static_cast<double>(i) / 5000.0);
   const auto y = Resample(x, 5000, 2000);
   ASSERT_NEAR(static_cast<double>(y.size()), 8000, 2);
   double err = 0;
   int n = 0;
-  for (std::size_t i = 500; i + 500 < y.size(); ++i, ++n) err += std::pow(y[i] - std::sin(2 * kPi * 100 * static_cast<double>(i) / 2000.0), 2);
+  for (std::size_t i = 500; i + 500 < y.size(); ++i, ++n)
+    err += std::pow(y[i] - std::sin(2 * kPi * 100 * static_cast<double>(i) / 2000.0), 2);
   EXPECT_LT(std::sqrt(err / n), 1e-5);
 }
 
@@ -77,8 +84,8 @@ TEST(Vibration, SpectralErrorHandCases) {
     neg[i] = -x[i];
   }
   EXPECT_NEAR(SpectralError(x, x), 0.0, 1e-15);
-  EXPECT_NEAR(SpectralError(x, neg), 0.0, 1e-12);   // magnitudes only
-  EXPECT_NEAR(SpectralError(x, twice), 1.0, 1e-12); // |2X| - |X| = |X|
+  EXPECT_NEAR(SpectralError(x, neg), 0.0, 1e-12);    // magnitudes only
+  EXPECT_NEAR(SpectralError(x, twice), 1.0, 1e-12);  // |2X| - |X| = |X|
   EXPECT_NEAR(SpectralError(x, zero), 1.0, 1e-15);
 }
 
@@ -108,7 +115,8 @@ TEST(Vibration, LevinsonRecoversAKnownAr) {
   const auto x = Synthesize(c, 0.5, 60000, 5);
   const auto fit = FitAr(x, 4);
   ASSERT_EQ(fit.order, 4);
-  for (int i = 0; i < 4; ++i) EXPECT_NEAR(fit.coeffs[static_cast<std::size_t>(i)], c[static_cast<std::size_t>(i)], 0.03) << i;
+  for (int i = 0; i < 4; ++i)
+    EXPECT_NEAR(fit.coeffs[static_cast<std::size_t>(i)], c[static_cast<std::size_t>(i)], 0.03) << i;
   EXPECT_NEAR(fit.variance, 0.5, 0.5 * 0.03);
   EXPECT_TRUE(renderer::IsStableAr(fit.coeffs));
   const auto autofit = FitAr(x, 0, 20);
@@ -116,7 +124,8 @@ TEST(Vibration, LevinsonRecoversAKnownAr) {
   // Recovered PSD: the analytic spectra of the fit and the truth agree.
   double num = 0, den = 0;
   for (int k = 1; k < 1000; ++k) {
-    const double a = std::sqrt(renderer::ArPsd(c, 0.5, 2000, k)), b = std::sqrt(renderer::ArPsd(autofit.coeffs, autofit.variance, 2000, k));
+    const double a = std::sqrt(renderer::ArPsd(c, 0.5, 2000, k)),
+                 b = std::sqrt(renderer::ArPsd(autofit.coeffs, autofit.variance, 2000, k));
     num += (a - b) * (a - b);
     den += a * a;
   }
@@ -126,12 +135,16 @@ TEST(Vibration, LevinsonRecoversAKnownAr) {
 TEST(Vibration, BankFromRecordingsOfASmoothlyVaryingProcess) {
   test::TempDir dir;
   const double fs = 10000;  // recorded at 10 kHz, modeled at 2 kHz
-  const std::vector<double> speeds{0.04, 0.06, 0.08, 0.10, 0.12}, forces{0.54, 0.89, 1.18, 1.40, 1.91};
+  const std::vector<double> speeds{0.04, 0.06, 0.08, 0.10, 0.12},
+      forces{0.54, 0.89, 1.18, 1.40, 1.91};
   int k = 0;
   for (double v : speeds)
     for (double f : forces) {
       ++k;
-      WriteRecording(dir.File(fmt::format("c{:02d}.csv", k)), Synthesize(TrueCoeffs(v, f, fs), TrueVariance(v, f), 50000, 100 + static_cast<std::uint64_t>(k)), fs, v, f);
+      WriteRecording(dir.File(fmt::format("c{:02d}.csv", k)),
+                     Synthesize(TrueCoeffs(v, f, fs), TrueVariance(v, f), 50000,
+                                100 + static_cast<std::uint64_t>(k)),
+                     fs, v, f);
     }
   const auto recs = LoadRecordings(dir.path());
   ASSERT_EQ(recs.size(), 25u);
@@ -160,7 +173,8 @@ TEST(Vibration, BankFromRecordingsOfASmoothlyVaryingProcess) {
   EXPECT_EQ(cv.rows.size(), 25u);
   EXPECT_GT(cv.mean_es_test, cv.mean_es_train);
   for (const auto& r : cv.rows) EXPECT_LT(r.es, 0.5) << r.speed_mps << " " << r.force_N;
-  std::printf("cross-validation: order %d, mean E_s train %.3f, held-out %.3f\n", cv.order, cv.mean_es_train, cv.mean_es_test);
+  std::printf("cross-validation: order %d, mean E_s train %.3f, held-out %.3f\n", cv.order,
+              cv.mean_es_train, cv.mean_es_test);
 }
 
 TEST(Vibration, RecordingsWithoutMetadataAreCutIntoSteadyParts) {
@@ -172,7 +186,8 @@ TEST(Vibration, RecordingsWithoutMetadataAreCutIntoSteadyParts) {
   for (int i = 0; i < 10000; ++i) {
     const bool first = i < 6000;
     const double v = first ? 0.05 : 0.10, f = first ? 1.0 : 1.5;
-    o << fmt::format("{},0,0,0,{},0,0,0,0,{},{}\n", i / 2000.0, v * (1 + 0.02 * rng.Normal()), f * (1 + 0.02 * rng.Normal()), rng.Normal());
+    o << fmt::format("{},0,0,0,{},0,0,0,0,{},{}\n", i / 2000.0, v * (1 + 0.02 * rng.Normal()),
+                     f * (1 + 0.02 * rng.Normal()), rng.Normal());
   }
   o.close();
   const auto segs = LoadRecordingSegments(dir.File("scan.csv"));
@@ -193,7 +208,8 @@ TEST(Vibration, RecordingErrorsNameTheFile) {
   {
     std::ofstream o(dir.File("gap.csv"));
     o << "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,x_m,y_m,z_m,acc_mps2\n";
-    for (int i = 0; i < 600; ++i) o << (i < 300 ? i : i + 5) / 1000.0 << ",0,0,0," << acc[static_cast<std::size_t>(i)] << "\n";
+    for (int i = 0; i < 600; ++i)
+      o << (i < 300 ? i : i + 5) / 1000.0 << ",0,0,0," << acc[static_cast<std::size_t>(i)] << "\n";
   }
   try {
     LoadRecording(dir.File("gap.csv"));

@@ -41,9 +41,16 @@ std::vector<Scenario> Scenarios() {
       {"dahl", "kappa 1500", [](TruthParams& t) { t.kappa_N_per_m = 1500; }},
       {"dahl", "kappa 4000", [](TruthParams& t) { t.kappa_N_per_m = 4000; }},
       {"stribeck", "dmu 0.15 vs 4 mm/s", [](TruthParams& t) { t.stribeck_dmu = 0.15; }},
-      {"stribeck", "dmu 0.3 vs 8 mm/s", [](TruthParams& t) { t.stribeck_dmu = 0.3, t.stribeck_vs_mps = 0.008; }},
-      {"anisotropic-friction", "cos 2phi 0.25", [](TruthParams& t) { t.aniso = {0, 0, 0.25, 0}; }},
-      {"anisotropic-friction", "cos phi 0.15, sin 2phi 0.1", [](TruthParams& t) { t.aniso = {0.15, 0, 0, 0.1}; }},
+      {"stribeck", "dmu 0.3 vs 8 mm/s",
+       [](TruthParams& t) { t.stribeck_dmu = 0.3, t.stribeck_vs_mps = 0.008; }},
+      {"anisotropic-friction", "cos 2phi 0.25",
+       [](TruthParams& t) {
+         t.aniso = {0, 0, 0.25, 0};
+       }},
+      {"anisotropic-friction", "cos phi 0.15, sin 2phi 0.1",
+       [](TruthParams& t) {
+         t.aniso = {0.15, 0, 0, 0.1};
+       }},
       {"load-dependent-friction", "alpha 0.6", [](TruthParams& t) { t.load_alpha = 0.6; }},
       {"load-dependent-friction", "alpha 0.8", [](TruthParams& t) { t.load_alpha = 0.8; }},
       {"position-dependent-friction", "amplitude 0.2", [](TruthParams& t) { t.tile_amp = 0.2; }},
@@ -52,8 +59,10 @@ std::vector<Scenario> Scenarios() {
       {"hc-damping", "B 40 N s/m at 1 mm", [](TruthParams& t) { t.B1mm_Ns_per_m = 40; }},
       {"hc-exponent", "n 1.4", [](TruthParams& t) { t.n = 1.4; }},
       {"hc-exponent", "n 1.8", [](TruthParams& t) { t.n = 1.8; }},
-      {"base-layer", "6000 N/m under 0.6 mm", [](TruthParams& t) { t.base_K_N_per_m = 6000, t.layer_m = 0.6e-3; }},
-      {"base-layer", "3000 N/m under 0.45 mm", [](TruthParams& t) { t.base_K_N_per_m = 3000, t.layer_m = 0.45e-3; }},
+      {"base-layer", "6000 N/m under 0.6 mm",
+       [](TruthParams& t) { t.base_K_N_per_m = 6000, t.layer_m = 0.6e-3; }},
+      {"base-layer", "3000 N/m under 0.45 mm",
+       [](TruthParams& t) { t.base_K_N_per_m = 3000, t.layer_m = 0.45e-3; }},
       {"vibration-speed", "power ~ v^2", [](TruthParams& t) { t.vib_speed_exp = 1.0; }},
       {"vibration-speed", "power ~ v^3", [](TruthParams& t) { t.vib_speed_exp = 1.5; }},
       {"vibration-force", "power ~ f^1.6", [](TruthParams& t) { t.vib_force_exp = 0.8; }},
@@ -89,8 +98,9 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndFittingItReachesTheNoiseFloor) {
   ASSERT_FALSE(dx.candidates.empty());
   std::string table;
   for (const auto& c : dx.candidates)
-    table += fmt::format("  {:28s} reduction {:+.5f} ({:+.1f} % of {}), t {:.1f}{}\n", c.effect, c.error_reduction,
-                         100 * c.relative_reduction, c.channel, c.t_statistic, c.supported ? ", supported" : "");
+    table += fmt::format("  {:28s} reduction {:+.5f} ({:+.1f} % of {}), t {:.1f}{}\n", c.effect,
+                         c.error_reduction, 100 * c.relative_reduction, c.channel, c.t_statistic,
+                         c.supported ? ", supported" : "");
   const auto& top = dx.candidates.front();
   EXPECT_EQ(top.effect, sc.effect) << sc.variant << "\n" << table;
   EXPECT_TRUE(top.supported) << table;
@@ -104,16 +114,21 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndFittingItReachesTheNoiseFloor) {
   const auto err = ComputeErrors(r, Predict(fitted, r), Split::kHeldOut);
   const auto floor = NoiseFloor(sim, r, Split::kHeldOut);
   const std::string ch = ChannelName(FindEffect(sc.effect)->channel());
-  const double before = dx.baseline_channel.at(ch), after = err.channel.at(ch), fl = floor.channel.at(ch);
-  EXPECT_LE(after, 1.10 * fl) << sc.effect << " (" << sc.variant << "): held-out " << ch << " error " << after
-                              << ", noise floor " << fl << ", before " << before;
+  const double before = dx.baseline_channel.at(ch), after = err.channel.at(ch),
+               fl = floor.channel.at(ch);
+  EXPECT_LE(after, 1.10 * fl) << sc.effect << " (" << sc.variant << "): held-out " << ch
+                              << " error " << after << ", noise floor " << fl << ", before "
+                              << before;
   // Reported for the closing note's confusion table.
-  fmt::print("[hidden] {:28s} {:28s} -> first: {:28s} {} | {} error {:.4f} -> {:.4f}, floor {:.4f} ({:.3f}x)\n",
-             sc.effect, sc.variant, top.effect, top.supported ? "supported" : "NOT supported", ch, before, after, fl,
-             after / fl);
+  fmt::print(
+      "[hidden] {:28s} {:28s} -> first: {:28s} {} | {} error {:.4f} -> {:.4f}, floor {:.4f} "
+      "({:.3f}x)\n",
+      sc.effect, sc.variant, top.effect, top.supported ? "supported" : "NOT supported", ch, before,
+      after, fl, after / fl);
 }
 
-INSTANTIATE_TEST_SUITE_P(EveryEffect, HiddenEffect, ::testing::Range(0, static_cast<int>(Scenarios().size())),
+INSTANTIATE_TEST_SUITE_P(EveryEffect, HiddenEffect,
+                         ::testing::Range(0, static_cast<int>(Scenarios().size())),
                          [](const ::testing::TestParamInfo<int>& i) {
                            auto s = Scenarios()[static_cast<std::size_t>(i.param)];
                            std::string n = s.effect + "_" + std::to_string(i.param % 2);
@@ -136,8 +151,8 @@ TEST_P(NullCase, NoCandidateClaimsAMeaningfulReduction) {
   for (const auto& c : dx.candidates) {
     EXPECT_FALSE(c.supported) << c.effect << ": " << c.evidence;
     EXPECT_LT(c.relative_reduction, 0.02) << c.effect;
-    fmt::print("[null] seed {} {:28s} {:+.2f} % of {} (t {:.1f})\n", t.seed, c.effect, 100 * c.relative_reduction, c.channel,
-               c.t_statistic);
+    fmt::print("[null] seed {} {:28s} {:+.2f} % of {} (t {:.1f})\n", t.seed, c.effect,
+               100 * c.relative_reduction, c.channel, c.t_statistic);
   }
 }
 INSTANTIATE_TEST_SUITE_P(Seeds, NullCase, ::testing::Range(0, 2));
@@ -163,8 +178,10 @@ TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
   ASSERT_TRUE(exp && knee);
   EXPECT_EQ(dx.candidates.front().effect, "hc-exponent");
   ASSERT_TRUE(knee->supported) << knee->evidence;
-  EXPECT_NE(std::find(exp->confounded_with.begin(), exp->confounded_with.end(), "base-layer"), exp->confounded_with.end());
-  EXPECT_NE(knee->evidence.find("confounded with hc-exponent"), std::string::npos) << knee->evidence;
+  EXPECT_NE(std::find(exp->confounded_with.begin(), exp->confounded_with.end(), "base-layer"),
+            exp->confounded_with.end());
+  EXPECT_NE(knee->evidence.find("confounded with hc-exponent"), std::string::npos)
+      << knee->evidence;
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -40,7 +40,8 @@ TEST(WorkbenchFiles, SavedModelsLoadInTheRendererAndRoundTrip) {
   EXPECT_FALSE(mat.vibration.empty());
   const auto back = LoadModel(path.string());
   EXPECT_EQ(back.effects, m.effects);
-  const auto e1 = ComputeErrors(r, Predict(m, r), Split::kAll), e2 = ComputeErrors(r, Predict(back, r), Split::kAll);
+  const auto e1 = ComputeErrors(r, Predict(m, r), Split::kAll),
+             e2 = ComputeErrors(r, Predict(back, r), Split::kAll);
   EXPECT_NEAR(e1.overall, e2.overall, 1e-12);
 
   // The AR bank derived for the renderer has the fitted band spectrum: compare the AR cell's
@@ -62,7 +63,8 @@ TEST(WorkbenchFiles, SavedModelsLoadInTheRendererAndRoundTrip) {
       s += renderer::ArPsd(cell.coeffs, cell.variance, fs, f) * fs / 2;
     }
     const double db = 10 * std::log10((s / n) / p.band_power[0][b]);
-    EXPECT_LT(std::abs(db), 3.0) << "band " << b << " (" << r.band_lo_hz[b] << " Hz): " << db << " dB";
+    EXPECT_LT(std::abs(db), 3.0) << "band " << b << " (" << r.band_lo_hz[b] << " Hz): " << db
+                                 << " dB";
   }
 
   // Bad files: unknown effect, missing parameters, wrong coefficient counts, each located.

@@ -21,12 +21,22 @@ namespace hapticlab::modeling::wb {
 namespace {
 
 TEST(WorkbenchCatalogue, HasEveryNamedEffectWithDescriptionsAndSaneParameters) {
-  const std::vector<std::string> required = {"coulomb", "viscous", "dahl", "stribeck", "anisotropic-friction",
-                                             "load-dependent-friction", "position-dependent-friction", "hc-damping",
-                                             "hc-exponent", "base-layer", "vibration-speed", "vibration-force",
+  const std::vector<std::string> required = {"coulomb",
+                                             "viscous",
+                                             "dahl",
+                                             "stribeck",
+                                             "anisotropic-friction",
+                                             "load-dependent-friction",
+                                             "position-dependent-friction",
+                                             "hc-damping",
+                                             "hc-exponent",
+                                             "base-layer",
+                                             "vibration-speed",
+                                             "vibration-force",
                                              "vibration-direction"};
   std::set<std::string> names;
-  for (const auto& e : Catalogue()) EXPECT_TRUE(names.insert(std::string(e->name())).second) << e->name();
+  for (const auto& e : Catalogue())
+    EXPECT_TRUE(names.insert(std::string(e->name())).second) << e->name();
   for (const auto& n : required) EXPECT_TRUE(names.count(n)) << n;
   TruthParams t;
   t.duration_s = 10;
@@ -59,7 +69,8 @@ TEST(WorkbenchCatalogue, UnknownNamesAreInputErrorsNamingSourceAndField) {
     EXPECT_EQ(e.diagnostics()[0].field, "--add");
     EXPECT_NE(e.diagnostics()[0].message.find("'wobble'"), std::string::npos);
     EXPECT_NE(e.diagnostics()[1].message.find("'drag'"), std::string::npos);
-    EXPECT_NE(e.diagnostics()[1].message.find("vibration-direction"), std::string::npos) << "lists the catalogue";
+    EXPECT_NE(e.diagnostics()[1].message.find("vibration-direction"), std::string::npos)
+        << "lists the catalogue";
   }
 }
 
@@ -72,7 +83,8 @@ TEST(WorkbenchCatalogue, VibrationAxesUseTheirOwnKeyAndKnots) {
   ASSERT_NE(fo, nullptr);
   EXPECT_EQ(sp->VibrationColumns(), 4);
   EXPECT_EQ(fo->VibrationColumns(), 2);
-  const double knots_speed[] = {std::log(0.01), std::log(0.02), std::log(0.04), std::log(0.08), std::log(0.16)};
+  const double knots_speed[] = {std::log(0.01), std::log(0.02), std::log(0.04), std::log(0.08),
+                                std::log(0.16)};
   const double knots_force[] = {std::log(0.5), std::log(1.0), std::log(2.0)};
   Replay::Window w{};
   w.speed_mps = 0.03;  // between knots 1 and 2 of speed: ln-interpolated weights

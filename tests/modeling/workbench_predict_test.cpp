@@ -11,7 +11,8 @@
 namespace hapticlab::modeling::wb {
 namespace {
 
-Replay::Sample Touching(double d_m, double ddot_mps, double vx_mps, double vy_mps, double load_N, int block) {
+Replay::Sample Touching(double d_m, double ddot_mps, double vx_mps, double vy_mps, double load_N,
+                        int block) {
   Replay::Sample s{};
   s.d_m = d_m;
   s.ddot_mps = ddot_mps;

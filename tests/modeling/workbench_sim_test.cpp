@@ -12,9 +12,9 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/modeling/workbench.hpp"
-#include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -24,8 +24,8 @@ namespace {
 TEST(WorkbenchSimulator, TruthModelReproducesTheIndependentSimulator) {
   TruthParams t;
   t.effects = BaselineEffects();
-  for (const char* e : {"stribeck", "anisotropic-friction", "load-dependent-friction", "position-dependent-friction",
-                        "base-layer"})
+  for (const char* e : {"stribeck", "anisotropic-friction", "load-dependent-friction",
+                        "position-dependent-friction", "base-layer"})
     t.effects.push_back(e);
   t.duration_s = 30;
   t.pos_noise_m = t.vel_noise_mps = 0;  // exact kinematics: only the implementations differ
@@ -37,7 +37,8 @@ TEST(WorkbenchSimulator, TruthModelReproducesTheIndependentSimulator) {
     if (!r.samples()[i].contact) continue;
     const int row = r.samples()[i].row;
     en += std::pow(p.fn_N[i] - sim.fn_clean[row], 2);
-    et += std::pow(p.ftx_N[i] - sim.ftx_clean[row], 2) + std::pow(p.fty_N[i] - sim.fty_clean[row], 2);
+    et +=
+        std::pow(p.ftx_N[i] - sim.ftx_clean[row], 2) + std::pow(p.fty_N[i] - sim.fty_clean[row], 2);
     sn += std::pow(sim.fn_clean[row], 2);
     st += std::pow(sim.ftx_clean[row], 2) + std::pow(sim.fty_clean[row], 2);
   }

@@ -34,10 +34,12 @@ TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths
       ASSERT_TRUE(est.count(ch)) << ch;
       // 20 %: the estimate sees the force noise and the velocity noise through the model; the
       // truth's floor also holds the load noise through f_C.
-      EXPECT_NEAR(est.at(ch), truth.channel.at(ch), 0.2 * truth.channel.at(ch)) << ch << " at " << noise << " N";
+      EXPECT_NEAR(est.at(ch), truth.channel.at(ch), 0.2 * truth.channel.at(ch))
+          << ch << " at " << noise << " N";
     }
     ASSERT_TRUE(est.count("vibration"));
-    EXPECT_NEAR(est.at("vibration"), truth.channel.at("vibration"), 0.35 * truth.channel.at("vibration"));
+    EXPECT_NEAR(est.at("vibration"), truth.channel.at("vibration"),
+                0.35 * truth.channel.at("vibration"));
   }
 }
 
@@ -72,8 +74,8 @@ struct OutOfCatalogueCase {
   std::function<void(TruthParams&)> set;
 };
 std::vector<OutOfCatalogueCase> OutOfCatalogueCases() {
-  return {{"friction drifts by 40 % over the recording (a warming or wearing surface)", "friction", "time",
-           [](TruthParams& t) { t.mu_drift = 0.4; }},
+  return {{"friction drifts by 40 % over the recording (a warming or wearing surface)", "friction",
+           "time", [](TruthParams& t) { t.mu_drift = 0.4; }},
           {"stiffness varies by -+30 % across the surface", "normal_force", "position",
            [](TruthParams& t) { t.K_position_amp = 0.3; }}};
 }
@@ -94,8 +96,9 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
   const auto dx = Diagnose(m, r);
   std::string table;
   for (const auto& c : dx.candidates)
-    table += fmt::format("  {:28s} {:+.1f} % of {}, t {:.1f}{} | {}\n", c.effect, 100 * c.relative_reduction, c.channel,
-                         c.t_statistic, c.supported ? " SUPPORTED" : "", c.evidence);
+    table += fmt::format("  {:28s} {:+.1f} % of {}, t {:.1f}{} | {}\n", c.effect,
+                         100 * c.relative_reduction, c.channel, c.t_statistic,
+                         c.supported ? " SUPPORTED" : "", c.evidence);
   const auto& u = dx.unexplained;
   // The residuals of the fitted baseline, for each effect's cause sentence.
   Model probe;
@@ -119,12 +122,16 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
   EXPECT_EQ(u.axes.front().channel, oc.channel);
   EXPECT_NE(u.summary.find("No catalogue effect"), std::string::npos) << u.summary;
   EXPECT_NE(u.summary.find(oc.axis), std::string::npos) << u.summary;
-  fmt::print("[out-of-catalogue] {}: {} error {:.1f}x floor; first axis {} ({:.0f} %): {}\n", oc.name, u.channels.front().channel,
-             u.channels.front().ratio, u.axes.front().axis, 100 * u.axes.front().share, u.axes.front().description);
+  fmt::print("[out-of-catalogue] {}: {} error {:.1f}x floor; first axis {} ({:.0f} %): {}\n",
+             oc.name, u.channels.front().channel, u.channels.front().ratio, u.axes.front().axis,
+             100 * u.axes.front().share, u.axes.front().description);
 }
-INSTANTIATE_TEST_SUITE_P(Cases, OutOfCatalogue, ::testing::Range(0, static_cast<int>(OutOfCatalogueCases().size())),
-                         [](const ::testing::TestParamInfo<int>& i) { return i.param == 0 ? std::string("time_drift")
-                                                                                            : std::string("position_stiffness"); });
+INSTANTIATE_TEST_SUITE_P(Cases, OutOfCatalogue,
+                         ::testing::Range(0, static_cast<int>(OutOfCatalogueCases().size())),
+                         [](const ::testing::TestParamInfo<int>& i) {
+                           return i.param == 0 ? std::string("time_drift")
+                                               : std::string("position_stiffness");
+                         });
 
 }  // namespace
 }  // namespace hapticlab::modeling::wb

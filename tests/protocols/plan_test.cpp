@@ -1,6 +1,4 @@
 // The trial plan (protocols/src/plan.cpp): golden plan, constraints, Latin squares.
-#include "hapticlab/protocols/protocol.hpp"
-
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -9,6 +7,7 @@
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::protocols {
@@ -53,7 +52,8 @@ void CheckPlan(const Protocol& p, const std::vector<PlannedTrial>& plan) {
       (t.left.rfind("real:", 0) == 0 ? sides[t.phase].first : sides[t.phase].second)++;
     }
   }
-  EXPECT_EQ(main_cells.size(), p.materials.size() * p.methods.size() * static_cast<std::size_t>(p.phases.back().repetitions));
+  EXPECT_EQ(main_cells.size(), p.materials.size() * p.methods.size() *
+                                   static_cast<std::size_t>(p.phases.back().repetitions));
   for (const auto& [k, n] : main_cells) EXPECT_EQ(n, 1);
   for (const auto& [ph, s] : sides) EXPECT_LE(std::abs(s.first - s.second), 1);
 }
@@ -71,7 +71,8 @@ TEST(Plan, ConstraintsHoldForManySeedsAndEverySchemeAndAreDeterministic) {
         const auto plan = Plan(p, i);
         CheckPlan(p, plan);
         const auto again = Plan(p, i);
-        for (std::size_t k = 0; k < plan.size(); ++k) ASSERT_EQ(plan[k].left + plan[k].method, again[k].left + again[k].method);
+        for (std::size_t k = 0; k < plan.size(); ++k)
+          ASSERT_EQ(plan[k].left + plan[k].method, again[k].left + again[k].method);
         if (std::string(scheme) != "full") {
           // Blocks are contiguous: the method changes exactly once in the main phase.
           int changes = 0;
@@ -90,7 +91,8 @@ TEST(Plan, ConstraintsHoldForManySeedsAndEverySchemeAndAreDeterministic) {
             if (t.phase != PhaseKind::kMain) continue;
             if (t.break_before) {
               ++breaks;
-              EXPECT_TRUE(!prev.empty() && t.method != prev) << "break inside a block at trial " << t.index + 1;
+              EXPECT_TRUE(!prev.empty() && t.method != prev)
+                  << "break inside a block at trial " << t.index + 1;
             }
             prev = t.method;
           }
@@ -112,13 +114,14 @@ TEST(Plan, LatinSquareBalancesBlockOrderAcrossParticipants) {
   for (int i = 0; i < 6; ++i) {
     std::vector<std::string> order;
     for (const auto& t : Plan(p, i))
-      if (t.phase == PhaseKind::kMain && (order.empty() || order.back() != t.method)) order.push_back(t.method);
+      if (t.phase == PhaseKind::kMain && (order.empty() || order.back() != t.method))
+        order.push_back(t.method);
     ASSERT_EQ(order.size(), 3u);
     ++first[order[0]];
     for (std::size_t k = 1; k < order.size(); ++k) ++follows[{order[k - 1], order[k]}];
   }
   for (const auto& [m, n] : first) EXPECT_EQ(n, 2) << m;
-  EXPECT_EQ(follows.size(), 6u);  // every ordered pair...
+  EXPECT_EQ(follows.size(), 6u);                        // every ordered pair...
   for (const auto& [pr, n] : follows) EXPECT_EQ(n, 2);  // ...equally often
 }
 

@@ -25,7 +25,6 @@ TEST(Protocol, ParsesTheSmallStudy) {
   EXPECT_EQ(p.break_every_trials, 8);
 }
 
-
 TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
   std::string deep_key = "a";
   for (int i = 0; i < 40; ++i) deep_key += ".a";
@@ -35,25 +34,35 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
   const std::vector<Case> cases = {
       {"seed = 42", "seed = -3", "study.seed: expected a non-negative integer"},
       {"seed = 42", "seed = \"x\"", "study.seed: expected a non-negative integer"},
-      {"criteria = [\"roughness\", \"overall\"]", "criteria = []", "study.criteria: needs at least one criterion"},
+      {"criteria = [\"roughness\", \"overall\"]", "criteria = []",
+       "study.criteria: needs at least one criterion"},
       {"stimulus_duration_s = 0.5", "stimulus_duration_s = -1.0", "study.stimulus_duration_s"},
-      {"algorithm = \"fric2\"\nvibration", "algorithm = \"fric9\"\nvibration", "method[0].algorithm: expected wall, norm, fric1, fric2 or none, got 'fric9'"},
+      {"algorithm = \"fric2\"\nvibration", "algorithm = \"fric9\"\nvibration",
+       "method[0].algorithm: expected wall, norm, fric1, fric2 or none, got 'fric9'"},
       {"name = \"Hybrid\"", "name = \"FF\"", "method[1].name: duplicate method 'FF'"},
       {"id = \"Cork\"", "id = \"Denim\"", "material[1].id: duplicate material id 'Denim'"},
-      {"kind = \"training\"", "kind = \"warmup\"", "phase[0].kind: expected training, reference, main, staircase or quest-plus, got 'warmup'"},
+      {"kind = \"training\"", "kind = \"warmup\"",
+       "phase[0].kind: expected training, reference, main, staircase or quest-plus, got 'warmup'"},
       {"repetitions = 2", "repetitions = 0", "phase[2].repetitions: expected an integer 1..100"},
       {"different_pairs = 2", "different_pairs = 7", "phase[1].different_pairs: expected 0..6"},
-      {"different_pairs = 2", "different_pairs = [[\"Denim\", \"Nope\"]]", "phase[1].different_pairs"},
-      {"scheme = \"full\"", "scheme = \"random\"", "randomization.scheme: expected full, blocked or latin-square"},
-      {"scheme = \"full\"", "scheme = \"blocked\"\nblock_by = \"material\"", "infeasible with no_immediate_repeat"},
+      {"different_pairs = 2", "different_pairs = [[\"Denim\", \"Nope\"]]",
+       "phase[1].different_pairs"},
+      {"scheme = \"full\"", "scheme = \"random\"",
+       "randomization.scheme: expected full, blocked or latin-square"},
+      {"scheme = \"full\"", "scheme = \"blocked\"\nblock_by = \"material\"",
+       "infeasible with no_immediate_repeat"},
       {"every_trials = 8", "every_trials = 8\nduraton_s = 3", "breaks.duraton_s: unknown key"},
-      {"duration_s = 30", "duration_s = 30\n[analysis]\ntests = [\"lmm\"]\nlmm_formula = \"score ~ method\"",
+      {"duration_s = 30",
+       "duration_s = 30\n[analysis]\ntests = [\"lmm\"]\nlmm_formula = \"score ~ method\"",
        "analysis.lmm_formula: expected an lme4 formula"},
       {"[study]", "[studdy]", "studdy: unknown key"},
       // Range-checked before narrowing: 2^32 must not wrap to 0 ("no breaks").
-      {"every_trials = 8", "every_trials = 4294967296", "breaks.every_trials: expected an integer 0..10000"},
-      {"every_trials = 8", "every_trials = -1", "breaks.every_trials: expected an integer 0..10000"},
-      {"seed = 42", "seed = 42\nparticipant_code = \"([A-Z\"", "study.participant_code: not a valid regular expression"},
+      {"every_trials = 8", "every_trials = 4294967296",
+       "breaks.every_trials: expected an integer 0..10000"},
+      {"every_trials = 8", "every_trials = -1",
+       "breaks.every_trials: expected an integer 0..10000"},
+      {"seed = 42", "seed = 42\nparticipant_code = \"([A-Z\"",
+       "study.participant_code: not a valid regular expression"},
       // Input limits before toml++ parses (its recursion would overflow the stack).
       {"seed = 42", "seed = 42\n" + deep_key + " = 1", "more than 32 dotted parts"},
   };
@@ -75,9 +84,10 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
 
 TEST(Protocol, ParticipantCodesFollowThePatternAndAreNeverNames) {
   const auto p = ParseProtocol(Small(), "small.toml");
-  for (const char* ok : {"P07", "AB123", "SIM01", "X9999"}) EXPECT_NO_THROW(CheckParticipantCode(p, ok)) << ok;
-  for (const char* bad : {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "0151-2345678", "+491512345678",
-                          "P7", "p07", "P07 ", "", "P00000"}) {
+  for (const char* ok : {"P07", "AB123", "SIM01", "X9999"})
+    EXPECT_NO_THROW(CheckParticipantCode(p, ok)) << ok;
+  for (const char* bad : {"Anna_Kowalski_19850312", "JohnSmith1985", "1985-03-12", "0151-2345678",
+                          "+491512345678", "P7", "p07", "P07 ", "", "P00000"}) {
     try {
       CheckParticipantCode(p, bad);
       ADD_FAILURE() << "accepted " << bad;
@@ -126,7 +136,8 @@ kind = "main"
     ParseProtocol(text, "one.toml");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot avoid immediate repeats"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot avoid immediate repeats"), std::string::npos)
+        << e.what();
     EXPECT_NE(std::string(e.what()).find("one.toml:13"), std::string::npos) << e.what();
   }
 }

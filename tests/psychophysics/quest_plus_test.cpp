@@ -4,8 +4,8 @@
 
 #include <cmath>
 
-#include "hapticlab/psychophysics/simulated_observer.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/psychophysics/simulated_observer.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {

@@ -4,9 +4,9 @@
 
 #include <cmath>
 
-#include "hapticlab/psychophysics/simulated_observer.hpp"
-#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/psychophysics/simulated_observer.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {

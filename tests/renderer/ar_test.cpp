@@ -2,13 +2,12 @@
 
 #include <gtest/gtest.h>
 
-#include "hapticlab/core/status.hpp"
-
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <random>
 
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/renderer/vibration.hpp"
 #include "spectrum_util.hpp"
 
@@ -35,7 +34,8 @@ std::vector<double> RandomStableAr(int p, std::mt19937_64& rng) {
   }
   if (k < p) mul(rad(rng) * (ang(rng) < 1.5 ? 1.0 : -1.0));
   std::vector<double> c(static_cast<std::size_t>(p));
-  for (int i = 0; i < p; ++i) c[static_cast<std::size_t>(i)] = -poly[static_cast<std::size_t>(i + 1)].real();
+  for (int i = 0; i < p; ++i)
+    c[static_cast<std::size_t>(i)] = -poly[static_cast<std::size_t>(i + 1)].real();
   return c;
 }
 

@@ -2,10 +2,10 @@
 
 #include <gtest/gtest.h>
 
-#include "hapticlab/core/status.hpp"
-
 #include <cmath>
 #include <numbers>
+
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::renderer {
 namespace {

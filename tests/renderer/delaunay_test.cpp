@@ -2,18 +2,19 @@
 
 #include <gtest/gtest.h>
 
-#include "hapticlab/core/status.hpp"
-
 #include <cmath>
 #include <random>
 
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/renderer/material.hpp"
 
 namespace hapticlab::renderer {
 namespace {
 
-double Area(const std::vector<double>& x, const std::vector<double>& y, const std::array<int, 3>& t) {
-  const auto a = static_cast<std::size_t>(t[0]), b = static_cast<std::size_t>(t[1]), c = static_cast<std::size_t>(t[2]);
+double Area(const std::vector<double>& x, const std::vector<double>& y,
+            const std::array<int, 3>& t) {
+  const auto a = static_cast<std::size_t>(t[0]), b = static_cast<std::size_t>(t[1]),
+             c = static_cast<std::size_t>(t[2]);
   return 0.5 * std::abs((x[b] - x[a]) * (y[c] - y[a]) - (x[c] - x[a]) * (y[b] - y[a]));
 }
 
@@ -41,8 +42,12 @@ TEST(Delaunay, TrianglesTileTheConvexHullWithEmptyCircumcircles) {
     const double bx = x[static_cast<std::size_t>(t[1])], by = y[static_cast<std::size_t>(t[1])];
     const double cx = x[static_cast<std::size_t>(t[2])], cy = y[static_cast<std::size_t>(t[2])];
     const double d = 2 * (ax * (by - cy) + bx * (cy - ay) + cx * (ay - by));
-    const double ux = ((ax * ax + ay * ay) * (by - cy) + (bx * bx + by * by) * (cy - ay) + (cx * cx + cy * cy) * (ay - by)) / d;
-    const double uy = ((ax * ax + ay * ay) * (cx - bx) + (bx * bx + by * by) * (ax - cx) + (cx * cx + cy * cy) * (bx - ax)) / d;
+    const double ux = ((ax * ax + ay * ay) * (by - cy) + (bx * bx + by * by) * (cy - ay) +
+                       (cx * cx + cy * cy) * (ay - by)) /
+                      d;
+    const double uy = ((ax * ax + ay * ay) * (cx - bx) + (bx * bx + by * by) * (ax - cx) +
+                       (cx * cx + cy * cy) * (bx - ax)) /
+                      d;
     const double r2 = (ax - ux) * (ax - ux) + (ay - uy) * (ay - uy);
     for (std::size_t i = 0; i < x.size(); ++i)
       EXPECT_GE((x[i] - ux) * (x[i] - ux) + (y[i] - uy) * (y[i] - uy), r2 * (1 - 1e-9));
@@ -83,7 +88,8 @@ speed_mps = 0.12
 force_N = 1.5
 ar = [0.2]
 variance = 1.0
-)", "s.toml");
+)",
+                               "s.toml");
   EXPECT_EQ(m.vibration.triangles.size(), 2u);
 }
 

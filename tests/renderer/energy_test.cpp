@@ -22,15 +22,15 @@ TEST(Energy, NormOnASineMatchesEquation52) {
     const auto r = ComputeEnergy(Elastic(), ForceAlgorithm::kNorm, a, l, EnergyPath{});
     ASSERT_TRUE(r.has_closed_form);
     EXPECT_GT(r.closed_form_J, 0.0);  // algorithm A creates energy
-    EXPECT_NEAR(r.energy_J, r.closed_form_J, 0.01 * r.closed_form_J)
-        << "A=" << a << " l=" << l;
+    EXPECT_NEAR(r.energy_J, r.closed_form_J, 0.01 * r.closed_form_J) << "A=" << a << " l=" << l;
   }
 }
 
 TEST(Energy, ClosedFormVanishesForSmallSlopesAsTheFourthPower) {
   // eq. (5.2) ~ K l^2 s^4 / (32 pi^2) with s = 2 pi A / l.
   const double k = 1000, l = 1e-3, a = 1e-6, s = 2 * std::numbers::pi * a / l;
-  EXPECT_NEAR(ClosedFormEnergyNorm(k, a, l), k * l * l * std::pow(s, 4) / (32 * std::pow(std::numbers::pi, 2)),
+  EXPECT_NEAR(ClosedFormEnergyNorm(k, a, l),
+              k * l * l * std::pow(s, 4) / (32 * std::pow(std::numbers::pi, 2)),
               1e-3 * k * l * l * std::pow(s, 4));
 }
 

@@ -2,9 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include "hapticlab/core/diagnostics.hpp"
-
 #include <cmath>
+
+#include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -35,7 +35,8 @@ TEST(Force, StaticHuntCrossleyInTheLayerAndTheBase) {
   EXPECT_NEAR(out.force_N.head<2>().norm(), 0, 1e-15);
   // Moving into the surface adds B d^n d'.
   out = f.Step(At(0, 0, 0.6e-3, 0, 0, -0.02));
-  EXPECT_NEAR(out.force_N.z(), 900 * std::pow(0.4e-3, 1.5) + 5 * std::pow(0.4e-3, 1.5) * 0.02, 1e-12);
+  EXPECT_NEAR(out.force_N.z(), 900 * std::pow(0.4e-3, 1.5) + 5 * std::pow(0.4e-3, 1.5) * 0.02,
+              1e-12);
   // Below the base: the full layer (d_t = T) plus the linear base.
   out = f.Step(At(0, 0, -0.2e-3));
   EXPECT_NEAR(out.force_N.z(), 900 * std::pow(1e-3, 1.5) + 3000 * 0.2e-3, 1e-12);

@@ -15,7 +15,8 @@ TEST(HeightMap, BilinearIsExactOnAPlane) {
   const double pitch = 1e-3;
   std::vector<float> h;
   for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 4; ++j) h.push_back(static_cast<float>(1e-5 + 2e-3 * j * pitch + 5e-4 * i * pitch));
+    for (int j = 0; j < 4; ++j)
+      h.push_back(static_cast<float>(1e-5 + 2e-3 * j * pitch + 5e-4 * i * pitch));
   HeightMap m(4, 3, pitch, h);
   const auto s = m.Sample(1.3e-3, 0.6e-3);
   EXPECT_NEAR(s.h_m, 1e-5 + 2e-3 * 1.3e-3 + 5e-4 * 0.6e-3, 1e-10);

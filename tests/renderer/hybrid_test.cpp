@@ -49,8 +49,9 @@ TEST(Hybrid, ForceNeverExceedsTheLimitNorIsNanOverAMillionRandomStates) {
   std::uniform_real_distribution<double> pos(-5e-3, 5e-3), depth(-20e-3, 2e-3), vel(-2.0, 2.0);
   std::uniform_real_distribution<double> u01(0, 1);
   const auto base = test::TexturedMaterial();
-  const ForceAlgorithm algs[] = {ForceAlgorithm::kWall, ForceAlgorithm::kNorm, ForceAlgorithm::kFric1,
-                                 ForceAlgorithm::kFric2, ForceAlgorithm::kNone};
+  const ForceAlgorithm algs[] = {ForceAlgorithm::kWall, ForceAlgorithm::kNorm,
+                                 ForceAlgorithm::kFric1, ForceAlgorithm::kFric2,
+                                 ForceAlgorithm::kNone};
   // A million states in the release build; a tenth of them (every model, algorithm and
   // filter setting still covered) in the sanitizer builds.
   const int per_model = test::kSanitizerBuild ? 5000 : 50000;

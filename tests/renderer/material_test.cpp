@@ -98,7 +98,8 @@ TEST(Material, ReportsEveryProblemWithLineAndKey) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("contact.texture_n: exponent must be in [1, 2]"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -109,7 +110,9 @@ TEST(Material, StoredLsfsMustMatchTheCoefficients) {
     ParseMaterial(text, "l.toml");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("vibration.cells[0].lsf: does not match"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vibration.cells[0].lsf: does not match"),
+              std::string::npos)
+        << e.what();
   }
 }
 
@@ -161,8 +164,11 @@ TEST(Material, ModelledRangeAndNoSplitRoundTripAndAreRangeChecked) {
     ParseMaterial(bad, "bad.toml");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("vibration.max_force_N: must be 0 (no limit) or > 0.01"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("hybrid.cutoff_hz: must be >= 0"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("vibration.max_force_N: must be 0 (no limit) or > 0.01"),
+              std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("hybrid.cutoff_hz: must be >= 0"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -8,8 +8,8 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/renderer/ar.hpp"
-#include "hapticlab/renderer/vibration.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/renderer/vibration.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "penn_xml.hpp"
 #include "spectrum_util.hpp"
@@ -24,7 +24,8 @@ struct Generated {
 
 std::string Values(const std::vector<double>& v, const char* fmt_str) {
   std::string s;
-  for (double x : v) s += fmt::format(fmt::runtime(std::string("      <value>") + fmt_str + "</value>\n"), x);
+  for (double x : v)
+    s += fmt::format(fmt::runtime(std::string("      <value>") + fmt_str + "</value>\n"), x);
   return s;
 }
 
@@ -37,8 +38,10 @@ Generated MakeXml(bool arma, int p = 10) {
   s += "   <numMod>4</numMod>\n   <numTri>2</numTri>\n   <speedList type=\"array\">\n";
   s += Values({speeds, speeds + 4}, "{:.6f}") + "   </speedList>\n   <forceList type=\"array\">\n";
   s += Values({forces, forces + 4}, "{:.6f}") + "   </forceList>\n";
-  s += "   <tri type=\"array\">\n      <value>1</value>\n      <value>2</value>\n      <value>4</value>\n   </tri>\n";
-  s += "   <tri type=\"array\">\n      <value>1</value>\n      <value>3</value>\n      <value>4</value>\n   </tri>\n";
+  s += "   <tri type=\"array\">\n      <value>1</value>\n      <value>2</value>\n      "
+       "<value>4</value>\n   </tri>\n";
+  s += "   <tri type=\"array\">\n      <value>1</value>\n      <value>3</value>\n      "
+       "<value>4</value>\n   </tri>\n";
   s += fmt::format("   <numARCoeff>{}</numARCoeff>\n", p);
   if (arma) s += "   <numMACoeff>3</numMACoeff>\n";
   for (int m = 0; m < 4; ++m) {
@@ -49,7 +52,8 @@ Generated MakeXml(bool arma, int p = 10) {
     std::vector<double> a{1.0};
     for (double x : c) a.push_back(-x);
     s += fmt::format("   <model>\n      <modNum>{}</modNum>\n      <ARcoeff>\n", m + 1);
-    s += Values(a, "{:.20f}") + "      </ARcoeff>\n      <ARlsf>\n" + Values(lsf, "{:.6f}") + "      </ARlsf>\n";
+    s += Values(a, "{:.20f}") + "      </ARcoeff>\n      <ARlsf>\n" + Values(lsf, "{:.6f}") +
+         "      </ARlsf>\n";
     if (arma) {
       const std::vector<double> mlsf{0.5 + 0.1 * m, 1.5, 2.5};
       const auto mc = LsfToAr(mlsf);
@@ -61,8 +65,9 @@ Generated MakeXml(bool arma, int p = 10) {
     } else {
       s += fmt::format("      <var>{:.6f}</var>\n", 0.01 * (m + 1));
     }
-    s += fmt::format("      <speedMod>{:.6f}</speedMod>\n      <forceMod>{:.6f}</forceMod>\n   </model>\n",
-                     speeds[m], forces[m]);
+    s += fmt::format(
+        "      <speedMod>{:.6f}</speedMod>\n      <forceMod>{:.6f}</forceMod>\n   </model>\n",
+        speeds[m], forces[m]);
   }
   s += "</modelSet>\n";
   g.xml = s;
@@ -86,7 +91,8 @@ TEST(PennImport, ReadsTheArVariant) {
   ASSERT_EQ(b.triangles.size(), 2u);
   EXPECT_EQ(b.triangles[0], (std::array<int, 3>{0, 1, 3}));  // 1-based in the file
   for (std::size_t m = 0; m < 4; ++m)
-    for (std::size_t i = 0; i < g.ar[m].size(); ++i) EXPECT_NEAR(b.cells[m].coeffs[i], g.ar[m][i], 1e-15);
+    for (std::size_t i = 0; i < g.ar[m].size(); ++i)
+      EXPECT_NEAR(b.cells[m].coeffs[i], g.ar[m][i], 1e-15);
   // The file's 6-digit LSFs rebuild its coefficients to ~1e-5.
   EXPECT_LT(r.max_lsf_reconstruction_error, 1e-5);
   // The bank plays: at a model's own point the interpolated filter is that model.
@@ -131,8 +137,10 @@ TEST(PennImport, ErrorsNameTheElementAndLine) {
     FAIL();
   } catch (const InputError& e) {
     const std::string msg = e.what();
-    EXPECT_NE(msg.find("bad.xml:5: mu: expected a finite number, got 'abc'"), std::string::npos) << msg;
-    EXPECT_NE(msg.find("tri: expected three 1-based model indices in 1..4"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("bad.xml:5: mu: expected a finite number, got 'abc'"), std::string::npos)
+        << msg;
+    EXPECT_NE(msg.find("tri: expected three 1-based model indices in 1..4"), std::string::npos)
+        << msg;
   }
   test::WriteFile(dir.File("broken.xml"), "<modelSet><material>x</mat");
   EXPECT_THROW(ImportPennXml(dir.File("broken.xml")), InputError);
@@ -146,8 +154,8 @@ TEST(PennImport, ErrorsNameTheElementAndLine) {
 
 // Renders `seconds` of a constant stroke at (speed, force) and returns the vibration samples
 // after the first 0.2 s.
-std::vector<double> RenderStroke(const MaterialModel& m, double speed_mmps, double force_N, double seconds,
-                                 int* upsample_factor = nullptr) {
+std::vector<double> RenderStroke(const MaterialModel& m, double speed_mmps, double force_N,
+                                 double seconds, int* upsample_factor = nullptr) {
   RenderOptions o;
   o.algorithm = ForceAlgorithm::kWall;
   o.force_rate_hz = 1000;
@@ -182,11 +190,12 @@ double Rms(const std::vector<double>& x) {
 // Level within `level_tol` (relative RMS) and every band's mean PSD within `band_db` of the
 // analytic PSD of the model the toolkit would play there.
 void ExpectLikeToolkit(const std::vector<double>& y, const test::PennReference& ref,
-                       const std::vector<std::pair<double, double>>& bands, double level_tol, double band_db,
-                       const std::string& where) {
+                       const std::vector<std::pair<double, double>>& bands, double level_tol,
+                       double band_db, const std::string& where) {
   const double expected_rms = std::sqrt(ref.Power());
   ASSERT_GT(expected_rms, 0) << where;
-  EXPECT_NEAR(Rms(y) / expected_rms, 1.0, level_tol) << where << ": RMS " << Rms(y) << " expected " << expected_rms;
+  EXPECT_NEAR(Rms(y) / expected_rms, 1.0, level_tol)
+      << where << ": RMS " << Rms(y) << " expected " << expected_rms;
   const int n = 2048;
   const double fs = 10000;
   const auto psd = test::WelchPsdFft(y, fs, n);
@@ -201,7 +210,8 @@ void ExpectLikeToolkit(const std::vector<double>& y, const test::PennReference& 
       }
     }
     const double db = 10 * std::log10(sum / bins / ref.MeanPsd(lo, hi));
-    EXPECT_LT(std::abs(db), band_db) << where << ": band " << lo << "-" << hi << " Hz off by " << db << " dB";
+    EXPECT_LT(std::abs(db), band_db)
+        << where << ": band " << lo << "-" << hi << " Hz off by " << db << " dB";
   }
 }
 
@@ -232,9 +242,10 @@ TEST(PennToolkitSemantics, TenKilohertzArSetPlaysTheAnalyticSpectrumEverywhere) 
     const auto y = RenderStroke(imp.model, p.speed_mmps, p.force_N, 2.5, &factor);
     EXPECT_EQ(factor, 1);  // 10 kHz models at the 10 kHz loop
     // Level: about 500 independent samples of a 190 Hz-wide resonance: RMS sd ~3 %.
-    ExpectLikeToolkit(y, test::PennExpected(spec, p.speed_mmps, p.force_N),
-                      {{50, 100}, {100, 200}, {200, 400}, {400, 800}, {800, 1600}, {1600, 3200}, {3200, 4800}}, 0.10,
-                      1.5, p.where);
+    ExpectLikeToolkit(
+        y, test::PennExpected(spec, p.speed_mmps, p.force_N),
+        {{50, 100}, {100, 200}, {200, 400}, {400, 800}, {800, 1600}, {1600, 3200}, {3200, 4800}},
+        0.10, 1.5, p.where);
   }
 }
 
@@ -250,7 +261,8 @@ TEST(PennToolkitSemantics, OneKilohertzArmaSetPlaysTheAnalyticSpectrumUpsampled)
     EXPECT_EQ(factor, 10);  // 1 kHz models, band-limited to the 10 kHz loop
     // Bands up to 0.45 of the model rate (the upsampler's pass band, upsampler_test.cpp).
     ExpectLikeToolkit(y, test::PennExpected(spec, p.speed_mmps, p.force_N),
-                      {{20, 50}, {50, 100}, {100, 200}, {200, 300}, {300, 450}}, 0.12, 1.5, p.where);
+                      {{20, 50}, {50, 100}, {100, 200}, {200, 300}, {300, 450}}, 0.12, 1.5,
+                      p.where);
   }
 }
 
@@ -271,7 +283,8 @@ TEST(PennToolkitSemantics, BoundaryModelsAreSilentAndTheRangeSaturatesJustInside
   interp.Interpolate(0.4, 4.0, true, &beyond);
   interp.Interpolate(0.25 - 1e-5, 2.5 - 0.01, true, &inside);
   EXPECT_EQ(beyond.sigma, inside.sigma);
-  for (int i = 0; i < beyond.order; ++i) EXPECT_EQ(beyond.c[static_cast<std::size_t>(i)], inside.c[static_cast<std::size_t>(i)]);
+  for (int i = 0; i < beyond.order; ++i)
+    EXPECT_EQ(beyond.c[static_cast<std::size_t>(i)], inside.c[static_cast<std::size_t>(i)]);
   // The toolkit renders down to 0.05 mm/s.
   interp.Interpolate(0.06e-3, 1.5, true, &f);
   EXPECT_TRUE(f.active);
@@ -292,7 +305,8 @@ TEST(PennImport, IntegerFieldsAreRangeCheckedBeforeConversion) {
     FAIL();
   } catch (const InputError& e) {
     const std::string msg = e.what();
-    EXPECT_NE(msg.find("numMod: expected an integer in 1..100000, got '1e30'"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("numMod: expected an integer in 1..100000, got '1e30'"), std::string::npos)
+        << msg;
     EXPECT_NE(msg.find("tri: expected three 1-based model indices"), std::string::npos) << msg;
   }
 }

@@ -50,7 +50,7 @@ inline PennSetSpec MakePennSet(bool arma) {
   s.max_force_N = 2.5;
   s.material = arma ? "Generated Cloth ARMA" : "Generated Cloth AR";
   const double v[][2] = {
-      {0, 0}, {0, 1.2}, {0, 2.5}, {120, 0}, {250, 0},                       // boundary: var = 0
+      {0, 0},    {0, 1.2},   {0, 2.5},   {120, 0},   {250, 0},               // boundary: var = 0
       {60, 0.7}, {170, 0.9}, {110, 1.8}, {250, 1.3}, {160, 2.5}, {250, 2.5}  // measured
   };
   for (int i = 0; i < 11; ++i) {
@@ -59,7 +59,8 @@ inline PennSetSpec MakePennSet(bool arma) {
     m.force_N = v[i][1];
     const bool boundary = m.speed_mmps == 0 || m.force_N == 0;
     // Evenly spread LSFs with the first pair pulled around a resonance f_r.
-    const double fr_hz = arma ? 60 + 0.3 * m.speed_mmps + 20 * m.force_N : 150 + 2 * m.speed_mmps + 150 * m.force_N;
+    const double fr_hz =
+        arma ? 60 + 0.3 * m.speed_mmps + 20 * m.force_N : 150 + 2 * m.speed_mmps + 150 * m.force_N;
     const double wr = 2 * std::numbers::pi * fr_hz / s.rate_hz, half_gap = arma ? 0.12 : 0.06;
     for (int k = 0; k < s.p; ++k) m.lsf.push_back((k + 1) * std::numbers::pi / (s.p + 1));
     m.lsf[0] = wr - half_gap;
@@ -76,21 +77,24 @@ inline PennSetSpec MakePennSet(bool arma) {
   }
   // Vertices: 0 (0,0) 1 (0,1.2) 2 (0,2.5) 3 (120,0) 4 (250,0) 5 (60,0.7) 6 (170,0.9)
   //           7 (110,1.8) 8 (250,1.3) 9 (160,2.5) 10 (250,2.5)
-  s.tri = {{0, 3, 5}, {0, 5, 1}, {3, 6, 5}, {3, 4, 6}, {4, 8, 6}, {5, 6, 7}, {1, 5, 7},
-           {1, 7, 2}, {2, 7, 9}, {6, 8, 7}, {7, 8, 9}, {8, 10, 9}};
+  s.tri = {{0, 3, 5}, {0, 5, 1}, {3, 6, 5}, {3, 4, 6}, {4, 8, 6}, {5, 6, 7},
+           {1, 5, 7}, {1, 7, 2}, {2, 7, 9}, {6, 8, 7}, {7, 8, 9}, {8, 10, 9}};
   return s;
 }
 
 inline std::string PennXml(const PennSetSpec& s) {
   auto values = [](const std::vector<double>& v, const char* f) {
     std::string o;
-    for (double x : v) o += fmt::format(fmt::runtime(std::string("      <value>") + f + "</value>\n"), x);
+    for (double x : v)
+      o += fmt::format(fmt::runtime(std::string("      <value>") + f + "</value>\n"), x);
     return o;
   };
   std::string x = "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<modelSet texture=\"1\">\n";
-  x += fmt::format("   <material>{}</material>\n   <SampleRate>{:g}</SampleRate>\n   <mu>0.35</mu>\n",
-                   s.material, s.rate_hz);
-  x += fmt::format("   <numMod>{}</numMod>\n   <numTri>{}</numTri>\n", s.models.size(), s.tri.size());
+  x += fmt::format(
+      "   <material>{}</material>\n   <SampleRate>{:g}</SampleRate>\n   <mu>0.35</mu>\n",
+      s.material, s.rate_hz);
+  x += fmt::format("   <numMod>{}</numMod>\n   <numTri>{}</numTri>\n", s.models.size(),
+                   s.tri.size());
   if (s.max_speed_mmps > 0) x += fmt::format("   <maxSpeed>{:.6f}</maxSpeed>\n", s.max_speed_mmps);
   if (s.max_force_N > 0) x += fmt::format("   <maxForce>{:.6f}</maxForce>\n", s.max_force_N);
   std::vector<double> sp, fo;
@@ -101,8 +105,10 @@ inline std::string PennXml(const PennSetSpec& s) {
   x += "   <speedList type=\"array\">\n" + values(sp, "{:.6f}") + "   </speedList>\n";
   x += "   <forceList type=\"array\">\n" + values(fo, "{:.6f}") + "   </forceList>\n";
   for (const auto& t : s.tri)
-    x += fmt::format("   <tri type=\"array\">\n      <value>{}</value>\n      <value>{}</value>\n      <value>{}</value>\n   </tri>\n",
-                     t[0] + 1, t[1] + 1, t[2] + 1);
+    x += fmt::format(
+        "   <tri type=\"array\">\n      <value>{}</value>\n      <value>{}</value>\n      "
+        "<value>{}</value>\n   </tri>\n",
+        t[0] + 1, t[1] + 1, t[2] + 1);
   x += fmt::format("   <numARCoeff>{}</numARCoeff>\n", s.p);
   if (s.q > 0) x += fmt::format("   <numMACoeff>{}</numMACoeff>\n", s.q);
   for (std::size_t i = 0; i < s.models.size(); ++i) {
@@ -110,7 +116,8 @@ inline std::string PennXml(const PennSetSpec& s) {
     std::vector<double> a{1.0};
     for (double c : renderer::LsfToAr(m.lsf)) a.push_back(-c);
     x += fmt::format("   <model>\n      <modNum>{}</modNum>\n      <ARcoeff>\n", i + 1);
-    x += values(a, "{:.17g}") + "      </ARcoeff>\n      <ARlsf>\n" + values(m.lsf, "{:.6f}") + "      </ARlsf>\n";
+    x += values(a, "{:.17g}") + "      </ARcoeff>\n      <ARlsf>\n" + values(m.lsf, "{:.6f}") +
+         "      </ARlsf>\n";
     if (s.q > 0) {
       std::vector<double> b{1.0};
       for (double c : renderer::LsfToAr(m.ma_lsf)) b.push_back(-c);
@@ -119,8 +126,9 @@ inline std::string PennXml(const PennSetSpec& s) {
       x += fmt::format("      <gain>{:.6f}</gain>\n", m.gain);
     }
     x += fmt::format("      <var>{:.6f}</var>\n", m.var);
-    x += fmt::format("      <speedMod>{:.6f}</speedMod>\n      <forceMod>{:.6f}</forceMod>\n   </model>\n",
-                     m.speed_mmps, m.force_N);
+    x += fmt::format(
+        "      <speedMod>{:.6f}</speedMod>\n      <forceMod>{:.6f}</forceMod>\n   </model>\n",
+        m.speed_mmps, m.force_N);
   }
   return x + "</modelSet>\n";
 }
@@ -135,8 +143,10 @@ struct PennReference {
   double Psd(double f_hz) const {
     const double w = 2 * std::numbers::pi * f_hz / rate_hz;
     std::complex<double> a(1, 0), bb(1, 0);
-    for (std::size_t i = 0; i < c.size(); ++i) a -= c[i] * std::polar(1.0, -w * static_cast<double>(i + 1));
-    for (std::size_t j = 0; j < b.size(); ++j) bb += b[j] * std::polar(1.0, -w * static_cast<double>(j + 1));
+    for (std::size_t i = 0; i < c.size(); ++i)
+      a -= c[i] * std::polar(1.0, -w * static_cast<double>(i + 1));
+    for (std::size_t j = 0; j < b.size(); ++j)
+      bb += b[j] * std::polar(1.0, -w * static_cast<double>(j + 1));
     const double g = arma ? gain : 1.0;
     return 2 * var * g * g * std::norm(bb) / (rate_hz * std::norm(a));
   }
@@ -163,9 +173,11 @@ inline PennReference PennExpected(const PennSetSpec& s, double speed_mmps, doubl
     const double det = (B.force_N - C.force_N) * (A.speed_mmps - C.speed_mmps) +
                        (C.speed_mmps - B.speed_mmps) * (A.force_N - C.force_N);
     const double w1 = ((B.force_N - C.force_N) * (speed_mmps - C.speed_mmps) +
-                       (C.speed_mmps - B.speed_mmps) * (force_N - C.force_N)) / det;
+                       (C.speed_mmps - B.speed_mmps) * (force_N - C.force_N)) /
+                      det;
     const double w2 = ((C.force_N - A.force_N) * (speed_mmps - C.speed_mmps) +
-                       (A.speed_mmps - C.speed_mmps) * (force_N - C.force_N)) / det;
+                       (A.speed_mmps - C.speed_mmps) * (force_N - C.force_N)) /
+                      det;
     const double w3 = 1 - w1 - w2;
     if (w1 < -1e-12 || w2 < -1e-12 || w3 < -1e-12) continue;
     const PennModelSpec* m[3] = {&A, &B, &C};
@@ -182,7 +194,8 @@ inline PennReference PennExpected(const PennSetSpec& s, double speed_mmps, doubl
     for (double x : renderer::LsfToAr(ma)) r.b.push_back(-x);
     return r;
   }
-  throw std::logic_error(fmt::format("({}, {}) is outside the generated set's triangles", speed_mmps, force_N));
+  throw std::logic_error(
+      fmt::format("({}, {}) is outside the generated set's triangles", speed_mmps, force_N));
 }
 
 }  // namespace hapticlab::test

@@ -18,7 +18,8 @@ inline void Fft(std::vector<std::complex<double>>& a) {
     if (i < j) std::swap(a[i], a[j]);
   }
   for (std::size_t len = 2; len <= n; len <<= 1) {
-    const std::complex<double> w = std::polar(1.0, -2 * std::numbers::pi / static_cast<double>(len));
+    const std::complex<double> w =
+        std::polar(1.0, -2 * std::numbers::pi / static_cast<double>(len));
     for (std::size_t i = 0; i < n; i += len) {
       std::complex<double> wk(1.0, 0.0);
       for (std::size_t k = 0; k < len / 2; ++k, wk *= w) {
@@ -37,7 +38,8 @@ inline std::vector<double> WelchPsdFft(const std::vector<double>& x, double fs, 
   std::vector<double> w(N), psd(N / 2 + 1, 0.0);
   double wss = 0;
   for (std::size_t i = 0; i < N; ++i) {
-    w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(N));
+    w[i] = 0.5 -
+           0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(N));
     wss += w[i] * w[i];
   }
   std::vector<std::complex<double>> buf(N);
@@ -58,7 +60,8 @@ inline std::vector<double> WelchPsd(const std::vector<double>& x, double fs, int
   std::vector<double> w(N), psd(N / 2 + 1, 0.0);
   double wss = 0;
   for (std::size_t i = 0; i < N; ++i) {
-    w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(N));
+    w[i] = 0.5 -
+           0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(N));
     wss += w[i] * w[i];
   }
   int segments = 0;
@@ -66,7 +69,8 @@ inline std::vector<double> WelchPsd(const std::vector<double>& x, double fs, int
     for (std::size_t k = 0; k <= N / 2; ++k) {
       double re = 0, im = 0;
       for (std::size_t i = 0; i < N; ++i) {
-        const double ang = -2 * std::numbers::pi * static_cast<double>(k * i) / static_cast<double>(N);
+        const double ang =
+            -2 * std::numbers::pi * static_cast<double>(k * i) / static_cast<double>(N);
         re += w[i] * x[start + i] * std::cos(ang);
         im += w[i] * x[start + i] * std::sin(ang);
       }

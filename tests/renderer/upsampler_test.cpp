@@ -5,13 +5,12 @@
 
 #include <gtest/gtest.h>
 
-#include "hapticlab/core/status.hpp"
-
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <vector>
 
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::renderer {
@@ -33,7 +32,8 @@ std::vector<double> UpsampleSine(PolyphaseUpsampler& up, double f_over_fin, int 
 // Amplitude of the component at f (cycles per output sample) by correlation over whole periods.
 double Amplitude(const std::vector<double>& y, double f) {
   std::complex<double> s(0, 0);
-  for (std::size_t n = 0; n < y.size(); ++n) s += y[n] * std::polar(1.0, -2 * kPi * f * static_cast<double>(n));
+  for (std::size_t n = 0; n < y.size(); ++n)
+    s += y[n] * std::polar(1.0, -2 * kPi * f * static_cast<double>(n));
   return 2 * std::abs(s) / static_cast<double>(y.size());
 }
 

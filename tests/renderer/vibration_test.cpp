@@ -31,7 +31,8 @@ TEST(Vibration, GridWeightsAreBilinearAndClampedAtTheEdges) {
   const auto w = interp.Weights(0.06, 0.54 + 0.25 * (1.18 - 0.54));
   double sum = 0, s_mean = 0, f_mean = 0;
   for (int k = 0; k < w.count; ++k) {
-    const auto& c = interp.bank().cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])];
+    const auto& c =
+        interp.bank().cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])];
     sum += w.weight[static_cast<std::size_t>(k)];
     s_mean += w.weight[static_cast<std::size_t>(k)] * c.speed_mps;
     f_mean += w.weight[static_cast<std::size_t>(k)] * c.force_N;
@@ -66,8 +67,10 @@ TEST(Vibration, TriangulationReproducesVerticesAndInterpolatesInside) {
   EXPECT_EQ(w.count, 3);
   double s = 0, fo = 0;
   for (int k = 0; k < 3; ++k) {
-    s += w.weight[static_cast<std::size_t>(k)] * b.cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])].speed_mps;
-    fo += w.weight[static_cast<std::size_t>(k)] * b.cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])].force_N;
+    s += w.weight[static_cast<std::size_t>(k)] *
+         b.cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])].speed_mps;
+    fo += w.weight[static_cast<std::size_t>(k)] *
+          b.cells[static_cast<std::size_t>(w.cell[static_cast<std::size_t>(k)])].force_N;
   }
   EXPECT_NEAR(s, 0.05, 1e-12);
   EXPECT_NEAR(fo, 0.7, 1e-12);

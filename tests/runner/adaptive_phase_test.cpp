@@ -144,8 +144,11 @@ TEST(AdaptivePhase, EveryIntervalRunsThroughTheEngineOnTheSimulatedRig) {
     EXPECT_EQ(r.engine.force_ticks, force_ticks);
     EXPECT_EQ(r.hand_ticks, force_ticks);
     EXPECT_EQ(r.engine.vibration_ticks, 10 * force_ticks);
-    EXPECT_EQ(r.engine.disconnects + r.engine.nan_faults + r.engine.stale_faults + r.engine.miss_faults, 0u);
-    EXPECT_GE(static_cast<double>(r.contact_ticks), 0.05 * static_cast<double>(force_ticks)) << "trial " << r.plan_index;
+    EXPECT_EQ(
+        r.engine.disconnects + r.engine.nan_faults + r.engine.stale_faults + r.engine.miss_faults,
+        0u);
+    EXPECT_GE(static_cast<double>(r.contact_ticks), 0.05 * static_cast<double>(force_ticks))
+        << "trial " << r.plan_index;
   }
   db::Database d(o.db_path);
   std::size_t samples = 0;
@@ -186,7 +189,10 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
   test::TempDir dir;
   std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
-  RunOptions o{.db_path = dir.File("f.db"), .participant = "P01", .record = RecordMode::kNone, .fault_rate = 0.3};
+  RunOptions o{.db_path = dir.File("f.db"),
+               .participant = "P01",
+               .record = RecordMode::kNone,
+               .fault_rate = 0.3};
   const auto s = RunStudy(p, o);
   ASSERT_EQ(s.status, "completed");
   EXPECT_GT(s.faults, 0);
@@ -194,7 +200,8 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
   int watchdog_events = 0, trial_faults = 0;
   for (const auto& e : d.Events(s.session_id)) {
     if (e.kind != "device-fault") continue;
-    watchdog_events += e.detail.rfind("disconnect at ", 0) == 0 && e.detail.find("(interval 1, tick") != std::string::npos;
+    watchdog_events += e.detail.rfind("disconnect at ", 0) == 0 &&
+                       e.detail.find("(interval 1, tick") != std::string::npos;
     trial_faults += e.detail.rfind("watchdog: interval 1: ", 0) == 0;
   }
   EXPECT_EQ(trial_faults, s.faults);
@@ -208,7 +215,8 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
   }
   EXPECT_GT(repeated, 0);
   for (const auto& r : Records(o.db_path)) h.push_back({r.track, r.level, r.correct == 1});
-  for (const auto& t : psychophysics::ReplayStaircase(p.phases[0].adaptive->staircase, h)) EXPECT_TRUE(t.done);
+  for (const auto& t : psychophysics::ReplayStaircase(p.phases[0].adaptive->staircase, h))
+    EXPECT_TRUE(t.done);
 }
 
 TEST(AdaptivePhase, ResumeContinuesExactly) {
@@ -256,7 +264,8 @@ TEST(AdaptivePhase, HardwareAndMissingObserverAreRefusedUpFront) {
     RunStudy(protocols::LoadProtocol(dir.File("q.toml")), o);
     ADD_FAILURE() << "ran an adaptive phase on hardware";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("phase[0].kind: adaptive phases run on a simulated device (sim or falcon-twin)"),
+    EXPECT_NE(std::string(e.what()).find(
+                  "phase[0].kind: adaptive phases run on a simulated device (sim or falcon-twin)"),
               std::string::npos)
         << e.what();
   }
@@ -291,11 +300,15 @@ TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
   std::ofstream(dir.File("p.toml")) << text;
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   FirstIntervalUi ui;
-  RunOptions o{.db_path = dir.File("s.db"), .participant = "P01", .record = RecordMode::kNone, .ui = &ui,
+  RunOptions o{.db_path = dir.File("s.db"),
+               .participant = "P01",
+               .record = RecordMode::kNone,
+               .ui = &ui,
                .ui_playback_speed = 1e6};
   const auto s = RunStudy(p, o);
   EXPECT_EQ(s.status, "aborted");
-  EXPECT_EQ(ui.intervals_seen, (std::set<std::string>{"staircase: interval 1 of 2", "staircase: interval 2 of 2"}));
+  EXPECT_EQ(ui.intervals_seen,
+            (std::set<std::string>{"staircase: interval 1 of 2", "staircase: interval 2 of 2"}));
   db::Database d(o.db_path);
   int completed = 0;
   for (const auto& t : d.Trials(s.session_id)) {

@@ -15,12 +15,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <thread>
 #include <complex>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <numbers>
+#include <thread>
 #include <vector>
 
 #include "../renderer/test_materials.hpp"
@@ -86,17 +86,20 @@ double WelchPsd(const std::vector<double>& x, double fs, std::size_t n, double f
   std::vector<double> w(n);
   double u = 0;
   for (std::size_t i = 0; i < n; ++i) {
-    w[i] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+    w[i] = 0.5 -
+           0.5 * std::cos(2 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
     u += w[i] * w[i];
   }
   const double df = fs / static_cast<double>(n);
-  const int k0 = static_cast<int>(std::ceil((f - band_hz) / df)), k1 = static_cast<int>(std::floor((f + band_hz) / df));
+  const int k0 = static_cast<int>(std::ceil((f - band_hz) / df)),
+            k1 = static_cast<int>(std::floor((f + band_hz) / df));
   double sum = 0;
   int count = 0;
   for (std::size_t start = 0; start + n <= x.size(); start += n / 2)
     for (int k = k0; k <= k1; ++k) {
       std::complex<double> acc = 0, rot = 1;
-      const std::complex<double> step = std::polar(1.0, -2 * std::numbers::pi * k / static_cast<double>(n));
+      const std::complex<double> step =
+          std::polar(1.0, -2 * std::numbers::pi * k / static_cast<double>(n));
       for (std::size_t i = 0; i < n; ++i, rot *= step) acc += x[start + i] * w[i] * rot;
       sum += 2 * std::norm(acc) / (fs * u);
       ++count;
@@ -109,7 +112,8 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
   const std::string raw = dir.File("out.raw");
   {
     std::ofstream rc(dir.File(".asoundrc"));
-    rc << "pcm.hltest {\n  type file\n  slave.pcm \"null\"\n  file \"" << raw << "\"\n  format \"raw\"\n}\n";
+    rc << "pcm.hltest {\n  type file\n  slave.pcm \"null\"\n  file \"" << raw
+       << "\"\n  format \"raw\"\n}\n";
   }
   // alsa-lib reads ~/.asoundrc when PortAudio initialises (first stream of this process).
   ASSERT_EQ(setenv("HOME", dir.path().c_str(), 1), 0);
@@ -158,7 +162,8 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
   const auto st = engine.Stats();
   EXPECT_EQ(st.audio_underruns, 0u);
   EXPECT_EQ(out.underflows(), 0u);
-  EXPECT_NE(st.priority_status.find("paced by the actuator"), std::string::npos) << st.priority_status;
+  EXPECT_NE(st.priority_status.find("paced by the actuator"), std::string::npos)
+      << st.priority_status;
   const std::vector<double>& s = rec.kept();
   ASSERT_GE(s.size(), 100'000u) << "the callback pulled too few samples";
 
@@ -168,7 +173,8 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
   const auto bytes = static_cast<std::size_t>(f.tellg());
   f.seekg(0);
   std::vector<float> cap(bytes / sizeof(float));
-  f.read(reinterpret_cast<char*>(cap.data()), static_cast<std::streamsize>(cap.size() * sizeof(float)));
+  f.read(reinterpret_cast<char*>(cap.data()),
+         static_cast<std::streamsize>(cap.size() * sizeof(float)));
   const std::size_t frames = cap.size() / 2;
   ASSERT_GT(frames, 400'000u);
   auto act = [&](std::size_t i) { return static_cast<double>(cap[2 * i]); };
@@ -218,7 +224,8 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
   std::vector<double> played;
   played.reserve(static_cast<std::size_t>(static_cast<double>(s.size()) / step) + 16);
   const std::size_t matched = match(best_o, best_p, frames, &played);
-  EXPECT_EQ(matched, s.size()) << "the capture holds the renderer's samples 0.." << matched << " of " << s.size()
+  EXPECT_EQ(matched, s.size()) << "the capture holds the renderer's samples 0.." << matched
+                               << " of " << s.size()
                                << " in order (then a gap, a repeat or a different value)";
 
   // Level: the actuator channel carries the renderer's RMS acceleration (linear upsampling
@@ -228,20 +235,27 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
     for (const double x : v) q += x * x;
     return std::sqrt(q / static_cast<double>(v.size()));
   };
-  EXPECT_NEAR(rms(played) / rms(std::vector<double>(s.begin() + static_cast<std::ptrdiff_t>(j0), s.end())), 1.0, 0.03);
+  EXPECT_NEAR(
+      rms(played) / rms(std::vector<double>(s.begin() + static_cast<std::ptrdiff_t>(j0), s.end())),
+      1.0, 0.03);
   // Masking noise on the same stream: 0.1 full scale RMS on channel 1.
   double n2 = 0;
-  for (std::size_t i = best_o; i < best_o + played.size(); ++i) n2 += cap[2 * i + 1] * cap[2 * i + 1];
+  for (std::size_t i = best_o; i < best_o + played.size(); ++i)
+    n2 += cap[2 * i + 1] * cap[2 * i + 1];
   EXPECT_NEAR(std::sqrt(n2 / static_cast<double>(played.size())), c.noise_rms_fs, 0.005);
 
   // Spectrum: the captured texture against the AR model's PSD (its rate 2 kHz; the renderer
   // upsamples band-limited, so below 1 kHz the PSD is the model's) within 3 dB.
-  std::vector<double> seg(played.begin(), played.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(played.size(), 4096 * 40)));
+  std::vector<double> seg(played.begin(),
+                          played.begin() + static_cast<std::ptrdiff_t>(
+                                               std::min<std::size_t>(played.size(), 4096 * 40)));
   for (const double fhz : {60.0, 100.0, 150.0, 200.0, 300.0, 400.0, 500.0}) {
     const double measured = WelchPsd(seg, c.sample_rate_hz, 4096, fhz, 25);
-    const double model = renderer::ArPsd(cell.coeffs, cell.variance, m.vibration.sample_rate_hz, fhz);
+    const double model =
+        renderer::ArPsd(cell.coeffs, cell.variance, m.vibration.sample_rate_hz, fhz);
     std::printf("%.0f Hz: captured/model PSD %+.2f dB\n", fhz, 10 * std::log10(measured / model));
-    EXPECT_NEAR(10 * std::log10(measured / model), 0.0, 3.0) << fhz << " Hz: measured " << measured << ", model " << model;
+    EXPECT_NEAR(10 * std::log10(measured / model), 0.0, 3.0)
+        << fhz << " Hz: measured " << measured << ", model " << model;
   }
 }
 

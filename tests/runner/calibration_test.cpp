@@ -8,13 +8,14 @@
 // name. CalibrationSpec.* (the targets file's perceptual-scale parameters) is cheap and runs
 // everywhere.
 
+#include "hapticlab/runner/calibration.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstdio>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/runner/calibration.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner {
@@ -71,10 +72,10 @@ TEST(CalibrationSpec, ScaleOutsideTheObserverFilesRangeNamesFileLineField) {
 
 TEST(CalibratedObserver, ReproducesTables53To55And41) {
   auto spec = LoadCalibration(std::string(HL_SOURCE_DIR) + "/studies/shin2019/calibration.toml");
-  spec.seed = 777;       // not the calibration's seed
-  spec.pool = 3;         // other simulated participants' physics than the fit's (0-5)
+  spec.seed = 777;  // not the calibration's seed
+  spec.pool = 3;    // other simulated participants' physics than the fit's (0-5)
   spec.pool_first = 6;
-  spec.simulations = 8;  // simulated studies averaged per protocol
+  spec.simulations = 8;            // simulated studies averaged per protocol
   spec.start = spec.observer_out;  // the committed, fitted observer
   const auto state = PrepareCalibration(spec, {});
   std::vector<CalibrationRow> rows;
@@ -82,7 +83,8 @@ TEST(CalibratedObserver, ReproducesTables53To55And41) {
   double pes_abs = 0;
   int pes_n = 0;
   for (const auto& r : rows) {
-    std::printf("%s %-40s target %8.3f achieved %8.3f\n", r.protocol.c_str(), r.label.c_str(), r.target, r.achieved);
+    std::printf("%s %-40s target %8.3f achieved %8.3f\n", r.protocol.c_str(), r.label.c_str(),
+                r.target, r.achieved);
     ASSERT_TRUE(std::isfinite(r.achieved)) << r.protocol << " " << r.label;
     if (r.label.rfind("pes ", 0) == 0) {
       pes_abs += std::abs(r.achieved - r.target);

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
-#include <thread>
 #include <cmath>
+#include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
@@ -28,7 +28,9 @@ class CirclingDevice : public devices::HapticDevice {
  public:
   std::atomic<long> reads{0};
   long nan_from = -1, nan_count = 0;
-  devices::DeviceCapabilities Capabilities() const override { return {.name = "circling", .max_force_N = 4}; }
+  devices::DeviceCapabilities Capabilities() const override {
+    return {.name = "circling", .max_force_N = 4};
+  }
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
   devices::ReadResult Read(renderer::DeviceSample* out) noexcept override {
     const long k = reads++;
@@ -36,7 +38,8 @@ class CirclingDevice : public devices::HapticDevice {
     const double w = 0.05 / 0.01;
     out->state.p_m = {0.01 * std::cos(w * t), 0.01 * std::sin(w * t), -0.0005};
     out->state.v_mps = {-0.05 * std::sin(w * t), 0.05 * std::cos(w * t), 0};
-    if (nan_from >= 0 && k >= nan_from && k < nan_from + nan_count) out->state.p_m.x() = std::nan("");
+    if (nan_from >= 0 && k >= nan_from && k < nan_from + nan_count)
+      out->state.p_m.x() = std::nan("");
     out->t_s = t;
     return devices::ReadResult::kOk;
   }
@@ -111,7 +114,8 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   for (const auto& e : d.Events(se.id))  // on a loaded machine: deadline misses (real clock)
     if (e.kind == "device-fault") std::printf("%s\n", e.detail.c_str());
   bool device_logged = false;
-  for (const auto& e : d.Events(se.id)) device_logged |= e.kind == "device" && e.detail == "circling test device";
+  for (const auto& e : d.Events(se.id))
+    device_logged |= e.kind == "device" && e.detail == "circling test device";
   EXPECT_TRUE(device_logged);
 }
 
@@ -208,7 +212,8 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   RigFile wrong = DefaultRig("falcon");
-  for (auto& w : wrong.world_from_sample) w.translation() -= w.linear().col(2) * 0.05;  // 5 cm below the truth
+  for (auto& w : wrong.world_from_sample)
+    w.translation() -= w.linear().col(2) * 0.05;  // 5 cm below the truth
   auto sr = OpenSimulatedRig("falcon-twin", wrong);
   RunOptions o;
   o.db_path = dir.File("wrong.db");
@@ -224,12 +229,15 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
   int untouched = 0;
   bool abort_says_why = false;
   for (const auto& e : d.Events(se.id)) {
-    untouched += e.kind == "device-fault" && e.detail.find("nothing was touched") != std::string::npos;
-    abort_says_why |= e.kind == "abort" && e.detail.find("sample poses are probably wrong") != std::string::npos;
+    untouched +=
+        e.kind == "device-fault" && e.detail.find("nothing was touched") != std::string::npos;
+    abort_says_why |=
+        e.kind == "abort" && e.detail.find("sample poses are probably wrong") != std::string::npos;
   }
   EXPECT_EQ(untouched, 3);
   EXPECT_TRUE(abort_says_why);
-  for (const auto& t : d.Trials(se.id)) EXPECT_TRUE(d.Ratings(t.id).empty()) << "no silent trial was rated";
+  for (const auto& t : d.Trials(se.id))
+    EXPECT_TRUE(d.Ratings(t.id).empty()) << "no silent trial was rated";
 }
 
 }  // namespace

@@ -1,12 +1,13 @@
 // The lab of a session (runner/src/lab.cpp): stimulus names, and every problem of a
 // protocol's model and profile files reported together with file, line and field.
 
+#include "../../runner/src/lab.hpp"
+
 #include <gtest/gtest.h>
 
 #include <fstream>
 #include <string>
 
-#include "../../runner/src/lab.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -62,8 +63,10 @@ TEST(Lab, ReportsEveryMissingFileTogetherNamingTheProtocol) {
     bool profiles = false, model = false;
     for (const auto& d : e.diagnostics()) {
       EXPECT_EQ(d.file, path);
-      profiles |= d.field == "study.profiles" && d.message.find("nowhere.toml") != std::string::npos;
-      model |= d.field == "material.model" && d.message.find("denim.toml") != std::string::npos && d.line > 0;
+      profiles |=
+          d.field == "study.profiles" && d.message.find("nowhere.toml") != std::string::npos;
+      model |= d.field == "material.model" && d.message.find("denim.toml") != std::string::npos &&
+               d.line > 0;
     }
     EXPECT_TRUE(profiles) << e.what();
     EXPECT_TRUE(model) << e.what();

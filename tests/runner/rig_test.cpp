@@ -21,7 +21,8 @@ TEST(Rig, RoundTripsAndLocatesEveryProblem) {
   r.motor_units_per_Nm = 12345;
   r.world_from_device = PoseFromAxes({0.1, 0.2, 0.3}, {0, 1, 0}, {1, 0, 0});
   const RigFile back = ParseRig(RigToToml(r), "r.toml");
-  for (int s = 0; s < 2; ++s) EXPECT_TRUE(back.DeviceFromSample(s).isApprox(r.DeviceFromSample(s), 1e-9));
+  for (int s = 0; s < 2; ++s)
+    EXPECT_TRUE(back.DeviceFromSample(s).isApprox(r.DeviceFromSample(s), 1e-9));
   EXPECT_EQ(back.motor_units_per_Nm, 12345);
   EXPECT_EQ(back.tip_offset_m, r.tip_offset_m);
   EXPECT_EQ(back.device, "falcon");
@@ -54,8 +55,10 @@ TEST(Rig, RoundTripsAndLocatesEveryProblem) {
     EXPECT_NE(std::find(fields.begin(), fields.end(), "sample.right.colour"), fields.end());
   }
   // Parallel axes are refused by name.
-  const std::string parallel = RigToToml(DefaultRig("sim")).replace(RigToToml(DefaultRig("sim")).rfind("z_axis = [0, 0, 1]"),
-                                                                     18, "z_axis = [1, 0, 0]");
+  const std::string parallel =
+      RigToToml(DefaultRig("sim"))
+          .replace(RigToToml(DefaultRig("sim")).rfind("z_axis = [0, 0, 1]"), 18,
+                   "z_axis = [1, 0, 0]");
   EXPECT_THROW(ParseRig(parallel, "p.toml"), InputError);
 }
 
@@ -63,11 +66,13 @@ TEST(Rig, TheTipOffsetAndTheDevicePoseMoveTheSampleFrame) {
   RigFile r = DefaultRig("sim");
   r.tip_offset_m = {0, 0, -0.03};  // the tip 3 cm below the reported point
   // A reported point 3 cm above the left sample's origin puts the tip on it.
-  const Eigen::Vector3d reported = r.world_from_sample[0].translation() + Eigen::Vector3d(0, 0, 0.03);
+  const Eigen::Vector3d reported =
+      r.world_from_sample[0].translation() + Eigen::Vector3d(0, 0, 0.03);
   EXPECT_LT((r.DeviceFromSample(0).inverse() * reported).norm(), 1e-12);
   // Moving the device in the world moves the samples the other way in the device frame.
   r.world_from_device.translation() = Eigen::Vector3d(0.1, 0, 0);
-  EXPECT_NEAR((r.DeviceFromSample(0).inverse() * (reported - Eigen::Vector3d(0.1, 0, 0))).norm(), 0, 1e-12);
+  EXPECT_NEAR((r.DeviceFromSample(0).inverse() * (reported - Eigen::Vector3d(0.1, 0, 0))).norm(), 0,
+              1e-12);
 }
 
 TEST(Rig, TheFalconsRestPoseIsOutOfContactOnTheBuiltInRig) {
@@ -81,8 +86,10 @@ TEST(Rig, TheFalconsRestPoseIsOutOfContactOnTheBuiltInRig) {
 TEST(Rig, CalibrateRecoversATiltedPlaneFromNoisyTouches) {
   // A sample tilted 12 degrees about a skew axis, 4 cm below the Falcon's workspace centre;
   // eight touches with 0.2 mm noise (a stylus on a textured surface).
-  const Eigen::Vector3d n = (Eigen::AngleAxisd(12 * std::numbers::pi / 180, Eigen::Vector3d(1, 0, 1).normalized()) *
-                             Eigen::Vector3d(0, 1, 0)).normalized();
+  const Eigen::Vector3d n =
+      (Eigen::AngleAxisd(12 * std::numbers::pi / 180, Eigen::Vector3d(1, 0, 1).normalized()) *
+       Eigen::Vector3d(0, 1, 0))
+          .normalized();
   const Eigen::Isometry3d truth = PoseFromAxes({0.02, -0.04, 0.12}, {1, 0, 0}, n);
   std::mt19937_64 rng(5);
   std::normal_distribution<double> noise(0, 0.2e-3);
@@ -101,7 +108,9 @@ TEST(Rig, CalibrateRecoversATiltedPlaneFromNoisyTouches) {
   EXPECT_GT(f.rms_residual_m, 0.05e-3);
   EXPECT_LT(f.rms_residual_m, 0.4e-3);
   // +z follows the up hint; too few or collinear touches are refused.
-  EXPECT_LT(FitSamplePlane(touches, Eigen::Vector3d(0, -1, 0)).device_from_sample.linear().col(2).dot(n), 0);
+  EXPECT_LT(
+      FitSamplePlane(touches, Eigen::Vector3d(0, -1, 0)).device_from_sample.linear().col(2).dot(n),
+      0);
   EXPECT_THROW(FitSamplePlane({touches[0], touches[1]}, n), std::invalid_argument);
   EXPECT_THROW(FitSamplePlane({{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}}, n), std::invalid_argument);
 }

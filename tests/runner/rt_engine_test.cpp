@@ -94,7 +94,8 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   // The recording holds what the loops did.
   db::Database d(dir.File("e.db"));
   std::size_t force_samples = 0, vib_samples = 0;
-  for (const auto& c : d.TrajectoryChunks(trial)) (c.stream == "force" ? force_samples : vib_samples) += c.sample_count();
+  for (const auto& c : d.TrajectoryChunks(trial))
+    (c.stream == "force" ? force_samples : vib_samples) += c.sample_count();
   EXPECT_EQ(force_samples, st.force_ticks);
   EXPECT_EQ(vib_samples, st.vibration_ticks);
   // Each force sample carries how late its tick ran: a loop never wakes before its deadline,
@@ -110,10 +111,11 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
       }
     }
   EXPECT_GT(late_max, 0.0);
-  std::printf("force %.0f Hz, vibration %.0f Hz, force jitter max %.1f us mean %.1f us, misses %llu/%llu\n",
-              st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
-              st.force_jitter_mean_s * 1e6, static_cast<unsigned long long>(st.force_deadline_misses),
-              static_cast<unsigned long long>(st.vibration_deadline_misses));
+  std::printf(
+      "force %.0f Hz, vibration %.0f Hz, force jitter max %.1f us mean %.1f us, misses %llu/%llu\n",
+      st.achieved_force_rate_hz, st.achieved_vibration_rate_hz, st.force_jitter_max_s * 1e6,
+      st.force_jitter_mean_s * 1e6, static_cast<unsigned long long>(st.force_deadline_misses),
+      static_cast<unsigned long long>(st.vibration_deadline_misses));
 }
 
 // A device whose data never changes its time stamp: the renderer sees it go stale. Logs
@@ -181,8 +183,12 @@ namespace {
 // commanded force with its tick's time (preallocated).
 class FlakyLink : public devices::HapticDevice {
  public:
-  FlakyLink(const devices::Clock& clock, double empty_fraction, double lost_from_s, double lost_for_s)
-      : clock_(clock), empty_(empty_fraction), lost_from_(lost_from_s), lost_to_(lost_from_s + lost_for_s) {
+  FlakyLink(const devices::Clock& clock, double empty_fraction, double lost_from_s,
+            double lost_for_s)
+      : clock_(clock),
+        empty_(empty_fraction),
+        lost_from_(lost_from_s),
+        lost_to_(lost_from_s + lost_for_s) {
     forces.reserve(10000);
   }
   devices::DeviceCapabilities Capabilities() const override { return {.name = "flaky"}; }

@@ -91,7 +91,8 @@ TEST(RtThread, APriorityAboveTheMaximumIsReportedNotFatal) {
   const EngineRun r = RunEngine(rt);
   EXPECT_FALSE(r.stats.force_thread.fifo);
   EXPECT_EQ(r.stats.force_thread.priority, 0);
-  EXPECT_NE(r.stats.force_thread.priority_status.find("refused"), std::string::npos) << r.stats.force_thread.priority_status;
+  EXPECT_NE(r.stats.force_thread.priority_status.find("refused"), std::string::npos)
+      << r.stats.force_thread.priority_status;
   EXPECT_NE(r.stats.priority_status.find("outside"), std::string::npos) << r.stats.priority_status;
   EXPECT_GT(r.stats.force_ticks, 10u) << "the loops ran anyway";
   EXPECT_EQ(sched_getscheduler(0), SCHED_OTHER);
@@ -114,7 +115,9 @@ TEST(RtThread, AnUnprivilegedProcessIsRefusedFifoAndMemoryLockAndRunsAnyway) {
     if (r.stats.force_thread.priority_status.rfind("refused", 0) != 0) _exit(13);
     // The sanitizers intercept mlockall and return success without locking (they cannot lock
     // their shadow memory), so a refusal can only be seen in an uninstrumented build.
-    if (!test::kSanitizerBuild && (r.stats.memory.locked || r.stats.memory.status.rfind("refused", 0) != 0)) _exit(14);
+    if (!test::kSanitizerBuild &&
+        (r.stats.memory.locked || r.stats.memory.status.rfind("refused", 0) != 0))
+      _exit(14);
     if (r.stats.force_ticks < 10) _exit(15);
     if (r.stats.force_thread.timer_slack_ns != 1) _exit(16);
     _exit(0);
@@ -122,8 +125,9 @@ TEST(RtThread, AnUnprivilegedProcessIsRefusedFifoAndMemoryLockAndRunsAnyway) {
   int status = 0;
   ASSERT_EQ(waitpid(pid, &status, 0), pid);
   ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0) << "10/11: could not drop privileges; 12: FIFO granted; 13: no refusal reported; "
-                                       "14: memory lock not refused; 15: loops did not run; 16: slack";
+  EXPECT_EQ(WEXITSTATUS(status), 0)
+      << "10/11: could not drop privileges; 12: FIFO granted; 13: no refusal reported; "
+         "14: memory lock not refused; 15: loops did not run; 16: slack";
 }
 
 TEST(RtThread, AnOutOfRangeCpuIsReported) {

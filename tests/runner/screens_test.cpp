@@ -24,7 +24,8 @@ class Headless : public ::testing::Test {
   }
   void TearDown() override { ImGui::DestroyContext(ctx_); }
   // One frame with the mouse at (x, y), button down or up.
-  ParticipantAction Frame(const ParticipantView& v, float x, float y, bool down, Drawn* d = nullptr) {
+  ParticipantAction Frame(const ParticipantView& v, float x, float y, bool down,
+                          Drawn* d = nullptr) {
     ImGuiIO& io = ImGui::GetIO();
     io.MousePos = ImVec2(x, y);
     io.MouseDown[0] = down;
@@ -55,7 +56,8 @@ TEST_F(Headless, RatingNeedsEveryCriterionAndStartsWithoutAValue) {
   const auto* s1 = Find(d, "scale:roughness");
   const auto* s2 = Find(d, "scale:overall similarity");
   const auto* confirm = Find(d, "confirm");
-  ASSERT_TRUE(s1 && s2 && confirm && Find(d, "label:roughness") && Find(d, "left-square") && Find(d, "cursor"));
+  ASSERT_TRUE(s1 && s2 && confirm && Find(d, "label:roughness") && Find(d, "left-square") &&
+              Find(d, "cursor"));
   // Confirm is inert before every scale is set.
   a = Click(v, confirm->cx(), confirm->cy());
   EXPECT_FALSE(a.confirmed);

@@ -5,8 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
-#include <iterator>
 #include <filesystem>
+#include <iterator>
 #include <opencv2/imgcodecs.hpp>
 
 #include "hapticlab/runner_ui/session_ui.hpp"
@@ -69,7 +69,9 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   // White squares: their centres are white, the background between them is dark.
   const auto *l = Find(pd, "left-square"), *r = Find(pd, "right-square"), *cur = Find(pd, "cursor");
   ASSERT_TRUE(l && r && cur);
-  const auto px = [&](float x, float y) { return p.at<cv::Vec3b>(static_cast<int>(y), static_cast<int>(x)); };
+  const auto px = [&](float x, float y) {
+    return p.at<cv::Vec3b>(static_cast<int>(y), static_cast<int>(x));
+  };
   const auto rc = px(r->cx(), r->cy());
   EXPECT_GT(rc[0], 240);
   EXPECT_GT(rc[1], 240);
@@ -77,7 +79,8 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   const auto mid = px(0.5f * (l->x1 + r->x0), l->cy());
   EXPECT_LT(mid[0] + mid[1] + mid[2], 120);
   // The cursor is orange (BGR: little blue, much red) and sits on the left square.
-  const auto cc = px(cur->cx() + 0.25f * (cur->x1 - cur->x0), cur->cy() + 0.25f * (cur->y1 - cur->y0));
+  const auto cc =
+      px(cur->cx() + 0.25f * (cur->x1 - cur->x0), cur->cy() + 0.25f * (cur->y1 - cur->y0));
   EXPECT_GT(cc[2], 120);
   EXPECT_LT(cc[0], 60);
   EXPECT_GT(cur->cx(), l->x0);
@@ -90,20 +93,25 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   }
   // Each criterion's name sits with its own scale: right above it, and clearly below the
   // previous scale's end labels.
-  for (const auto& [prev, crit] : {std::pair{"roughness", "friction"}, std::pair{"friction", "overall similarity"}}) {
-    const auto *label = Find(pd, std::string("label:") + crit), *scale = Find(pd, std::string("scale:") + crit);
+  for (const auto& [prev, crit] :
+       {std::pair{"roughness", "friction"}, std::pair{"friction", "overall similarity"}}) {
+    const auto *label = Find(pd, std::string("label:") + crit),
+               *scale = Find(pd, std::string("scale:") + crit);
     const auto* prev_end = Find(pd, std::string("high:") + prev);
     ASSERT_TRUE(label && scale && prev_end) << crit;
     EXPECT_LE(label->y1, scale->y0 + 1) << crit;
-    EXPECT_LT(scale->y0 - label->y1, label->y0 - prev_end->y1) << crit << ": nearer its scale than the previous one";
+    EXPECT_LT(scale->y0 - label->y1, label->y0 - prev_end->y1)
+        << crit << ": nearer its scale than the previous one";
   }
-  for (const auto& id : {"label:roughness", "label:friction", "label:overall similarity", "low:roughness", "high:roughness", "prompt",
-                         "name:left-square", "name:right-square"}) {
+  for (const auto& id :
+       {"label:roughness", "label:friction", "label:overall similarity", "low:roughness",
+        "high:roughness", "prompt", "name:left-square", "name:right-square"}) {
     const auto* it = Find(pd, id);
     ASSERT_TRUE(it) << id;
     EXPECT_GT(Bright(p, *it), 15) << id;
   }
-  for (const auto& id : {"title", "next", "phase", "device", "faults", "trace:force", "trace:speed", "trace:acc"}) {
+  for (const auto& id :
+       {"title", "next", "phase", "device", "faults", "trace:force", "trace:speed", "trace:acc"}) {
     const auto* it = Find(cd, id);
     ASSERT_TRUE(it) << id;
     EXPECT_GT(Bright(c, *it), 15) << id;
@@ -121,8 +129,9 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
 class ScriptedBox : public devices::RatingInput {
  public:
   devices::RatingEvent Poll() override {
-    static const devices::RatingEvent script[] = {
-        {true, 0.3, false}, {true, 0.3, true}, {true, 0.3, false}, {true, 0.8, false}, {true, 0.8, true}, {true, 0.8, false}};
+    static const devices::RatingEvent script[] = {{true, 0.3, false}, {true, 0.3, true},
+                                                  {true, 0.3, false}, {true, 0.8, false},
+                                                  {true, 0.8, true},  {true, 0.8, false}};
     return k_ < std::size(script) ? script[k_++] : devices::RatingEvent{};
   }
 
@@ -155,7 +164,8 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
     if (answer == "cancel" || answer == "confirm") {
       if (!asked) {
         a.abort = asked = true;
-      } else if (cv.confirm_abort && Find(d, "abort-confirm") && Find(d, "abort-cancel") && ++modal_frames >= 3) {
+      } else if (cv.confirm_abort && Find(d, "abort-confirm") && Find(d, "abort-cancel") &&
+                 ++modal_frames >= 3) {
         // (ImGui sizes a new popup on its first frame and shows it from the next.)
         if (!shown) {
           ui.SaveScreenshot(1, out + "/console-abort.png");
@@ -167,7 +177,8 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
         (answer == "cancel" ? a.abort_cancelled : a.abort_confirmed) = true;
       }
     } else if (answer == "pause") {
-      if (!cv.paused && !shown) a.pause = true;
+      if (!cv.paused && !shown)
+        a.pause = true;
       else if (cv.paused && Find(d, "state:paused")) {
         shown = true;
         a.resume = true;
@@ -186,7 +197,8 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
     frames = modal_frames = 0;
   };
   step("cancel");
-  EXPECT_TRUE(ui.Stimulus(t, 0, Eigen::Vector3d::Zero(), 1.0)) << "Continue keeps the session running";
+  EXPECT_TRUE(ui.Stimulus(t, 0, Eigen::Vector3d::Zero(), 1.0))
+      << "Continue keeps the session running";
   EXPECT_TRUE(shown) << "the confirmation was drawn";
   step("pause");
   EXPECT_TRUE(ui.Stimulus(t, 0, Eigen::Vector3d::Zero(), 1.0));
@@ -196,10 +208,12 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
   EXPECT_TRUE(shown) << "the break's countdown was drawn";
   EXPECT_LT(frames, 100) << "the break ended when asked";
   step("confirm");
-  EXPECT_FALSE(ui.Stimulus(t, 1, Eigen::Vector3d::Zero(), 1.0)) << "a confirmed abort stops the session";
+  EXPECT_FALSE(ui.Stimulus(t, 1, Eigen::Vector3d::Zero(), 1.0))
+      << "a confirmed abort stops the session";
   EXPECT_TRUE(shown);
-  const std::vector<std::string> expected = {"abort-requested", "abort-cancelled", "pause", "resume",
-                                             "break-ended", "abort-requested", "abort-confirmed"};
+  const std::vector<std::string> expected = {
+      "abort-requested", "abort-cancelled", "pause",          "resume",
+      "break-ended",     "abort-requested", "abort-confirmed"};
   EXPECT_EQ(events, expected);
 }
 

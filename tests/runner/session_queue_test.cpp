@@ -66,7 +66,8 @@ TEST(SessionQueue, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
   const auto order = d.RatedTrialsInCompletionOrder(se.id);
   ASSERT_EQ(order.size(), material.size() - 4);  // all but the 4 training trials
   int repeats = 0;
-  for (std::size_t i = 1; i < order.size(); ++i) repeats += material[order[i]] == material[order[i - 1]];
+  for (std::size_t i = 1; i < order.size(); ++i)
+    repeats += material[order[i]] == material[order[i - 1]];
   EXPECT_LE(repeats, relaxed);
 }
 

@@ -10,12 +10,12 @@
 
 #include <array>
 #include <chrono>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <map>
-#include <utility>
 #include <random>
 #include <thread>
+#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
@@ -82,7 +82,8 @@ TEST(StudyRunner, EverySimulatedTrialSideRunsThroughTheEngine) {
     if (r.stimulus.rfind("virtual:", 0) == 0) {
       ++virtual_sides;
       // FF has no vibration; Hybrid runs 10 vibration ticks per force tick.
-      EXPECT_TRUE(r.engine.vibration_ticks == 0 || r.engine.vibration_ticks == 10 * force_ticks) << r.engine.vibration_ticks;
+      EXPECT_TRUE(r.engine.vibration_ticks == 0 || r.engine.vibration_ticks == 10 * force_ticks)
+          << r.engine.vibration_ticks;
     } else {
       EXPECT_EQ(r.engine.vibration_ticks, 0u) << "a real sample: the device only measures";
     }
@@ -106,8 +107,10 @@ class ScriptedUi : public SessionUi {
   std::vector<double> break_s;
   std::vector<std::pair<int, int>> rated_numbers;  // (index, total) per rated trial
   std::vector<std::array<int, 3>> progress;        // (rated done, training done, training total)
-  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p, double remaining) override {
-    if (stimulus_frames++ == 0 && log_event) log_event("pause", "scripted");  // the console's actions reach the record
+  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p,
+                double remaining) override {
+    if (stimulus_frames++ == 0 && log_event)
+      log_event("pause", "scripted");  // the console's actions reach the record
     EXPECT_TRUE(p.allFinite());
     EXPECT_GE(remaining, 0);
     EXPECT_FALSE(t.placement.empty());
@@ -120,7 +123,8 @@ class ScriptedUi : public SessionUi {
     rated_numbers.emplace_back(t.index, t.total);
     progress.push_back({t.rated_done, t.training_done, t.training_total});
     std::vector<double> r;
-    for (std::size_t i = 0; i < t.criteria.size(); ++i) r.push_back(10.0 * static_cast<double>(t.index % 10) + static_cast<double>(i));
+    for (std::size_t i = 0; i < t.criteria.size(); ++i)
+      r.push_back(10.0 * static_cast<double>(t.index % 10) + static_cast<double>(i));
     return r;
   }
   bool Break(double seconds) override {
@@ -128,7 +132,9 @@ class ScriptedUi : public SessionUi {
     ++breaks;
     return true;
   }
-  bool TakeBreakNow() override { return rated == break_request_at && !std::exchange(requested_, true); }
+  bool TakeBreakNow() override {
+    return rated == break_request_at && !std::exchange(requested_, true);
+  }
 
  private:
   bool requested_ = false;
@@ -159,7 +165,8 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   for (const auto& e : d.Events(se.id)) {
     pause_logged += e.kind == "pause" && e.detail == "scripted" && e.trial_id.has_value();
     abort_logged |= e.kind == "abort" && e.detail.find("console") != std::string::npos;
-    break_logged |= e.kind == "break" && e.detail.find("requested by the experimenter") != std::string::npos;
+    break_logged |=
+        e.kind == "break" && e.detail.find("requested by the experimenter") != std::string::npos;
   }
   EXPECT_TRUE(abort_logged);
   EXPECT_TRUE(break_logged);
@@ -177,7 +184,9 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   // Ratings stored are the participant's, exactly.
   for (const auto& t : d.Trials(se.id)) {
     if (t.status != db::kTrialCompleted || t.phase == "training") continue;
-    for (const auto& r : d.Ratings(t.id)) EXPECT_EQ(std::fmod(r.score, 10.0), r.criterion == p.criteria[0] ? 0.0 : 1.0) << r.criterion << " " << r.score;
+    for (const auto& r : d.Ratings(t.id))
+      EXPECT_EQ(std::fmod(r.score, 10.0), r.criterion == p.criteria[0] ? 0.0 : 1.0)
+          << r.criterion << " " << r.score;
   }
   ui.abort_at_trial = -1;
   EXPECT_EQ(ResumeStudy(o).status, "completed");
@@ -208,11 +217,11 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
     ASSERT_GE(pid, 0);
     if (pid == 0) {
       if (!started)
-        execl(cli.c_str(), cli.c_str(), "study", "run", protocol.c_str(), "--db", db.c_str(), "--participant",
-              "P09", "--quiet", "--record", "all", static_cast<char*>(nullptr));
+        execl(cli.c_str(), cli.c_str(), "study", "run", protocol.c_str(), "--db", db.c_str(),
+              "--participant", "P09", "--quiet", "--record", "all", static_cast<char*>(nullptr));
       else
-        execl(cli.c_str(), cli.c_str(), "study", "resume", "--db", db.c_str(), "--participant", "P09", "--quiet",
-              "--record", "all", static_cast<char*>(nullptr));
+        execl(cli.c_str(), cli.c_str(), "study", "resume", "--db", db.c_str(), "--participant",
+              "P09", "--quiet", "--record", "all", static_cast<char*>(nullptr));
       _exit(127);
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms(rng)));
@@ -249,7 +258,8 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
 // protocol's calibrated one (tests of the perceptual distance rather than of the calibration).
 std::map<std::string, double> SimulateAndAverage(
     const std::string& study, int n, const std::string& db_path,
-    const std::function<std::string(const db::Trial&, const db::Rating&)>& key, bool quiet_observer = false) {
+    const std::function<std::string(const db::Trial&, const db::Rating&)>& key,
+    bool quiet_observer = false) {
   auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) + "/studies/shin2019/" + study);
   if (quiet_observer) p.observer.clear();
   RunOptions o;
@@ -283,15 +293,17 @@ TEST(StudyRunner, SimulatedChapter4RealRealPairsSpanTheThesisLimits) {
   // reported in docs/studies.md). Catches a broken perceptual distance (same
   // pairs not at the top) or a broken similarity map (no separation).
   test::TempDir dir;
-  const auto m = SimulateAndAverage("ch4-realism.toml", 10, dir.File("ch4.db"),
-                                    [](const db::Trial& t, const db::Rating&) -> std::string {
-                                      if (t.phase != "reference") return "";
-                                      return t.material == t.comparison ? "same" : "different";
-                                    },
-                                    /*quiet_observer=*/true);
+  const auto m = SimulateAndAverage(
+      "ch4-realism.toml", 10, dir.File("ch4.db"),
+      [](const db::Trial& t, const db::Rating&) -> std::string {
+        if (t.phase != "reference") return "";
+        return t.material == t.comparison ? "same" : "different";
+      },
+      /*quiet_observer=*/true);
   ASSERT_EQ(m.count("same"), 1u);
   ASSERT_EQ(m.count("different"), 1u);
-  std::printf("real-real similarity: same material %.1f, different materials %.1f\n", m.at("same"), m.at("different"));
+  std::printf("real-real similarity: same material %.1f, different materials %.1f\n", m.at("same"),
+              m.at("different"));
   EXPECT_GT(m.at("same"), 72.0);
   EXPECT_LT(m.at("same"), 84.0);
   EXPECT_LT(m.at("different"), m.at("same") - 10.0);
@@ -302,10 +314,11 @@ TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
   // similar to the real samples in roughness than force-only and vibration-only, because
   // only it reproduces both the force fluctuation and the vibration the real samples give.
   test::TempDir dir;
-  const auto rough = SimulateAndAverage("ch5-hybrid-realism.toml", 20, dir.File("ch5.db"),
-                                        [](const db::Trial& t, const db::Rating& r) -> std::string {
-                                          return t.phase == "main" && r.criterion == "roughness" ? t.method : "";
-                                        });
+  const auto rough =
+      SimulateAndAverage("ch5-hybrid-realism.toml", 20, dir.File("ch5.db"),
+                         [](const db::Trial& t, const db::Rating& r) -> std::string {
+                           return t.phase == "main" && r.criterion == "roughness" ? t.method : "";
+                         });
   const double hybrid = rough.at("Hybrid"), ff = rough.at("FF"), lpc = rough.at("LPC");
   std::printf("roughness similarity: Hybrid %.1f, FF %.1f, LPC %.1f\n", hybrid, ff, lpc);
   EXPECT_GT(hybrid, ff);

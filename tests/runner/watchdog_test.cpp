@@ -27,19 +27,32 @@ struct Injection {
   const char* name;
   FaultKind kind;
   // Mutates the tick's inputs.
-  void (*apply)(devices::ReadResult& r, renderer::DeviceSample& s, double& late, Eigen::Vector3d& f);
+  void (*apply)(devices::ReadResult& r, renderer::DeviceSample& s, double& late,
+                Eigen::Vector3d& f);
 };
 
 TEST(Watchdog, EveryFaultZeroesTheForceOnTheSameTick) {
   const Injection inj[] = {
       {"nan position", FaultKind::kNaN,
-       [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) { s.state.p_m.x() = std::nan(""); }},
+       [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) {
+         s.state.p_m.x() = std::nan("");
+       }},
       {"nan velocity", FaultKind::kNaN,
-       [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) { s.state.v_mps.z() = INFINITY; }},
-      {"stale data", FaultKind::kStale, [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) { s.t_s -= 0.02; }},
-      {"nan command", FaultKind::kBadCommand, [](devices::ReadResult&, renderer::DeviceSample&, double&, Eigen::Vector3d& f) { f.y() = std::nan(""); }},
+       [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) {
+         s.state.v_mps.z() = INFINITY;
+       }},
+      {"stale data", FaultKind::kStale,
+       [](devices::ReadResult&, renderer::DeviceSample& s, double&, Eigen::Vector3d&) {
+         s.t_s -= 0.02;
+       }},
+      {"nan command", FaultKind::kBadCommand,
+       [](devices::ReadResult&, renderer::DeviceSample&, double&, Eigen::Vector3d& f) {
+         f.y() = std::nan("");
+       }},
       {"command above the limit", FaultKind::kBadCommand,
-       [](devices::ReadResult&, renderer::DeviceSample&, double&, Eigen::Vector3d& f) { f = {0, 0, 50}; }},
+       [](devices::ReadResult&, renderer::DeviceSample&, double&, Eigen::Vector3d& f) {
+         f = {0, 0, 50};
+       }},
   };
   for (const auto& in : inj) {
     Watchdog w({.stale_after_s = 0.005, .max_consecutive_misses = 3, .max_force_N = 8});
@@ -81,11 +94,13 @@ TEST(Watchdog, EveryFaultZeroesTheForceOnTheSameTick) {
 }
 
 TEST(Watchdog, AShortLossZeroesTheForceASustainedOneIsADisconnect) {
-  constexpr auto kOk = devices::ReadResult::kOk, kLost = devices::ReadResult::kLost, kEmpty = devices::ReadResult::kNoNewData;
+  constexpr auto kOk = devices::ReadResult::kOk, kLost = devices::ReadResult::kLost,
+                 kEmpty = devices::ReadResult::kNoNewData;
   Watchdog w({.max_lost_reads = 10, .max_lost_s = 0.010});
   const Eigen::Vector3d want(0.5, -0.2, 1.5);
   double t = 0;
-  for (int k = 0; k < 100; ++k, t += kPeriod) ASSERT_EQ(w.Check(kOk, Healthy(t), t, 0, kPeriod, want), want);
+  for (int k = 0; k < 100; ++k, t += kPeriod)
+    ASSERT_EQ(w.Check(kOk, Healthy(t), t, 0, kPeriod, want), want);
   // A read with no new data renders the last sample: force as wanted, no fault.
   EXPECT_EQ(w.Check(kEmpty, Healthy(t - kPeriod), t, 0, kPeriod, want), want);
   t += kPeriod;
@@ -123,7 +138,8 @@ TEST(Watchdog, MissedDeadlinesFaultAfterTheConfiguredRun) {
   // Two late ticks are tolerated; the third in a row is a fault on that tick.
   EXPECT_EQ(w.Check(devices::ReadResult::kOk, Healthy(t), t, 2.5 * kPeriod, kPeriod, want), want);
   EXPECT_EQ(w.Check(devices::ReadResult::kOk, Healthy(t), t, 2.5 * kPeriod, kPeriod, want), want);
-  EXPECT_EQ(w.Check(devices::ReadResult::kOk, Healthy(t), t, 2.5 * kPeriod, kPeriod, want), Eigen::Vector3d::Zero());
+  EXPECT_EQ(w.Check(devices::ReadResult::kOk, Healthy(t), t, 2.5 * kPeriod, kPeriod, want),
+            Eigen::Vector3d::Zero());
   EXPECT_EQ(w.last(), FaultKind::kDeadlineMiss);
   // An on-time tick clears the run.
   EXPECT_EQ(w.Check(devices::ReadResult::kOk, Healthy(t), t, 0, kPeriod, want), want);
@@ -133,12 +149,14 @@ TEST(Watchdog, MissedDeadlinesFaultAfterTheConfiguredRun) {
 TEST(Watchdog, PersistentFaultsQueueBoundedEvents) {
   Watchdog w({.event_capacity = 16});
   renderer::DeviceSample s;
-  for (int k = 0; k < 5000; ++k) w.Check(devices::ReadResult::kLost, s, k * kPeriod, 0, kPeriod, Eigen::Vector3d::Zero());
+  for (int k = 0; k < 5000; ++k)
+    w.Check(devices::ReadResult::kLost, s, k * kPeriod, 0, kPeriod, Eigen::Vector3d::Zero());
   int events = 0;
   FaultEvent e;
   while (w.PopEvent(&e)) ++events;
   EXPECT_EQ(events, 5);  // the first faulted tick, then one per 1000 ticks
-  EXPECT_EQ(w.count(FaultKind::kDisconnect), 5000u - 9u);  // the first 9 lost reads are a short loss
+  EXPECT_EQ(w.count(FaultKind::kDisconnect),
+            5000u - 9u);  // the first 9 lost reads are a short loss
 }
 
 }  // namespace

@@ -32,8 +32,10 @@ SideRun RunVirtualSide(const Eigen::Isometry3d& true_pose, const Eigen::Isometry
   SimDevice dev(SimDeviceModel{.encoder_resolution_m = 0}, hand, &clock);
   SimActuator act(hand, ro.vibration_rate_hz);
   Rng rng(7);
-  hand.Begin(DrawStroke(rng), true_pose, model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
-             model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr, ro.force_rate_hz, ro.vibration_rate_hz);
+  hand.Begin(DrawStroke(rng), true_pose,
+             model.contact.layer_thickness_m + model.geometry->max_m() - model.geometry->min_m(),
+             model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+             ro.force_rate_hz, ro.vibration_rate_hz);
   runner::EngineOptions eo;
   eo.virtual_clock = &clock;
   eo.sample_from_device = rig_pose.inverse();
@@ -99,7 +101,8 @@ TEST(SimRig, TheHandPressesOnARealSampleWithTheStrokesLoad) {
   SimDevice dev(SimDeviceModel{}, hand, &clock);
   Stroke s;
   s.force_N = 1.5;
-  hand.Begin(s, Eigen::Isometry3d::Identity(), truth.top_m(), truth.profile().stiffness_N_per_m, &truth, 1000, 10000);
+  hand.Begin(s, Eigen::Isometry3d::Identity(), truth.top_m(), truth.profile().stiffness_N_per_m,
+             &truth, 1000, 10000);
   renderer::DeviceSample out;
   for (int k = 1; k <= 2000; ++k) {
     clock.Set(k / 1000.0);

@@ -2,13 +2,14 @@
 // (sim::LoadObserver): each random effect shows up with the SD the file gives it, and a bad
 // file is refused with file:line: key.
 
+#include "hapticlab/sim/sim_lab.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <string>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/sim/sim_lab.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::sim {
@@ -21,14 +22,15 @@ ObserverParams Quiet() {
 }
 
 // SD over many participants of (rating of a - rating of b), everything else equal.
-double SdOfDifference(const ObserverParams& p, const std::string& ma, const std::string& mb, const std::string& ka,
-                      const std::string& kb) {
+double SdOfDifference(const ObserverParams& p, const std::string& ma, const std::string& mb,
+                      const std::string& ka, const std::string& kb) {
   double s = 0, s2 = 0;
   const int n = 4000;
   for (int i = 0; i < n; ++i) {
     const Observer o(p, 1000 + static_cast<std::uint64_t>(i), {"roughness"});
     Rng r1(5), r2(5);
-    const double d = o.RateDistance("roughness", ma, ka, 1.0, -1e6, 1e6, r1) - o.RateDistance("roughness", mb, kb, 1.0, -1e6, 1e6, r2);
+    const double d = o.RateDistance("roughness", ma, ka, 1.0, -1e6, 1e6, r1) -
+                     o.RateDistance("roughness", mb, kb, 1.0, -1e6, 1e6, r2);
     s += d;
     s2 += d * d;
   }
@@ -42,7 +44,8 @@ TEST(Observer, RandomEffectsHaveTheirSds) {
   EXPECT_NEAR(SdOfDifference(p, "Denim", "Cork", "LPC", "LPC"), std::sqrt(2.0) * 6, 0.4);
   EXPECT_NEAR(SdOfDifference(p, "Denim", "Denim", "LPC", "FF"), 0, 1e-12);
   p = Quiet();
-  p.criteria["roughness"] = {.sensitivity = 1, .offset_sd = 0, .material_sd = 0, .method_sd = 4, .noise_sd = 0};
+  p.criteria["roughness"] = {
+      .sensitivity = 1, .offset_sd = 0, .material_sd = 0, .method_sd = 4, .noise_sd = 0};
   EXPECT_NEAR(SdOfDifference(p, "Denim", "Denim", "LPC", "FF"), std::sqrt(2.0) * 4, 0.3);
   EXPECT_NEAR(SdOfDifference(p, "Denim", "Cork", "LPC", "LPC"), 0, 1e-12);
 }
@@ -58,7 +61,8 @@ TEST(Observer, ScaleRangeOffsetNoiseAndLapses) {
   for (int i = 0; i < n; ++i) {
     const Observer o(p, 77 + static_cast<std::uint64_t>(i), {"overall"});
     Rng r(3);
-    const double y = o.RateDistance("overall", "A", "B", 0.0, -1000, 1100, r);  // mid 50, never clamped
+    const double y =
+        o.RateDistance("overall", "A", "B", 0.0, -1000, 1100, r);  // mid 50, never clamped
     s += y;
     s2 += y * y;
   }
@@ -76,7 +80,8 @@ TEST(Observer, ScaleRangeOffsetNoiseAndLapses) {
   int nn = 0;
   for (int i = 0; i < n; ++i) {
     const double y = o.RateDistance("overall", "A", "B", 0.0, 0, 100, r);
-    if (std::abs(y - 78) > 35) ++far;  // 5 noise SDs: only a lapse lands there
+    if (std::abs(y - 78) > 35)
+      ++far;  // 5 noise SDs: only a lapse lands there
     else {
       ns += y;
       ns2 += y * y;
@@ -92,7 +97,9 @@ TEST(Observer, ScaleRangeOffsetNoiseAndLapses) {
 TEST(Observer, FileErrorsNameFileLineAndKey) {
   test::TempDir dir;
   const std::string f = dir.File("observer.toml");
-  test::WriteFile(f, "[observer]\nupper = 78\nnoise_sd = -1\nrange_sdd = 0.2\n\n[criterion.roughness]\nsensitivity = 1\nmethod_sd = \"x\"\n");
+  test::WriteFile(f,
+                  "[observer]\nupper = 78\nnoise_sd = -1\nrange_sdd = "
+                  "0.2\n\n[criterion.roughness]\nsensitivity = 1\nmethod_sd = \"x\"\n");
   try {
     LoadObserver(f);
     FAIL() << "accepted a bad observer file";

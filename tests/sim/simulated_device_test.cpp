@@ -1,10 +1,11 @@
 // The simulated back-ends (sim/src/simulated_device.cpp): the generic device and the Falcon
 // twin, each over the simulated hand, opened by name.
 
+#include "hapticlab/sim/simulated_device.hpp"
+
 #include <gtest/gtest.h>
 
 #include "hapticlab/core/status.hpp"
-#include "hapticlab/sim/simulated_device.hpp"
 
 namespace hapticlab::sim {
 namespace {

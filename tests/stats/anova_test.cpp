@@ -1,5 +1,7 @@
 // Properties of the ANOVA, Tukey and grouping code beyond the R fixtures.
 
+#include "hapticlab/stats/anova.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +9,6 @@
 #include <random>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/descriptive.hpp"
 #include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
@@ -53,10 +54,18 @@ TEST(RmAnova, TwoLevelFactorIsAPairedTTestWithTrivialSphericity) {
 }
 
 TEST(RmAnova, SubjectsWithAMissingCellAreDroppedAndRepetitionsAveraged) {
-  const auto r = RmAnova(Make({{"S1", "a", 1}, {"S1", "a", 3}, {"S1", "b", 4}, {"S1", "c", 5},
-                               {"S2", "a", 2}, {"S2", "b", 2}, {"S2", "c", 7},
-                               {"S3", "a", 1}, {"S3", "b", 6}, {"S3", "c", 2},
-                               {"S4", "a", 9}, {"S4", "b", 1}}),
+  const auto r = RmAnova(Make({{"S1", "a", 1},
+                               {"S1", "a", 3},
+                               {"S1", "b", 4},
+                               {"S1", "c", 5},
+                               {"S2", "a", 2},
+                               {"S2", "b", 2},
+                               {"S2", "c", 7},
+                               {"S3", "a", 1},
+                               {"S3", "b", 6},
+                               {"S3", "c", 2},
+                               {"S4", "a", 9},
+                               {"S4", "b", 1}}),
                          "subject", {"cond"});
   EXPECT_EQ(r.subjects, (std::vector<std::string>{"S1", "S2", "S3"}));
   EXPECT_EQ(r.dropped_subjects, std::vector<std::string>{"S4"});
@@ -68,7 +77,6 @@ TEST(RmAnova, ErrorsNameTheProblem) {
   EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}, {"S2", "a", 2}}), "subject", {"cond"}), InputError);
   EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}}), "subject", {"nope"}), InputError);
 }
-
 
 }  // namespace
 }  // namespace hapticlab::stats

@@ -17,11 +17,11 @@ const std::vector<double> kY = {4.81, 4.17, 4.41, 3.59, 5.87, 3.83, 6.03, 4.89, 
 TEST(Descriptive, MatchesRMeanSdSeMedianAndTInterval) {
   const auto d = Describe(kX);
   EXPECT_EQ(d.n, 11);
-  EXPECT_NEAR(d.mean, 5.4654545454545458, 1e-13);    // mean(x)
-  EXPECT_NEAR(d.sd, 1.5403594621799397, 1e-13);      // sd(x)
-  EXPECT_NEAR(d.se, 0.46443585257495446, 1e-13);     // sd(x) / sqrt(11)
-  EXPECT_NEAR(d.median, 5.17, 1e-13);                // median(x)
-  EXPECT_NEAR(d.ci95_lo, 4.430626978076921, 1e-9);   // t.test(x)$conf.int
+  EXPECT_NEAR(d.mean, 5.4654545454545458, 1e-13);   // mean(x)
+  EXPECT_NEAR(d.sd, 1.5403594621799397, 1e-13);     // sd(x)
+  EXPECT_NEAR(d.se, 0.46443585257495446, 1e-13);    // sd(x) / sqrt(11)
+  EXPECT_NEAR(d.median, 5.17, 1e-13);               // median(x)
+  EXPECT_NEAR(d.ci95_lo, 4.430626978076921, 1e-9);  // t.test(x)$conf.int
   EXPECT_NEAR(d.ci95_hi, 6.5002821128321706, 1e-9);
   EXPECT_THROW(Describe({}), PreconditionError);
 }

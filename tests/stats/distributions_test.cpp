@@ -5,6 +5,8 @@
 // p-value) and on the lower tail P(Q <= q), both through TukeyFamily (what Tukey HSD uses)
 // and through the direct PtukeyUpper/PtukeyLower (on every third row, for time).
 
+#include "hapticlab/stats/distributions.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -15,7 +17,6 @@
 #include <utility>
 
 #include "hapticlab/core/csv.hpp"
-#include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::stats {
@@ -28,13 +29,13 @@ struct Row {
 
 std::vector<Row> Rows() {
   const CsvTable t = ReadCsv(test::DataPath("stats/tukey_reference.csv"));
-  const auto ck = t.Require("k"), cd = t.Require("df"), cq = t.Require("q"), cu = t.Require("upper"),
-             cl = t.Require("lower");
+  const auto ck = t.Require("k"), cd = t.Require("df"), cq = t.Require("q"),
+             cu = t.Require("upper"), cl = t.Require("lower");
   std::vector<Row> rows;
   for (std::size_t r = 0; r < t.rows.size(); ++r) {
     const std::string& df = t.rows[r][cd];
-    rows.push_back({std::stoi(t.rows[r][ck]), df == "Inf" ? INFINITY : std::stod(df), std::stod(t.rows[r][cq]),
-                    std::stod(t.rows[r][cu]), std::stod(t.rows[r][cl])});
+    rows.push_back({std::stoi(t.rows[r][ck]), df == "Inf" ? INFINITY : std::stod(df),
+                    std::stod(t.rows[r][cq]), std::stod(t.rows[r][cu]), std::stod(t.rows[r][cl])});
   }
   return rows;
 }
@@ -49,7 +50,8 @@ TEST(TukeyAccuracy, UpperAndLowerTailsAgreeWithHighPrecisionQuadratureTo1e8Relat
     const Row& r = rows[i];
     auto& fam = families[{r.k, r.df}];
     if (!fam) fam = std::make_unique<TukeyFamily>(r.k, r.df);
-    const std::string at = "k=" + std::to_string(r.k) + " df=" + std::to_string(r.df) + " q=" + std::to_string(r.q);
+    const std::string at =
+        "k=" + std::to_string(r.k) + " df=" + std::to_string(r.df) + " q=" + std::to_string(r.q);
     const double up = fam->Upper(r.q), lo = fam->Lower(r.q);
     EXPECT_NEAR(up, r.upper, 1e-8 * r.upper) << at << " (TukeyFamily upper)";
     EXPECT_NEAR(lo, r.lower, 1e-8 * r.lower) << at << " (TukeyFamily lower)";
@@ -76,7 +78,8 @@ TEST(TukeyAccuracy, ReferenceRowsForTwoMeansMatchTheStudentTClosedForm) {
   for (const auto& r : Rows()) {
     if (r.k != 2) continue;
     ++n;
-    const double exact = std::isinf(r.df) ? PnormTwoSided(r.q / std::sqrt(2.0)) : PtTwoSided(r.q / std::sqrt(2.0), r.df);
+    const double exact = std::isinf(r.df) ? PnormTwoSided(r.q / std::sqrt(2.0))
+                                          : PtTwoSided(r.q / std::sqrt(2.0), r.df);
     EXPECT_NEAR(r.upper, exact, 1e-12 * exact) << "df=" << r.df << " q=" << r.q;
   }
   EXPECT_GE(n, 20);

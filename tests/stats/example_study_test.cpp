@@ -24,7 +24,8 @@ using nlohmann::json;
 constexpr double kRel = 1e-6;
 
 void Near(double got, double want, const std::string& what) {
-  EXPECT_LE(std::abs(got - want), kRel * std::abs(want) + 1e-300) << what << ": got " << got << " want " << want;
+  EXPECT_LE(std::abs(got - want), kRel * std::abs(want) + 1e-300)
+      << what << ": got " << got << " want " << want;
 }
 
 // R's Tukey p-values come from its ptukey as 1 - lower tail, whose absolute accuracy is
@@ -32,7 +33,8 @@ void Near(double got, double want, const std::string& what) {
 // high-precision reference to 1e-6 relative down to 1e-23). So p-values from R get
 // 1e-6 relative plus 1e-11 absolute.
 void NearTukeyP(double got, double want, const std::string& what) {
-  EXPECT_LE(std::abs(got - want), kRel * std::abs(want) + 1e-11) << what << ": got " << got << " want " << want;
+  EXPECT_LE(std::abs(got - want), kRel * std::abs(want) + 1e-11)
+      << what << ": got " << got << " want " << want;
 }
 
 class ExampleStudy : public ::testing::Test {
@@ -127,7 +129,8 @@ TEST_F(ExampleStudy, TukeyWithinUnivariateAndMultivariateMatchEmmeans) {
   const auto a = RmAnova(Crit("realism"), "subject", {"method", "material"});
   for (const bool mv : {false, true}) {
     const auto t = TukeyWithin(a, "method", mv);
-    const auto& rows = R("realism")["emmeans_tukey_within"][mv ? "method_multivariate" : "method_univariate"];
+    const auto& rows =
+        R("realism")["emmeans_tukey_within"][mv ? "method_multivariate" : "method_univariate"];
     ASSERT_EQ(t.pairs.size(), rows.size());
     for (const auto& row : rows) {
       // emmeans "b - a" with estimate = mean(b) - mean(a); ours: a = later level, diff = a - b.
@@ -219,7 +222,8 @@ TEST_F(ExampleStudy, ShapiroOutliersDescriptivesCorrelation) {
         Near(d.ci95_hi, row["ci95_hi"], m + " ci hi");
       }
     const auto graw = raw.Where({{"method", m}});
-    for (const auto& [rule, key] : {std::pair{QuartileRule::kHinges, "hinges"}, {QuartileRule::kType7, "type7"}}) {
+    for (const auto& [rule, key] :
+         {std::pair{QuartileRule::kHinges, "hinges"}, {QuartileRule::kType7, "type7"}}) {
       const auto o = Outliers(graw.y, rule);
       const auto& ro = r["outliers_1.5IQR_per_method_raw"][m][key];
       Near(o.q1, ro["q1"], m + " q1 " + key);

@@ -5,6 +5,8 @@
 // Agreement asked by issue #24: 1e-4 relative (quantities that are zero in R, such as a θ on
 // its bound, to 1e-4 absolute on their own scale).
 
+#include "hapticlab/stats/lmm.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +14,6 @@
 #include <nlohmann/json.hpp>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/stats/lmm.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::stats {
@@ -58,7 +59,8 @@ void Compare(const std::string& design, bool reml) {
   ExpectClose(r.AIC, w["AIC"], tag + "AIC");
   ExpectClose(r.deviance, reml ? w["REMLcrit"] : w["deviance"], tag + "deviance");
   ASSERT_EQ(r.theta.size(), w["theta"].size()) << tag;
-  for (std::size_t i = 0; i < r.theta.size(); ++i) ExpectClose(r.theta[i], w["theta"][i], tag + "theta", 1.0);
+  for (std::size_t i = 0; i < r.theta.size(); ++i)
+    ExpectClose(r.theta[i], w["theta"][i], tag + "theta", 1.0);
   ASSERT_EQ(r.fixed.size(), w["fixed"].size()) << tag;
   for (std::size_t i = 0; i < r.fixed.size(); ++i) {
     const auto& c = r.fixed[i];
@@ -92,14 +94,16 @@ void Compare(const std::string& design, bool reml) {
       const auto& e = w["random"][row];
       EXPECT_EQ(term.group, e["group"].get<std::string>()) << tag;
       EXPECT_EQ(term.names[i], e["var1"].get<std::string>()) << tag;
-      ExpectClose(term.variance[i], e["vcov"], tag + term.group + " var " + term.names[i], r.sigma * r.sigma);
+      ExpectClose(term.variance[i], e["vcov"], tag + term.group + " var " + term.names[i],
+                  r.sigma * r.sigma);
       ExpectClose(term.sd[i], e["sdcor"], tag + term.group + " sd " + term.names[i], r.sigma);
     }
     for (std::size_t j = 0; j < k; ++j)
       for (std::size_t i = j + 1; i < k; ++i, ++row) {
         const auto& e = w["random"][row];
         EXPECT_EQ(term.names[i], e["var2"].get<std::string>()) << tag;
-        ExpectClose(term.corr[i][j], e["sdcor"], tag + term.group + " corr " + term.names[i] + "," + term.names[j], 1.0);
+        ExpectClose(term.corr[i][j], e["sdcor"],
+                    tag + term.group + " corr " + term.names[i] + "," + term.names[j], 1.0);
       }
   }
   ASSERT_EQ(row + 1, w["random"].size()) << tag;

@@ -77,14 +77,17 @@ void ComparePairs(const TukeyResult& t, const json& ref) {
     EXPECT_EQ(p->df, w["df"].get<double>()) << c;
     // The t ratio decides the p-value; R's ptukey is accurate to ~1e-9 absolute here (our
     // ptukey is checked against high-precision quadrature in tukey_accuracy_test.cpp).
-    EXPECT_NEAR(p->q / std::sqrt(2.0), std::abs(w["t"].get<double>()), 1e-10 * std::abs(w["t"].get<double>())) << c;
+    EXPECT_NEAR(p->q / std::sqrt(2.0), std::abs(w["t"].get<double>()),
+                1e-10 * std::abs(w["t"].get<double>()))
+        << c;
     EXPECT_NEAR(p->p_adj, w["p"].get<double>(), 1e-8 + 1e-6 * w["p"].get<double>()) << c;
   }
 }
 
 TEST(MixedAnova, TwoGroupsOfUnequalSizeByThreeMethodsAgreeWithAfex) {
   const auto ref = Ref("a");
-  const auto t = ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
+  const auto t =
+      ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
   const auto r = RmAnova(t, "subject", {"method"}, {"group"});
   EXPECT_EQ(r.subjects.size(), ref["n_kept"].get<std::size_t>());
   ASSERT_EQ(r.dropped_subjects, std::vector<std::string>{ref["dropped"].get<std::string>()});
@@ -110,7 +113,8 @@ TEST(MixedAnova, TwoBetweenByTwoWithinFactorsUnbalancedAgreeWithAfex) {
 }
 
 TEST(MixedAnova, ABetweenFactorGivenAsWithinIsNamed) {
-  const auto t = ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
+  const auto t =
+      ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
   try {
     RmAnova(t, "subject", {"group", "method"});
     FAIL() << "no error";
@@ -124,24 +128,28 @@ TEST(MixedAnova, ABetweenFactorGivenAsWithinIsNamed) {
     RmAnova(t, "subject", {}, {"method"});
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("'method' varies within subject"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("'method' varies within subject"), std::string::npos)
+        << e.what();
   }
 }
 
 TEST(MixedAnova, AMissingScoreDropsItsSubjectByName) {
-  auto t = ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
+  auto t =
+      ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
   // S03's first audio rating missing: its audio cell is unobserved, so S03 goes (as afex).
   std::size_t row = 0;
   while (!(t.keys[0][row] == "S03" && t.keys[2][row] == "audio")) ++row;
   t.y[row] = std::numeric_limits<double>::quiet_NaN();
   const auto r = RmAnova(t, "subject", {"method"}, {"group"});
   EXPECT_EQ(r.dropped_subjects, (std::vector<std::string>{"S03", "S17"}));
-  EXPECT_NE(r.dropped_reasons.at(0).find("missing score"), std::string::npos) << r.dropped_reasons.at(0);
+  EXPECT_NE(r.dropped_reasons.at(0).find("missing score"), std::string::npos)
+      << r.dropped_reasons.at(0);
   EXPECT_EQ(r.subjects.size(), 15u);
 }
 
 TEST(MixedAnova, AnEmptyBetweenCellIsAnError) {
-  const auto all = ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
+  const auto all =
+      ReadLongCsv(test::DataPath("stats/mixed_2x3.csv"), "score", {"subject", "group", "method"});
   // The only novice left, S01, misses its visual ratings: the novice cell is empty.
   LongTable t = all;
   t.keys.assign(3, {});
@@ -156,7 +164,8 @@ TEST(MixedAnova, AnEmptyBetweenCellIsAnError) {
     RmAnova(t, "subject", {"method"}, {"group"});
     FAIL() << "no error";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("between cell group=novice"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("between cell group=novice"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -4,16 +4,16 @@
 // lambda = n sum_j (mu_j - mu)^2 / sigma_e^2 (e.g. Maxwell & Delaney, ch. 11).
 // The reference distribution is Boost.Math's non_central_f_distribution.
 
+#include "hapticlab/stats/power.hpp"
+
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <boost/math/distributions/fisher_f.hpp>
 #include <boost/math/distributions/non_central_f.hpp>
-#include <fmt/format.h>
-
 #include <cmath>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/stats/power.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -44,7 +44,8 @@ double AnalyticPower(int n, double alpha) {
   for (double m : kMu) ss += (m - mean) * (m - mean);
   const double lambda = n * ss / (kSigmaE * kSigmaE);
   const double df1 = k - 1, df2 = (k - 1) * (n - 1);
-  const double fcrit = quantile(complement(boost::math::fisher_f_distribution<double>(df1, df2), alpha));
+  const double fcrit =
+      quantile(complement(boost::math::fisher_f_distribution<double>(df1, df2), alpha));
   return cdf(complement(boost::math::non_central_f_distribution<double>(df1, df2, lambda), fcrit));
 }
 
@@ -74,11 +75,15 @@ TEST(StudyPower, NullEffectRejectsAtAlpha) {
   o.participants = {10};
   o.simulations = 600;
   o.seed = 7;
-  const auto r = SimulatePower("null", [](int n, Rng& rng) {
-    auto t = OneFactor(n, rng);
-    for (std::size_t i = 0; i < t.rows(); ++i) t.y[i] -= kMu[static_cast<std::size_t>(t.keys[2][i][1] - '0')];
-    return t;
-  }, o);
+  const auto r = SimulatePower(
+      "null",
+      [](int n, Rng& rng) {
+        auto t = OneFactor(n, rng);
+        for (std::size_t i = 0; i < t.rows(); ++i)
+          t.y[i] -= kMu[static_cast<std::size_t>(t.keys[2][i][1] - '0')];
+        return t;
+      },
+      o);
   double lo, hi;
   WilsonInterval(r.rows[0].effects[0].hits, r.rows[0].effects[0].runs, &lo, &hi);
   EXPECT_LE(lo, 0.05);

@@ -2,8 +2,6 @@
 // data set, and the parametric bootstrap's coverage of known parameters.
 #include "hapticlab/stats/psychometric.hpp"
 
-#include "hapticlab/stats/psychometric_report.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,6 +9,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::stats {

@@ -57,12 +57,18 @@ std::vector<double> Sample(const std::map<std::string, std::string>& a) {
   if (x.rfind("gen ", 0) != 0) return Numbers(x);
   std::vector<double> v;
   for (int i = 1; i <= n; ++i) {
-    if (x.find("i^2") != std::string::npos) v.push_back(double(i) * i);
-    else if (x.find("log(i)") != std::string::npos) v.push_back(std::log(double(i)));
-    else if (x.find("qnorm((i-0.375)/(n+0.25))") != std::string::npos) v.push_back(Qnorm((i - 0.375) / (n + 0.25)));
-    else if (x.find("exp(qnorm((i-0.5)/n))") != std::string::npos) v.push_back(std::exp(Qnorm((i - 0.5) / n)));
-    else if (x.find("gen i ") != std::string::npos) v.push_back(i);
-    else ADD_FAILURE() << "unknown generator " << x;
+    if (x.find("i^2") != std::string::npos)
+      v.push_back(double(i) * i);
+    else if (x.find("log(i)") != std::string::npos)
+      v.push_back(std::log(double(i)));
+    else if (x.find("qnorm((i-0.375)/(n+0.25))") != std::string::npos)
+      v.push_back(Qnorm((i - 0.375) / (n + 0.25)));
+    else if (x.find("exp(qnorm((i-0.5)/n))") != std::string::npos)
+      v.push_back(std::exp(Qnorm((i - 0.5) / n)));
+    else if (x.find("gen i ") != std::string::npos)
+      v.push_back(i);
+    else
+      ADD_FAILURE() << "unknown generator " << x;
   }
   return v;
 }
@@ -86,8 +92,10 @@ std::vector<std::vector<double>> Matrix3(const std::string& s) {
 }
 
 double Compute(const std::string& func, const std::map<std::string, std::string>& a) {
-  if (func == "ptukey_lower") return PtukeyLower(Num(a.at("q")), std::stoi(a.at("k")), Num(a.at("df")));
-  if (func == "ptukey_upper") return PtukeyUpper(Num(a.at("q")), std::stoi(a.at("k")), Num(a.at("df")));
+  if (func == "ptukey_lower")
+    return PtukeyLower(Num(a.at("q")), std::stoi(a.at("k")), Num(a.at("df")));
+  if (func == "ptukey_upper")
+    return PtukeyUpper(Num(a.at("q")), std::stoi(a.at("k")), Num(a.at("df")));
   if (func == "ptukey_exact_k2") return PtukeyLower(Num(a.at("q")), 2, Num(a.at("df")));
   if (func == "qtukey") return Qtukey(Num(a.at("p")), std::stoi(a.at("k")), Num(a.at("df")));
   if (func == "shapiro_W") return ShapiroWilk(Sample(a)).W;
@@ -133,7 +141,8 @@ TEST(ReferenceVectors, EveryRowWithinItsTolerance) {
       EXPECT_LE(diff, std::stod(ta)) << "got " << got << " expected " << expected;
     }
     if (!tr.empty()) {
-      EXPECT_LE(diff, std::stod(tr) * std::abs(expected)) << "got " << got << " expected " << expected;
+      EXPECT_LE(diff, std::stod(tr) * std::abs(expected))
+          << "got " << got << " expected " << expected;
     }
     ++checked;
   }
@@ -144,12 +153,14 @@ TEST(Distributions, TukeyK2IsExactlyAScaledT) {
   // For two means the studentized range is sqrt(2)|T|: P(Q <= q) = 2 pt(q / sqrt 2, df) - 1.
   for (double df : {2.0, 5.0, 30.0})
     for (double q : {0.5, 2.0, 6.0})
-      EXPECT_NEAR(PtukeyLower(q, 2, df), 1 - PtTwoSided(q / std::sqrt(2.0), df), 1e-11) << q << " " << df;
+      EXPECT_NEAR(PtukeyLower(q, 2, df), 1 - PtTwoSided(q / std::sqrt(2.0), df), 1e-11)
+          << q << " " << df;
 }
 
 TEST(Distributions, LowerAndUpperTukeyTailsAddToOne) {
   for (int k : {3, 7})
-    for (double q : {1.0, 3.5, 5.0}) EXPECT_NEAR(PtukeyLower(q, k, 12) + PtukeyUpper(q, k, 12), 1.0, 1e-12);
+    for (double q : {1.0, 3.5, 5.0})
+      EXPECT_NEAR(PtukeyLower(q, k, 12) + PtukeyUpper(q, k, 12), 1.0, 1e-12);
   EXPECT_NEAR(PtukeyLower(Qtukey(0.95, 4, 20), 4, 20), 0.95, 1e-12);
 }
 

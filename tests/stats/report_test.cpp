@@ -21,24 +21,36 @@ namespace hapticlab::stats {
 namespace {
 
 // Score of participant p (0-based) for a planned trial and criterion; nullopt: not rated.
-using ScoreFn = std::function<std::optional<double>(int, const protocols::PlannedTrial&, const std::string&)>;
+using ScoreFn =
+    std::function<std::optional<double>(int, const protocols::PlannedTrial&, const std::string&)>;
 
 // Writes `participants` participants (codes P01, P02, ...) of the protocol into the database,
 // every planned rated trial completed with the scores of `score`.
-void WriteStudy(const std::string& db_path, const std::string& protocol_text, int participants, const ScoreFn& score) {
+void WriteStudy(const std::string& db_path, const std::string& protocol_text, int participants,
+                const ScoreFn& score) {
   const auto proto = protocols::ParseProtocol(protocol_text, "protocol");
   db::Database d(db_path);
   d.Exec("PRAGMA synchronous = OFF");  // a throw-away database: no fsync per trial
-  const auto study = d.CreateStudy({.name = proto.name, .protocol_toml = protocol_text, .protocol_hash = "test", .seed = proto.seed});
+  const auto study = d.CreateStudy({.name = proto.name,
+                                    .protocol_toml = protocol_text,
+                                    .protocol_hash = "test",
+                                    .seed = proto.seed});
   for (int p = 0; p < participants; ++p) {
     const std::string code = p < 9 ? "P0" + std::to_string(p + 1) : "P" + std::to_string(p + 1);
     const auto pid = d.AddParticipant({.study_id = study, .code = code, .index = p, .seed = 1});
-    const auto sid = d.StartSession({.participant_id = pid, .software_version = "test", .device = "none"});
+    const auto sid =
+        d.StartSession({.participant_id = pid, .software_version = "test", .device = "none"});
     for (const auto& t : protocols::Plan(proto, p)) {
       if (!t.rated) continue;
-      const auto tid = d.AddTrial({.session_id = sid, .plan_index = t.index, .phase = protocols::ToString(t.phase),
-                                   .material = t.material, .comparison = t.comparison, .method = t.method,
-                                   .repetition = t.repetition, .left = t.left, .right = t.right});
+      const auto tid = d.AddTrial({.session_id = sid,
+                                   .plan_index = t.index,
+                                   .phase = protocols::ToString(t.phase),
+                                   .material = t.material,
+                                   .comparison = t.comparison,
+                                   .method = t.method,
+                                   .repetition = t.repetition,
+                                   .left = t.left,
+                                   .right = t.right});
       std::vector<db::Rating> ratings;
       for (const auto& c : proto.criteria)
         if (const auto s = score(p, t, c)) ratings.push_back({c, *s, 1.0});
@@ -60,18 +72,47 @@ std::string Section(const std::string& md, const std::string& from, const std::s
 TEST(Report, AggregateTablesHaveTheLayoutOfTable54) {
   // The chapter V.3 protocol, three participants whose per-cell means are exactly the
   // dissertation's Table 5.4 (roughness): participant offsets -1, 0, +1 cancel.
-  const std::map<std::string, std::map<std::string, double>> table54 = {
-      {"LPC", {{"Bamboo", 44.00}, {"Denim", 58.67}, {"RubberMat", 58.22}, {"Tile", 61.33}, {"Towel", 55.78},
-               {"Wood", 56.67}, {"Acryl", 66.44}, {"Hardboard", 61.87}, {"Cork", 65.11}, {"Velvet", 67.00}}},
-      {"FF", {{"Bamboo", 60.00}, {"Denim", 69.22}, {"RubberMat", 70.56}, {"Tile", 54.64}, {"Towel", 62.67},
-              {"Wood", 69.67}, {"Acryl", 72.89}, {"Hardboard", 57.22}, {"Cork", 57.16}, {"Velvet", 50.02}}},
-      {"Hybrid", {{"Bamboo", 62.11}, {"Denim", 70.78}, {"RubberMat", 73.22}, {"Tile", 68.78}, {"Towel", 65.22},
-                  {"Wood", 71.89}, {"Acryl", 72.78}, {"Hardboard", 58.24}, {"Cork", 61.33}, {"Velvet", 60.98}}}};
+  const std::map<std::string, std::map<std::string, double>> table54 = {{"LPC",
+                                                                         {{"Bamboo", 44.00},
+                                                                          {"Denim", 58.67},
+                                                                          {"RubberMat", 58.22},
+                                                                          {"Tile", 61.33},
+                                                                          {"Towel", 55.78},
+                                                                          {"Wood", 56.67},
+                                                                          {"Acryl", 66.44},
+                                                                          {"Hardboard", 61.87},
+                                                                          {"Cork", 65.11},
+                                                                          {"Velvet", 67.00}}},
+                                                                        {"FF",
+                                                                         {{"Bamboo", 60.00},
+                                                                          {"Denim", 69.22},
+                                                                          {"RubberMat", 70.56},
+                                                                          {"Tile", 54.64},
+                                                                          {"Towel", 62.67},
+                                                                          {"Wood", 69.67},
+                                                                          {"Acryl", 72.89},
+                                                                          {"Hardboard", 57.22},
+                                                                          {"Cork", 57.16},
+                                                                          {"Velvet", 50.02}}},
+                                                                        {"Hybrid",
+                                                                         {{"Bamboo", 62.11},
+                                                                          {"Denim", 70.78},
+                                                                          {"RubberMat", 73.22},
+                                                                          {"Tile", 68.78},
+                                                                          {"Towel", 65.22},
+                                                                          {"Wood", 71.89},
+                                                                          {"Acryl", 72.78},
+                                                                          {"Hardboard", 58.24},
+                                                                          {"Cork", 61.33},
+                                                                          {"Velvet", 60.98}}}};
   test::TempDir dir;
-  const std::string text = test::ReadFile(std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml");
-  WriteStudy(dir.File("ch5.db"), text, 3, [&](int p, const protocols::PlannedTrial& t, const std::string&) {
-    return std::optional<double>(table54.at(t.method).at(t.material) + (p - 1) * (1 + t.repetition));
-  });
+  const std::string text =
+      test::ReadFile(std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml");
+  WriteStudy(dir.File("ch5.db"), text, 3,
+             [&](int p, const protocols::PlannedTrial& t, const std::string&) {
+               return std::optional<double>(table54.at(t.method).at(t.material) +
+                                            (p - 1) * (1 + t.repetition));
+             });
   const auto r = Analyze(dir.File("ch5.db"), {.out_dir = dir.File("rep"), .figures = false});
   const std::string md = test::ReadFile(r.markdown);
   const std::string rough = Section(md, "### roughness", "### friction");
@@ -80,7 +121,8 @@ TEST(Report, AggregateTablesHaveTheLayoutOfTable54) {
   // as rows in protocol order (LPC, FF, Hybrid); materials in protocol order.
   const std::string expected =
       "**inhomogeneous**\n\n"
-      "| method | Bamboo | Denim | RubberMat | Tile | Towel | Wood |\n|---|---|---|---|---|---|---|\n"
+      "| method | Bamboo | Denim | RubberMat | Tile | Towel | Wood "
+      "|\n|---|---|---|---|---|---|---|\n"
       "| LPC | 44.00 | 58.67 | 58.22 | 61.33 | 55.78 | 56.67 |\n"
       "| FF | 60.00 | 69.22 | 70.56 | 54.64 | 62.67 | 69.67 |\n"
       "| Hybrid | 62.11 | 70.78 | 73.22 | 68.78 | 65.22 | 71.89 |\n"
@@ -101,23 +143,30 @@ TEST(Report, AggregateTablesHaveTheLayoutOfTable54) {
 TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   test::TempDir dir;
   std::string small = test::ReadFile(test::DataPath("protocols/small.toml"));
-  small += "\n[analysis]\ntests = [\"rm-anova\", \"tukey\", \"kruskal\", \"grouping\", \"aggregate\", \"correlation\", \"shapiro\"]\n";
+  small +=
+      "\n[analysis]\ntests = [\"rm-anova\", \"tukey\", \"kruskal\", \"grouping\", \"aggregate\", "
+      "\"correlation\", \"shapiro\"]\n";
   const auto proto = protocols::ParseProtocol(small, "small");
   std::map<std::string, int> material_index;
-  for (std::size_t i = 0; i < proto.materials.size(); ++i) material_index[proto.materials[i].id] = static_cast<int>(i);
+  for (std::size_t i = 0; i < proto.materials.size(); ++i)
+    material_index[proto.materials[i].id] = static_cast<int>(i);
   // FF's 32 participant x material cell means follow exponential quantiles (skewed: the
   // Shapiro-Wilk test rejects normality); Hybrid's are a symmetric triangle of values.
   // P08 never rated Cork with FF: dropped from the ANOVA and named.
-  WriteStudy(dir.File("s.db"), small, 8, [&](int p, const protocols::PlannedTrial& t, const std::string& c) -> std::optional<double> {
-    if (t.phase != protocols::PhaseKind::kMain) return t.material == t.comparison ? 80.0 - p : 30.0 + p;
-    if (p == 7 && t.material == "Cork" && t.method == "FF") return std::nullopt;
-    const int k = p * 4 + material_index.at(t.material);  // 0..31
-    const double crit = c == "overall" ? 1.0 : 0.0;
-    if (t.method == "FF") return 20.0 + 15.0 * -std::log(1.0 - (((k * 7) % 32) + 0.5) / 32.0) + crit;
-    // Normal quantiles (Tukey's lambda approximation, lambda = 0.14) in a scrambled order.
-    const double q = (((k * 5) % 32) + 0.5) / 32.0;
-    return 50.0 + 10.0 * 4.91 * (std::pow(q, 0.14) - std::pow(1.0 - q, 0.14)) + crit;
-  });
+  WriteStudy(
+      dir.File("s.db"), small, 8,
+      [&](int p, const protocols::PlannedTrial& t, const std::string& c) -> std::optional<double> {
+        if (t.phase != protocols::PhaseKind::kMain)
+          return t.material == t.comparison ? 80.0 - p : 30.0 + p;
+        if (p == 7 && t.material == "Cork" && t.method == "FF") return std::nullopt;
+        const int k = p * 4 + material_index.at(t.material);  // 0..31
+        const double crit = c == "overall" ? 1.0 : 0.0;
+        if (t.method == "FF")
+          return 20.0 + 15.0 * -std::log(1.0 - (((k * 7) % 32) + 0.5) / 32.0) + crit;
+        // Normal quantiles (Tukey's lambda approximation, lambda = 0.14) in a scrambled order.
+        const double q = (((k * 5) % 32) + 0.5) / 32.0;
+        return 50.0 + 10.0 * 4.91 * (std::pow(q, 0.14) - std::pow(1.0 - q, 0.14)) + crit;
+      });
   const std::string one =
       "[study]\nname = \"one-method\"\nseed = 7\ncriteria = [\"roughness\"]\n"
       "[[material]]\nid = \"Denim\"\n[[material]]\nid = \"Cork\"\n[[material]]\nid = \"Acryl\"\n"
@@ -127,10 +176,12 @@ TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   // Denim's scores swing from participant to participant while Cork and Acryl move
   // together: the variances of the material differences are far from equal (sphericity
   // violated).
-  WriteStudy(dir.File("s.db"), one, 8, [](int p, const protocols::PlannedTrial& t, const std::string&) {
-    const int m = t.material == "Denim" ? 0 : t.material == "Cork" ? 1 : 2;
-    return std::optional<double>(55.0 + p + (m == 0 ? 10.0 * ((p * 37) % 7 - 3) : 0.0) + (p * 3 + m) % 5);
-  });
+  WriteStudy(dir.File("s.db"), one, 8,
+             [](int p, const protocols::PlannedTrial& t, const std::string&) {
+               const int m = t.material == "Denim" ? 0 : t.material == "Cork" ? 1 : 2;
+               return std::optional<double>(55.0 + p + (m == 0 ? 10.0 * ((p * 37) % 7 - 3) : 0.0) +
+                                            (p * 3 + m) % 5);
+             });
   const auto r = Analyze(dir.File("s.db"), {.out_dir = dir.File("rep"), .figures = false});
   const std::string md = test::ReadFile(r.markdown);
   const std::string two = Section(md, "## Study `test-small`", "## Study `one-method`");
@@ -138,8 +189,10 @@ TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   ASSERT_FALSE(two.empty()) << md;
   ASSERT_FALSE(single.empty()) << md;
   // grouping on a two-method study: a sentence, no letters.
-  EXPECT_NE(two.find("*`grouping` was requested but not run: it compares the materials of a single method"),
-            std::string::npos)
+  EXPECT_NE(
+      two.find(
+          "*`grouping` was requested but not run: it compares the materials of a single method"),
+      std::string::npos)
       << two;
   EXPECT_EQ(two.find("Dunn-Bonferroni"), std::string::npos) << two;
   // The skewed method is flagged, the symmetric one is not.
@@ -149,14 +202,20 @@ TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   const std::string dropped = Section(two, "- dropped P08: ", "\n");
   EXPECT_NE(dropped.find("Cork"), std::string::npos) << two;
   // One method, no reference phase: Tukey and grouping each say why they did not run.
-  EXPECT_NE(single.find("*`tukey` was requested but not run: it compares methods"), std::string::npos) << single;
-  EXPECT_NE(single.find("*`grouping` was requested but not run: it needs the real-real limits"), std::string::npos)
+  EXPECT_NE(single.find("*`tukey` was requested but not run: it compares methods"),
+            std::string::npos)
+      << single;
+  EXPECT_NE(single.find("*`grouping` was requested but not run: it needs the real-real limits"),
+            std::string::npos)
       << single;
   EXPECT_NE(single.find("Kruskal-Wallis on cell means by material"), std::string::npos) << single;
-  EXPECT_NE(single.find("**Sphericity violated** for material: Mauchly's W = "), std::string::npos) << single;
+  EXPECT_NE(single.find("**Sphericity violated** for material: Mauchly's W = "), std::string::npos)
+      << single;
   EXPECT_NE(single.find("The Greenhouse-Geisser correction is used"), std::string::npos) << single;
   EXPECT_EQ(two.find("**Sphericity violated**"), std::string::npos) << two;
-  EXPECT_NE(single.find("*`correlation` was requested but not run: it needs an `overall` criterion"), std::string::npos)
+  EXPECT_NE(
+      single.find("*`correlation` was requested but not run: it needs an `overall` criterion"),
+      std::string::npos)
       << single;
 }
 

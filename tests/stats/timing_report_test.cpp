@@ -3,11 +3,11 @@
 // merged), checked against the nearest-rank percentiles of the raw values; a study that ran
 // only on a virtual clock says so.
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fmt/format.h>
 
 #include "hapticlab/core/latency_histogram.hpp"
 #include "hapticlab/db/database.hpp"
@@ -28,13 +28,21 @@ struct Fixture {
     const auto se = d.StartSession({.participant_id = p});
     trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
   }
-  // A force-loop row of `values` [s] (its percentiles from the histogram, as the engine stores them).
-  void Add(const std::string& side, const std::vector<double>& values, const std::string& clock = "real") {
+  // A force-loop row of `values` [s] (its percentiles from the histogram, as the engine stores
+  // them).
+  void Add(const std::string& side, const std::vector<double>& values,
+           const std::string& clock = "real") {
     LatencyHistogram h;
     for (const double v : values) h.Add(v);
     const auto s = h.Snapshot();
-    db::SideTiming t{.trial_id = trial, .attempt = 1, .side = side, .loop = "force", .clock = clock, .rate_hz = 1000,
-                     .achieved_rate_hz = 999.5, .ticks = static_cast<std::int64_t>(values.size())};
+    db::SideTiming t{.trial_id = trial,
+                     .attempt = 1,
+                     .side = side,
+                     .loop = "force",
+                     .clock = clock,
+                     .rate_hz = 1000,
+                     .achieved_rate_hz = 999.5,
+                     .ticks = static_cast<std::int64_t>(values.size())};
     t.late_p50_us = s.Quantile(0.5) * 1e6;
     t.late_max_us = s.max_s * 1e6;
     t.late_histogram = s.Sparse();
@@ -66,8 +74,9 @@ TEST(TimingReport, PercentilesAreOverAllTicksOfAllSides) {
   // The pooled median lies in the left side's values; p99 in the right's.
   const double max_us = (120 + 0.25) * w * 1e6;
   auto edge = [&](double q) { return std::min(NearestRank(all, q) * 1e6 + 0.375, max_us); };
-  const std::string expect = fmt::format("p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us (max {:.1f} us)", edge(0.5),
-                                         edge(0.99), edge(0.999), max_us);
+  const std::string expect =
+      fmt::format("p50 {:.1f} us, p99 {:.1f} us, p99.9 {:.1f} us (max {:.1f} us)", edge(0.5),
+                  edge(0.99), edge(0.999), max_us);
   EXPECT_NE(s.find(expect), std::string::npos) << s << "\nexpected: " << expect;
   EXPECT_NE(s.find("2 trial sides on the real clock"), std::string::npos) << s;
   EXPECT_NE(s.find("over 2000 ticks"), std::string::npos) << s;
@@ -79,7 +88,8 @@ TEST(TimingReport, AVirtualClockStudySaysSo) {
   f.Add("left", {0, 0, 0}, "virtual");
   EXPECT_NE(TimingMethodsSentence(f.d, f.study).find("virtual clock"), std::string::npos);
   Fixture none;
-  EXPECT_NE(TimingMethodsSentence(none.d, none.study).find("No real-time timing"), std::string::npos);
+  EXPECT_NE(TimingMethodsSentence(none.d, none.study).find("No real-time timing"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
 // Tukey HSD and the compact letter grouping (stats/src/tukey.cpp).
 
+#include "hapticlab/stats/tukey.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,6 @@
 #include "hapticlab/stats/descriptive.hpp"
 #include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
-#include "hapticlab/stats/tukey.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -30,9 +31,21 @@ LongTable Make(const std::vector<std::tuple<std::string, std::string, double>>& 
 
 TEST(Tukey, EqualGroupsGiveTheClassicalHsd) {
   // Three groups of 5: q = |diff| / sqrt(MSE / n).
-  const auto t = TukeyBetween(Make({{"1", "x", 1}, {"2", "x", 2}, {"3", "x", 3}, {"4", "x", 2}, {"5", "x", 2},
-                                    {"6", "y", 4}, {"7", "y", 5}, {"8", "y", 6}, {"9", "y", 5}, {"10", "y", 5},
-                                    {"11", "z", 2}, {"12", "z", 3}, {"13", "z", 4}, {"14", "z", 3}, {"15", "z", 3}}),
+  const auto t = TukeyBetween(Make({{"1", "x", 1},
+                                    {"2", "x", 2},
+                                    {"3", "x", 3},
+                                    {"4", "x", 2},
+                                    {"5", "x", 2},
+                                    {"6", "y", 4},
+                                    {"7", "y", 5},
+                                    {"8", "y", 6},
+                                    {"9", "y", 5},
+                                    {"10", "y", 5},
+                                    {"11", "z", 2},
+                                    {"12", "z", 3},
+                                    {"13", "z", 4},
+                                    {"14", "z", 3},
+                                    {"15", "z", 3}}),
                               "cond");
   EXPECT_DOUBLE_EQ(t.mse, 0.5);
   ASSERT_EQ(t.pairs.size(), 3u);

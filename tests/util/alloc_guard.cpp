@@ -107,9 +107,7 @@ void* operator new(std::size_t n, const std::nothrow_t&) noexcept {
   Count();
   return std::malloc(n ? n : 1);
 }
-void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept {
-  return operator new(n, t);
-}
+void* operator new[](std::size_t n, const std::nothrow_t& t) noexcept { return operator new(n, t); }
 void* operator new(std::size_t n, std::align_val_t a, const std::nothrow_t&) noexcept {
   Count();
   const auto al = static_cast<std::size_t>(a);

@@ -7,7 +7,8 @@ using namespace detail;
 
 double Quantile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
+  const std::size_t k =
+      std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())));
   std::nth_element(v.begin(), v.begin() + k, v.end());
   return v[k];
 }
@@ -26,8 +27,22 @@ class BaseLayer final : public Effect {
     std::vector<double> d;
     for (const auto& s : r.samples())
       if (s.contact) d.push_back(s.d_m);
-    return {{.name = "K_b", .unit = "N/m", .init = 500, .lo = 0, .hi = 1e6, .scale = 1000, .fitted = true, .doc = "base stiffness"},
-            {.name = "t", .unit = "m", .init = Quantile(d, 0.6), .lo = 0, .hi = 0.01, .scale = 1e-3, .fitted = true, .doc = "layer thickness"}};
+    return {{.name = "K_b",
+             .unit = "N/m",
+             .init = 500,
+             .lo = 0,
+             .hi = 1e6,
+             .scale = 1000,
+             .fitted = true,
+             .doc = "base stiffness"},
+            {.name = "t",
+             .unit = "m",
+             .init = Quantile(d, 0.6),
+             .lo = 0,
+             .hi = 0.01,
+             .scale = 1e-3,
+             .fitted = true,
+             .doc = "layer thickness"}};
   }
   void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {
     t.extra_N += p[0] * std::max(0.0, s.d_m - p[1]);
@@ -40,16 +55,19 @@ class BaseLayer final : public Effect {
     for (int k = 0; k <= 8; ++k) e.push_back(dmax * k / 8);
     e.back() += 1e-12;
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.samples()[i].d_m; },
+        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].d_m; },
         [&](std::size_t i) { return r.samples()[i].contact; }, e);
     const int hi = b.Last();
     if (hi < 2) return {"too narrow a range of penetration to judge", "", false};
     // The deepest bin's excess over the trend of the shallower half.
     const int mid = hi / 2;
-    return {fmt::format("normal-force residual is {} around {:.2f} mm and {} at the deepest {:.2f} mm", Mn(b.mean[mid]),
-                        (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500),
-            "the contact gets stiffer beyond some depth, a base under the layer is felt",
-            !(b.mean[hi] > b.mean[mid] + 0.01)};
+    return {
+        fmt::format("normal-force residual is {} around {:.2f} mm and {} at the deepest {:.2f} mm",
+                    Mn(b.mean[mid]), (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]),
+                    (b.lo[hi] + b.hi[hi]) * 500),
+        "the contact gets stiffer beyond some depth, a base under the layer is felt",
+        !(b.mean[hi] > b.mean[mid] + 0.01)};
   }
 };
 }  // namespace

@@ -19,24 +19,39 @@ class Coulomb final : public Effect {
     // Initial value: median measured friction ratio while sliding.
     std::vector<double> ratio;
     for (const auto& s : r.samples())
-      if (s.contact && s.speed_mps >= kSlidingSpeed_mps && s.fn_N > 0.05) ratio.push_back(std::hypot(s.ftx_N, s.fty_N) / s.fn_N);
+      if (s.contact && s.speed_mps >= kSlidingSpeed_mps && s.fn_N > 0.05)
+        ratio.push_back(std::hypot(s.ftx_N, s.fty_N) / s.fn_N);
     double init = 0.3;
     if (!ratio.empty()) {
       std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
       init = std::clamp(ratio[ratio.size() / 2], 0.01, 2.0);
     }
-    return {{.name = "mu_k", .unit = "1", .init = init, .lo = 0, .hi = 3, .scale = 0.3, .fitted = true, .doc = "kinetic friction coefficient"}};
+    return {{.name = "mu_k",
+             .unit = "1",
+             .init = init,
+             .lo = 0,
+             .hi = 3,
+             .scale = 0.3,
+             .fitted = true,
+             .doc = "kinetic friction coefficient"}};
   }
-  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.mu_k = p[0]; }
+  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
+    t.mu_k = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.samples()[i].fn_N; },
-        [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps; },
+        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].fn_N; },
+        [&](std::size_t i) {
+          return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
+        },
         {0, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0) return {"too few sliding samples to judge", "", false};
-    return {fmt::format("while sliding, the friction residual is {} at loads of {:.1f}-{:.1f} N and {} at {:.1f}-{:.1f} N",
-                        Mn(b.mean[lo]), b.lo[lo], b.hi[lo], Mn(b.mean[hi]), b.lo[hi], std::min(b.hi[hi], 9.9)),
+    return {fmt::format("while sliding, the friction residual is {} at loads of {:.1f}-{:.1f} N "
+                        "and {} at {:.1f}-{:.1f} N",
+                        Mn(b.mean[lo]), b.lo[lo], b.hi[lo], Mn(b.mean[hi]), b.lo[hi],
+                        std::min(b.hi[hi], 9.9)),
             "a resistance that grows with the normal load is missing", !(b.mean[hi] > 0.005)};
   }
 };

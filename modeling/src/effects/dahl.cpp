@@ -18,9 +18,18 @@ class Dahl final : public Effect {
            "reversals and starts show a ramp of about f_C / kappa.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "kappa", .unit = "N/m", .init = 2000, .lo = 10, .hi = 1e6, .scale = 1000, .fitted = true, .doc = "pre-sliding stiffness"}};
+    return {{.name = "kappa",
+             .unit = "N/m",
+             .init = 2000,
+             .lo = 10,
+             .hi = 1e6,
+             .scale = 1000,
+             .fitted = true,
+             .doc = "pre-sliding stiffness"}};
   }
-  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.kappa = p[0]; }
+  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
+    t.kappa = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Residual magnitude in pre-sliding / starting samples vs steady sliding.
     double pre = 0, sl = 0;
@@ -28,15 +37,20 @@ class Dahl final : public Effect {
     for (std::size_t i = 0; i < r.samples().size(); ++i) {
       if (!r.samples()[i].contact) continue;
       const double e = res.friction_N[i] * res.friction_N[i];
-      if (r.samples()[i].speed_mps < kSlidingSpeed_mps) pre += e, ++npre;
-      else sl += e, ++nsl;
+      if (r.samples()[i].speed_mps < kSlidingSpeed_mps)
+        pre += e, ++npre;
+      else
+        sl += e, ++nsl;
     }
-    if (npre < 10 || nsl < 10) return {"too few pre-sliding or sliding samples to judge", "", false};
+    if (npre < 10 || nsl < 10)
+      return {"too few pre-sliding or sliding samples to judge", "", false};
     const double a = std::sqrt(pre / npre), b = std::sqrt(sl / nsl);
-    return {fmt::format("friction residual RMS is {:.4f} N below 3 mm/s (starts, stops, reversals) against {:.4f} N while "
+    return {fmt::format("friction residual RMS is {:.4f} N below 3 mm/s (starts, stops, reversals) "
+                        "against {:.4f} N while "
                         "sliding ({:.1f}x)",
                         a, b, a / std::max(b, 1e-12)),
-            "the build-up of friction over the first tenths of a millimetre is not modelled", !(a > 1.5 * b)};
+            "the build-up of friction over the first tenths of a millimetre is not modelled",
+            !(a > 1.5 * b)};
   }
 };
 }  // namespace

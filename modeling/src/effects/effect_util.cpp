@@ -28,7 +28,9 @@ int Bins::Last(int min_n) const {
 double MeanBandResidualDb(const Residuals& res, std::size_t w) {
   double s = 0;
   for (const double x : res.log_band[w]) s += x;
-  return res.log_band[w].empty() ? 0 : 10.0 / std::log(10.0) * s / static_cast<double>(res.log_band[w].size());
+  return res.log_band[w].empty()
+             ? 0
+             : 10.0 / std::log(10.0) * s / static_cast<double>(res.log_band[w].size());
 }
 
 }  // namespace hapticlab::modeling::wb::detail
@@ -57,7 +59,8 @@ void Hats(const double* t, int K, double u, double* out) {
 
 std::vector<double> LogQuantileKnots(const Replay& r, int K, bool speed) {
   std::vector<double> v;
-  for (const auto& w : r.windows) v.push_back(std::log(speed ? w.speed_mps : std::max(w.force_N, 1e-3)));
+  for (const auto& w : r.windows)
+    v.push_back(std::log(speed ? w.speed_mps : std::max(w.force_N, 1e-3)));
   std::vector<double> knots;
   if (v.empty()) {
     for (int k = 0; k < K; ++k) knots.push_back(speed ? std::log(0.01) + k : k - 1.0);
@@ -65,7 +68,9 @@ std::vector<double> LogQuantileKnots(const Replay& r, int K, bool speed) {
   }
   std::sort(v.begin(), v.end());
   for (int k = 0; k < K; ++k) {
-    double q = v[std::min(v.size() - 1, static_cast<std::size_t>(static_cast<double>(k) / (K - 1) * static_cast<double>(v.size() - 1)))];
+    double q =
+        v[std::min(v.size() - 1, static_cast<std::size_t>(static_cast<double>(k) / (K - 1) *
+                                                          static_cast<double>(v.size() - 1)))];
     if (!knots.empty() && q <= knots.back() + 1e-3) q = knots.back() + 1e-3;
     knots.push_back(q);
   }

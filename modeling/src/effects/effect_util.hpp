@@ -47,7 +47,8 @@ Bins BinMeans(std::size_t count, Value value, Key key, Use use, const std::vecto
       }
     }
   }
-  for (std::size_t j = 0; j < k; ++j) b.mean[j] = b.n[j] ? b.mean[j] / static_cast<double>(b.n[j]) : 0;
+  for (std::size_t j = 0; j < k; ++j)
+    b.mean[j] = b.n[j] ? b.mean[j] / static_cast<double>(b.n[j]) : 0;
   return b;
 }
 

@@ -11,21 +11,32 @@ class HcDamping final : public Effect {
   Channel channel() const override { return Channel::kNormal; }
   std::string_view description() const override {
     return "Hunt-Crossley damping: the normal force depends on the penetration rate as well as on "
-           "the depth, f = (K + B d_dot) (d / 1 mm)^n (dissertation eq. 4.11), so pressing in meets "
+           "the depth, f = (K + B d_dot) (d / 1 mm)^n (dissertation eq. 4.11), so pressing in "
+           "meets "
            "more force than releasing at the same depth and the loop dissipates energy. Damping "
            "scales with depth, so there is no force jump at first contact.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "B1mm", .unit = "N s/m", .init = 0, .lo = 0, .hi = 1e5, .scale = 10, .fitted = true, .doc = "damping at 1 mm penetration"}};
+    return {{.name = "B1mm",
+             .unit = "N s/m",
+             .init = 0,
+             .lo = 0,
+             .hi = 1e5,
+             .scale = 10,
+             .fitted = true,
+             .doc = "damping at 1 mm penetration"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.B = p[0]; }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const double c = Correlation(
-        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.samples()[i].ddot_mps; },
+        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].ddot_mps; },
         [&](std::size_t i) { return r.samples()[i].contact; });
-    return {fmt::format("normal-force residual correlates with the penetration rate (r = {:+.2f})", c),
-            "pressing in meets more force than releasing at the same depth, a rate-dependent (damping) force is missing",
-            !(c > 0.2)};
+    return {
+        fmt::format("normal-force residual correlates with the penetration rate (r = {:+.2f})", c),
+        "pressing in meets more force than releasing at the same depth, a rate-dependent (damping) "
+        "force is missing",
+        !(c > 0.2)};
   }
 };
 }  // namespace

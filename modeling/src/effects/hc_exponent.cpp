@@ -26,21 +26,31 @@ class HcExponent final : public Effect {
            "under-predicts it deep, with a smooth curvature in between.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "n", .unit = "1", .init = 1.1, .lo = 1, .hi = 2, .scale = 0.1, .fitted = true, .doc = "exponent"}};
+    return {{.name = "n",
+             .unit = "1",
+             .init = 1.1,
+             .lo = 1,
+             .hi = 2,
+             .scale = 0.1,
+             .fitted = true,
+             .doc = "exponent"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.n = p[0]; }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; }, [&](std::size_t i) { return r.samples()[i].d_m; },
+        r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].d_m; },
         [&](std::size_t i) { return r.samples()[i].contact; }, DepthEdges(r));
     const int lo = b.First(), hi = b.Last();
     if (lo < 0 || hi - lo < 2) return {"too narrow a range of penetration to judge", "", false};
     const int mid = (lo + hi) / 2;
     const bool curved = b.mean[lo] < b.mean[mid] - 0.005 || b.mean[hi] > b.mean[mid] + 0.005;
-    return {fmt::format("normal-force residual is {} at {:.2f} mm, {} at {:.2f} mm and {} at {:.2f} mm of penetration",
-                        Mn(b.mean[lo]), (b.lo[lo] + b.hi[lo]) * 500, Mn(b.mean[mid]), (b.lo[mid] + b.hi[mid]) * 500,
-                        Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500),
-            "the force-penetration curve bends upward, the contact stiffens smoothly with depth", !curved};
+    return {fmt::format("normal-force residual is {} at {:.2f} mm, {} at {:.2f} mm and {} at "
+                        "{:.2f} mm of penetration",
+                        Mn(b.mean[lo]), (b.lo[lo] + b.hi[lo]) * 500, Mn(b.mean[mid]),
+                        (b.lo[mid] + b.hi[mid]) * 500, Mn(b.mean[hi]), (b.lo[hi] + b.hi[hi]) * 500),
+            "the force-penetration curve bends upward, the contact stiffens smoothly with depth",
+            !curved};
   }
 };
 }  // namespace

@@ -17,24 +17,38 @@ class LoadDependentFriction final : public Effect {
            "contact), so the friction coefficient falls as the user presses harder.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "alpha", .unit = "1", .init = 1.0, .lo = 0.2, .hi = 1.8, .scale = 0.1, .fitted = true, .doc = "load exponent (1: Coulomb)"}};
+    return {{.name = "alpha",
+             .unit = "1",
+             .init = 1.0,
+             .lo = 0.2,
+             .hi = 1.8,
+             .scale = 0.1,
+             .fitted = true,
+             .doc = "load exponent (1: Coulomb)"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto use = [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps; };
+    const auto use = [&](std::size_t i) {
+      return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
+    };
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.ratio[i]; }, [&](std::size_t i) { return r.samples()[i].fn_N; }, use,
-        {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
+        r.samples().size(), [&](std::size_t i) { return res.ratio[i]; },
+        [&](std::size_t i) { return r.samples()[i].fn_N; }, use, {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0 || lo == hi) return {"too narrow a range of loads to judge", "", false};
     const double d = b.mean[hi] - b.mean[lo];
-    return {fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} N and {:+.3f} at {:.1f}-{:.1f} N", b.mean[lo],
-                        b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9)),
-            fmt::format("the friction coefficient {} with load", d < 0 ? "falls" : "rises"), std::abs(d) < 0.01};
+    return {
+        fmt::format(
+            "friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} N and {:+.3f} at {:.1f}-{:.1f} N",
+            b.mean[lo], b.lo[lo], b.hi[lo], b.mean[hi], b.lo[hi], std::min(b.hi[hi], 9.9)),
+        fmt::format("the friction coefficient {} with load", d < 0 ? "falls" : "rises"),
+        std::abs(d) < 0.01};
   }
 };
 }  // namespace
-std::unique_ptr<Effect> MakeLoadDependentFriction() { return std::make_unique<LoadDependentFriction>(); }
+std::unique_ptr<Effect> MakeLoadDependentFriction() {
+  return std::make_unique<LoadDependentFriction>();
+}
 }  // namespace hapticlab::modeling::wb

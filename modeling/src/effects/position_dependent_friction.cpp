@@ -22,17 +22,54 @@ class PositionDependentFriction final : public Effect {
     return "Position-dependent friction: the friction coefficient varies over the sample "
            "(worn or polished areas, contamination, a grain that changes across a board), "
            "mu(x, y) = mu_k (1 + sum g_jk P_j(u) P_k(v)) with u, v the position scaled to [-1, 1] "
-           "over the measured area and P_j Legendre polynomials of degree j <= 2. Residuals then differ between tiles of the "
+           "over the measured area and P_j Legendre polynomials of degree j <= 2. Residuals then "
+           "differ between tiles of the "
            "surface rather than with speed, load or direction.";
   }
   std::vector<ParamSpec> Params(const Replay& r) const override {
-    std::vector<ParamSpec> p = {{.name = "x0", .unit = "m", .init = r.x_min, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
-                                {.name = "x1", .unit = "m", .init = r.x_max, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
-                                {.name = "y0", .unit = "m", .init = r.y_min, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"},
-                                {.name = "y1", .unit = "m", .init = r.y_max, .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "area"}};
+    std::vector<ParamSpec> p = {{.name = "x0",
+                                 .unit = "m",
+                                 .init = r.x_min,
+                                 .lo = -1e9,
+                                 .hi = 1e9,
+                                 .scale = 1,
+                                 .fitted = false,
+                                 .doc = "area"},
+                                {.name = "x1",
+                                 .unit = "m",
+                                 .init = r.x_max,
+                                 .lo = -1e9,
+                                 .hi = 1e9,
+                                 .scale = 1,
+                                 .fitted = false,
+                                 .doc = "area"},
+                                {.name = "y0",
+                                 .unit = "m",
+                                 .init = r.y_min,
+                                 .lo = -1e9,
+                                 .hi = 1e9,
+                                 .scale = 1,
+                                 .fitted = false,
+                                 .doc = "area"},
+                                {.name = "y1",
+                                 .unit = "m",
+                                 .init = r.y_max,
+                                 .lo = -1e9,
+                                 .hi = 1e9,
+                                 .scale = 1,
+                                 .fitted = false,
+                                 .doc = "area"}};
     for (int j = 0; j <= kOrder; ++j)
       for (int k = 0; k <= kOrder; ++k)
-        if (j || k) p.push_back({.name = fmt::format("g{}{}", j, k), .unit = "1", .init = 0, .lo = -0.9, .hi = 0.9, .scale = 0.1, .fitted = true, .doc = "Legendre coefficient"});
+        if (j || k)
+          p.push_back({.name = fmt::format("g{}{}", j, k),
+                       .unit = "1",
+                       .init = 0,
+                       .lo = -0.9,
+                       .hi = 0.9,
+                       .scale = 0.1,
+                       .fitted = true,
+                       .doc = "Legendre coefficient"});
     return p;
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
@@ -53,8 +90,10 @@ class PositionDependentFriction final : public Effect {
     for (std::size_t i = 0; i < r.samples().size(); ++i) {
       const auto& s = r.samples()[i];
       if (!s.contact || s.speed_mps < kSlidingSpeed_mps || s.fn_N < 0.05) continue;
-      const int tx = std::clamp(static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
-      const int ty = std::clamp(static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
+      const int tx = std::clamp(
+          static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
+      const int ty = std::clamp(
+          static_cast<int>(3 * (s.y_m - r.y_min) / std::max(r.y_max - r.y_min, 1e-9)), 0, 2);
       m[3 * ty + tx] += res.friction_N[i] / s.fn_N;
       n[3 * ty + tx] += 1;
     }
@@ -66,14 +105,18 @@ class PositionDependentFriction final : public Effect {
       if (hi < 0 || m[k] > m[hi]) hi = k;
     }
     if (lo < 0) return {"too few sliding samples to judge", "", false};
-    static const char* kTile[9] = {"front-left", "front-centre", "front-right", "middle-left", "centre",
-                                   "middle-right", "back-left", "back-centre", "back-right"};
-    return {fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} tile of a 3 x 3 grid "
+    static const char* kTile[9] = {"front-left",  "front-centre", "front-right",
+                                   "middle-left", "centre",       "middle-right",
+                                   "back-left",   "back-centre",  "back-right"};
+    return {fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} "
+                        "tile of a 3 x 3 grid "
                         "over the stroked area",
                         m[hi], kTile[hi], m[lo], kTile[lo]),
             "friction varies over the surface", !(m[hi] - m[lo] > 0.03)};
   }
 };
 }  // namespace
-std::unique_ptr<Effect> MakePositionDependentFriction() { return std::make_unique<PositionDependentFriction>(); }
+std::unique_ptr<Effect> MakePositionDependentFriction() {
+  return std::make_unique<PositionDependentFriction>();
+}
 }  // namespace hapticlab::modeling::wb

@@ -17,8 +17,22 @@ class Stribeck final : public Effect {
            "and is felt as stick at the start of a stroke.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "dmu_s", .unit = "1", .init = 0.05, .lo = 0, .hi = 3, .scale = 0.1, .fitted = true, .doc = "static minus kinetic coefficient"},
-            {.name = "v_s", .unit = "m/s", .init = 0.005, .lo = 2e-4, .hi = 0.1, .scale = 0.005, .fitted = true, .doc = "Stribeck speed"}};
+    return {{.name = "dmu_s",
+             .unit = "1",
+             .init = 0.05,
+             .lo = 0,
+             .hi = 3,
+             .scale = 0.1,
+             .fitted = true,
+             .doc = "static minus kinetic coefficient"},
+            {.name = "v_s",
+             .unit = "m/s",
+             .init = 0.005,
+             .lo = 2e-4,
+             .hi = 0.1,
+             .scale = 0.005,
+             .fitted = true,
+             .doc = "Stribeck speed"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     const double u = s.speed_mps / p[1];
@@ -26,16 +40,23 @@ class Stribeck final : public Effect {
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0; },
-        [&](std::size_t i) { return r.samples()[i].speed_mps; }, [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= 0.5e-3; },
+        r.samples().size(),
+        [&](std::size_t i) {
+          return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0;
+        },
+        [&](std::size_t i) { return r.samples()[i].speed_mps; },
+        [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= 0.5e-3; },
         {0.0005, 0.002, 0.005, 0.01, 0.02, 0.05, 1});
     const int lo = b.First(10), hi = b.Last();
     if (lo < 0 || hi < 0) return {"too few slow sliding samples to judge", "", false};
     const bool pattern = b.mean[lo] > b.mean[hi] + 0.01;
-    return {fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} mm/s and {:+.3f} at {:.0f}-{:.0f} mm/s{}",
+    return {fmt::format("friction-ratio residual is {:+.3f} at {:.1f}-{:.1f} mm/s and {:+.3f} at "
+                        "{:.0f}-{:.0f} mm/s{}",
                         b.mean[lo], b.lo[lo] * 1e3, b.hi[lo] * 1e3, b.mean[hi], b.lo[hi] * 1e3,
-                        std::min(b.hi[hi], 0.2) * 1e3, pattern ? "" : " (no excess friction at low speed)"),
-            "positive at low speed and decaying with speed, static friction exceeds kinetic", !pattern};
+                        std::min(b.hi[hi], 0.2) * 1e3,
+                        pattern ? "" : " (no excess friction at low speed)"),
+            "positive at low speed and decaying with speed, static friction exceeds kinetic",
+            !pattern};
   }
 };
 }  // namespace

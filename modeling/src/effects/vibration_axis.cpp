@@ -18,18 +18,18 @@ struct Axis {
   std::vector<double> edges;  // evidence bins of the key [m/s or N]
   double display_scale;       // key -> displayed unit
   int display_digits;
-  double display_cap;         // the last bin's upper edge shown at most this [key units]
+  double display_cap;  // the last bin's upper edge shown at most this [key units]
   const char* display_unit;
-  const char* range_word;     // "speeds", "loads"
-  const char* ln_symbol;      // "v", "f_n"
+  const char* range_word;  // "speeds", "loads"
+  const char* ln_symbol;   // "v", "f_n"
   const char* cause;
   double Key(const Replay::Window& w) const { return speed ? w.speed_mps : w.force_N; }
   double LnKey(const Replay::Window& w) const {
     return speed ? std::log(w.speed_mps) : std::log(std::max(w.force_N, 1e-3));
   }
   std::string Range(double lo, double hi) const {
-    return fmt::format("{:.{}f}-{:.{}f} {}", lo * display_scale, display_digits, hi * display_scale, display_digits,
-                       display_unit);
+    return fmt::format("{:.{}f}-{:.{}f} {}", lo * display_scale, display_digits, hi * display_scale,
+                       display_digits, display_unit);
   }
 };
 
@@ -43,8 +43,14 @@ class VibrationAxis final : public Effect {
     const auto k = LogQuantileKnots(r, a_.knots, a_.speed);
     std::vector<ParamSpec> p;
     for (int i = 0; i < a_.knots; ++i)
-      p.push_back({.name = fmt::format("knot{}", i), .unit = a_.knot_unit, .init = k[static_cast<std::size_t>(i)],
-                   .lo = -1e9, .hi = 1e9, .scale = 1, .fitted = false, .doc = "knot"});
+      p.push_back({.name = fmt::format("knot{}", i),
+                   .unit = a_.knot_unit,
+                   .init = k[static_cast<std::size_t>(i)],
+                   .lo = -1e9,
+                   .hi = 1e9,
+                   .scale = 1,
+                   .fitted = false,
+                   .doc = "knot"});
     return p;
   }
   int VibrationColumns() const override { return a_.knots - 1; }
@@ -62,8 +68,10 @@ class VibrationAxis final : public Effect {
         r.windows.size(), [&](std::size_t w) { return MeanBandResidualDb(res, w); },
         [&](std::size_t w) { return a_.Key(r.windows[w]); }, use, a_.edges);
     const int lo = b.First(5), hi = b.Last(5);
-    if (lo < 0 || lo == hi) return {fmt::format("too narrow a range of {} to judge", a_.range_word), "", false};
-    return {fmt::format("vibration band-power residual is {:+.1f} dB at {} and {:+.1f} dB at {} (correlation with ln {} "
+    if (lo < 0 || lo == hi)
+      return {fmt::format("too narrow a range of {} to judge", a_.range_word), "", false};
+    return {fmt::format("vibration band-power residual is {:+.1f} dB at {} and {:+.1f} dB at {} "
+                        "(correlation with ln {} "
                         "{:+.2f})",
                         b.mean[lo], a_.Range(b.lo[lo], b.hi[lo]), b.mean[hi],
                         a_.Range(b.lo[hi], std::min(b.hi[hi], a_.display_cap)), a_.ln_symbol, c),
@@ -78,11 +86,12 @@ class VibrationAxis final : public Effect {
 std::unique_ptr<Effect> MakeVibrationSpeed() {
   return std::make_unique<VibrationAxis>(Axis{
       .name = "vibration-speed",
-      .description = "Speed-dependent vibration: a surface with spatial period lambda excites the tool at "
-                     "v / lambda, and faster strokes hit the micro-geometry harder, so both the level and "
-                     "the shape of the acceleration spectrum change with speed (the speed axis of the "
-                     "dissertation's AR bank, ch. III). Modelled as a piecewise-linear function of ln(v) "
-                     "per frequency band, with knots at quantiles of the measured speeds.",
+      .description =
+          "Speed-dependent vibration: a surface with spatial period lambda excites the tool at "
+          "v / lambda, and faster strokes hit the micro-geometry harder, so both the level and "
+          "the shape of the acceleration spectrum change with speed (the speed axis of the "
+          "dissertation's AR bank, ch. III). Modelled as a piecewise-linear function of ln(v) "
+          "per frequency band, with knots at quantiles of the measured speeds.",
       .knots = 5,
       .speed = true,
       .knot_unit = "ln(m/s)",
@@ -97,23 +106,24 @@ std::unique_ptr<Effect> MakeVibrationSpeed() {
 }
 
 std::unique_ptr<Effect> MakeVibrationForce() {
-  return std::make_unique<VibrationAxis>(Axis{
-      .name = "vibration-force",
-      .description = "Load-dependent vibration: pressing harder drives the tool deeper into the "
-                     "micro-geometry and changes the contact's stiffness, so the vibration level (and "
-                     "the resonances) change with the normal force (the force axis of the dissertation's "
-                     "AR bank, ch. III). Modelled as a piecewise-linear function of ln(f_n) per band.",
-      .knots = 3,
-      .speed = false,
-      .knot_unit = "ln(N)",
-      .edges = {0, 0.5, 1, 1.5, 2, 3, 1e9},
-      .display_scale = 1,
-      .display_digits = 1,
-      .display_cap = 9.9,
-      .display_unit = "N",
-      .range_word = "loads",
-      .ln_symbol = "f_n",
-      .cause = "the vibration level changes with the normal force"});
+  return std::make_unique<VibrationAxis>(
+      Axis{.name = "vibration-force",
+           .description =
+               "Load-dependent vibration: pressing harder drives the tool deeper into the "
+               "micro-geometry and changes the contact's stiffness, so the vibration level (and "
+               "the resonances) change with the normal force (the force axis of the dissertation's "
+               "AR bank, ch. III). Modelled as a piecewise-linear function of ln(f_n) per band.",
+           .knots = 3,
+           .speed = false,
+           .knot_unit = "ln(N)",
+           .edges = {0, 0.5, 1, 1.5, 2, 3, 1e9},
+           .display_scale = 1,
+           .display_digits = 1,
+           .display_cap = 9.9,
+           .display_unit = "N",
+           .range_word = "loads",
+           .ln_symbol = "f_n",
+           .cause = "the vibration level changes with the normal force"});
 }
 
 }  // namespace hapticlab::modeling::wb

@@ -34,7 +34,8 @@ class VibrationDirection final : public Effect {
     const int hi = b.ArgMax(5), lo = b.ArgMin(5);
     if (hi < 0) return {"too few windows to judge", "", false};
     const auto deg = [&](int j) { return (b.lo[j] + b.hi[j]) / 2 * 180 / std::numbers::pi; };
-    return {fmt::format("vibration band-power residual is {:+.1f} dB for strokes along {:.0f} deg and {:+.1f} dB along {:.0f} "
+    return {fmt::format("vibration band-power residual is {:+.1f} dB for strokes along {:.0f} deg "
+                        "and {:+.1f} dB along {:.0f} "
                         "deg",
                         b.mean[hi], deg(hi), b.mean[lo], deg(lo)),
             "the vibration depends on the direction of motion", false};

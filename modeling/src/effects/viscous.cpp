@@ -15,22 +15,36 @@ class Viscous final : public Effect {
            "term of dissertation eq. 4.7). It shows as friction that keeps rising with speed.";
   }
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "mu_b", .unit = "N s/m", .init = 0.0, .lo = 0, .hi = 1000, .scale = 1, .fitted = true, .doc = "viscous coefficient"}};
+    return {{.name = "mu_b",
+             .unit = "N s/m",
+             .init = 0.0,
+             .lo = 0,
+             .hi = 1000,
+             .scale = 1,
+             .fitted = true,
+             .doc = "viscous coefficient"}};
   }
-  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override { t.mu_b = p[0]; }
+  void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
+    t.mu_b = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto use = [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps; };
+    const auto use = [&](std::size_t i) {
+      return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
+    };
     const double c = Correlation(
-        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.samples()[i].speed_mps; }, use);
+        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].speed_mps; }, use);
     const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; }, [&](std::size_t i) { return r.samples()[i].speed_mps; }, use,
+        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
+        [&](std::size_t i) { return r.samples()[i].speed_mps; }, use,
         {0.003, 0.01, 0.03, 0.06, 0.1, 0.15, 1});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0) return {"too few sliding samples to judge", "", false};
-    return {fmt::format("friction residual goes from {} at {:.0f}-{:.0f} mm/s to {} at {:.0f}-{:.0f} mm/s (correlation "
+    return {fmt::format("friction residual goes from {} at {:.0f}-{:.0f} mm/s to {} at "
+                        "{:.0f}-{:.0f} mm/s (correlation "
                         "with speed {:+.2f})",
-                        Mn(b.mean[lo]), b.lo[lo] * 1e3, b.hi[lo] * 1e3, Mn(b.mean[hi]), b.lo[hi] * 1e3,
-                        std::min(b.hi[hi], 0.2) * 1e3, c),
+                        Mn(b.mean[lo]), b.lo[lo] * 1e3, b.hi[lo] * 1e3, Mn(b.mean[hi]),
+                        b.lo[hi] * 1e3, std::min(b.hi[hi], 0.2) * 1e3, c),
             "friction rises with sliding speed", !(c > 0)};
   }
 };

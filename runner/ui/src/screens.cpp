@@ -25,14 +25,15 @@ void FullWindow(const char* name, ImU32 bg) {
   ImGui::SetNextWindowSize(io.DisplaySize);
   ImGui::PushStyleColor(ImGuiCol_WindowBg, bg);
   ImGui::Begin(name, nullptr,
-               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
-                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoBringToFrontOnFocus);
   ImGui::PopStyleColor();
 }
 
 // A rating scale with no default position: a track the participant clicks or drags on; the
 // handle appears only once a value is set.
-bool RatingScale(const std::string& id, std::optional<double>* value, double lo, double hi, float width, Drawn* drawn) {
+bool RatingScale(const std::string& id, std::optional<double>* value, double lo, double hi,
+                 float width, Drawn* drawn) {
   const ImVec2 p = ImGui::GetCursorScreenPos();
   const float h = 28;
   ImGui::InvisibleButton(id.c_str(), ImVec2(width, h));
@@ -80,9 +81,11 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   const ImVec2 size = ImGui::GetIO().DisplaySize;
   ImDrawList* dl = ImGui::GetWindowDrawList();
   if (v.mode == ParticipantView::Mode::kBreak || v.mode == ParticipantView::Mode::kMessage) {
-    const std::string text = v.mode == ParticipantView::Mode::kBreak
-                                 ? fmt::format("Break. Please rest your hand.\nThe study continues in {:.0f} s.", std::ceil(v.break_remaining_s))
-                                 : v.message;
+    const std::string text =
+        v.mode == ParticipantView::Mode::kBreak
+            ? fmt::format("Break. Please rest your hand.\nThe study continues in {:.0f} s.",
+                          std::ceil(v.break_remaining_s))
+            : v.message;
     ImGui::SetWindowFontScale(2.0f);
     const ImVec2 ts = ImGui::CalcTextSize(text.c_str());
     ImGui::SetCursorPos(ImVec2((size.x - ts.x) / 2, (size.y - ts.y) / 2));
@@ -94,16 +97,20 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   // The scene: the upper part of the window (all of it while the stimulus is explored),
   // below the phase's prompt. The margins hold the whole cursor (a 6 mm sphere) wherever
   // the stylus is, so it is never clipped at the window's edges.
-  const bool below = v.mode == ParticipantView::Mode::kRating || v.mode == ParticipantView::Mode::kChoice;
+  const bool below =
+      v.mode == ParticipantView::Mode::kRating || v.mode == ParticipantView::Mode::kChoice;
   // Rating: the panel under the scene holds the prompt, each criterion (gap, name, scale,
   // end labels) and the confirm button; the scene gets what is left (at most 55 %).
   const ImGuiStyle& style = ImGui::GetStyle();
   const float line = ImGui::GetTextLineHeightWithSpacing();
-  const float per_criterion = 14 + 1.25f * line + 28 + style.ItemSpacing.y + line + style.ItemSpacing.y;
-  const float panel = v.mode == ParticipantView::Mode::kRating
-                          ? 10 + line + static_cast<float>(v.criteria.size()) * per_criterion + 10 + 36 + 34
-                          : 130;
-  const float scene_h = below ? std::max(size.y * 0.3f, std::min(size.y * 0.55f, size.y - panel)) : size.y;
+  const float per_criterion =
+      14 + 1.25f * line + 28 + style.ItemSpacing.y + line + style.ItemSpacing.y;
+  const float panel =
+      v.mode == ParticipantView::Mode::kRating
+          ? 10 + line + static_cast<float>(v.criteria.size()) * per_criterion + 10 + 36 + 34
+          : 130;
+  const float scene_h =
+      below ? std::max(size.y * 0.3f, std::min(size.y * 0.55f, size.y - panel)) : size.y;
   float top = 0;
   if (v.mode == ParticipantView::Mode::kStimulus && !v.stimulus_prompt.empty()) {
     ImGui::SetWindowFontScale(1.5f);
@@ -115,8 +122,9 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   }
   constexpr double kCursorRadius_m = 0.006;
   const Eigen::Vector2d span = v.workspace_max_m - v.workspace_min_m;
-  const float scale = std::min(size.x * 0.95f / static_cast<float>(span.x() + 2 * kCursorRadius_m),
-                               (scene_h - top) * 0.95f / static_cast<float>(span.y() + 2 * kCursorRadius_m));
+  const float scale =
+      std::min(size.x * 0.95f / static_cast<float>(span.x() + 2 * kCursorRadius_m),
+               (scene_h - top) * 0.95f / static_cast<float>(span.y() + 2 * kCursorRadius_m));
   const ImVec2 origin((size.x - scale * static_cast<float>(span.x())) / 2,
                       top + (scene_h - top - scale * static_cast<float>(span.y())) / 2);
   auto to_px = [&](const Eigen::Vector2d& m) {
@@ -145,7 +153,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   cp.y = std::clamp(cp.y, top + r, std::max(top + r, scene_h - r));
   const float press = std::clamp(static_cast<float>(-v.stylus_m.z() / 0.002), 0.f, 1.f);
   const auto shade = [&](float k) {
-    return IM_COL32(static_cast<int>((255 - 90 * press) * k), static_cast<int>((140 - 60 * press) * k), static_cast<int>(30 * k), 255);
+    return IM_COL32(static_cast<int>((255 - 90 * press) * k),
+                    static_cast<int>((140 - 60 * press) * k), static_cast<int>(30 * k), 255);
   };
   dl->AddCircleFilled(cp, r, shade(0.75f), 32);
   dl->AddCircleFilled(ImVec2(cp.x - r * 0.25f, cp.y - r * 0.25f), r * 0.6f, shade(1.0f), 32);
@@ -156,7 +165,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     const float x0 = (size.x - width) / 2;
     ImGui::SetCursorPos(ImVec2(x0, scene_h + 10));
     TextRecorded(drawn, "prompt",
-                 fmt::format("How similar are {} and {}? Click on each scale, then confirm.", v.left_label, v.right_label));
+                 fmt::format("How similar are {} and {}? Click on each scale, then confirm.",
+                             v.left_label, v.right_label));
     for (std::size_t i = 0; i < v.criteria.size(); ++i) {
       // One group per criterion: its name (larger) right above its scale, the scale's end
       // labels right under it, then a gap before the next criterion's name.
@@ -175,7 +185,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
       ImGui::PopStyleColor();
     }
     ImGui::Dummy(ImVec2(0, 10));
-    const bool all = std::all_of(act.ratings.begin(), act.ratings.end(), [](const auto& x) { return x.has_value(); });
+    const bool all = std::all_of(act.ratings.begin(), act.ratings.end(),
+                                 [](const auto& x) { return x.has_value(); });
     ImGui::SetCursorPosX(x0 + width / 2 - 60);
     if (!all) ImGui::BeginDisabled();
     const ImVec2 bp = ImGui::GetCursorScreenPos();
@@ -187,7 +198,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     // The question and one button per answer; number keys (and Y / N) answer too.
     const float bw = 120, gap = 24;
     const float total = static_cast<float>(v.answers.size()) * (bw + gap) - gap;
-    ImGui::SetCursorPos(ImVec2((size.x - ImGui::CalcTextSize(v.question.c_str()).x) / 2, scene_h + 10));
+    ImGui::SetCursorPos(
+        ImVec2((size.x - ImGui::CalcTextSize(v.question.c_str()).x) / 2, scene_h + 10));
     TextRecorded(drawn, "prompt", v.question);
     ImGui::SetCursorPos(ImVec2((size.x - total) / 2, scene_h + 60));
     for (std::size_t k = 0; k < v.answers.size(); ++k) {
@@ -206,7 +218,8 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   }
   if (v.trials > 0) {
     ImGui::SetCursorPos(ImVec2(10, size.y - 24));
-    TextRecorded(drawn, "trial", fmt::format("{}{} / {}", v.training ? "Training " : "", v.trial, v.trials));
+    TextRecorded(drawn, "trial",
+                 fmt::format("{}{} / {}", v.training ? "Training " : "", v.trial, v.trials));
   }
   ImGui::End();
   return act;
@@ -221,20 +234,24 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   const ImVec2 pp = ImGui::GetCursorScreenPos();
   const float frac = v.total > 0 ? static_cast<float>(v.done) / static_cast<float>(v.total) : 0.f;
   ImGui::PushStyleColor(ImGuiCol_PlotHistogram, IM_COL32(60, 180, 90, 255));
-  ImGui::ProgressBar(frac, ImVec2(-1, 24), fmt::format("{} of {} rated trials", v.done, v.total).c_str());
+  ImGui::ProgressBar(frac, ImVec2(-1, 24),
+                     fmt::format("{} of {} rated trials", v.done, v.total).c_str());
   ImGui::PopStyleColor();
   Record(drawn, "progress", pp, ImVec2(pp.x + ImGui::GetContentRegionAvail().x, pp.y + 24));
   if (v.training_total > 0)
-    TextRecorded(drawn, "training", fmt::format("Training: {} of {} trials", v.training_done, v.training_total));
+    TextRecorded(drawn, "training",
+                 fmt::format("Training: {} of {} trials", v.training_done, v.training_total));
   TextRecorded(drawn, "phase", "Phase: " + v.phase);
   // The session's state, impossible to miss: paused, on a break (with its countdown).
   if (v.paused || v.on_break) {
-    const std::string state = v.paused ? "PAUSED - the participant sees \"Please wait\". Press Resume to continue."
-                                       : fmt::format("BREAK - {:.0f} s left", std::ceil(v.break_remaining_s));
+    const std::string state =
+        v.paused ? "PAUSED - the participant sees \"Please wait\". Press Resume to continue."
+                 : fmt::format("BREAK - {:.0f} s left", std::ceil(v.break_remaining_s));
     const ImVec2 sp = ImGui::GetCursorScreenPos();
     const float w = ImGui::GetContentRegionAvail().x;
-    ImGui::GetWindowDrawList()->AddRectFilled(sp, ImVec2(sp.x + w, sp.y + 34),
-                                              v.paused ? IM_COL32(190, 120, 20, 255) : IM_COL32(40, 110, 190, 255));
+    ImGui::GetWindowDrawList()->AddRectFilled(
+        sp, ImVec2(sp.x + w, sp.y + 34),
+        v.paused ? IM_COL32(190, 120, 20, 255) : IM_COL32(40, 110, 190, 255));
     ImGui::SetCursorScreenPos(ImVec2(sp.x + 8, sp.y + 6));
     ImGui::SetWindowFontScale(1.3f);
     TextRecorded(drawn, v.paused ? "state:paused" : "state:break", state);
@@ -249,10 +266,12 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   auto trace = [&](const char* id, const char* label, const std::vector<float>& x) {
     const ImVec2 p = ImGui::GetCursorScreenPos();
     const float w = ImGui::GetContentRegionAvail().x;
-    const std::string overlay = x.empty() ? std::string("no data") : fmt::format("{} {:.3f}", label, x.back());
+    const std::string overlay =
+        x.empty() ? std::string("no data") : fmt::format("{} {:.3f}", label, x.back());
     static const float kNone = 0;
-    ImGui::PlotLines(fmt::format("##{}", id).c_str(), x.empty() ? &kNone : x.data(), x.empty() ? 1 : static_cast<int>(x.size()), 0,
-                     overlay.c_str(), FLT_MAX, FLT_MAX, ImVec2(w, 70));
+    ImGui::PlotLines(fmt::format("##{}", id).c_str(), x.empty() ? &kNone : x.data(),
+                     x.empty() ? 1 : static_cast<int>(x.size()), 0, overlay.c_str(), FLT_MAX,
+                     FLT_MAX, ImVec2(w, 70));
     Record(drawn, id, p, ImVec2(p.x + w, p.y + 70));
   };
   trace("trace:force", "force [N]", v.force_N);
@@ -260,11 +279,15 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   trace("trace:acc", "acceleration [m/s^2]", v.acc_mps2);
   ImGui::Separator();
   const ImVec2 bp = ImGui::GetCursorScreenPos();
-  if (v.paused) act.resume = ImGui::Button("Resume", ImVec2(110, 30));
-  else act.pause = ImGui::Button("Pause", ImVec2(110, 30));
+  if (v.paused)
+    act.resume = ImGui::Button("Resume", ImVec2(110, 30));
+  else
+    act.pause = ImGui::Button("Pause", ImVec2(110, 30));
   ImGui::SameLine();
-  if (v.on_break) act.end_break = ImGui::Button("End break now", ImVec2(110, 30));
-  else act.take_break = ImGui::Button("Break", ImVec2(110, 30));
+  if (v.on_break)
+    act.end_break = ImGui::Button("End break now", ImVec2(110, 30));
+  else
+    act.take_break = ImGui::Button("Break", ImVec2(110, 30));
   ImGui::SameLine();
   ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
   act.abort = ImGui::Button("Abort", ImVec2(110, 30));
@@ -273,20 +296,24 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
   ImGui::Separator();
   TextRecorded(drawn, "device", "Device: " + v.device_status);
   std::string faults;
-  for (const auto& [k, n] : v.faults) faults += fmt::format("{}{} {}", faults.empty() ? "" : ", ", k, n);
+  for (const auto& [k, n] : v.faults)
+    faults += fmt::format("{}{} {}", faults.empty() ? "" : ", ", k, n);
   TextRecorded(drawn, "faults", "Faults: " + (faults.empty() ? std::string("none") : faults));
   ImGui::Separator();
-  for (std::size_t i = v.log.size() > 8 ? v.log.size() - 8 : 0; i < v.log.size(); ++i) ImGui::TextUnformatted(v.log[i].c_str());
+  for (std::size_t i = v.log.size() > 8 ? v.log.size() - 8 : 0; i < v.log.size(); ++i)
+    ImGui::TextUnformatted(v.log[i].c_str());
   // Abort asks first: a modal over the console (nothing else in it reacts while it is open).
   if (v.confirm_abort) {
     if (!ImGui::IsPopupOpen("Abort the session?")) ImGui::OpenPopup("Abort the session?");
     const ImVec2 size = ImGui::GetIO().DisplaySize;
     ImGui::SetNextWindowPos(ImVec2(size.x / 2, size.y / 2), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
     ImGui::SetNextWindowSize(ImVec2(460, 0));
-    if (ImGui::BeginPopupModal("Abort the session?", nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings)) {
+    if (ImGui::BeginPopupModal("Abort the session?", nullptr,
+                               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings)) {
       const ImVec2 mp = ImGui::GetWindowPos();
-      ImGui::TextWrapped("Abort this session now? Completed trials stay recorded; the current trial is "
-                         "not. 'hapticlab study resume' continues with it later.");
+      ImGui::TextWrapped(
+          "Abort this session now? Completed trials stay recorded; the current trial is "
+          "not. 'hapticlab study resume' continues with it later.");
       ImGui::Spacing();
       const ImVec2 yp = ImGui::GetCursorScreenPos();
       ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
@@ -297,7 +324,8 @@ ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
       const ImVec2 np = ImGui::GetCursorScreenPos();
       act.abort_cancelled = ImGui::Button("Continue", ImVec2(200, 32));
       Record(drawn, "abort-cancel", np, ImVec2(np.x + 200, np.y + 32));
-      Record(drawn, "abort-modal", mp, ImVec2(mp.x + ImGui::GetWindowWidth(), mp.y + ImGui::GetWindowHeight()));
+      Record(drawn, "abort-modal", mp,
+             ImVec2(mp.x + ImGui::GetWindowWidth(), mp.y + ImGui::GetWindowHeight()));
       ImGui::EndPopup();
     }
     act.abort = false;

@@ -9,8 +9,9 @@
 
 namespace hapticlab::runner::ui {
 
-WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& participant, const std::string& device_status,
-                                 const WindowOptions& o, devices::RatingInput* box)
+WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& participant,
+                                 const std::string& device_status, const WindowOptions& o,
+                                 devices::RatingInput* box)
     : win_(o), box_(box) {
   cv_.study = study;
   cv_.participant = participant;
@@ -71,7 +72,8 @@ bool WindowSessionUi::Frame(ParticipantAction* pa) {
       cv_.paused = false;
       Log("resume", cv_.current);
     }
-    std::this_thread::sleep_for(std::chrono::milliseconds(15));  // ~60 frames per second without vsync
+    std::this_thread::sleep_for(
+        std::chrono::milliseconds(15));  // ~60 frames per second without vsync
     if (!cv_.paused && !cv_.confirm_abort) {
       if (held) pv_ = saved;
       return true;
@@ -90,17 +92,18 @@ void WindowSessionUi::Show(const TrialScreen& t) {
   cv_.total = t.rated_total > 0 ? t.rated_total : t.total;
   cv_.training_done = t.training_done;
   cv_.training_total = t.training_total;
-  cv_.current = fmt::format("{} {}: {} | {}{}", t.training ? "training trial" : "trial", t.index, t.left, t.right,
-                            t.method.empty() ? "" : " (" + t.method + ")");
+  cv_.current = fmt::format("{} {}: {} | {}{}", t.training ? "training trial" : "trial", t.index,
+                            t.left, t.right, t.method.empty() ? "" : " (" + t.method + ")");
   cv_.next_placement = t.placement;
   pv_.trial = t.index;
   pv_.trials = t.total;
   pv_.training = t.training;
   // The participant's prompt per phase (the same for reference and main trials: the
   // participant is not told which sample is real).
-  pv_.stimulus_prompt = t.training              ? "Training (not rated): explore A and B with the stylus"
-                        : !t.answers.empty()    ? "Explore each interval, then answer"
-                                                : "Explore A, then B: you will rate how similar they feel";
+  pv_.stimulus_prompt = t.training ? "Training (not rated): explore A and B with the stylus"
+                        : !t.answers.empty()
+                            ? "Explore each interval, then answer"
+                            : "Explore A, then B: you will rate how similar they feel";
   pv_.criteria = t.criteria;
   pv_.scale_min = t.scale_min;
   pv_.scale_max = t.scale_max;
@@ -108,18 +111,21 @@ void WindowSessionUi::Show(const TrialScreen& t) {
   pv_.scale_high = t.scale_high;
 }
 
-bool WindowSessionUi::Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) {
+bool WindowSessionUi::Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m,
+                               double remaining_s) {
   Show(t);
   pv_.mode = ParticipantView::Mode::kStimulus;
   const Eigen::Vector2d centre = side == 0 ? pv_.left_square_m : pv_.right_square_m;
-  pv_.stylus_m = Eigen::Vector3d(centre.x() + stylus_m.x(), centre.y() + stylus_m.y(), stylus_m.z());
+  pv_.stylus_m =
+      Eigen::Vector3d(centre.x() + stylus_m.x(), centre.y() + stylus_m.y(), stylus_m.z());
   // Traces for the console: the stylus speed proxy and penetration-as-force proxy are what the
   // sim provides; real devices fill them from the force stream.
   cv_.speed_mps.push_back(static_cast<float>(stylus_m.head<2>().norm()));
   cv_.force_N.push_back(static_cast<float>(std::max(0.0, -stylus_m.z()) * 1000));
   if (cv_.speed_mps.size() > 300) cv_.speed_mps.erase(cv_.speed_mps.begin());
   if (cv_.force_N.size() > 300) cv_.force_N.erase(cv_.force_N.begin());
-  cv_.current += fmt::format(" - exploring {}, {:.1f} s left", side == 0 ? "A (left)" : "B (right)", remaining_s);
+  cv_.current += fmt::format(" - exploring {}, {:.1f} s left", side == 0 ? "A (left)" : "B (right)",
+                             remaining_s);
   return Frame();
 }
 
@@ -143,10 +149,13 @@ std::optional<std::vector<double>> WindowSessionUi::Rate(const TrialScreen& t) {
         box_pos_ = e.position;
         box_button_ = e.confirm;
         if (moved) pv_.ratings[focus_] = t.scale_min + e.position * (t.scale_max - t.scale_min);
-        const bool all = std::all_of(pv_.ratings.begin(), pv_.ratings.end(), [](const auto& x) { return x.has_value(); });
+        const bool all = std::all_of(pv_.ratings.begin(), pv_.ratings.end(),
+                                     [](const auto& x) { return x.has_value(); });
         if (press && pv_.ratings[focus_]) {
-          if (focus_ + 1 < pv_.ratings.size()) ++focus_;
-          else if (all) a.confirmed = true;
+          if (focus_ + 1 < pv_.ratings.size())
+            ++focus_;
+          else if (all)
+            a.confirmed = true;
         }
       }
     }
@@ -181,7 +190,8 @@ std::optional<int> WindowSessionUi::Choose(const TrialScreen& t) {
       }
     }
     if (a.chosen) {
-      cv_.log.push_back(fmt::format("trial {}: answered {}", t.index, t.answers[static_cast<std::size_t>(*a.chosen)]));
+      cv_.log.push_back(fmt::format("trial {}: answered {}", t.index,
+                                    t.answers[static_cast<std::size_t>(*a.chosen)]));
       return a.chosen;
     }
   }
@@ -195,7 +205,8 @@ bool WindowSessionUi::Break(double seconds) {
   const auto t0 = std::chrono::steady_clock::now();
   bool go_on = true;
   for (;;) {
-    const double left = seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double left =
+        seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (left <= 0) break;
     pv_.break_remaining_s = cv_.break_remaining_s = left;
     if (!Frame()) {

@@ -4,11 +4,10 @@
 #include <backends/imgui_impl_opengl2.h>
 #include <imgui.h>
 
+#include <cstdlib>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
-
-#include <cstdlib>
 #include <stdexcept>
 
 namespace hapticlab::runner::ui {
@@ -25,11 +24,12 @@ namespace {
 // GLFW is initialised once per process and terminated at exit: re-initialising it after
 // glfwTerminate fails on some X servers.
 bool glfw_ready = false;
-}
+}  // namespace
 
 Windows::Windows(const WindowOptions& o) {
   if (!glfw_ready) {
-    if (!glfwInit()) throw std::runtime_error("GLFW cannot start: no display (set DISPLAY or run under xvfb-run)");
+    if (!glfwInit())
+      throw std::runtime_error("GLFW cannot start: no display (set DISPLAY or run under xvfb-run)");
     glfw_ready = true;
     std::atexit(glfwTerminate);
   }
@@ -67,8 +67,8 @@ Windows::~Windows() {
   }
 }
 
-bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa, ConsoleAction* ca,
-                    Drawn* pd, Drawn* cd) {
+bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa,
+                    ConsoleAction* ca, Drawn* pd, Drawn* cd) {
   glfwPollEvents();
   bool open = true;
   for (std::size_t i = 0; i < wins_.size(); ++i) {
@@ -82,13 +82,16 @@ bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, Participan
     glfwGetWindowSize(w.w, &ww, &wh);
     io.DisplaySize = ImVec2(static_cast<float>(ww), static_cast<float>(wh));
     if (ww > 0 && wh > 0)
-      io.DisplayFramebufferScale = ImVec2(static_cast<float>(w.fb_w) / static_cast<float>(ww), static_cast<float>(w.fb_h) / static_cast<float>(wh));
+      io.DisplayFramebufferScale = ImVec2(static_cast<float>(w.fb_w) / static_cast<float>(ww),
+                                          static_cast<float>(w.fb_h) / static_cast<float>(wh));
     const double now = glfwGetTime();
     io.DeltaTime = static_cast<float>(std::max(1e-4, now - w.last_time));
     w.last_time = now;
     double mx = 0, my = 0;
     glfwGetCursorPos(w.w, &mx, &my);
-    io.MousePos = glfwGetWindowAttrib(w.w, GLFW_HOVERED) ? ImVec2(static_cast<float>(mx), static_cast<float>(my)) : ImVec2(-FLT_MAX, -FLT_MAX);
+    io.MousePos = glfwGetWindowAttrib(w.w, GLFW_HOVERED)
+                      ? ImVec2(static_cast<float>(mx), static_cast<float>(my))
+                      : ImVec2(-FLT_MAX, -FLT_MAX);
     for (int b = 0; b < 3; ++b) io.MouseDown[b] = glfwGetMouseButton(w.w, b) == GLFW_PRESS;
     ImGui_ImplOpenGL2_NewFrame();
     ImGui::NewFrame();

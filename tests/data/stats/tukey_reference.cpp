@@ -51,13 +51,31 @@ Q Sqrt(Q x) { return sqrtq(x); }
 double Lgamma(double x) { return std::lgamma(x); }
 L Lgamma(L x) { return lgammal(x); }
 Q Lgamma(Q x) { return lgammaq(x); }
-template <class T> T Pi() { return static_cast<T>(acosq(Q(-1))); }
-template <class T> T Abs(T x) { return x < 0 ? -x : x; }
-template <class T> T Min(T a, T b) { return a < b ? a : b; }
-template <class T> T Max(T a, T b) { return a > b ? a : b; }
+template <class T>
+T Pi() {
+  return static_cast<T>(acosq(Q(-1)));
+}
+template <class T>
+T Abs(T x) {
+  return x < 0 ? -x : x;
+}
+template <class T>
+T Min(T a, T b) {
+  return a < b ? a : b;
+}
+template <class T>
+T Max(T a, T b) {
+  return a > b ? a : b;
+}
 
-template <class T> T Phi(T x) { return Erfc(-x / Sqrt(T(2))) / 2; }
-template <class T> T phi(T x) { return Exp(-x * x / 2) / Sqrt(2 * Pi<T>()); }
+template <class T>
+T Phi(T x) {
+  return Erfc(-x / Sqrt(T(2))) / 2;
+}
+template <class T>
+T phi(T x) {
+  return Exp(-x * x / 2) / Sqrt(2 * Pi<T>());
+}
 
 template <class T>
 struct Nodes {
@@ -119,13 +137,15 @@ T U(T w, int k, const Nodes<T>& nd) {
   const T lo = Min(T(-13), w / 2 - 13), hi = Max(T(13), w / 2 + 13);
   const int n = static_cast<int>(std::ceil(static_cast<double>((hi - lo) / T(1.5))));
   T t = 0;
-  for (int i = 0; i < n; ++i) t += Panel(g, lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n, nd);
+  for (int i = 0; i < n; ++i)
+    t += Panel(g, lo + (hi - lo) * i / n, lo + (hi - lo) * (i + 1) / n, nd);
   return t;
 }
 
 template <class T>
 T LogChi(T s, T df) {
-  return df / 2 * Log(df) - Lgamma(df / 2) - (df / 2 - 1) * Log(T(2)) + (df - 1) * Log(s) - df * s * s / 2;
+  return df / 2 * Log(df) - Lgamma(df / 2) - (df / 2 - 1) * Log(T(2)) + (df - 1) * Log(s) -
+         df * s * s / 2;
 }
 
 template <class T>
@@ -139,9 +159,17 @@ T Upper(T q, int k, double dfd, const Nodes<T>& nd) {
   for (int i = 0; i < 120 && b - a > T(1e-18) * b; ++i) {
     // Both probes where U underflowed (w > 100): the mass lies to the left.
     if (f1 > f2 || (std::isinf(static_cast<double>(f1)) && std::isinf(static_cast<double>(f2)))) {
-      b = x2; x2 = x1; f2 = f1; x1 = b - r * (b - a); f1 = logg(x1);
+      b = x2;
+      x2 = x1;
+      f2 = f1;
+      x1 = b - r * (b - a);
+      f1 = logg(x1);
     } else {
-      a = x1; x1 = x2; f1 = f2; x2 = a + r * (b - a); f2 = logg(x2);
+      a = x1;
+      x1 = x2;
+      f1 = f2;
+      x2 = a + r * (b - a);
+      f2 = logg(x2);
     }
   }
   const T sp = (a + b) / 2, lp = logg(sp);
@@ -206,7 +234,8 @@ int main(int argc, char** argv) {
     const int k = std::atoi(argv[1]);
     const double df = std::string(argv[2]) == "Inf" ? INFINITY : std::atof(argv[2]);
     const Nodes<Q> qa(20);
-    std::printf("long double %s\n__float128  %s\n", Str(Q(Upper(strtold(argv[3], nullptr), k, df, la)), 20).c_str(),
+    std::printf("long double %s\n__float128  %s\n",
+                Str(Q(Upper(strtold(argv[3], nullptr), k, df, la)), 20).c_str(),
                 Str(Upper(strtoflt128(argv[3], nullptr), k, df, qa), 32).c_str());
     return 0;
   }
@@ -220,7 +249,8 @@ int main(int argc, char** argv) {
   std::vector<std::pair<int, double>> designs;
   for (int k : ks)
     for (double df : dfs) designs.push_back({k, df});
-  for (auto d : std::vector<std::pair<int, double>>{{20, 120}, {3, 1000}, {4, 5}, {15, 12}}) designs.push_back(d);
+  for (auto d : std::vector<std::pair<int, double>>{{20, 120}, {3, 1000}, {4, 5}, {15, 12}})
+    designs.push_back(d);
   std::vector<P> points;
   for (auto [k, df] : designs)
     for (double t : targets) points.push_back({k, df, t});  // q found below, per shard
@@ -243,7 +273,8 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "k=%d df=%g q=%.6g: only %d digits, skipped\n", p.k, p.df, p.q, digits);
       continue;
     }
-    std::printf("%d,%s,%s,%s,%s,%d\n", p.k, std::isinf(p.df) ? "Inf" : std::to_string(static_cast<int>(p.df)).c_str(), q,
+    std::printf("%d,%s,%s,%s,%s,%d\n", p.k,
+                std::isinf(p.df) ? "Inf" : std::to_string(static_cast<int>(p.df)).c_str(), q,
                 Str(Q(ub), 19).c_str(), Str(Q(1 - ub), 19).c_str(), digits);
     std::fflush(stdout);
   }

@@ -17,7 +17,7 @@ struct CsvTable {
   std::map<std::string, std::string> metadata;  ///< `# key: value` comments
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
-  std::vector<int> row_lines;                   ///< 1-based source line of each row
+  std::vector<int> row_lines;  ///< 1-based source line of each row
 
   /// Index of a column, or nullopt.
   std::optional<std::size_t> Find(const std::string& column) const;

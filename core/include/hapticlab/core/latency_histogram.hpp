@@ -32,11 +32,13 @@ struct LatencySummary {
   /// The value [s] at or below which a fraction q (0..1) of the recorded values lie.
   double Quantile(double q) const {
     if (total == 0) return 0;
-    const auto need = static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(total)));
+    const auto need =
+        static_cast<std::uint64_t>(std::ceil(std::clamp(q, 0.0, 1.0) * static_cast<double>(total)));
     std::uint64_t cum = 0;
     for (std::size_t i = 0; i < kBins; ++i) {
       cum += counts[i];
-      if (cum >= std::max<std::uint64_t>(need, 1)) return std::min(max_s, static_cast<double>(i + 1) * kBinWidthS);
+      if (cum >= std::max<std::uint64_t>(need, 1))
+        return std::min(max_s, static_cast<double>(i + 1) * kBinWidthS);
     }
     return max_s;
   }
@@ -49,7 +51,8 @@ struct LatencySummary {
   std::string Sparse() const {
     std::string s;
     for (std::size_t i = 0; i <= kBins; ++i)
-      if (counts[i]) s += (s.empty() ? "" : " ") + std::to_string(i) + ":" + std::to_string(counts[i]);
+      if (counts[i])
+        s += (s.empty() ? "" : " ") + std::to_string(i) + ":" + std::to_string(counts[i]);
     return s;
   }
   /// Parses Sparse(); returns false on malformed text.
@@ -79,12 +82,15 @@ struct LatencySummary {
 
 class LatencyHistogram {
  public:
-  LatencyHistogram() : bins_(std::make_unique<std::atomic<std::uint64_t>[]>(LatencySummary::kBins + 1)) {}
+  LatencyHistogram()
+      : bins_(std::make_unique<std::atomic<std::uint64_t>[]>(LatencySummary::kBins + 1)) {}
   /// Real-time safe; one writer thread. Negative values count as 0.
   void Add(double value_s) noexcept {
     const double v = value_s > 0 ? value_s : 0.0;
     const double b = v / LatencySummary::kBinWidthS;
-    const std::size_t i = b >= static_cast<double>(LatencySummary::kBins) ? LatencySummary::kBins : static_cast<std::size_t>(b);
+    const std::size_t i = b >= static_cast<double>(LatencySummary::kBins)
+                              ? LatencySummary::kBins
+                              : static_cast<std::size_t>(b);
     bins_[i].store(bins_[i].load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     total_.store(total_.load(std::memory_order_relaxed) + 1, std::memory_order_relaxed);
     if (v > max_.load(std::memory_order_relaxed)) max_.store(v, std::memory_order_relaxed);

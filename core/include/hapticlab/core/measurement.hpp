@@ -9,11 +9,10 @@
 ///
 /// Forces are those the surface exerts on the tool. Rows are in time order.
 
+#include <Eigen/Core>
 #include <map>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hapticlab {
 

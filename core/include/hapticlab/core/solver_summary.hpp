@@ -13,9 +13,9 @@ namespace hapticlab {
 struct SolverSummary {
   bool converged = false;
   int iterations = 0;
-  double initial_cost = 0.0;  ///< objective at the start, in the solver's own units
-  double final_cost = 0.0;    ///< objective at the end
-  std::string message;        ///< why it stopped ("converged: relative step < 1e-8", ...)
+  double initial_cost = 0.0;         ///< objective at the start, in the solver's own units
+  double final_cost = 0.0;           ///< objective at the end
+  std::string message;               ///< why it stopped ("converged: relative step < 1e-8", ...)
   std::vector<Diagnostic> warnings;  ///< non-fatal problems, with file/field when known
 
   /// One line: "converged after 41 iterations, cost 3.2 -> 0.11 (reason)".

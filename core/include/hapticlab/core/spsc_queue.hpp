@@ -26,7 +26,7 @@ class SpscQueue {
   /// @param capacity number of elements the queue can hold; rounded up to a power of two.
   explicit SpscQueue(std::size_t capacity) {
     HL_REQUIRE(capacity >= 1 && capacity <= (std::size_t{1} << 30),
-                    "SpscQueue capacity must be in [1, 2^30]");
+               "SpscQueue capacity must be in [1, 2^30]");
     std::size_t c = 1;
     while (c < capacity) c <<= 1;
     mask_ = c - 1;
@@ -76,9 +76,9 @@ class SpscQueue {
   std::unique_ptr<T[]> buffer_;
   std::size_t mask_ = 0;
   alignas(kLine) std::atomic<std::size_t> head_{0};  // written by the producer
-  std::size_t tail_cache_ = 0;                        // producer's view of tail_
+  std::size_t tail_cache_ = 0;                       // producer's view of tail_
   alignas(kLine) std::atomic<std::size_t> tail_{0};  // written by the consumer
-  std::size_t head_cache_ = 0;                        // consumer's view of head_
+  std::size_t head_cache_ = 0;                       // consumer's view of head_
   alignas(kLine) std::atomic<std::uint64_t> overflow_{0};
 };
 

@@ -37,7 +37,7 @@ namespace internal {
 }  // namespace hapticlab
 
 /// Precondition check at a non-real-time public API: throws hapticlab::PreconditionError.
-#define HL_REQUIRE(cond, message)                                                      \
-  do {                                                                                 \
+#define HL_REQUIRE(cond, message)                                                                \
+  do {                                                                                           \
     if (!(cond)) ::hapticlab::internal::ThrowPrecondition(__FILE__, __LINE__, #cond, (message)); \
   } while (0)

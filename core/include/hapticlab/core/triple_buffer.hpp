@@ -35,9 +35,9 @@ class TripleBuffer {
  private:
   static constexpr std::uint32_t kFresh = 4, kIndex = 3;
   T buf_[3];
-  std::uint32_t write_ = 0;                 // writer-owned index
-  std::atomic<std::uint32_t> middle_{1};    // shared index | fresh flag
-  std::uint32_t read_ = 2;                  // reader-owned index
+  std::uint32_t write_ = 0;               // writer-owned index
+  std::atomic<std::uint32_t> middle_{1};  // shared index | fresh flag
+  std::uint32_t read_ = 2;                // reader-owned index
 };
 
 }  // namespace hapticlab

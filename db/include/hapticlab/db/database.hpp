@@ -39,17 +39,17 @@ inline constexpr const char* kRaterSimulated = "simulated";
 struct Session {
   std::int64_t id = 0;
   std::int64_t participant_id = 0;
-  std::string started_at;        ///< ISO-8601 UTC, filled by the database when empty
-  std::string ended_at;          ///< empty while running
-  std::string status = "running";///< running | completed | aborted | crashed
-  std::string software_version;  ///< "<version>+<git sha>"
-  std::string device;            ///< device back-end name and serial
-  std::string calibration;       ///< device calibration description or hash
-  std::string provenance_json;   ///< protocol hash, seeds, model hashes (JSON object)
-  std::string plan_json;         ///< the resolved trial plan (schema v3)
+  std::string started_at;          ///< ISO-8601 UTC, filled by the database when empty
+  std::string ended_at;            ///< empty while running
+  std::string status = "running";  ///< running | completed | aborted | crashed
+  std::string software_version;    ///< "<version>+<git sha>"
+  std::string device;              ///< device back-end name and serial
+  std::string calibration;         ///< device calibration description or hash
+  std::string provenance_json;     ///< protocol hash, seeds, model hashes (JSON object)
+  std::string plan_json;           ///< the resolved trial plan (schema v3)
   // The session's mode (schema v5); `study resume` continues in it.
-  std::string actuator;          ///< vibrotactile actuator: "audio", "none" ("unrecorded": before v5)
-  bool screens = false;          ///< participant window and console (--ui)
+  std::string actuator;  ///< vibrotactile actuator: "audio", "none" ("unrecorded": before v5)
+  bool screens = false;  ///< participant window and console (--ui)
   std::string rater = kRaterSimulated;  ///< who rates: "simulated" or the participant's input
                                         ///< device ("window", "rating-box:VID:PID")
 };
@@ -65,24 +65,24 @@ inline constexpr const char* kTrialAborted = "aborted";
 struct Trial {
   std::int64_t id = 0;
   std::int64_t session_id = 0;
-  int plan_index = 0;           ///< position in the resolved plan (0-based)
-  std::string phase;            ///< training | reference | main
-  std::string material;         ///< material shown (real sample id / virtual model)
-  std::string comparison;       ///< the other stimulus: "virtual" or a material (reference)
-  std::string method;           ///< rendering method name; empty for real-real pairs
-  int repetition = 0;           ///< 0-based repetition index
-  std::string left;             ///< stimulus on the left square
-  std::string right;            ///< stimulus on the right square
+  int plan_index = 0;      ///< position in the resolved plan (0-based)
+  std::string phase;       ///< training | reference | main
+  std::string material;    ///< material shown (real sample id / virtual model)
+  std::string comparison;  ///< the other stimulus: "virtual" or a material (reference)
+  std::string method;      ///< rendering method name; empty for real-real pairs
+  int repetition = 0;      ///< 0-based repetition index
+  std::string left;        ///< stimulus on the left square
+  std::string right;       ///< stimulus on the right square
   std::string status = kTrialPlanned;
-  int attempts = 0;             ///< how many times the trial was started
-  int completed_attempt = 0;    ///< the attempt whose data the trial holds (0 until completed)
+  int attempts = 0;           ///< how many times the trial was started
+  int completed_attempt = 0;  ///< the attempt whose data the trial holds (0 until completed)
 };
 
 /// One rating of one criterion in one trial.
 struct Rating {
-  std::string criterion;        ///< e.g. "roughness"
-  double score = 0;             ///< on the protocol's scale (0-100 by default)
-  double response_time_s = 0;   ///< from stimulus end to confirmation [s]
+  std::string criterion;       ///< e.g. "roughness"
+  double score = 0;            ///< on the protocol's scale (0-100 by default)
+  double response_time_s = 0;  ///< from stimulus end to confirmation [s]
   /// Who gave it: "simulated" (the simulated observer) or the participant's input device
   /// ("window", "rating-box:VID:PID"). Empty when stored: the session's rater.
   std::string source;
@@ -102,14 +102,16 @@ struct Event {
 /// (sample-major: samples[i * channels.size() + c]).
 struct TrajectoryChunk {
   std::int64_t trial_id = 0;
-  std::string stream;               ///< e.g. "force", "vibration"
-  double start_time_s = 0;          ///< time of the first sample [s]
-  double rate_hz = 0;               ///< sample rate [Hz]
-  std::vector<std::string> channels;///< channel names with units, e.g. "fx_N"
+  std::string stream;                 ///< e.g. "force", "vibration"
+  double start_time_s = 0;            ///< time of the first sample [s]
+  double rate_hz = 0;                 ///< sample rate [Hz]
+  std::vector<std::string> channels;  ///< channel names with units, e.g. "fx_N"
   std::vector<float> samples;
-  int attempt = 0;                  ///< the trial's attempt that recorded it (1-based; 0: before
-                                    ///< the trial was started, or unattributed by migration)
-  std::size_t sample_count() const { return channels.empty() ? 0 : samples.size() / channels.size(); }
+  int attempt = 0;  ///< the trial's attempt that recorded it (1-based; 0: before
+                    ///< the trial was started, or unattributed by migration)
+  std::size_t sample_count() const {
+    return channels.empty() ? 0 : samples.size() / channels.size();
+  }
 };
 
 /// What one trajectory stream of one trial attempt delivered, as the writer counted it.
@@ -118,11 +120,11 @@ struct StreamReport {
   std::int64_t trial_id = 0;
   int attempt = 0;
   std::string stream;
-  double rate_hz = 0;                  ///< [Hz]
-  std::uint64_t samples_offered = 0;   ///< Push calls by the producer
-  std::uint64_t samples_dropped = 0;   ///< refused because the queue was full (time gaps)
-  std::uint64_t samples_written = 0;   ///< committed to the database
-  std::string error;                   ///< first write error met by this stream ("" when none)
+  double rate_hz = 0;                 ///< [Hz]
+  std::uint64_t samples_offered = 0;  ///< Push calls by the producer
+  std::uint64_t samples_dropped = 0;  ///< refused because the queue was full (time gaps)
+  std::uint64_t samples_written = 0;  ///< committed to the database
+  std::string error;                  ///< first write error met by this stream ("" when none)
 };
 
 /// Thrown by CompleteTrial when a trial's trajectories are not whole: the trial is not
@@ -138,10 +140,10 @@ bool IsPseudonymousCode(const std::string& code);
 
 /// Options for opening a database.
 struct OpenOptions {
-  bool create = true;                 ///< create the file when missing
-  int migrate_to = kSchemaVersion;    ///< migrate up to this version (tests use older ones)
+  bool create = true;               ///< create the file when missing
+  int migrate_to = kSchemaVersion;  ///< migrate up to this version (tests use older ones)
   bool read_only = false;
-  int busy_timeout_ms = 10000;        ///< wait for another writer this long
+  int busy_timeout_ms = 10000;  ///< wait for another writer this long
 };
 
 /// A connection to a study record. Not thread-safe: one per thread.
@@ -178,8 +180,8 @@ class Database {
   void EndSession(std::int64_t session_id, const std::string& status);
   /// Records a new mode for a session (resume with --change-mode); ratings stored from now
   /// on carry the new rater as their source.
-  void SetSessionMode(std::int64_t session_id, const std::string& device, const std::string& actuator,
-                      bool screens, const std::string& rater);
+  void SetSessionMode(std::int64_t session_id, const std::string& device,
+                      const std::string& actuator, bool screens, const std::string& rater);
   /// Copies the database's committed content (the -wal included) into `dest` with SQLite's
   /// online backup API, while other connections may keep writing. `dest` must not exist.
   /// @throws InputError naming dest when it exists or cannot be written

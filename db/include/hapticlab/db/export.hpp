@@ -26,6 +26,7 @@ struct ExportedFile {
 /// database) when a trial's chunks no longer match the sample counts stored at its
 /// completion (Database::VerifyTrajectories) or a chunk's blob does not match its counts.
 /// @param trajectories false: ratings, trials and events only (trajectories stay in the db)
-std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir, bool trajectories = true);
+std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir,
+                                    bool trajectories = true);
 
 }  // namespace hapticlab::db

@@ -18,14 +18,22 @@ namespace hapticlab::db {
 
 /// The columns of a force-stream row, in on-disk order.
 enum class ForceChannel : std::size_t {
-  kX_m, kY_m, kZ_m,              ///< stylus tip position [m]
-  kVx_mps, kVy_mps, kVz_mps,     ///< stylus tip velocity [m/s]
-  kFx_N, kFy_N, kFz_N,           ///< force the renderer computed, before the safety clamp [N]
-  kCmdFx_N, kCmdFy_N, kCmdFz_N,  ///< force commanded to the device, after clamp and watchdog [N]
-  kNormal_N,                     ///< normal (contact) force between stylus and surface [N]
-  kSpeed_mps,                    ///< tangential speed over the surface [m/s]
-  kFault,                        ///< 1 when the tick was faulted and the force zeroed, else 0
-  kLate_s,                       ///< how late the tick ran after its scheduled time [s]
+  kX_m,
+  kY_m,
+  kZ_m,  ///< stylus tip position [m]
+  kVx_mps,
+  kVy_mps,
+  kVz_mps,  ///< stylus tip velocity [m/s]
+  kFx_N,
+  kFy_N,
+  kFz_N,  ///< force the renderer computed, before the safety clamp [N]
+  kCmdFx_N,
+  kCmdFy_N,
+  kCmdFz_N,    ///< force commanded to the device, after clamp and watchdog [N]
+  kNormal_N,   ///< normal (contact) force between stylus and surface [N]
+  kSpeed_mps,  ///< tangential speed over the surface [m/s]
+  kFault,      ///< 1 when the tick was faulted and the force zeroed, else 0
+  kLate_s,     ///< how late the tick ran after its scheduled time [s]
 };
 inline constexpr std::size_t kForceChannelCount = 16;
 
@@ -51,7 +59,8 @@ inline constexpr std::array<ChannelSpec, kForceChannelCount> kForceChannels{{
     {"cmd_fz_N", "force commanded to the device, z axis (after clamp and watchdog)"},
     {"normal_N", "normal (contact) force between stylus and surface"},
     {"speed_mps", "tangential speed of the stylus over the surface"},
-    {"fault", "1 when the tick was faulted (watchdog or renderer) and the force was zeroed, else 0"},
+    {"fault",
+     "1 when the tick was faulted (watchdog or renderer) and the force was zeroed, else 0"},
     {"late_s", "how much later than scheduled the force tick ran (0 on a virtual clock)"},
 }};
 
@@ -70,6 +79,7 @@ inline const std::vector<std::string>& ForceChannelNames() {
 
 /// The vibration stream ("<side>_vibration"): one column, the acceleration at the stylus.
 inline constexpr ChannelSpec kVibrationChannel{
-    "acc_mps2", "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"};
+    "acc_mps2",
+    "vibrotactile acceleration felt at the stylus (actuator command or simulated hand)"};
 
 }  // namespace hapticlab::db

@@ -21,8 +21,8 @@ inline constexpr std::size_t kMaxChannels = 16;
 
 /// One sample as queued between the real-time thread and the writer.
 struct TrajectorySample {
-  double t_s;                                ///< sample time [s]
-  std::array<float, kMaxChannels> values;    ///< first `channels` entries are used
+  double t_s;                              ///< sample time [s]
+  std::array<float, kMaxChannels> values;  ///< first `channels` entries are used
 };
 
 /// Options of a TrajectoryWriter.
@@ -33,7 +33,7 @@ struct WriterOptions {
   /// Chunks whose commit failed are kept and retried on the next pass, up to this many
   /// float32 values in all (64 MiB); beyond it the oldest are dropped and counted as lost.
   std::size_t retry_limit_values = std::size_t{16} << 20;
-  int busy_timeout_ms = 10000;           ///< wait for another writer this long per commit
+  int busy_timeout_ms = 10000;  ///< wait for another writer this long per commit
 };
 
 /// A stream's producer end. Push is wait-free, allocation-free and never throws; it is the

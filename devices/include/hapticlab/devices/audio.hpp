@@ -6,7 +6,8 @@
 /// SampleSource, so the sound card's clock paces the vibration synthesis; otherwise the
 /// vibration loop writes them at its own rate into a lock-free queue. Either way the callback
 /// upsamples to the device's rate, maps channels, adds white noise on the headphone
-/// channels, and counts underflows and clipping. The host API is behind AudioStream so tests drive the callback themselves.
+/// channels, and counts underflows and clipping. The host API is behind AudioStream so tests drive
+/// the callback themselves.
 
 #include <atomic>
 #include <cstdint>
@@ -22,17 +23,17 @@
 namespace hapticlab::devices {
 
 struct AudioConfig {
-  std::string device;                   ///< PortAudio device name (substring); empty: the default output
-  double sample_rate_hz = 48000;        ///< the sound device's rate
-  double input_rate_hz = 10000;         ///< rate of the samples the vibration loop writes
-  double latency_s = 0.005;             ///< suggested output latency
+  std::string device;             ///< PortAudio device name (substring); empty: the default output
+  double sample_rate_hz = 48000;  ///< the sound device's rate
+  double input_rate_hz = 10000;   ///< rate of the samples the vibration loop writes
+  double latency_s = 0.005;       ///< suggested output latency
   int channels = 2;
   std::vector<int> actuator_channels{0};  ///< channels that carry the actuator signal
   std::vector<int> noise_channels{1};     ///< headphone channels that carry white noise
-  double full_scale_mps2 = 50;          ///< acceleration at full scale (amplifier and actuator calibration)
-  double noise_rms_fs = 0.1;            ///< masking noise level (RMS, full-scale units)
-  double queue_s = 0.05;                ///< buffer between the vibration loop and the callback
-  std::uint64_t seed = 1;               ///< noise seed (recorded with the session)
+  double full_scale_mps2 = 50;  ///< acceleration at full scale (amplifier and actuator calibration)
+  double noise_rms_fs = 0.1;    ///< masking noise level (RMS, full-scale units)
+  double queue_s = 0.05;        ///< buffer between the vibration loop and the callback
+  std::uint64_t seed = 1;       ///< noise seed (recorded with the session)
   /// true: the callback pulls input samples from the engine's source (SetSource): the sound
   /// card's clock paces the vibration synthesis and there is no queue to underrun. false:
   /// the vibration loop pushes through a queue (Write).
@@ -62,7 +63,9 @@ class AudioOutput final : public Actuator, public MaskingNoise {
   double SampleRateHz() const override { return c_.input_rate_hz; }
   /// Vibration loop: queue one sample [m/s^2]; a full queue drops it (counted).
   void Write(double acc_mps2) noexcept override;
-  void SetNoiseLevel(double rms_fs) noexcept override { noise_rms_.store(rms_fs, std::memory_order_relaxed); }
+  void SetNoiseLevel(double rms_fs) noexcept override {
+    noise_rms_.store(rms_fs, std::memory_order_relaxed);
+  }
   bool PullsSamples() const noexcept override { return c_.pull; }
   void SetSource(devices::SampleSource* source) noexcept override;
   void Start();
@@ -71,9 +74,11 @@ class AudioOutput final : public Actuator, public MaskingNoise {
   void Render(float* out, unsigned long frames) noexcept;
 
   std::uint64_t underflows() const { return underflows_.load(); }  ///< output samples with no input
-  std::uint64_t Underruns() const noexcept override { return underflows_.load(std::memory_order_relaxed); }
-  std::uint64_t overflows() const { return overflows_.load(); }    ///< input samples dropped
-  std::uint64_t clipped() const { return clipped_.load(); }        ///< output samples beyond full scale
+  std::uint64_t Underruns() const noexcept override {
+    return underflows_.load(std::memory_order_relaxed);
+  }
+  std::uint64_t overflows() const { return overflows_.load(); }  ///< input samples dropped
+  std::uint64_t clipped() const { return clipped_.load(); }  ///< output samples beyond full scale
 
  private:
   AudioConfig c_;

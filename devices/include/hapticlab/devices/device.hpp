@@ -3,11 +3,10 @@
 /// actuator. Back-ends (sim, falcon, audio, ...) implement them; the real-time loops call
 /// only the noexcept methods below.
 
+#include <Eigen/Core>
 #include <chrono>
 #include <cstdint>
 #include <string>
-
-#include <Eigen/Core>
 
 #include "hapticlab/renderer/hybrid.hpp"
 
@@ -15,10 +14,10 @@ namespace hapticlab::devices {
 
 /// What a haptic device can do (from its datasheet or driver).
 struct DeviceCapabilities {
-  std::string name;                     ///< back-end and model, e.g. "sim", "falcon"
-  double max_force_N = 8.0;             ///< continuous force limit [N]
-  double max_stiffness_N_per_m = 3000;  ///< largest stable rendered stiffness [N/m]
-  double max_rate_hz = 4000;            ///< fastest force loop the link supports [Hz]
+  std::string name;                               ///< back-end and model, e.g. "sim", "falcon"
+  double max_force_N = 8.0;                       ///< continuous force limit [N]
+  double max_stiffness_N_per_m = 3000;            ///< largest stable rendered stiffness [N/m]
+  double max_rate_hz = 4000;                      ///< fastest force loop the link supports [Hz]
   Eigen::Vector3d workspace_m{0.16, 0.12, 0.12};  ///< workspace box extents [m]
 };
 

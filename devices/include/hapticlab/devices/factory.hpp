@@ -16,8 +16,8 @@ namespace hapticlab::devices {
 
 /// What a session asks of the real hardware.
 struct DeviceRequest {
-  std::string device;    ///< "falcon", "dhd" or "openhaptics"
-  std::string firmware;  ///< falcon: the firmware file (required)
+  std::string device;             ///< "falcon", "dhd" or "openhaptics"
+  std::string firmware;           ///< falcon: the firmware file (required)
   double motor_units_per_Nm = 0;  ///< falcon: from the rig file (0: the back-end's default)
   double max_force_N = 0;         ///< falcon: from the rig file (0: the back-end's default)
 };
@@ -41,11 +41,13 @@ OpenedDevice OpenRealDevice(const DeviceRequest& r,
 /// The PortAudio actuator and masking noise, started, with the masking noise off (a session
 /// turns it on while its protocol asks for it). @throws std::runtime_error when the sound
 /// device cannot be opened; std::invalid_argument for a bad configuration.
-std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device, double full_scale_mps2);
+std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device,
+                                               double full_scale_mps2);
 
 /// The HID rating box at `vid_pid` ("VID:PID" in hex) with the report layout in
 /// `layout_file`. @throws InputError (fields "rating_box", "rating_layout") for a malformed
 /// id or a missing layout; std::runtime_error when the box is absent.
-std::unique_ptr<RatingInput> OpenRatingBox(const std::string& vid_pid, const std::string& layout_file);
+std::unique_ptr<RatingInput> OpenRatingBox(const std::string& vid_pid,
+                                           const std::string& layout_file);
 
 }  // namespace hapticlab::devices

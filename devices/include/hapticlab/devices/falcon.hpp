@@ -7,14 +7,13 @@
 /// Everything below the USB transport is testable without a device: tests drive the state
 /// machine and the device through a scripted FakeUsbTransport with recorded packet fixtures.
 
+#include <Eigen/Core>
 #include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "hapticlab/devices/device.hpp"
 
@@ -57,7 +56,8 @@ double EncoderToAngle(std::int16_t count);
 bool InverseKinematics(const Eigen::Vector3d& p_m, Eigen::Vector3d* theta_rad);
 /// Forward kinematics by Newton's method on the inverse (from `guess`, the last position);
 /// false when it does not converge to 1e-9 rad in 20 iterations.
-bool ForwardKinematics(const Eigen::Vector3d& theta_rad, const Eigen::Vector3d& guess_m, Eigen::Vector3d* p_m);
+bool ForwardKinematics(const Eigen::Vector3d& theta_rad, const Eigen::Vector3d& guess_m,
+                       Eigen::Vector3d* p_m);
 /// Motor torques [N m] that produce the force `f_N` at position `p_m`: tau = J^-T f with J the
 /// Jacobian d(theta)/d(p).
 bool ForceToTorque(const Eigen::Vector3d& p_m, const Eigen::Vector3d& f_N, Eigen::Vector3d* tau_Nm);
@@ -70,8 +70,8 @@ bool ForceToTorque(const Eigen::Vector3d& p_m, const Eigen::Vector3d& f_N, Eigen
 class UsbTransport {
  public:
   virtual ~UsbTransport() = default;
-  virtual int Control(std::uint8_t request_type, std::uint8_t request, std::uint16_t value, std::uint16_t index,
-                      unsigned timeout_ms) = 0;
+  virtual int Control(std::uint8_t request_type, std::uint8_t request, std::uint16_t value,
+                      std::uint16_t index, unsigned timeout_ms) = 0;
   virtual int BulkWrite(const std::uint8_t* data, int n, unsigned timeout_ms) = 0;
   /// Reads up to n bytes; FTDI prefixes every read with two modem-status bytes.
   virtual int BulkRead(std::uint8_t* data, int n, unsigned timeout_ms) = 0;
@@ -86,29 +86,42 @@ int CountDevices();
 // FTDI vendor requests used on the link.
 namespace ftdi {
 inline constexpr std::uint8_t kRequestType = 0x40;
-inline constexpr std::uint8_t kReset = 0, kModemCtrl = 1, kFlowCtrl = 2, kBaudRate = 3, kData = 4, kLatency = 9;
+inline constexpr std::uint8_t kReset = 0, kModemCtrl = 1, kFlowCtrl = 2, kBaudRate = 3, kData = 4,
+                              kLatency = 9;
 inline constexpr std::uint16_t kPurgeRx = 1, kPurgeTx = 2;
 inline constexpr std::uint16_t kDtrHigh = 0x0101, kDtrLow = 0x0100, kRtsLow = 0x0200;
-inline constexpr std::uint16_t kBaud9600 = 0x4138, kBaud140000 = 0x0015, kBaudNormal = 0x0002;  // divisors
+inline constexpr std::uint16_t kBaud9600 = 0x4138, kBaud140000 = 0x0015,
+                               kBaudNormal = 0x0002;  // divisors
 }  // namespace ftdi
 
 // ---------------------------------------------------------------------------------------------
 // Firmware loading.
 
-enum class LoadState { kIdle, kPurge, kLineSetup, kHandshake, kBootloader, kUpload, kNormalMode, kVerify, kDone, kFailed };
+enum class LoadState {
+  kIdle,
+  kPurge,
+  kLineSetup,
+  kHandshake,
+  kBootloader,
+  kUpload,
+  kNormalMode,
+  kVerify,
+  kDone,
+  kFailed
+};
 const char* LoadStateName(LoadState s);
 
 struct LoadOptions {
-  int attempts = 3;           ///< whole-load retries
-  int handshake_tries = 100;  ///< handshake messages before giving up
-  unsigned timeout_ms = 1000; ///< per USB transfer
-  int verify_tries = 50;      ///< packets sent after loading before declaring the firmware dead
+  int attempts = 3;            ///< whole-load retries
+  int handshake_tries = 100;   ///< handshake messages before giving up
+  unsigned timeout_ms = 1000;  ///< per USB transfer
+  int verify_tries = 50;       ///< packets sent after loading before declaring the firmware dead
 };
 struct LoadResult {
   bool ok = false;
   int attempts = 0;
   LoadState failed_in = LoadState::kIdle;
-  std::string error;          ///< what failed, in words, with the state
+  std::string error;             ///< what failed, in words, with the state
   std::vector<LoadState> trace;  ///< states visited (last attempt)
 };
 /// Loads `firmware` (the user's file, e.g. the Novint SDK's test firmware): purge, line set-up
@@ -116,7 +129,8 @@ struct LoadResult {
 /// baud and 'A' answered by 'A', upload in 62-byte blocks each echoed back and compared,
 /// normal mode (1 ms latency timer, the fast baud divisor), then packets until a valid status
 /// comes back. Each attempt starts over; errors name the state.
-LoadResult LoadFirmware(UsbTransport& usb, const std::vector<std::uint8_t>& firmware, const LoadOptions& o = {});
+LoadResult LoadFirmware(UsbTransport& usb, const std::vector<std::uint8_t>& firmware,
+                        const LoadOptions& o = {});
 /// Reads a firmware file. @throws InputError naming the file.
 std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path);
 
@@ -124,10 +138,11 @@ std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path);
 // The device.
 
 struct FalconOptions {
-  double motor_units_per_Nm = 10000;  ///< command scale (calibrate with a force gauge; docs/hardware.md)
-  double max_force_N = 8.0;           ///< the Falcon's rated peak force
-  unsigned io_timeout_ms = 2;         ///< a read that takes longer counts as no data
-  double velocity_cutoff_hz = 100;    ///< low-pass of the differentiated position
+  double motor_units_per_Nm =
+      10000;                   ///< command scale (calibrate with a force gauge; docs/hardware.md)
+  double max_force_N = 8.0;    ///< the Falcon's rated peak force
+  unsigned io_timeout_ms = 2;  ///< a read that takes longer counts as no data
+  double velocity_cutoff_hz = 100;  ///< low-pass of the differentiated position
 };
 
 /// HapticDevice on a Falcon whose firmware is loaded. Read() does one exchange: sends the last
@@ -140,7 +155,8 @@ struct FalconOptions {
 class FalconDevice final : public HapticDevice {
  public:
   /// @param clock seconds on the loops' time base; empty: seconds since SetTimeBase (the engine's)
-  FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock = {}, const FalconOptions& o = {});
+  FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock = {},
+               const FalconOptions& o = {});
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
   DeviceCapabilities Capabilities() const override;
   ReadResult Read(renderer::DeviceSample* out) noexcept override;

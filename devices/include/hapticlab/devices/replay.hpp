@@ -44,11 +44,15 @@ class ReplayDevice : public HapticDevice {
 /// Keeps every sample (capacity reserved up front; extra samples are counted, not stored).
 class BufferActuator : public Actuator {
  public:
-  BufferActuator(double rate_hz, std::size_t capacity) : rate_hz_(rate_hz) { samples_.reserve(capacity); }
+  BufferActuator(double rate_hz, std::size_t capacity) : rate_hz_(rate_hz) {
+    samples_.reserve(capacity);
+  }
   double SampleRateHz() const override { return rate_hz_; }
   void Write(double acc_mps2) noexcept override {
-    if (samples_.size() < samples_.capacity()) samples_.push_back(acc_mps2);
-    else ++dropped_;
+    if (samples_.size() < samples_.capacity())
+      samples_.push_back(acc_mps2);
+    else
+      ++dropped_;
   }
   const std::vector<double>& samples() const { return samples_; }
   std::size_t dropped() const { return dropped_; }

@@ -34,8 +34,8 @@ struct Algorithm1Result {
 struct ContactFitOptions {
   double presliding_speed_mps = wb::kPreslidingSpeed_mps;  ///< Tv1 (Algorithm 1)
   double sliding_speed_mps = wb::kSlidingSpeed_mps;        ///< Tv2
-  double convergence = 1e-9;             ///< TC
-  double max_force_N = 2.0;              ///< poke samples above this are discarded (ch. IV.3.3)
+  double convergence = 1e-9;                               ///< TC
+  double max_force_N = 2.0;  ///< poke samples above this are discarded (ch. IV.3.3)
   /// How the measurement is replayed (smoothing, rate). The default is the workbench's, so that
   /// `model fit-contact` and `hapticlab fit` agree; other values are for measuring the effect of
   /// the preprocessing on the estimates (tests/modeling/contact_test.cpp, Experiment).
@@ -44,7 +44,8 @@ struct ContactFitOptions {
 
 /// Algorithm 1 over the replay's samples in the split.
 /// @throws InputError naming the file when there are too few pre-sliding or sliding samples.
-Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split, const ContactFitOptions& o = {});
+Algorithm1Result AlgorithmOne(const wb::Replay& r, wb::Split split,
+                              const ContactFitOptions& o = {});
 
 struct ContactFit {
   // Renderer units ([contact] and [friction] of a material model).
@@ -59,7 +60,7 @@ struct ContactFit {
   double friction_rms_N = 0;  ///< RMS of the tangential residual (vector) over samples in contact
   double normal_rms_N = 0;    ///< RMS of the normal residual over the fitted poke samples
   int stroke_samples = 0, poke_samples = 0;
-  std::string poke_source;    ///< where the Hunt-Crossley samples came from, in words
+  std::string poke_source;  ///< where the Hunt-Crossley samples came from, in words
   std::string uncertainty_method;
   bool IsUsable() const { return friction_summary.usable && normal_summary.usable; }
 };
@@ -68,7 +69,8 @@ struct ContactFit {
 /// Hunt-Crossley from pokes: `pokes` when given, else the samples of `m` that are pokes
 /// (SplitStrokesAndPokes), else every sample of `m` in contact, up to `max_force_N`.
 /// @throws InputError when there are too few stroke or poke samples.
-ContactFit FitContact(const Measurement& m, const Measurement* pokes = nullptr, const ContactFitOptions& o = {});
+ContactFit FitContact(const Measurement& m, const Measurement* pokes = nullptr,
+                      const ContactFitOptions& o = {});
 
 /// The effects FitContact fits: coulomb, viscous, dahl, hc-damping, hc-exponent.
 std::vector<std::string> ContactEffects();

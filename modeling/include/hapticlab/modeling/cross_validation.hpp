@@ -15,8 +15,8 @@ namespace hapticlab::modeling {
 
 /// A fitted model's synthesis at one recording's (speed [m/s], force [N]) condition: `n`
 /// samples at the model rate, seeded, after the model has settled.
-using ConditionSynthesizer =
-    std::function<std::vector<double>(const Recording& condition, std::size_t n, std::uint64_t seed)>;
+using ConditionSynthesizer = std::function<std::vector<double>(const Recording& condition,
+                                                               std::size_t n, std::uint64_t seed)>;
 
 /// Fits a model on the training recordings and returns its synthesizer.
 using CvFit = std::function<ConditionSynthesizer(const std::vector<Recording>& training)>;
@@ -30,8 +30,10 @@ bool NearAny(const std::vector<double>& set, double x);
 /// synthesized one is compared with (as the fit preprocesses it).
 /// @throws InputError ("<command line>", field "training conditions") with fewer than 3
 /// training recordings.
-CvResult CrossValidateModel(const std::vector<Recording>& recordings, const std::vector<double>& train_speeds_mps,
-                            const std::vector<double>& train_forces_N, const VibrationFitOptions& preprocess,
-                            const CvFit& fit, std::uint64_t seed);
+CvResult CrossValidateModel(const std::vector<Recording>& recordings,
+                            const std::vector<double>& train_speeds_mps,
+                            const std::vector<double>& train_forces_N,
+                            const VibrationFitOptions& preprocess, const CvFit& fit,
+                            std::uint64_t seed);
 
 }  // namespace hapticlab::modeling

@@ -4,11 +4,10 @@
 /// arXiv:1412.6980] with mini-batches and early stopping. Written with Eigen: no C++ neural
 /// network framework is packaged in Debian that earns its weight for networks this small.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hapticlab::modeling {
 
@@ -21,7 +20,7 @@ struct MlpTrainOptions {
   int patience = 15;                 ///< epochs without validation improvement before stopping
   /// Called after every epoch (epoch, validation MSE); may be empty.
   std::function<void(int, double)> progress;
-  std::uint64_t seed = 1;            ///< initialisation and shuffling
+  std::uint64_t seed = 1;  ///< initialisation and shuffling
 };
 
 struct MlpTrainSummary {
@@ -36,15 +35,17 @@ class Mlp {
   Mlp(std::vector<int> layers, std::uint64_t seed);
   double Predict(const Eigen::Ref<const Eigen::VectorXd>& x) const;
   /// Loss 0.5 (f(x) - target)^2 and its gradient with respect to every parameter.
-  double Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target, Eigen::VectorXd* grad) const;
+  double Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target,
+                  Eigen::VectorXd* grad) const;
   /// Mean loss over the given rows of X and its gradient (matrix form: one pass per layer for
   /// the whole mini-batch). Equals the mean of Gradient over the rows.
-  double BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const std::vector<Eigen::Index>& rows,
-                       Eigen::VectorXd* grad) const;
+  double BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                       const std::vector<Eigen::Index>& rows, Eigen::VectorXd* grad) const;
   /// Predictions for every row of X.
   Eigen::VectorXd PredictRows(const Eigen::MatrixXd& X) const;
   /// Trains on rows of X (n x inputs) against y with Adam; restores the best validation weights.
-  MlpTrainSummary Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y, const MlpTrainOptions& o);
+  MlpTrainSummary Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
+                        const MlpTrainOptions& o);
   Eigen::VectorXd& params() { return params_; }
   const Eigen::VectorXd& params() const { return params_; }
   const std::vector<int>& layers() const { return layers_; }

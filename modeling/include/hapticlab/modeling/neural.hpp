@@ -51,7 +51,7 @@ struct NeuralFitOptions {
   /// bands of the nonlinear AR grid) and still raise the free-running E_s
   /// (docs/modeling-neural.md). false: always keep the networks. Needs linear_part.
   bool validate_nonlinear_part = true;
-  int threads = 0;                 ///< networks trained in parallel; 0: all cores
+  int threads = 0;  ///< networks trained in parallel; 0: all cores
   /// Progress (what, networks done, total), from worker threads: every 5th training epoch of
   /// each network ("band 2: epoch 10/40, validation MSE 0.41") and when a network finishes.
   std::function<void(const std::string&, int, int)> progress;
@@ -67,16 +67,20 @@ struct NeuralFitOptions {
 /// has the recording's power inside the band. The networks' nonlinear part is then kept or
 /// dropped on validation data (validate_nonlinear_part). Seeded by options.train.seed.
 /// @throws InputError when the recordings do not form a full grid (listing what is missing).
-renderer::NeuralModel FitNeural(const std::vector<Recording>& recordings, const NeuralFitOptions& o);
+renderer::NeuralModel FitNeural(const std::vector<Recording>& recordings,
+                                const NeuralFitOptions& o);
 
 /// Ch. III.4 cross-validation for the neural model: fit on the recordings at the training
 /// speeds x forces, synthesize every recording's condition with renderer::NeuralSynth
 /// (seeded), E_s against the preprocessed recording. Same rows as CrossValidate.
-CvResult CrossValidateNeural(const std::vector<Recording>& recordings, const std::vector<double>& train_speeds_mps,
-                             const std::vector<double>& train_forces_N, const NeuralFitOptions& o, std::uint64_t seed = 1);
+CvResult CrossValidateNeural(const std::vector<Recording>& recordings,
+                             const std::vector<double>& train_speeds_mps,
+                             const std::vector<double>& train_forces_N, const NeuralFitOptions& o,
+                             std::uint64_t seed = 1);
 
 /// Synthesizes `n` samples at the model rate for a condition (after `settle` samples).
-std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double speed_mps, double force_N, std::size_t n,
-                                     std::uint64_t seed, std::size_t settle = 4000);
+std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double speed_mps,
+                                     double force_N, std::size_t n, std::uint64_t seed,
+                                     std::size_t settle = 4000);
 
 }  // namespace hapticlab::modeling

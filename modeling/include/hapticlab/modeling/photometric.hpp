@@ -10,12 +10,11 @@
 /// Lights written in the y-up convention (x right, y up, z towards the camera) are read with
 /// `y_up = true`, which negates their y component.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
-
-#include <Eigen/Core>
 
 namespace hapticlab::modeling {
 
@@ -24,7 +23,7 @@ namespace hapticlab::modeling {
 struct Light {
   std::string file;  ///< image file name, relative to the images folder (empty: from an image list)
   Eigen::Vector3d direction = Eigen::Vector3d::UnitZ();
-  int line = 0;      ///< line of the lights file it came from (0 for presets)
+  int line = 0;        ///< line of the lights file it came from (0 for presets)
   std::string source;  ///< the lights file it came from (empty for presets)
 };
 
@@ -72,7 +71,8 @@ std::vector<std::uint8_t> ReadMask(const std::string& path, int width, int heigh
 /// How normals become heights.
 enum class Integration {
   kFrankotChellappa,  ///< FFT, periodic boundary (best for textures that tile); whole image only
-  kPoisson,           ///< Poisson solve, Neumann boundary on the image edge (DCT) or on the mask boundary (sparse)
+  kPoisson,  ///< Poisson solve, Neumann boundary on the image edge (DCT) or on the mask boundary
+             ///< (sparse)
 };
 
 /// How lights are excluded per pixel before the Lambertian fit.
@@ -89,15 +89,16 @@ enum class Rejection {
 };
 
 struct PhotometricOptions {
-  double pitch_m = 20e-6;         ///< pixel pitch on the sample [m]
+  double pitch_m = 20e-6;  ///< pixel pitch on the sample [m]
   Integration integration = Integration::kFrankotChellappa;
   Rejection rejection = Rejection::kResidual;
   double shadow_fraction = 0.05;  ///< dark-reading threshold, dimensionless (see Rejection)
   double outlier_sigmas = 3.0;    ///< residual rule: threshold in robust standard deviations
   double noise_floor = 1e-3;      ///< residual rule: least residual SD, as a fraction of s_j |b|
   int min_lights = 4;             ///< residual rule: outlier rejection never leaves fewer lights
-  double specular_fraction = 0.1; ///< brightest rule only: the brightest fraction dropped when >= 6 remain
-  int iterations = 100;           ///< most alternations between normals and per-light intensities
+  double specular_fraction =
+      0.1;               ///< brightest rule only: the brightest fraction dropped when >= 6 remain
+  int iterations = 100;  ///< most alternations between normals and per-light intensities
   /// Pixels to solve: empty = all, else width * height values, non-zero = inside. Outside
   /// pixels are neither solved nor integrated; an irregular mask needs Integration::kPoisson.
   std::vector<std::uint8_t> mask;
@@ -105,22 +106,23 @@ struct PhotometricOptions {
 
 struct PhotometricResult {
   int width = 0, height = 0;
-  std::vector<float> albedo;            ///< |b| (0 outside the mask and where unsolved)
-  std::vector<Eigen::Vector3f> normals; ///< unit normals, image frame; zero outside the mask
-  std::vector<float> height_m;          ///< integrated height [m], zero mean inside; outside the mask the lowest inside height
-  std::vector<std::uint8_t> mask;       ///< the pixels solved (1) or not (0)
-  std::vector<double> light_scale;      ///< estimated relative intensity of each light (mean 1)
-  std::vector<double> light_use;        ///< fraction of the mask's pixels that used each light
-  int alternations = 0;                 ///< alternations run (they stop when no light scale changes by 1e-6)
-  std::size_t unsolved_pixels = 0;      ///< inside pixels with fewer than 3 usable lights (normal +z)
-  double residual_sd = 0;               ///< robust SD of the kept residuals / (s_j |b|), dimensionless
-  double dropped_bright = 0;            ///< fraction of inside (pixel, light) readings dropped as too bright
-  double dropped_dark = 0;              ///< ... as too dark (shadows)
+  std::vector<float> albedo;             ///< |b| (0 outside the mask and where unsolved)
+  std::vector<Eigen::Vector3f> normals;  ///< unit normals, image frame; zero outside the mask
+  std::vector<float> height_m;  ///< integrated height [m], zero mean inside; outside the mask the
+                                ///< lowest inside height
+  std::vector<std::uint8_t> mask;   ///< the pixels solved (1) or not (0)
+  std::vector<double> light_scale;  ///< estimated relative intensity of each light (mean 1)
+  std::vector<double> light_use;    ///< fraction of the mask's pixels that used each light
+  int alternations = 0;  ///< alternations run (they stop when no light scale changes by 1e-6)
+  std::size_t unsolved_pixels = 0;  ///< inside pixels with fewer than 3 usable lights (normal +z)
+  double residual_sd = 0;           ///< robust SD of the kept residuals / (s_j |b|), dimensionless
+  double dropped_bright = 0;  ///< fraction of inside (pixel, light) readings dropped as too bright
+  double dropped_dark = 0;    ///< ... as too dark (shadows)
   /// Integrability check of the image frame: the normals' curl as given, divided by their curl
   /// with one in-plane axis mirrored (x or y; the two are indistinguishable). Well above 1
   /// means the lights' frame is probably mirrored (e.g. y-up lights read as y-down).
   double mirrored_curl_ratio = 1;
-  bool axis_flip_suspected = false;     ///< mirrored_curl_ratio > kAxisFlipRatio
+  bool axis_flip_suspected = false;  ///< mirrored_curl_ratio > kAxisFlipRatio
 };
 
 /// mirrored_curl_ratio above which a mirrored axis is reported.
@@ -133,21 +135,24 @@ inline constexpr double kAxisFlipRatio = 2.0;
 /// Preconditions (HL_REQUIRE, PreconditionError) on inconsistent inputs (image count, mask size, an
 /// irregular mask with Frankot-Chellappa).
 PhotometricResult PhotometricStereo(const ImageStack& images, const std::vector<Light>& lights,
-                                    const PhotometricOptions& options, const ImageStack* reference = nullptr,
+                                    const PhotometricOptions& options,
+                                    const ImageStack* reference = nullptr,
                                     const std::function<void(double)>& progress = {});
 
 /// Frankot-Chellappa: the height whose gradient is closest (least squares, periodic
 /// boundary) to (p, q) = (dh/dx, dh/dy) in height units per pixel; scaled by pitch_m.
-std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& normals, int width, int height, double pitch_m);
+std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& normals, int width,
+                                    int height, double pitch_m);
 /// The least-squares height whose differences between 4-neighbours match the normals'
 /// gradients (averaged over each pair), i.e. a Poisson solve with Neumann boundary on the
 /// image edge (DCT, FFTW); zero mean; scaled by pitch_m.
-std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& normals, int width, int height,
-                                           double pitch_m);
+std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& normals, int width,
+                                           int height, double pitch_m);
 /// The same on an irregular domain: only pairs of neighbours both inside `mask` (non-zero)
 /// count, so the boundary condition is Neumann on the mask boundary (sparse Cholesky, Eigen).
 /// Each connected region has zero mean; outside pixels get the lowest inside height.
-std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& normals, const std::vector<std::uint8_t>& mask,
-                                          int width, int height, double pitch_m);
+std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& normals,
+                                          const std::vector<std::uint8_t>& mask, int width,
+                                          int height, double pitch_m);
 
 }  // namespace hapticlab::modeling

@@ -45,7 +45,8 @@ std::vector<double> Resample(const std::vector<double>& x, double from_hz, doubl
                              ResampleQuality q = ResampleQuality::kMedium);
 /// Band-limits to [lo_hz, hi_hz]: 4th-order Butterworth high-pass and low-pass (two biquads
 /// each), run forward then backward so there is no phase shift.
-std::vector<double> BandLimit(const std::vector<double>& x, double rate_hz, double lo_hz, double hi_hz);
+std::vector<double> BandLimit(const std::vector<double>& x, double rate_hz, double lo_hz,
+                              double hi_hz);
 
 /// Model order selection.
 enum class OrderCriterion { kAic, kBic };
@@ -54,7 +55,7 @@ struct ArFit {
   std::vector<double> coeffs;  ///< c_1..c_p (renderer convention: a[k] = sum c_i a[k-i] + e)
   double variance = 0;         ///< residual (prediction-error) variance
   int order = 0;
-  double criterion = 0;        ///< AIC or BIC of the chosen order
+  double criterion = 0;  ///< AIC or BIC of the chosen order
 };
 /// Autocorrelation-method AR fit by Levinson-Durbin (always minimum phase). `order` > 0 fixes
 /// it; 0 chooses 1..max_order by the criterion.
@@ -73,9 +74,9 @@ double SpectralError(const std::vector<double>& measured, const std::vector<doub
 std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment = 512);
 
 struct AdfResult {
-  double statistic = 0;     ///< t statistic of gamma in dy = a + gamma y[-1] + sum d_i dy[-i]
-  double critical_5pct = 0; ///< MacKinnon (2010) 5 % critical value, constant, no trend
-  int lags = 0;             ///< lag order chosen by AIC
+  double statistic = 0;      ///< t statistic of gamma in dy = a + gamma y[-1] + sum d_i dy[-i]
+  double critical_5pct = 0;  ///< MacKinnon (2010) 5 % critical value, constant, no trend
+  int lags = 0;              ///< lag order chosen by AIC
   bool rejects_unit_root = false;
 };
 /// Augmented Dickey-Fuller test with a constant; lags 0..max_lags chosen by AIC (default
@@ -90,23 +91,25 @@ struct CutoffResult {
 /// Ch. III.5: high-pass at each cut-off from lo to hi (step) and take the first at which the
 /// ADF test rejects a unit root at 5 %. The ADF runs on at most `max_samples` samples.
 CutoffResult StationarityCutoff(const std::vector<double>& x, double rate_hz, double lo_hz = 50,
-                                double hi_hz = 150, double step_hz = 10, std::size_t max_samples = 20000);
+                                double hi_hz = 150, double step_hz = 10,
+                                std::size_t max_samples = 20000);
 
 struct VibrationFitOptions {
-  double model_rate_hz = 2000;   ///< 2 kHz in the thesis
-  double band_lo_hz = 20;        ///< high-pass of the band limit
-  int order = 0;                 ///< 0: by the criterion
+  double model_rate_hz = 2000;  ///< 2 kHz in the thesis
+  double band_lo_hz = 20;       ///< high-pass of the band limit
+  int order = 0;                ///< 0: by the criterion
   int max_order = 30;
   OrderCriterion criterion = OrderCriterion::kAic;
   ResampleQuality resample = ResampleQuality::kMedium;
-  int threads = 0;               ///< recordings preprocessed and fitted in parallel; 0: all cores
+  int threads = 0;  ///< recordings preprocessed and fitted in parallel; 0: all cores
 };
 /// Preprocessing of one recording for modeling: resample to the model rate, band-limit.
 std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o);
 /// The AR bank over the recordings' (speed, force) conditions: a regular grid when the
 /// conditions form one, otherwise scattered cells with their Delaunay triangulation.
 /// Every fit uses the same order (the criterion's choice over all recordings).
-renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recordings, const VibrationFitOptions& o);
+renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recordings,
+                                         const VibrationFitOptions& o);
 
 struct CvRow {
   double speed_mps = 0, force_N = 0;
@@ -122,7 +125,8 @@ struct CvResult {
 /// Ch. III.4 cross-validation: fit the bank on the recordings at the training speeds and
 /// forces, synthesize every recording's condition with the renderer's interpolation and AR
 /// synthesis (seeded), and report E_s per condition.
-CvResult CrossValidate(const std::vector<Recording>& recordings, const std::vector<double>& train_speeds_mps,
+CvResult CrossValidate(const std::vector<Recording>& recordings,
+                       const std::vector<double>& train_speeds_mps,
                        const std::vector<double>& train_forces_N, const VibrationFitOptions& o,
                        std::uint64_t seed = 1);
 

@@ -17,10 +17,10 @@ namespace hapticlab::modeling::wb {
 struct Candidate {
   std::string effect;
   std::string channel;
-  double error_after = 0;       ///< held-out overall error with the effect
-  double error_reduction = 0;   ///< baseline_error - error_after
+  double error_after = 0;         ///< held-out overall error with the effect
+  double error_reduction = 0;     ///< baseline_error - error_after
   double relative_reduction = 0;  ///< of the channel's held-out error
-  double t_statistic = 0;       ///< paired over held-out blocks
+  double t_statistic = 0;         ///< paired over held-out blocks
   /// Error falls by the threshold, t above its threshold, the fit usable, none of the effect's
   /// parameters at a bound, and its own evidence does not contradict it.
   bool supported = false;
@@ -42,17 +42,20 @@ struct UnexplainedChannel {
 /// How much of a channel's residual variance one axis explains (between-bin over total sum of
 /// squares), with the shape of the dependence in words.
 struct ResidualAxis {
-  std::string axis;     ///< time, speed, load, direction, position, regime, band
+  std::string axis;  ///< time, speed, load, direction, position, regime, band
   std::string channel;
-  double share = 0;     ///< 0..1
+  double share = 0;  ///< 0..1
   std::string description;
 };
 struct Unexplained {
   std::vector<UnexplainedChannel> channels;
-  std::vector<ResidualAxis> axes;  ///< channels above the threshold first, then by share, descending
-  /// No candidate supported, yet some channel's error is at least `unexplained_ratio` times its floor.
+  std::vector<ResidualAxis>
+      axes;  ///< channels above the threshold first, then by share, descending
+  /// No candidate supported, yet some channel's error is at least `unexplained_ratio` times its
+  /// floor.
   bool flagged = false;
-  std::string summary;  ///< one paragraph: what is unexplained, where it lives, what would be needed
+  std::string
+      summary;  ///< one paragraph: what is unexplained, where it lives, what would be needed
 };
 
 struct Diagnosis {
@@ -64,8 +67,9 @@ struct Diagnosis {
 struct DiagnoseOptions {
   double min_relative_reduction = 0.02;  ///< of the channel's held-out error
   double min_t = 3.0;                    ///< paired t over held-out blocks
-  double unexplained_ratio = 1.5;        ///< a channel's error / noise floor above which it is unexplained
-  int threads = 0;                       ///< candidates fitted in parallel; 0: all cores
+  double unexplained_ratio =
+      1.5;          ///< a channel's error / noise floor above which it is unexplained
+  int threads = 0;  ///< candidates fitted in parallel; 0: all cores
   /// Called after each candidate (effect, done, total), from the worker threads.
   std::function<void(const std::string&, int, int)> progress;
 };
@@ -75,7 +79,8 @@ Diagnosis Diagnose(const Model& m, const Replay& r, const DiagnoseOptions& o = {
 /// measurement alone (see UnexplainedChannel). With a model, the noise of the measured
 /// velocities (same estimator) is added through the model's sensitivity to them (the damping
 /// and viscous terms), as the model sees it when replayed.
-std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m = nullptr);
+std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split,
+                                                 const Model* m = nullptr);
 
 /// Where a model's residual lives: every axis of every channel present, by share.
 std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p);
@@ -84,7 +89,8 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
 /// the held-out split, predictions `p`) against its noise floor, the residual axes ranked (channels
 /// above `unexplained_ratio` times their floor first), flagged when `any_supported` is false and
 /// some channel is above.
-Unexplained ExplainResidual(const Model& m, const Replay& r, const Prediction& p, const Errors& held_out_errors,
-                            bool any_supported, double unexplained_ratio);
+Unexplained ExplainResidual(const Model& m, const Replay& r, const Prediction& p,
+                            const Errors& held_out_errors, bool any_supported,
+                            double unexplained_ratio);
 
 }  // namespace hapticlab::modeling::wb

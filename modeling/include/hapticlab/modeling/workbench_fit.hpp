@@ -16,7 +16,8 @@ struct FitOptions {
   Split split = Split::kAll;
   bool normal = true, friction = true, vibration = true;  ///< channels to fit
   int max_iterations = 100;
-  /// Compute uncertainties (delete-one-cluster jackknife over 3 s clusters of the split's blocks; see ChannelFit).
+  /// Compute uncertainties (delete-one-cluster jackknife over 3 s clusters of the split's blocks;
+  /// see ChannelFit).
   bool uncertainty = false;
   /// Normal-force samples above this are not fitted (ch. IV.3.3 fits the texture layer on
   /// pokes up to 2 N); infinity: every sample in contact [N].
@@ -31,11 +32,11 @@ struct FitOptions {
 /// solver's common report (core/solver_summary.hpp: converged, iterations, costs as 1/2 sum of
 /// squared residuals [N^2 or ln^2], the solver's own message) plus the workbench's context.
 struct FitSummary : SolverSummary {
-  std::string what;          ///< channel name ("friction", "normal_force", "vibration")
-  std::string method;        ///< "ceres (numeric derivatives of the replay)" or "linear least squares"
-  std::string termination;   ///< "converged", "iteration limit", "failed", "not run (...)"
+  std::string what;    ///< channel name ("friction", "normal_force", "vibration")
+  std::string method;  ///< "ceres (numeric derivatives of the replay)" or "linear least squares"
+  std::string termination;  ///< "converged", "iteration limit", "failed", "not run (...)"
   std::vector<std::string> at_bounds;  ///< "effect.param at its lower|upper bound (value)"
-  bool usable = false;       ///< converged (or a linear solve) with a finite cost
+  bool usable = false;                 ///< converged (or a linear solve) with a finite cost
   bool IsUsable() const { return usable; }
 };
 
@@ -43,8 +44,8 @@ struct FitSummary : SolverSummary {
 struct ParamEstimate {
   std::string effect, name;
   double value = 0;
-  double sd = 0;                 ///< standard error (0 when not computed)
-  double lo95 = 0, hi95 = 0;     ///< 95 % interval: value -+ t(0.975, clusters - 1) sd
+  double sd = 0;              ///< standard error (0 when not computed)
+  double lo95 = 0, hi95 = 0;  ///< 95 % interval: value -+ t(0.975, clusters - 1) sd
   bool at_bound = false;
 };
 

@@ -27,7 +27,7 @@ const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration
 struct ParamSpec {
   std::string name, unit;
   double init = 0, lo = -1e300, hi = 1e300;
-  double scale = 1;     ///< typical magnitude (the optimizer works on value / scale)
+  double scale = 1;  ///< typical magnitude (the optimizer works on value / scale)
   bool fitted = true;
   std::string doc;
 };
@@ -49,9 +49,9 @@ struct Residuals;
 /// What the current model's residuals say about an effect: the pattern as measured, and the
 /// cause it would point to. Reports assert the cause only for supported effects.
 struct EvidenceNote {
-  std::string pattern;      ///< the residual pattern in words with numbers (no causal claim)
-  std::string cause;        ///< what the pattern means when the effect is supported
-  bool contradicts = false; ///< the pattern is not the one this effect produces (or is absent)
+  std::string pattern;       ///< the residual pattern in words with numbers (no causal claim)
+  std::string cause;         ///< what the pattern means when the effect is supported
+  bool contradicts = false;  ///< the pattern is not the one this effect produces (or is absent)
   std::string Sentence(bool supported) const {
     return supported && !cause.empty() ? pattern + ": " + cause : pattern;
   }
@@ -71,10 +71,12 @@ class Effect {
   /// Its parameters with initial (neutral) values from the data.
   virtual std::vector<ParamSpec> Params(const Replay& r) const = 0;
   virtual void Normal(const double* /*p*/, const Replay::Sample& /*s*/, NormalTerms& /*t*/) const {}
-  virtual void Friction(const double* /*p*/, const Replay::Sample& /*s*/, FrictionTerms& /*t*/) const {}
+  virtual void Friction(const double* /*p*/, const Replay::Sample& /*s*/,
+                        FrictionTerms& /*t*/) const {}
   /// Vibration effects add regression columns for the log band powers.
   virtual int VibrationColumns() const { return 0; }
-  virtual void VibrationFeatures(const double* /*p*/, const Replay::Window& /*w*/, double* /*out*/) const {}
+  virtual void VibrationFeatures(const double* /*p*/, const Replay::Window& /*w*/,
+                                 double* /*out*/) const {}
   /// What pattern of the current model's residuals points to this effect, and whether the
   /// residuals show it.
   virtual EvidenceNote Evidence(const Replay& r, const Residuals& res) const = 0;
@@ -93,7 +95,8 @@ std::vector<std::string> BaselineEffects();
 std::string CatalogueNames();
 /// Checks user-given effect names. @throws InputError (file `source`, e.g. a model file or
 /// "<command line>", and `field`) listing every unknown name and the catalogue.
-void RequireKnownEffects(const std::vector<std::string>& names, const std::string& source, const std::string& field);
+void RequireKnownEffects(const std::vector<std::string>& names, const std::string& source,
+                         const std::string& field);
 
 /// A model: effect names and every parameter's values (fitted and fixed). Vibration
 /// coefficients are stored as "coef" (bands x columns, row-major) per vibration effect and

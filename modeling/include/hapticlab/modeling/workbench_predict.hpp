@@ -20,9 +20,9 @@ Prediction Predict(const Model& m, const Replay& r);
 
 /// Residuals (measured minus predicted) in the quantities the evidence reads.
 struct Residuals {
-  std::vector<double> normal_N;     ///< f_n,meas - f_n,pred (0 out of contact)
-  std::vector<double> friction_N;   ///< friction along the motion, measured - predicted
-  std::vector<double> ratio;        ///< friction ratio measured - predicted (sliding samples)
+  std::vector<double> normal_N;    ///< f_n,meas - f_n,pred (0 out of contact)
+  std::vector<double> friction_N;  ///< friction along the motion, measured - predicted
+  std::vector<double> ratio;       ///< friction ratio measured - predicted (sliding samples)
   std::vector<std::vector<double>> log_band;  ///< ln(measured / predicted band power)
 };
 Residuals ComputeResiduals(const Model& m, const Replay& r, const Prediction& p);
@@ -35,10 +35,10 @@ enum class Split { kAll, kTrain, kHeldOut };
 /// the mean of the channels present. Per-block sums support the significance test.
 struct Errors {
   double overall = 0;
-  std::map<std::string, double> channel;       ///< ChannelName -> normalized error
-  std::map<std::string, double> rms;           ///< normal_force_N, tangential_N, friction_ratio
+  std::map<std::string, double> channel;  ///< ChannelName -> normalized error
+  std::map<std::string, double> rms;      ///< normal_force_N, tangential_N, friction_ratio
   std::map<std::string, std::map<int, double>> block_sse;  ///< channel -> block -> SSE (or Σ E_s)
-  std::map<std::string, double> norm;          ///< channel -> normalizer (Σ f² or window count)
+  std::map<std::string, double> norm;  ///< channel -> normalizer (Σ f² or window count)
 };
 Errors ComputeErrors(const Replay& r, const Prediction& p, Split split);
 

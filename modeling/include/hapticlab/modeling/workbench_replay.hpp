@@ -25,8 +25,8 @@ inline constexpr double kSlidingSpeed_mps = 3e-3;
 class Replay {
  public:
   std::string file;
-  double rate_hz = 0;        ///< rate of the force samples after decimation [Hz]
-  double block_s = 1.0;      ///< length of a time block of the split [s]
+  double rate_hz = 0;    ///< rate of the force samples after decimation [Hz]
+  double block_s = 1.0;  ///< length of a time block of the split [s]
   struct Sample {
     double t_s, x_m, y_m, d_m, ddot_mps, vx_mps, vy_mps, speed_mps, dir_rad, fn_N, ftx_N, fty_N;
     /// Measured normal force averaged over ReplayOptions::load_smoothing_s (rows in contact):
@@ -43,14 +43,15 @@ class Replay {
   /// sensitivity replays, tests); everything else reads samples().
   std::vector<Sample>& mutable_samples() { return samples_; }
   double x_min = 0, x_max = 0, y_min = 0, y_max = 0;  ///< bounds of the positions in contact
-  double position_resolution_m = 1e-6;  ///< the Dahl bristle follows the tool through a play of this width [m]
+  double position_resolution_m =
+      1e-6;  ///< the Dahl bristle follows the tool through a play of this width [m]
 
   bool has_vibration = false;
   double acc_rate_hz = 0;
   std::vector<double> band_lo_hz, band_hi_hz;  ///< log-spaced analysis bands
   struct Window {
     double t_s, speed_mps, force_N;
-    std::array<double, 4> dir;  ///< speed-weighted means of cos φ, sin φ, cos 2φ, sin 2φ
+    std::array<double, 4> dir;       ///< speed-weighted means of cos φ, sin φ, cos 2φ, sin 2φ
     std::vector<double> band_power;  ///< mean periodogram power per band [(m/s^2)^2 per bin]
     int block;
     int row0, rows;  ///< measurement rows of the window
@@ -68,7 +69,8 @@ struct ReplayOptions {
   int bands = 8;                   ///< log-spaced bands from 20 Hz to min(1000 Hz, 0.45 rate)
   double contact_force_N = 0.02;   ///< a sample is in contact when f_n exceeds this
   double min_speed_mps = 0.01;     ///< vibration windows below this speed are not scored
-  double max_variation = 0.35;     ///< windows whose speed or load varies more (SD / mean) are not scored
+  double max_variation =
+      0.35;  ///< windows whose speed or load varies more (SD / mean) are not scored
   /// Displacements below this are sensor noise for the Dahl bristle (an encoder's resolution):
   /// without it, position noise at rest would random-walk the pre-sliding state to zero.
   /// 0 (default): 4 times the position noise estimated from the rows at rest (median absolute
@@ -84,7 +86,8 @@ struct ReplayOptions {
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
-/// Prepares a measurement (vibration windows hop by a quarter window). @throws InputError when it has no samples in contact.
+/// Prepares a measurement (vibration windows hop by a quarter window). @throws InputError when it
+/// has no samples in contact.
 Replay PrepareReplay(const Measurement& m, const ReplayOptions& o = {});
 
 /// `measurement check`: duration, rate, ranges, gaps.

@@ -22,17 +22,17 @@ struct TruthParams {
   double mu_k = 0.3, kappa_N_per_m = 3000, mu_b_Ns_per_m = 0.5;
   double stribeck_dmu = 0.25, stribeck_vs_mps = 0.004;
   std::array<double, 4> aniso{0.0, 0.0, 0.25, 0.0};  ///< a1, b1, a2, b2 of 1 + a1 cos φ + ...
-  double load_alpha = 0.7;                            ///< f_C ∝ f_n^alpha
-  double tile_amp = 0.25;                             ///< µ varies by about ± this over the area
+  double load_alpha = 0.7;                           ///< f_C ∝ f_n^alpha
+  double tile_amp = 0.25;                            ///< µ varies by about ± this over the area
   double vib_sigma = 2.0, vib_speed_exp = 1.0, vib_force_exp = 0.8, vib_dir_amp = 0.8;
-  double wavelength_m = 0.4e-3;                       ///< spatial period of the micro-geometry
+  double wavelength_m = 0.4e-3;  ///< spatial period of the micro-geometry
   /// Out of the catalogue (tests of `diagnose`'s unexplained report): mu_k drifts linearly by
   /// this fraction over the recording (mu_k (1 + mu_drift (t / duration - 1/2))), and the
   /// stiffness varies over the surface (K1mm (1 + K_position_amp x / (area / 2))).
   double mu_drift = 0, K_position_amp = 0;
   double force_noise_N = 0.005, pos_noise_m = 0.2e-6, vel_noise_mps = 0.2e-3, acc_noise = 0.05;
   double duration_s = 30, rate_hz = 2000;
-  double area_m = 0.04;                               ///< strokes stay in a square of this side
+  double area_m = 0.04;  ///< strokes stay in a square of this side
   std::uint64_t seed = 1;
   bool Has(std::string_view e) const;
 };

@@ -26,8 +26,8 @@ struct Material {
 
 /// A rendering method: force algorithm plus vibration and hybrid-filter switches.
 struct Method {
-  std::string name;          ///< e.g. "hybrid", "FF", "LPC"
-  std::string algorithm;     ///< wall | norm | fric1 | fric2 | none
+  std::string name;       ///< e.g. "hybrid", "FF", "LPC"
+  std::string algorithm;  ///< wall | norm | fric1 | fric2 | none
   bool vibration = true;
   bool hybrid_filter = true;
   int line = 0;
@@ -41,12 +41,13 @@ const char* ToString(PhaseKind k);
 struct Phase {
   PhaseKind kind = PhaseKind::kMain;
   int repetitions = 1;
-  double duration_s = 30;   ///< training: exploration time per sample [s]
+  double duration_s = 30;  ///< training: exploration time per sample [s]
   /// training: the method rendering the virtual samples (ch. V.2.1: each virtual sample in
   /// turn); default the last [[method]] (the full one in the dissertation's protocols)
   std::string method;
-  bool same_pairs = true;   ///< reference: each material against itself (upper limit)
-  int different_pairs = 0;  ///< reference: distinct material pairs (lower limit), drawn by the study seed
+  bool same_pairs = true;  ///< reference: each material against itself (upper limit)
+  int different_pairs =
+      0;  ///< reference: distinct material pairs (lower limit), drawn by the study seed
   std::vector<std::pair<std::string, std::string>> explicit_pairs;  ///< or listed
   std::optional<AdaptiveSpec> adaptive;  ///< staircase / quest-plus phases
   int line = 0;
@@ -62,27 +63,29 @@ struct Randomization {
 };
 
 struct Protocol {
-  std::string file;               ///< path it was read from
-  std::string text;               ///< the protocol file exactly (stored with the study)
+  std::string file;  ///< path it was read from
+  std::string text;  ///< the protocol file exactly (stored with the study)
   std::string name, description;
-  std::uint64_t seed = 1;         ///< study seed; participants derive theirs from it
+  std::uint64_t seed = 1;  ///< study seed; participants derive theirs from it
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
   double stimulus_duration_s = 2.0;  ///< exploration time per stimulus in a rated trial [s]
-  std::string profiles;           ///< simulated-lab profiles file (relative to the protocol)
-  std::string observer;           ///< simulated observer's parameters (relative; empty: the profiles' [observer])
+  std::string profiles;              ///< simulated-lab profiles file (relative to the protocol)
+  std::string
+      observer;  ///< simulated observer's parameters (relative; empty: the profiles' [observer])
   std::vector<Material> materials;
   std::vector<Method> methods;
   std::vector<Phase> phases;
   Randomization randomization;
-  int break_every_trials = 0;     ///< 0: no breaks
+  int break_every_trials = 0;  ///< 0: no breaks
   double break_duration_s = 60;
   bool masking_noise = false;
   double masking_level_dB = 70;
   /// Participant codes must match this ECMAScript regular expression (`[study]
   /// participant_code`); the default allows 1-3 capital letters and 2-4 digits (P07, AB123).
   std::string participant_code = "^[A-Z]{1,3}[0-9]{2,4}$";
-  std::vector<std::string> analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm
+  std::vector<std::string>
+      analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm
   /// `[analysis] lmm_formula`: the linear mixed model of the "lmm" analysis, fitted per
   /// criterion to the main phase's ratings (columns: score, participant, method, material,
   /// comparison, repetition).
@@ -104,15 +107,15 @@ Protocol ParseProtocol(const std::string& text, const std::string& file);
 
 /// One trial of a participant's plan.
 struct PlannedTrial {
-  int index = 0;             ///< position in the plan
+  int index = 0;  ///< position in the plan
   PhaseKind phase = PhaseKind::kMain;
   std::string material;
-  std::string comparison;    ///< "virtual" (main), the other material (reference), "" (training)
-  std::string method;        ///< main phase only
+  std::string comparison;  ///< "virtual" (main), the other material (reference), "" (training)
+  std::string method;      ///< main phase only
   int repetition = 0;
-  std::string left, right;   ///< stimuli on the two squares: "real:<id>" or "virtual:<id>"
-  bool rated = true;         ///< training trials are not rated
-  bool break_before = false; ///< a break precedes this trial
+  std::string left, right;    ///< stimuli on the two squares: "real:<id>" or "virtual:<id>"
+  bool rated = true;          ///< training trials are not rated
+  bool break_before = false;  ///< a break precedes this trial
 };
 
 /// The participant's seed: derived from the study seed and the participant index.

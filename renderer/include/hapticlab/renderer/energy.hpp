@@ -15,16 +15,16 @@ struct EnergyPath {
   /// (0, 0) -> (l/4, 0) -> (l/4, A) -> (0, A) -> (0, 0). Path B (friction algorithms):
   /// from the surface top at x = 0, down dz_max, along +x by dx_max, up dz_max, back.
   enum class Kind { kA, kB } kind = Kind::kA;
-  double dx_max_m = 1e-4;  ///< path B's tangential excursion [m]
-  double dz_max_m = 1e-4;  ///< path B's penetration [m]
-  int steps = 20000;       ///< integration steps per side
-  double speed_mps = 0.01; ///< tool speed along the path (for damping and Dahl) [m/s]
+  double dx_max_m = 1e-4;   ///< path B's tangential excursion [m]
+  double dz_max_m = 1e-4;   ///< path B's penetration [m]
+  int steps = 20000;        ///< integration steps per side
+  double speed_mps = 0.01;  ///< tool speed along the path (for damping and Dahl) [m/s]
 };
 
 struct EnergyResult {
-  double energy_J = 0;           ///< numeric work done by the surface on the tool [J]
-  double normal_energy_J = 0;    ///< part done by the force's z component [J]
-  double tangential_energy_J = 0;///< part done by its x component (friction, tilted normal) [J]
+  double energy_J = 0;             ///< numeric work done by the surface on the tool [J]
+  double normal_energy_J = 0;      ///< part done by the force's z component [J]
+  double tangential_energy_J = 0;  ///< part done by its x component (friction, tilted normal) [J]
   bool has_closed_form = false;
   /// Path A with `norm`: eq. (5.2). Path B with a friction algorithm: the normal part's
   /// K (T(dx) - T(0)) dz (linear texture contact, B = 0), which the friction part adds to.

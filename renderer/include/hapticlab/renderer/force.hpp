@@ -22,9 +22,8 @@
 /// which composes over consecutive ticks to eq. (4.6)'s exp(-κ |x - x0| / f_C) from the
 /// last rest point x0, and extends it to 2-D motion and reversals without a reset rule.
 
-#include <cstdint>
-
 #include <Eigen/Core>
+#include <cstdint>
 
 #include "hapticlab/renderer/material.hpp"
 
@@ -54,10 +53,10 @@ struct ToolState {
 /// Result of one force tick.
 struct ForceOutput {
   Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< force on the tool [N]
-  double normal_force_N = 0;        ///< f_n = |F_m + F_b| [N]
-  double friction_N = 0;            ///< |F_f| after modulation [N]
-  double tangential_speed_mps = 0;  ///< |v_xy| [m/s]
-  double penetration_m = 0;         ///< d_t + d_b [m]
+  double normal_force_N = 0;                          ///< f_n = |F_m + F_b| [N]
+  double friction_N = 0;                              ///< |F_f| after modulation [N]
+  double tangential_speed_mps = 0;                    ///< |v_xy| [m/s]
+  double penetration_m = 0;                           ///< d_t + d_b [m]
   bool in_contact = false;
 };
 

@@ -13,9 +13,9 @@ namespace hapticlab::renderer {
 
 /// Height and slope at a point.
 struct HeightSample {
-  double h_m = 0;    ///< height above the base [m]
-  double dhdx = 0;   ///< slope along x (dimensionless)
-  double dhdy = 0;   ///< slope along y (dimensionless)
+  double h_m = 0;   ///< height above the base [m]
+  double dhdx = 0;  ///< slope along x (dimensionless)
+  double dhdy = 0;  ///< slope along y (dimensionless)
 };
 
 class HeightMap {

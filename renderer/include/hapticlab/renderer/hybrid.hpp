@@ -24,14 +24,14 @@ namespace hapticlab::renderer {
 /// How one trial renders a material (a protocol's "method").
 struct RenderOptions {
   ForceAlgorithm algorithm = ForceAlgorithm::kFric2;
-  bool vibration = true;          ///< synthesize vibration at all
-  bool hybrid_filter = true;      ///< low-pass force and high-pass vibration at f_c
-  double force_rate_hz = 1000;    ///< force tick rate [Hz]
-  double vibration_rate_hz = 10000;///< vibration tick rate [Hz]
-  double max_force_N = 8.0;       ///< device force limit [N]
+  bool vibration = true;                       ///< synthesize vibration at all
+  bool hybrid_filter = true;                   ///< low-pass force and high-pass vibration at f_c
+  double force_rate_hz = 1000;                 ///< force tick rate [Hz]
+  double vibration_rate_hz = 10000;            ///< vibration tick rate [Hz]
+  double max_force_N = 8.0;                    ///< device force limit [N]
   double device_max_stiffness_N_per_m = 3000;  ///< base K defaults to half of this (ch. V)
-  double stale_after_s = 0.005;   ///< device data older than this is a fault [s]
-  std::uint64_t seed = 1;         ///< vibration noise seed (recorded with the trial)
+  double stale_after_s = 0.005;                ///< device data older than this is a fault [s]
+  std::uint64_t seed = 1;                      ///< vibration noise seed (recorded with the trial)
 };
 
 /// Device reading handed to the force tick.
@@ -48,9 +48,9 @@ struct DeviceSample {
 /// What the force tick commands and observes.
 struct ForceCommand {
   Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< commanded (filtered, clamped) [N]
-  ForceOutput raw;         ///< unfiltered model output
-  bool fault = false;      ///< this tick was a fault: force is zero
-  bool saturated = false;  ///< the limit clamped this tick
+  ForceOutput raw;                                    ///< unfiltered model output
+  bool fault = false;                                 ///< this tick was a fault: force is zero
+  bool saturated = false;                             ///< the limit clamped this tick
 };
 
 /// Fault and activity counters (single writer per field: force or vibration thread).
@@ -96,10 +96,10 @@ class HybridRenderer {
   ArSynth synth_;
   std::unique_ptr<NeuralSynth> neural_;  // the material's neural model, when it has one
   Biquad vib_hp_;
-  double phase_ = 1.0;   // fraction of a model-rate period elapsed (linear interpolation)
-  double step_ = 0.2;    // model rate / vibration rate
+  double phase_ = 1.0;  // fraction of a model-rate period elapsed (linear interpolation)
+  double step_ = 0.2;   // model rate / vibration rate
   double prev_ = 0, next_ = 0;
-  bool upsample_ = false;   // integer rate ratio: band-limited polyphase upsampling
+  bool upsample_ = false;  // integer rate ratio: band-limited polyphase upsampling
   PolyphaseUpsampler up_;
   int up_phase_ = 0;
   RtCounters counters_;

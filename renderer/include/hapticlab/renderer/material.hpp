@@ -24,10 +24,10 @@ struct HuntCrossleyParams {
 
 /// Contact of the texture layer and the base (eqs. 4.13-4.15).
 struct ContactParams {
-  HuntCrossleyParams texture;       ///< texture layer (K_t, B_t, n_t)
+  HuntCrossleyParams texture;  ///< texture layer (K_t, B_t, n_t)
   BaseModel base_model = BaseModel::kLinear;
-  HuntCrossleyParams base{0, 0, 1}; ///< base; K = 0 means "half the device's max stiffness"
-  double layer_thickness_m = 0;     ///< uniform layer under the height map's lowest point [m]
+  HuntCrossleyParams base{0, 0, 1};  ///< base; K = 0 means "half the device's max stiffness"
+  double layer_thickness_m = 0;      ///< uniform layer under the height map's lowest point [m]
 };
 
 /// Discrete Dahl friction with a viscous term (eqs. 4.6-4.7).
@@ -39,16 +39,16 @@ struct FrictionParams {
 
 /// One AR model of the vibration bank, identified at one (speed, normal force) condition.
 struct ArCell {
-  double speed_mps = 0;          ///< scan speed [m/s]
-  double force_N = 0;            ///< normal force [N]
-  std::vector<double> coeffs;    ///< AR coefficients c_1..c_p (see ar.hpp), dimensionless
-  double variance = 0;           ///< excitation (residual) variance [(m/s^2)^2]
-  std::vector<double> lsf;       ///< LSFs [rad/sample], filled on load
+  double speed_mps = 0;        ///< scan speed [m/s]
+  double force_N = 0;          ///< normal force [N]
+  std::vector<double> coeffs;  ///< AR coefficients c_1..c_p (see ar.hpp), dimensionless
+  double variance = 0;         ///< excitation (residual) variance [(m/s^2)^2]
+  std::vector<double> lsf;     ///< LSFs [rad/sample], filled on load
   /// Optional moving-average part (ARMA models, e.g. the Penn toolkit's 1 kHz variant):
   /// a[k] = sum c_i a[k-i] + gain (e[k] + sum_j ma_j e[k-j]). Empty for pure AR.
-  std::vector<double> ma;        ///< MA coefficients b_1..b_q (B(z) = 1 + sum b_j z^-j)
-  std::vector<double> ma_lsf;    ///< LSFs of B(z), filled on load
-  double gain = 1;               ///< excitation gain (dimensionless)
+  std::vector<double> ma;      ///< MA coefficients b_1..b_q (B(z) = 1 + sum b_j z^-j)
+  std::vector<double> ma_lsf;  ///< LSFs of B(z), filled on load
+  double gain = 1;             ///< excitation gain (dimensionless)
 };
 
 /// How far inside the modelled range a saturated condition is put (the Penn toolkit's
@@ -59,15 +59,16 @@ inline constexpr double kSaturationMarginForce_N = 0.01;
 /// The AR bank over (speed, normal force). Either a regular grid (`speeds_mps` x `forces_N`,
 /// cells row-major with force fastest) or scattered cells with a triangulation.
 struct VibrationBank {
-  double sample_rate_hz = 2000;               ///< rate the AR models run at [Hz]
+  double sample_rate_hz = 2000;  ///< rate the AR models run at [Hz]
   std::vector<ArCell> cells;
   std::vector<double> grid_speeds_mps;        ///< ascending; empty for scattered cells
   std::vector<double> grid_forces_N;          ///< ascending; empty for scattered cells
   std::vector<std::array<int, 3>> triangles;  ///< 0-based cell indices (scattered cells)
   double min_speed_mps = 0.01;                ///< synthesis is off below this speed (1 cm/s)
   /// The modelled range (0: none). Above it the condition saturates just inside, as the Penn
-  /// toolkit renders: a speed above max_speed_mps becomes max_speed_mps - kSaturationMarginSpeed_mps,
-  /// a force above max_force_N becomes max_force_N - kSaturationMarginForce_N.
+  /// toolkit renders: a speed above max_speed_mps becomes max_speed_mps -
+  /// kSaturationMarginSpeed_mps, a force above max_force_N becomes max_force_N -
+  /// kSaturationMarginForce_N.
   double max_speed_mps = 0;
   double max_force_N = 0;
   bool empty() const { return cells.empty(); }
@@ -77,8 +78,8 @@ struct VibrationBank {
 /// A complete material model.
 struct MaterialModel {
   std::string name;
-  std::string source_path;                 ///< file it was loaded from (for messages)
-  std::vector<std::string> effects;        ///< named effects of the workbench catalogue
+  std::string source_path;           ///< file it was loaded from (for messages)
+  std::vector<std::string> effects;  ///< named effects of the workbench catalogue
   ContactParams contact;
   FrictionParams friction;
   std::shared_ptr<const HeightMap> geometry = std::make_shared<HeightMap>(HeightMap::Flat());
@@ -89,7 +90,7 @@ struct MaterialModel {
   /// Optional neural vibration model (ch. III.3), from `[neural] file = "..."`; when present
   /// the renderer synthesizes with it instead of the AR bank.
   std::shared_ptr<const NeuralModel> neural;
-  std::string neural_file;                 ///< as written in the file (relative to it)
+  std::string neural_file;  ///< as written in the file (relative to it)
 };
 
 /// Loads and validates a material model TOML file (format in docs/renderer.md). Relative

@@ -38,7 +38,7 @@ namespace hapticlab::renderer {
 /// A trained MLP: tanh hidden layers, linear scalar output. Parameters per layer l: W_l
 /// (out x in, column-major) then b_l (out).
 struct NeuralNet {
-  std::vector<int> layers;     ///< sizes from input to output (output 1)
+  std::vector<int> layers;  ///< sizes from input to output (output 1)
   std::vector<double> params;
   /// Optional linear autoregressive part added to the MLP's output (empty: none). Over the
   /// M history inputs x_i: Γ_D, M weights a_i, y += sum a_i x_i; Γ_U, 9 M weights, one block
@@ -55,9 +55,9 @@ struct NeuralBand {
   double lo_hz = 20, hi_hz = 100;  ///< the band
   int decimation = 10;             ///< γ: the band runs at sample_rate / γ
   int history = 50;                ///< M: past decimated samples fed to the network
-  double scale = 1;                ///< band signal standard deviation [m/s^2]; nets work in units of it
-  std::vector<NeuralNet> nets;     ///< Γ_U: one; Γ_D: one per grid cell (speed-major)
-  std::vector<double> sigma;       ///< residual SD per grid cell (units of `scale`)
+  double scale = 1;  ///< band signal standard deviation [m/s^2]; nets work in units of it
+  std::vector<NeuralNet> nets;  ///< Γ_U: one; Γ_D: one per grid cell (speed-major)
+  std::vector<double> sigma;    ///< residual SD per grid cell (units of `scale`)
 };
 
 enum class NeuralTopology { kUnified, kDecomposed };
@@ -66,8 +66,8 @@ inline constexpr std::size_t kMaxNeuralBands = 8;
 
 struct NeuralModel {
   NeuralTopology topology = NeuralTopology::kUnified;
-  double sample_rate_hz = 2000;            ///< model rate [Hz]
-  double min_speed_mps = 0.01;             ///< off below this speed (as the AR bank)
+  double sample_rate_hz = 2000;              ///< model rate [Hz]
+  double min_speed_mps = 0.01;               ///< off below this speed (as the AR bank)
   std::vector<double> speeds_mps, forces_N;  ///< the training grid (ascending)
   std::vector<NeuralBand> bands;
   /// Γ_U condition inputs: v and f mapped linearly from [lo, hi] of the grid to [-1, 1].
@@ -107,11 +107,11 @@ class NeuralSynth {
   static constexpr int kTaps = 16;  // interpolator taps per phase
   static constexpr double kButterworth4Q[2] = {0.54119610014619701, 1.3065629648763766};
   struct BandState {
-    std::vector<double> hist;     // 2M: newest-first window at [head, head + M)
-    std::vector<double> input;    // M (+2) network input
+    std::vector<double> hist;   // 2M: newest-first window at [head, head + M)
+    std::vector<double> input;  // M (+2) network input
     int head = 0, phase = 0;
-    Biquad hp;                    // lowest band only: drift high-pass at lo / 2 (decimated rate)
-    PolyphaseUpsampler up;        // by γ, kTaps taps per phase
+    Biquad hp;              // lowest band only: drift high-pass at lo / 2 (decimated rate)
+    PolyphaseUpsampler up;  // by γ, kTaps taps per phase
     std::array<Biquad, 2 * kMaxNeuralBands> xover{};  // crossover sections at the model rate
     int nxover = 0;
   };

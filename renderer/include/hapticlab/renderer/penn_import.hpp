@@ -24,10 +24,10 @@ namespace hapticlab::renderer {
 inline constexpr double kPennMinSpeed_mps = 5e-5;
 
 struct PennImport {
-  MaterialModel model;          ///< mu -> friction.mu_k; the bank; contact left at defaults;
-                                ///< flat geometry and hybrid_cutoff_hz = 0 (no split)
-  bool arma = false;            ///< the file holds ARMA models (the 1 kHz variant)
-  bool has_range = false;       ///< the file gave maxSpeed and maxForce (imported as the bank's range)
+  MaterialModel model;     ///< mu -> friction.mu_k; the bank; contact left at defaults;
+                           ///< flat geometry and hybrid_cutoff_hz = 0 (no split)
+  bool arma = false;       ///< the file holds ARMA models (the 1 kHz variant)
+  bool has_range = false;  ///< the file gave maxSpeed and maxForce (imported as the bank's range)
   /// Largest |c_i| difference between the file's AR coefficients and those rebuilt from the
   /// file's LSFs (a check of the file and of our LSF convention; ~1e-5 from 6-digit LSFs).
   double max_lsf_reconstruction_error = 0;

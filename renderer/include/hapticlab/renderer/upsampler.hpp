@@ -44,7 +44,9 @@ class PolyphaseUpsampler {
   int factor() const { return factor_; }
   int taps_per_phase() const { return taps_; }
   /// Group delay in input samples.
-  double DelayInputSamples() const { return factor_ == 1 ? 0.0 : 0.5 * (taps_ * factor_ - 1) / factor_; }
+  double DelayInputSamples() const {
+    return factor_ == 1 ? 0.0 : 0.5 * (taps_ * factor_ - 1) / factor_;
+  }
 
  private:
   int factor_ = 1, taps_ = 1;

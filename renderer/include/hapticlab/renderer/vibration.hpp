@@ -19,9 +19,9 @@ struct ArFilter {
   int order = 0;
   std::array<double, kMaxArOrder> b{};  ///< MA coefficients b_1..b_ma_order (ARMA only)
   int ma_order = 0;
-  double gain = 1;    ///< excitation gain (dimensionless)
-  double sigma = 0;   ///< residual standard deviation [m/s^2]
-  bool active = false;///< false: out of contact or slower than the bank's minimum speed
+  double gain = 1;      ///< excitation gain (dimensionless)
+  double sigma = 0;     ///< residual standard deviation [m/s^2]
+  bool active = false;  ///< false: out of contact or slower than the bank's minimum speed
   double speed_mps = 0, force_N = 0;  ///< the condition (for the neural model's inputs)
 };
 

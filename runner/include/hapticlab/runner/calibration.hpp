@@ -47,7 +47,8 @@ struct CalibrationSpec {
   std::string path;
   std::uint64_t seed = 1;
   int simulations = 16, pool = 6, sweeps = 10;
-  int pool_first = 0;  ///< plan index of the first pool participant (not in the file; tests hold out the fit's)
+  int pool_first =
+      0;  ///< plan index of the first pool participant (not in the file; tests hold out the fit's)
   std::string observer_out, start;
   std::vector<CalibrationProtocol> protocols;
   std::vector<CalibrationParam> params;
@@ -59,18 +60,20 @@ bool IsScaleParam(const std::string& name);
 CalibrationSpec LoadCalibration(const std::string& path);
 
 struct CalibrationState {
-  std::vector<FeltPool> pools;     ///< per protocol, in spec order
-  sim::ObserverParams start;       ///< the start observer
+  std::vector<FeltPool> pools;  ///< per protocol, in spec order
+  sim::ObserverParams start;    ///< the start observer
 };
 /// Records each protocol's pool through the runner (the slow part) and loads the start observer.
-CalibrationState PrepareCalibration(const CalibrationSpec& spec, const std::function<void(const std::string&)>& log);
+CalibrationState PrepareCalibration(const CalibrationSpec& spec,
+                                    const std::function<void(const std::string&)>& log);
 
 struct CalibrationRow {
   std::string protocol, label;
   double target = 0, weight = 0, achieved = 0;
 };
 /// Loss of `observer`; with `rows`, also each target's achieved value.
-double EvaluateCalibration(const CalibrationState& state, const CalibrationSpec& spec, const sim::ObserverParams& observer,
-                           std::vector<CalibrationRow>* rows, int threads = 2);
+double EvaluateCalibration(const CalibrationState& state, const CalibrationSpec& spec,
+                           const sim::ObserverParams& observer, std::vector<CalibrationRow>* rows,
+                           int threads = 2);
 
 }  // namespace hapticlab::runner

@@ -26,18 +26,21 @@
 namespace hapticlab::runner {
 
 struct FeltPool {
-  std::string protocol;                          ///< study name
+  std::string protocol;  ///< study name
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
-  sim::ObserverParams observer;                  ///< the protocol's observer (its file or the profiles')
-  std::vector<std::vector<FeltTrial>> participants;  ///< rated trials of each pool participant, plan order
+  sim::ObserverParams observer;  ///< the protocol's observer (its file or the profiles')
+  std::vector<std::vector<FeltTrial>>
+      participants;  ///< rated trials of each pool participant, plan order
 };
 
 /// Runs `pool_size` simulated participants (plan indices first_index..first_index+pool_size-1)
-/// through the runner, each in its own temporary database (removed afterwards), `threads` at a time.
+/// through the runner, each in its own temporary database (removed afterwards), `threads` at a
+/// time.
 /// @throws InputError as RunStudy does
 FeltPool RecordFeltPool(const protocols::Protocol& protocol, int pool_size, int threads = 2,
-                        const std::function<void(const std::string&)>& log = {}, int first_index = 0);
+                        const std::function<void(const std::string&)>& log = {},
+                        int first_index = 0);
 
 /// The observer of a protocol as the runner would load it (observer file, else profiles).
 sim::ObserverParams ProtocolObserver(const protocols::Protocol& protocol);
@@ -46,7 +49,7 @@ sim::ObserverParams ProtocolObserver(const protocols::Protocol& protocol);
 /// participant, criterion, phase, material, comparison, method (response score); with
 /// `main_only` just the main phase's rows and the keys participant, criterion, method,
 /// material (what stats::AnalyseOnce analyses, as the report does).
-stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams& observer, int participants, Rng& rng,
-                                 bool main_only);
+stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams& observer,
+                                 int participants, Rng& rng, bool main_only);
 
 }  // namespace hapticlab::runner

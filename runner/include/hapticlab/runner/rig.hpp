@@ -8,21 +8,21 @@
 /// The engine maps the device's reported point, moved by the stylus tip offset, into the
 /// sample frame before the renderer and maps the renderer's force back into the device frame.
 
+#include <Eigen/Geometry>
 #include <array>
 #include <string>
 #include <vector>
 
-#include <Eigen/Geometry>
-
 namespace hapticlab::runner {
 
 struct RigFile {
-  std::string path;    ///< where it was read from (empty: built in)
-  std::string text;    ///< the file's content, as recorded with a session
-  std::string sha256;  ///< of `text`
+  std::string path;            ///< where it was read from (empty: built in)
+  std::string text;            ///< the file's content, as recorded with a session
+  std::string sha256;          ///< of `text`
   std::string device = "sim";  ///< the back-end it describes (informational)
   Eigen::Isometry3d world_from_device = Eigen::Isometry3d::Identity();
-  std::array<Eigen::Isometry3d, 2> world_from_sample{Eigen::Isometry3d::Identity(), Eigen::Isometry3d::Identity()};
+  std::array<Eigen::Isometry3d, 2> world_from_sample{Eigen::Isometry3d::Identity(),
+                                                     Eigen::Isometry3d::Identity()};
   /// From the point the device reports to the stylus tip, in the device frame [m] (the
   /// devices here are translational: the offset does not turn).
   Eigen::Vector3d tip_offset_m = Eigen::Vector3d::Zero();
@@ -41,7 +41,8 @@ RigFile ParseRig(const std::string& text, const std::string& path);
 std::string RigToToml(const RigFile& r);
 /// A pose from an origin and two axes (x is made orthogonal to z).
 /// @throws std::invalid_argument when the axes are zero or parallel
-Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis, const Eigen::Vector3d& z_axis);
+Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis,
+                               const Eigen::Vector3d& z_axis);
 
 /// The built-in rigs: "sim" (device frame = world, z up, samples flat at x = -+3 cm) and
 /// "falcon" (the Falcon's frame: y up, z towards the user; samples 4 cm below the workspace
@@ -57,6 +58,7 @@ struct PlaneFit {
   double rms_residual_m = 0, max_residual_m = 0;
 };
 /// @throws std::invalid_argument for fewer than 3 points or collinear points
-PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& points_device_m, const Eigen::Vector3d& up_hint);
+PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& points_device_m,
+                        const Eigen::Vector3d& up_hint);
 
 }  // namespace hapticlab::runner

@@ -30,6 +30,7 @@
 /// command give zero force on that tick, latch the trial as faulted and queue an event; the
 /// renderer itself also zeroes NaN and stale data and clamps to the device limit.
 
+#include <Eigen/Geometry>
 #include <atomic>
 #include <chrono>
 #include <cstdint>
@@ -37,15 +38,13 @@
 #include <string>
 #include <thread>
 
-#include <Eigen/Geometry>
-
+#include "hapticlab/core/latency_histogram.hpp"
 #include "hapticlab/core/triple_buffer.hpp"
+#include "hapticlab/db/force_record.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/devices/clock.hpp"
-#include "hapticlab/db/force_record.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
-#include "hapticlab/core/latency_histogram.hpp"
 #include "hapticlab/runner/rt_thread.hpp"
 #include "hapticlab/runner/watchdog.hpp"
 
@@ -61,9 +60,9 @@ inline const std::vector<std::string>& VibrationStreamChannels() {
 }
 
 struct EngineOptions {
-  int max_consecutive_misses = 3;   ///< late force ticks in a row before forcing zero force
-  int max_lost_reads = 10;          ///< lost reads in a row that fault the trial (disconnect)
-  double max_lost_s = 0.010;        ///< time without a good read that faults the trial [s]
+  int max_consecutive_misses = 3;  ///< late force ticks in a row before forcing zero force
+  int max_lost_reads = 10;         ///< lost reads in a row that fault the trial (disconnect)
+  double max_lost_s = 0.010;       ///< time without a good read that faults the trial [s]
   /// What the loop threads ask for before their first tick (real clock only): timer slack
   /// 1 ns always; spin, SCHED_FIFO priority (the vibration loop one below the force loop),
   /// memory locking, CPU pinning (the vibration loop on the next CPU) as asked. Outcomes in
@@ -95,7 +94,8 @@ struct EngineTiming {
 struct EngineStats {
   std::uint64_t force_ticks = 0, vibration_ticks = 0;
   std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
-  std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0, bad_commands = 0;
+  std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0,
+                bad_commands = 0;
   std::uint64_t recording_overflows = 0;
   std::uint64_t contact_ticks = 0;  ///< force ticks with the stylus inside the model's surface
   std::uint64_t empty_reads = 0, lost_reads = 0;  ///< reads with no new data, lost reads
@@ -177,7 +177,8 @@ class RtEngine {
   std::thread force_thread_, vibration_thread_;
   // Statistics (single writer each).
   std::atomic<std::uint64_t> force_ticks_{0}, vibration_ticks_{0};
-  std::atomic<std::uint64_t> force_misses_{0}, vibration_misses_{0}, disconnects_{0}, miss_faults_{0};
+  std::atomic<std::uint64_t> force_misses_{0}, vibration_misses_{0}, disconnects_{0},
+      miss_faults_{0};
   std::atomic<double> force_jitter_max_{0}, force_jitter_sum_{0}, vibration_jitter_max_{0};
   std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
   std::atomic<std::uint64_t> recording_overflows_at_stop_{0};

@@ -22,9 +22,9 @@ namespace hapticlab::runner {
 inline constexpr double kDefaultSpinUs = 20;
 
 struct RtThreadOptions {
-  int priority = 0;           ///< SCHED_FIFO priority of the force loop (1..99; 0: normal scheduling)
-  bool lock_memory = false;   ///< mlockall(MCL_CURRENT | MCL_FUTURE) before the loops start
-  int cpu = -1;               ///< pin the force loop to this CPU (-1: no pinning)
+  int priority = 0;  ///< SCHED_FIFO priority of the force loop (1..99; 0: normal scheduling)
+  bool lock_memory = false;         ///< mlockall(MCL_CURRENT | MCL_FUTURE) before the loops start
+  int cpu = -1;                     ///< pin the force loop to this CPU (-1: no pinning)
   double spin_us = kDefaultSpinUs;  ///< busy-wait this long before each force deadline (0: none)
   /// Stack touched before the first tick (0: none).
   std::size_t prefault_stack_bytes = std::size_t{64} * 1024;
@@ -32,12 +32,12 @@ struct RtThreadOptions {
 
 /// What a thread (or the process, for memory locking) got; strings for people and records.
 struct RtThreadReport {
-  long timer_slack_ns = -1;       ///< read back with prctl(PR_GET_TIMERSLACK) on the thread
-  bool fifo = false;              ///< SCHED_FIFO granted
-  int priority = 0;               ///< the granted SCHED_FIFO priority (0: normal scheduling)
-  std::string priority_status;    ///< "SCHED_FIFO 80", "not requested", "refused: ..."
-  int cpu = -1;                   ///< the CPU pinned to (-1: none)
-  std::string affinity_status;    ///< "not requested", "CPU 1", "refused: ..."
+  long timer_slack_ns = -1;     ///< read back with prctl(PR_GET_TIMERSLACK) on the thread
+  bool fifo = false;            ///< SCHED_FIFO granted
+  int priority = 0;             ///< the granted SCHED_FIFO priority (0: normal scheduling)
+  std::string priority_status;  ///< "SCHED_FIFO 80", "not requested", "refused: ..."
+  int cpu = -1;                 ///< the CPU pinned to (-1: none)
+  std::string affinity_status;  ///< "not requested", "CPU 1", "refused: ..."
   bool stack_prefaulted = false;
 };
 

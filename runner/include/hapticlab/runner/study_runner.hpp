@@ -15,22 +15,19 @@
 /// (none twice, none skipped); a faulted trial is re-queued at the end of its phase in a
 /// position that keeps the no-immediate-repeat constraint when any such position exists.
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <optional>
 #include <string>
-
-#include <Eigen/Core>
 #include <vector>
 
-#include <array>
-
-#include <Eigen/Geometry>
-
 #include "hapticlab/devices/device.hpp"
+#include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/sim/sim_device.hpp"
-#include "hapticlab/protocols/protocol.hpp"
 
 namespace hapticlab::runner {
 
@@ -43,9 +40,10 @@ struct TrialScreen {
   /// many there are; a training trial (`training`) counts among the training trials instead.
   int index = 0, total = 0;
   bool training = false;
-  int rated_done = 0, rated_total = 0;        ///< rated trials completed / planned (console progress)
+  int rated_done = 0, rated_total = 0;  ///< rated trials completed / planned (console progress)
   int training_done = 0, training_total = 0;  ///< training trials completed / planned
-  std::string phase, left, right, method, placement;  ///< placement: what the experimenter puts where
+  std::string phase, left, right, method,
+      placement;  ///< placement: what the experimenter puts where
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
   std::string scale_low = "very different", scale_high = "identical";
@@ -63,7 +61,8 @@ class SessionUi {
   /// One frame while the participant explores side 0 (left) or 1 (right): the stylus [m,
   /// in that sample's frame] and the stimulus time left. false: the experimenter
   /// aborted.
-  virtual bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) = 0;
+  virtual bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m,
+                        double remaining_s) = 0;
   /// Blocks until the participant confirms a rating per criterion (in the protocol's scale),
   /// or the experimenter aborts (nullopt).
   virtual std::optional<std::vector<double>> Rate(const TrialScreen& t) = 0;
@@ -89,16 +88,16 @@ class SessionUi {
 /// falcon ...). Without one, a "sim" session builds the generic simulated rig itself.
 /// Ratings come from the SessionUi, or from the simulated observer on a simulated rig.
 struct HardwareRig {
-  devices::HapticDevice* device = nullptr;   ///< required
-  devices::Actuator* actuator = nullptr;     ///< the vibrotactile actuator (may be null: no vibration)
-  devices::MaskingNoise* noise = nullptr;    ///< headphones (may be null)
-  double noise_rms_fs = 0.1;                 ///< masking level when the protocol asks for noise
+  devices::HapticDevice* device = nullptr;  ///< required
+  devices::Actuator* actuator = nullptr;  ///< the vibrotactile actuator (may be null: no vibration)
+  devices::MaskingNoise* noise = nullptr;  ///< headphones (may be null)
+  double noise_rms_fs = 0.1;               ///< masking level when the protocol asks for noise
   /// Pose of each sample (0 left, 1 right) in the device frame: origin on the sample's base
   /// plane, +z out of the sample (the rig file's; docs/hardware.md).
   std::array<Eigen::Isometry3d, 2> device_from_sample{sim::DefaultSamplePoses()};
-  std::string description;                   ///< recorded in the session's provenance
-  std::string calibration;                   ///< recorded with the session (rig file content)
-  std::string rig_file_hash;                 ///< SHA-256 of the rig file (provenance), empty: none
+  std::string description;    ///< recorded in the session's provenance
+  std::string calibration;    ///< recorded with the session (rig file content)
+  std::string rig_file_hash;  ///< SHA-256 of the rig file (provenance), empty: none
   /// A simulated rig (borrowed): its virtual clock runs the engine, its hand explores, the
   /// observer rates. Null on hardware.
   sim::SimRig* sim = nullptr;
@@ -107,10 +106,10 @@ struct HardwareRig {
 /// What one trial side did in the engine (RunOptions::on_side; tests and diagnostics).
 struct SideReport {
   int plan_index = 0, side = 0, attempt = 0;
-  std::string stimulus;            ///< "real:Denim", "virtual:Denim"
+  std::string stimulus;  ///< "real:Denim", "virtual:Denim"
   EngineStats engine;
-  std::uint64_t hand_ticks = 0;    ///< simulated rig: ticks the hand was stepped
-  std::uint64_t contact_ticks = 0; ///< ticks the renderer found the stylus inside the surface
+  std::uint64_t hand_ticks = 0;     ///< simulated rig: ticks the hand was stepped
+  std::uint64_t contact_ticks = 0;  ///< ticks the renderer found the stylus inside the surface
 };
 
 /// What the simulated hand felt in one rated trial, as the observer's feature distance per
@@ -127,12 +126,13 @@ struct FeltTrial {
 
 struct RunOptions {
   std::string db_path;
-  std::string participant;       ///< pseudonymous code, e.g. "P07"
-  int participant_index = -1;    ///< plan index; -1: the next free index in the study
-  std::string device = "sim";    ///< device back-end name (recorded; "sim": the generic simulated rig)
+  std::string participant;     ///< pseudonymous code, e.g. "P07"
+  int participant_index = -1;  ///< plan index; -1: the next free index in the study
+  std::string device =
+      "sim";  ///< device back-end name (recorded; "sim": the generic simulated rig)
   RecordMode record = RecordMode::kAll;
-  int stop_after_trials = -1;    ///< abort the session after this many trials (tests; -1: run all)
-  double fault_rate = 0;         ///< sim: probability that a trial's link drops out for 50 ms (tests)
+  int stop_after_trials = -1;  ///< abort the session after this many trials (tests; -1: run all)
+  double fault_rate = 0;       ///< sim: probability that a trial's link drops out for 50 ms (tests)
   std::function<void(const std::string&)> log;  ///< progress lines (may be empty)
   /// Participant and console windows: ratings come from the participant; the stimulus is
   /// shown (sim: the simulated strokes, played in real time). Borrowed; may be null.
@@ -140,12 +140,13 @@ struct RunOptions {
   double ui_playback_speed = 1.0;  ///< simulated rig with a UI: virtual time runs this much faster
   HardwareRig* rig = nullptr;      ///< required when device != "sim"
   std::function<void(const SideReport&)> on_side;  ///< after every trial side (may be empty)
-  std::function<void(const FeltTrial&)> on_felt;   ///< simulated rig: before every rating (may be empty)
+  std::function<void(const FeltTrial&)>
+      on_felt;  ///< simulated rig: before every rating (may be empty)
   /// Abort the session after this many trials in a row where a side touched nothing (the
   /// rig's sample pose is probably wrong).
   int max_untouched_trials = 3;
   // The session's mode besides `device` and `ui` (recorded; resume continues in it).
-  std::string actuator = "none";   ///< vibrotactile actuator back-end ("audio", "none")
+  std::string actuator = "none";        ///< vibrotactile actuator back-end ("audio", "none")
   std::string rating_input = "window";  ///< with a UI: the participant's input device
                                         ///< ("window", "rating-box:VID:PID")
   /// Resume: continue in this mode although it differs from the recorded one (logged as a
@@ -158,11 +159,12 @@ struct RunOptions {
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.
 struct SessionMode {
-  std::string device = "sim";     ///< back-end
-  std::string actuator = "none";  ///< "unrecorded" for sessions before schema v5
-  bool screens = false;           ///< --ui
-  std::string rater = "simulated";///< "simulated" or the participant's input device
-  std::string Describe() const;   ///< e.g. "device sim, actuator none, screens off, ratings simulated"
+  std::string device = "sim";       ///< back-end
+  std::string actuator = "none";    ///< "unrecorded" for sessions before schema v5
+  bool screens = false;             ///< --ui
+  std::string rater = "simulated";  ///< "simulated" or the participant's input device
+  std::string Describe()
+      const;  ///< e.g. "device sim, actuator none, screens off, ratings simulated"
 };
 
 /// Resuming in `now` a session recorded in `recorded`: true when the mode changes (allowed
@@ -182,7 +184,8 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
 /// phases runnable on the device, the profiles file (looked up relative to the protocol
 /// file's folder) present and naming every material's profile, every model file present and
 /// loadable. @throws InputError listing every problem (file, line, key, path looked up)
-void CheckRunnable(const protocols::Protocol& protocol, const std::string& device = "sim", bool ui = false);
+void CheckRunnable(const protocols::Protocol& protocol, const std::string& device = "sim",
+                   bool ui = false);
 
 /// The plan index of participant `code` of study `study` in the database (`study plan
 /// --participant CODE --db DB`). @throws InputError when there is no such participant
@@ -198,9 +201,9 @@ int StopRequested() noexcept;
 struct RunSummary {
   std::int64_t session_id = 0;
   std::string participant;
-  std::string status;            ///< completed | aborted
+  std::string status;  ///< completed | aborted
   int planned = 0, completed = 0, executed = 0, faults = 0;
-  double simulated_s = 0;        ///< stimulus time rendered (sim)
+  double simulated_s = 0;  ///< stimulus time rendered (sim)
   double wall_s = 0;
 };
 
@@ -218,6 +221,7 @@ struct ParticipantStatus {
   std::string session_status;
 };
 /// Progress of every participant (or one) in the database.
-std::vector<ParticipantStatus> StudyStatus(const std::string& db_path, const std::string& participant = "");
+std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
+                                           const std::string& participant = "");
 
 }  // namespace hapticlab::runner

@@ -7,11 +7,10 @@
 /// runner) and go to a lock-free event queue that a non-real-time thread drains into the
 /// study record's event log. Check() is noexcept and allocation-free.
 
+#include <Eigen/Core>
 #include <array>
 #include <atomic>
 #include <cstdint>
-
-#include <Eigen/Core>
 
 #include "hapticlab/core/spsc_queue.hpp"
 #include "hapticlab/devices/device.hpp"
@@ -19,14 +18,22 @@
 
 namespace hapticlab::runner {
 
-enum class FaultKind : std::uint8_t { kNone = 0, kDisconnect, kNaN, kStale, kDeadlineMiss, kBadCommand };
+enum class FaultKind : std::uint8_t {
+  kNone = 0,
+  kDisconnect,
+  kNaN,
+  kStale,
+  kDeadlineMiss,
+  kBadCommand
+};
 inline constexpr int kFaultKinds = 6;
-const char* FaultName(FaultKind k);  ///< "disconnect", "nan", "stale", "deadline-miss", "bad-command"
+const char* FaultName(
+    FaultKind k);  ///< "disconnect", "nan", "stale", "deadline-miss", "bad-command"
 
 struct WatchdogOptions {
-  double stale_after_s = 0.005;     ///< device data older than this is stale
-  int max_consecutive_misses = 3;   ///< late ticks in a row before it is a fault
-  double max_force_N = 8.0;         ///< a command above this (before clamping) is a fault
+  double stale_after_s = 0.005;    ///< device data older than this is stale
+  int max_consecutive_misses = 3;  ///< late ticks in a row before it is a fault
+  double max_force_N = 8.0;        ///< a command above this (before clamping) is a fault
   /// A loss is sustained (a disconnect fault) after this many lost reads in a row, or this
   /// long since the last good read, whichever comes first.
   int max_lost_reads = 10;
@@ -47,13 +54,15 @@ class Watchdog {
   /// ignored on a lost read), the loop's time, how late the tick woke, and the force the
   /// renderer wants. Returns the force to command: `force`, or zero on a fault (the same
   /// tick) and on any lost read (a short loss zeroes the force without faulting the trial).
-  Eigen::Vector3d Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s, double late_s,
-                        double period_s, const Eigen::Vector3d& force) noexcept;
+  Eigen::Vector3d Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s,
+                        double late_s, double period_s, const Eigen::Vector3d& force) noexcept;
   /// The fault of the last Check (kNone when healthy).
   FaultKind last() const { return last_; }
   /// Any fault since Reset: the trial is faulted.
   bool tripped() const { return tripped_.load(std::memory_order_acquire); }
-  std::uint64_t count(FaultKind k) const { return counts_[static_cast<std::size_t>(k)].load(std::memory_order_relaxed); }
+  std::uint64_t count(FaultKind k) const {
+    return counts_[static_cast<std::size_t>(k)].load(std::memory_order_relaxed);
+  }
   /// A new trial.
   void Reset() noexcept;
   /// Non-real-time side: the next fault event (each fault's first tick is queued, then one per

@@ -34,8 +34,8 @@ class FalconTwinTransport final : public devices::falcon::UsbTransport {
  public:
   /// Borrowed: the hand on the grip and the clock (the engine's virtual clock).
   FalconTwinTransport(Hand& hand, const devices::Clock& clock, const FalconTwinOptions& o = {});
-  int Control(std::uint8_t request_type, std::uint8_t request, std::uint16_t value, std::uint16_t index,
-              unsigned timeout_ms) override;
+  int Control(std::uint8_t request_type, std::uint8_t request, std::uint16_t value,
+              std::uint16_t index, unsigned timeout_ms) override;
   int BulkWrite(const std::uint8_t* data, int n, unsigned timeout_ms) override;
   int BulkRead(std::uint8_t* data, int n, unsigned timeout_ms) override;
 
@@ -62,7 +62,7 @@ class FalconTwinTransport final : public devices::falcon::UsbTransport {
   bool dtr_ = false, loading_ = false, normal_ = false, holding_ = false;
   std::array<std::uint8_t, 256> out_{};  // bytes waiting for the host's reads
   std::size_t out_n_ = 0;
-  std::size_t split_hold_ = 0;            // > 0: bytes of the pending packet held for the next read
+  std::size_t split_hold_ = 0;  // > 0: bytes of the pending packet held for the next read
   Eigen::Vector3d grip_m_;
   std::array<std::int16_t, 3> encoders_{};
   double dropout_start_s_ = -1, dropout_s_ = 0;

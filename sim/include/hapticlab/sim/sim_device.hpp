@@ -17,13 +17,12 @@
 /// and the truth's contact vibration is produced by the force loop. Begin/Finish are called
 /// between runs. Everything on the loops is allocation-free and noexcept.
 
+#include <Eigen/Geometry>
 #include <array>
 #include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
-
-#include <Eigen/Geometry>
 
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/spsc_queue.hpp"
@@ -46,10 +45,10 @@ class TruthSample {
   TruthSample(const MaterialProfile& p, std::uint64_t seed, double vibration_rate_hz);
   struct Contact {
     Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< on the stylus [N, sample frame]
-    double normal_N = 0;       ///< normal force magnitude [N]
-    double penetration_m = 0;  ///< depth below the local surface [m]
-    double micro_dd = 0;       ///< acceleration the micro-geometry imposes at 1 m/s [1/m]
-    double speed_mps = 0;      ///< tangential speed [m/s]
+    double normal_N = 0;                                ///< normal force magnitude [N]
+    double penetration_m = 0;                           ///< depth below the local surface [m]
+    double micro_dd = 0;   ///< acceleration the micro-geometry imposes at 1 m/s [1/m]
+    double speed_mps = 0;  ///< tangential speed [m/s]
   };
   /// Contact at the stylus state (`vz_mps`: the stylus' normal velocity).
   Contact At(const Eigen::Vector3d& p_m, const Eigen::Vector3d& v_mps) const noexcept;
@@ -84,8 +83,9 @@ class Hand {
   /// Begins a stimulus: the stroke on a sample whose top is `top_m` above its base
   /// [sample frame], placed at `device_from_sample` (the truth), touching `truth` (null on a
   /// virtual side). `stiffness_N_per_m` sets the hand's force-loop gain. Not real-time.
-  void Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, double top_m, double stiffness_N_per_m,
-             TruthSample* truth, double force_rate_hz, double vibration_rate_hz);
+  void Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, double top_m,
+             double stiffness_N_per_m, TruthSample* truth, double force_rate_hz,
+             double vibration_rate_hz);
   /// The features of what the hand felt since Begin (call after the run stopped).
   Features Finish() noexcept;
 
@@ -132,9 +132,9 @@ struct SimDeviceModel {
   double max_force_N = 8.0;
   double max_stiffness_N_per_m = 3000;
   double max_rate_hz = 4000;
-  double encoder_resolution_m = 1e-6;   ///< position quantum [m]
-  double velocity_cutoff_hz = 300;      ///< low-pass of the differentiated position [Hz]
-  double empty_read_probability = 0;    ///< link: a read with no new data
+  double encoder_resolution_m = 1e-6;  ///< position quantum [m]
+  double velocity_cutoff_hz = 300;     ///< low-pass of the differentiated position [Hz]
+  double empty_read_probability = 0;   ///< link: a read with no new data
   std::uint64_t seed = 1;
 };
 
@@ -193,7 +193,7 @@ struct SimRig {
   devices::VirtualClock clock;
   Hand hand;
   SimActuator actuator;
-  std::unique_ptr<SimDevice> generic;      ///< the generic device (null when a twin replaced it)
+  std::unique_ptr<SimDevice> generic;       ///< the generic device (null when a twin replaced it)
   devices::HapticDevice* device = nullptr;  ///< what the engine drives
   FalconTwinTransport* twin = nullptr;      ///< the Falcon twin's link, when the device is one
   std::array<Eigen::Isometry3d, 2> true_device_from_sample;

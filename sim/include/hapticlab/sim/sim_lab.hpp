@@ -33,50 +33,51 @@ namespace hapticlab::sim {
 /// Ground-truth description of a material (a "real sample") for the simulated lab.
 struct MaterialProfile {
   std::string id;
-  double roughness_m = 20e-6;        ///< RMS of the macro geometry [m]
-  double wavelength_m = 1e-3;        ///< dominant spatial wavelength [m]
-  double anisotropy = 0.3;           ///< 0 isotropic .. 1 directional (weave)
-  double inhomogeneity = 0.3;        ///< 0 homogeneous .. 1 patchy at 10 wavelengths
-  double micro_roughness_m = 0.3e-6; ///< fine roughness no map resolves [m]
-  double stiffness_N_per_m = 800;    ///< texture layer K [N/m^n]
-  double hc_n = 1.2;                 ///< Hunt-Crossley exponent
-  double damping = 2;                ///< Hunt-Crossley B [N s/m^(n+1)]
-  double layer_thickness_m = 1e-3;   ///< texture layer over the stiff base [m]
-  double mu_k = 0.35;                ///< kinetic friction coefficient
-  double stribeck_ratio = 1.3;       ///< static / kinetic friction (truth only)
-  double stribeck_speed_mps = 0.01;  ///< Stribeck decay speed (truth only) [m/s]
-  double load_exponent = 0.9;        ///< friction ∝ f_n^exponent (truth only; models assume 1)
-  double vibration_rms_mps2 = 1.0;   ///< contact vibration at 8 cm/s and 1.2 N [m/s^2]
-  double vibration_peak_hz = 200;    ///< resonance of the contact vibration [Hz]
-  double vibration_q = 2;            ///< its quality factor
+  double roughness_m = 20e-6;         ///< RMS of the macro geometry [m]
+  double wavelength_m = 1e-3;         ///< dominant spatial wavelength [m]
+  double anisotropy = 0.3;            ///< 0 isotropic .. 1 directional (weave)
+  double inhomogeneity = 0.3;         ///< 0 homogeneous .. 1 patchy at 10 wavelengths
+  double micro_roughness_m = 0.3e-6;  ///< fine roughness no map resolves [m]
+  double stiffness_N_per_m = 800;     ///< texture layer K [N/m^n]
+  double hc_n = 1.2;                  ///< Hunt-Crossley exponent
+  double damping = 2;                 ///< Hunt-Crossley B [N s/m^(n+1)]
+  double layer_thickness_m = 1e-3;    ///< texture layer over the stiff base [m]
+  double mu_k = 0.35;                 ///< kinetic friction coefficient
+  double stribeck_ratio = 1.3;        ///< static / kinetic friction (truth only)
+  double stribeck_speed_mps = 0.01;   ///< Stribeck decay speed (truth only) [m/s]
+  double load_exponent = 0.9;         ///< friction ∝ f_n^exponent (truth only; models assume 1)
+  double vibration_rms_mps2 = 1.0;    ///< contact vibration at 8 cm/s and 1.2 N [m/s^2]
+  double vibration_peak_hz = 200;     ///< resonance of the contact vibration [Hz]
+  double vibration_q = 2;             ///< its quality factor
   int line = 0;
 };
 
 /// Per-criterion part of the observer: how strongly the rendered difference moves the rating
 /// and the participant's random effects on that criterion (rating points, SD).
 struct CriterionObserver {
-  double sensitivity = 1;   ///< multiplies the feature distance d_c
-  double offset_sd = 4;     ///< participant's offset on this criterion
-  double material_sd = 0;   ///< participant x material
-  double method_sd = 0;     ///< participant x method
-  double noise_sd = 7;      ///< per rating
+  double sensitivity = 1;  ///< multiplies the feature distance d_c
+  double offset_sd = 4;    ///< participant's offset on this criterion
+  double material_sd = 0;  ///< participant x material
+  double method_sd = 0;    ///< participant x method
+  double noise_sd = 7;     ///< per rating
 };
 
 /// Observer-model constants (perceptual scales are in the features' units). Loaded from the
 /// [observer] table of the profiles file or, preferably, from the protocol's `observer`
 /// file (studies/shin2019/observer.toml; docs/studies.md "The simulated observer").
 struct ObserverParams {
-  double upper = 78, lower = 35;          ///< dissertation's real-real limits
-  double range_sd = 0;                    ///< log-SD of a participant's scale range (x exp(N(0, sd)) about the midpoint)
-  double lapse_rate = 0;                  ///< probability that a rating is uniform on the scale
-  CriterionObserver defaults;             ///< every criterion not in `criteria`
+  double upper = 78, lower = 35;  ///< dissertation's real-real limits
+  double range_sd =
+      0;  ///< log-SD of a participant's scale range (x exp(N(0, sd)) about the midpoint)
+  double lapse_rate = 0;       ///< probability that a rating is uniform on the scale
+  CriterionObserver defaults;  ///< every criterion not in `criteria`
   std::map<std::string, CriterionObserver> criteria;
   // Perceptual scales: a feature difference of one scale is one unit of distance d.
-  double scale_vibration = 0.25;          ///< log10 vibration power (x1.8 in RMS)
-  double scale_fluctuation = 0.3;         ///< log10 force fluctuation (x2)
-  double scale_friction = 0.12;           ///< friction ratio
-  double scale_stiffness = 0.25;          ///< log10 stiffness (x1.8)
-  double scale_pattern = 0.4;             ///< log10 large-scale force pattern (x2.5)
+  double scale_vibration = 0.25;   ///< log10 vibration power (x1.8 in RMS)
+  double scale_fluctuation = 0.3;  ///< log10 force fluctuation (x2)
+  double scale_friction = 0.12;    ///< friction ratio
+  double scale_stiffness = 0.25;   ///< log10 stiffness (x1.8)
+  double scale_pattern = 0.4;      ///< log10 large-scale force pattern (x2.5)
   const CriterionObserver& For(const std::string& criterion) const {
     const auto it = criteria.find(criterion);
     return it == criteria.end() ? defaults : it->second;
@@ -111,11 +112,11 @@ struct Features {
 
 /// How a participant explores in one stimulus.
 struct Stroke {
-  double speed_mps = 0.08;   ///< 2-15 cm/s
-  double force_N = 1.2;      ///< target load 0.5-2 N
-  double direction_rad = 0;  ///< stroke direction on the surface
-  double x0_m = 0, y0_m = 0; ///< where on the sample the stroke starts
-  double length_m = 0.04;    ///< back-and-forth excursion (2-4 cm)
+  double speed_mps = 0.08;    ///< 2-15 cm/s
+  double force_N = 1.2;       ///< target load 0.5-2 N
+  double direction_rad = 0;   ///< stroke direction on the surface
+  double x0_m = 0, y0_m = 0;  ///< where on the sample the stroke starts
+  double length_m = 0.04;     ///< back-and-forth excursion (2-4 cm)
 };
 
 /// Draws a participant's stroke for one trial (2-15 cm/s, 0.5-2 N, random direction, 2-4 cm
@@ -134,7 +135,8 @@ class FeatureAccumulator {
   FeatureAccumulator(double force_rate_hz, double vibration_rate_hz, double settle_s = 0.25);
   /// One force tick: felt normal and tangential force [N], tangential speed [m/s], and how
   /// deep the stylus is below where it first met resistance [m].
-  void AddForce(double normal_N, double tangential_N, double speed_mps, double penetration_m) noexcept;
+  void AddForce(double normal_N, double tangential_N, double speed_mps,
+                double penetration_m) noexcept;
   /// One felt acceleration sample [m/s^2].
   void AddVibration(double acc_mps2) noexcept;
   Features Result() const;
@@ -161,19 +163,20 @@ class Observer {
  public:
   Observer(const ObserverParams& p, std::uint64_t seed, const std::vector<std::string>& criteria);
   /// Similarity of the two interactions on `criterion` (clamped to [lo, hi]).
-  double Rate(const std::string& criterion, const std::string& material, const std::string& method, const Features& a,
-              const Features& b, double lo, double hi, Rng& noise) const;
+  double Rate(const std::string& criterion, const std::string& material, const std::string& method,
+              const Features& a, const Features& b, double lo, double hi, Rng& noise) const;
   /// The same from a feature distance (Distance()); used by `study power` to re-rate
   /// recorded interactions.
-  double RateDistance(const std::string& criterion, const std::string& material, const std::string& method, double d,
-                      double lo, double hi, Rng& noise) const;
+  double RateDistance(const std::string& criterion, const std::string& material,
+                      const std::string& method, double d, double lo, double hi, Rng& noise) const;
   /// Time to answer [s] (lognormal around 4 s).
   static double ResponseTime(Rng& noise);
   /// Feature distance for a criterion, in perceptual units (exposed for tests and docs).
   double Distance(const std::string& criterion, const Features& a, const Features& b) const;
 
  private:
-  double Effect(const char* kind, const std::string& criterion, const std::string& level, double sd) const;
+  double Effect(const char* kind, const std::string& criterion, const std::string& level,
+                double sd) const;
   ObserverParams p_;
   std::uint64_t seed_ = 0;
   double range_ = 1;

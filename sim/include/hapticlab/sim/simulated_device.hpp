@@ -31,6 +31,7 @@ struct SimulatedDevice {
 SimulatedDevice OpenSimulatedDevice(const std::string& device,
                                     const std::array<Eigen::Isometry3d, 2>& true_device_from_sample,
                                     const devices::falcon::FalconOptions& falcon = {},
-                                    const SimDeviceModel& generic = {}, const FalconTwinOptions& twin = {});
+                                    const SimDeviceModel& generic = {},
+                                    const FalconTwinOptions& twin = {});
 
 }  // namespace hapticlab::sim

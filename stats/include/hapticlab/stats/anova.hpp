@@ -34,12 +34,13 @@
 namespace hapticlab::stats {
 
 struct AnovaEffect {
-  std::string effect;   ///< "A", "B", "A:B"
-  bool between_only = false;  ///< a between-subjects term (no sphericity statistics: ε = 1, Mauchly NaN)
+  std::string effect;  ///< "A", "B", "A:B"
+  bool between_only =
+      false;  ///< a between-subjects term (no sphericity statistics: ε = 1, Mauchly NaN)
   double df1 = 0, df2 = 0;
   double SS = 0, SS_error = 0, MSE = 0;
   double F = 0, p = 0;
-  double pes = 0;       ///< partial eta squared SS / (SS + SS_error)
+  double pes = 0;  ///< partial eta squared SS / (SS + SS_error)
   bool mauchly_defined = false;
   double mauchly_W = 0, mauchly_p = 0, mauchly_chi2 = 0, mauchly_p_firstorder = 0;
   double gg_epsilon = 0, p_gg = 0;
@@ -49,18 +50,18 @@ struct AnovaEffect {
 struct RmAnovaResult {
   std::vector<std::string> factors;              ///< within factors
   std::vector<std::vector<std::string>> levels;  ///< sorted levels of each within factor
-  std::vector<std::string> between;              ///< between factors (empty: repeated measures only)
+  std::vector<std::string> between;  ///< between factors (empty: repeated measures only)
   std::vector<std::vector<std::string>> between_levels;  ///< sorted levels of each between factor
-  std::vector<std::string> subjects;             ///< kept subjects, sorted
+  std::vector<std::string> subjects;                     ///< kept subjects, sorted
   /// Between cell of each kept subject (index over the between factors' level combinations,
   /// last factor fastest); all 0 without between factors.
   std::vector<int> subject_group;
-  std::vector<int> group_sizes;                  ///< kept subjects per between cell
-  std::vector<std::string> dropped_subjects;     ///< subjects with a missing cell
+  std::vector<int> group_sizes;               ///< kept subjects per between cell
+  std::vector<std::string> dropped_subjects;  ///< subjects with a missing cell
   /// Why each dropped subject went, parallel to dropped_subjects: the missing cells, e.g.
   /// "no rating for method=visual" (or the file line of a missing score).
   std::vector<std::string> dropped_reasons;
-  double error_df = 0;                           ///< N − rank X (N − 1 without between factors)
+  double error_df = 0;  ///< N − rank X (N − 1 without between factors)
   /// Effects in afex's order: between terms, then each within term followed by its
   /// interactions with the between terms ("group:method").
   std::vector<AnovaEffect> effects;

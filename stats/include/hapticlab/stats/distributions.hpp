@@ -48,8 +48,8 @@ double Qtukey(double p, int k, double df);
 class TukeyFamily {
  public:
   TukeyFamily(int k, double df);
-  double Lower(double q) const;   ///< P(Q <= q)
-  double Upper(double q) const;   ///< P(Q > q), relative accuracy kept for tiny p
+  double Lower(double q) const;  ///< P(Q <= q)
+  double Upper(double q) const;  ///< P(Q > q), relative accuracy kept for tiny p
   double Quantile(double p) const;
   int k() const { return k_; }
   double df() const { return df_; }

@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "hapticlab/stats/long_table.hpp"
 #include "hapticlab/core/solver_summary.hpp"
+#include "hapticlab/stats/long_table.hpp"
 
 namespace hapticlab::stats {
 
@@ -71,7 +71,7 @@ struct LmmFTest {
 struct LmmRandomTerm {
   std::string group;
   int levels = 0;
-  std::vector<std::string> names;          ///< "(Intercept)", "method1", ...
+  std::vector<std::string> names;  ///< "(Intercept)", "method1", ...
   std::vector<double> variance, sd;
   std::vector<std::vector<double>> corr;  ///< correlation matrix (1 on the diagonal)
 };
@@ -83,21 +83,21 @@ struct LmmRandomTerm {
 struct LmmResult : SolverSummary {
   std::string formula;
   bool reml = true;
-  int n = 0;                                   ///< observations
-  std::string ddf;                             ///< "Satterthwaite" or "Kenward-Roger"
-  std::vector<LmmCoefficient> fixed;           ///< t tests with `ddf` df (KR: adjusted SEs)
-  std::vector<LmmFTest> anova;                 ///< type 3, `ddf` df (KR: scaled F)
-  std::vector<LmmRandomTerm> random;           ///< in lme4's order (most levels first)
-  std::vector<double> theta;                   ///< lme4's θ (lower triangles, column-major)
-  double sigma = 0;                            ///< residual SD
-  double deviance = 0;                         ///< the optimised criterion: REML criterion or ML deviance
+  int n = 0;                          ///< observations
+  std::string ddf;                    ///< "Satterthwaite" or "Kenward-Roger"
+  std::vector<LmmCoefficient> fixed;  ///< t tests with `ddf` df (KR: adjusted SEs)
+  std::vector<LmmFTest> anova;        ///< type 3, `ddf` df (KR: scaled F)
+  std::vector<LmmRandomTerm> random;  ///< in lme4's order (most levels first)
+  std::vector<double> theta;          ///< lme4's θ (lower triangles, column-major)
+  double sigma = 0;                   ///< residual SD
+  double deviance = 0;                ///< the optimised criterion: REML criterion or ML deviance
   double logLik = 0, AIC = 0, BIC = 0;
-  int n_parameters = 0;                        ///< β, θ and σ (lme4's df of logLik)
+  int n_parameters = 0;  ///< β, θ and σ (lme4's df of logLik)
   // Convergence diagnostics.
-  int evaluations = 0;                         ///< deviance evaluations (= iterations)
-  double gradient_max_abs = 0;                 ///< max |∂ deviance / ∂θ| at the optimum (free θ only)
-  bool singular = false;                       ///< a bounded θ below 1e-4 (lme4's isSingular)
-  std::string optimizer;                       ///< what ran, for the record
+  int evaluations = 0;          ///< deviance evaluations (= iterations)
+  double gradient_max_abs = 0;  ///< max |∂ deviance / ∂θ| at the optimum (free θ only)
+  bool singular = false;        ///< a bounded θ below 1e-4 (lme4's isSingular)
+  std::string optimizer;        ///< what ran, for the record
 };
 
 /// @param data long table with every formula column as a key column (y is the response)

@@ -11,12 +11,12 @@ namespace hapticlab::stats {
 
 /// A long-format table: `keys[c][r]` is key column c of row r; `y[r]` the response.
 struct LongTable {
-  std::string source;                      ///< file name, for messages
+  std::string source;  ///< file name, for messages
   std::vector<std::string> key_names;
   std::vector<std::vector<std::string>> keys;
-  std::vector<double> y;                   ///< NaN: a missing response (allow_missing)
+  std::vector<double> y;  ///< NaN: a missing response (allow_missing)
   std::string y_name;
-  std::vector<std::size_t> lines;          ///< source line of each row (empty when built in code)
+  std::vector<std::size_t> lines;  ///< source line of each row (empty when built in code)
 
   std::size_t rows() const { return y.size(); }
   /// Index of a key column; throws InputError naming the source and the column.

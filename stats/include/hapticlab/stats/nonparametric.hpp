@@ -16,7 +16,7 @@ namespace hapticlab::stats {
 struct DunnPair {
   std::string a, b;  ///< groups, a before b in level order
   int n_a = 0, n_b = 0;
-  double z = 0;      ///< (mean rank b − mean rank a) / SE, with the tie-corrected variance
+  double z = 0;             ///< (mean rank b − mean rank a) / SE, with the tie-corrected variance
   double p = 0, p_adj = 0;  ///< two-sided; Bonferroni over all k(k−1)/2 pairs, capped at 1
 };
 

@@ -11,8 +11,8 @@ namespace hapticlab::stats {
 /// One bar series (e.g. a method) over the groups (e.g. materials).
 struct BarSeries {
   std::string name;
-  std::vector<double> mean;   ///< one per group (NaN: no bar)
-  std::vector<double> err;    ///< half-length of the error bar (SE or CI half-width)
+  std::vector<double> mean;  ///< one per group (NaN: no bar)
+  std::vector<double> err;   ///< half-length of the error bar (SE or CI half-width)
 };
 
 struct BarChart {
@@ -20,7 +20,7 @@ struct BarChart {
   /// Groups along the x axis; a single unnamed group ({""}) labels each bar with its series.
   std::vector<std::string> groups;
   std::vector<BarSeries> series;
-  std::vector<std::string> group_marks;     ///< text above each group (letters), optional
+  std::vector<std::string> group_marks;  ///< text above each group (letters), optional
   /// Significance brackets between series within a single-group chart: (i, j, "**").
   struct Mark {
     int a, b;

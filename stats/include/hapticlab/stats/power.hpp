@@ -24,9 +24,9 @@ namespace hapticlab::stats {
 /// One effect's tally at one participant count.
 struct PowerTally {
   std::string criterion, effect;
-  long hits = 0;        ///< simulations with p < alpha
-  long runs = 0;        ///< simulations analysed
-  double sum_pes = 0;   ///< sum of partial eta^2 over the runs
+  long hits = 0;       ///< simulations with p < alpha
+  long runs = 0;       ///< simulations analysed
+  double sum_pes = 0;  ///< sum of partial eta^2 over the runs
   double power() const { return runs ? static_cast<double>(hits) / static_cast<double>(runs) : 0; }
   double mean_pes() const { return runs ? sum_pes / static_cast<double>(runs) : 0; }
 };
@@ -38,14 +38,14 @@ struct PowerRow {
 
 struct PowerResult {
   std::string protocol;
-  long simulations = 0;   ///< simulations per participant count (of the whole run, all shards)
+  long simulations = 0;  ///< simulations per participant count (of the whole run, all shards)
   std::uint64_t seed = 0;
   int shard = 0, shards = 1;  ///< which part of the simulations this result holds (merged: 0 of 1)
   std::vector<PowerRow> rows;
 };
 
 struct PowerOptions {
-  std::vector<int> participants;   ///< e.g. 8, 12, 16, 20, 30
+  std::vector<int> participants;  ///< e.g. 8, 12, 16, 20, 30
   long simulations = 200;
   std::uint64_t seed = 1;
   int shard = 0, shards = 1;
@@ -68,7 +68,8 @@ using StudyGenerator = std::function<LongTable(int participants, Rng& rng)>;
 /// @throws InputError as RmAnova does
 std::vector<PowerTally> AnalyseOnce(const LongTable& data, double alpha);
 
-PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& generate, const PowerOptions& options);
+PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& generate,
+                          const PowerOptions& options);
 
 /// Wilson score interval (95 %) for `hits` successes in `n` trials.
 void WilsonInterval(long hits, long n, double* low, double* high);
@@ -80,7 +81,8 @@ std::string PowerToJson(const PowerResult& r);
 PowerResult PowerFromJson(const std::string& text, const std::string& file);
 /// Sums shards of one run (same protocol, seed, simulations, participant counts; each shard
 /// once). @throws InputError when they do not fit together
-PowerResult MergePower(const std::vector<PowerResult>& parts, const std::vector<std::string>& files);
+PowerResult MergePower(const std::vector<PowerResult>& parts,
+                       const std::vector<std::string>& files);
 
 /// Text table: one line per participant count and effect.
 std::string PowerTable(const PowerResult& r);
@@ -88,6 +90,7 @@ std::string PowerTable(const PowerResult& r);
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base);
 
 /// Smallest participant count whose power for (criterion, effect) is >= target; 0: none.
-int ParticipantsFor(const PowerResult& r, const std::string& criterion, const std::string& effect, double target);
+int ParticipantsFor(const PowerResult& r, const std::string& criterion, const std::string& effect,
+                    double target);
 
 }  // namespace hapticlab::stats

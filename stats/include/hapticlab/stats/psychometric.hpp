@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "hapticlab/psychophysics/psychometric.hpp"
 #include "hapticlab/core/solver_summary.hpp"
+#include "hapticlab/psychophysics/psychometric.hpp"
 
 namespace hapticlab::stats {
 

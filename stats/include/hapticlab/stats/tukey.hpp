@@ -21,9 +21,9 @@ namespace hapticlab::stats {
 struct TukeyPair {
   std::string a, b;
   double diff = 0, lwr = 0, upr = 0;  ///< diff and its 95 % family-wise interval
-  double se = 0;                       ///< standard error of the difference
+  double se = 0;                      ///< standard error of the difference
   double df = 0;
-  double q = 0;                        ///< studentized range statistic |diff| / (se / sqrt 2)
+  double q = 0;  ///< studentized range statistic |diff| / (se / sqrt 2)
   double p_adj = 0;
 };
 

@@ -7,18 +7,18 @@
 /// counters). The draw functions only need an ImGui frame, so tests run them headless; the
 /// windows (GLFW + OpenGL) are in ui_windows.hpp.
 
+#include <Eigen/Core>
 #include <map>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include <Eigen/Core>
-
 namespace hapticlab::runner::ui {
 
 /// One thing a screen drew, in window pixels (for tests and screenshot checks).
 struct DrawnItem {
-  std::string id;  ///< "left-square", "right-square", "cursor", "scale:<criterion>", "label:<criterion>", "confirm", ...
+  std::string id;  ///< "left-square", "right-square", "cursor", "scale:<criterion>",
+                   ///< "label:<criterion>", "confirm", ...
   float x0 = 0, y0 = 0, x1 = 0, y1 = 0;
   float cx() const { return 0.5f * (x0 + x1); }
   float cy() const { return 0.5f * (y0 + y1); }
@@ -33,7 +33,8 @@ struct ParticipantView {
   Eigen::Vector2d workspace_min_m{-0.06, -0.04}, workspace_max_m{0.06, 0.04};
   Eigen::Vector2d left_square_m{-0.03, 0}, right_square_m{0.03, 0};
   double square_size_m = 0.03;
-  Eigen::Vector3d stylus_m = Eigen::Vector3d::Zero();  ///< the cursor (z shades it: pressing darkens)
+  Eigen::Vector3d stylus_m =
+      Eigen::Vector3d::Zero();  ///< the cursor (z shades it: pressing darkens)
   // Rating.
   std::vector<std::string> criteria;
   std::vector<std::optional<double>> ratings;  ///< per criterion; unset: no handle drawn
@@ -56,8 +57,8 @@ struct ParticipantView {
 
 struct ParticipantAction {
   std::vector<std::optional<double>> ratings;  ///< after this frame's input
-  bool confirmed = false;                       ///< confirm pressed with every criterion rated
-  std::optional<int> chosen;                    ///< choice mode: the answer clicked or keyed
+  bool confirmed = false;                      ///< confirm pressed with every criterion rated
+  std::optional<int> chosen;                   ///< choice mode: the answer clicked or keyed
 };
 
 /// Draws the participant window into the current ImGui frame (full window).
@@ -65,16 +66,16 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn = nullp
 
 struct ConsoleView {
   std::string study, participant, phase, current, next_placement;
-  int done = 0, total = 0;                  ///< rated trials of the main phases completed / planned
+  int done = 0, total = 0;  ///< rated trials of the main phases completed / planned
   int training_done = 0, training_total = 0;  ///< training trials (shown apart from the progress)
   std::vector<float> force_N, speed_mps, acc_mps2;  ///< recent samples, oldest first
   std::string device_status;
-  std::map<std::string, std::uint64_t> faults;      ///< counter name -> count
+  std::map<std::string, std::uint64_t> faults;  ///< counter name -> count
   bool paused = false;
-  bool on_break = false;                            ///< a break is running (countdown below)
+  bool on_break = false;  ///< a break is running (countdown below)
   double break_remaining_s = 0;
-  bool confirm_abort = false;                       ///< the abort confirmation is open (modal)
-  std::vector<std::string> log;                     ///< recent events, newest last
+  bool confirm_abort = false;    ///< the abort confirmation is open (modal)
+  std::vector<std::string> log;  ///< recent events, newest last
 };
 
 /// What the experimenter did this frame. `abort` only asks: the console then shows a modal

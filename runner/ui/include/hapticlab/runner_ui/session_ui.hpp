@@ -18,9 +18,11 @@ class WindowSessionUi final : public SessionUi {
   /// @throws std::runtime_error without a display
   /// @param box optional rating box: turning its knob sets the focused scale (the first at the
   ///        start), a press moves to the next one and, on the last with all set, confirms.
-  WindowSessionUi(const std::string& study, const std::string& participant, const std::string& device_status,
-                  const WindowOptions& o = {}, devices::RatingInput* box = nullptr);
-  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m, double remaining_s) override;
+  WindowSessionUi(const std::string& study, const std::string& participant,
+                  const std::string& device_status, const WindowOptions& o = {},
+                  devices::RatingInput* box = nullptr);
+  bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& stylus_m,
+                double remaining_s) override;
   std::optional<std::vector<double>> Rate(const TrialScreen& t) override;
   /// Adaptive trials: a click, a number key (Y / N) or the rating box (the knob points at an
   /// answer, a press confirms it).
@@ -37,7 +39,9 @@ class WindowSessionUi final : public SessionUi {
   using ConsoleScript = std::function<ConsoleAction(const ConsoleView&, const Drawn&)>;
   void SetConsoleScript(ConsoleScript script) { script_ = std::move(script); }
   /// Writes the last frame of window 0 (participant) or 1 (console) as PNG.
-  void SaveScreenshot(int window, const std::string& path) const { win_.SaveScreenshot(window, path); }
+  void SaveScreenshot(int window, const std::string& path) const {
+    win_.SaveScreenshot(window, path);
+  }
 
  private:
   // One frame of both windows. Abort (or closing a window) opens the console's confirmation

@@ -14,9 +14,9 @@
 namespace hapticlab::runner::ui {
 
 struct WindowOptions {
-  int width = 1280, height = 800;        ///< of each window [px]
-  bool participant_fullscreen = false;   ///< on the participant's monitor (the last one)
-  bool visible = true;                   ///< false: off-screen (screenshots)
+  int width = 1280, height = 800;       ///< of each window [px]
+  bool participant_fullscreen = false;  ///< on the participant's monitor (the last one)
+  bool visible = true;                  ///< false: off-screen (screenshots)
 };
 
 class Windows {
@@ -27,8 +27,8 @@ class Windows {
   Windows(const Windows&) = delete;
   Windows& operator=(const Windows&) = delete;
   /// Draws one frame in each window and handles input; false once a window was closed.
-  bool Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa, ConsoleAction* ca,
-             Drawn* participant_drawn = nullptr, Drawn* console_drawn = nullptr);
+  bool Frame(const ParticipantView& pv, const ConsoleView& cv, ParticipantAction* pa,
+             ConsoleAction* ca, Drawn* participant_drawn = nullptr, Drawn* console_drawn = nullptr);
   /// Clears the windows' close requests (the close button asks for a confirmation first).
   void KeepOpen();
   /// Writes the last frame of window 0 (participant) or 1 (console) as PNG.

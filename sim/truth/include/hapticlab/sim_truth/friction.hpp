@@ -16,12 +16,13 @@
 namespace hapticlab::sim_truth {
 
 struct StribeckFriction {
-  double mu_k = 0;             ///< kinetic coefficient (dimensionless, >= 0)
-  double dmu_s = 0;            ///< static excess mu_s - mu_k (dimensionless, >= 0)
+  double mu_k = 0;                   ///< kinetic coefficient (dimensionless, >= 0)
+  double dmu_s = 0;                  ///< static excess mu_s - mu_k (dimensionless, >= 0)
   double stribeck_speed_mps = 1e-3;  ///< v_s [m/s], > 0
 
   /// The law for a static-to-kinetic ratio mu_s / mu_k (>= 1).
-  static constexpr StribeckFriction FromRatio(double mu_k, double ratio, double speed_mps) noexcept {
+  static constexpr StribeckFriction FromRatio(double mu_k, double ratio,
+                                              double speed_mps) noexcept {
     return {mu_k, mu_k * (ratio - 1), speed_mps};
   }
   /// Coefficient at sliding speed v [m/s] (dimensionless). Allocation-free, real-time safe.
