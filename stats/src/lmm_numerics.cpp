@@ -11,7 +11,7 @@ namespace hapticlab::stats::lmm_internal {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
-Minimum NelderMead(const std::function<double(const VectorXd&)>& f, VectorXd x0,
+Minimum NelderMead(const std::function<double(const VectorXd&)>& f, const VectorXd& x0,
                    const std::vector<double>& lower, int max_evals) {
   const Eigen::Index m = x0.size();
   auto project = [&](VectorXd x) {

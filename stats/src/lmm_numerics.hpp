@@ -21,8 +21,8 @@ struct Minimum {
 };
 
 /// Minimises f from x0 with x >= lower (element-wise), at most max_evals evaluations.
-Minimum NelderMead(const std::function<double(const Eigen::VectorXd&)>& f, Eigen::VectorXd x0,
-                   const std::vector<double>& lower, int max_evals);
+Minimum NelderMead(const std::function<double(const Eigen::VectorXd&)>& f,
+                   const Eigen::VectorXd& x0, const std::vector<double>& lower, int max_evals);
 /// Hessian of f at x by Richardson-extrapolated central differences.
 Eigen::MatrixXd Hessian(const std::function<double(const Eigen::VectorXd&)>& f,
                         const Eigen::VectorXd& x);

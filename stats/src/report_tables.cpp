@@ -127,13 +127,13 @@ void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
     const std::string W = e.between_only || e.df1 <= 1 ? "-"
                           : e.mauchly_defined          ? fmt::format("{:.3f}", e.mauchly_W)
                                                        : "n/a";
-    const std::string pW = e.between_only || e.df1 <= 1 ? "-"
-                           : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "")
-                                               : "n/a";
+    const std::string p_w = e.between_only || e.df1 <= 1 ? "-"
+                            : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "")
+                                                : "n/a";
     md << fmt::format("| {}{} | {:.0f}, {:.0f} | {} | {} | {:.3f} | {} | {} | {:.3f} | {} |\n",
                       e.effect, p_used < 0.05 ? "*" : "", e.df1, e.df2,
                       e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F), P(e.p),
-                      e.pes, W, pW, e.gg_epsilon, P(e.p_gg));
+                      e.pes, W, p_w, e.gg_epsilon, P(e.p_gg));
     csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n",
                        e.effect, e.df1, e.df2, e.F, e.p, e.pes,
                        std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
