@@ -26,9 +26,7 @@
 
 namespace hapticlab::db {
 
-using internal::ExecSql;
 using internal::Stmt;
-using internal::Transaction;
 
 std::int64_t Database::CreateStudy(const Study& st) {
   HL_REQUIRE(!st.name.empty(), "study name must not be empty");

@@ -26,9 +26,7 @@
 
 namespace hapticlab::db {
 
-using internal::ExecSql;
 using internal::Stmt;
-using internal::Transaction;
 
 namespace {
 

@@ -26,7 +26,6 @@
 
 namespace hapticlab::db {
 
-using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
 

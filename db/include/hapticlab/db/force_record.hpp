@@ -69,12 +69,12 @@ constexpr std::size_t Col(ForceChannel c) { return static_cast<std::size_t>(c); 
 
 /// The channel names in order, as a stream is opened with (TrajectoryWriter::OpenStream).
 inline const std::vector<std::string>& ForceChannelNames() {
-  static const std::vector<std::string> k = [] {
+  static const std::vector<std::string> kNames = [] {
     std::vector<std::string> v;
     for (const auto& c : kForceChannels) v.emplace_back(c.name);
     return v;
   }();
-  return k;
+  return kNames;
 }
 
 /// The vibration stream ("<side>_vibration"): one column, the acceleration at the stylus.
