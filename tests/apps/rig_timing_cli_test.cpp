@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "hapticlab/test/test_util.hpp"
+#include "sine_model.hpp"
 
 namespace hapticlab {
 namespace {
@@ -57,20 +58,7 @@ TEST(RigTimingCli, ARefusedPriorityIsReportedAndTheCheckRuns) {
 // contact (zero force). A model file that does not exist is bad input.
 TEST(RigTimingCli, RenderStrokesTheModelOnTheRealClock) {
   test::TempDir dir;
-  test::WriteFile(dir.File("m.toml"), R"(name = "Sine test"
-effects = ["coulomb", "dahl"]
-[contact]
-texture_K = 900.0
-base_K = 2000.0
-layer_thickness_m = 5e-4
-[friction]
-kappa_N_per_m = 2000.0
-mu_k = 0.3
-[geometry]
-kind = "sine"
-amplitude_m = 1e-5
-wavelength_m = 1e-3
-)");
+  test::WriteFile(dir.File("m.toml"), test::kSineModelToml);
   int rc = -1;
   const auto with = RunJson("--seconds 0.5 --no-vibration --render " + dir.File("m.toml"), &rc);
   EXPECT_TRUE(rc == 0 || rc == 1) << rc;

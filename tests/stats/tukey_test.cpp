@@ -13,21 +13,12 @@
 #include "hapticlab/stats/descriptive.hpp"
 #include "hapticlab/stats/distributions.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
+#include "long_table_fixture.hpp"
 
 namespace hapticlab::stats {
 namespace {
 
-LongTable Make(const std::vector<std::tuple<std::string, std::string, double>>& rows) {
-  LongTable t;
-  t.key_names = {"subject", "cond"};
-  t.keys.assign(2, {});
-  for (const auto& [s, c, y] : rows) {
-    t.keys[0].push_back(s);
-    t.keys[1].push_back(c);
-    t.y.push_back(y);
-  }
-  return t;
-}
+using fixture::Make;
 
 TEST(Tukey, EqualGroupsGiveTheClassicalHsd) {
   // Three groups of 5: q = |diff| / sqrt(MSE / n).
