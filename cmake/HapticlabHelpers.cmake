@@ -29,20 +29,106 @@ function(hl_add_module name)
   target_link_libraries(hl_${name} PRIVATE hl_warnings)
 endfunction()
 
-# hl_add_test(<module> <source>) builds tests/<module>/<source>_test.cpp.
-# SERIAL: the tests run alone (ctest RUN_SERIAL), for tests whose loops run on the real
+# hl_add_test(<module> <source> [SERIAL] [ENVIRONMENT var=value] [DEPS ...] [TOOLS ...])
+# adds tests/<module>/<source>_test.cpp to the module's one test executable, <module>_tests
+# (one link per module instead of one per file: link time in the release, ASan and TSan
+# builds). hl_add_module_tests() below creates the executables once every file is listed.
+# DEPS: libraries the file needs besides hapticlab::<module> (linked into <module>_tests).
+# TOOLS: targets the tests run (built before the executable, e.g. the hapticlab CLI).
+# SERIAL: the file's tests run alone (ctest RUN_SERIAL), for tests whose loops run on the real
 # clock and fault on missed deadlines when another test shares the machine's cores.
+# ENVIRONMENT: one variable set for this file's tests only.
+# SERIAL and ENVIRONMENT apply to the test suites the file defines (TEST, TEST_F, TEST_P
+# names read from the file); they are discovered separately with a gtest filter.
+# HL_TEST_ONLY (cache list of <module>/<source>): build only these files, e.g. the threaded
+# tests in the ThreadSanitizer build (scripts/test).
+set(HL_TEST_ONLY "" CACHE STRING "Only these test files (<module>/<source>;...); empty: all")
+
 function(hl_add_test module source)
-  cmake_parse_arguments(T "SERIAL" "" "DEPS" ${ARGN})
-  set(target ${module}_${source}_test)
-  add_executable(${target} ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
-  target_link_libraries(${target} PRIVATE hapticlab::${module} ${T_DEPS} fmt::fmt
-                        hl_test_util GTest::gtest_main hl_warnings)
-  set(serial FALSE)
-  if(T_SERIAL)
-    set(serial TRUE)
+  cmake_parse_arguments(T "SERIAL" "ENVIRONMENT" "DEPS;TOOLS" ${ARGN})
+  if(HL_TEST_ONLY AND NOT "${module}/${source}" IN_LIST HL_TEST_ONLY)
+    return()
   endif()
-  gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60
-                       PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_CURRENT_SOURCE_DIR}/data"
-                                  RUN_SERIAL ${serial})
+  set(file ${CMAKE_CURRENT_SOURCE_DIR}/${source}_test.cpp)
+  if(NOT EXISTS ${file})
+    set(file ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
+  endif()
+  get_property(modules GLOBAL PROPERTY HL_TEST_MODULES)
+  if(NOT module IN_LIST modules)
+    set_property(GLOBAL APPEND PROPERTY HL_TEST_MODULES ${module})
+  endif()
+  set_property(GLOBAL APPEND PROPERTY HL_TEST_${module}_SOURCES ${file})
+  set_property(GLOBAL APPEND PROPERTY HL_TEST_${module}_DEPS ${T_DEPS})
+  set_property(GLOBAL APPEND PROPERTY HL_TEST_${module}_TOOLS ${T_TOOLS})
+  if(T_SERIAL OR T_ENVIRONMENT)
+    # The suites this file defines, as a gtest filter (parameterised suites carry a prefix).
+    file(STRINGS ${file} lines REGEX "^(TEST|TEST_F|TEST_P)\\(")
+    set(suites "")
+    foreach(line IN LISTS lines)
+      string(REGEX MATCH "^TEST(_F|_P)?\\( *([A-Za-z0-9_]+)" unused "${line}")
+      set(suite "${CMAKE_MATCH_2}")
+      if(CMAKE_MATCH_1 STREQUAL "_P")
+        set(suite "*/${suite}")
+      endif()
+      if(NOT "${suite}.*" IN_LIST suites)
+        list(APPEND suites "${suite}.*")
+      endif()
+    endforeach()
+    list(JOIN suites ":" filter)
+    set(serial FALSE)
+    if(T_SERIAL)
+      set(serial TRUE)
+    endif()
+    set(env "HL_TEST_DATA=${CMAKE_SOURCE_DIR}/tests/data")
+    if(T_ENVIRONMENT)
+      set(env "${T_ENVIRONMENT}")
+    endif()
+    # One group per file: filter|serial|environment.
+    set_property(GLOBAL APPEND PROPERTY HL_TEST_${module}_GROUPS "${filter}|${serial}|${env}")
+  endif()
+endfunction()
+
+# hl_add_module_tests(): one executable <module>_tests per module from its listed files. Each
+# SERIAL or ENVIRONMENT file's suites are discovered with their own properties; the rest of
+# the executable's tests with the default ones (every ctest name stays the gtest name).
+function(hl_add_module_tests)
+  get_property(modules GLOBAL PROPERTY HL_TEST_MODULES)
+  foreach(module IN LISTS modules)
+    get_property(sources GLOBAL PROPERTY HL_TEST_${module}_SOURCES)
+    get_property(deps GLOBAL PROPERTY HL_TEST_${module}_DEPS)
+    get_property(tools GLOBAL PROPERTY HL_TEST_${module}_TOOLS)
+    get_property(groups GLOBAL PROPERTY HL_TEST_${module}_GROUPS)
+    list(REMOVE_DUPLICATES deps)
+    set(target ${module}_tests)
+    add_executable(${target} ${sources})
+    if(TARGET hapticlab::${module})
+      target_link_libraries(${target} PRIVATE hapticlab::${module})
+    endif()
+    target_link_libraries(${target} PRIVATE ${deps} fmt::fmt hl_test_util GTest::gtest_main
+                          hl_warnings)
+    if(tools)
+      list(REMOVE_DUPLICATES tools)
+      add_dependencies(${target} ${tools})
+    endif()
+    set(excluded "")
+    foreach(group IN LISTS groups)
+      string(REPLACE "|" ";" fields "${group}")
+      list(GET fields 0 filter)
+      list(GET fields 1 serial)
+      list(GET fields 2 env)
+      gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 TEST_FILTER "${filter}"
+                           PROPERTIES ENVIRONMENT "${env}" RUN_SERIAL ${serial})
+      if(excluded)
+        string(APPEND excluded ":")
+      endif()
+      string(APPEND excluded "${filter}")
+    endforeach()
+    set(filter "*")
+    if(excluded)
+      set(filter "*-${excluded}")
+    endif()
+    gtest_discover_tests(${target} DISCOVERY_TIMEOUT 60 TEST_FILTER "${filter}"
+                         PROPERTIES ENVIRONMENT "HL_TEST_DATA=${CMAKE_SOURCE_DIR}/tests/data"
+                                    RUN_SERIAL FALSE)
+  endforeach()
 endfunction()

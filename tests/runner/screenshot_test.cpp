@@ -141,7 +141,7 @@ class ScriptedBox : public devices::RatingInput {
 
 // The console's Abort asks first (the modal drawn, its buttons readable): Continue keeps the
 // session running, a second Abort confirmed stops it (the runner then records the stop and
-// 'study run' exits 3: tests/apps/study_cli_test.cpp). Pause and an early-ended break show
+// 'study run' exits 3: tests/apps/cmd_study_test.cpp). Pause and an early-ended break show
 // their state on the console, and every one of these actions is logged as an event.
 TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
   const std::string out = std::string(HL_BINARY_DIR) + "/screenshots";

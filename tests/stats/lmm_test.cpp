@@ -15,31 +15,10 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "lmm_reference.hpp"
 
 namespace hapticlab::stats {
 namespace {
-
-using nlohmann::json;
-constexpr double kRel = 1e-4;
-
-json Ref(const std::string& design) {
-  std::ifstream f(test::DataPath("stats/lmm_reference.json"));
-  return json::parse(f)[design];
-}
-
-// Relative agreement, with an absolute floor `scale` * kRel for values near zero.
-void ExpectClose(double got, const json& want, const std::string& what, double scale = 0) {
-  ASSERT_FALSE(want.is_null()) << what;
-  const double w = want.get<double>();
-  EXPECT_NEAR(got, w, kRel * std::max(std::abs(w), scale)) << what;
-}
-
-LongTable Load(const json& ref) {
-  const auto f = ParseLmmFormula(ref["formula"].get<std::string>());
-  auto cols = f.Columns();
-  cols.erase(cols.begin());
-  return ReadLongCsv(test::DataPath("stats/" + ref["csv"].get<std::string>()), f.response, cols);
-}
 
 void Compare(const std::string& design, bool reml) {
   const json ref = Ref(design);
@@ -110,67 +89,12 @@ void Compare(const std::string& design, bool reml) {
   ExpectClose(r.sigma, w["random"][row]["sdcor"], tag + "residual sd");
 }
 
-// Kenward-Roger (REML fits): adjusted SEs, df, t, p; scaled F, df, p (pbkrtest via lmerTest).
-void CompareKenwardRoger(const std::string& design) {
-  const json ref = Ref(design);
-  const json& w = ref["reml"]["kr"];
-  LmmOptions o;
-  o.kenward_roger = true;
-  const auto r = FitLmm(Load(ref), ref["formula"].get<std::string>(), o);
-  EXPECT_EQ(r.ddf, "Kenward-Roger");
-  ASSERT_EQ(r.fixed.size(), w["fixed"].size());
-  for (std::size_t i = 0; i < r.fixed.size(); ++i) {
-    const auto& c = r.fixed[i];
-    const auto& e = w["fixed"][i];
-    const std::string name = design + " KR " + e["name"].get<std::string>();
-    ExpectClose(c.se, e["se"], name + " se");
-    ExpectClose(c.df, e["df"], name + " df");
-    ExpectClose(c.t, e["t"], name + " t", 1.0);
-    ExpectClose(c.p, e["p"], name + " p");
-  }
-  ASSERT_EQ(r.anova.size(), w["anova"].size());
-  for (std::size_t i = 0; i < r.anova.size(); ++i) {
-    const std::string name = design + " KR " + w["anova"][i]["term"].get<std::string>();
-    ExpectClose(r.anova[i].den_df, w["anova"][i]["den_df"], name + " den df");
-    ExpectClose(r.anova[i].F, w["anova"][i]["F"], name + " F");
-    ExpectClose(r.anova[i].p, w["anova"][i]["p"], name + " p");
-  }
-}
-
-TEST(Lmm, CrossedRandomSlopesKenwardRoger) { CompareKenwardRoger("crossed"); }
-TEST(Lmm, UnbalancedNumericSlopeKenwardRoger) { CompareKenwardRoger("unbalanced"); }
-TEST(Lmm, SingularFitKenwardRoger) { CompareKenwardRoger("singular"); }
-
-TEST(Lmm, KenwardRogerNeedsReml) {
-  const json ref = Ref("singular");
-  LmmOptions o;
-  o.kenward_roger = true;
-  o.reml = false;
-  EXPECT_THROW(FitLmm(Load(ref), ref["formula"].get<std::string>(), o), InputError);
-}
-
 TEST(Lmm, CrossedRandomSlopesReml) { Compare("crossed", true); }
 TEST(Lmm, CrossedRandomSlopesMl) { Compare("crossed", false); }
 TEST(Lmm, UnbalancedNumericSlopeReml) { Compare("unbalanced", true); }
 TEST(Lmm, UnbalancedNumericSlopeMl) { Compare("unbalanced", false); }
 TEST(Lmm, SingularFitReml) { Compare("singular", true); }
 TEST(Lmm, SingularFitMl) { Compare("singular", false); }
-
-TEST(Lmm, FormulaParsing) {
-  const auto f = ParseLmmFormula("score ~ a * b + c + (1 + a | g) + (0 + x | h)");
-  EXPECT_EQ(f.response, "score");
-  ASSERT_EQ(f.fixed.size(), 4u);  // a, b, c, a:b (R's order: by degree)
-  EXPECT_EQ(f.fixed[2], std::vector<std::string>{"c"});
-  EXPECT_EQ(f.fixed[3], (std::vector<std::string>{"a", "b"}));
-  ASSERT_EQ(f.random.size(), 2u);
-  EXPECT_TRUE(f.random[0].intercept);
-  EXPECT_FALSE(f.random[1].intercept);
-  EXPECT_EQ(f.random[1].group, "h");
-  EXPECT_THROW(ParseLmmFormula("score ~ a + (1 | )", "f.csv"), InputError);
-  EXPECT_THROW(ParseLmmFormula("score ~ a", "f.csv"), InputError);  // no random term
-  EXPECT_THROW(ParseLmmFormula("score ~ a - 1 + (1 | g)", "f.csv"), InputError);
-  EXPECT_THROW(ParseLmmFormula("score a + (1 | g)", "f.csv"), InputError);
-}
 
 TEST(Lmm, UnknownColumnNamesIt) {
   const json ref = Ref("singular");

@@ -1,0 +1,107 @@
+// The study record's schema (schema.cpp), read back by SQLite itself through its own C API
+// (not our Database class): every foreign key names a parent key SQLite can enforce, and no
+// migration leaves a row pointing at nothing.
+
+#include <gtest/gtest.h>
+#include <sqlite3.h>
+
+#include <set>
+#include <string>
+#include <vector>
+
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::db {
+namespace {
+
+// Rows of `sql` on a fresh read-only connection, each row's columns joined by '|'.
+std::vector<std::string> Query(const std::string& path, const std::string& sql) {
+  sqlite3* h = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
+  std::vector<std::string> rows;
+  while (s != nullptr && sqlite3_step(s) == SQLITE_ROW) {
+    std::string row;
+    for (int c = 0; c < sqlite3_column_count(s); ++c) {
+      const auto* text = sqlite3_column_text(s, c);
+      if (c > 0) row += '|';
+      row += text == nullptr ? "NULL" : reinterpret_cast<const char*>(text);
+    }
+    rows.push_back(row);
+  }
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return rows;
+}
+
+// SQLite checks a foreign key's parent only when a row is written ("foreign key mismatch",
+// sqlite.org/foreignkeys.html §3): the parent key must be the parent's primary key or carry a
+// UNIQUE index. Each single-column key is checked here for every table of a fresh file.
+TEST(Schema, EveryForeignKeyReferencesAPrimaryOrUniqueKey) {
+  test::TempDir dir;
+  const auto path = dir.File("a.db");
+  { Database db(path); }
+  const auto tables = Query(path, "SELECT name FROM sqlite_master WHERE type = 'table'");
+  ASSERT_GE(tables.size(), 5u);
+  int keys = 0;
+  for (const auto& table : tables) {
+    // id|seq|table|from|to|on_update|on_delete|match
+    for (const auto& fk :
+         Query(path, "SELECT \"table\", \"to\" FROM pragma_foreign_key_list('" + table + "')")) {
+      ++keys;
+      const auto bar = fk.find('|');
+      const std::string parent = fk.substr(0, bar), to = fk.substr(bar + 1);
+      SCOPED_TRACE(table + " -> " + parent + "(" + to + ")");
+      const auto pk =
+          Query(path, "SELECT name FROM pragma_table_info('" + parent + "') WHERE pk > 0");
+      ASSERT_FALSE(Query(path, "SELECT name FROM sqlite_master WHERE type = 'table' AND name = '" +
+                                   parent + "'")
+                       .empty())
+          << "parent table missing";
+      if (to == "NULL") {  // REFERENCES parent: its primary key
+        EXPECT_EQ(pk.size(), 1u);
+        continue;
+      }
+      std::set<std::string> unique;  // single-column keys only
+      if (pk.size() == 1) unique.insert(pk[0]);
+      for (const auto& index : Query(
+               path, "SELECT name FROM pragma_index_list('" + parent + "') WHERE \"unique\" = 1")) {
+        const auto cols = Query(path, "SELECT name FROM pragma_index_info('" + index + "')");
+        if (cols.size() == 1) unique.insert(cols[0]);
+      }
+      EXPECT_TRUE(unique.count(to) == 1) << "parent key is neither primary nor unique";
+    }
+  }
+  EXPECT_GE(keys, 5);  // trial -> session -> participant -> study, rating -> trial, ...
+}
+
+// Migrations rewrite rows (attempt numbers, rating sources, events): after each one, SQLite's
+// own checks find no dangling foreign key and an intact file.
+TEST(Schema, MigratedFilesPassSqlitesForeignKeyAndIntegrityChecks) {
+  for (int from = 1; from < kSchemaVersion; ++from) {
+    SCOPED_TRACE(from);
+    test::TempDir dir;
+    const auto path = dir.File("a.db");
+    {
+      Database old(path, {.migrate_to = from});
+      old.Exec(
+          "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
+      old.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11)");
+      old.Exec("INSERT INTO session(participant_id) VALUES (1)");
+      old.Exec(
+          "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','D')");
+      old.Exec(
+          "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
+          "(1,'overall',61.5,2.0)");
+    }
+    { Database db(path); }
+    EXPECT_EQ(Query(path, "PRAGMA foreign_key_check"), std::vector<std::string>{});
+    EXPECT_EQ(Query(path, "PRAGMA integrity_check"), std::vector<std::string>{"ok"});
+    EXPECT_EQ(Query(path, "SELECT count(*) FROM rating"), std::vector<std::string>{"1"});
+  }
+}
+
+}  // namespace
+}  // namespace hapticlab::db
