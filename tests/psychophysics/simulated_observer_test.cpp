@@ -16,9 +16,9 @@ TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
   const SimulatedObserverParams o{
       .shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
   Rng rng(5);
-  constexpr int n = 200000;
+  constexpr int kN = 200000;
   int correct = 0, counts[3] = {0, 0, 0};
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < kN; ++i) {
     const auto a = SimulatedAnswer(o, Task::k3Afc, 0.2, 1, rng);
     correct += a.positive;
     ++counts[a.response];
@@ -26,8 +26,8 @@ TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
   }
   const double p = 1.0 / 3 + (2.0 / 3 - 0.02) * (1 - std::exp(-1.0));
   // 5 binomial standard deviations: fails by chance with probability < 1e-6.
-  EXPECT_NEAR(static_cast<double>(correct) / n, p, 5 * std::sqrt(p * (1 - p) / n));
-  EXPECT_NEAR(counts[0], counts[2], 5 * std::sqrt(n * (1 - p) / 2));
+  EXPECT_NEAR(static_cast<double>(correct) / kN, p, 5 * std::sqrt(p * (1 - p) / kN));
+  EXPECT_NEAR(counts[0], counts[2], 5 * std::sqrt(kN * (1 - p) / 2));
 }
 
 }  // namespace

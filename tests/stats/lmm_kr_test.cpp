@@ -12,6 +12,11 @@
 namespace hapticlab::stats {
 namespace {
 
+using lmm_reference::ExpectClose;
+using lmm_reference::Load;
+using lmm_reference::Ref;
+using nlohmann::json;
+
 // Kenward-Roger (REML fits): adjusted SEs, df, t, p; scaled F, df, p (pbkrtest via lmerTest).
 void CompareKenwardRoger(const std::string& design) {
   const json ref = Ref(design);

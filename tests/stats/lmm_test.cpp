@@ -20,6 +20,11 @@
 namespace hapticlab::stats {
 namespace {
 
+using lmm_reference::ExpectClose;
+using lmm_reference::Load;
+using lmm_reference::Ref;
+using nlohmann::json;
+
 void Compare(const std::string& design, bool reml) {
   const json ref = Ref(design);
   const json& w = ref[reml ? "reml" : "ml"];

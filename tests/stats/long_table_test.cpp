@@ -28,7 +28,7 @@ constexpr const char* kCsv =
     "P1,B,Denim,30,x\n";
 
 std::string Write(const test::TempDir& dir, const std::string& name, const std::string& text) {
-  const auto path = dir.File(name);
+  auto path = dir.File(name);
   std::ofstream(path) << text;
   return path;
 }
