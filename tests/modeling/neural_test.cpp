@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <mutex>
 #include <numbers>
@@ -487,35 +488,59 @@ std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
   return recs;
 }
 
+// Data seeds of the AR-grid Fig. 3.7 test: 40, or those of HL_NEURAL_FIG37_SEEDS="41,42,43"
+// (a scratch knob for the seed tables in docs/modeling-neural.md; ctest runs the default).
+std::vector<std::uint64_t> Fig37Seeds() {
+  const char* env = std::getenv("HL_NEURAL_FIG37_SEEDS");
+  if (env == nullptr || *env == 0) return {40};
+  std::vector<std::uint64_t> seeds;
+  const std::string text(env);
+  for (std::size_t at = 0; at < text.size();) {
+    const auto comma = text.find(',', at);
+    seeds.push_back(std::stoull(text.substr(at, comma - at)));
+    at = comma == std::string::npos ? text.size() : comma + 1;
+  }
+  return seeds;
+}
+
 // Fig. 3.7 on the synthetic AR grids (thesis grid: train 4, 8, 12 cm/s x 0.54, 1.18, 1.91 N,
 // held out 6, 10 cm/s and 0.89, 1.40 N): LPC, Γ_U, Γ_D, training and held-out mean E_s.
-// Issue #19's targets: on the linear grid Γ_U within 0.05 of LPC on training conditions and
-// within 0.1 held out; on the nonlinear grid Γ_U below LPC held out. With the nonlinear part
-// kept only where validation favours it (NeuralFitOptions::validate_nonlinear_part), Γ_U is
-// below LPC held out on data seeds 40, 41, 43 (by 0.021-0.034) and 0.011 above on seed 42
-// (docs/modeling-neural.md: that gap is the linear parts' interpolation between conditions,
-// not the networks). Asserted is what holds on every seed tried: training within 0.02 of
-// LPC, held out within 0.02.
+// Asserted are issue #19's targets: on the linear grid Γ_U within 0.05 of LPC on training
+// conditions and within 0.1 held out; on the nonlinear grid Γ_U below LPC held out (and
+// within 0.02 of it on training conditions). They hold on data seed 40 (this test's) and on
+// seeds 41 and 43; on seed 42 the nonlinear grid's Γ_U is 0.011 above LPC held out
+// (docs/modeling-neural.md: the linear parts' interpolation between conditions; not fixed).
 TEST(NeuralFig37, LinearAndNonlinearArGrids) {
   const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
-  std::printf("AR grid    | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
-  for (const bool nonlinear : {false, true}) {
-    const auto recs = ArGrid(nonlinear, 40);
-    const auto lpc = CrossValidate(recs, tv, tf, {});
-    auto uo = Quick(renderer::NeuralTopology::kUnified);
-    std::string decision;
-    uo.progress = [&](const std::string& what, int, int) {
-      if (what.rfind("validation E_s", 0) == 0) decision = what;
-    };
-    const auto u = CrossValidateNeural(recs, tv, tf, uo);
-    const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
-    std::printf("%s grid, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear", decision.c_str());
-    std::printf("%-10s |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n",
-                nonlinear ? "nonlinear" : "linear", lpc.mean_es_train, lpc.mean_es_test,
-                u.mean_es_train, u.mean_es_test, d.mean_es_train, d.mean_es_test);
-    EXPECT_LE(u.mean_es_train, lpc.mean_es_train + (nonlinear ? 0.02 : 0.05));
-    EXPECT_LE(u.mean_es_test, lpc.mean_es_test + (nonlinear ? 0.02 : 0.1));
-  }
+  std::printf("AR grid, seed | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
+  for (const std::uint64_t seed : Fig37Seeds())
+    for (const bool nonlinear : {false, true}) {
+      const auto recs = ArGrid(nonlinear, seed);
+      const auto lpc = CrossValidate(recs, tv, tf, {});
+      auto uo = Quick(renderer::NeuralTopology::kUnified);
+      std::string decision;
+      std::mutex mu;
+      uo.progress = [&](const std::string& what, int, int) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (what.rfind("validation E_s", 0) == 0) decision = what;
+      };
+      const auto u = CrossValidateNeural(recs, tv, tf, uo);
+      const auto d =
+          CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
+      std::printf("%s grid, seed %d, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear",
+                  static_cast<int>(seed), decision.c_str());
+      std::printf("%-9s %4d |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n",
+                  nonlinear ? "nonlinear" : "linear", static_cast<int>(seed), lpc.mean_es_train,
+                  lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train,
+                  d.mean_es_test);
+      if (nonlinear) {
+        EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.02) << "seed " << seed;
+        EXPECT_LT(u.mean_es_test, lpc.mean_es_test) << "seed " << seed;
+      } else {
+        EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.05) << "seed " << seed;
+        EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.1) << "seed " << seed;
+      }
+    }
 }
 
 }  // namespace
