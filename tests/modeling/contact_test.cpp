@@ -199,19 +199,20 @@ TEST(ContactFreeHand, AlgorithmOneStartsNearTheTruthFromSlidingAndTremor) {
 // every estimate must be within its tolerance. With the plain (J'J)^-1 sigma^2 of the earlier
 // engine, mu_k's interval (+- 0.002) covered the truth in none.
 // KNOWN FAILURE, so disabled (run with --gtest_also_run_disabled_tests, 20 s): mu_b is covered in
-// 16 of 20 seeds (K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19); error mean -0.34 %, SD 2.07 %
-// against a median reported SE of 1.29 %. The cause is the replay's inputs, not the interval
-// method (measured with Experiment, EXP_COVER=1; docs/modeling-geometry-contact.md): with exact
-// positions and velocities replayed at 1 kHz the jackknife's SE matches mu_b's spread (SD 0.86 %,
-// median SE 0.97 %), and what is left is a bias of -1.23 % from the force noise in the load that
-// sets the Coulomb level (errors in variables: -0.66, -1.36, -2.16 % at 4, 8, 12 mN). On the
+// 16 of 20 seeds (before round 2: K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19); error mean -0.34 %,
+// SD 2.07 % against a median reported SE of 1.29 %. The cause is the replay's inputs, not the
+// interval method (measured with Experiment, EXP_COVER=1; docs/modeling-geometry-contact.md): with
+// exact positions and velocities replayed at 1 kHz the jackknife's SE matches mu_b's spread (SD
+// 0.86 %, median SE 0.97 %), and what is left is a bias of -1.23 % from the force noise in the load
+// that sets the Coulomb level (errors in variables: -0.66, -1.36, -2.16 % at 4, 8, 12 mN). On the
 // test's inputs the 20 ms position smoothing and the 500 Hz replay add a per-recording error of
 // about 1 % SD (+0.67 % mean) that is systematic within a recording (RMS z 2.0 at 0.5 mN noise),
 // so no resampling of the recording sees it. A wider interval would hide these; they are fixed
 // in the replay or not at all. Round 2 (docs/modeling-geometry-contact.md, choices measured on
 // seeds 200-219 with Experiment): the load from the fitted Hunt-Crossley law (an instrument)
 // costs mu_k coverage (its own error is not in the friction's interval); a 1 kHz replay helps
-// on 200-219 but leaves mu_b at 16 of 20 here; the poke cap now selects by the smoothed load.
+// on 200-219 (not measured here); the poke cap now selects by the smoothed load. Now: K1mm 19,
+// n 20, B1mm 20, kappa 19, mu_k 19, mu_b 16 of 20 (mu_b error mean -0.34 %, SD 2.07 %).
 // Open: a data-driven position window and poke classification from the penetration path.
 // The coverage experiment over the 20 seeds (100-119, noise from 4-12 mN), printed per seed and
 // summarised: per parameter, how many intervals covered the truth and how many estimates were
