@@ -68,7 +68,7 @@ double RmsNormal(const wb::Model& m, const wb::Replay& r, double max_force_N) {
   double s = 0;
   int n = 0;
   for (std::size_t i = 0; i < r.samples().size(); ++i)
-    if (r.samples()[i].contact && r.samples()[i].fn_N <= max_force_N)
+    if (r.samples()[i].contact && r.samples()[i].fload_N <= max_force_N)
       s += std::pow(r.samples()[i].fn_N - p.fn_N[i], 2), ++n;
   return n ? std::sqrt(s / n) : 0;
 }
@@ -186,35 +186,15 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
       "(J'J - J_g'J_g)^-1 J_g' "
       "r_g, cov = (G-1)/G sum (d_g - mean)(d_g - mean)'), 95 % intervals with "
       "t(0.975, G-1)";
-  // Friction: the whole measurement replayed (pokes carry no sliding), as the workbench does.
+  // The whole measurement replayed (pokes carry no sliding), as the workbench does.
   const auto r = wb::PrepareReplay(m, o.replay);
-  out.algorithm1 = AlgorithmOne(r, wb::Split::kAll, o);
   wb::Model model;
   wb::AddEffects(&model, ContactEffects(), r);
   wb::FitOptions fo;
-  fo.normal = fo.vibration = false;
   fo.uncertainty = true;
-  const auto fr = wb::Fit(&model, r, fo);
-  const auto* cf = fr.Find(wb::Channel::kFriction);
-  HL_REQUIRE(cf != nullptr, "the contact cost functor must exist");
-  out.friction_summary = cf->summary;
-  out.kappa_N_per_m = FromParam(*cf, "dahl", "kappa");
-  out.mu_k = FromParam(*cf, "coulomb", "mu_k");
-  out.mu_b_Ns_per_m = FromParam(*cf, "viscous", "mu_b");
-  out.stroke_samples = cf->samples;
-  {
-    const auto p = wb::Predict(model, r);
-    double s = 0;
-    int n = 0;
-    for (std::size_t i = 0; i < r.samples().size(); ++i)
-      if (r.samples()[i].contact)
-        s += std::pow(r.samples()[i].ftx_N - p.ftx_N[i], 2) +
-             std::pow(r.samples()[i].fty_N - p.fty_N[i], 2),
-            ++n;
-    out.friction_rms_N = n ? std::sqrt(s / n) : 0;
-  }
+  fo.vibration = false;
 
-  // Hunt-Crossley: a separate pokes file, the measurement's pokes, or all of it.
+  // Hunt-Crossley first: a separate pokes file, the measurement's pokes, or all of it.
   Measurement strokes, pokes;
   SplitStrokesAndPokes(m, &strokes, &pokes);
   auto in_contact = [&](const Measurement& x) {
@@ -248,6 +228,41 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
   const auto* nf = nr.Find(wb::Channel::kNormal);
   HL_REQUIRE(nf != nullptr, "the cost functor must exist");
   out.normal_summary = nf->summary;
+
+  // Friction. The Coulomb level is mu_k times the load; the measured load carries the force
+  // sensor's noise, and through the bristle's saturation (|F| <= f_C) that noise biases the
+  // replayed friction (errors in variables). The Hunt-Crossley law just fitted predicts the load
+  // from the penetration, a different sensor whose noise is independent of the forces: the
+  // friction replay uses that prediction (an instrument for the load) when the law explains the
+  // strokes' load.
+  wb::Replay fr_replay = r;
+  if (o.load_from_normal_law) {
+    const auto pred = wb::Predict(model, r).fn_N;
+    for (std::size_t i = 0; i < r.samples().size(); ++i)
+      if (r.samples()[i].contact && pred[i] > 0) fr_replay.mutable_samples()[i].fload_N = pred[i];
+  }
+  out.algorithm1 = AlgorithmOne(fr_replay, wb::Split::kAll, o);
+  fo.normal = false;
+  fo.friction = true;
+  const auto fr = wb::Fit(&model, fr_replay, fo);
+  const auto* cf = fr.Find(wb::Channel::kFriction);
+  HL_REQUIRE(cf != nullptr, "the contact cost functor must exist");
+  out.friction_summary = cf->summary;
+  out.kappa_N_per_m = FromParam(*cf, "dahl", "kappa");
+  out.mu_k = FromParam(*cf, "coulomb", "mu_k");
+  out.mu_b_Ns_per_m = FromParam(*cf, "viscous", "mu_b");
+  out.stroke_samples = cf->samples;
+  {
+    const auto p = wb::Predict(model, fr_replay);
+    double s = 0;
+    int n = 0;
+    for (std::size_t i = 0; i < r.samples().size(); ++i)
+      if (r.samples()[i].contact)
+        s += std::pow(r.samples()[i].ftx_N - p.ftx_N[i], 2) +
+             std::pow(r.samples()[i].fty_N - p.fty_N[i], 2),
+            ++n;
+    out.friction_rms_N = n ? std::sqrt(s / n) : 0;
+  }
   out.K1mm_N = FromParam(*nf, "core", "K1mm_N");
   out.B1mm_Ns_per_m = FromParam(*nf, "hc-damping", "B1mm");
   out.n = FromParam(*nf, "hc-exponent", "n");

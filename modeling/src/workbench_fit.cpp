@@ -99,9 +99,11 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   out.channel = c;
   out.summary.what = ChannelName(c);
   auto* cost = new ChannelCost{c, &r, {}, Resolve(*m, r, c), {}, {}, {}, {}};
+  // The normal cap selects by the smoothed load, not the noisy measured force: selecting on the
+  // response keeps the samples whose noise is negative near the cap and biases the law low.
   for (std::size_t i = 0; i < r.samples().size(); ++i)
     if (r.samples()[i].contact && InSplit(r.samples()[i].block, o.split) &&
-        (c != Channel::kNormal || r.samples()[i].fn_N <= o.max_normal_force_N))
+        (c != Channel::kNormal || r.samples()[i].fload_N <= o.max_normal_force_N))
       cost->idx.push_back(static_cast<int>(i));
   // Algorithm 1 starts a friction model that has never been fitted (coulomb and dahl at their
   // initial values): the Ceres refinement is then the joint batch step of the dissertation.

@@ -40,6 +40,10 @@ struct ContactFitOptions {
   /// `model fit-contact` and `hapticlab fit` agree; other values are for measuring the effect of
   /// the preprocessing on the estimates (tests/modeling/contact_test.cpp, Experiment).
   wb::ReplayOptions replay;
+  /// The friction's Coulomb level from the fitted Hunt-Crossley law's prediction of the load
+  /// (penetration and its rate) instead of the measured, smoothed load (errors in variables;
+  /// see FitContact).
+  bool load_from_normal_law = false;
 };
 
 /// Algorithm 1 over the replay's samples in the split.
