@@ -83,9 +83,9 @@ class PositionDependentFriction final : public BasicEffect {
       if (hi < 0 || m[k] > m[hi]) hi = k;
     }
     if (lo < 0) return {"too few sliding samples to judge", "", false};
-    static const char* kTile[9] = {"front-left",  "front-centre", "front-right",
-                                   "middle-left", "centre",       "middle-right",
-                                   "back-left",   "back-centre",  "back-right"};
+    static constexpr const char* kTile[9] = {"front-left",  "front-centre", "front-right",
+                                             "middle-left", "centre",       "middle-right",
+                                             "back-left",   "back-centre",  "back-right"};
     return {fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} "
                         "tile of a 3 x 3 grid "
                         "over the stroked area",
