@@ -158,9 +158,7 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
                                           .stribeck_speed_mps = t.stribeck_vs_mps};
     const double mu = law.Mu(v);
     const double fc = fn * mu;
-    if (fc <= 0) {
-      Fx = Fy = 0;
-    } else if (t.Has(effect::kDahl)) {
+    if (fc > 0 && t.Has(effect::kDahl)) {
       if (k == 0 || out.fn_clean[k - 1] <= 0) {
         Fx = Fy = 0;
       } else {
@@ -173,12 +171,12 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
         const double mag = std::hypot(Fx, Fy);
         if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
       }
-    } else if (v > 0) {
+    } else if (fc > 0 && v > 0) {
       const double g = fc * std::tanh(v / 0.5e-3) / v;
       Fx = g * vx[k];
       Fy = g * vy[k];
     } else {
-      Fx = Fy = 0;
+      Fx = Fy = 0;  // no friction level, or at rest without pre-sliding
     }
     const double mub = t.Has(effect::kViscous) ? t.mu_b_Ns_per_m : 0.0;
     out.ftx_clean[k] = -(Fx + mub * vx[k]);
