@@ -29,6 +29,7 @@
 #include "hapticlab/modeling/neural.hpp"
 #include "hapticlab/modeling/photometric.hpp"
 #include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/modeling/workbench_io.hpp"
 #include "hapticlab/renderer/energy.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
@@ -285,7 +286,9 @@ void AddImportPenn(CLI::App& model) {
     RunGuarded([&] {
       auto r = renderer::ImportPennXml(o->xml);
       r.model.hybrid_cutoff_hz = o->cutoff;
-      r.model.effects = {"coulomb", "vibration-speed", "vibration-force"};
+      r.model.effects = {std::string(modeling::wb::effect::kCoulomb),
+                         std::string(modeling::wb::effect::kVibrationSpeed),
+                         std::string(modeling::wb::effect::kVibrationForce)};
       FILE* f = std::fopen(o->out.c_str(), "w");
       if (!f) throw std::runtime_error(o->out + ": cannot write");
       const std::string text = "# Imported from " + o->xml +
@@ -361,15 +364,13 @@ void AddBuild(CLI::App& model) {
       mm.hybrid_cutoff_hz = o->cutoff;
       if (mm.effects.empty()) {
         // A contact part without an effect list: the effects its parameters say were fitted.
-        mm.effects = {"coulomb", "dahl"};
-        if (mm.friction.mu_b_Ns_per_m > 0) mm.effects.push_back("viscous");
-        if (mm.contact.texture.B > 0) mm.effects.push_back("hc-damping");
-        if (mm.contact.texture.n != 1) mm.effects.push_back("hc-exponent");
+        mm.effects = modeling::wb::ContactEffectsOf(mm);
       }
       if (!mm.vibration.empty())
-        for (const char* e : {"vibration-speed", "vibration-force"})
+        for (const auto e :
+             {modeling::wb::effect::kVibrationSpeed, modeling::wb::effect::kVibrationForce})
           if (std::find(mm.effects.begin(), mm.effects.end(), e) == mm.effects.end())
-            mm.effects.push_back(e);
+            mm.effects.emplace_back(e);
       // The geometry by reference to its .f32, relative to the model.
       const auto f32 =
           (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();

@@ -27,18 +27,19 @@ using namespace modeling::wb;
 
 nlohmann::json ErrorsJson(const Errors& e) {
   nlohmann::json j = {{"overall", e.overall}};
-  for (const auto& [k, v] : e.channel) j["channels"][k] = v;
-  for (const auto& [k, v] : e.rms) j["rms"][k] = v;
+  for (const auto& [k, v] : e.Normalized()) j["channels"][k] = v;
+  j["rms"] = {{"normal_force_N", e.normal_force_rms_N},
+              {"tangential_N", e.tangential_rms_N},
+              {"friction_ratio", e.friction_ratio_rms}};
+  if (e.vibration.present) j["rms"]["vibration_Es"] = e.vibration.normalized;
   return j;
 }
 
 std::string ErrorsLine(const Errors& e) {
   std::string s = fmt::format("overall {:.4f}", e.overall);
-  for (const auto& [k, v] : e.channel) s += fmt::format(", {} {:.4f}", k, v);
-  if (e.rms.count("normal_force_N"))
-    s += fmt::format(" (rms: normal {:.4f} N, tangential {:.4f} N, friction ratio {:.4f})",
-                     e.rms.at("normal_force_N"), e.rms.at("tangential_N"),
-                     e.rms.at("friction_ratio"));
+  for (const auto& [k, v] : e.Normalized()) s += fmt::format(", {} {:.4f}", k, v);
+  s += fmt::format(" (rms: normal {:.4f} N, tangential {:.4f} N, friction ratio {:.4f})",
+                   e.normal_force_rms_N, e.tangential_rms_N, e.friction_ratio_rms);
   return s;
 }
 

@@ -20,30 +20,28 @@ bool InSplit(int block, wb::Split s) {
   return s == wb::Split::kAll || (s == wb::Split::kTrain) == (block % 2 == 0);
 }
 
-const wb::ParamEstimate* FindParam(const wb::ChannelFit& c, const std::string& effect,
-                                   const std::string& name, int* at) {
+const wb::ParamEstimate* FindParam(const wb::ChannelFit& c, wb::ParamKey key, int* at) {
   for (std::size_t k = 0; k < c.params.size(); ++k)
-    if (c.params[k].effect == effect && c.params[k].name == name) {
+    if (c.params[k].effect == key.effect && c.params[k].name == key.name) {
       if (at) *at = static_cast<int>(k);
       return &c.params[k];
     }
   return nullptr;
 }
 
-Estimate FromParam(const wb::ChannelFit& c, const std::string& effect, const std::string& name) {
+Estimate FromParam(const wb::ChannelFit& c, wb::ParamKey key) {
   Estimate e;
-  if (const auto* p = FindParam(c, effect, name, nullptr)) e = {p->value, p->sd, p->lo95, p->hi95};
+  if (const auto* p = FindParam(c, key, nullptr)) e = {p->value, p->sd, p->lo95, p->hi95};
   return e;
 }
 
 // Renderer units: X = X1mm / (1 mm)^n, so ln X = ln X1mm - n ln(1 mm); its variance by the
 // delta method from the channel's covariance, the interval exp(ln X -+ t sd).
-Estimate ToRendererUnits(const wb::ChannelFit& c, const std::string& effect,
-                         const std::string& name) {
+Estimate ToRendererUnits(const wb::ChannelFit& c, wb::ParamKey key) {
   Estimate e;
   int i = -1, j = -1;
-  const auto* x = FindParam(c, effect, name, &i);
-  const auto* n = FindParam(c, "hc-exponent", "n", &j);
+  const auto* x = FindParam(c, key, &i);
+  const auto* n = FindParam(c, wb::key::kN, &j);
   if (!x || !n) return e;
   const double l = std::log(1e-3);
   e.value = x->value / std::exp(n->value * l);
@@ -76,7 +74,9 @@ double RmsNormal(const wb::Model& m, const wb::Replay& r, double max_force_N) {
 }  // namespace
 
 std::vector<std::string> ContactEffects() {
-  return {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent"};
+  using namespace wb::effect;
+  return {std::string(kCoulomb), std::string(kViscous), std::string(kDahl), std::string(kHcDamping),
+          std::string(kHcExponent)};
 }
 
 void SplitStrokesAndPokes(const Measurement& m, Measurement* strokes, Measurement* pokes) {
@@ -248,9 +248,9 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
   const auto* cf = fr.Find(wb::Channel::kFriction);
   HL_REQUIRE(cf != nullptr, "the contact cost functor must exist");
   out.friction_summary = cf->summary;
-  out.kappa_N_per_m = FromParam(*cf, "dahl", "kappa");
-  out.mu_k = FromParam(*cf, "coulomb", "mu_k");
-  out.mu_b_Ns_per_m = FromParam(*cf, "viscous", "mu_b");
+  out.kappa_N_per_m = FromParam(*cf, wb::key::kKappa_N_per_m);
+  out.mu_k = FromParam(*cf, wb::key::kMuK);
+  out.mu_b_Ns_per_m = FromParam(*cf, wb::key::kMuB_Ns_per_m);
   out.stroke_samples = cf->samples;
   {
     const auto p = wb::Predict(model, fr_replay);
@@ -263,11 +263,11 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
             ++n;
     out.friction_rms_N = n ? std::sqrt(s / n) : 0;
   }
-  out.K1mm_N = FromParam(*nf, "core", "K1mm_N");
-  out.B1mm_Ns_per_m = FromParam(*nf, "hc-damping", "B1mm");
-  out.n = FromParam(*nf, "hc-exponent", "n");
-  out.K = ToRendererUnits(*nf, "core", "K1mm_N");
-  out.B = ToRendererUnits(*nf, "hc-damping", "B1mm");
+  out.K1mm_N = FromParam(*nf, wb::key::kK1mm_N);
+  out.B1mm_Ns_per_m = FromParam(*nf, wb::key::kB1mm_Ns_per_m);
+  out.n = FromParam(*nf, wb::key::kN);
+  out.K = ToRendererUnits(*nf, wb::key::kK1mm_N);
+  out.B = ToRendererUnits(*nf, wb::key::kB1mm_Ns_per_m);
   out.poke_samples = nf->samples;
   out.normal_rms_N = RmsNormal(model, pr, o.max_force_N);
   return out;

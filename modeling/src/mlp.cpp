@@ -61,10 +61,10 @@ double Mlp::Gradient(const Eigen::Ref<const Eigen::VectorXd>& x, double target,
   Eigen::VectorXd delta = Eigen::VectorXd::Constant(1, err);  // dLoss/dz of the output layer
   for (std::size_t l = L; l-- > 0;) {
     const int in = layers_[l], out = layers_[l + 1];
-    Eigen::Map<Eigen::MatrixXd> gW(grad->data() + offset_[l], out, in);
+    Eigen::Map<Eigen::MatrixXd> gw(grad->data() + offset_[l], out, in);
     Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in,
                                    out);
-    gW = delta * act[l].transpose();
+    gw = delta * act[l].transpose();
     gb = delta;
     if (l > 0) {
       const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);
@@ -100,10 +100,10 @@ double Mlp::BatchGradient(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   Eigen::MatrixXd delta = err / static_cast<double>(B);  // 1 x B: dLoss/dz of the output
   for (std::size_t l = L; l-- > 0;) {
     const int in = layers_[l], out = layers_[l + 1];
-    Eigen::Map<Eigen::MatrixXd> gW(grad->data() + offset_[l], out, in);
+    Eigen::Map<Eigen::MatrixXd> gw(grad->data() + offset_[l], out, in);
     Eigen::Map<Eigen::VectorXd> gb(grad->data() + offset_[l] + static_cast<Eigen::Index>(out) * in,
                                    out);
-    gW.noalias() = delta * act[l].transpose();
+    gw.noalias() = delta * act[l].transpose();
     gb = delta.rowwise().sum();
     if (l > 0) {
       const Eigen::Map<const Eigen::MatrixXd> W(params_.data() + offset_[l], out, in);

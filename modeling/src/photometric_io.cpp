@@ -157,7 +157,7 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
                 "{} cells; expected file elevation_deg azimuth_deg, file lx ly lz, or lx ly lz",
                 c.size()));
     }
-    const bool named = cols.size() > 0 && cols[0] == "file";
+    const bool named = !cols.empty() && cols[0] == "file";
     const bool angles = cols.size() == 3 && named;
     for (; k < lines.size(); ++k) {
       const auto& l = lines[k];

@@ -22,13 +22,13 @@ namespace hapticlab::modeling::wb {
 Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
   Diagnosis dx;
   Model base = m0;
-  if (!base.params.count("core")) AddEffects(&base, {}, r);
+  if (!base.params.count(std::string(effect::kCore))) AddEffects(&base, {}, r);
   Fit(&base, r, {.split = Split::kTrain});
   const auto pbase = Predict(base, r);
   const auto ebase = ComputeErrors(r, pbase, Split::kHeldOut);
   const auto res = ComputeResiduals(base, r, pbase);
   dx.baseline_error = ebase.overall;
-  dx.baseline_channel = ebase.channel;
+  dx.baseline_channel = ebase.Normalized();
 
   // Candidates: effects the model lacks whose prerequisites it has, on channels with data.
   std::vector<const Effect*> cands;
@@ -70,14 +70,16 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
       }
       c.error_after = err.overall;
       c.error_reduction = ebase.overall - err.overall;
-      const double b0 = ebase.channel.count(c.channel) ? ebase.channel.at(c.channel) : 0;
-      const double b1 = err.channel.count(c.channel) ? err.channel.at(c.channel) : 0;
+      const auto& e0 = ebase.Of(e->channel());
+      const auto& e1 = err.Of(e->channel());
+      const double b0 = e0.present ? e0.normalized : 0;
+      const double b1 = e1.present ? e1.normalized : 0;
       c.relative_reduction = b0 > 0 ? (b0 - b1) / b0 : 0;
       // Paired over held-out blocks: t of the per-block log ratio of the channel's error (scale
       // free, so a few blocks with large errors do not dominate).
       std::vector<double> d;
-      const auto& bb = ebase.block_sse.at(c.channel);
-      const auto& bc = err.block_sse.at(c.channel);
+      const auto& bb = e0.block_sse;
+      const auto& bc = e1.block_sse;
       for (const auto& [blk, v] : bb)
         if (bc.count(blk) && v > 0 && bc.at(blk) > 0) d.push_back(std::log(v / bc.at(blk)));
       if (d.size() >= 3) {

@@ -107,24 +107,25 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
       cost->idx.push_back(static_cast<int>(i));
   // Algorithm 1 starts a friction model that has never been fitted (coulomb and dahl at their
   // initial values): the Ceres refinement is then the joint batch step of the dissertation.
-  if (c == Channel::kFriction && o.algorithm1_init && m->Has("coulomb") && m->Has("dahl")) {
-    auto slot = [&](const std::string& e, const std::string& p) -> double* {
+  if (c == Channel::kFriction && o.algorithm1_init && m->Has(effect::kCoulomb) &&
+      m->Has(effect::kDahl)) {
+    auto slot = [&](ParamKey key) -> double* {
       for (auto& x : cost->eff)
-        if (x.name == e)
+        if (x.name == key.effect)
           for (std::size_t k = 0; k < x.specs.size(); ++k)
-            if (x.specs[k].name == p) return &x.p[k];
+            if (x.specs[k].name == key.name) return &x.p[k];
       return nullptr;
     };
-    auto init = [&](const std::string& e, const std::string& p) {
-      for (const auto& spec : FindEffect(e)->Params(r))
-        if (spec.name == p) return spec.init;
+    auto init = [&](ParamKey key) {
+      for (const auto& spec : FindEffect(key.effect)->Params(r))
+        if (spec.name == key.name) return spec.init;
       return std::numeric_limits<double>::quiet_NaN();
     };
-    double* mu_k = slot("coulomb", "mu_k");
-    double* kappa = slot("dahl", "kappa");
-    double* mu_b = slot("viscous", "mu_b");
-    if (mu_k && kappa && *mu_k == init("coulomb", "mu_k") && *kappa == init("dahl", "kappa") &&
-        (!mu_b || *mu_b == init("viscous", "mu_b"))) {
+    double* mu_k = slot(key::kMuK);
+    double* kappa = slot(key::kKappa_N_per_m);
+    double* mu_b = slot(key::kMuB_Ns_per_m);
+    if (mu_k && kappa && *mu_k == init(key::kMuK) && *kappa == init(key::kKappa_N_per_m) &&
+        (!mu_b || *mu_b == init(key::kMuB_Ns_per_m))) {
       try {
         const auto a = AlgorithmOne(r, o.split);
         if (std::isfinite(a.mu_k) && a.mu_k > 0) *mu_k = std::min(a.mu_k, 3.0);
@@ -300,11 +301,12 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   // predicted power equals the measured power on average.
   const Eigen::MatrixXd pred = X * C;
   m->coef.clear();
-  m->coef["core"].resize(nb);
+  auto& intercept = m->coef[std::string(effect::kCore)];
+  intercept.resize(nb);
   for (std::size_t b = 0; b < nb; ++b) {
     double ratio = 0;
     for (std::size_t k = 0; k < use.size(); ++k) ratio += std::exp(Y(k, b) - pred(k, b));
-    m->coef["core"][b] = C(0, b) + std::log(ratio / static_cast<double>(use.size()));
+    intercept[b] = C(0, b) + std::log(ratio / static_cast<double>(use.size()));
   }
   int col = 1;
   for (const auto& x : vib) {
@@ -317,11 +319,13 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   }
   // Predictions are kept within the measured range of each band (plus one e-fold), so an
   // extrapolated condition cannot predict absurd power.
-  m->coef["range_lo"].resize(nb);
-  m->coef["range_hi"].resize(nb);
+  auto& range_lo = m->coef[std::string(kCoefRangeLo)];
+  auto& range_hi = m->coef[std::string(kCoefRangeHi)];
+  range_lo.resize(nb);
+  range_hi.resize(nb);
   for (std::size_t b = 0; b < nb; ++b) {
-    m->coef["range_lo"][b] = Y.col(static_cast<Eigen::Index>(b)).minCoeff() - 1;
-    m->coef["range_hi"][b] = Y.col(static_cast<Eigen::Index>(b)).maxCoeff() + 1;
+    range_lo[b] = Y.col(static_cast<Eigen::Index>(b)).minCoeff() - 1;
+    range_hi[b] = Y.col(static_cast<Eigen::Index>(b)).maxCoeff() + 1;
   }
   m->band_edges_hz = r.band_lo_hz;
   m->band_edges_hz.push_back(r.band_hi_hz.back());
@@ -342,8 +346,9 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
 
 FitReport Fit(Model* m, const Replay& r, const FitOptions& o) {
   FitReport rep;
-  if (!m->params.count("core"))
-    for (const auto& s : CoreEffect().Params(r)) m->params["core"][s.name] = s.init;
+  const std::string core(effect::kCore);
+  if (!m->params.count(core))
+    for (const auto& s : CoreEffect().Params(r)) m->params[core][s.name] = s.init;
   if (o.normal) rep.channels.push_back(FitForceChannel(m, r, Channel::kNormal, o));
   if (o.friction) rep.channels.push_back(FitForceChannel(m, r, Channel::kFriction, o));
   if (o.vibration && r.has_vibration) rep.channels.push_back(FitVibration(m, r, o.split));

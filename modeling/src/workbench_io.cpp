@@ -25,11 +25,16 @@ namespace {
 constexpr double kMm = 1e-3;
 constexpr int kBankOrder = 16;
 
-double Get(const Model& m, const std::string& e, const std::string& p, double def) {
-  const auto it = m.params.find(e);
-  if (it == m.params.end()) return def;
-  const auto jt = it->second.find(p);
-  return jt == it->second.end() ? def : jt->second;
+// ln-key knots "knot0", "knot1", ... of a vibration axis effect, exponentiated.
+std::vector<double> ExpKnots(const Model& m, std::string_view e) {
+  std::vector<double> out;
+  const auto& ps = m.params.at(std::string(e));
+  for (int k = 0;; ++k) {
+    const auto it = ps.find(fmt::format("{}{}", kKnotPrefix, k));
+    if (it == ps.end()) break;
+    out.push_back(std::exp(it->second));
+  }
+  return out;
 }
 
 // Autocorrelation of a piecewise-constant band spectrum (power per bin as the workbench
@@ -76,47 +81,41 @@ renderer::ArCell BandsToAr(const std::vector<double>& edges, const std::vector<d
 
 }  // namespace
 
+std::vector<std::string> ContactEffectsOf(const renderer::MaterialModel& mm) {
+  std::vector<std::string> e = {std::string(effect::kCoulomb), std::string(effect::kDahl)};
+  if (mm.friction.mu_b_Ns_per_m > 0) e.emplace_back(effect::kViscous);
+  if (mm.contact.texture.B > 0) e.emplace_back(effect::kHcDamping);
+  if (mm.contact.texture.n != 1) e.emplace_back(effect::kHcExponent);
+  return e;
+}
+
 void SaveModel(const Model& m, const std::string& path, const Replay* r) {
   renderer::MaterialModel mm;
   mm.name = m.name.empty() ? std::filesystem::path(path).stem().string() : m.name;
   mm.effects = m.effects;
-  const double n = m.Has("hc-exponent") ? Get(m, "hc-exponent", "n", 1) : 1;
-  const double scale = std::pow(kMm, n);
-  mm.contact.texture.K = Get(m, "core", "K1mm_N", 1) / scale;
-  mm.contact.texture.B = m.Has("hc-damping") ? Get(m, "hc-damping", "B1mm", 0) / scale : 0;
-  mm.contact.texture.n = n;
+  // Without dahl the renderer's bristle is stiff enough to act as ideal Coulomb friction.
+  const auto cp = ContactParameters::From(m, /*no_dahl_kappa_N_per_m=*/1e6);
+  mm.contact.texture.K = cp.K_N_per_m_pow_n();
+  mm.contact.texture.B = cp.B_Ns_per_m_pow_n_plus_1();
+  mm.contact.texture.n = cp.n;
   mm.contact.base_model = renderer::BaseModel::kLinear;
-  if (m.Has("base-layer")) {
-    mm.contact.base = {Get(m, "base-layer", "K_b", 0), 0, 1};
-    mm.contact.layer_thickness_m = Get(m, "base-layer", "t", 0);
+  if (m.Has(effect::kBaseLayer)) {
+    mm.contact.base = {m.Get(key::kBaseK_N_per_m, 0), 0, 1};
+    mm.contact.layer_thickness_m = m.Get(key::kLayer_m, 0);
   } else {
     // No base was felt: the layer is thicker than any measured penetration.
     mm.contact.base = {0, 0, 1};
     mm.contact.layer_thickness_m = 0.005;
   }
-  mm.friction.mu_k = m.Has("coulomb") ? Get(m, "coulomb", "mu_k", 0) : 0;
-  mm.friction.kappa_N_per_m = m.Has("dahl") ? Get(m, "dahl", "kappa", 2000) : 1e6;
-  mm.friction.mu_b_Ns_per_m = m.Has("viscous") ? Get(m, "viscous", "mu_b", 0) : 0;
+  mm.friction.mu_k = cp.mu_k;
+  mm.friction.kappa_N_per_m = cp.kappa_N_per_m;
+  mm.friction.mu_b_Ns_per_m = cp.mu_b_Ns_per_m;
   if (m.HasVibration() && r && r->has_vibration) {
     // AR bank on the grid of the speed and force knots, direction averaged out.
     Model g = m;
     std::vector<double> speeds{0.05}, forces{1.0};
-    if (m.Has("vibration-speed")) {
-      speeds.clear();
-      for (int k = 0;; ++k) {
-        const auto it = m.params.at("vibration-speed").find(fmt::format("knot{}", k));
-        if (it == m.params.at("vibration-speed").end()) break;
-        speeds.push_back(std::exp(it->second));
-      }
-    }
-    if (m.Has("vibration-force")) {
-      forces.clear();
-      for (int k = 0;; ++k) {
-        const auto it = m.params.at("vibration-force").find(fmt::format("knot{}", k));
-        if (it == m.params.at("vibration-force").end()) break;
-        forces.push_back(std::exp(it->second));
-      }
-    }
+    if (m.Has(effect::kVibrationSpeed)) speeds = ExpKnots(m, effect::kVibrationSpeed);
+    if (m.Has(effect::kVibrationForce)) forces = ExpKnots(m, effect::kVibrationForce);
     Replay grid = *r;
     grid.windows.clear();
     for (const double v : speeds)
@@ -168,7 +167,7 @@ void SaveModel(const Model& m, const std::string& path, const Replay* r) {
     s += "]\n";
   }
   for (const auto& [e, ps] : m.params) {
-    if (e != "core" && !m.Has(e)) continue;
+    if (e != effect::kCore && !m.Has(e)) continue;
     s += fmt::format("\n[workbench.params.{}]\n", e);
     for (const auto& [k, v] : ps) s += fmt::format("{} = {:.17g}\n", k, v);
   }
@@ -218,18 +217,16 @@ Model LoadModel(const std::string& path) {
   if (!wb) {
     // A renderer material: its contact and friction tables are the baseline's parameters.
     if (m.effects.empty()) {
-      m.effects = {"coulomb", "dahl"};
-      if (mm.friction.mu_b_Ns_per_m > 0) m.effects.push_back("viscous");
-      if (mm.contact.texture.B > 0) m.effects.push_back("hc-damping");
-      if (mm.contact.texture.n != 1) m.effects.push_back("hc-exponent");
+      m.effects = ContactEffectsOf(mm);
     }
     const double scale = std::pow(kMm, mm.contact.texture.n);
-    m.params["core"]["K1mm_N"] = mm.contact.texture.K * scale;
-    m.params["hc-damping"]["B1mm"] = mm.contact.texture.B * scale;
-    m.params["hc-exponent"]["n"] = mm.contact.texture.n;
-    m.params["coulomb"]["mu_k"] = mm.friction.mu_k;
-    m.params["dahl"]["kappa"] = mm.friction.kappa_N_per_m;
-    m.params["viscous"]["mu_b"] = mm.friction.mu_b_Ns_per_m;
+    const ContactParameters cp{.K1mm_N = mm.contact.texture.K * scale,
+                               .n = mm.contact.texture.n,
+                               .B1mm_Ns_per_m = mm.contact.texture.B * scale,
+                               .mu_k = mm.friction.mu_k,
+                               .mu_b_Ns_per_m = mm.friction.mu_b_Ns_per_m,
+                               .kappa_N_per_m = mm.friction.kappa_N_per_m};
+    cp.ToModel(&m);
     // Vibration effects of a renderer material are its AR bank, not the workbench's band
     // model: they are kept and have no coefficients until `hapticlab fit` fits them.
     for (const auto& e : m.effects)
@@ -241,7 +238,7 @@ Model LoadModel(const std::string& path) {
                 "effect added gives them",
                 e));
     for (auto it = m.params.begin(); it != m.params.end();)
-      it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
+      it = (it->first == effect::kCore || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
     diag.ThrowIfAny();
     return m;
   }
@@ -259,7 +256,7 @@ Model LoadModel(const std::string& path) {
   if (const auto* ps = (*wb)["params"].as_table()) {
     for (const auto& [k, v] : *ps) {
       const std::string e(k.str());
-      if (e != "core" && !m.Has(e)) {
+      if (e != effect::kCore && !m.Has(e)) {
         diag.Add(path, line(&v), "workbench.params." + e,
                  "parameters of an effect not listed in effects = [...]");
         continue;
@@ -270,8 +267,8 @@ Model LoadModel(const std::string& path) {
         continue;
       }
       std::set<std::string> known;
-      if (e == "core")
-        known.insert("K1mm_N");
+      if (e == effect::kCore)
+        known.emplace(key::kK1mm_N.name);
       else
         for (const auto& spec : FindEffect(e)->Params(Replay{})) known.insert(spec.name);
       for (const auto& [pk, pv] : *t) {
@@ -287,8 +284,10 @@ Model LoadModel(const std::string& path) {
       }
     }
   }
-  if (!m.params.count("core") || !m.params["core"].count("K1mm_N"))
-    diag.Add(path, line(wb), "workbench.params.core.K1mm_N",
+  if (!m.params.count(std::string(effect::kCore)) ||
+      !m.params[std::string(effect::kCore)].count(std::string(key::kK1mm_N.name)))
+    diag.Add(path, line(wb),
+             fmt::format("workbench.params.{}.{}", effect::kCore, key::kK1mm_N.name),
              "missing: the normal force at 1 mm penetration [N]");
   for (const auto& e : m.effects)
     if (!m.params.count(e) && FindEffect(e)->channel() != Channel::kVibration)
@@ -304,7 +303,7 @@ Model LoadModel(const std::string& path) {
         for (const auto& x : *a)
           if (auto d = x.value<double>()) c.push_back(*d);
       const Effect* ef = FindEffect(e);
-      const bool per_band = e == "core" || e == "range_lo" || e == "range_hi";
+      const bool per_band = e == effect::kCore || e == kCoefRangeLo || e == kCoefRangeHi;
       const std::size_t want =
           per_band ? nb : (ef ? nb * static_cast<std::size_t>(ef->VibrationColumns()) : 0);
       if (!a || c.size() != a->size() || c.size() != want || (!per_band && !m.Has(e)))

@@ -4,7 +4,9 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cmath>
 #include <functional>
+#include <limits>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
@@ -18,7 +20,7 @@ namespace {
 // The core every model has: the contact stiffness K (force at 1 mm penetration).
 class Core final : public Effect {
  public:
-  std::string_view name() const override { return "core"; }
+  std::string_view name() const override { return effect::kCore; }
   Channel channel() const override { return Channel::kNormal; }
   std::string_view description() const override { return "contact stiffness"; }
   std::vector<ParamSpec> Params(const Replay& r) const override {
@@ -31,7 +33,7 @@ class Core final : public Effect {
       std::nth_element(k.begin(), k.begin() + k.size() / 2, k.end());
       init = std::max(k[k.size() / 2], 1e-3);
     }
-    return {{.name = "K1mm_N",
+    return {{.name = std::string(key::kK1mm_N.name),
              .unit = "N",
              .init = init,
              .lo = 1e-6,
@@ -45,7 +47,9 @@ class Core final : public Effect {
 };
 const Core kCore;
 
-const Effect* Lookup(std::string_view name) { return name == "core" ? &kCore : FindEffect(name); }
+const Effect* Lookup(std::string_view name) {
+  return name == effect::kCore ? &kCore : FindEffect(name);
+}
 
 }  // namespace
 
@@ -54,7 +58,7 @@ const Effect& CoreEffect() { return kCore; }
 std::vector<Resolved> Resolve(const Model& m, const Replay& r, Channel c) {
   std::vector<Resolved> out;
   std::vector<std::string> names;
-  if (c == Channel::kNormal) names.push_back("core");
+  if (c == Channel::kNormal) names.emplace_back(effect::kCore);
   for (const auto& n : m.effects) {
     const Effect* e = FindEffect(n);
     if (e && e->channel() == c) names.push_back(n);
@@ -104,12 +108,58 @@ const Effect* FindEffect(std::string_view name) {
 }
 
 std::vector<std::string> BaselineEffects() {
-  return {"coulomb",     "viscous",         "dahl",           "hc-damping",
-          "hc-exponent", "vibration-speed", "vibration-force"};
+  using namespace effect;
+  return {std::string(kCoulomb),       std::string(kViscous),    std::string(kDahl),
+          std::string(kHcDamping),     std::string(kHcExponent), std::string(kVibrationSpeed),
+          std::string(kVibrationForce)};
 }
 
 bool Model::Has(std::string_view e) const {
   return std::find(effects.begin(), effects.end(), e) != effects.end();
+}
+
+double Model::Get(ParamKey k, double fallback) const {
+  const auto it = params.find(std::string(k.effect));
+  if (it == params.end()) return fallback;
+  const auto jt = it->second.find(std::string(k.name));
+  return jt == it->second.end() ? fallback : jt->second;
+}
+
+double Model::At(ParamKey k) const {
+  const double v = Get(k, std::numeric_limits<double>::quiet_NaN());
+  HL_REQUIRE(!std::isnan(v), fmt::format("the model has no parameter {}.{}", k.effect, k.name));
+  return v;
+}
+
+void Model::Set(ParamKey k, double value) {
+  params[std::string(k.effect)][std::string(k.name)] = value;
+}
+
+ContactParameters ContactParameters::From(const Model& m, double no_dahl_kappa_N_per_m) {
+  constexpr double kDahlInit_N_per_m = 2000;  // effects/dahl.cpp's initial value
+  ContactParameters c;
+  c.K1mm_N = m.Get(key::kK1mm_N, 1);
+  c.n = m.Has(effect::kHcExponent) ? m.Get(key::kN, 1) : 1;
+  c.B1mm_Ns_per_m = m.Has(effect::kHcDamping) ? m.Get(key::kB1mm_Ns_per_m, 0) : 0;
+  c.mu_k = m.Has(effect::kCoulomb) ? m.Get(key::kMuK, 0) : 0;
+  c.mu_b_Ns_per_m = m.Has(effect::kViscous) ? m.Get(key::kMuB_Ns_per_m, 0) : 0;
+  c.kappa_N_per_m =
+      m.Has(effect::kDahl) ? m.Get(key::kKappa_N_per_m, kDahlInit_N_per_m) : no_dahl_kappa_N_per_m;
+  return c;
+}
+
+void ContactParameters::ToModel(Model* m) const {
+  m->Set(key::kK1mm_N, K1mm_N);
+  m->Set(key::kN, n);
+  m->Set(key::kB1mm_Ns_per_m, B1mm_Ns_per_m);
+  m->Set(key::kMuK, mu_k);
+  m->Set(key::kMuB_Ns_per_m, mu_b_Ns_per_m);
+  m->Set(key::kKappa_N_per_m, kappa_N_per_m);
+}
+
+double ContactParameters::K_N_per_m_pow_n() const { return K1mm_N / std::pow(internal::kMm, n); }
+double ContactParameters::B_Ns_per_m_pow_n_plus_1() const {
+  return B1mm_Ns_per_m / std::pow(internal::kMm, n);
 }
 
 std::string CatalogueNames() {
@@ -154,8 +204,9 @@ void AddEffects(Model* m, const std::vector<std::string>& names, const Replay& r
     };
     return idx(a) < idx(b);
   });
-  if (!m->params.count("core"))
-    for (const auto& s : CoreEffect().Params(r)) m->params["core"][s.name] = s.init;
+  const std::string core(effect::kCore);
+  if (!m->params.count(core))
+    for (const auto& s : CoreEffect().Params(r)) m->params[core][s.name] = s.init;
 }
 
 }  // namespace hapticlab::modeling::wb

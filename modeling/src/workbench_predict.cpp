@@ -100,7 +100,7 @@ Prediction Predict(const Model& m, const Replay& r) {
   FrictionForces(Resolve(m, r, Channel::kFriction), r, p.ftx_N.data(), p.fty_N.data());
   if (m.HasVibration() && r.has_vibration) {
     const auto vib = Resolve(m, r, Channel::kVibration);
-    const auto& core = m.coef.at("core");
+    const auto& core = m.coef.at(std::string(effect::kCore));
     const std::size_t nb = r.band_lo_hz.size();
     if (core.size() != nb)
       throw InputError(
@@ -120,8 +120,9 @@ Prediction Predict(const Model& m, const Replay& r) {
             for (int j = 0; j < c; ++j) lp += it->second[b * c + j] * row[col + j];
           col += c;
         }
-        if (const auto lo = m.coef.find("range_lo"); lo != m.coef.end() && lo->second.size() == nb)
-          lp = std::clamp(lp, lo->second[b], m.coef.at("range_hi")[b]);
+        if (const auto lo = m.coef.find(std::string(kCoefRangeLo));
+            lo != m.coef.end() && lo->second.size() == nb)
+          lp = std::clamp(lp, lo->second[b], m.coef.at(std::string(kCoefRangeHi))[b]);
         bp[b] = std::exp(lp);
       }
       p.band_power.push_back(std::move(bp));
@@ -156,6 +157,25 @@ Residuals ComputeResiduals(const Model&, const Replay& r, const Prediction& p) {
   return res;
 }
 
+const ChannelErrors& Errors::Of(Channel c) const {
+  switch (c) {
+    case Channel::kNormal:
+      return normal_force;
+    case Channel::kFriction:
+      return friction;
+    case Channel::kVibration:
+      break;
+  }
+  return vibration;
+}
+
+std::map<std::string, double> Errors::Normalized() const {
+  std::map<std::string, double> out;
+  for (const Channel c : {Channel::kNormal, Channel::kFriction, Channel::kVibration})
+    if (Of(c).present) out[ChannelName(c)] = Of(c).normalized;
+  return out;
+}
+
 Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
   Errors e;
   double sn = 0, nn = 0, st = 0, nt = 0, sr = 0;
@@ -167,8 +187,8 @@ Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
     const double dx = s.ftx_N - p.ftx_N[i], dy = s.fty_N - p.fty_N[i], et = dx * dx + dy * dy;
     sn += en, nn += s.fn_N * s.fn_N;
     st += et, nt += s.ftx_N * s.ftx_N + s.fty_N * s.fty_N;
-    e.block_sse["normal_force"][s.block] += en;
-    e.block_sse["friction"][s.block] += et;
+    e.normal_force.block_sse[s.block] += en;
+    e.friction.block_sse[s.block] += et;
     if (s.speed_mps >= kSlidingSpeed_mps && s.fn_N > 0.05) {
       const double d = (std::hypot(s.ftx_N, s.fty_N) - std::hypot(p.ftx_N[i], p.fty_N[i])) / s.fn_N;
       sr += d * d, ++nr;
@@ -176,21 +196,23 @@ Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
   }
   int count = 0;
   if (nn > 0) {
-    e.channel["normal_force"] = std::sqrt(sn / nn);
-    e.norm["normal_force"] = nn;
+    e.normal_force.present = true;
+    e.normal_force.normalized = std::sqrt(sn / nn);
+    e.normal_force.normalizer = nn;
     ++count;
   }
   if (nt > 0) {
-    e.channel["friction"] = std::sqrt(st / nt);
-    e.norm["friction"] = nt;
+    e.friction.present = true;
+    e.friction.normalized = std::sqrt(st / nt);
+    e.friction.normalizer = nt;
     ++count;
   }
   // RMS in newtons over the counted samples.
   int ns = 0;
   for (const auto& s : r.samples()) ns += s.contact && InSplit(s.block, split);
-  e.rms["normal_force_N"] = ns ? std::sqrt(sn / ns) : 0;
-  e.rms["tangential_N"] = ns ? std::sqrt(st / ns) : 0;
-  e.rms["friction_ratio"] = nr ? std::sqrt(sr / nr) : 0;
+  e.normal_force_rms_N = ns ? std::sqrt(sn / ns) : 0;
+  e.tangential_rms_N = ns ? std::sqrt(st / ns) : 0;
+  e.friction_ratio_rms = nr ? std::sqrt(sr / nr) : 0;
   if (!p.band_power.empty()) {
     double se = 0;
     int nw = 0;
@@ -204,17 +226,17 @@ Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
       }
       const double es = std::sqrt(num / den);
       se += es, ++nw;
-      e.block_sse["vibration"][r.windows[w].block] += es;
+      e.vibration.block_sse[r.windows[w].block] += es;
     }
     if (nw > 0) {
-      e.channel["vibration"] = se / nw;
-      e.norm["vibration"] = nw;
-      e.rms["vibration_Es"] = se / nw;
+      e.vibration.present = true;
+      e.vibration.normalized = se / nw;
+      e.vibration.normalizer = nw;
       ++count;
     }
   }
-  double sum = 0;
-  for (const auto& [k, v] : e.channel) sum += v;
+  double sum = 0;  // in ChannelName order, as the reports list the channels
+  for (const auto& [k, v] : e.Normalized()) sum += v;
   e.overall = count ? sum / count : 0;
   return e;
 }

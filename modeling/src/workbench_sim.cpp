@@ -30,9 +30,9 @@ constexpr double kPi = std::numbers::pi;
 // Static part of the normal law: load at penetration d.
 double StaticLoad(const TruthParams& t, double d) {
   if (d <= 0) return 0;
-  const double n = t.Has("hc-exponent") ? t.n : 1.0;
+  const double n = t.Has(effect::kHcExponent) ? t.n : 1.0;
   double f = t.K1mm_N * std::pow(d / 1e-3, n);
-  if (t.Has("base-layer") && d > t.layer_m) f += t.base_K_N_per_m * (d - t.layer_m);
+  if (t.Has(effect::kBaseLayer) && d > t.layer_m) f += t.base_K_N_per_m * (d - t.layer_m);
   return f;
 }
 
@@ -121,13 +121,13 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
   out.ftx_clean.resize(N);
   out.fty_clean.resize(N);
   out.acc_state.resize(N);
-  const double n_exp = t.Has("hc-exponent") ? t.n : 1.0;
+  const double n_exp = t.Has(effect::kHcExponent) ? t.n : 1.0;
   for (std::size_t k = 0; k < N; ++k) {
     if (d[k] <= 0) continue;
     const double dn = std::pow(d[k] / 1e-3, n_exp);
     const double K = t.K1mm_N * (1 + t.K_position_amp * x[k] / half);
-    double f = dn * (K + (t.Has("hc-damping") ? t.B1mm_Ns_per_m * dd[k] : 0.0));
-    if (t.Has("base-layer") && d[k] > t.layer_m) f += t.base_K_N_per_m * (d[k] - t.layer_m);
+    double f = dn * (K + (t.Has(effect::kHcDamping) ? t.B1mm_Ns_per_m * dd[k] : 0.0));
+    if (t.Has(effect::kBaseLayer) && d[k] > t.layer_m) f += t.base_K_N_per_m * (d[k] - t.layer_m);
     out.fn_clean[k] = std::max(0.0, f);
   }
 
@@ -145,22 +145,20 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
     }
     const double v = std::hypot(vx[k], vy[k]), dir = dirs[k];
     double S = 1 + t.mu_drift * (static_cast<double>(k) / static_cast<double>(N) - 0.5);
-    if (t.Has("anisotropic-friction"))
+    if (t.Has(effect::kAnisotropicFriction))
       S *= 1 + t.aniso[0] * std::cos(dir) + t.aniso[1] * std::sin(dir) +
            t.aniso[2] * std::cos(2 * dir) + t.aniso[3] * std::sin(2 * dir);
-    if (t.Has("load-dependent-friction")) S *= std::pow(fn, t.load_alpha - 1);
-    if (t.Has("position-dependent-friction")) {
+    if (t.Has(effect::kLoadDependentFriction)) S *= std::pow(fn, t.load_alpha - 1);
+    if (t.Has(effect::kPositionDependentFriction)) {
       const double u = x[k] / half, w = y[k] / half;
       S *= 1 + t.tile_amp * (0.8 * u - 0.5 * w + 0.6 * u * w - 0.4 * (1.5 * u * u - 0.5));
     }
-    const sim_truth::StribeckFriction law{.mu_k = t.Has("coulomb") ? t.mu_k * S : 0.0,
-                                          .dmu_s = t.Has("stribeck") ? t.stribeck_dmu : 0.0,
+    const sim_truth::StribeckFriction law{.mu_k = t.Has(effect::kCoulomb) ? t.mu_k * S : 0.0,
+                                          .dmu_s = t.Has(effect::kStribeck) ? t.stribeck_dmu : 0.0,
                                           .stribeck_speed_mps = t.stribeck_vs_mps};
     const double mu = law.Mu(v);
     const double fc = fn * mu;
-    if (fc <= 0) {
-      Fx = Fy = 0;
-    } else if (t.Has("dahl")) {
+    if (fc > 0 && t.Has(effect::kDahl)) {
       if (k == 0 || out.fn_clean[k - 1] <= 0) {
         Fx = Fy = 0;
       } else {
@@ -173,14 +171,14 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
         const double mag = std::hypot(Fx, Fy);
         if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
       }
-    } else if (v > 0) {
+    } else if (fc > 0 && v > 0) {
       const double g = fc * std::tanh(v / 0.5e-3) / v;
       Fx = g * vx[k];
       Fy = g * vy[k];
     } else {
-      Fx = Fy = 0;
+      Fx = Fy = 0;  // no friction level, or at rest without pre-sliding
     }
-    const double mub = t.Has("viscous") ? t.mu_b_Ns_per_m : 0.0;
+    const double mub = t.Has(effect::kViscous) ? t.mu_b_Ns_per_m : 0.0;
     out.ftx_clean[k] = -(Fx + mub * vx[k]);
     out.fty_clean[k] = -(Fy + mub * vy[k]);
   }
@@ -193,14 +191,14 @@ SimulatedMeasurement Simulate(const TruthParams& tp) {
   for (std::size_t k = 0; k < N; ++k) {
     const double fn = out.fn_clean[k], v = std::hypot(vx[k], vy[k]);
     const double fr =
-        t.Has("vibration-speed") ? std::clamp(v / t.wavelength_m, 30.0, 0.4 * fs) : 200.0;
+        t.Has(effect::kVibrationSpeed) ? std::clamp(v / t.wavelength_m, 30.0, 0.4 * fs) : 200.0;
     const double a1 = 2 * r * std::cos(2 * kPi * fr / fs), a2 = -r * r;
     double pw = 0;
     if (fn > 0 && v > 1e-3) {
       pw = t.vib_sigma * t.vib_sigma;
-      if (t.Has("vibration-speed")) pw *= std::pow(v / 0.05, 2 * t.vib_speed_exp);
-      if (t.Has("vibration-force")) pw *= std::pow(fn, 2 * t.vib_force_exp);
-      if (t.Has("vibration-direction"))
+      if (t.Has(effect::kVibrationSpeed)) pw *= std::pow(v / 0.05, 2 * t.vib_speed_exp);
+      if (t.Has(effect::kVibrationForce)) pw *= std::pow(fn, 2 * t.vib_force_exp);
+      if (t.Has(effect::kVibrationDirection))
         pw *= std::exp(t.vib_dir_amp * std::cos(2 * (dirs[k] - 0.3)));
       pw *= (1 - r);
     }
@@ -285,25 +283,26 @@ Model TruthModel(const SimulatedMeasurement& sim, const Replay& r) {
     if (FindEffect(e) && FindEffect(e)->channel() != Channel::kVibration)
       force_effects.push_back(e);
   AddEffects(&m, force_effects, r);
-  m.params["core"]["K1mm_N"] = t.K1mm_N;
-  m.params["hc-exponent"]["n"] = t.Has("hc-exponent") ? t.n : 1.0;
-  m.params["hc-damping"]["B1mm"] = t.B1mm_Ns_per_m;
-  m.params["base-layer"]["K_b"] = t.base_K_N_per_m;
-  m.params["base-layer"]["t"] = t.layer_m;
-  m.params["coulomb"]["mu_k"] = t.mu_k;
-  m.params["dahl"]["kappa"] = t.kappa_N_per_m;
-  m.params["viscous"]["mu_b"] = t.mu_b_Ns_per_m;
-  m.params["stribeck"]["dmu_s"] = t.stribeck_dmu;
-  m.params["stribeck"]["v_s"] = t.stribeck_vs_mps;
-  const char* an[] = {"a1", "b1", "a2", "b2"};
-  for (int k = 0; k < 4; ++k) m.params["anisotropic-friction"][an[k]] = t.aniso[k];
-  m.params["load-dependent-friction"]["alpha"] = t.load_alpha;
-  if (t.Has("position-dependent-friction")) {
+  const ContactParameters cp{.K1mm_N = t.K1mm_N,
+                             .n = t.Has(effect::kHcExponent) ? t.n : 1.0,
+                             .B1mm_Ns_per_m = t.B1mm_Ns_per_m,
+                             .mu_k = t.mu_k,
+                             .mu_b_Ns_per_m = t.mu_b_Ns_per_m,
+                             .kappa_N_per_m = t.kappa_N_per_m};
+  cp.ToModel(&m);
+  m.Set(key::kBaseK_N_per_m, t.base_K_N_per_m);
+  m.Set(key::kLayer_m, t.layer_m);
+  m.Set(key::kStribeckDmu, t.stribeck_dmu);
+  m.Set(key::kStribeckSpeed_mps, t.stribeck_vs_mps);
+  for (int k = 0; k < 4; ++k) m.Set(key::kAnisotropy[k], t.aniso[k]);
+  m.Set(key::kLoadAlpha, t.load_alpha);
+  if (t.Has(effect::kPositionDependentFriction)) {
     // The truth's field is a quadratic in x, y: re-expand it exactly on the replay's box by
     // least squares on a grid.
     const double half = t.area_m / 2;
-    auto& pp = m.params["position-dependent-friction"];
-    const double x0 = pp["x0"], x1 = pp["x1"], y0 = pp["y0"], y1 = pp["y1"];
+    const double x0 = m.Get(key::kTileX0_m, 0), x1 = m.Get(key::kTileX1_m, 0),
+                 y0 = m.Get(key::kTileY0_m, 0), y1 = m.Get(key::kTileY1_m, 0);
+    auto& pp = m.params[std::string(effect::kPositionDependentFriction)];
     Eigen::MatrixXd A(121, 8);
     Eigen::VectorXd b(121);
     int row = 0;
@@ -323,10 +322,10 @@ Model TruthModel(const SimulatedMeasurement& sim, const Replay& r) {
     int c = 0;
     for (int jj = 0; jj <= 2; ++jj)
       for (int kk = 0; kk <= 2; ++kk)
-        if (jj || kk) pp[fmt::format("g{}{}", jj, kk)] = g(c++);
+        if (jj || kk) pp[fmt::format("{}{}{}", kLegendrePrefix, jj, kk)] = g(c++);
   }
   for (auto it = m.params.begin(); it != m.params.end();)
-    it = (it->first == "core" || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
+    it = (it->first == effect::kCore || m.Has(it->first)) ? std::next(it) : m.params.erase(it);
   return m;
 }
 

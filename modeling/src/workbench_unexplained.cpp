@@ -349,7 +349,7 @@ Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction
   Unexplained u;
   const auto floor = EstimateNoiseFloor(r, Split::kHeldOut, &base);
   std::set<std::string> above;
-  for (const auto& [ch, e] : ebase.channel) {
+  for (const auto& [ch, e] : ebase.Normalized()) {
     UnexplainedChannel x{ch, e, floor.count(ch) ? floor.at(ch) : 0, 0};
     x.ratio = x.noise_floor > 0 ? x.error / x.noise_floor : 0;
     if (x.ratio >= unexplained_ratio) above.insert(ch);

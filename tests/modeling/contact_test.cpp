@@ -499,10 +499,10 @@ TEST(ContactCli, FitContactAndWorkbenchFitAgreeAndBuildKeepsEveryEffect) {
   // The workbench replays the built model with its fitted exponent, not n = 1.
   const auto wm = wb::LoadModel(dir.File("built.toml"));
   EXPECT_TRUE(wm.Has("hc-exponent"));
-  EXPECT_NEAR(wm.params.at("hc-exponent").at("n"), c["hunt_crossley"]["n"].get<double>(), 1e-12);
-  EXPECT_NEAR(wm.params.at("core").at("K1mm_N"), c["hunt_crossley"]["K1mm_N"].get<double>(),
+  EXPECT_NEAR(wm.At(wb::key::kN), c["hunt_crossley"]["n"].get<double>(), 1e-12);
+  EXPECT_NEAR(wm.At(wb::key::kK1mm_N), c["hunt_crossley"]["K1mm_N"].get<double>(),
               1e-9 * c["hunt_crossley"]["K1mm_N"].get<double>());
-  EXPECT_NEAR(wm.params.at("hc-damping").at("B1mm"), c["hunt_crossley"]["B1mm"].get<double>(),
+  EXPECT_NEAR(wm.At(wb::key::kB1mm_Ns_per_m), c["hunt_crossley"]["B1mm"].get<double>(),
               1e-9 * c["hunt_crossley"]["B1mm"].get<double>());
 }
 

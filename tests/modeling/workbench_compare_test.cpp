@@ -40,7 +40,9 @@ TEST(WorkbenchCompare, BreakdownShowsWhereTheModelFails) {
   for (const char* dim : {"regime", "speed", "load", "direction", "position", "time", "band"})
     EXPECT_TRUE(c.breakdown.count(dim)) << dim;
   EXPECT_GT(c.errors.overall, 0);
-  EXPECT_EQ(c.errors.channel.size(), 3u);
+  EXPECT_TRUE(c.errors.normal_force.present && c.errors.friction.present &&
+              c.errors.vibration.present);
+  EXPECT_EQ(c.errors.Normalized().size(), 3u);
 }
 
 }  // namespace

@@ -113,9 +113,11 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndFittingItReachesTheNoiseFloor) {
   Fit(&fitted, r, {.split = Split::kTrain});
   const auto err = ComputeErrors(r, Predict(fitted, r), Split::kHeldOut);
   const auto floor = NoiseFloor(sim, r, Split::kHeldOut);
-  const std::string ch = ChannelName(FindEffect(sc.effect)->channel());
-  const double before = dx.baseline_channel.at(ch), after = err.channel.at(ch),
-               fl = floor.channel.at(ch);
+  const Channel channel = FindEffect(sc.effect)->channel();
+  const std::string ch = ChannelName(channel);
+  ASSERT_TRUE(err.Of(channel).present && floor.Of(channel).present) << ch;
+  const double before = dx.baseline_channel.at(ch), after = err.Of(channel).normalized,
+               fl = floor.Of(channel).normalized;
   EXPECT_LE(after, 1.10 * fl) << sc.effect << " (" << sc.variant << "): held-out " << ch
                               << " error " << after << ", noise floor " << fl << ", before "
                               << before;

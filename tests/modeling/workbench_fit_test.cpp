@@ -26,7 +26,7 @@ TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
   const auto r = PrepareReplay(sim.m);
   Model m;
   AddEffects(&m, {"coulomb", "viscous", "hc-exponent"}, r);
-  const double mu_start = m.params.at("coulomb").at("mu_k");
+  const double mu_start = m.At(key::kMuK);
   const auto rep = Fit(&m, r, {.vibration = false, .algorithm1_init = false});
   ASSERT_EQ(rep.channels.size(), 2u);
   EXPECT_TRUE(rep.IsUsable());
@@ -37,11 +37,11 @@ TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
     EXPECT_LE(s.final_cost, s.initial_cost);
     EXPECT_EQ(c.summary.termination, "converged");
   }
-  EXPECT_NE(mu_start, m.params.at("coulomb").at("mu_k"));
-  EXPECT_NEAR(m.params.at("coulomb").at("mu_k"), 0.35, 0.01);
-  EXPECT_NEAR(m.params.at("viscous").at("mu_b"), 0.8, 0.1);
-  EXPECT_NEAR(m.params.at("core").at("K1mm_N"), 1.7, 0.02);
-  EXPECT_NEAR(m.params.at("hc-exponent").at("n"), 1.4, 0.02);
+  EXPECT_NE(mu_start, m.At(key::kMuK));
+  EXPECT_NEAR(m.At(key::kMuK), 0.35, 0.01);
+  EXPECT_NEAR(m.At(key::kMuB_Ns_per_m), 0.8, 0.1);
+  EXPECT_NEAR(m.At(key::kK1mm_N), 1.7, 0.02);
+  EXPECT_NEAR(m.At(key::kN), 1.4, 0.02);
   const ChannelFit* fr = rep.Find(Channel::kFriction);
   ASSERT_NE(fr, nullptr);
   EXPECT_EQ(fr->params.size(), 2u);

@@ -35,8 +35,8 @@ TEST(WorkbenchFiles, SavedModelsLoadInTheRendererAndRoundTrip) {
   SaveModel(m, path.string(), &r);
   const auto mat = renderer::LoadMaterial(path.string());
   EXPECT_EQ(mat.effects, m.effects);
-  EXPECT_NEAR(mat.friction.mu_k, m.params.at("coulomb").at("mu_k"), 1e-12);
-  EXPECT_NEAR(mat.contact.texture.n, m.params.at("hc-exponent").at("n"), 1e-12);
+  EXPECT_NEAR(mat.friction.mu_k, m.At(key::kMuK), 1e-12);
+  EXPECT_NEAR(mat.contact.texture.n, m.At(key::kN), 1e-12);
   EXPECT_FALSE(mat.vibration.empty());
   const auto back = LoadModel(path.string());
   EXPECT_EQ(back.effects, m.effects);
@@ -102,8 +102,8 @@ TEST(WorkbenchFiles, RendererMaterialsAreReadAsBaselineModels) {
   const auto m = LoadModel(path.string());
   EXPECT_TRUE(m.Has("coulomb") && m.Has("dahl") && m.Has("viscous") && m.Has("hc-damping"));
   EXPECT_FALSE(m.Has("hc-exponent"));
-  EXPECT_NEAR(m.params.at("core").at("K1mm_N"), 2.0, 1e-12);  // 2000 N/m at 1 mm
-  EXPECT_NEAR(m.params.at("coulomb").at("mu_k"), 0.35, 1e-12);
+  EXPECT_NEAR(m.At(key::kK1mm_N), 2.0, 1e-12);  // 2000 N/m at 1 mm
+  EXPECT_NEAR(m.At(key::kMuK), 0.35, 1e-12);
   std::ofstream(path) << "name = \"m\"\neffects = [\"stribeck\"]\n[contact]\ntexture_K = 2000\n"
                          "[friction]\nkappa_N_per_m = 2500\nmu_k = 0.35\n";
   try {

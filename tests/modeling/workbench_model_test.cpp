@@ -100,5 +100,60 @@ TEST(WorkbenchCatalogue, VibrationAxesUseTheirOwnKeyAndKnots) {
   EXPECT_NEAR(out_f[1], 0, 1e-12);
 }
 
+// The keys declared once in workbench_params.hpp name parameters the catalogue really has.
+TEST(WorkbenchParams, KeysNameParametersOfTheirEffects) {
+  const Replay r;
+  const ParamKey keys[] = {key::kK1mm_N,        key::kN,
+                           key::kB1mm_Ns_per_m, key::kBaseK_N_per_m,
+                           key::kLayer_m,       key::kMuK,
+                           key::kMuB_Ns_per_m,  key::kKappa_N_per_m,
+                           key::kStribeckDmu,   key::kStribeckSpeed_mps,
+                           key::kLoadAlpha,     key::kAnisotropy[0],
+                           key::kAnisotropy[1], key::kAnisotropy[2],
+                           key::kAnisotropy[3], key::kTileX0_m,
+                           key::kTileX1_m,      key::kTileY0_m,
+                           key::kTileY1_m};
+  Model all;
+  std::vector<std::string> every;
+  for (const auto& e : Catalogue()) every.emplace_back(e->name());
+  AddEffects(&all, every, r);
+  for (const auto& k : keys) {
+    EXPECT_TRUE(k.effect == effect::kCore || all.Has(k.effect)) << k.effect;
+    EXPECT_TRUE(std::isfinite(all.Get(k, std::nan("")))) << k.effect << "." << k.name;
+  }
+  EXPECT_THROW(Model{}.At(key::kMuK), PreconditionError);
+}
+
+// ContactParameters: the typed view reads only the effects a model lists, and its renderer
+// units reproduce the workbench's law f_n = (d / 1 mm)^n (K1mm + B1mm d_dot) as d^n (K + B d_dot).
+TEST(WorkbenchParams, ContactParametersViewAndRendererUnits) {
+  Model m;
+  m.effects = {std::string(effect::kCoulomb), std::string(effect::kHcExponent),
+               std::string(effect::kHcDamping)};
+  const ContactParameters in{.K1mm_N = 2.5,
+                             .n = 1.6,
+                             .B1mm_Ns_per_m = 12,
+                             .mu_k = 0.4,
+                             .mu_b_Ns_per_m = 0.7,
+                             .kappa_N_per_m = 3000};
+  in.ToModel(&m);
+  EXPECT_EQ(m.At(key::kMuB_Ns_per_m), 0.7);  // written even though viscous is not listed
+  const auto out = ContactParameters::From(m, /*no_dahl_kappa_N_per_m=*/1e6);
+  EXPECT_EQ(out.K1mm_N, 2.5);
+  EXPECT_EQ(out.n, 1.6);
+  EXPECT_EQ(out.B1mm_Ns_per_m, 12);
+  EXPECT_EQ(out.mu_k, 0.4);
+  EXPECT_EQ(out.mu_b_Ns_per_m, 0) << "viscous is not in the model";
+  EXPECT_EQ(out.kappa_N_per_m, 1e6) << "dahl is not in the model";
+  const double d_m = 2.3e-3, ddot_mps = 0.01;
+  const double workbench_N = std::pow(d_m / 1e-3, 1.6) * (2.5 + 12 * ddot_mps);
+  const double renderer_N =
+      std::pow(d_m, 1.6) * (out.K_N_per_m_pow_n() + out.B_Ns_per_m_pow_n_plus_1() * ddot_mps);
+  EXPECT_NEAR(renderer_N, workbench_N, 1e-12 * workbench_N);
+  m.effects.erase(m.effects.begin() + 1);  // without hc-exponent the law is linear
+  EXPECT_EQ(ContactParameters::From(m).n, 1);
+  EXPECT_NEAR(ContactParameters::From(m).K_N_per_m_pow_n(), 2500, 1e-9);
+}
+
 }  // namespace
 }  // namespace hapticlab::modeling::wb

@@ -28,13 +28,13 @@ Replay::Sample Touching(double d_m, double ddot_mps, double vx_mps, double vy_mp
 Model HandModel() {
   Model m;
   m.effects = {"coulomb", "viscous", "stribeck", "hc-damping", "hc-exponent"};
-  m.params["core"]["K1mm_N"] = 2.0;
-  m.params["hc-exponent"]["n"] = 1.5;
-  m.params["hc-damping"]["B1mm"] = 10.0;
-  m.params["coulomb"]["mu_k"] = 0.4;
-  m.params["viscous"]["mu_b"] = 0.5;
-  m.params["stribeck"]["dmu_s"] = 0.2;
-  m.params["stribeck"]["v_s"] = 0.01;
+  m.Set(key::kK1mm_N, 2.0);
+  m.Set(key::kN, 1.5);
+  m.Set(key::kB1mm_Ns_per_m, 10.0);
+  m.Set(key::kMuK, 0.4);
+  m.Set(key::kMuB_Ns_per_m, 0.5);
+  m.Set(key::kStribeckDmu, 0.2);
+  m.Set(key::kStribeckSpeed_mps, 0.01);
   return m;
 }
 
@@ -72,15 +72,19 @@ TEST(WorkbenchPredict, ErrorsAreNormalisedPerChannelAndSplitByBlock) {
   p.fty_N = {0, 0};
   const auto all = ComputeErrors(r, p, Split::kAll);
   // normal: sqrt((0.1^2 + 0.4^2) / (1^2 + 2^2)); friction: sqrt(0.3^2 / (0.5^2 + 1^2)).
-  EXPECT_NEAR(all.channel.at("normal_force"), std::sqrt(0.17 / 5.0), 1e-12);
-  EXPECT_NEAR(all.channel.at("friction"), std::sqrt(0.09 / 1.25), 1e-12);
+  ASSERT_TRUE(all.normal_force.present && all.friction.present);
+  EXPECT_FALSE(all.vibration.present);
+  EXPECT_NEAR(all.normal_force.normalized, std::sqrt(0.17 / 5.0), 1e-12);
+  EXPECT_NEAR(all.friction.normalized, std::sqrt(0.09 / 1.25), 1e-12);
+  EXPECT_EQ(all.Normalized().size(), 2U);
+  EXPECT_NEAR(all.Normalized().at("friction"), all.friction.normalized, 0);
   EXPECT_NEAR(all.overall, (std::sqrt(0.17 / 5.0) + std::sqrt(0.09 / 1.25)) / 2, 1e-12);
-  EXPECT_NEAR(all.rms.at("normal_force_N"), std::sqrt(0.17 / 2), 1e-12);
+  EXPECT_NEAR(all.normal_force_rms_N, std::sqrt(0.17 / 2), 1e-12);
   const auto train = ComputeErrors(r, p, Split::kTrain);
-  EXPECT_NEAR(train.channel.at("normal_force"), 0.1, 1e-12);
-  EXPECT_NEAR(train.channel.at("friction"), 0.0, 1e-12);
+  EXPECT_NEAR(train.normal_force.normalized, 0.1, 1e-12);
+  EXPECT_NEAR(train.friction.normalized, 0.0, 1e-12);
   const auto held = ComputeErrors(r, p, Split::kHeldOut);
-  EXPECT_NEAR(held.channel.at("normal_force"), 0.2, 1e-12);
+  EXPECT_NEAR(held.normal_force.normalized, 0.2, 1e-12);
   // Residuals: measured minus predicted, friction along the motion (+x here).
   const auto res = ComputeResiduals(Model{}, r, p);
   EXPECT_NEAR(res.normal_N[1], -0.4, 1e-12);

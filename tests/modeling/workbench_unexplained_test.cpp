@@ -30,16 +30,16 @@ TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths
     const auto model = TruthModel(sim, r);
     const auto est = EstimateNoiseFloor(r, Split::kHeldOut, &model);
     const auto truth = NoiseFloor(sim, r, Split::kHeldOut);
-    for (const char* ch : {"normal_force", "friction"}) {
-      ASSERT_TRUE(est.count(ch)) << ch;
+    for (const Channel c : {Channel::kNormal, Channel::kFriction}) {
+      const std::string ch = ChannelName(c);
+      ASSERT_TRUE(est.count(ch) && truth.Of(c).present) << ch;
       // 20 %: the estimate sees the force noise and the velocity noise through the model; the
       // truth's floor also holds the load noise through f_C.
-      EXPECT_NEAR(est.at(ch), truth.channel.at(ch), 0.2 * truth.channel.at(ch))
+      EXPECT_NEAR(est.at(ch), truth.Of(c).normalized, 0.2 * truth.Of(c).normalized)
           << ch << " at " << noise << " N";
     }
-    ASSERT_TRUE(est.count("vibration"));
-    EXPECT_NEAR(est.at("vibration"), truth.channel.at("vibration"),
-                0.35 * truth.channel.at("vibration"));
+    ASSERT_TRUE(est.count("vibration") && truth.vibration.present);
+    EXPECT_NEAR(est.at("vibration"), truth.vibration.normalized, 0.35 * truth.vibration.normalized);
   }
 }
 
@@ -54,7 +54,7 @@ TEST(WorkbenchUnexplained, ResidualAxesRankTheAxisThatCarriesTheResidual) {
   // The truth's friction with mu_k lowered by 0.1 on the right third of the area only.
   auto pred = Predict(truth, r);
   Model low = truth;
-  low.params["coulomb"]["mu_k"] -= 0.1;
+  low.Set(key::kMuK, low.At(key::kMuK) - 0.1);
   const auto plow = Predict(low, r);
   const double x_split = r.x_min + 2 * (r.x_max - r.x_min) / 3;
   for (std::size_t i = 0; i < r.samples().size(); ++i)

@@ -7,50 +7,26 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class AnisotropicFriction final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Anisotropic friction: the coefficient depends on the direction of motion "
+    "phi, mu(phi) = mu_k (1 + a1 cos phi + b1 sin phi + a2 cos 2phi + b2 sin "
+    "2phi). The second harmonic describes grain, grooves or weave (along differs "
+    "from across); the first describes a nap or scales that are smoother one way "
+    "than the other.";
+
+class AnisotropicFriction final : public BasicEffect {
  public:
-  std::string_view name() const override { return "anisotropic-friction"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
-  std::string_view description() const override {
-    return "Anisotropic friction: the coefficient depends on the direction of motion phi, "
-           "mu(phi) = mu_k (1 + a1 cos phi + b1 sin phi + a2 cos 2phi + b2 sin 2phi). The second "
-           "harmonic describes grain, grooves or weave (along differs from across); the first "
-           "describes a nap or scales that are smoother one way than the other.";
-  }
+  AnisotropicFriction()
+      : BasicEffect({.name = effect::kAnisotropicFriction,
+                     .modifies_coulomb = true,
+                     .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "a1",
-             .unit = "1",
-             .init = 0,
-             .lo = -0.9,
-             .hi = 0.9,
-             .scale = 0.1,
-             .fitted = true,
-             .doc = "cos phi"},
-            {.name = "b1",
-             .unit = "1",
-             .init = 0,
-             .lo = -0.9,
-             .hi = 0.9,
-             .scale = 0.1,
-             .fitted = true,
-             .doc = "sin phi"},
-            {.name = "a2",
-             .unit = "1",
-             .init = 0,
-             .lo = -0.9,
-             .hi = 0.9,
-             .scale = 0.1,
-             .fitted = true,
-             .doc = "cos 2 phi"},
-            {.name = "b2",
-             .unit = "1",
-             .init = 0,
-             .lo = -0.9,
-             .hi = 0.9,
-             .scale = 0.1,
-             .fitted = true,
-             .doc = "sin 2 phi"}};
+    const char* docs[4] = {"cos phi", "sin phi", "cos 2 phi", "sin 2 phi"};
+    std::vector<ParamSpec> p;
+    for (int k = 0; k < 4; ++k)
+      p.push_back(ModulationCoefficient(std::string(key::kAnisotropy[k].name), docs[k]));
+    return p;
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     const double f = 1 + p[0] * std::cos(s.dir_rad) + p[1] * std::sin(s.dir_rad) +
@@ -61,16 +37,10 @@ class AnisotropicFriction final : public Effect {
     std::vector<double> edges;
     for (int k = 0; k <= 8; ++k) edges.push_back(-std::numbers::pi + k * std::numbers::pi / 4);
     edges.back() += 1e-9;
-    const auto b = BinMeans(
-        r.samples().size(),
-        [&](std::size_t i) {
-          return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0;
-        },
+    const auto b = SampleBins(
+        r, [&](std::size_t i) { return RatioResidual(r, res, i); },
         [&](std::size_t i) { return r.samples()[i].dir_rad; },
-        [&](std::size_t i) {
-          return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
-        },
-        edges);
+        [&](std::size_t i) { return Sliding(r, i); }, edges);
     const int hi = b.ArgMax(), lo = b.ArgMin();
     if (hi < 0) return {"too few sliding samples to judge", "", false};
     const auto deg = [&](int j) { return (b.lo[j] + b.hi[j]) / 2 * 180 / std::numbers::pi; };

@@ -13,35 +13,36 @@ double Quantile(std::vector<double> v, double q) {
   return v[k];
 }
 
-class BaseLayer final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Stiff base under a thin layer: once the tool has pressed through a compliant "
+    "layer of thickness t it meets a stiffer base, f += K_b max(0, d - t) (the "
+    "base of dissertation eqs. 4.14-4.15; paper on wood, fabric on foam on a "
+    "plate, a coating on metal). The force-penetration curve has a knee at d = t "
+    "rather than a smooth curvature.";
+
+class BaseLayer final : public BasicEffect {
  public:
-  std::string_view name() const override { return "base-layer"; }
-  Channel channel() const override { return Channel::kNormal; }
-  std::string_view description() const override {
-    return "Stiff base under a thin layer: once the tool has pressed through a compliant layer of "
-           "thickness t it meets a stiffer base, f += K_b max(0, d - t) (the base of dissertation "
-           "eqs. 4.14-4.15; paper on wood, fabric on foam on a plate, a coating on metal). The "
-           "force-penetration curve has a knee at d = t rather than a smooth curvature.";
-  }
+  BaseLayer()
+      : BasicEffect(
+            {.name = effect::kBaseLayer, .channel = Channel::kNormal, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay& r) const override {
     std::vector<double> d;
     for (const auto& s : r.samples())
       if (s.contact) d.push_back(s.d_m);
-    return {{.name = "K_b",
+    return {{.name = std::string(key::kBaseK_N_per_m.name),
              .unit = "N/m",
              .init = 500,
              .lo = 0,
              .hi = 1e6,
              .scale = 1000,
-             .fitted = true,
              .doc = "base stiffness"},
-            {.name = "t",
+            {.name = std::string(key::kLayer_m.name),
              .unit = "m",
              .init = Quantile(d, 0.6),
              .lo = 0,
              .hi = 0.01,
              .scale = 1e-3,
-             .fitted = true,
              .doc = "layer thickness"}};
   }
   void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {

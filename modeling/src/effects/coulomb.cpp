@@ -5,16 +5,17 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class Coulomb final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Kinetic (Coulomb) friction: while sliding, the surface resists the motion "
+    "with a force mu_k f_n opposite to the velocity, independent of speed and "
+    "contact area (Amontons' laws). It is the Coulomb level f_C = mu_k f_n that "
+    "the Dahl bristle saturates to (dissertation eq. 4.6) and the largest part of "
+    "the tangential force on most samples.";
+
+class Coulomb final : public BasicEffect {
  public:
-  std::string_view name() const override { return "coulomb"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::string_view description() const override {
-    return "Kinetic (Coulomb) friction: while sliding, the surface resists the motion with a force "
-           "mu_k f_n opposite to the velocity, independent of speed and contact area (Amontons' "
-           "laws). It is the Coulomb level f_C = mu_k f_n that the Dahl bristle saturates to "
-           "(dissertation eq. 4.6) and the largest part of the tangential force on most samples.";
-  }
+  Coulomb() : BasicEffect({.name = effect::kCoulomb, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay& r) const override {
     // Initial value: median measured friction ratio while sliding.
     std::vector<double> ratio;
@@ -26,26 +27,22 @@ class Coulomb final : public Effect {
       std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
       init = std::clamp(ratio[ratio.size() / 2], 0.01, 2.0);
     }
-    return {{.name = "mu_k",
+    return {{.name = std::string(key::kMuK.name),
              .unit = "1",
              .init = init,
              .lo = 0,
              .hi = 3,
              .scale = 0.3,
-             .fitted = true,
              .doc = "kinetic friction coefficient"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
     t.mu_k = p[0];
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
+    const auto b = SampleBins(
+        r, [&](std::size_t i) { return res.friction_N[i]; },
         [&](std::size_t i) { return r.samples()[i].fn_N; },
-        [&](std::size_t i) {
-          return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
-        },
-        {0, 0.5, 1, 1.5, 2, 3, 1e9});
+        [&](std::size_t i) { return Sliding(r, i); }, {0, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0) return {"too few sliding samples to judge", "", false};
     return {fmt::format("while sliding, the friction residual is {} at loads of {:.1f}-{:.1f} N "

@@ -5,26 +5,25 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class Dahl final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Pre-sliding (Dahl) friction: before gross sliding the asperities deform "
+    "elastically, so friction builds up over a small displacement with stiffness "
+    "kappa, saturating at the Coulomb level: dF = kappa (dx - |dx| F / f_C) "
+    "(dissertation eq. 4.6). Without it friction jumps to its full value at the "
+    "first micrometre of motion; with it, reversals and starts show a ramp of "
+    "about f_C / kappa.";
+
+class Dahl final : public BasicEffect {
  public:
-  std::string_view name() const override { return "dahl"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
-  std::string_view description() const override {
-    return "Pre-sliding (Dahl) friction: before gross sliding the asperities deform elastically, "
-           "so friction builds up over a small displacement with stiffness kappa, saturating at "
-           "the Coulomb level: dF = kappa (dx - |dx| F / f_C) (dissertation eq. 4.6). Without it "
-           "friction jumps to its full value at the first micrometre of motion; with it, "
-           "reversals and starts show a ramp of about f_C / kappa.";
-  }
+  Dahl() : BasicEffect({.name = effect::kDahl, .modifies_coulomb = true, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "kappa",
+    return {{.name = std::string(key::kKappa_N_per_m.name),
              .unit = "N/m",
              .init = 2000,
              .lo = 10,
              .hi = 1e6,
              .scale = 1000,
-             .fitted = true,
              .doc = "pre-sliding stiffness"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {

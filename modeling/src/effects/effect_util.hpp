@@ -68,6 +68,57 @@ double Correlation(std::size_t count, Value value, Key key, Use use) {
   return cxx > 0 && cyy > 0 ? cxy / std::sqrt(cxx * cyy) : 0;
 }
 
+/// What every catalogue entry states as data: its name (workbench_params.hpp), channel,
+/// description paragraph and whether it modifies the Coulomb level (then it requires coulomb).
+struct EffectInfo {
+  std::string_view name;
+  Channel channel = Channel::kFriction;
+  bool modifies_coulomb = false;
+  std::string_view description;
+};
+
+/// Base of the catalogue's effects: Effect's descriptive members from an EffectInfo.
+class BasicEffect : public Effect {
+ public:
+  explicit BasicEffect(const EffectInfo& info) : info_(info) {}
+  std::string_view name() const final { return info_.name; }
+  Channel channel() const final { return info_.channel; }
+  std::string_view description() const final { return info_.description; }
+  std::vector<std::string_view> requires_effects() const final {
+    if (info_.modifies_coulomb) return {effect::kCoulomb};
+    return {};
+  }
+
+ private:
+  EffectInfo info_;
+};
+
+/// A coefficient that modulates the friction coefficient, mu_k (1 + c ...): fitted within
+/// +-0.9 (so mu stays positive), starting at 0 [1].
+inline ParamSpec ModulationCoefficient(std::string name, std::string doc) {
+  return {.name = std::move(name),
+          .unit = "1",
+          .init = 0,
+          .lo = -0.9,
+          .hi = 0.9,
+          .scale = 0.1,
+          .doc = std::move(doc)};
+}
+
+/// Sample i is in contact and sliding (speed >= kSlidingSpeed_mps).
+inline bool Sliding(const Replay& r, std::size_t i) {
+  return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
+}
+/// The friction-ratio residual of sample i (friction residual / f_n; 0 at loads <= 0.05 N).
+inline double RatioResidual(const Replay& r, const Residuals& res, std::size_t i) {
+  return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0;
+}
+/// BinMeans over the force samples: value(i) by key(i) for the samples with use(i).
+template <class Value, class Key, class Use>
+Bins SampleBins(const Replay& r, Value value, Key key, Use use, const std::vector<double>& edges) {
+  return BinMeans(r.samples().size(), value, key, use, edges);
+}
+
 /// Mean over bands of the log band-power residual of window w, in dB.
 double MeanBandResidualDb(const Residuals& res, std::size_t w);
 

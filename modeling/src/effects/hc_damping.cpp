@@ -5,25 +5,26 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class HcDamping final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Hunt-Crossley damping: the normal force depends on the penetration rate as "
+    "well as on the depth, f = (K + B d_dot) (d / 1 mm)^n (dissertation eq. "
+    "4.11), so pressing in meets more force than releasing at the same depth and "
+    "the loop dissipates energy. Damping scales with depth, so there is no force "
+    "jump at first contact.";
+
+class HcDamping final : public BasicEffect {
  public:
-  std::string_view name() const override { return "hc-damping"; }
-  Channel channel() const override { return Channel::kNormal; }
-  std::string_view description() const override {
-    return "Hunt-Crossley damping: the normal force depends on the penetration rate as well as on "
-           "the depth, f = (K + B d_dot) (d / 1 mm)^n (dissertation eq. 4.11), so pressing in "
-           "meets "
-           "more force than releasing at the same depth and the loop dissipates energy. Damping "
-           "scales with depth, so there is no force jump at first contact.";
-  }
+  HcDamping()
+      : BasicEffect(
+            {.name = effect::kHcDamping, .channel = Channel::kNormal, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "B1mm",
+    return {{.name = std::string(key::kB1mm_Ns_per_m.name),
              .unit = "N s/m",
              .init = 0,
              .lo = 0,
              .hi = 1e5,
              .scale = 10,
-             .fitted = true,
              .doc = "damping at 1 mm penetration"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.B = p[0]; }

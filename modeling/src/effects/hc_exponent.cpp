@@ -15,24 +15,26 @@ std::vector<double> DepthEdges(const Replay& r) {
   return e;
 }
 
-class HcExponent final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Hunt-Crossley exponent: the contact stiffens with depth, f = K (d / 1 mm)^n "
+    "with 1 <= n <= 2 (n = 1.5 for a Hertzian sphere on a half-space; "
+    "dissertation eq. 4.11). A linear spring (n = 1) then over-predicts the force "
+    "at shallow depth and under-predicts it deep, with a smooth curvature in "
+    "between.";
+
+class HcExponent final : public BasicEffect {
  public:
-  std::string_view name() const override { return "hc-exponent"; }
-  Channel channel() const override { return Channel::kNormal; }
-  std::string_view description() const override {
-    return "Hunt-Crossley exponent: the contact stiffens with depth, f = K (d / 1 mm)^n with "
-           "1 <= n <= 2 (n = 1.5 for a Hertzian sphere on a half-space; dissertation eq. 4.11). "
-           "A linear spring (n = 1) then over-predicts the force at shallow depth and "
-           "under-predicts it deep, with a smooth curvature in between.";
-  }
+  HcExponent()
+      : BasicEffect(
+            {.name = effect::kHcExponent, .channel = Channel::kNormal, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "n",
+    return {{.name = std::string(key::kN.name),
              .unit = "1",
              .init = 1.1,
              .lo = 1,
              .hi = 2,
              .scale = 0.1,
-             .fitted = true,
              .doc = "exponent"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.n = p[0]; }

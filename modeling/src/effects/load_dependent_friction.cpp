@@ -5,37 +5,37 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class LoadDependentFriction final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Load-dependent friction: the friction force grows sub- or super-linearly "
+    "with load, f_C = mu_k f_n (f_n / 1 N)^(alpha - 1). Elastomers, skin-like and "
+    "soft coated materials have alpha < 1 (real contact area grows like f_n^(2/3) "
+    "in Hertzian contact), so the friction coefficient falls as the user presses "
+    "harder.";
+
+class LoadDependentFriction final : public BasicEffect {
  public:
-  std::string_view name() const override { return "load-dependent-friction"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
-  std::string_view description() const override {
-    return "Load-dependent friction: the friction force grows sub- or super-linearly with load, "
-           "f_C = mu_k f_n (f_n / 1 N)^(alpha - 1). Elastomers, skin-like and soft coated "
-           "materials have alpha < 1 (real contact area grows like f_n^(2/3) in Hertzian "
-           "contact), so the friction coefficient falls as the user presses harder.";
-  }
+  LoadDependentFriction()
+      : BasicEffect({.name = effect::kLoadDependentFriction,
+                     .modifies_coulomb = true,
+                     .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "alpha",
+    return {{.name = std::string(key::kLoadAlpha.name),
              .unit = "1",
              .init = 1.0,
              .lo = 0.2,
              .hi = 1.8,
              .scale = 0.1,
-             .fitted = true,
              .doc = "load exponent (1: Coulomb)"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto use = [&](std::size_t i) {
-      return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
-    };
-    const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.ratio[i]; },
-        [&](std::size_t i) { return r.samples()[i].fn_N; }, use, {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
+    const auto b = SampleBins(
+        r, [&](std::size_t i) { return res.ratio[i]; },
+        [&](std::size_t i) { return r.samples()[i].fn_N; },
+        [&](std::size_t i) { return Sliding(r, i); }, {0.05, 0.5, 1, 1.5, 2, 3, 1e9});
     const int lo = b.First(), hi = b.Last();
     if (lo < 0 || lo == hi) return {"too narrow a range of loads to judge", "", false};
     const double d = b.mean[hi] - b.mean[lo];

@@ -13,63 +13,41 @@ using namespace detail;
 // one measurement means the same on another of the same sample.
 constexpr int kOrder = 2;
 
-class PositionDependentFriction final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Position-dependent friction: the friction coefficient varies over the sample "
+    "(worn or polished areas, contamination, a grain that changes across a "
+    "board), mu(x, y) = mu_k (1 + sum g_jk P_j(u) P_k(v)) with u, v the position "
+    "scaled to [-1, 1] over the measured area and P_j Legendre polynomials of "
+    "degree j <= 2. Residuals then differ between tiles of the surface rather "
+    "than with speed, load or direction.";
+
+class PositionDependentFriction final : public BasicEffect {
  public:
-  std::string_view name() const override { return "position-dependent-friction"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
-  std::string_view description() const override {
-    return "Position-dependent friction: the friction coefficient varies over the sample "
-           "(worn or polished areas, contamination, a grain that changes across a board), "
-           "mu(x, y) = mu_k (1 + sum g_jk P_j(u) P_k(v)) with u, v the position scaled to [-1, 1] "
-           "over the measured area and P_j Legendre polynomials of degree j <= 2. Residuals then "
-           "differ between tiles of the "
-           "surface rather than with speed, load or direction.";
-  }
+  PositionDependentFriction()
+      : BasicEffect({.name = effect::kPositionDependentFriction,
+                     .modifies_coulomb = true,
+                     .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay& r) const override {
-    std::vector<ParamSpec> p = {{.name = "x0",
-                                 .unit = "m",
-                                 .init = r.x_min,
-                                 .lo = -1e9,
-                                 .hi = 1e9,
-                                 .scale = 1,
-                                 .fitted = false,
-                                 .doc = "area"},
-                                {.name = "x1",
-                                 .unit = "m",
-                                 .init = r.x_max,
-                                 .lo = -1e9,
-                                 .hi = 1e9,
-                                 .scale = 1,
-                                 .fitted = false,
-                                 .doc = "area"},
-                                {.name = "y0",
-                                 .unit = "m",
-                                 .init = r.y_min,
-                                 .lo = -1e9,
-                                 .hi = 1e9,
-                                 .scale = 1,
-                                 .fitted = false,
-                                 .doc = "area"},
-                                {.name = "y1",
-                                 .unit = "m",
-                                 .init = r.y_max,
-                                 .lo = -1e9,
-                                 .hi = 1e9,
-                                 .scale = 1,
-                                 .fitted = false,
-                                 .doc = "area"}};
+    // The box is fixed from the data: the area the strokes covered [m].
+    const std::pair<ParamKey, double> box[4] = {{key::kTileX0_m, r.x_min},
+                                                {key::kTileX1_m, r.x_max},
+                                                {key::kTileY0_m, r.y_min},
+                                                {key::kTileY1_m, r.y_max}};
+    std::vector<ParamSpec> p;
+    for (const auto& [k, v] : box)
+      p.push_back({.name = std::string(k.name),
+                   .unit = "m",
+                   .init = v,
+                   .lo = -1e9,
+                   .hi = 1e9,
+                   .fitted = false,
+                   .doc = "area"});
     for (int j = 0; j <= kOrder; ++j)
       for (int k = 0; k <= kOrder; ++k)
         if (j || k)
-          p.push_back({.name = fmt::format("g{}{}", j, k),
-                       .unit = "1",
-                       .init = 0,
-                       .lo = -0.9,
-                       .hi = 0.9,
-                       .scale = 0.1,
-                       .fitted = true,
-                       .doc = "Legendre coefficient"});
+          p.push_back(ModulationCoefficient(fmt::format("{}{}{}", kLegendrePrefix, j, k),
+                                            "Legendre coefficient"));
     return p;
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
@@ -89,7 +67,7 @@ class PositionDependentFriction final : public Effect {
     double m[9] = {}, n[9] = {};
     for (std::size_t i = 0; i < r.samples().size(); ++i) {
       const auto& s = r.samples()[i];
-      if (!s.contact || s.speed_mps < kSlidingSpeed_mps || s.fn_N < 0.05) continue;
+      if (!Sliding(r, i) || s.fn_N < 0.05) continue;
       const int tx = std::clamp(
           static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
       const int ty = std::clamp(
@@ -105,9 +83,9 @@ class PositionDependentFriction final : public Effect {
       if (hi < 0 || m[k] > m[hi]) hi = k;
     }
     if (lo < 0) return {"too few sliding samples to judge", "", false};
-    static const char* kTile[9] = {"front-left",  "front-centre", "front-right",
-                                   "middle-left", "centre",       "middle-right",
-                                   "back-left",   "back-centre",  "back-right"};
+    static constexpr const char* kTile[9] = {"front-left",  "front-centre", "front-right",
+                                             "middle-left", "centre",       "middle-right",
+                                             "back-left",   "back-centre",  "back-right"};
     return {fmt::format("friction-ratio residual is {:+.3f} on the {} tile and {:+.3f} on the {} "
                         "tile of a 3 x 3 grid "
                         "over the stroked area",

@@ -5,33 +5,31 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class Stribeck final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Stribeck effect: static and low-speed friction exceed kinetic friction, "
+    "decaying to the Coulomb level over a characteristic speed v_s: f_C = f_n "
+    "(mu_k + dmu_s exp(-(v / v_s)^2)). It comes from boundary lubrication and "
+    "junction growth at rest, and is felt as stick at the start of a stroke.";
+
+class Stribeck final : public BasicEffect {
  public:
-  std::string_view name() const override { return "stribeck"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::vector<std::string_view> requires_effects() const override { return {"coulomb"}; }
-  std::string_view description() const override {
-    return "Stribeck effect: static and low-speed friction exceed kinetic friction, decaying to "
-           "the Coulomb level over a characteristic speed v_s: f_C = f_n (mu_k + dmu_s "
-           "exp(-(v / v_s)^2)). It comes from boundary lubrication and junction growth at rest, "
-           "and is felt as stick at the start of a stroke.";
-  }
+  Stribeck()
+      : BasicEffect({.name = effect::kStribeck, .modifies_coulomb = true, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "dmu_s",
+    return {{.name = std::string(key::kStribeckDmu.name),
              .unit = "1",
              .init = 0.05,
              .lo = 0,
              .hi = 3,
              .scale = 0.1,
-             .fitted = true,
              .doc = "static minus kinetic coefficient"},
-            {.name = "v_s",
+            {.name = std::string(key::kStribeckSpeed_mps.name),
              .unit = "m/s",
              .init = 0.005,
              .lo = 2e-4,
              .hi = 0.1,
              .scale = 0.005,
-             .fitted = true,
              .doc = "Stribeck speed"}};
   }
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
@@ -39,11 +37,8 @@ class Stribeck final : public Effect {
     t.mu_add += p[0] * std::exp(-u * u);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto b = BinMeans(
-        r.samples().size(),
-        [&](std::size_t i) {
-          return r.samples()[i].fn_N > 0.05 ? res.friction_N[i] / r.samples()[i].fn_N : 0;
-        },
+    const auto b = SampleBins(
+        r, [&](std::size_t i) { return RatioResidual(r, res, i); },
         [&](std::size_t i) { return r.samples()[i].speed_mps; },
         [&](std::size_t i) { return r.samples()[i].contact && r.samples()[i].speed_mps >= 0.5e-3; },
         {0.0005, 0.002, 0.005, 0.01, 0.02, 0.05, 1});

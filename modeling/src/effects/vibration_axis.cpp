@@ -43,7 +43,7 @@ class VibrationAxis final : public Effect {
     const auto k = LogQuantileKnots(r, a_.knots, a_.speed);
     std::vector<ParamSpec> p;
     for (int i = 0; i < a_.knots; ++i)
-      p.push_back({.name = fmt::format("knot{}", i),
+      p.push_back({.name = fmt::format("{}{}", kKnotPrefix, i),
                    .unit = a_.knot_unit,
                    .init = k[static_cast<std::size_t>(i)],
                    .lo = -1e9,
@@ -85,7 +85,7 @@ class VibrationAxis final : public Effect {
 
 std::unique_ptr<Effect> MakeVibrationSpeed() {
   return std::make_unique<VibrationAxis>(Axis{
-      .name = "vibration-speed",
+      .name = effect::kVibrationSpeed,
       .description =
           "Speed-dependent vibration: a surface with spatial period lambda excites the tool at "
           "v / lambda, and faster strokes hit the micro-geometry harder, so both the level and "
@@ -107,7 +107,7 @@ std::unique_ptr<Effect> MakeVibrationSpeed() {
 
 std::unique_ptr<Effect> MakeVibrationForce() {
   return std::make_unique<VibrationAxis>(
-      Axis{.name = "vibration-force",
+      Axis{.name = effect::kVibrationForce,
            .description =
                "Load-dependent vibration: pressing harder drives the tool deeper into the "
                "micro-geometry and changes the contact's stiffness, so the vibration level (and "

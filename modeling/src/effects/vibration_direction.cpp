@@ -9,7 +9,7 @@ using namespace detail;
 
 class VibrationDirection final : public Effect {
  public:
-  std::string_view name() const override { return "vibration-direction"; }
+  std::string_view name() const override { return effect::kVibrationDirection; }
   Channel channel() const override { return Channel::kVibration; }
   std::string_view description() const override {
     return "Direction-dependent vibration: on grooved, woven or grained surfaces stroking across "

@@ -5,37 +5,35 @@ namespace hapticlab::modeling::wb {
 namespace {
 using namespace detail;
 
-class Viscous final : public Effect {
+// What the effect is, for `hapticlab effects` and the reports.
+constexpr std::string_view kAbout =
+    "Viscous friction: a tangential force mu_b v proportional to the sliding "
+    "velocity, from lubricant films, soft coatings or the damping of a compliant "
+    "surface layer (the mu_b term of dissertation eq. 4.7). It shows as friction "
+    "that keeps rising with speed.";
+
+class Viscous final : public BasicEffect {
  public:
-  std::string_view name() const override { return "viscous"; }
-  Channel channel() const override { return Channel::kFriction; }
-  std::string_view description() const override {
-    return "Viscous friction: a tangential force mu_b v proportional to the sliding velocity, from "
-           "lubricant films, soft coatings or the damping of a compliant surface layer (the mu_b "
-           "term of dissertation eq. 4.7). It shows as friction that keeps rising with speed.";
-  }
+  Viscous() : BasicEffect({.name = effect::kViscous, .description = kAbout}) {}
   std::vector<ParamSpec> Params(const Replay&) const override {
-    return {{.name = "mu_b",
+    return {{.name = std::string(key::kMuB_Ns_per_m.name),
              .unit = "N s/m",
              .init = 0.0,
              .lo = 0,
              .hi = 1000,
              .scale = 1,
-             .fitted = true,
              .doc = "viscous coefficient"}};
   }
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
     t.mu_b = p[0];
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
-    const auto use = [&](std::size_t i) {
-      return r.samples()[i].contact && r.samples()[i].speed_mps >= kSlidingSpeed_mps;
-    };
+    const auto use = [&](std::size_t i) { return Sliding(r, i); };
     const double c = Correlation(
         r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
         [&](std::size_t i) { return r.samples()[i].speed_mps; }, use);
-    const auto b = BinMeans(
-        r.samples().size(), [&](std::size_t i) { return res.friction_N[i]; },
+    const auto b = SampleBins(
+        r, [&](std::size_t i) { return res.friction_N[i]; },
         [&](std::size_t i) { return r.samples()[i].speed_mps; }, use,
         {0.003, 0.01, 0.03, 0.06, 0.1, 0.15, 1});
     const int lo = b.First(), hi = b.Last();

@@ -3,8 +3,13 @@
 /// `[workbench]` table.
 
 #include <string>
+#include <vector>
 
 #include "hapticlab/modeling/workbench_model.hpp"
+
+namespace hapticlab::renderer {
+struct MaterialModel;
+}
 
 namespace hapticlab::modeling::wb {
 
@@ -15,5 +20,9 @@ Model LoadModel(const std::string& path);
 /// Writes the model as a material TOML. With `r` and vibration fitted, an AR bank over the
 /// grid of speed x force is derived from the band spectra (see docs/workbench.md).
 void SaveModel(const Model& m, const std::string& path, const Replay* r = nullptr);
+/// The effects a renderer material's [contact] and [friction] parameters say were fitted (for
+/// a material without an effect list): coulomb and dahl; viscous when mu_b > 0, hc-damping
+/// when B > 0, hc-exponent when n != 1.
+std::vector<std::string> ContactEffectsOf(const renderer::MaterialModel& mm);
 
 }  // namespace hapticlab::modeling::wb

@@ -7,7 +7,9 @@
 ///  - vibration      log band powers of 0.128 s windows as a linear model in features of the
 ///                   window's speed, load and direction.
 /// Units: see each ParamSpec (unit field); lengths in the normal-force terms are relative to
-/// 1 mm of penetration (K1mm_N is the force at 1 mm, not renderer material.hpp's K [N/m^n]).
+/// 1 mm of penetration (K1mm_N is the force at 1 mm, not renderer material.hpp's K [N/m^n]; the
+/// conversion is in workbench_params.hpp, ContactParameters). Effect and parameter names are
+/// declared once in workbench_params.hpp.
 
 #include <map>
 #include <memory>
@@ -15,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hapticlab/modeling/workbench_params.hpp"
 #include "hapticlab/modeling/workbench_replay.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -107,8 +110,15 @@ struct Model {
   std::map<std::string, std::map<std::string, double>> params;  ///< effect -> name -> value
   std::map<std::string, std::vector<double>> coef;              ///< vibration coefficients
   std::vector<double> band_edges_hz;  ///< bands the vibration coefficients refer to
-  bool HasVibration() const { return coef.count("core") > 0; }
+  bool HasVibration() const { return coef.count(std::string(effect::kCore)) > 0; }
   bool Has(std::string_view e) const;
+  /// The value of parameter `k`, or `fallback` when the model holds none (whether or not the
+  /// model lists the effect).
+  double Get(ParamKey k, double fallback) const;
+  /// The value of parameter `k`. Precondition (HL_REQUIRE): the model holds it.
+  double At(ParamKey k) const;
+  /// Sets parameter `k` (the effect is not added to `effects`).
+  void Set(ParamKey k, double value);
 };
 
 /// Adds effects (with their dependencies) to a model, initializing their parameters from the

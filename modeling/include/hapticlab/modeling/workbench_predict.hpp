@@ -30,15 +30,27 @@ Residuals ComputeResiduals(const Model& m, const Replay& r, const Prediction& p)
 /// Which samples count: all, the training blocks (even) or the held-out blocks (odd).
 enum class Split { kAll, kTrain, kHeldOut };
 
+/// One channel's error over the samples (windows) of a split.
+struct ChannelErrors {
+  bool present = false;   ///< the split had samples in contact (vibration: scored windows)
+  double normalized = 0;  ///< the normalized error [1] (see Errors)
+  double normalizer = 0;  ///< Σ f² [N²] over the samples (vibration: the window count)
+  std::map<int, double> block_sse;  ///< time block -> SSE [N²] (vibration: Σ E_s [1])
+};
+
 /// Errors per channel, normalized so they can be summed: normal RMS / RMS(f_n), tangential
 /// RMS(|Δf_t|) / RMS(|f_t|), vibration mean E_s (eq. 3.1 over band magnitudes). `overall` is
 /// the mean of the channels present. Per-block sums support the significance test.
 struct Errors {
   double overall = 0;
-  std::map<std::string, double> channel;  ///< ChannelName -> normalized error
-  std::map<std::string, double> rms;      ///< normal_force_N, tangential_N, friction_ratio
-  std::map<std::string, std::map<int, double>> block_sse;  ///< channel -> block -> SSE (or Σ E_s)
-  std::map<std::string, double> norm;  ///< channel -> normalizer (Σ f² or window count)
+  ChannelErrors normal_force, friction, vibration;
+  double normal_force_rms_N = 0;  ///< RMS of the normal-force residual over samples in contact
+  double tangential_rms_N = 0;    ///< RMS of |tangential residual| over samples in contact
+  double friction_ratio_rms = 0;  ///< RMS of the friction-ratio residual while sliding [1]
+  const ChannelErrors& Of(Channel c) const;
+  /// The normalized errors of the present channels by ChannelName (in name order, as reports
+  /// list them).
+  std::map<std::string, double> Normalized() const;
 };
 Errors ComputeErrors(const Replay& r, const Prediction& p, Split split);
 
