@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::devices::falcon {
 namespace {
@@ -420,7 +421,7 @@ std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path) {
 FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock,
                            const FalconOptions& o)
     : usb_(std::move(usb)), clock_(std::move(clock)), o_(o) {
-  if (!usb_) throw std::invalid_argument("falcon: a transport is required");
+  HL_REQUIRE(usb_ != nullptr, "falcon: a transport is required");
 }
 
 DeviceCapabilities FalconDevice::Capabilities() const {
@@ -446,7 +447,7 @@ void FalconDevice::WriteForce(const Eigen::Vector3d& f) noexcept {
   }
 }
 
-ReadResult FalconDevice::Read(renderer::DeviceSample* out) noexcept {
+ReadResult FalconDevice::Read(DeviceSample* out) noexcept {
   const auto packet = EncodeCommand(cmd_);
   if (usb_->BulkWrite(packet.data(), 16, o_.io_timeout_ms) != 16) {
     ++lost_reads_;

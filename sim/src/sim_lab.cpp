@@ -27,9 +27,7 @@ using internal::VibrationRms;
 }  // namespace
 
 FeatureAccumulator::FeatureAccumulator(double fr, double vr, double settle_s)
-    : fr_(fr),
-      vr_(vr),
-      skip_f_(static_cast<std::uint64_t>(settle_s * fr)),
+    : skip_f_(static_cast<std::uint64_t>(settle_s * fr)),
       skip_v_(static_cast<std::uint64_t>(settle_s * vr)),
       hp_(renderer::BiquadCoeffs::ButterworthHighPass(2.0, fr)),
       hpt_(renderer::BiquadCoeffs::ButterworthHighPass(2.0, fr)),
@@ -152,7 +150,7 @@ void Number(const toml::table& t, const std::string& path, const std::string& pr
 void CheckKeys(const toml::table& t, const std::string& path, const std::string& pre,
                std::initializer_list<const char*> known, Diagnostics& diag) {
   for (const auto& [k, v] : t)
-    if (std::none_of(known.begin(), known.end(), [&](const char* x) { return k.str() == x; }))
+    if (std::find(known.begin(), known.end(), k.str()) == known.end())
       diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
                "unknown key (a typo?)");
 }
@@ -275,8 +273,7 @@ ProfileSet LoadProfiles(const std::string& path) {
                                     "vibration_peak_hz",
                                     "vibration_q",
                                     "notes"};
-      if (std::none_of(std::begin(known), std::end(known),
-                       [&](const char* x) { return k.str() == x; }))
+      if (std::find(std::begin(known), std::end(known), k.str()) == std::end(known))
         diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
                  "unknown key (a typo?)");
     }
