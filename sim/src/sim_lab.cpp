@@ -104,11 +104,12 @@ renderer::MaterialModel PlaceholderModel(const MaterialProfile& p) {
   const int n = 256;
   const double pitch = p.wavelength_m / 20;
   std::vector<float> h(static_cast<std::size_t>(n * n));
+  std::size_t at = 0;  // row-major: row i, column j
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       double v, gx, gy;
       geo.Macro(j * pitch, i * pitch, &v, &gx, &gy);
-      h[static_cast<std::size_t>(i * n + j)] = static_cast<float>(v + geo.bound());
+      h[at++] = static_cast<float>(v + geo.bound());
     }
   m.geometry = std::make_shared<renderer::HeightMap>(n, n, pitch, std::move(h));
   // AR bank on the thesis's 3 x 3 grid: the truth resonance at the 2 kHz model rate, with
