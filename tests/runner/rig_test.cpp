@@ -10,6 +10,7 @@
 #include <random>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
 
 namespace hapticlab::runner {
@@ -113,6 +114,7 @@ TEST(Rig, CalibrateRecoversATiltedPlaneFromNoisyTouches) {
       0);
   EXPECT_THROW(FitSamplePlane({touches[0], touches[1]}, n), InputError);
   EXPECT_THROW(FitSamplePlane({{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}}, n), InputError);
+  EXPECT_THROW(PoseFromAxes({0, 0, 0}, {0, 0, 1}, {0, 0, 2}), PreconditionError);
 }
 
 }  // namespace
