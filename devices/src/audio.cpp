@@ -13,26 +13,31 @@
 
 namespace hapticlab::devices {
 
-void ValidateAudioConfig(const AudioConfig& c) {
-  if (!(c.sample_rate_hz > 0) || !(c.input_rate_hz > 0))
-    throw std::invalid_argument("audio: sample_rate_hz and input_rate_hz must be positive");
+void ValidateAudioConfig(const AudioConfig& c, const std::string& source) {
+  auto bad = [&](const std::string& field, const std::string& expected) {
+    return InputError(source, 0, field, "audio: " + expected);
+  };
+  if (!(c.sample_rate_hz > 0))
+    throw bad("sample_rate_hz", "sample_rate_hz and input_rate_hz must be positive");
+  if (!(c.input_rate_hz > 0))
+    throw bad("input_rate_hz", "sample_rate_hz and input_rate_hz must be positive");
   if (c.input_rate_hz > c.sample_rate_hz)
-    throw std::invalid_argument("audio: input_rate_hz must not exceed the device's sample_rate_hz");
-  if (c.channels < 1) throw std::invalid_argument("audio: channels must be >= 1");
-  for (const auto* list : {&c.actuator_channels, &c.noise_channels})
+    throw bad("input_rate_hz", "input_rate_hz must not exceed the device's sample_rate_hz");
+  if (c.channels < 1) throw bad("channels", "channels must be >= 1");
+  for (const auto* list : {&c.actuator_channels, &c.noise_channels}) {
+    const char* field = list == &c.actuator_channels ? "actuator_channels" : "noise_channels";
     for (const int ch : *list)
       if (ch < 0 || ch >= c.channels)
-        throw std::invalid_argument(
-            fmt::format("audio: channel {} outside 0..{} ({} map)", ch, c.channels - 1,
-                        list == &c.actuator_channels ? "actuator_channels" : "noise_channels"));
+        throw bad(field,
+                  fmt::format("channel {} outside 0..{} ({} map)", ch, c.channels - 1, field));
+  }
   for (const int a : c.actuator_channels)
     if (std::find(c.noise_channels.begin(), c.noise_channels.end(), a) != c.noise_channels.end())
-      throw std::invalid_argument(
-          fmt::format("audio: channel {} is both an actuator and a noise channel", a));
-  if (!(c.full_scale_mps2 > 0))
-    throw std::invalid_argument("audio: full_scale_mps2 must be positive");
+      throw bad("noise_channels",
+                fmt::format("channel {} is both an actuator and a noise channel", a));
+  if (!(c.full_scale_mps2 > 0)) throw bad("full_scale_mps2", "full_scale_mps2 must be positive");
   if (!(c.noise_rms_fs >= 0 && c.noise_rms_fs <= 0.5))
-    throw std::invalid_argument("audio: noise_rms_fs must be in 0..0.5");
+    throw bad("noise_rms_fs", "noise_rms_fs must be in 0..0.5");
 }
 
 AudioOutput::AudioOutput(const AudioConfig& c, std::unique_ptr<AudioStream> stream)

@@ -39,7 +39,7 @@ class DhdDevice final : public HapticDevice {
     return c;
   }
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
-  ReadResult Read(renderer::DeviceSample* out) noexcept override {
+  ReadResult Read(DeviceSample* out) noexcept override {
     double x, y, z, vx, vy, vz;
     const char id = static_cast<char>(id_);
     if (dhdGetPosition(&x, &y, &z, id) < DHD_NO_ERROR) return ReadResult::kLost;

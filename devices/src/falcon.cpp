@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::devices::falcon {
 namespace {
@@ -30,10 +31,10 @@ std::array<std::uint8_t, 16> EncodeCommand(const Command& c) {
   std::array<std::uint8_t, 16> p{};
   p[0] = '<';
   p[15] = '>';
-  for (int m = 0; m < 3; ++m) {
-    const auto v = static_cast<std::uint16_t>(c.motor[static_cast<std::size_t>(m)]);
-    for (int k = 0; k < 4; ++k)
-      p[static_cast<std::size_t>(1 + 4 * m + k)] = static_cast<std::uint8_t>((v >> (4 * k)) & 0xf);
+  for (std::size_t m = 0; m < 3; ++m) {
+    const auto v = static_cast<std::uint16_t>(c.motor[m]);
+    for (std::size_t k = 0; k < 4; ++k)
+      p[1 + 4 * m + k] = static_cast<std::uint8_t>((v >> (4 * k)) & 0xf);
   }
   p[13] = static_cast<std::uint8_t>((c.leds & 0x0e) | (c.homing ? 0x01 : 0x00));
   p[14] = 0;
@@ -61,11 +62,11 @@ bool DecodeStatus(const std::uint8_t* d, std::size_t n, Status* out, int* malfor
       ++at;
       continue;
     }
-    for (int m = 0; m < 3; ++m) {
+    for (std::size_t m = 0; m < 3; ++m) {
       std::uint16_t v = 0;
-      for (int k = 0; k < 4; ++k)
+      for (std::size_t k = 0; k < 4; ++k)
         v = static_cast<std::uint16_t>(v | ((d[at + 1 + 4 * m + k] - 0x41) & 0xf) << (4 * k));
-      out->encoder[static_cast<std::size_t>(m)] = static_cast<std::int16_t>(v);
+      out->encoder[m] = static_cast<std::int16_t>(v);
     }
     const int info = d[at + 13] - 0x41;
     out->buttons = static_cast<std::uint8_t>(info & 0x0f);
@@ -420,7 +421,7 @@ std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path) {
 FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock,
                            const FalconOptions& o)
     : usb_(std::move(usb)), clock_(std::move(clock)), o_(o) {
-  if (!usb_) throw std::invalid_argument("falcon: a transport is required");
+  HL_REQUIRE(usb_ != nullptr, "falcon: a transport is required");
 }
 
 DeviceCapabilities FalconDevice::Capabilities() const {
@@ -446,7 +447,7 @@ void FalconDevice::WriteForce(const Eigen::Vector3d& f) noexcept {
   }
 }
 
-ReadResult FalconDevice::Read(renderer::DeviceSample* out) noexcept {
+ReadResult FalconDevice::Read(DeviceSample* out) noexcept {
   const auto packet = EncodeCommand(cmd_);
   if (usb_->BulkWrite(packet.data(), 16, o_.io_timeout_ms) != 16) {
     ++lost_reads_;

@@ -80,8 +80,7 @@ HidReportLayout LoadHidLayout(const std::string& path) {
     static const char* known[] = {"report_id", "position_offset", "position_bytes", "raw_min",
                                   "raw_max",   "button_offset",   "button_bit",     "little_endian",
                                   "signed",    "vendor_id",       "product_id",     "serial"};
-    if (std::none_of(std::begin(known), std::end(known),
-                     [&](const char* x) { return k.str() == x; }))
+    if (std::find(std::begin(known), std::end(known), k.str()) == std::end(known))
       d.Add(path, static_cast<int>(v.source().begin.line), std::string(k.str()), "unknown key");
   }
   if (L.position_bytes != 1 && L.position_bytes != 2)

@@ -74,7 +74,7 @@ class OpenHapticsDevice final : public HapticDevice {
     t0_ns_.store(
         std::chrono::duration_cast<std::chrono::nanoseconds>(t0.time_since_epoch()).count());
   }
-  ReadResult Read(renderer::DeviceSample* out) noexcept override {
+  ReadResult Read(DeviceSample* out) noexcept override {
     const State& s = state_.Read();
     if (!s.ok) return ReadResult::kLost;
     if (s.t == last_t_) return ReadResult::kNoNewData;  // the servo has not run since

@@ -1,16 +1,15 @@
 #include "hapticlab/devices/replay.hpp"
 
-#include <stdexcept>
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::devices {
 
 ReplayDevice::ReplayDevice(std::vector<TrajectorySample> samples, std::function<double()> clock,
                            DeviceCapabilities caps)
     : samples_(std::move(samples)), clock_(std::move(clock)), caps_(std::move(caps)) {
-  if (samples_.empty()) throw std::invalid_argument("replay needs at least one sample");
+  HL_REQUIRE(!samples_.empty(), "replay needs at least one sample");
   for (std::size_t i = 1; i < samples_.size(); ++i)
-    if (!(samples_[i].t_s >= samples_[i - 1].t_s))
-      throw std::invalid_argument("replay samples must be in time order");
+    HL_REQUIRE(samples_[i].t_s >= samples_[i - 1].t_s, "replay samples must be in time order");
   caps_.name = caps_.name.empty() ? "replay" : caps_.name;
   // Room for a 4 kHz loop over the whole trajectory, plus margin.
   const double span = samples_.back().t_s - samples_.front().t_s;
@@ -29,7 +28,7 @@ const char* ReadResultName(ReadResult r) {
   return "?";
 }
 
-ReadResult ReplayDevice::Read(renderer::DeviceSample* out) noexcept {
+ReadResult ReplayDevice::Read(DeviceSample* out) noexcept {
   const double now = clock_() + samples_.front().t_s;
   if (now > samples_.back().t_s) {
     finished_.store(true);

@@ -8,6 +8,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/psychophysics/quest_plus.hpp"
 #include "hapticlab/psychophysics/simulated_observer.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
@@ -145,7 +146,8 @@ renderer::MaterialModel WithParameter(const renderer::MaterialModel& m,
   } else if (parameter == "friction.mu_b_Ns_per_m") {
     r.friction.mu_b_Ns_per_m = value;
   } else {
-    throw std::invalid_argument("unknown adaptive parameter '" + parameter + "'");
+    // The protocol parser admits only protocols::AdaptiveParameters(): a caller's bug.
+    HL_REQUIRE(false, "unknown adaptive parameter '" + parameter + "'");
   }
   return r;
 }

@@ -41,7 +41,8 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
 // participant answers, without one the phase's simulated observer must exist.
 void CheckAdaptivePhases(const protocols::Protocol& p, const std::string& device, bool with_ui);
 
-// The model with one parameter set to `value` (protocols::AdaptiveParameters()).
+// The model with one parameter set to `value`; `parameter` is one of
+// protocols::AdaptiveParameters() (PreconditionError otherwise).
 renderer::MaterialModel WithParameter(const renderer::MaterialModel& m,
                                       const std::string& parameter, double value);
 

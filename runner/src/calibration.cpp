@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <filesystem>
@@ -156,7 +157,7 @@ CalibrationSpec LoadCalibration(const std::string& path) {
   auto known = [&](const toml::table& t, const std::string& pre,
                    std::initializer_list<const char*> keys) {
     for (const auto& [k, v] : t)
-      if (std::none_of(keys.begin(), keys.end(), [&](const char* x) { return k.str() == x; }))
+      if (std::find(keys.begin(), keys.end(), k.str()) == keys.end())
         d.Add(path, Line(&v), pre + "." + std::string(k.str()), "unknown key (a typo?)");
   };
   known(doc, "", {"fit", "protocol", "param", "target"});
@@ -189,8 +190,8 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     s.protocols.push_back(p);
   }
   if (s.protocols.empty()) d.Add(path, 1, "protocol", "no [[protocol]] tables");
-  static const char* kFields[] = {"sensitivity", "offset_sd", "material_sd", "method_sd",
-                                  "noise_sd"};
+  static const char* const kFields[] = {"sensitivity", "offset_sd", "material_sd", "method_sd",
+                                        "noise_sd"};
   for (const auto& [t, pre] : tables("param")) {
     known(*t, pre, {"name", "lo", "hi", "step"});
     CalibrationParam p;

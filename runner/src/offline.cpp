@@ -16,7 +16,7 @@ OfflineResult RenderOffline(const renderer::MaterialModel& model,
   double next_vib_s = 0;  // time of the next vibration sample, relative to t0
   for (const auto& row : trajectory.rows) {
     const double t = row.t_s - t0;
-    renderer::DeviceSample s;
+    DeviceSample s;
     s.state.p_m = row.p_m;
     s.state.v_mps = row.v_mps;
     s.t_s = t;

@@ -6,16 +6,26 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
 
 namespace hapticlab::runner {
 namespace {
 
-const char* kSideNames[2] = {"left", "right"};
+const char* const kSideNames[2] = {"left", "right"};
+
+// What is wrong with two axes for PoseFromAxes (empty: nothing).
+std::string AxesProblem(const Eigen::Vector3d& x_axis, const Eigen::Vector3d& z_axis) {
+  if (!(z_axis.norm() > 1e-9)) return "z_axis is zero";
+  const Eigen::Vector3d z = z_axis.normalized();
+  const Eigen::Vector3d xp = x_axis - x_axis.dot(z) * z;
+  if (!(xp.norm() > 1e-6 * std::max(1.0, x_axis.norm())))
+    return "x_axis is zero or parallel to z_axis";
+  return {};
+}
 
 std::string Vec(const Eigen::Vector3d& v) {
   return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z());
@@ -73,23 +83,20 @@ void ReadPose(const toml::table& root, const std::string& name, Eigen::Isometry3
   ReadVec(*t, name, "x_axis", &x, d, path, true);
   ReadVec(*t, name, "z_axis", &z, d, path, true);
   if (d.size() != before) return;
-  try {
+  if (const std::string problem = AxesProblem(x, z); !problem.empty())
+    d.Add(path, static_cast<int>(t->source().begin.line), name, problem);
+  else
     *out = PoseFromAxes(o, x, z);
-  } catch (const std::invalid_argument& e) {
-    d.Add(path, static_cast<int>(t->source().begin.line), name, e.what());
-  }
 }
 
 }  // namespace
 
 Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis,
                                const Eigen::Vector3d& z_axis) {
-  if (!(z_axis.norm() > 1e-9)) throw std::invalid_argument("z_axis is zero");
+  const std::string problem = AxesProblem(x_axis, z_axis);
+  HL_REQUIRE(problem.empty(), problem);
   const Eigen::Vector3d z = z_axis.normalized();
-  const Eigen::Vector3d xp = x_axis - x_axis.dot(z) * z;
-  if (!(xp.norm() > 1e-6 * std::max(1.0, x_axis.norm())))
-    throw std::invalid_argument("x_axis is zero or parallel to z_axis");
-  const Eigen::Vector3d x = xp.normalized();
+  const Eigen::Vector3d x = (x_axis - x_axis.dot(z) * z).normalized();
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear().col(0) = x;
   T.linear().col(1) = z.cross(x);
@@ -121,8 +128,7 @@ RigFile ParseRig(const std::string& text, const std::string& path) {
   r.sha256 = db::HashText(text);
   for (const auto& [k, v] : doc) {
     static const char* known[] = {"device", "device_pose", "stylus", "force", "sample"};
-    if (std::none_of(std::begin(known), std::end(known),
-                     [&](const char* x) { return k.str() == x; }))
+    if (std::find(std::begin(known), std::end(known), k.str()) == std::end(known))
       d.Add(path, static_cast<int>(v.source().begin.line), std::string(k.str()),
             "unknown key (a typo?)");
   }
@@ -201,10 +207,11 @@ RigFile DefaultRig(const std::string& device) {
   return r;
 }
 
-PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& up_hint) {
+PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& pts, const Eigen::Vector3d& up_hint,
+                        const std::string& source) {
   if (pts.size() < 3)
-    throw std::invalid_argument(
-        fmt::format("a plane needs at least 3 touches, got {}", pts.size()));
+    throw InputError(source, 0, "points",
+                     fmt::format("a plane needs at least 3 touches, got {}", pts.size()));
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (const auto& p : pts) c += p;
   c /= static_cast<double>(pts.size());
@@ -214,8 +221,8 @@ PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& pts, const Eigen::Ve
   // Eigenvalues ascending: the smallest is the normal; the middle one must not vanish.
   const double spread = std::sqrt(es.eigenvalues()[1] / static_cast<double>(pts.size()));
   if (!(spread > 1e-4))
-    throw std::invalid_argument(
-        "the touches lie on a line (or one point): touch three spread-out points");
+    throw InputError(source, 0, "points",
+                     "the touches lie on a line (or one point): touch three spread-out points");
   Eigen::Vector3d n = es.eigenvectors().col(0);
   if (n.dot(up_hint) < 0) n = -n;
   Eigen::Vector3d x = pts[1] - pts[0];

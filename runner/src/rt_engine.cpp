@@ -8,8 +8,9 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <stdexcept>
 #include <thread>
+
+#include "hapticlab/core/status.hpp"
 
 namespace hapticlab::runner {
 namespace {
@@ -21,9 +22,8 @@ using Clock = std::chrono::steady_clock;
 void SleepUntil(Clock::time_point deadline) noexcept {
   const auto ns =
       std::chrono::duration_cast<std::chrono::nanoseconds>(deadline.time_since_epoch()).count();
-  timespec ts;
-  ts.tv_sec = static_cast<time_t>(ns / 1000000000);
-  ts.tv_nsec = static_cast<long>(ns % 1000000000);
+  const timespec ts{.tv_sec = static_cast<time_t>(ns / 1000000000),
+                    .tv_nsec = static_cast<long>(ns % 1000000000)};
   while (clock_nanosleep(CLOCK_MONOTONIC, TIMER_ABSTIME, &ts, nullptr) == EINTR) {
   }
 }
@@ -81,10 +81,10 @@ RtEngine::RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& de
                                 .max_force_N = renderer.options().max_force_N,
                                 .max_lost_reads = options.max_lost_reads,
                                 .max_lost_s = options.max_lost_s}) {
-  if (force_stream_ && force_stream_->channel_count() != ForceStreamChannels().size())
-    throw std::invalid_argument("force stream must have the ForceStreamChannels() layout");
-  if (vibration_stream_ && vibration_stream_->channel_count() != 1)
-    throw std::invalid_argument("vibration stream must have one channel");
+  HL_REQUIRE(!force_stream_ || force_stream_->channel_count() == ForceStreamChannels().size(),
+             "force stream must have the ForceStreamChannels() layout");
+  HL_REQUIRE(!vibration_stream_ || vibration_stream_->channel_count() == 1,
+             "vibration stream must have one channel");
 }
 
 RtEngine::~RtEngine() { Stop(); }
@@ -94,9 +94,9 @@ double RtEngine::Now() const {
   return std::chrono::duration<double>(Clock::now() - t0_).count();
 }
 
-renderer::DeviceSample RtEngine::LastSample() {
+DeviceSample RtEngine::LastSample() {
   const Snapshot& s = last_sample_.Read();
-  renderer::DeviceSample out;
+  DeviceSample out;
   out.state.p_m = {s.p[0], s.p[1], s.p[2]};
   out.state.v_mps = {s.v[0], s.v[1], s.v[2]};
   out.t_s = s.t;
@@ -149,7 +149,7 @@ void RtEngine::Stop() {
 }
 
 bool RtEngine::AdvanceTo(double t_s) {
-  if (!options_.virtual_clock) throw std::logic_error("RtEngine::AdvanceTo needs a virtual clock");
+  HL_REQUIRE(options_.virtual_clock != nullptr, "RtEngine::AdvanceTo needs a virtual clock");
   if (!running_.load()) return false;
   const double fr = renderer_.options().force_rate_hz, vr = renderer_.options().vibration_rate_hz;
   const bool vib = renderer_.options().vibration;
@@ -224,7 +224,7 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
                           std::memory_order_relaxed);
   AtomicMax(force_jitter_max_, late_s);
   if (late_s > 1.0 / rate) force_misses_.fetch_add(1, std::memory_order_relaxed);
-  renderer::DeviceSample fresh;
+  DeviceSample fresh;
   renderer::ForceCommand cmd;
   const devices::ReadResult rr = device_.Read(&fresh);
   if (rr == devices::ReadResult::kOk) {
@@ -243,7 +243,7 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
     empty_reads_.fetch_add(1, std::memory_order_relaxed);
   }
   // No new data: the newest good sample again (the stale check bounds how long).
-  const renderer::DeviceSample& sample = last_good_;
+  const DeviceSample& sample = last_good_;
   const bool render = rr != devices::ReadResult::kLost && have_good_;
   if (render) cmd = renderer_.ForceTick(sample, now_s);
   if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);

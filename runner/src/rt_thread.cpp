@@ -16,7 +16,7 @@ namespace {
 // mlockall(MCL_FUTURE), locked) before the first tick. noinline: the array must be on this
 // frame, not optimised away.
 [[gnu::noinline]] void PrefaultStack(std::size_t bytes) {
-  constexpr std::size_t kMax = 256 * 1024;
+  constexpr std::size_t kMax = std::size_t{256} * 1024;
   char buf[kMax];
   const std::size_t n = bytes < kMax ? bytes : kMax;
   for (std::size_t i = 0; i < n; i += 4096) buf[i] = 0;

@@ -33,8 +33,8 @@ void Watchdog::Reset() noexcept {
   last_ok_s_ = 0;
 }
 
-Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const renderer::DeviceSample& s,
-                                double now_s, double late_s, double period_s,
+Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const DeviceSample& s, double now_s,
+                                double late_s, double period_s,
                                 const Eigen::Vector3d& force) noexcept {
   ++tick_;
   misses_ = late_s > period_s ? misses_ + 1 : 0;

@@ -114,7 +114,7 @@ void Hand::FlushInterval() noexcept {
     acc_.AddVibration(shake_last_ + (truth_ ? truth_->Vibration(contact_) : 0.0));
 }
 
-renderer::ToolState Hand::Step(double t_s) noexcept {
+ToolState Hand::Step(double t_s) noexcept {
   FlushInterval();
   const double dt = t_s > t_s_ ? t_s - t_s_ : 1.0 / fr_;
   t_s_ = t_s;
@@ -132,7 +132,7 @@ renderer::ToolState Hand::Step(double t_s) noexcept {
   if (truth_) contact_ = truth_->At(p_, v_);
   pending_ = true;
   ++ticks_;
-  renderer::ToolState out;
+  ToolState out;
   out.p_m = device_from_sample_ * p_;
   out.v_mps = device_from_sample_.linear() * v_;
   return out;
@@ -200,10 +200,10 @@ void SimDevice::Reset() noexcept {
   reads_.store(0, std::memory_order_relaxed);
 }
 
-devices::ReadResult SimDevice::Read(renderer::DeviceSample* out) noexcept {
+devices::ReadResult SimDevice::Read(DeviceSample* out) noexcept {
   const double t = Time();
   // The hand moves whatever the link does.
-  const renderer::ToolState s = hand_.Step(t);
+  const ToolState s = hand_.Step(t);
   reads_.fetch_add(1, std::memory_order_relaxed);
   if (dropout_start_s_ >= 0 && t >= dropout_start_s_ && t < dropout_start_s_ + dropout_s_) {
     ++lost_reads_;

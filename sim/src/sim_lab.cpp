@@ -27,9 +27,7 @@ using internal::VibrationRms;
 }  // namespace
 
 FeatureAccumulator::FeatureAccumulator(double fr, double vr, double settle_s)
-    : fr_(fr),
-      vr_(vr),
-      skip_f_(static_cast<std::uint64_t>(settle_s * fr)),
+    : skip_f_(static_cast<std::uint64_t>(settle_s * fr)),
       skip_v_(static_cast<std::uint64_t>(settle_s * vr)),
       hp_(renderer::BiquadCoeffs::ButterworthHighPass(2.0, fr)),
       hpt_(renderer::BiquadCoeffs::ButterworthHighPass(2.0, fr)),
@@ -106,11 +104,12 @@ renderer::MaterialModel PlaceholderModel(const MaterialProfile& p) {
   const int n = 256;
   const double pitch = p.wavelength_m / 20;
   std::vector<float> h(static_cast<std::size_t>(n * n));
+  std::size_t at = 0;  // row-major: row i, column j
   for (int i = 0; i < n; ++i)
     for (int j = 0; j < n; ++j) {
       double v, gx, gy;
       geo.Macro(j * pitch, i * pitch, &v, &gx, &gy);
-      h[static_cast<std::size_t>(i * n + j)] = static_cast<float>(v + geo.bound());
+      h[at++] = static_cast<float>(v + geo.bound());
     }
   m.geometry = std::make_shared<renderer::HeightMap>(n, n, pitch, std::move(h));
   // AR bank on the thesis's 3 x 3 grid: the truth resonance at the 2 kHz model rate, with
@@ -152,7 +151,7 @@ void Number(const toml::table& t, const std::string& path, const std::string& pr
 void CheckKeys(const toml::table& t, const std::string& path, const std::string& pre,
                std::initializer_list<const char*> known, Diagnostics& diag) {
   for (const auto& [k, v] : t)
-    if (std::none_of(known.begin(), known.end(), [&](const char* x) { return k.str() == x; }))
+    if (std::find(known.begin(), known.end(), k.str()) == known.end())
       diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
                "unknown key (a typo?)");
 }
@@ -275,8 +274,7 @@ ProfileSet LoadProfiles(const std::string& path) {
                                     "vibration_peak_hz",
                                     "vibration_q",
                                     "notes"};
-      if (std::none_of(std::begin(known), std::end(known),
-                       [&](const char* x) { return k.str() == x; }))
+      if (std::find(std::begin(known), std::end(known), k.str()) == std::end(known))
         diag.Add(path, static_cast<int>(v.source().begin.line), pre + "." + std::string(k.str()),
                  "unknown key (a typo?)");
     }

@@ -146,19 +146,20 @@ TEST(Audio, PullModeSynthesisIsPacedByTheCallback) {
 TEST(Audio, BadConfigurationsNameTheField) {
   AudioConfig c;
   c.actuator_channels = {2};
-  EXPECT_THROW(ValidateAudioConfig(c), std::invalid_argument);
+  EXPECT_THROW(ValidateAudioConfig(c), InputError);
   c = {};
   c.noise_channels = {0};  // the actuator's channel
   try {
     ValidateAudioConfig(c);
     FAIL();
-  } catch (const std::invalid_argument& e) {
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).field, "noise_channels");
     EXPECT_NE(std::string(e.what()).find("both an actuator and a noise channel"),
               std::string::npos);
   }
   c = {};
   c.input_rate_hz = 96000;
-  EXPECT_THROW(ValidateAudioConfig(c), std::invalid_argument);
+  EXPECT_THROW(ValidateAudioConfig(c), InputError);
 }
 
 }  // namespace

@@ -241,7 +241,7 @@ TEST(Falcon, DeviceReadsPositionsAndCommandsTorques) {
         static_cast<std::int16_t>(std::lround((th[k] - EncoderToAngle(0)) / per_count));
   double t = 0;
   FalconDevice dev(std::move(fake), [&] { return t; });
-  renderer::DeviceSample s;
+  DeviceSample s;
   ASSERT_EQ(dev.Read(&s), ReadResult::kOk);
   EXPECT_LT((s.state.p_m - p0).norm(), 2e-4) << "within the encoder quantization";
   const Eigen::Vector3d q(EncoderToAngle(usb->encoders[0]), EncoderToAngle(usb->encoders[1]),
@@ -282,7 +282,7 @@ TEST(Falcon, APacketSplitAcrossTwoReadsIsReassembled) {
   usb->encoders = {120, -340, 55};
   double t = 0;
   FalconDevice dev(std::move(fake), [&] { return t; });
-  renderer::DeviceSample s;
+  DeviceSample s;
   // Each status packet arrives in two USB reads: 7 bytes, then 9.
   usb->split_replies_at = 7;
   ASSERT_EQ(dev.Read(&s), ReadResult::kNoNewData) << "the first half alone is no packet";

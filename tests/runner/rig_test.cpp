@@ -10,6 +10,7 @@
 #include <random>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
 
 namespace hapticlab::runner {
@@ -111,8 +112,9 @@ TEST(Rig, CalibrateRecoversATiltedPlaneFromNoisyTouches) {
   EXPECT_LT(
       FitSamplePlane(touches, Eigen::Vector3d(0, -1, 0)).device_from_sample.linear().col(2).dot(n),
       0);
-  EXPECT_THROW(FitSamplePlane({touches[0], touches[1]}, n), std::invalid_argument);
-  EXPECT_THROW(FitSamplePlane({{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}}, n), std::invalid_argument);
+  EXPECT_THROW(FitSamplePlane({touches[0], touches[1]}, n), InputError);
+  EXPECT_THROW(FitSamplePlane({{0, 0, 0}, {0.01, 0, 0}, {0.02, 0, 0}}, n), InputError);
+  EXPECT_THROW(PoseFromAxes({0, 0, 0}, {0, 0, 1}, {0, 0, 2}), PreconditionError);
 }
 
 }  // namespace

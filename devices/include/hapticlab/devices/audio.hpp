@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/spsc_queue.hpp"
 #include "hapticlab/devices/device.hpp"
@@ -39,8 +40,10 @@ struct AudioConfig {
   /// the vibration loop pushes through a queue (Write).
   bool pull = true;
 };
-/// Checks channel indices, rates and levels; throws std::invalid_argument naming the field.
-void ValidateAudioConfig(const AudioConfig& c);
+/// Checks channel indices, rates and levels. The values are the user's (command-line options,
+/// a rig's settings): @throws InputError on `source` (the file they came from, or
+/// "<command line>"), line 0, naming the AudioConfig member at fault and what was expected.
+void ValidateAudioConfig(const AudioConfig& c, const std::string& source = "<command line>");
 
 /// The host API seam: starts a stream that calls `render` with interleaved float frames.
 class AudioStream {

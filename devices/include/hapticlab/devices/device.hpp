@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/core/tool_state.hpp"
 
 namespace hapticlab::devices {
 
@@ -39,7 +39,7 @@ class HapticDevice {
   virtual DeviceCapabilities Capabilities() const = 0;
   /// Reads the newest tool state [device frame]. Never blocks longer than the device's own
   /// transfer.
-  virtual ReadResult Read(renderer::DeviceSample* out) noexcept = 0;
+  virtual ReadResult Read(DeviceSample* out) noexcept = 0;
   /// Commands a force on the tool [N] (already clamped by the renderer).
   virtual void WriteForce(const Eigen::Vector3d& force_N) noexcept = 0;
   /// The loops' time zero: samples are stamped in seconds since it (RtEngine::Start calls this).

@@ -40,7 +40,7 @@ OpenedDevice OpenRealDevice(const DeviceRequest& r,
 
 /// The PortAudio actuator and masking noise, started, with the masking noise off (a session
 /// turns it on while its protocol asks for it). @throws std::runtime_error when the sound
-/// device cannot be opened; std::invalid_argument for a bad configuration.
+/// device cannot be opened; InputError (ValidateAudioConfig) for a bad configuration.
 std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device,
                                                double full_scale_mps2);
 

@@ -117,6 +117,12 @@ struct LoadOptions {
   unsigned timeout_ms = 1000;  ///< per USB transfer
   int verify_tries = 50;       ///< packets sent after loading before declaring the firmware dead
 };
+/// How a firmware load went. A failing load is the environment failing (the device, its
+/// cable, its USB link), not bad user data, so under the error policy (docs/architecture.md,
+/// "Errors") it is reported like a solver's SolverSummary: a retrying procedure returns its
+/// outcome with the trace the tests and the operator need, and the caller decides (the
+/// factory throws std::runtime_error with `error`). A bad firmware file is an InputError
+/// from ReadFirmwareFile before any load starts.
 struct LoadResult {
   bool ok = false;
   int attempts = 0;
@@ -154,12 +160,13 @@ struct FalconOptions {
 /// engine's watchdog's decision.
 class FalconDevice final : public HapticDevice {
  public:
+  /// @param usb the link to a Falcon whose firmware runs (non-null: PreconditionError)
   /// @param clock seconds on the loops' time base; empty: seconds since SetTimeBase (the engine's)
   FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<double()> clock = {},
                const FalconOptions& o = {});
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override { t0_ = t0; }
   DeviceCapabilities Capabilities() const override;
-  ReadResult Read(renderer::DeviceSample* out) noexcept override;
+  ReadResult Read(DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
   const Status& last_status() const { return status_; }
   int malformed_packets() const { return malformed_; }

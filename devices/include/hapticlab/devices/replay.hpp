@@ -22,11 +22,13 @@ struct TrajectorySample {
 /// link is lost. Commanded forces are kept (preallocated) for inspection.
 class ReplayDevice : public HapticDevice {
  public:
+  /// @param samples at least one, in time order (a precondition: a caller that reads them
+  ///        from a file checks them and reports an InputError first; PreconditionError here)
   /// @param clock returns the current time [s] on the replay's time base
   ReplayDevice(std::vector<TrajectorySample> samples, std::function<double()> clock,
                DeviceCapabilities caps = {});
   DeviceCapabilities Capabilities() const override { return caps_; }
-  ReadResult Read(renderer::DeviceSample* out) noexcept override;
+  ReadResult Read(DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
   /// Forces written so far (read after the loop stopped).
   const std::vector<Eigen::Vector3d>& forces() const { return forces_; }

@@ -25,6 +25,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "hapticlab/core/tool_state.hpp"
 #include "hapticlab/renderer/material.hpp"
 
 namespace hapticlab::renderer {
@@ -44,11 +45,8 @@ const char* ToString(ForceAlgorithm a);
 /// The single place to change for another reading.
 double SinThetaT(double dhdx, double dhdy, double ux, double uy) noexcept;
 
-/// Tool state as read from the device.
-struct ToolState {
-  Eigen::Vector3d p_m = Eigen::Vector3d::Zero();    ///< tool tip position [m]
-  Eigen::Vector3d v_mps = Eigen::Vector3d::Zero();  ///< tool tip velocity [m/s]
-};
+/// Tool state as read from the device (core/tool_state.hpp, shared with devices/).
+using hapticlab::ToolState;
 
 /// Result of one force tick.
 struct ForceOutput {

@@ -34,16 +34,8 @@ struct RenderOptions {
   std::uint64_t seed = 1;                      ///< vibration noise seed (recorded with the trial)
 };
 
-/// Device reading handed to the force tick.
-struct DeviceSample {
-  ToolState state;
-  double t_s = 0;  ///< time the sample was measured [s]
-  /// A measured normal force (a force sensor, or a recorded trajectory's force): when
-  /// present it drives the vibration model instead of the rendered normal force, and the
-  /// vibration is on while it is > 0 (the Penn toolkit's rendering reads the device's force).
-  bool has_normal_force = false;
-  double normal_force_N = 0;
-};
+/// Device reading handed to the force tick (core/tool_state.hpp, shared with devices/).
+using hapticlab::DeviceSample;
 
 /// What the force tick commands and observes.
 struct ForceCommand {

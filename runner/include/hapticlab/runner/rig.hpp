@@ -39,8 +39,9 @@ RigFile LoadRig(const std::string& path);
 RigFile ParseRig(const std::string& text, const std::string& path);
 /// The rig file text of `r` (round-trips through ParseRig).
 std::string RigToToml(const RigFile& r);
-/// A pose from an origin and two axes (x is made orthogonal to z).
-/// @throws std::invalid_argument when the axes are zero or parallel
+/// A pose from an origin and two axes (x is made orthogonal to z). Precondition: z_axis is
+/// not zero and x_axis not zero nor parallel to it (PreconditionError otherwise; ParseRig
+/// reports such axes in a rig file as an InputError before calling this).
 Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis,
                                const Eigen::Vector3d& z_axis);
 
@@ -57,8 +58,10 @@ struct PlaneFit {
   Eigen::Isometry3d device_from_sample = Eigen::Isometry3d::Identity();
   double rms_residual_m = 0, max_residual_m = 0;
 };
-/// @throws std::invalid_argument for fewer than 3 points or collinear points
+/// The touches are the user's data: @throws InputError on `source` (the file they came from,
+/// or "<command line>"), field "points", for fewer than 3 points or collinear points.
 PlaneFit FitSamplePlane(const std::vector<Eigen::Vector3d>& points_device_m,
-                        const Eigen::Vector3d& up_hint);
+                        const Eigen::Vector3d& up_hint,
+                        const std::string& source = "<command line>");
 
 }  // namespace hapticlab::runner

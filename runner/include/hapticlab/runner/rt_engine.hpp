@@ -55,8 +55,8 @@ namespace hapticlab::runner {
 inline const std::vector<std::string>& ForceStreamChannels() { return db::ForceChannelNames(); }
 /// Channels of the vibration stream.
 inline const std::vector<std::string>& VibrationStreamChannels() {
-  static const std::vector<std::string> k{std::string(db::kVibrationChannel.name)};
-  return k;
+  static const std::vector<std::string> kChannels{std::string(db::kVibrationChannel.name)};
+  return kChannels;
 }
 
 struct EngineOptions {
@@ -113,7 +113,9 @@ struct EngineStats {
 class RtEngine {
  public:
   /// The engine borrows everything; all must outlive it (streams at least until Stop).
-  /// `actuator`, `force_stream` and `vibration_stream` may be null.
+  /// `actuator`, `force_stream` and `vibration_stream` may be null; a stream that is given
+  /// has the layout of ForceStreamChannels() / VibrationStreamChannels() (PreconditionError
+  /// otherwise).
   RtEngine(renderer::HybridRenderer& renderer, devices::HapticDevice& device,
            devices::Actuator* actuator, const EngineOptions& options = {},
            db::TrajectoryStream* force_stream = nullptr,
@@ -140,7 +142,7 @@ class RtEngine {
   Watchdog& watchdog() { return watchdog_; }
   /// The newest device sample the force loop read, in the sample frame (for screens; one
   /// reader thread).
-  renderer::DeviceSample LastSample();
+  DeviceSample LastSample();
   /// Seconds since Start on the loops' clock (virtual or real).
   double Now() const;
 
@@ -183,7 +185,7 @@ class RtEngine {
   std::atomic<double> force_last_s_{0}, vibration_last_s_{0};
   std::atomic<std::uint64_t> recording_overflows_at_stop_{0};
   std::atomic<std::uint64_t> contact_ticks_{0}, empty_reads_{0};
-  renderer::DeviceSample last_good_;  // force loop only: the newest good sample (sample frame)
+  DeviceSample last_good_;  // force loop only: the newest good sample (sample frame)
   bool have_good_ = false;
   std::string priority_status_ = "not requested";
   LatencyHistogram force_late_, force_tick_, vibration_late_, vibration_tick_;

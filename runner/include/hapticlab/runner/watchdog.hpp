@@ -54,7 +54,7 @@ class Watchdog {
   /// ignored on a lost read), the loop's time, how late the tick woke, and the force the
   /// renderer wants. Returns the force to command: `force`, or zero on a fault (the same
   /// tick) and on any lost read (a short loss zeroes the force without faulting the trial).
-  Eigen::Vector3d Check(devices::ReadResult read, const renderer::DeviceSample& s, double now_s,
+  Eigen::Vector3d Check(devices::ReadResult read, const DeviceSample& s, double now_s,
                         double late_s, double period_s, const Eigen::Vector3d& force) noexcept;
   /// The fault of the last Check (kNone when healthy).
   FaultKind last() const { return last_; }

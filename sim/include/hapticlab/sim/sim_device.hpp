@@ -92,7 +92,7 @@ class Hand {
   // --- called by the simulated devices on the loops ---
   /// Moves to time `t_s` (seconds since the stimulus began) with the force felt since the
   /// last step; returns the stylus tip in the device frame.
-  renderer::ToolState Step(double t_s) noexcept;
+  ToolState Step(double t_s) noexcept;
   /// The device pushes with `force_N` [N, device frame] from now to the next step.
   void Push(const Eigen::Vector3d& force_device_N) noexcept;
   /// One actuator sample reaches the hand [m/s^2].
@@ -144,7 +144,7 @@ class SimDevice final : public devices::HapticDevice {
   /// since SetTimeBase). The hand is borrowed.
   SimDevice(const SimDeviceModel& m, Hand& hand, const devices::Clock* clock);
   devices::DeviceCapabilities Capabilities() const override;
-  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override;
+  devices::ReadResult Read(DeviceSample* out) noexcept override;
   void WriteForce(const Eigen::Vector3d& force_N) noexcept override;
   void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override;
   /// The link drops out (every read lost) from `start_s` for `duration_s` of the next run.

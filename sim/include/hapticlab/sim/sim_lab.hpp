@@ -143,7 +143,6 @@ class FeatureAccumulator {
   std::uint64_t force_samples() const { return n_force_; }
 
  private:
-  double fr_ = 1000, vr_ = 10000;
   std::uint64_t skip_f_ = 0, skip_v_ = 0, n_force_ = 0, n_vib_ = 0;
   renderer::Biquad hp_, hpt_, lp_, hpl_, bhp_, blp_;
   double fl2_ = 0, pat2_ = 0, fn_sum_ = 0, ft_sum_ = 0, pen_sum_ = 0, sp_ = 0, v2_ = 0;
