@@ -55,8 +55,8 @@ namespace hapticlab::runner {
 inline const std::vector<std::string>& ForceStreamChannels() { return db::ForceChannelNames(); }
 /// Channels of the vibration stream.
 inline const std::vector<std::string>& VibrationStreamChannels() {
-  static const std::vector<std::string> k{std::string(db::kVibrationChannel.name)};
-  return k;
+  static const std::vector<std::string> kChannels{std::string(db::kVibrationChannel.name)};
+  return kChannels;
 }
 
 struct EngineOptions {
