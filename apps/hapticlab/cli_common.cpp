@@ -36,6 +36,14 @@ void RunGuarded(const std::function<int()>& body) {
   if (rc != kExitOk) throw CLI::RuntimeError(rc);
 }
 
+void RunGuarded(const std::map<std::string, std::string>& flags, const std::function<int()>& body) {
+  RunGuarded([&] {
+    int rc = kExitOk;
+    WithFlags(flags, [&] { rc = body(); });
+    return rc;
+  });
+}
+
 int ParseAndRun(CLI::App& app, int argc, const char* const* argv) {
   try {
     app.parse(argc, argv);
@@ -60,6 +68,13 @@ void WithFlags(const std::map<std::string, std::string>& flags, const std::funct
     d.ThrowIfAny();
     throw;  // an InputError without diagnostics: as it was
   }
+}
+
+void PrintJson(const nlohmann::json& j) { fmt::print("{}\n", j.dump(2)); }
+
+std::function<void(const std::string&)> StderrLog(bool quiet) {
+  if (quiet) return [](const std::string&) {};
+  return [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
 }
 
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,

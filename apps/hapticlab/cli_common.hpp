@@ -4,6 +4,7 @@
 #include <CLI/CLI.hpp>
 #include <functional>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <string>
 
 namespace hapticlab::cli {
@@ -27,6 +28,10 @@ int Guard(const std::function<int()>& body);
 /// Guard for CLI11 callbacks: runs `body` and turns a non-zero exit into CLI11's exit path.
 void RunGuarded(const std::function<int()>& body);
 
+/// RunGuarded with WithFlags: the library's names for what the user gave ("db",
+/// "participant", ...) are shown as the options that gave them (`flags`: field -> "--flag").
+void RunGuarded(const std::map<std::string, std::string>& flags, const std::function<int()>& body);
+
 /// Parses `argv` with `app` (running the chosen command's callback) and returns the process's
 /// exit code: a command's own (CLI::RuntimeError), 0 for --help and --version, 2 for bad usage.
 int ParseAndRun(CLI::App& app, int argc, const char* const* argv);
@@ -35,6 +40,12 @@ int ParseAndRun(CLI::App& app, int argc, const char* const* argv);
 /// (a library's name for it, e.g. "firmware") replaced by the command-line option that set
 /// it ("--firmware"): library code names its own fields, never the CLI's flags.
 void WithFlags(const std::map<std::string, std::string>& flags, const std::function<void()>& body);
+
+/// A command's --json output: `j` indented by two spaces, then a newline, on stdout.
+void PrintJson(const nlohmann::json& j);
+
+/// The progress log of a long command: each line to stderr, or nowhere when `quiet`.
+std::function<void(const std::string&)> StderrLog(bool quiet);
 
 /// Registers a command group whose work lands with a later issue; running it explains that.
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,

@@ -36,7 +36,7 @@ void RegisterAnalyze(CLI::App& app) {
       "Keep the simulated observer's ratings in a study that also holds ratings by participants\n"
       "(left out by default; the report says how many)");
   cmd->callback([o] {
-    RunGuarded([&] {
+    RunGuarded({{"db", "--db"}, {"out", "--out"}}, [&] {
       const auto r = stats::Analyze(o->db, {.out_dir = o->out,
                                             .figures = !o->no_figures,
                                             .include_simulated = o->include_simulated});

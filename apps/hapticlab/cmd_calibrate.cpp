@@ -104,9 +104,7 @@ void RegisterCalibrate(CLI::App& study) {
   cmd->callback([a] {
     RunGuarded([&] {
       const auto spec = runner::LoadCalibration(a->targets);
-      auto log = [q = a->quiet](const std::string& s) {
-        if (!q) fmt::print(stderr, "{}\n", s);
-      };
+      const auto log = StderrLog(a->quiet);
       runner::CalibrationState st = runner::PrepareCalibration(spec, log);
       sim::ObserverParams best = st.start;
       std::vector<Param> params;

@@ -46,7 +46,7 @@ void RegisterDevice(CLI::App& app) {
         }
         j["hid"] = hids;
         if (*json) {
-          fmt::print("{}\n", j.dump(2));
+          PrintJson(j);
         } else {
           fmt::print("Novint Falcons: {}\n", j["falcons"].get<int>());
           fmt::print("audio outputs:{}\n", j["audio_outputs"].empty() ? " none" : "");

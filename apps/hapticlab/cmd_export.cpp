@@ -48,7 +48,7 @@ void RegisterExport(CLI::App& app) {
   cmd->add_flag("--no-trajectories", o->no_trajectories,
                 "csv: only ratings, trials and events (trajectory CSVs can be hundreds of MB)");
   cmd->callback([o] {
-    RunGuarded([&] {
+    RunGuarded({{"db", "--db"}, {"out", "--out"}, {"participant", "--participant"}}, [&] {
       if (!o->participant.empty() && o->format != "xdf")
         throw InputError(kCommandLine, 0, "--participant",
                          "only --format xdf selects participants");
@@ -69,7 +69,7 @@ void RegisterExport(CLI::App& app) {
       if (o->json) {
         nlohmann::json j = nlohmann::json::array();
         for (const auto& f : files) j.push_back({{"path", f.path}, {"rows", f.rows}});
-        fmt::print("{}\n", nlohmann::json{{"files", j}}.dump(2));
+        PrintJson(nlohmann::json{{"files", j}});
       } else {
         for (const auto& f : files) fmt::print("{} ({} rows)\n", f.path, f.rows);
       }

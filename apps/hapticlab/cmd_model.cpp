@@ -71,7 +71,7 @@ void AddCheck(CLI::App& model) {
             {"sample_rate_hz", m.vibration.sample_rate_hz}}},
           {"hybrid_cutoff_hz", m.hybrid_cutoff_hz}};
       if (*json)
-        fmt::print("{}\n", j.dump(2));
+        PrintJson(j);
       else
         fmt::print("{}: ok\n{}\n", *path, j.dump(2));
       return kExitOk;
@@ -244,7 +244,7 @@ void AddEnergy(CLI::App& model) {
         j["gain_bound_J"] = r.gain_bound_J;
       }
       if (o->json) {
-        fmt::print("{}\n", j.dump(2));
+        PrintJson(j);
       } else {
         fmt::print("algorithm {} on path {}: energy {:.6e} J", o->algorithm,
                    j["path"].get<std::string>(), r.energy_J);

@@ -265,12 +265,11 @@ void AddCvVibration(CLI::App& model) {
                           {"force_N", r.force_N},
                           {"split", r.train ? "train" : "test"},
                           {"es", r.es}});
-        fmt::print("{}\n", nlohmann::json{{"model_kind", *kind},
-                                          {"conditions", rows},
-                                          {"mean_es_train", cv.mean_es_train},
-                                          {"mean_es_test", cv.mean_es_test},
-                                          {"order", cv.order}}
-                               .dump(2));
+        PrintJson(nlohmann::json{{"model_kind", *kind},
+                                 {"conditions", rows},
+                                 {"mean_es_train", cv.mean_es_train},
+                                 {"mean_es_test", cv.mean_es_test},
+                                 {"order", cv.order}});
         return kExitOk;
       }
       fmt::print("{:>10} {:>9} {:>6} {:>7}\n", "speed m/s", "force N", "split", "E_s");
@@ -315,11 +314,10 @@ void AddCutoff(CLI::App& model) {
                            {"critical_5pct", adf.critical_5pct},
                            {"lags", adf.lags},
                            {"stationary", adf.rejects_unit_root}});
-        fmt::print("{}\n", nlohmann::json{{"found", c.found},
-                                          {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz)
-                                                                : nlohmann::json()},
-                                          {"tried", tried}}
-                               .dump(2));
+        PrintJson(
+            nlohmann::json{{"found", c.found},
+                           {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz) : nlohmann::json()},
+                           {"tried", tried}});
       } else if (c.found) {
         fmt::print("f_c = {:.1f} Hz (ADF {:.2f} < {:.2f} at 5 %)\n", c.cutoff_hz,
                    c.tried.back().second.statistic, c.tried.back().second.critical_5pct);

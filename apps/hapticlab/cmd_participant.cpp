@@ -31,7 +31,7 @@ void RegisterParticipant(CLI::App& app) {
   cmd->add_option("--db", o->db, "Study database (may not exist yet)")->required();
   cmd->add_option("--prefix", o->prefix, "Letters before the number")->capture_default_str();
   cmd->callback([o] {
-    RunGuarded([&] {
+    RunGuarded({{"db", "--db"}}, [&] {
       const auto p = protocols::LoadProtocol(o->protocol);
       std::set<std::string> taken;
       if (std::filesystem::exists(o->db)) {

@@ -147,9 +147,7 @@ void RegisterPower(CLI::App& study) {
       }
       const auto p = protocols::LoadProtocol(a->protocol);
       const auto t0 = std::chrono::steady_clock::now();
-      auto log = [q = a->quiet](const std::string& s) {
-        if (!q) fmt::print(stderr, "{}\n", s);
-      };
+      const auto log = StderrLog(a->quiet);
       const auto pool = runner::RecordFeltPool(p, a->pool, a->threads, log);
       const double t_pool =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

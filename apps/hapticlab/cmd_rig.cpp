@@ -113,7 +113,7 @@ void RegisterRig(CLI::App& app) {
                         {"max_force_N", r.max_force_N},
                         {"samples", sides}};
         if (o->json) {
-          fmt::print("{}\n", j.dump(2));
+          PrintJson(j);
           return kExitOk;
         }
         fmt::print("rig {} (sha256 {}), device {}\n", j["file"].get<std::string>(),
@@ -257,7 +257,7 @@ void RegisterRig(CLI::App& app) {
           j["twin_split_packets"] = sr->sim->twin->split_packets();
         }
         if (o->json) {
-          fmt::print("{}\n", j.dump(2));
+          PrintJson(j);
         } else {
           fmt::print(
               "{} on rig {}: {} ticks, {} empty reads, {} lost, {} in contact, {}; rest pose {}\n",

@@ -163,11 +163,10 @@ void AddRmAnova(CLI::App& s) {
                              {"hf_epsilon", Num(e.hf_epsilon)},
                              {"p_hf", Num(e.p_hf)},
                              {"between_only", e.between_only}});
-        fmt::print("{}\n", json{{"effects", effects},
-                                {"subjects", r.subjects.size()},
-                                {"dropped_subjects", r.dropped_subjects},
-                                {"dropped", DroppedJson(r)}}
-                               .dump(2));
+        PrintJson(json{{"effects", effects},
+                       {"subjects", r.subjects.size()},
+                       {"dropped_subjects", r.dropped_subjects},
+                       {"dropped", DroppedJson(r)}});
         return kExitOk;
       }
       fmt::print("{} subjects{}\n", r.subjects.size(),
@@ -262,12 +261,11 @@ void AddTukey(CLI::App& s) {
                            {"se", p.se},
                            {"df", p.df},
                            {"q", p.q}});
-        fmt::print("{}\n", json{{"method", r.method},
-                                {"factor", r.factor},
-                                {"comparisons", pairs},
-                                {"dropped_subjects", a.dropped_subjects},
-                                {"dropped", DroppedJson(a)}}
-                               .dump(2));
+        PrintJson(json{{"method", r.method},
+                       {"factor", r.factor},
+                       {"comparisons", pairs},
+                       {"dropped_subjects", a.dropped_subjects},
+                       {"dropped", DroppedJson(a)}});
         return kExitOk;
       }
       if (!subject->empty())
@@ -302,8 +300,7 @@ void AddKruskal(CLI::App& s) {
         json dunn = json::array();
         for (const auto& d : k.dunn)
           dunn.push_back({{"a", d.a}, {"b", d.b}, {"z", d.z}, {"p", d.p}, {"p_adj", d.p_adj}});
-        fmt::print("{}\n",
-                   json{{"H", k.H}, {"df", k.df}, {"p", k.p}, {"N", k.N}, {"dunn", dunn}}.dump(2));
+        PrintJson(json{{"H", k.H}, {"df", k.df}, {"p", k.p}, {"N", k.N}, {"dunn", dunn}});
         return kExitOk;
       }
       fmt::print("Kruskal-Wallis: H({:.0f}) = {:.4f}, p = {:.4g}, N = {}\n", k.df, k.H, k.p, k.N);
@@ -336,7 +333,7 @@ void AddShapiro(CLI::App& s) {
       else
         for (const auto& g : t.Levels(*by)) one(g, t.Where({{*by, g}}).y);
       if (c->json) {
-        fmt::print("{}\n", json{{"groups", groups}}.dump(2));
+        PrintJson(json{{"groups", groups}});
       } else {
         for (const auto& g : groups)
           fmt::print("{:<24} n = {:>5}  W = {:.5f}  p = {:.4g}\n", g["group"].get<std::string>(),
@@ -476,19 +473,21 @@ void AddLmm(CLI::App& s) {
   cmd->add_flag("--json", c->json, "Print results as JSON");
   cmd->callback([=] {
     RunGuarded([&] {
-      const auto f = stats::ParseLmmFormula(*formula, c->csv);
-      c->dv = f.response;
-      auto keys = f.Columns();
-      keys.erase(keys.begin());
-      stats::LmmOptions o;
-      o.reml = !*ml;
-      o.kenward_roger = *ddf == "kenward-roger";
-      const auto r = stats::FitLmm(Load(*c, keys), *formula, o);
-      if (c->json) {
-        fmt::print("{}\n", LmmJson(r).dump(2));
-        return kExitOk;
-      }
-      PrintLmm(r);
+      // The library names the fields "formula" and "ddf"; the user set them with these flags.
+      WithFlags({{"formula", "--formula"}, {"ddf", "--ddf"}}, [&] {
+        const auto f = stats::ParseLmmFormula(*formula, c->csv);
+        c->dv = f.response;
+        auto keys = f.Columns();
+        keys.erase(keys.begin());
+        stats::LmmOptions o;
+        o.reml = !*ml;
+        o.kenward_roger = *ddf == "kenward-roger";
+        const auto r = stats::FitLmm(Load(*c, keys), *formula, o);
+        if (c->json)
+          PrintJson(LmmJson(r));
+        else
+          PrintLmm(r);
+      });
       return kExitOk;
     });
   });

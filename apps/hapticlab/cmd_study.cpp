@@ -14,6 +14,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/devices/factory.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/plan_json.hpp"
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
@@ -129,16 +130,15 @@ runner::RecordMode ParseRecord(const std::string& s) {
 
 void PrintSummary(const runner::RunSummary& s, bool json_out) {
   if (json_out) {
-    fmt::print("{}\n", json{{"participant", s.participant},
-                            {"session", s.session_id},
-                            {"status", s.status},
-                            {"planned", s.planned},
-                            {"completed", s.completed},
-                            {"executed", s.executed},
-                            {"faults", s.faults},
-                            {"simulated_s", s.simulated_s},
-                            {"wall_s", s.wall_s}}
-                           .dump(2));
+    PrintJson(json{{"participant", s.participant},
+                   {"session", s.session_id},
+                   {"status", s.status},
+                   {"planned", s.planned},
+                   {"completed", s.completed},
+                   {"executed", s.executed},
+                   {"faults", s.faults},
+                   {"simulated_s", s.simulated_s},
+                   {"wall_s", s.wall_s}});
   } else {
     fmt::print(
         "{}: session {} {} — {}/{} trials completed, {} faults re-queued; {:.0f} s of stimuli in "
@@ -180,7 +180,7 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   o.record = ParseRecord(a.record);
   o.stop_after_trials = a.stop_after;
   o.rt = a.rt;
-  if (!a.quiet && !a.json) o.log = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+  if (!a.quiet && !a.json) o.log = StderrLog(false);
   InstallStopHandlers();
   const auto sum = session(o);
   PrintSummary(sum, a.json);
@@ -190,12 +190,8 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
 // RunGuarded, with the runner's names for what the user gave ("participant", "db", ...)
 // shown as the options that gave them.
 void RunStudyGuarded(const std::function<int()>& body) {
-  RunGuarded([&] {
-    int rc = kExitOk;
-    WithFlags({{"participant", "--participant"}, {"db", "--db"}, {"change_mode", "--change-mode"}},
-              [&] { rc = body(); });
-    return rc;
-  });
+  RunGuarded({{"participant", "--participant"}, {"db", "--db"}, {"change_mode", "--change-mode"}},
+             body);
 }
 
 }  // namespace
@@ -277,24 +273,10 @@ void RegisterStudy(CLI::App& app) {
         }
         const auto plan = protocols::Plan(p, *index);
         if (*as_json) {
-          json j = json::array();
-          for (const auto& t : plan)
-            j.push_back({{"trial", t.index + 1},
-                         {"plan_index", t.index},
-                         {"phase", protocols::ToString(t.phase)},
-                         {"material", t.material},
-                         {"comparison", t.comparison},
-                         {"method", t.method},
-                         {"repetition", t.repetition},
-                         {"left", t.left},
-                         {"right", t.right},
-                         {"rated", t.rated},
-                         {"break_before", t.break_before}});
-          fmt::print("{}\n", json{{"study", p.name},
-                                  {"participant_index", *index},
-                                  {"participant_seed", protocols::ParticipantSeed(p, *index)},
-                                  {"trials", j}}
-                                 .dump(2));
+          PrintJson(json{{"study", p.name},
+                         {"participant_index", *index},
+                         {"participant_seed", protocols::ParticipantSeed(p, *index)},
+                         {"trials", runner::PlanToJson(plan)}});
           return kExitOk;
         }
         fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n",
@@ -464,7 +446,7 @@ void RegisterStudy(CLI::App& app) {
                           {"faulted", s.faulted},
                           {"duplicates", s.duplicates},
                           {"session_status", s.session_status}});
-          fmt::print("{}\n", json{{"participants", ps}}.dump(2));
+          PrintJson(json{{"participants", ps}});
         } else {
           fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned",
                      "completed", "faulted", "duplicates", "session");

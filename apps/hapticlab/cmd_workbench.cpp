@@ -104,7 +104,7 @@ void AddEffectsList(CLI::App& app) {
                      e->description(), line);
       }
       if (*json)
-        fmt::print("{}\n", j.dump(2));
+        PrintJson(j);
       else
         fmt::print("baseline (the thesis's model): {}\n", fmt::join(BaselineEffects(), ", "));
       return kExitOk;
@@ -135,18 +135,17 @@ void AddMeasurement(CLI::App& app) {
         if (o->json) {
           nlohmann::json ranges;
           for (const auto& [k, v] : s.ranges) ranges[k] = {v.first, v.second};
-          fmt::print("{}\n", nlohmann::json{{"file", o->file},
-                                            {"material", m.material},
-                                            {"samples", s.samples},
-                                            {"duration_s", s.duration_s},
-                                            {"rate_hz", s.rate_hz},
-                                            {"gaps", s.gaps},
-                                            {"max_gap_s", s.max_gap_s},
-                                            {"contact_samples", s.contact_samples},
-                                            {"has_acceleration", m.has_acceleration},
-                                            {"ranges", ranges},
-                                            {"warnings", s.warnings}}
-                                 .dump(2));
+          PrintJson(nlohmann::json{{"file", o->file},
+                                   {"material", m.material},
+                                   {"samples", s.samples},
+                                   {"duration_s", s.duration_s},
+                                   {"rate_hz", s.rate_hz},
+                                   {"gaps", s.gaps},
+                                   {"max_gap_s", s.max_gap_s},
+                                   {"contact_samples", s.contact_samples},
+                                   {"has_acceleration", m.has_acceleration},
+                                   {"ranges", ranges},
+                                   {"warnings", s.warnings}});
           return kExitOk;
         }
         fmt::print(

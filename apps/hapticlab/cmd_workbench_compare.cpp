@@ -211,13 +211,12 @@ void AddCompare(CLI::App& app) {
                         {"mean", f.mean},
                         {"rms", f.rms}});
         auto j = ErrorsJson(c.errors);
-        fmt::print("{}\n", nlohmann::json{{"error", c.errors.overall},
-                                          {"channels", j["channels"]},
-                                          {"rms", j["rms"]},
-                                          {"summary", {{"axes", ax}, {"largest", lg}}},
-                                          {"breakdown", b},
-                                          {"plots", files}}
-                               .dump(2));
+        PrintJson(nlohmann::json{{"error", c.errors.overall},
+                                 {"channels", j["channels"]},
+                                 {"rms", j["rms"]},
+                                 {"summary", {{"axes", ax}, {"largest", lg}}},
+                                 {"breakdown", b},
+                                 {"plots", files}});
         return kExitOk;
       }
       fmt::print("{} on {}: {}\n", o->model, o->measurement, ErrorsLine(c.errors));

@@ -103,15 +103,12 @@ void AddDiagnose(CLI::App& app) {
                         {"channel", x.channel},
                         {"share", x.share},
                         {"description", x.description}});
-        fmt::print(
-            "{}\n",
-            nlohmann::json{
-                {"baseline_error", dx.baseline_error},
-                {"baseline_channels", dx.baseline_channel},
-                {"candidates", c},
-                {"unexplained",
-                 {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}}}
-                .dump(2));
+        PrintJson(nlohmann::json{
+            {"baseline_error", dx.baseline_error},
+            {"baseline_channels", dx.baseline_channel},
+            {"candidates", c},
+            {"unexplained",
+             {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}}});
         return kExitOk;
       }
       if (u.flagged) fmt::print("{}\n\n", u.summary);

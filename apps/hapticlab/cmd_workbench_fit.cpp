@@ -104,7 +104,7 @@ void AddFit(CLI::App& app) {
             {"params", params},
             {"out", o->out}};
         j.update(FitReportJson(rep));
-        fmt::print("{}\n", j.dump(2));
+        PrintJson(j);
       } else {
         fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
         if (changes) {

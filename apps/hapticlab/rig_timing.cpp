@@ -171,7 +171,7 @@ int RunTimingCheck(const TimingCheckArgs& a) {
                         {"jitter_us", Percentiles(tm.vibration_late)},
                         {"misses", st.vibration_deadline_misses},
                         {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
-    fmt::print("{}\n", j.dump(2));
+    PrintJson(j);
   } else {
     fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n",
                st.achieved_force_rate_hz, a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);

@@ -46,7 +46,7 @@ bool IsPseudonymousCode(const std::string& code) {
 Database OpenForReading(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-    throw InputError(path, 0, "--db", "no such database file");
+    throw InputError(path, 0, "db", "no such database file");
   std::string report;
   try {
     Database d(path, {.create = false, .read_only = true});
@@ -94,18 +94,18 @@ void CheckSharedMemoryFile(const std::string& path) {
   if (::stat(wal.c_str(), &ws) == 0 &&
       ((ws.st_mode & 0222) == 0 || ::access(wal.c_str(), W_OK) != 0))
     throw InputError(
-        wal, 0, "--db",
+        wal, 0, "db",
         "the database's write-ahead log is read-only; make it (and the -shm file) "
         "writable: it may hold committed trials that are not yet in the database file");
   const std::string shm = path + "-shm";
   struct stat st {};
   if (::stat(shm.c_str(), &st) != 0) return;  // none: SQLite creates it
   if ((st.st_mode & 0222) == 0 || ::access(shm.c_str(), W_OK) != 0)
-    throw InputError(shm, 0, "--db",
+    throw InputError(shm, 0, "db",
                      "the database's shared-memory file is read-only; make it writable (and the "
                      "-wal file) or, when no HapticLab process uses the database, delete it");
   if (st.st_size % 32768 != 0)
-    throw InputError(shm, 0, "--db",
+    throw InputError(shm, 0, "db",
                      "the database's shared-memory file is truncated (" +
                          std::to_string(st.st_size) +
                          " bytes); when no HapticLab process uses the database, delete it");
@@ -307,7 +307,7 @@ namespace hapticlab::db {
 WriterLease::WriterLease(const std::string& db_path) {
   fd_ = ::open(db_path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0)
-    throw InputError(db_path, 0, "--db", std::string("cannot open: ") + std::strerror(errno));
+    throw InputError(db_path, 0, "db", std::string("cannot open: ") + std::strerror(errno));
   if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
     const int err = errno;
     ::close(fd_);
@@ -322,12 +322,12 @@ WriterLease::WriterLease(const std::string& db_path) {
       } catch (const std::exception&) {
         // An older schema or a database being created: the generic message stands.
       }
-      throw InputError(db_path, 0, "--db",
+      throw InputError(db_path, 0, "db",
                        holder +
                            " is writing this study database; one writer at a time: wait "
                            "for it to finish, or stop it, then resume");
     }
-    throw InputError(db_path, 0, "--db", std::string("cannot lock: ") + std::strerror(err));
+    throw InputError(db_path, 0, "db", std::string("cannot lock: ") + std::strerror(err));
   }
   // Name the holder for the next one who tries.
   try {

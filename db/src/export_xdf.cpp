@@ -203,9 +203,9 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
   if (out.ends_with(".xdf")) {
     if (sessions.size() != 1)
       throw InputError(
-          out, 0, "--out",
+          out, 0, "out",
           fmt::format("a file name holds one session and the selection has {}; name a directory, "
-                      "or choose one with --participant",
+                      "or choose one participant",
                       sessions.size()));
     files.push_back({out, WriteSession(sessions[0], out)});
     return files;

@@ -192,7 +192,7 @@ std::vector<SessionRecord> LoadSessions(const Database& db, const std::string& p
     }
   }
   if (!found)
-    throw InputError(db.path(), 0, "--participant",
+    throw InputError(db.path(), 0, "participant",
                      "no participant " + participant + " in this database");
   return out;
 }

@@ -9,7 +9,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 
 namespace hapticlab::devices {
 
@@ -46,13 +46,7 @@ RatingEvent ParseHidReport(const HidReportLayout& L, const std::uint8_t* d, std:
 }
 
 HidReportLayout LoadHidLayout(const std::string& path) {
-  toml::table t;
-  try {
-    t = toml::parse(ReadTomlFile(path), path);
-  } catch (const toml::parse_error& err) {
-    throw InputError(path, static_cast<int>(err.source().begin.line), "",
-                     std::string(err.description()));
-  }
+  const toml::table t = ParseTomlFile(path);
   Diagnostics d;
   HidReportLayout L;
   // Range-checked before the conversion (an offset outside a 64-byte report would index

@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
@@ -190,13 +190,7 @@ void SaveModel(const Model& m, const std::string& path, const Replay* r) {
 
 Model LoadModel(const std::string& path) {
   const auto mm = renderer::LoadMaterial(path);  // validates the renderer's part
-  toml::table doc;
-  try {
-    doc = toml::parse(ReadTomlFile(path), path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlFile(path);
   Diagnostics diag;
   auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
   Model m;

@@ -13,6 +13,7 @@
 #include "adaptive_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 
 namespace hapticlab::protocols {
 namespace {
@@ -142,18 +143,11 @@ void CheckParticipantCode(const Protocol& p, const std::string& code) {
   bool plain = !code.empty() && code.size() <= 32;
   for (unsigned char c : code) plain = plain && (std::isalnum(c) || c == '-' || c == '_');
   if (!plain || !std::regex_match(code, std::regex(p.participant_code, std::regex::ECMAScript)))
-    throw InputError(p.file, 0, "--participant", "'" + code + "' is not " + rule);
+    throw InputError(p.file, 0, "participant", "'" + code + "' is not " + rule);
 }
 
 Protocol ParseProtocol(const std::string& text, const std::string& file) {
-  CheckTomlLimits(text, file);
-  toml::table doc;
-  try {
-    doc = toml::parse(text, file);
-  } catch (const toml::parse_error& e) {
-    throw InputError(file, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlText(text, file);
   Diagnostics diag;
   Reader r(file, &diag);
   Protocol p;

@@ -12,6 +12,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/delaunay.hpp"
 
@@ -124,10 +125,9 @@ void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::p
   }
   toml::table doc;
   try {
-    doc = toml::parse(ReadTomlFile(path.string()), path.string());
-  } catch (const toml::parse_error& e) {
-    r.diag().Add(path.string(), static_cast<int>(e.source().begin.line), "",
-                 std::string(e.description()));
+    doc = ParseTomlFile(path.string(), "vibration file");
+  } catch (const InputError& e) {  // collected with the including file's other problems
+    for (const Diagnostic& d : e.diagnostics()) r.diag().Add(d.file, d.line, d.field, d.message);
     return;
   }
   Diagnostics inner;
@@ -232,14 +232,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
 }  // namespace
 
 MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
-  CheckTomlLimits(text, name);
-  toml::table doc;
-  try {
-    doc = toml::parse(text, name);
-  } catch (const toml::parse_error& e) {
-    throw InputError(name, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlText(text, name);
   Diagnostics diag;
   Reader r(name, &diag);
   const auto base = std::filesystem::path(name).parent_path();

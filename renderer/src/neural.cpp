@@ -11,8 +11,8 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/core/toml_util.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -245,13 +245,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
 }
 
 NeuralModel LoadNeuralModel(const std::string& path) {
-  toml::table doc;
-  try {
-    doc = toml::parse(ReadTomlFile(path), path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlFile(path);
   Diagnostics d;
   auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
   auto numbers = [&](const toml::node* n, const std::string& key, std::vector<double>* out) {

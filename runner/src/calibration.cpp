@@ -12,7 +12,7 @@
 #include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/stats/power.hpp"
 
@@ -116,13 +116,7 @@ bool IsScaleParam(const std::string& name) {
 }
 
 CalibrationSpec LoadCalibration(const std::string& path) {
-  toml::table doc;
-  try {
-    doc = toml::parse(ReadTomlFile(path, "calibration targets file"), path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlFile(path, "calibration targets file");
   Diagnostics d;
   CalibrationSpec s;
   s.path = path;

@@ -10,6 +10,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/db/database.hpp"
 
 namespace hapticlab::runner {
@@ -113,14 +114,7 @@ Eigen::Isometry3d RigFile::DeviceFromSample(int side) const {
 }
 
 RigFile ParseRig(const std::string& text, const std::string& path) {
-  CheckTomlLimits(text, path);  // toml++ recurses per dotted part: refuse hostile input first
-  toml::table doc;
-  try {
-    doc = toml::parse(text, path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlText(text, path);
   Diagnostics d;
   RigFile r = DefaultRig("sim");
   r.path = path;

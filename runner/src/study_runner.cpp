@@ -16,6 +16,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/plan_json.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "lab.hpp"
 #include "session_queue.hpp"
@@ -163,18 +164,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   // Provenance: everything needed to reproduce this session.
   json models = json::object();
   for (const auto& [id, h] : lab.model_hashes) models[id] = h;
-  json plan_json = json::array();
-  for (const auto& t : plan)
-    plan_json.push_back({{"index", t.index},
-                         {"phase", protocols::ToString(t.phase)},
-                         {"material", t.material},
-                         {"comparison", t.comparison},
-                         {"method", t.method},
-                         {"repetition", t.repetition},
-                         {"left", t.left},
-                         {"right", t.right},
-                         {"rated", t.rated},
-                         {"break_before", t.break_before}});
+  const json plan_json = PlanToJson(plan);
   const json prov = {
       {"protocol_hash", hash},
       // Relative to the database's folder (an absolute path would carry a user name).

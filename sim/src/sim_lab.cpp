@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/io.hpp"
+#include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/biquad.hpp"
 #include "truth_internal.hpp"
@@ -192,13 +192,7 @@ void ParseObserverTable(const toml::table& o, const std::string& path, Diagnosti
 }  // namespace
 
 ObserverParams LoadObserver(const std::string& path) {
-  toml::table doc;
-  try {
-    doc = toml::parse(ReadTomlFile(path, "observer file"), path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlFile(path, "observer file");
   Diagnostics diag;
   ObserverParams ob;
   CheckKeys(doc, path, "", {"observer", "criterion"}, diag);
@@ -232,13 +226,7 @@ ObserverParams LoadObserver(const std::string& path) {
 }
 
 ProfileSet LoadProfiles(const std::string& path) {
-  toml::table doc;
-  try {
-    doc = toml::parse(ReadTomlFile(path), path);
-  } catch (const toml::parse_error& e) {
-    throw InputError(path, static_cast<int>(e.source().begin.line), "",
-                     std::string(e.description()));
-  }
+  const toml::table doc = ParseTomlFile(path);
   Diagnostics diag;
   ProfileSet set;
   auto num = [&](const toml::table& t, const std::string& pre, const char* key, double* out,

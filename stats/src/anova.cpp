@@ -188,10 +188,10 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       varies = !fresh && it->second != data.keys[fcol[f]][r];
     }
     if (!varies)
-      throw InputError(data.source, 0, within[f],
-                       "'" + within[f] + "' is a between-subjects factor (every " + subject +
-                           " has one level of it): give it with --between " + within[f] +
-                           ", not as a within factor");
+      throw InputError(
+          data.source, 0, within[f],
+          "'" + within[f] + "' is a between-subjects factor (every " + subject +
+              " has one level of it): give it as a between factor, not as a within one");
   }
   int ncells = 1;
   for (int l : nlev) ncells *= l;
@@ -228,7 +228,7 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       throw InputError(data.source, 0, between[f],
                        "'" + between[f] + "' varies within " + subject + " " + s +
                            ": a between factor must be constant per " + subject +
-                           " (give it with --within)");
+                           " (give it as a within factor)");
     }
     a.group = group;
     auto& c = a.cell[static_cast<std::size_t>(cell)];

@@ -232,18 +232,19 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   {
     Eigen::ColPivHouseholderQR<MatrixXd> qr(d.X);
     if (qr.rank() < p)
-      throw InputError(data.source, 0, "--formula",
+      throw InputError(data.source, 0, "formula",
                        "the fixed-effects design is rank deficient (rank " +
                            std::to_string(qr.rank()) + " < " + std::to_string(p) +
                            " columns): a cell of the design has no data?");
   }
   if (d.X.rows() <= p)
-    throw InputError(data.source, 0, "--formula", "fewer observations than fixed effects");
+    throw InputError(data.source, 0, "formula", "fewer observations than fixed effects");
   if (options.kenward_roger && !options.reml)
-    throw InputError(data.source, 0, "--ddf",
-                     "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest): drop --ml");
+    throw InputError(
+        data.source, 0, "ddf",
+        "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest), not a maximum-likelihood one");
   if (options.kenward_roger && d.X.rows() > kKenwardRogerMaxRows)
-    throw InputError(data.source, 0, "--ddf",
+    throw InputError(data.source, 0, "ddf",
                      "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) +
                          " observations exceed " + std::to_string(kKenwardRogerMaxRows) +
                          " (use satterthwaite)");

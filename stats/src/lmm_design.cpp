@@ -57,7 +57,7 @@ void AddTerms(const std::string& piece, std::vector<std::vector<std::string>>& t
     auto vars = SplitTop(f, ':');
     for (const auto& v : vars)
       if (!ValidName(v))
-        throw InputError(source, 0, "--formula",
+        throw InputError(source, 0, "formula",
                          "expected a column name, got '" + v + "' in '" + piece + "'");
     ops.push_back(vars);
   }
@@ -188,28 +188,28 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
   const std::string s = Strip(formula);
   const auto tilde = s.find('~');
   if (tilde == std::string::npos || s.find('~', tilde + 1) != std::string::npos)
-    throw InputError(source, 0, "--formula", "expected 'response ~ terms', got '" + formula + "'");
+    throw InputError(source, 0, "formula", "expected 'response ~ terms', got '" + formula + "'");
   LmmFormula f;
   f.response = s.substr(0, tilde);
   if (!ValidName(f.response))
-    throw InputError(source, 0, "--formula", "expected a response column before '~'");
+    throw InputError(source, 0, "formula", "expected a response column before '~'");
   if (s.find('-') != std::string::npos)
-    throw InputError(source, 0, "--formula",
+    throw InputError(source, 0, "formula",
                      "'-' is not supported (the fixed part always has an intercept)");
   for (const auto& piece : SplitTop(s.substr(tilde + 1), '+')) {
-    if (piece.empty()) throw InputError(source, 0, "--formula", "empty term in '" + formula + "'");
+    if (piece.empty()) throw InputError(source, 0, "formula", "empty term in '" + formula + "'");
     if (piece.front() == '(') {
       if (piece.back() != ')')
-        throw InputError(source, 0, "--formula", "unbalanced parentheses in '" + piece + "'");
+        throw InputError(source, 0, "formula", "unbalanced parentheses in '" + piece + "'");
       const std::string in = piece.substr(1, piece.size() - 2);
       const auto bar = in.find('|');
       if (bar == std::string::npos || in.find('|', bar + 1) != std::string::npos)
-        throw InputError(source, 0, "--formula",
+        throw InputError(source, 0, "formula",
                          "expected '(terms | group)', got '" + piece + "' ('||' is not supported)");
       LmmFormula::Random r;
       r.group = in.substr(bar + 1);
       if (!ValidName(r.group))
-        throw InputError(source, 0, "--formula",
+        throw InputError(source, 0, "formula",
                          "expected a grouping column after '|' in '" + piece + "'");
       bool saw_zero = false;
       for (const auto& t : SplitTop(in.substr(0, bar), '+')) {
@@ -223,12 +223,12 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
       r.intercept = !saw_zero;
       Canonical(r.terms);
       if (!r.intercept && r.terms.empty())
-        throw InputError(source, 0, "--formula", "random term '" + piece + "' is empty");
+        throw InputError(source, 0, "formula", "random term '" + piece + "' is empty");
       f.random.push_back(r);
     } else if (piece == "1") {
       continue;
     } else if (piece == "0") {
-      throw InputError(source, 0, "--formula",
+      throw InputError(source, 0, "formula",
                        "a fixed part without intercept ('0') is not supported");
     } else {
       AddTerms(piece, f.fixed, source);
@@ -236,7 +236,7 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
   }
   if (f.random.empty())
     throw InputError(
-        source, 0, "--formula",
+        source, 0, "formula",
         "no random term such as '(1 | participant)': use rm-anova for a fixed-effects model");
   Canonical(f.fixed);
   return f;
@@ -295,7 +295,7 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
       for (const auto& v : t) has_factor = has_factor || !cols.at(v).numeric;
       if (!r.intercept && has_factor && !full)
         throw InputError(
-            data.source, 0, "--formula",
+            data.source, 0, "formula",
             "a random term without intercept may hold numeric columns or one factor only");
       TermColumns(t, cols, n, full, zc, b.names);
     }

@@ -177,8 +177,9 @@ PowerResult PowerFromJson(const std::string& text, const std::string& file) {
       r.rows.push_back(std::move(pr));
     }
   } catch (const json::exception& e) {
-    throw InputError(file, 0, "",
-                     std::string("not a study power result (written with --json): ") + e.what());
+    throw InputError(
+        file, 0, "",
+        std::string("not a study power result (the JSON the power analysis writes): ") + e.what());
   }
   return r;
 }

@@ -143,7 +143,7 @@ TEST(StatsCli, ABetweenFactorGivenAsWithinExitsWithTwoAndSaysSo) {
                              &out),
             2);
   EXPECT_NE(out.find("'group' is a between-subjects factor"), std::string::npos) << out;
-  EXPECT_NE(out.find("--between group"), std::string::npos) << out;
+  EXPECT_NE(out.find("give it as a between factor"), std::string::npos) << out;
 }
 
 TEST(StatsCli, MissingScoresAreAnErrorOrDropTheirSubjectByName) {

@@ -92,7 +92,8 @@ TEST(Protocol, ParticipantCodesFollowThePatternAndAreNeverNames) {
       CheckParticipantCode(p, bad);
       ADD_FAILURE() << "accepted " << bad;
     } catch (const InputError& e) {
-      EXPECT_NE(std::string(e.what()).find("--participant"), std::string::npos) << e.what();
+      ASSERT_EQ(e.diagnostics().size(), 1U) << e.what();
+      EXPECT_EQ(e.diagnostics()[0].field, "participant") << e.what();  // the CLI: --participant
     }
   }
   // A protocol may declare its own pattern.

@@ -121,7 +121,7 @@ TEST(MixedAnova, ABetweenFactorGivenAsWithinIsNamed) {
   } catch (const InputError& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("'group' is a between-subjects factor"), std::string::npos) << m;
-    EXPECT_NE(m.find("--between group"), std::string::npos) << m;
+    EXPECT_NE(m.find("give it as a between factor"), std::string::npos) << m;
   }
   // And a within factor given as between.
   try {

@@ -43,7 +43,7 @@ struct LmmFormula {
   std::vector<std::string> Columns() const;
 };
 
-/// @throws hapticlab::InputError naming `source` and the field "--formula" for bad syntax
+/// @throws hapticlab::InputError naming `source` and the field "formula" for bad syntax
 LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source = "");
 
 /// Kenward-Roger works on dense n x n matrices: larger data sets are refused.
@@ -101,7 +101,7 @@ struct LmmResult : SolverSummary {
 };
 
 /// @param data long table with every formula column as a key column (y is the response)
-/// @throws hapticlab::InputError (source, "--formula") for a column missing from the table,
+/// @throws hapticlab::InputError (source, "formula") for a column missing from the table,
 ///         a factor with one level, or a rank-deficient fixed-effects design
 LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOptions& options = {});
 
