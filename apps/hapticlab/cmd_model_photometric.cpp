@@ -262,7 +262,9 @@ void AddPhotometric(CLI::App& model) {
         if (!c) throw std::runtime_error(o->csv + ": cannot write");
         for (int i = 0; i < r.height; ++i)
           for (int j = 0; j < r.width; ++j)
-            std::fprintf(c, "%.9g%c", h[static_cast<std::size_t>(i * r.width + j)],
+            std::fprintf(c, "%.9g%c",
+                         h[static_cast<std::size_t>(i) * static_cast<std::size_t>(r.width) +
+                           static_cast<std::size_t>(j)],
                          j + 1 == r.width ? '\n' : ',');
         std::fclose(c);
       }

@@ -25,7 +25,7 @@ namespace hapticlab::cli {
 namespace {
 
 using nlohmann::json;
-const char* kSides[2] = {"left", "right"};
+const char* const kSides[2] = {"left", "right"};
 
 json Vec(const Eigen::Vector3d& v) { return json::array({v.x(), v.y(), v.z()}); }
 

@@ -28,7 +28,7 @@ TEST(Replay, ReadsTheLatestSampleAtOrBeforeTheClockThenLosesTheLink) {
   double now_s = 0;
   ReplayDevice dev(Stroke(), [&] { return now_s; });
   EXPECT_EQ(dev.Capabilities().name, "replay");
-  renderer::DeviceSample out;
+  DeviceSample out;
   const auto read = [&](double t_s) {
     now_s = t_s;
     return dev.Read(&out);
