@@ -8,6 +8,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -229,18 +230,20 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
   HL_REQUIRE(nf != nullptr, "the cost functor must exist");
   out.normal_summary = nf->summary;
 
-  // Friction. The Coulomb level is mu_k times the load; the measured load carries the force
-  // sensor's noise, and through the bristle's saturation (|F| <= f_C) that noise biases the
-  // replayed friction (errors in variables). The Hunt-Crossley law just fitted predicts the load
-  // from the penetration, a different sensor whose noise is independent of the forces: the
-  // friction replay uses that prediction (an instrument for the load) when the law explains the
-  // strokes' load.
-  wb::Replay fr_replay = r;
+  // Friction. The Coulomb level is mu_k times the measured load, whose force-sensor noise biases
+  // the replayed friction through the bristle's saturation |F| <= f_C (errors in variables).
+  // With load_from_normal_law (off by default) the friction replay takes the load from the
+  // Hunt-Crossley law just fitted, predicted from the penetration instead; measured in
+  // docs/modeling-geometry-contact.md and not the default, because the law's own error then
+  // enters mu_k without being in its interval.
+  std::optional<wb::Replay> law_load;
   if (o.load_from_normal_law) {
+    law_load = r;
     const auto pred = wb::Predict(model, r).fn_N;
     for (std::size_t i = 0; i < r.samples().size(); ++i)
-      if (r.samples()[i].contact && pred[i] > 0) fr_replay.mutable_samples()[i].fload_N = pred[i];
+      if (r.samples()[i].contact && pred[i] > 0) law_load->mutable_samples()[i].fload_N = pred[i];
   }
+  const wb::Replay& fr_replay = law_load ? *law_load : r;
   out.algorithm1 = AlgorithmOne(fr_replay, wb::Split::kAll, o);
   fo.normal = false;
   fo.friction = true;
