@@ -141,7 +141,9 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
   if (test::RunCommand("command -v xvfb-run") == 0) {
     // (Leak checking off for this child under ASan: Mesa's unloaded driver, see
     // tests/CMakeLists.txt.)
-    ASSERT_EQ(test::RunCommand("ASAN_OPTIONS=detect_leaks=0 xvfb-run -a " + Cli() + " study run " +
+    // (with_display.sh: xvfb-run's own clean-up failures must not replace the exit status.)
+    ASSERT_EQ(test::RunCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(HL_SOURCE_DIR) +
+                                   "/tests/util/with_display.sh " + Cli() + " study run " +
                                    Small() + " --db " + dir.File("c.db") +
                                    " --participant P01 --ui --stop-after 3 --quiet",
                                &out),
