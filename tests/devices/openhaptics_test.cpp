@@ -30,10 +30,10 @@ TEST(OpenHaptics, AnInitialisationErrorIsReportedWithItsCode) {
     EXPECT_NE(std::string(e.what()).find("error " + std::to_string(0x0301)), std::string::npos)
         << e.what();
   }
-  EXPECT_STREQ(fake_hd::state.init_name, "Phantom 1");
+  EXPECT_EQ(fake_hd::state.init_name, "Phantom 1");
   fake_hd::state = {};
   (void)OpenOpenHaptics();
-  EXPECT_STREQ(fake_hd::state.init_name, "(default)");
+  EXPECT_EQ(fake_hd::state.init_name, "(default)");
 }
 
 TEST(OpenHaptics, MillimetresInMetresOutAndStiffnessInNewtonsPerMetre) {

@@ -6,6 +6,7 @@
 // fake_hd::Tick() to run the scheduled servo callback once, as the HD servo loop would.
 
 #include <cstdint>
+#include <string>
 
 using HHD = unsigned int;
 using HDerror = unsigned int;
@@ -42,7 +43,7 @@ struct State {
   double p_mm[3] = {0, 0, 0}, v_mmps[3] = {0, 0, 0};
   double force_N[3] = {0, 0, 0};  // the last HD_CURRENT_FORCE
   bool force_output = false, scheduler_running = false, disabled = false;
-  const char* init_name = "unset";
+  std::string init_name = "unset";  // the device name hdInitDevice was given
   HDSchedulerCallback callback = nullptr;
   void* user = nullptr;
   int frames = 0;
