@@ -2,12 +2,11 @@
 // unit suffixes, BIDS labels, the database's time stamps as integers, and the session clock
 // that places overlapping (simulated) trials back to back.
 
-#include "../../db/src/interchange_internal.hpp"
-
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 
+#include "../../db/src/interchange_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -47,9 +46,9 @@ TEST(InterchangeLoad, StampsAreExactMicrosecondsSince1970) {
   EXPECT_EQ(*ParseUtcMicros("2026-11-22T17:42:55.123457Z") -
                 *ParseUtcMicros("2026-11-22T17:42:55.123456Z"),
             1);
-  EXPECT_EQ(*ParseUtcMicros("2026-03-01T00:00:00.000Z") -
-                *ParseUtcMicros("2026-02-28T23:59:59.500Z"),
-            500000);
+  EXPECT_EQ(
+      *ParseUtcMicros("2026-03-01T00:00:00.000Z") - *ParseUtcMicros("2026-02-28T23:59:59.500Z"),
+      500000);
   EXPECT_FALSE(ParseUtcMicros(""));
   EXPECT_FALSE(ParseUtcMicros("2026-01-01T00:00:00.000"));  // no zone: not UTC
   EXPECT_FALSE(ParseUtcMicros("2026-01-01 00:00:00Z"));
@@ -107,9 +106,10 @@ TEST(InterchangeLoad, UnknownParticipantAndDisagreeingChunksAreRefused) {
     EXPECT_NE(std::string(e.what()).find("i.db"), std::string::npos) << e.what();
   }
   // A chunk of one stream at another rate: the recording has no one clock.
-  d.Exec(fmt::format("UPDATE trajectory_chunk SET rate_hz = 50 WHERE trial_id = {} AND "
-                     "start_time_s > 0",
-                     ids.b));
+  d.Exec(
+      fmt::format("UPDATE trajectory_chunk SET rate_hz = 50 WHERE trial_id = {} AND "
+                  "start_time_s > 0",
+                  ids.b));
   EXPECT_THROW(LoadSessions(d, ""), std::runtime_error);
   // A session start that is not a stamp.
   Database d2(dir.File("j.db"));

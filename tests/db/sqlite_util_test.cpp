@@ -91,7 +91,8 @@ TEST(SqliteUtil, ErrorsNameTheFileAndExplainTheCode) {
   const auto bad_sql = Message([&] { Stmt s(c.db, "SELEC nonsense"); });
   EXPECT_NE(bad_sql.find(path), std::string::npos) << bad_sql;
   EXPECT_NE(bad_sql.find("SELEC nonsense"), std::string::npos) << bad_sql;
-  const auto dup = Message([&] { ExecSql(c.db, "INSERT INTO t VALUES (1); INSERT INTO t VALUES (1)"); });
+  const auto dup =
+      Message([&] { ExecSql(c.db, "INSERT INTO t VALUES (1); INSERT INTO t VALUES (1)"); });
   EXPECT_NE(dup.find("UNIQUE"), std::string::npos) << dup;
   EXPECT_NE(dup.find(path), std::string::npos) << dup;
   Stmt ins(c.db, "INSERT INTO t VALUES (?)");
