@@ -96,7 +96,6 @@ TEST(TimingReport, AVirtualClockStudySaysSo) {
             std::string::npos);
 }
 
-
 // A study on the small test protocol (scale 0-100) with one trial of `ratings`.
 std::int64_t RatedStudy(db::Database& d, const std::string& name, const std::string& code,
                         const std::vector<db::Rating>& ratings) {
@@ -122,9 +121,9 @@ TEST(ReportSources, APersonsStudyLeavesTheSimulatedRatingsOut) {
     db::Database d(path);
     RatedStudy(d, "human", "P01",
                {{"roughness", 70, 1.0, "window"}, {"overall", 20, 1.5, db::kRaterSimulated}});
-    RatedStudy(d, "sim", "P02",
-               {{"roughness", 40, 0.5, db::kRaterSimulated},
-                {"overall", 45, 0.5, db::kRaterSimulated}});
+    RatedStudy(
+        d, "sim", "P02",
+        {{"roughness", 40, 0.5, db::kRaterSimulated}, {"overall", 45, 0.5, db::kRaterSimulated}});
   }
   RatingSources src;
   const auto t = RatingsFromDatabase(path, false, &src);

@@ -99,8 +99,14 @@ TEST(ReportTables, AnovaTableUsesTheCorrectedPWhereSphericityIsViolated) {
                        .gg_epsilon = 0.6,
                        .p_gg = 0.08});
   // material: two levels, significant; no Mauchly test.
-  a.effects.push_back({.effect = "material", .df1 = 1, .df2 = 4, .F = 20, .p = 0.01, .pes = 0.8,
-                       .gg_epsilon = 1, .p_gg = 0.01});
+  a.effects.push_back({.effect = "material",
+                       .df1 = 1,
+                       .df2 = 4,
+                       .F = 20,
+                       .p = 0.01,
+                       .pes = 0.8,
+                       .gg_epsilon = 1,
+                       .p_gg = 0.01});
   std::ostringstream md, csv;
   AnovaTable(md, csv, a);
   const std::string m = md.str();
