@@ -29,13 +29,23 @@ FeltPool Pool(double distance) {
   pool.criteria = {"roughness", "overall"};
   pool.observer = sim::LoadProfiles(test::DataPath("protocols/profiles.toml")).observer;
   for (int i = 0; i < 2; ++i)
-    pool.participants.push_back(
-        {{.plan_index = 0, .phase = "reference", .material = "Cork", .comparison = "Towel",
-          .distances = {distance, distance}},
-         {.plan_index = 1, .phase = "main", .material = "Cork", .comparison = "virtual",
-          .method = "FF", .distances = {distance, distance}},
-         {.plan_index = 2, .phase = "main", .material = "Denim", .comparison = "virtual",
-          .method = "Hybrid", .distances = {distance, distance}}});
+    pool.participants.push_back({{.plan_index = 0,
+                                  .phase = "reference",
+                                  .material = "Cork",
+                                  .comparison = "Towel",
+                                  .distances = {distance, distance}},
+                                 {.plan_index = 1,
+                                  .phase = "main",
+                                  .material = "Cork",
+                                  .comparison = "virtual",
+                                  .method = "FF",
+                                  .distances = {distance, distance}},
+                                 {.plan_index = 2,
+                                  .phase = "main",
+                                  .material = "Denim",
+                                  .comparison = "virtual",
+                                  .method = "Hybrid",
+                                  .distances = {distance, distance}}});
   return pool;
 }
 
@@ -112,8 +122,8 @@ repetitions = 1
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   EXPECT_EQ(ProtocolObserver(p).upper, 81.5);  // the profiles file's [observer], beside p.toml
   std::vector<std::string> log;
-  const auto pool =
-      RecordFeltPool(p, 2, 2, [&](const std::string& line) { log.push_back(line); }, 3);
+  const auto pool = RecordFeltPool(
+      p, 2, 2, [&](const std::string& line) { log.push_back(line); }, 3);
   EXPECT_EQ(pool.protocol, "pool-test");
   EXPECT_EQ(pool.criteria, p.criteria);
   EXPECT_EQ(pool.observer.upper, 81.5);

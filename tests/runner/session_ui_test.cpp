@@ -2,13 +2,14 @@
 // abort confirmation, pause and break, and a rating box driving the participant's scales.
 // Built with ui_windows_test.cpp into one executable that runs under Xvfb (tests/CMakeLists.txt).
 
+#include "hapticlab/runner_ui/session_ui.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <iterator>
 #include <opencv2/imgcodecs.hpp>
 
-#include "hapticlab/runner_ui/session_ui.hpp"
 #include "hapticlab/runner_ui/ui_windows.hpp"
 #include "screenshot_util.hpp"
 

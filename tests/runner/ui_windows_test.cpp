@@ -4,13 +4,14 @@
 // Built with session_ui_test.cpp into one executable that runs under Xvfb
 // (tests/CMakeLists.txt, ctest name Screenshot.ParticipantWindowAndConsole).
 
+#include "hapticlab/runner_ui/ui_windows.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
 
-#include "hapticlab/runner_ui/ui_windows.hpp"
 #include "screenshot_util.hpp"
 
 namespace hapticlab::runner::ui {
