@@ -38,7 +38,7 @@ TEST(Dhd, OpenFailuresCarryTheSdksMessageAndCloseTheDevice) {
   fake_dhd::state.last_error = "device busy";
   EXPECT_EQ(ErrorOf([] { (void)OpenDhd(); }), "dhd: cannot enable forces: device busy");
   EXPECT_EQ(fake_dhd::state.close_calls, 1);
-  EXPECT_EQ(fake_dhd::state.last_id, 2);
+  EXPECT_EQ(fake_dhd::state.last_id, static_cast<char>(2));
 }
 
 TEST(Dhd, ReadsWritesAndShutsDownOnItsDevice) {
@@ -52,7 +52,9 @@ TEST(Dhd, ReadsWritesAndShutsDownOnItsDevice) {
     fake_dhd::state.p_m[0] = 0.01, fake_dhd::state.p_m[1] = -0.02, fake_dhd::state.p_m[2] = 0.03;
     fake_dhd::state.v_mps[2] = -0.5;
     DeviceSample s;
+    fake_dhd::state.last_id = -2;
     ASSERT_EQ(d->Read(&s), ReadResult::kOk);
+    EXPECT_EQ(fake_dhd::state.last_id, static_cast<char>(3));    // its own device
     EXPECT_EQ(s.state.p_m, Eigen::Vector3d(0.01, -0.02, 0.03));  // metres, as the SDK's
     EXPECT_EQ(s.state.v_mps, Eigen::Vector3d(0, 0, -0.5));
     EXPECT_GE(s.t_s, 0);
@@ -62,7 +64,7 @@ TEST(Dhd, ReadsWritesAndShutsDownOnItsDevice) {
     EXPECT_EQ(fake_dhd::state.force_N[0], 1.5);
     EXPECT_EQ(fake_dhd::state.force_N[1], -2);
     EXPECT_EQ(fake_dhd::state.force_N[2], 0.25);
-    EXPECT_EQ(fake_dhd::state.last_id, 3);
+    EXPECT_EQ(fake_dhd::state.last_id, static_cast<char>(3));
     EXPECT_EQ(fake_dhd::state.close_calls, 0);
   }
   // Closing: zero force first, then the device.

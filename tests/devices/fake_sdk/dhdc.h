@@ -7,8 +7,9 @@
 #include <string>
 
 using uchar = unsigned char;
-inline constexpr uchar DHD_ON = 1;
-inline constexpr int DHD_NO_ERROR = 0;
+// Constants as the SDK defines them: macros.
+#define DHD_ON 1
+#define DHD_NO_ERROR 0
 
 namespace fake_dhd {
 struct State {
@@ -20,7 +21,7 @@ struct State {
   double p_m[3] = {0, 0, 0}, v_mps[3] = {0, 0, 0};
   double force_N[3] = {0, 0, 0};  // the last dhdSetForce
   int set_force_calls = 0, close_calls = 0, enable_calls = 0;
-  int last_id = -2;  // the device id of the last call
+  char last_id = -2;  // the device id of the last call
 };
 inline State state;
 }  // namespace fake_dhd
@@ -49,12 +50,14 @@ inline int dhdSetForce(double fx, double fy, double fz, char id = -1) {
   return 0;
 }
 inline int dhdGetPosition(double* px, double* py, double* pz, char id = -1) {
-  const auto& s = fake_dhd::state;
+  auto& s = fake_dhd::state;
+  s.last_id = id;
   *px = s.p_m[0], *py = s.p_m[1], *pz = s.p_m[2];
-  return id >= 0 ? s.read_result : -1;
+  return s.read_result;
 }
 inline int dhdGetLinearVelocity(double* vx, double* vy, double* vz, char id = -1) {
-  const auto& s = fake_dhd::state;
+  auto& s = fake_dhd::state;
+  s.last_id = id;
   *vx = s.v_mps[0], *vy = s.v_mps[1], *vz = s.v_mps[2];
-  return id >= 0 ? s.read_result : -1;
+  return s.read_result;
 }

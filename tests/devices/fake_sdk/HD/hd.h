@@ -18,14 +18,19 @@ using HDSchedulerHandle = unsigned long;
 #define HDCALLBACK
 using HDSchedulerCallback = HDCallbackCode (*)(void*);
 
-inline constexpr HHD HD_INVALID_HANDLE = 0xFFFFFFFF;
-inline constexpr HDerror HD_SUCCESS = 0;
-inline constexpr HDCallbackCode HD_CALLBACK_DONE = 0, HD_CALLBACK_CONTINUE = 1;
-inline constexpr HDushort HD_MAX_SCHEDULER_PRIORITY = 0xFFFF;
-inline constexpr const char* HD_DEFAULT_DEVICE = nullptr;
-inline constexpr HDenum HD_CURRENT_POSITION = 0x2050, HD_CURRENT_VELOCITY = 0x2051,
-                        HD_CURRENT_FORCE = 0x2700, HD_NOMINAL_MAX_FORCE = 0x2603,
-                        HD_NOMINAL_MAX_STIFFNESS = 0x2602, HD_FORCE_OUTPUT = 0x4000;
+// Constants as the SDK defines them: macros.
+#define HD_INVALID_HANDLE 0xFFFFFFFFu
+#define HD_SUCCESS 0x0000u
+#define HD_CALLBACK_DONE 0u
+#define HD_CALLBACK_CONTINUE 1u
+#define HD_MAX_SCHEDULER_PRIORITY static_cast<HDushort>(0xFFFF)
+#define HD_DEFAULT_DEVICE nullptr
+#define HD_CURRENT_POSITION 0x2050u
+#define HD_CURRENT_VELOCITY 0x2051u
+#define HD_CURRENT_FORCE 0x2700u
+#define HD_NOMINAL_MAX_STIFFNESS 0x2602u
+#define HD_NOMINAL_MAX_FORCE 0x2603u
+#define HD_FORCE_OUTPUT 0x4000u
 
 struct HDErrorInfo {
   HDerror errorCode;
