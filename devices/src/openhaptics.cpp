@@ -3,7 +3,7 @@
 // device state out and the engine's last force in through lock-free triple buffers, so the
 // engine's loop and the scheduler never wait on each other (one extra servo tick of latency).
 // The force slot carries the time the engine wrote it: when it is older than
-// kForceStale_ns (the engine stalled or stopped), the servo commands zero force.
+// kForceStaleNs (the engine stalled or stopped), the servo commands zero force.
 // Units: the HD API works in millimetres; HapticLab in metres.
 #include <HD/hd.h>
 
@@ -27,7 +27,7 @@ struct Force {
   double f[3];
   long long t_ns;  // steady-clock time the engine wrote it
 };
-constexpr long long kForceStale_ns = 5'000'000;  // 5 ms: five servo ticks
+constexpr long long kForceStaleNs = 5'000'000;  // 5 ms: five servo ticks
 
 long long SteadyNs() noexcept {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(
@@ -44,9 +44,9 @@ class OpenHapticsDevice final : public HapticDevice {
       throw std::runtime_error("openhaptics: cannot initialise the device (error " +
                                std::to_string(e.errorCode) + ")");
     hdGetDoublev(HD_NOMINAL_MAX_FORCE, &max_force_N_);
-    double k_N_per_mm = 0;
-    hdGetDoublev(HD_NOMINAL_MAX_STIFFNESS, &k_N_per_mm);
-    max_k_N_per_m_ = k_N_per_mm * 1000;
+    double k_hd = 0;  // N/mm, the HD API's unit
+    hdGetDoublev(HD_NOMINAL_MAX_STIFFNESS, &k_hd);
+    max_k_N_per_m_ = k_hd * 1000;
     hdEnable(HD_FORCE_OUTPUT);
     handle_ = hdScheduleAsynchronous(&Servo, this, HD_MAX_SCHEDULER_PRIORITY);
     hdStartScheduler();
@@ -100,7 +100,7 @@ class OpenHapticsDevice final : public HapticDevice {
     hdGetDoublev(HD_CURRENT_VELOCITY, v);  // mm/s
     const Force& f = self->force_.Read();
     // A stale slot (the engine stalled or stopped writing) gives zero force.
-    const bool fresh = SteadyNs() - f.t_ns <= kForceStale_ns;
+    const bool fresh = SteadyNs() - f.t_ns <= kForceStaleNs;
     double cmd[3] = {fresh ? f.f[0] : 0.0, fresh ? f.f[1] : 0.0, fresh ? f.f[2] : 0.0};
     hdSetDoublev(HD_CURRENT_FORCE, cmd);
     hdEndFrame(self->hhd_);

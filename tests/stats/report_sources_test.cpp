@@ -1,7 +1,10 @@
-// The report's real-time timing sentence from stored side_timing rows: the lateness
-// percentiles are those of all ticks of all real-clock sides together (the histograms
-// merged), checked against the nearest-rank percentiles of the raw values; a study that ran
-// only on a virtual clock says so.
+// The report's inputs (stats/src/report_sources.cpp). The real-time timing sentence from
+// stored side_timing rows: the lateness percentiles are those of all ticks of all real-clock
+// sides together (the histograms merged), checked against the nearest-rank percentiles of
+// the raw values; a study that ran only on a virtual clock says so. The ratings read from a
+// database: a study with any person's rating leaves the simulated observer's out (unless
+// asked), every kept rating is counted by source, and a score off the protocol's scale is
+// refused.
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -9,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/latency_histogram.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/timing.hpp"
@@ -90,6 +94,75 @@ TEST(TimingReport, AVirtualClockStudySaysSo) {
   Fixture none;
   EXPECT_NE(TimingMethodsSentence(none.d, none.study).find("No real-time timing"),
             std::string::npos);
+}
+
+// A study on the small test protocol (scale 0-100) with one trial of `ratings`.
+std::int64_t RatedStudy(db::Database& d, const std::string& name, const std::string& code,
+                        const std::vector<db::Rating>& ratings) {
+  const auto st = d.CreateStudy(
+      {.name = name, .protocol_toml = test::ReadFile(test::DataPath("protocols/small.toml"))});
+  const auto p = d.AddParticipant({.study_id = st, .code = code});
+  const auto se = d.StartSession({.participant_id = p});
+  const auto t = d.AddTrial({.session_id = se,
+                             .plan_index = 0,
+                             .phase = "main",
+                             .material = "Cork",
+                             .comparison = "virtual",
+                             .method = "FF",
+                             .repetition = 2});
+  d.CompleteTrial(t, ratings);
+  return st;
+}
+
+TEST(ReportSources, APersonsStudyLeavesTheSimulatedRatingsOut) {
+  test::TempDir dir;
+  const std::string path = dir.File("r.db");
+  {
+    db::Database d(path);
+    RatedStudy(d, "human", "P01",
+               {{"roughness", 70, 1.0, "window"}, {"overall", 20, 1.5, db::kRaterSimulated}});
+    RatedStudy(
+        d, "sim", "P02",
+        {{"roughness", 40, 0.5, db::kRaterSimulated}, {"overall", 45, 0.5, db::kRaterSimulated}});
+  }
+  RatingSources src;
+  const auto t = RatingsFromDatabase(path, false, &src);
+  ASSERT_EQ(t.rows(), 3u);
+  EXPECT_EQ(t.source, path);
+  EXPECT_EQ(src.human.at("human"), 1u);
+  EXPECT_EQ(src.simulated_excluded.at("human"), 1u);
+  EXPECT_EQ(src.simulated_kept.at("sim"), 2u);  // a simulated study keeps its ratings
+  EXPECT_FALSE(src.simulated_kept.contains("human"));
+  const auto human = t.Where({{"study", "human"}});
+  ASSERT_EQ(human.rows(), 1u);
+  EXPECT_EQ(human.y[0], 70);
+  EXPECT_EQ(human.keys[human.Key("participant")][0], "P01");
+  EXPECT_EQ(human.keys[human.Key("criterion")][0], "roughness");
+  EXPECT_EQ(human.keys[human.Key("repetition")][0], "2");
+  EXPECT_EQ(human.keys[human.Key("method")][0], "FF");
+  // Asked for, the simulated ratings of the person's study are kept too.
+  RatingSources all;
+  EXPECT_EQ(RatingsFromDatabase(path, true, &all).rows(), 4u);
+  EXPECT_EQ(all.simulated_kept.at("human"), 1u);
+  EXPECT_TRUE(all.simulated_excluded.empty());
+}
+
+TEST(ReportSources, AScoreOffTheProtocolsScaleIsRefused) {
+  test::TempDir dir;
+  const std::string path = dir.File("r.db");
+  {
+    db::Database d(path);
+    RatedStudy(d, "s", "P01", {{"roughness", 100.5, 1.0, "window"}});
+  }
+  try {
+    RatingsFromDatabase(path);
+    ADD_FAILURE() << "a score above the scale was read";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("r.db"), std::string::npos) << what;
+    EXPECT_NE(what.find("rating.score"), std::string::npos) << what;
+    EXPECT_NE(what.find("100.5"), std::string::npos) << what;
+  }
 }
 
 }  // namespace

@@ -1,0 +1,125 @@
+// The report's figures (stats/src/plot.cpp) read back by OpenCV, a reader this project did
+// not write: bar heights in proportion to the means on a common baseline, box heights in
+// proportion to the Tukey hinges' spread, both formats written, and a chart without data
+// refused.
+
+#include "hapticlab/stats/plot.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <string>
+
+#include "hapticlab/core/status.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::stats {
+namespace {
+
+// The palette's first two colours (Okabe-Ito blue, orange), as OpenCV's BGR.
+const cv::Vec3b kBlue(178, 114, 0), kOrange(0, 159, 230);
+
+// The tallest unbroken run of `colour` in any one column: [top row, bottom row] (-1 when
+// absent). Unbroken: the legend's squares in the same colour lie above the bars.
+struct Extent {
+  int top = -1, bottom = -1;
+  int height() const { return top < 0 ? 0 : bottom - top + 1; }
+};
+Extent TallestColumn(const cv::Mat& img, const cv::Vec3b& colour) {
+  Extent best;
+  for (int x = 0; x < img.cols; ++x) {
+    Extent run;
+    for (int y = 0; y <= img.rows; ++y) {
+      if (y < img.rows && img.at<cv::Vec3b>(y, x) == colour) {
+        if (run.top < 0) run.top = y;
+        run.bottom = y;
+      } else if (run.top >= 0) {
+        if (run.height() > best.height()) best = run;
+        run = {};
+      }
+    }
+  }
+  return best;
+}
+
+// The tallest extent of `colour` in any one column, first row to last (a box plot's box
+// is split by its median line).
+Extent TallestSpan(const cv::Mat& img, const cv::Vec3b& colour) {
+  Extent best;
+  for (int x = 0; x < img.cols; ++x) {
+    Extent e;
+    for (int y = 0; y < img.rows; ++y)
+      if (img.at<cv::Vec3b>(y, x) == colour) {
+        if (e.top < 0) e.top = y;
+        e.bottom = y;
+      }
+    if (e.height() > best.height()) best = e;
+  }
+  return best;
+}
+
+TEST(Plot, BarHeightsAreProportionalToTheMeans) {
+  test::TempDir dir;
+  BarChart c{.title = "t", .x_label = "x", .y_label = "score", .error_label = "95% CI"};
+  c.groups = {""};
+  c.series = {{.name = "FF", .mean = {80}, .err = {5}},
+              {.name = "Hybrid", .mean = {40}, .err = {0}}};
+  const auto files = DrawBarChart(c, dir.File("bars"));
+  ASSERT_EQ(files.size(), 2u);
+  EXPECT_EQ(files[0], dir.File("bars.svg"));
+  EXPECT_NE(test::ReadFile(files[0]).find("<svg"), std::string::npos);
+  const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty()) << files[1];
+  EXPECT_EQ(img.cols, 900);
+  EXPECT_EQ(img.rows, 520);
+  const auto a = TallestColumn(img, kBlue), b = TallestColumn(img, kOrange);
+  ASSERT_GT(a.height(), 100) << "no bar of the first series";
+  ASSERT_GT(b.height(), 50) << "no bar of the second series";
+  // One baseline (y = 0), heights 80 : 40 (the outline and antialiasing: a pixel or two).
+  EXPECT_NEAR(a.bottom, b.bottom, 1);
+  EXPECT_NEAR(static_cast<double>(a.height()) / b.height(), 2.0, 0.04);
+}
+
+TEST(Plot, BoxHeightsFollowTheHinges) {
+  test::TempDir dir;
+  BoxPlot p{.title = "t", .x_label = "method", .y_label = "score"};
+  p.groups = {"wide", "narrow"};
+  // Tukey's hinges: 20 and 60; 45 and 55 (0 and 100 are outliers there, so a box drawn
+  // from the range or the whiskers would be placed elsewhere).
+  p.samples = {{0, 10, 20, 30, 40, 50, 60, 70, 80}, {0, 45, 50, 55, 100}};
+  p.y_max = 110;
+  const auto files = DrawBoxPlot(p, dir.File("box"));
+  const cv::Mat img = cv::imread(files.at(1), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  const auto wide = TallestSpan(img, kBlue), narrow = TallestSpan(img, kOrange);
+  ASSERT_GT(wide.height(), 50);
+  ASSERT_GT(narrow.height(), 5);
+  // The wide box's fill (inside its one-pixel outline) spans 20..60: the rows of any value.
+  const double px_per_unit = (wide.height() + 1) / 40.0;
+  const auto row = [&](double v) { return wide.bottom + 0.5 - (v - 20) * px_per_unit; };
+  EXPECT_NEAR(narrow.top - 0.5, row(55), 2);
+  EXPECT_NEAR(narrow.bottom + 0.5, row(45), 2);
+}
+
+TEST(Plot, LinePlotWritesBothFormatsAndEmptyChartsAreRefused) {
+  test::TempDir dir;
+  LinePlot l{.title = "spectrum", .x_label = "f [Hz]", .y_label = "PSD", .x = {1, 2, 3}};
+  l.series = {{"measured", {1, 10, 100}}, {"synthesized", {0, 0, 0}}};  // log of 0 is clamped
+  l.log_y = true;
+  const auto files = DrawLinePlot(l, dir.File("line"));
+  ASSERT_EQ(files.size(), 2u);
+  const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  EXPECT_GT(TallestColumn(img, kBlue).height(), 0);  // the first curve is drawn
+  EXPECT_THROW(DrawLinePlot(LinePlot{}, dir.File("e")), PreconditionError);
+  EXPECT_THROW(DrawBarChart(BarChart{}, dir.File("e")), PreconditionError);
+  BoxPlot mismatched;
+  mismatched.groups = {"a", "b"};
+  mismatched.samples = {{1}};
+  EXPECT_THROW(DrawBoxPlot(mismatched, dir.File("e")), PreconditionError);
+}
+
+}  // namespace
+}  // namespace hapticlab::stats
