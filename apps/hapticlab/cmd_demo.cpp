@@ -166,8 +166,8 @@ void RegisterDemo(CLI::App& app) {
     RunGuarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
       const fs::path dir = fs::path(o->out.empty() ? "demo-out" : o->out) / UtcStamp();
+      const auto p = protocols::LoadProtocol(o->protocol);  // before anything is written
       fs::create_directories(dir);
-      const auto p = protocols::LoadProtocol(o->protocol);
       const std::string db_path = (dir / "study.db").string();
       fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n",
                  kVersion, kGitSha, p.name, o->participants, dir.string());

@@ -64,7 +64,7 @@ void RegisterDevice(CLI::App& app) {
         "falcon-load", "Load the Falcon's firmware and report each step (to check a rig)");
     cmd->add_option("--firmware", *fw, "Firmware file (yours)")->required();
     cmd->callback([fw] {
-      RunGuarded([&] {
+      RunGuarded({{"firmware", "--firmware"}}, [&] {
         const auto bytes = devices::falcon::ReadFirmwareFile(*fw);
         auto usb = devices::falcon::OpenLibusb(0);
         const auto r = devices::falcon::LoadFirmware(*usb, bytes);

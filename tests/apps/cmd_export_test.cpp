@@ -16,6 +16,8 @@
 #include <nlohmann/json.hpp>
 #include <set>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
@@ -355,30 +357,21 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                                  .protocol_hash = db::HashText("# protocol")});
   const auto p = d.AddParticipant({.study_id = st, .code = "P07"});
   const auto se = d.StartSession({.participant_id = p});
-  const auto ids = d.AddTrials({{.session_id = se,
-                                 .plan_index = 0,
-                                 .phase = "main",
-                                 .material = "Cork",
-                                 .comparison = "virtual",
-                                 .method = "FF",
-                                 .left = "real:Cork",
-                                 .right = "virtual:Cork"},
-                                {.session_id = se,
-                                 .plan_index = 1,
-                                 .phase = "main",
-                                 .material = "Denim",
-                                 .comparison = "virtual",
-                                 .method = "FF",
-                                 .left = "virtual:Denim",
-                                 .right = "real:Denim"},
-                                {.session_id = se,
-                                 .plan_index = 2,
-                                 .phase = "main",
-                                 .material = "Towel",
-                                 .comparison = "virtual",
-                                 .method = "FF",
-                                 .left = "real:Towel",
-                                 .right = "virtual:Towel"}});
+  // Three main trials; the second has the virtual sample on the left.
+  std::vector<db::Trial> planned;
+  for (const char* name : {"Cork", "Denim", "Towel"}) {
+    const std::string m = name;
+    const int k = static_cast<int>(planned.size());
+    planned.push_back({.session_id = se,
+                       .plan_index = k,
+                       .phase = "main",
+                       .material = m,
+                       .comparison = "virtual",
+                       .method = "FF",
+                       .left = (k == 1 ? "virtual:" : "real:") + m,
+                       .right = (k == 1 ? "real:" : "virtual:") + m});
+  }
+  const auto ids = d.AddTrials(planned);
   auto ramp = [](std::size_t n, float base) {
     std::vector<float> v;
     for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);

@@ -1,4 +1,4 @@
-// hapticlab study / analyze / demo through the command line.
+// hapticlab study (validate, plan, run, resume, status) through the command line
 
 #include <gtest/gtest.h>
 
@@ -151,97 +151,6 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
         << out;
     EXPECT_TRUE(std::filesystem::exists(dir.File("c.db")));
   }
-}
-
-TEST(StudyCli, DemoRunsEndToEnd) {
-  test::TempDir dir;
-  std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " demo --participants 2 --out " + dir.File("d"), &out), 0)
-      << out;
-  EXPECT_NE(out.find("report:"), std::string::npos) << out;
-  EXPECT_NE(out.find("real-time engine check"), std::string::npos) << out;
-  std::string report;
-  for (const auto& e : std::filesystem::recursive_directory_iterator(dir.File("d")))
-    if (e.path().filename() == "report.md") report = e.path().string();
-  ASSERT_FALSE(report.empty());
-  // The methods section carries timing figures: the sessions ran on a virtual clock, so the
-  // report says so and adds the real-clock check's percentiles (measured, not asserted).
-  const std::string md = test::ReadFile(report);
-  EXPECT_NE(md.find("virtual clock"), std::string::npos) << md;
-  const auto at = md.find("## Real-time check");
-  ASSERT_NE(at, std::string::npos) << md;
-  for (const char* s : {"requested 1000 Hz) achieved", "wake-up lateness p50", "p99.9",
-                        "deadline misses", "requested 10000 Hz) achieved", "timer slack 1 ns"})
-    EXPECT_NE(md.find(s, at), std::string::npos) << s << "\n" << md.substr(at);
-}
-
-}  // namespace
-}  // namespace hapticlab
-
-namespace hapticlab {
-namespace {
-
-std::string RigCli() { return std::string(HL_CLI_PATH); }
-
-TEST(RigCli, CheckShowAndCalibrate) {
-  test::TempDir dir;
-  std::string out;
-  // The Falcon twin through the engine: JSON with the link's counters; the rest pose is out of
-  // contact.
-  ASSERT_EQ(
-      test::RunCommand(
-          RigCli() + " rig check --device falcon-twin --seconds 1 --empty-reads 0.1 --json", &out),
-      0)
-      << out;
-  const auto j = nlohmann::json::parse(out.substr(out.find('{')));
-  EXPECT_EQ(j["device"], "falcon-twin");
-  EXPECT_EQ(j["ticks"], 1000);
-  EXPECT_GT(j["empty_reads"].get<int>(), 50);
-  EXPECT_EQ(j["lost"], 0);
-  EXPECT_EQ(j["home_in_contact"], false);
-  EXPECT_EQ(j["faulted"], false);
-  EXPECT_GT(j["contact_ticks"].get<int>(), 500);
-  // A rig file whose left sample sits where the grip rests: the check says so (exit 1).
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig show --device falcon > /dev/null", &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("none.toml") +
-                                 " --points '-0.01,0,0;0.01,0,0;0,0.01,0'",
-                             &out),
-            2)
-      << out;
-  // Calibrate the left sample from four touches on the plane y = 0.01 (above the grip's rest pose).
-  test::WriteFile(dir.File("touches.csv"),
-                  "x_m,y_m,z_m\n-0.03,0.01,0.10\n0.0,0.01,0.10\n-0.03,0.01,0.14\n0.0,0.01,0.14\n");
-  test::WriteFile(
-      dir.File("rig.toml"),
-      "device = \"falcon\"\n[sample.left]\norigin_m = [-0.025, -0.04, 0.125]\nx_axis = [1, 0, "
-      "0]\nz_axis = [0, 1, 0]\n"
-      "[sample.right]\norigin_m = [0.025, -0.04, 0.125]\nx_axis = [1, 0, 0]\nz_axis = [0, 1, 0]\n");
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") +
-                                 " --side left --points " + dir.File("touches.csv") + " --out " +
-                                 dir.File("new.toml"),
-                             &out),
-            0)
-      << out;
-  EXPECT_NE(out.find("residual RMS 0.000 mm"), std::string::npos) << out;
-  ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + dir.File("new.toml") + " --json", &out), 0)
-      << out;
-  const auto s = nlohmann::json::parse(out.substr(out.find('{')));
-  EXPECT_NEAR(s["samples"]["left"]["device"]["origin_m"][1].get<double>(), 0.01, 1e-9);
-  EXPECT_NEAR(s["samples"]["left"]["device"]["z_axis"][1].get<double>(), 1.0, 1e-9);
-  // The left sample now sits where the grip rests: rig check refuses it.
-  EXPECT_EQ(test::RunCommand(RigCli() + " rig check --device falcon-twin --seconds 0.1 --rig " +
-                                 dir.File("new.toml"),
-                             &out),
-            1)
-      << out;
-  EXPECT_NE(out.find("IN CONTACT"), std::string::npos) << out;
-  // A malformed touch names the file and line.
-  test::WriteFile(dir.File("bad.csv"), "0,0,0\n0.01,0,zero\n");
-  EXPECT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") + " --points " +
-                                 dir.File("bad.csv"),
-                             &out),
-            2);
-  EXPECT_NE(out.find("bad.csv:2"), std::string::npos) << out;
 }
 
 }  // namespace

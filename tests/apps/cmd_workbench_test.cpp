@@ -1,5 +1,8 @@
-// hapticlab measurement / fit / diagnose / compare / effects through the command line: the
-// worked example of docs/workbench.md on a short simulated measurement.
+// hapticlab measurement / effects through the command line (apps/hapticlab/cmd_workbench.cpp),
+// and the workbench's worked example of docs/workbench.md end to end on a short simulated
+// measurement: measurement simulate, check, fit, diagnose, fit --add, compare (the commands'
+// own tests: cmd_workbench_fit_test.cpp, cmd_workbench_compare_test.cpp,
+// cmd_workbench_diagnose_test.cpp).
 
 #include <gtest/gtest.h>
 
@@ -7,6 +10,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <string>
 
 #include "hapticlab/test/test_util.hpp"
 
@@ -142,6 +146,89 @@ TEST(WorkbenchCli, BadInputIsReportedWithFileLineAndColumn) {
   EXPECT_NE(out.find("stribeck"), std::string::npos) << "lists the catalogue: " << out;
   EXPECT_EQ(test::RunCommand(Cli() + " effects", &out), 0);
   EXPECT_NE(out.find("position-dependent-friction"), std::string::npos);
+}
+
+// measurement check on a hand-written file: 1 kHz with one 51 ms hole, every other sample
+// pressing 1 N; what it reports is computed here from how the file was written.
+TEST(WorkbenchCli, MeasurementCheckCountsSamplesGapsAndContact) {
+  test::TempDir dir;
+  std::string csv =
+      "# hapticlab-measurement v1\n# material: cork\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,"
+      "fy_N,fz_N\n";
+  int rows = 0, contact = 0;
+  for (int k = 0; k < 2000; ++k) {
+    if (k >= 1000 && k < 1050) continue;  // the hole: t = 0.999 -> 1.050
+    const double t = k * 1e-3;
+    const bool touch = rows % 2 == 0;
+    csv += std::to_string(t) + "," + std::to_string(0.01 * t) + ",0,-0.0002,0.01,0,0,-0.3,0," +
+           (touch ? "1" : "0") + "\n";
+    ++rows;
+    contact += touch;
+  }
+  test::WriteFile(dir.File("m.csv"), csv);
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " measurement check --json " + dir.File("m.csv"), &out), 0)
+      << out;
+  const auto j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["material"], "cork");
+  EXPECT_EQ(j["samples"], rows);
+  EXPECT_NEAR(j["duration_s"].get<double>(), 1.999, 1e-9);
+  EXPECT_NEAR(j["rate_hz"].get<double>(), 1000, 1e-6);
+  EXPECT_EQ(j["gaps"], 1);
+  EXPECT_NEAR(j["max_gap_s"].get<double>(), 0.051, 1e-9);
+  EXPECT_EQ(j["contact_samples"], contact);
+  EXPECT_FALSE(j["has_acceleration"].get<bool>());
+  EXPECT_NEAR(j["ranges"]["x_m"][1].get<double>(), 0.01 * 1.999, 1e-9);
+  EXPECT_EQ(j["ranges"]["fz_N"], nlohmann::json::array({0.0, 1.0}));
+  // The hole is named by the line of the row after it (3 header lines, 1000 rows before it).
+  bool named = false, no_acc = false;
+  for (const auto& w : j["warnings"]) {
+    named |= w.get<std::string>().rfind("line 1004: gap of 0.051 s", 0) == 0;
+    no_acc |= w.get<std::string>().find("no acc_mps2 column") != std::string::npos;
+  }
+  EXPECT_TRUE(named) << j["warnings"].dump();
+  EXPECT_TRUE(no_acc) << j["warnings"].dump();
+}
+
+// measurement simulate is reproducible from its seed (recorded in the file); effects lists each
+// catalogue entry once, and what an effect requires is in the catalogue.
+TEST(WorkbenchCli, SimulateIsReproducibleAndEffectsListTheCatalogueOnce) {
+  test::TempDir dir;
+  std::string out;
+  for (const char* f : {"a.csv", "b.csv"})
+    ASSERT_EQ(test::RunCommand(
+                  Cli() + " measurement simulate --duration 5 --seed 7 -o " + dir.File(f), &out),
+              0)
+        << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " measurement simulate --duration 5 --seed 8 --add stribeck -o " +
+                           dir.File("c.csv"),
+                       &out),
+      0)
+      << out;
+  const auto a = test::ReadFile(dir.File("a.csv")), c = test::ReadFile(dir.File("c.csv"));
+  EXPECT_EQ(a, test::ReadFile(dir.File("b.csv")));
+  EXPECT_NE(a.find("\n# seed: 7\n"), std::string::npos);
+  EXPECT_NE(c.find("\n# seed: 8\n"), std::string::npos);
+  EXPECT_NE(c.find("stribeck"), std::string::npos) << "the truth's effects are recorded";
+  EXPECT_NE(a.substr(a.find("\nt_s")), c.substr(c.find("\nt_s")));
+  const auto check = Json(Cli() + " measurement check --json " + dir.File("a.csv"));
+  EXPECT_EQ(check["samples"], 10000);  // 5 s at the default 2 kHz
+  const auto fx = Json(Cli() + " effects --json");
+  std::set<std::string> names;
+  for (const auto& e : fx) EXPECT_TRUE(names.insert(e["name"].get<std::string>()).second) << e;
+  for (const auto& e : fx) {
+    EXPECT_TRUE(std::set<std::string>({"friction", "normal_force", "vibration"})
+                    .count(e["channel"].get<std::string>()))
+        << e;
+    for (const auto& r : e["requires"]) EXPECT_TRUE(names.count(r.get<std::string>())) << e;
+  }
+  ASSERT_EQ(test::RunCommand(Cli() + " effects", &out), 0);
+  for (const char* b : {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent",
+                        "vibration-speed", "vibration-force"}) {
+    EXPECT_TRUE(names.count(b)) << b;
+    EXPECT_NE(out.find(b), std::string::npos) << b;
+  }
 }
 
 }  // namespace

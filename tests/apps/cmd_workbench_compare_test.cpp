@@ -1,0 +1,106 @@
+// hapticlab compare through the command line (apps/hapticlab/cmd_workbench_compare.cpp): a
+// short simulated measurement of the baseline truth compared with the truth's own force model
+// (written here from the simulator's documented defaults, modeling/workbench_sim.hpp) and with
+// the same model with mu_k 0.06 too high. (Plots, --before and the text report's order:
+// WorkbenchCli.FromRawMeasurementToImprovedModel in cmd_workbench_test.cpp.)
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <tuple>
+
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab {
+namespace {
+
+std::string Cli() { return HL_CLI_PATH; }
+
+// The truth's force effects as a renderer material: K = K1mm / (1 mm)^n, B = B1mm / (1 mm)^n.
+std::string TruthModel(double mu_k) {
+  const double mm_n = std::pow(1e-3, 1.3);
+  return "name = \"truth\"\neffects = [\"coulomb\", \"viscous\", \"dahl\", \"hc-damping\", "
+         "\"hc-exponent\"]\n[contact]\ntexture_K = " +
+         std::to_string(1.5 / mm_n) + "\ntexture_B = " + std::to_string(20 / mm_n) +
+         "\ntexture_n = 1.3\nlayer_thickness_m = 0.005\n[friction]\nkappa_N_per_m = 3000.0\n"
+         "mu_k = " +
+         std::to_string(mu_k) + "\nmu_b_Ns_per_m = 0.5\n";
+}
+
+TEST(WorkbenchCompareCli, AWrongFrictionCoefficientShowsAsAConstantFrictionRatioResidual) {
+  test::TempDir dir;
+  const auto meas = dir.File("m.csv");
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " measurement simulate --duration 10 --seed 3 -o " + meas + " > /dev/null", &out),
+      0)
+      << out;
+  test::WriteFile(dir.File("truth.toml"), TruthModel(0.3));
+  test::WriteFile(dir.File("wrong.toml"), TruthModel(0.36));
+  auto compare = [&](const std::string& model) {
+    EXPECT_EQ(
+        test::RunCommand(
+            Cli() + " compare --json --model " + dir.File(model) + " --measurement " + meas, &out),
+        0)
+        << out;
+    return nlohmann::json::parse(out);
+  };
+  const auto t = compare("truth.toml"), w = compare("wrong.toml");
+  // Residual = measured - model: the friction ratio is 0.06 below the wrong model's wherever it
+  // slides, at every load, speed and time; the truth leaves none. (Bins of 100 samples or more;
+  // Dahl's pre-sliding transients pull the mean a little towards zero.)
+  for (const char* dim : {"load", "speed", "time"}) {
+    int bins = 0;
+    for (const auto& [cmp, lo, hi] :
+         {std::tuple(&t, -0.005, 0.005), std::tuple(&w, -0.066, -0.050)})
+      for (const auto& row : (*cmp)["breakdown"][dim]["friction_ratio"])
+        if (row["n"].get<int>() >= 100) {
+          EXPECT_GE(row["mean"].get<double>(), lo) << dim << " " << row.dump();
+          EXPECT_LE(row["mean"].get<double>(), hi) << dim << " " << row.dump();
+          ++bins;
+        }
+    EXPECT_GE(bins, 4) << dim;
+  }
+  // Only friction changed: the normal-force channel is the same, the friction channel worse,
+  // and the largest systematic residual of the wrong model is a friction one.
+  EXPECT_DOUBLE_EQ(w["channels"]["normal_force"].get<double>(),
+                   t["channels"]["normal_force"].get<double>());
+  EXPECT_GT(w["channels"]["friction"].get<double>(), 4 * t["channels"]["friction"].get<double>());
+  EXPECT_GT(w["error"].get<double>(), t["error"].get<double>());
+  ASSERT_FALSE(w["summary"]["largest"].empty());
+  EXPECT_EQ(w["summary"]["largest"][0]["quantity"].get<std::string>().rfind("friction", 0), 0u)
+      << w["summary"]["largest"][0];
+  // Every dimension bins the same normal-force samples.
+  int n_regime = 0;
+  for (const auto& row : t["breakdown"]["regime"]["normal_force_N"])
+    n_regime += row["n"].get<int>();
+  EXPECT_GT(n_regime, 1000);
+  for (const auto& [dim, qs] : t["breakdown"].items()) {
+    if (!qs.contains("normal_force_N")) continue;
+    int n = 0;
+    for (const auto& row : qs["normal_force_N"]) n += row["n"].get<int>();
+    EXPECT_EQ(n, n_regime) << dim;
+  }
+}
+
+TEST(WorkbenchCompareCli, AMissingModelOrMeasurementIsNamed) {
+  test::TempDir dir;
+  test::WriteFile(dir.File("truth.toml"), TruthModel(0.3));
+  std::string out;
+  EXPECT_EQ(test::RunCommand(Cli() + " compare --model " + dir.File("none.toml") +
+                                 " --measurement " + dir.File("m.csv"),
+                             &out),
+            2);
+  EXPECT_NE(out.find(dir.File("none.toml") + ": cannot open"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " compare --model " + dir.File("truth.toml") +
+                                 " --measurement " + dir.File("m.csv"),
+                             &out),
+            2);
+  EXPECT_NE(out.find(dir.File("m.csv")), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace hapticlab
