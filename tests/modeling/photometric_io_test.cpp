@@ -159,7 +159,7 @@ TEST(PhotometricIo, ImagesWrittenByOpenCvReadBackAsGreyInTheirStoredOrder) {
     ASSERT_EQ(hh, h) << name;
     for (int i = 0; i < h; ++i)
       for (int j = 0; j < w; ++j)
-        EXPECT_NEAR(g[static_cast<std::size_t>(i * w + j)], Expected(img, i, j), 2e-3)
+        EXPECT_NEAR(g[static_cast<std::size_t>(i * w + j)], Expected(img, i, j), 5e-6)
             << name << " at row " << i << ", column " << j;
   }
   // Values above 1 in float images are kept (radiance, not clipped).

@@ -48,6 +48,13 @@ TEST(CoulombEffect, InitialValueIsTheMedianMeasuredRatioAndTheFitRecoversMuK) {
   ASSERT_EQ(spec.size(), 1u);
   EXPECT_EQ(spec[0].name, key::kMuK.name);
   EXPECT_NEAR(spec[0].init, mu_k, 0.01) << "median |f_t| / f_n while sliding";
+  // The median, not another quantile: 40 % of the sliding time at 0.2, 20 % at 0.35, 40 % at 0.5.
+  const auto mixed = MakeStrokes(
+      {{0, 0.05, 0.05, 1, 1, 0.4}, {1, 0.05, 0.05, 1, 1, 0.2}, {2, 0.05, 0.05, 1, 1, 0.4}},
+      [](const Replay::Sample& s) { return s.dir_rad < 0.5   ? 0.2
+                                           : s.dir_rad < 1.5 ? 0.35
+                                                             : 0.5; });
+  EXPECT_NEAR(FindEffect(effect::kCoulomb)->Params(mixed)[0].init, 0.35, 1e-9);
   Model m = ModelOf({"coulomb"}, r);
   m.Set(key::kMuK, 0.1);  // start away from the answer
   const auto rep = Fit(&m, r, {.normal = false, .vibration = false});
