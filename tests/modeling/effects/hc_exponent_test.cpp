@@ -1,6 +1,6 @@
 // effects/hc_exponent.cpp: the Hunt-Crossley exponent, f = K (d / 1 mm)^n (dissertation eq. 4.11;
 // n = 3/2 is Hertz's sphere on an elastic half-space, F = 4/3 E* sqrt(R) d^(3/2): Johnson,
-// Contact Mechanics, 1985, eq. 4.23).
+// Contact Mechanics, 1985, ch. 4).
 
 #include <gtest/gtest.h>
 

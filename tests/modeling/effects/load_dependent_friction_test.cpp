@@ -1,7 +1,7 @@
 // effects/load_dependent_friction.cpp: friction growing as a power of the load,
 // f_C = mu_k f_n (f_n / 1 N)^(alpha - 1) = mu_k f_n^alpha (alpha = 2/3 for adhesive friction on a
 // Hertzian contact, whose area grows as f_n^(2/3): Bowden and Tabor; Johnson, Contact
-// Mechanics, 1985, eq. 4.22).
+// Mechanics, 1985, ch. 4).
 
 #include <gtest/gtest.h>
 

@@ -98,7 +98,8 @@ inline Replay MakeStrokes(const std::vector<Stroke>& strokes, const FrictionLaw&
 }
 
 /// Strokes in `directions` evenly spaced directions, each at a constant slow, a constant fast
-/// and a sweeping speed, with the load sweeping 0.5-3 N or back, starting on a 3 x 3 cm grid.
+/// and a sweeping speed, with the load sweeping 0.5-3 N or back, each starting 1 cm behind the
+/// origin so that the strokes cross there.
 inline std::vector<Stroke> StarOfStrokes(int directions = 8, double v_lo_mps = 0.01,
                                          double v_hi_mps = 0.12) {
   std::vector<Stroke> out;
@@ -146,8 +147,8 @@ inline Replay MakePresses(const std::function<double(double, double)>& law, doub
   return r;
 }
 
-/// 960 vibration windows over a grid of speeds (12-250 mm/s), loads (0.3-3 N) and directions, with
-/// eight log-spaced bands from 20 Hz to 1 kHz whose power is exp(law(band, window)) times
+/// 960 vibration windows over a grid of speeds (12-230 mm/s), loads (0.3-2.7 N) and directions,
+/// with eight log-spaced bands from 20 Hz to 1 kHz whose power is exp(law(band, window)) times
 /// log-normal noise of `noise_ln` (SD of ln power). The force samples are left empty.
 inline Replay MakeWindows(const std::function<double(int, const Replay::Window&)>& law,
                           double noise_ln = 0, unsigned seed = 1) {

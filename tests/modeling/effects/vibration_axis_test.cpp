@@ -135,8 +135,8 @@ TEST(VibrationAxisEffect, EvidenceReportsTheResidualAtBothEndsOfItsAxis) {
   EXPECT_NEAR(got.lo_db, lo, 0.051) << note.pattern;
   EXPECT_NEAR(got.hi_db, hi, 0.051) << note.pattern;
   // The level is set so that the predicted power matches on average (workbench_fit.cpp), so the
-  // fast end, which dominates the mean power, sits near 0 dB; v^2 over the bins' 12-fold range
-  // of mean speeds is about 21 dB from end to end.
+  // fast end, which dominates the mean power, sits near 0 dB; v^2 over the end bins' 13-fold range
+  // of mean speeds is about 22 dB from end to end.
   EXPECT_GT(hi - lo, 18);
   EXPECT_GT(got.correlation, 0.9);
   // On the load axis the same data show no trend: the same offset at both ends.
