@@ -71,6 +71,16 @@ TEST(EffectUtil, CorrelationIsPearsonsR) {
       x.size(), [&](std::size_t i) { return y[i]; }, [&](std::size_t i) { return x[i]; }, use);
   EXPECT_NEAR(r, sxy / std::sqrt(sxx * syy), 1e-6);
   EXPECT_GT(r, 0.4);
+  // R 4.2: x <- c(0.3, 1.7, 2.2, 3.9, 4.1, 5.8, 6.6, 7.0); y <- c(2.1, 1.4, 3.9, 3.0, 5.2, 4.4,
+  // 7.9, 6.1); cor(x, y); cor(x[-c(2, 5)], y[-c(2, 5)]).
+  const double xs[] = {0.3, 1.7, 2.2, 3.9, 4.1, 5.8, 6.6, 7.0};
+  const double ys[] = {2.1, 1.4, 3.9, 3.0, 5.2, 4.4, 7.9, 6.1};
+  const auto cor = [&](auto use_i) {
+    return Correlation(
+        8, [&](std::size_t i) { return ys[i]; }, [&](std::size_t i) { return xs[i]; }, use_i);
+  };
+  EXPECT_NEAR(cor([](std::size_t) { return true; }), 0.84315470158020434, 1e-12);
+  EXPECT_NEAR(cor([](std::size_t i) { return i != 1 && i != 4; }), 0.83139511671753596, 1e-12);
   // Degenerate: fewer than three items, or a constant.
   EXPECT_EQ(Correlation(
                 2, [](std::size_t i) { return static_cast<double>(i); },
