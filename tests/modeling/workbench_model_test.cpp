@@ -74,32 +74,6 @@ TEST(WorkbenchCatalogue, UnknownNamesAreInputErrorsNamingSourceAndField) {
   }
 }
 
-// The speed and force axes of the vibration bank share one implementation: hat features of
-// ln(speed) or ln(load) that sum to one with the intercept's partner column left out.
-TEST(WorkbenchCatalogue, VibrationAxesUseTheirOwnKeyAndKnots) {
-  const Effect* sp = FindEffect("vibration-speed");
-  const Effect* fo = FindEffect("vibration-force");
-  ASSERT_NE(sp, nullptr);
-  ASSERT_NE(fo, nullptr);
-  EXPECT_EQ(sp->VibrationColumns(), 4);
-  EXPECT_EQ(fo->VibrationColumns(), 2);
-  const double knots_speed[] = {std::log(0.01), std::log(0.02), std::log(0.04), std::log(0.08),
-                                std::log(0.16)};
-  const double knots_force[] = {std::log(0.5), std::log(1.0), std::log(2.0)};
-  Replay::Window w{};
-  w.speed_mps = 0.03;  // between knots 1 and 2 of speed: ln-interpolated weights
-  w.force_N = 1.0;     // exactly on knot 1 of force
-  double out_s[4] = {}, out_f[2] = {};
-  sp->VibrationFeatures(knots_speed, w, out_s);
-  fo->VibrationFeatures(knots_force, w, out_f);
-  const double u = (std::log(0.03) - std::log(0.02)) / (std::log(0.04) - std::log(0.02));
-  EXPECT_NEAR(out_s[0], 1 - u, 1e-12);  // hat of knot 1
-  EXPECT_NEAR(out_s[1], u, 1e-12);      // hat of knot 2
-  EXPECT_NEAR(out_s[2], 0, 1e-12);
-  EXPECT_NEAR(out_f[0], 1, 1e-12);
-  EXPECT_NEAR(out_f[1], 0, 1e-12);
-}
-
 // The keys declared once in workbench_params.hpp name parameters the catalogue really has.
 TEST(WorkbenchParams, KeysNameParametersOfTheirEffects) {
   const Replay r;
