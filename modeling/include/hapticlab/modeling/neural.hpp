@@ -15,6 +15,17 @@
 
 namespace hapticlab::modeling {
 
+/// How Γ_U's linear part follows speed and force (NeuralFitOptions::unified_linear).
+enum class UnifiedLinearPart {
+  /// One AR(M) per training cell, least squares on that cell's recording, mixed at synthesis
+  /// as the LPC bank mixes its fits (LSFs, bilinear grid weights; NeuralBand::cell_ar, file
+  /// format 2). Γ_U = LPC's interpolation of per-band AR fits + the validated MLP correction.
+  kCellAr,
+  /// AR coefficients biquadratic in the scaled (v', f') (NeuralNet::linear, 9 M weights; the
+  /// form before format 2): the exact interpolant of a 3 x 3 grid, quadratic between nodes.
+  kConditionBasis,
+};
+
 struct NeuralFitOptions {
   renderer::NeuralTopology topology = renderer::NeuralTopology::kUnified;
   std::vector<renderer::NeuralBand> bands = renderer::DefaultNeuralBands();  ///< layout only
@@ -35,8 +46,12 @@ struct NeuralFitOptions {
   /// put a white floor into every band (docs/modeling-neural.md).
   double signal_noise = 0.0;
   /// Give every network a linear autoregressive part fitted by least squares on the clean
-  /// histories (Γ_U: coefficients biquadratic in v', f'); the MLP learns what it leaves.
+  /// histories (Γ_U: see unified_linear); the MLP learns what it leaves.
   bool linear_part = true;
+  /// Γ_U's linear part: per-cell AR fits interpolated as LPC's (default) or the biquadratic
+  /// condition basis (issue #19: held out, the biquadratic interpolant between the nodes lost
+  /// to LPC's LSF mixing on some data; docs/modeling-neural.md).
+  UnifiedLinearPart unified_linear = UnifiedLinearPart::kCellAr;
   /// Ridge of the linear part's least squares, relative to the mean diagonal of its normal
   /// matrix (keeps the coefficients, and their condition dependence, small where the data
   /// do not determine them).
