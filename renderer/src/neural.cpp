@@ -145,9 +145,10 @@ std::string CellArProblem(const NeuralModel& m, const NeuralBand& band) {
     const auto& a = band.cell_ar[c];
     const std::string cell = fmt::format("cell_ar[{}] ({:g} m/s, {:g} N)", c + 1,
                                          m.speeds_mps[c / nf], m.forces_N[c % nf]);
-    if (a.size() != M)
-      return fmt::format("{}: {} coefficients, expected {} (the band's history)", cell, a.size(),
-                         M);
+    if (a.empty() || a.size() > M || a.size() != band.cell_ar.front().size())
+      return fmt::format(
+          "{}: {} coefficients, expected 1 to {} (the band's history), the same in every cell",
+          cell, a.size(), M);
     for (const double x : a)
       if (!std::isfinite(x)) return cell + ": non-finite coefficient";
     if (!IsStableAr(a))
@@ -155,8 +156,9 @@ std::string CellArProblem(const NeuralModel& m, const NeuralBand& band) {
   }
   if (!band.cell_lsf.empty()) {
     if (band.cell_lsf.size() != cells) return "cell_lsf does not match cell_ar";
-    for (const auto& l : band.cell_lsf)
-      if (l.size() != M) return "cell_lsf does not match cell_ar";
+    for (std::size_t c = 0; c < cells; ++c)
+      if (band.cell_lsf[c].size() != band.cell_ar[c].size())
+        return "cell_lsf does not match cell_ar";
   }
   return "";
 }
@@ -172,14 +174,16 @@ struct NeuralSynth::CellArMix {
   double speed_mps = std::numeric_limits<double>::quiet_NaN();  // condition of `filter`
   double force_N = std::numeric_limits<double>::quiet_NaN();
 
-  double Predict(double v, double f, const double* x, std::size_t M) noexcept {
+  // sum c_i x_i over the filter's order (at most the band's history, which `x` holds).
+  double Predict(double v, double f, const double* x) noexcept {
     if (!(v == speed_mps && f == force_N)) {
       interp.Interpolate(v, f, true, &filter);
       speed_mps = v;
       force_N = f;
     }
     double y = 0;
-    for (std::size_t i = 0; i < M; ++i) y += filter.c[i] * x[i];
+    for (std::size_t i = 0; i < static_cast<std::size_t>(filter.order); ++i)
+      y += filter.c[i] * x[i];
     return y;
   }
 };
@@ -517,7 +521,7 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       }
       double y = 0, sig = 0;
       if (unified) y = Forward(band.nets[0], true, s.input.data(), act_a_.data(), act_b_.data());
-      if (s.ar) y += s.ar->Predict(speed_mps, force_N, s.input.data(), M);
+      if (s.ar) y += s.ar->Predict(speed_mps, force_N, s.input.data());
       for (int k = 0; k < nw; ++k) {
         const auto c = static_cast<std::size_t>(cell[k]);
         if (!unified)

@@ -17,7 +17,8 @@ namespace hapticlab::modeling {
 
 /// How Γ_U's linear part follows speed and force (NeuralFitOptions::unified_linear).
 enum class UnifiedLinearPart {
-  /// One AR(M) per training cell, least squares on that cell's recording, mixed at synthesis
+  /// One AR(p) per training cell (p chosen as the LPC bank chooses its order, at most M),
+  /// least squares on that cell's recording, mixed at synthesis
   /// as the LPC bank mixes its fits (LSFs, bilinear grid weights; NeuralBand::cell_ar, file
   /// format 2). Γ_U = LPC's interpolation of per-band AR fits + the validated MLP correction.
   kCellAr,
@@ -48,10 +49,12 @@ struct NeuralFitOptions {
   /// Give every network a linear autoregressive part fitted by least squares on the clean
   /// histories (Γ_U: see unified_linear); the MLP learns what it leaves.
   bool linear_part = true;
-  /// Γ_U's linear part: per-cell AR fits interpolated as LPC's (default) or the biquadratic
-  /// condition basis (issue #19: held out, the biquadratic interpolant between the nodes lost
-  /// to LPC's LSF mixing on some data; docs/modeling-neural.md).
-  UnifiedLinearPart unified_linear = UnifiedLinearPart::kCellAr;
+  /// Γ_U's linear part: the biquadratic condition basis (default) or per-cell AR fits
+  /// interpolated as LPC's. The per-cell form was built for issue #19 and measured worse held
+  /// out on the AR grids (with order M its LSF mixing splits resonances, with LPC's order it
+  /// also fits the training cells worse; docs/modeling-neural.md has the numbers), so it is
+  /// not the default.
+  UnifiedLinearPart unified_linear = UnifiedLinearPart::kConditionBasis;
   /// Ridge of the linear part's least squares, relative to the mean diagonal of its normal
   /// matrix (keeps the coefficients, and their condition dependence, small where the data
   /// do not determine them).

@@ -59,15 +59,16 @@ struct NeuralBand {
   std::vector<NeuralNet> nets;  ///< Γ_U: one; Γ_D: one per grid cell (speed-major)
   std::vector<double> sigma;    ///< residual SD per grid cell (units of `scale`)
   /// Γ_U's linear part interpolated as the LPC bank interpolates (file format_version 2,
-  /// issue #19): one AR(M) per grid cell (speed-major, as `sigma`), coefficients c_1..c_M
-  /// over the band's history in units of `scale` (ar.hpp's convention), each minimum phase.
+  /// issue #19): one AR(p) per grid cell (speed-major, as `sigma`; the same order p, 1 <= p
+  /// <= M, in every cell), coefficients c_1..c_p over the newest p samples of the band's
+  /// history in units of `scale` (ar.hpp's convention), each minimum phase.
   /// At synthesis the cells' LSFs are mixed with the AR bank's weights (VibrationInterpolator:
   /// bilinear on the grid, clamped at its edges) and converted back, and the network's output
   /// adds sum c_i x_i; the MLP is the correction on top. Empty: no such part (the network's
   /// own `linear`, if any, is used: files before format_version 2).
   std::vector<std::vector<double>> cell_ar;
   /// LSFs [rad/sample] of `cell_ar` (same shape), filled by the fit and on load; empty: the
-  /// synthesizer computes them (slow for M = 50: ~1 ms per cell).
+  /// synthesizer computes them (ArToLsf's scan: milliseconds per cell at high order).
   std::vector<std::vector<double>> cell_lsf;
 };
 
