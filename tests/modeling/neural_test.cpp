@@ -634,13 +634,13 @@ std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
   return recs;
 }
 
-// Data seeds of the AR-grid Fig. 3.7 test: 40, or those of HL_NEURAL_FIG37_SEEDS
+// Data seeds of the AR-grid Fig. 3.7 test: 40 and 41, or those of HL_NEURAL_FIG37_SEEDS
 // (e.g. "40,41,42,43": a scratch knob for the seed tables in docs/modeling-neural.md).
 // HL_NEURAL_FIG37_LINEAR=cells fits Γ_U's linear part as per-cell AR fits mixed like LPC's
 // (UnifiedLinearPart::kCellAr; measured worse held out, not the default).
 std::vector<std::uint64_t> Fig37Seeds() {
   const char* env = std::getenv("HL_NEURAL_FIG37_SEEDS");
-  if (env == nullptr || *env == 0) return {40};
+  if (env == nullptr || *env == 0) return {40, 41};
   std::vector<std::uint64_t> seeds;
   const std::string text(env);
   for (std::size_t at = 0; at < text.size();) {
