@@ -10,11 +10,13 @@
 #include <cmath>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/cross_validation.hpp"
+#include "hapticlab/renderer/ar.hpp"
 
 namespace hapticlab::modeling {
 namespace {
@@ -183,6 +185,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
         Eigen::MatrixXd X(total, inputs);
         Eigen::VectorXd y(total);
+        std::vector<std::size_t> row_cell(static_cast<std::size_t>(total));  // grid cell per row
         Eigen::Index r = 0, nval = 0;
         for (const bool val : {false, true})
           for (const auto i : use) {
@@ -195,24 +198,61 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                 X(r, M + 1) = m.NormForce(recs[i].force_N);
               }
               y(r) = x[t];
+              row_cell[static_cast<std::size_t>(r)] = static_cast<std::size_t>(cell_of[i]);
             }
             if (val) nval += static_cast<Eigen::Index>(b - a);
           }
         // The linear part (NeuralFitOptions::linear_part): least squares on the clean training
-        // rows. Its features are phi(v', f') (x) x (Γ_D: phi = 1; Γ_U: the biquadratic
-        // condition basis of renderer/neural.cpp), and phi is constant within a recording, so
-        // the normal matrix is sum over recordings of (phi phi^T) (x) (X_i^T X_i): one M x M
-        // Gram matrix per recording instead of 9 M features per row.
-        const Eigen::Index terms = unified ? 9 : 1, nlin = o.linear_part ? terms * M : 0;
+        // rows. Γ_U with per-cell AR fits (UnifiedLinearPart::kCellAr): one AR(M) per
+        // recording, on its own rows; at synthesis the cells' fits are mixed as the LPC bank's
+        // (renderer/neural.cpp). Otherwise the features are phi(v', f') (x) x (Γ_D: phi = 1;
+        // Γ_U with kConditionBasis: the biquadratic basis of renderer/neural.cpp), and phi is
+        // constant within a recording, so the normal matrix is sum over recordings of
+        // (phi phi^T) (x) (X_i^T X_i): one M x M Gram matrix per recording instead of 9 M
+        // features per row. Either way the linear part at a training cell is one AR(M),
+        // `a_cell[c]`, which predicts that cell's rows.
+        const bool per_cell = unified && o.unified_linear == UnifiedLinearPart::kCellAr;
+        const Eigen::Index terms = unified && !per_cell ? 9 : 1,
+                           nlin = o.linear_part ? terms * M : 0;
         auto basis = [&](double v, double fo) {
           Eigen::VectorXd phi(terms);
           phi(0) = 1;
-          if (unified)
+          if (terms == 9)
             phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
           return phi;
         };
         Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
+        std::vector<Eigen::VectorXd> a_cell(cells, Eigen::VectorXd::Zero(M));
+        std::vector<std::vector<double>> cell_ar;  // per_cell: the band's NeuralBand::cell_ar
         Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
+        // Per-cell AR order: chosen as the LPC bank chooses its order (the criterion summed
+        // over the recordings, at most preprocess.max_order, one order for all cells: LSF
+        // interpolation needs equal orders), here on the band's training signals and at most
+        // M. Why not M = 50 itself: the LSFs of a high-order fit are mostly spurious pairs,
+        // and a resonance that moves between two cells changes which LSF pair carries it, so
+        // mixing them splits it into two weaker ones instead of moving it (held out on the
+        // AR grids, data seed 40: E_s 0.265 and 0.318 with order 50, LPC 0.222 and 0.276).
+        Eigen::Index p_lin = M;
+        if (per_cell && o.linear_part) {
+          const int pmax = o.preprocess.order > 0 ? std::min(M, o.preprocess.order)
+                                                  : std::min(M, o.preprocess.max_order);
+          std::vector<double> crit(static_cast<std::size_t>(pmax), 0.0);
+          for (const auto i : use) {
+            const auto& x = sig[j.band][i];
+            const std::vector<double> train(
+                x.begin(), x.begin() + static_cast<std::ptrdiff_t>(rows_of(j, i, false).second));
+            for (int p = o.preprocess.order > 0 ? pmax : 1; p <= pmax; ++p)
+              crit[static_cast<std::size_t>(p - 1)] +=
+                  FitAr(train, p, pmax, o.preprocess.criterion).criterion;
+          }
+          p_lin = pmax;
+          if (o.preprocess.order <= 0)
+            p_lin = 1 + std::distance(crit.begin(), std::min_element(crit.begin(), crit.end()));
+          if (o.progress)
+            o.progress(fmt::format("band {}: per-cell AR order {} (as the LPC bank chooses)",
+                                   j.band + 1, p_lin),
+                       static_cast<int>(done.load()), static_cast<int>(jobs.size()));
+        }
         if (nlin > 0) {
           Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin);
           Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
@@ -221,9 +261,32 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                use) {  // the training rows, recording by recording (as laid out above)
             const auto [a, b] = rows_of(j, i, false);
             const auto n = static_cast<Eigen::Index>(b - a);
-            const auto Xi = X.block(off, 0, n, M);
-            const Eigen::MatrixXd G = Xi.transpose() * Xi;
+            const auto Xi = X.block(off, 0, n, per_cell ? p_lin : M);
+            Eigen::MatrixXd G = Xi.transpose() * Xi;
             const Eigen::VectorXd g = Xi.transpose() * y.segment(off, n);
+            off += n;
+            const auto c = static_cast<std::size_t>(cell_of[i]);
+            if (per_cell) {
+              G.diagonal().array() += o.linear_ridge * G.trace() / static_cast<double>(p_lin);
+              a_cell[c].head(p_lin) = G.ldlt().solve(g);
+              if (!renderer::IsStableAr(
+                      std::span<const double>(a_cell[c].data(), static_cast<std::size_t>(p_lin)))) {
+                // The covariance-method fit need not be minimum phase, and LSF mixing needs
+                // it: the autocorrelation method (Levinson, as the LPC bank) always is.
+                const auto& x = sig[j.band][i];
+                const auto fit = FitAr(
+                    std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(
+                                                                   rows_of(j, i, false).second)),
+                    static_cast<int>(p_lin));
+                a_cell[c].head(p_lin) = Eigen::Map<const Eigen::VectorXd>(fit.coeffs.data(), p_lin);
+                if (o.progress)
+                  o.progress(fmt::format("band {}: the least-squares AR({}) at {} m/s, {} N is "
+                                         "not minimum phase; the Levinson fit is used there",
+                                         j.band + 1, p_lin, recs[i].speed_mps, recs[i].force_N),
+                             static_cast<int>(done.load()), static_cast<int>(jobs.size()));
+              }
+              continue;
+            }
             const Eigen::VectorXd phi =
                 unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N))
                         : basis(0, 0);
@@ -232,16 +295,23 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
               for (Eigen::Index u = 0; u < terms; ++u)
                 A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
             }
-            off += n;
           }
-          const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
-          A.diagonal().array() += lambda;
-          wlin = A.ldlt().solve(rhs);
-          // ylin = sum_t phi_t (x . w_t): the histories times the M x terms weight matrix.
-          const Eigen::MatrixXd P =
-              X.leftCols(M) * Eigen::Map<const Eigen::MatrixXd>(wlin.data(), M, terms);
+          if (per_cell) {
+            for (const auto& a : a_cell) cell_ar.emplace_back(a.data(), a.data() + p_lin);
+            wlin.resize(0);  // the network itself has no linear weights
+          } else {
+            const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
+            A.diagonal().array() += lambda;
+            wlin = A.ldlt().solve(rhs);
+            // The AR coefficients at each training cell: the M x terms weights times phi.
+            const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
+            for (const auto i : use)
+              a_cell[static_cast<std::size_t>(cell_of[i])] =
+                  W * (unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N))
+                               : basis(0, 0));
+          }
           for (Eigen::Index rr = 0; rr < total; ++rr)
-            ylin(rr) = P.row(rr).dot(unified ? basis(X(rr, M), X(rr, M + 1)) : basis(0, 0));
+            ylin(rr) = X.row(rr).head(M).dot(a_cell[row_cell[static_cast<std::size_t>(rr)]]);
         }
         const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
         const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns
@@ -282,7 +352,6 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             layers,
             std::vector<double>(net.params().data(), net.params().data() + net.params().size()),
             std::vector<double>(wlin.data(), wlin.data() + wlin.size())};
-        const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
         // Sigma per cell for the network with (mlp) or without its nonlinear part: the one-step
         // residual RMS on every row of the cell's recording (with a linear part on the clean
         // histories the synthesis feeds it), then calibrated: a trained predictor shrinks
@@ -307,9 +376,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             }
           for (std::size_t c = 0; c < cells; ++c)
             if (cnt[c] > 0) sigma[c] = std::sqrt(se[c] / cnt[c]);
-          auto predict = [&](const Eigen::VectorXd& in, const Eigen::VectorXd& phi) {
+          auto predict = [&](const Eigen::VectorXd& in, std::size_t c) {
             double v = mlp ? net.Predict(in) : 0.0;
-            if (nlin > 0) v += (in.head(M).transpose() * W).dot(phi);
+            if (nlin > 0) v += in.head(M).dot(a_cell[c]);
             return v;
           };
           const double rate_dec = m.sample_rate_hz / band.decimation;
@@ -328,14 +397,13 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
               in(M) = m.NormSpeed(recs[i].speed_mps);
               in(M + 1) = m.NormForce(recs[i].force_N);
             }
-            const Eigen::VectorXd phi_c = unified ? basis(in(M), in(M + 1)) : basis(0, 0);
             std::vector<double> run;
             for (int pass = 0; pass < 3 && target > 0; ++pass) {
               in.head(M).setZero();
               run.clear();
               const int warm = 300, steps = 3000;
               for (int t = 0; t < warm + steps; ++t) {
-                double yv = predict(in, phi_c) + sigma[c] * rng.Normal();
+                double yv = predict(in, c) + sigma[c] * rng.Normal();
                 yv = std::clamp(std::isfinite(yv) ? yv : 0.0, -10.0, 10.0);
                 for (int q = M - 1; q > 0; --q) in(q) = in(q - 1);
                 in(0) = yv;
@@ -360,8 +428,10 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           renderer::NeuralNet lin = out;
           std::fill(lin.params.begin(), lin.params.end(), 0.0);  // the network's output is 0
           linear_only[j.band].nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(lin);
+          linear_only[j.band].cell_ar = cell_ar;
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
+        band.cell_ar = std::move(cell_ar);
         if (o.progress)
           o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
       } catch (...) {
@@ -376,6 +446,8 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   work();
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
+  renderer::FillNeuralCellLsf(&m);  // once here, not in every synthesizer
+  for (std::size_t b = 0; b < m.bands.size(); ++b) linear_only[b].cell_lsf = m.bands[b].cell_lsf;
   if (o.linear_part && o.validate_nonlinear_part) {
     // Model selection on validation data: free-running E_s (the Fig. 3.7 measure) of each
     // variant against the last validation_fraction of every recording, which no linear part

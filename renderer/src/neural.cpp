@@ -7,12 +7,15 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/core/toml_util.hpp"
+#include "hapticlab/renderer/ar.hpp"
+#include "hapticlab/renderer/vibration.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -119,7 +122,71 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
   return y;
 }
 
+// Γ_U's per-cell AR part (NeuralBand::cell_ar): "" when absent or consistent.
+std::string CellArProblem(const NeuralModel& m, const NeuralBand& band) {
+  if (band.cell_ar.empty()) {
+    if (!band.cell_lsf.empty()) return "cell_lsf without cell_ar";
+    return "";
+  }
+  if (m.topology != NeuralTopology::kUnified)
+    return "cell_ar is the unified (Γ_U) model's linear part; this model is decomposed";
+  const std::size_t cells = m.speeds_mps.size() * m.forces_N.size();
+  const auto M = static_cast<std::size_t>(band.history);
+  if (band.cell_ar.size() != cells)
+    return fmt::format("{} cell_ar filters, expected {} (one per grid cell)", band.cell_ar.size(),
+                       cells);
+  if (!band.nets.front().linear.empty())
+    return "both cell_ar and the network's linear weights: expected one linear part";
+  if (M > static_cast<std::size_t>(kMaxArOrder))
+    return fmt::format("cell_ar needs history <= {} (the AR interpolation's largest order)",
+                       kMaxArOrder);
+  const std::size_t nf = m.forces_N.size();
+  for (std::size_t c = 0; c < cells; ++c) {
+    const auto& a = band.cell_ar[c];
+    const std::string cell = fmt::format("cell_ar[{}] ({:g} m/s, {:g} N)", c + 1,
+                                         m.speeds_mps[c / nf], m.forces_N[c % nf]);
+    if (a.empty() || a.size() > M || a.size() != band.cell_ar.front().size())
+      return fmt::format(
+          "{}: {} coefficients, expected 1 to {} (the band's history), the same in every cell",
+          cell, a.size(), M);
+    for (const double x : a)
+      if (!std::isfinite(x)) return cell + ": non-finite coefficient";
+    if (!IsStableAr(a))
+      return cell + ": not minimum phase (its LSFs, which the interpolation mixes, do not exist)";
+  }
+  if (!band.cell_lsf.empty()) {
+    if (band.cell_lsf.size() != cells) return "cell_lsf does not match cell_ar";
+    for (std::size_t c = 0; c < cells; ++c)
+      if (band.cell_lsf[c].size() != band.cell_ar[c].size())
+        return "cell_lsf does not match cell_ar";
+  }
+  return "";
+}
+
 }  // namespace
+
+// Γ_U's per-cell AR part at synthesis: the AR bank's own interpolation (LSFs mixed with the
+// grid's bilinear weights, ar.hpp / vibration.hpp) over the band's cells, recomputed only when
+// the condition changes. Allocation-free after construction.
+struct NeuralSynth::CellArMix {
+  VibrationInterpolator interp;
+  ArFilter filter;
+  double speed_mps = std::numeric_limits<double>::quiet_NaN();  // condition of `filter`
+  double force_N = std::numeric_limits<double>::quiet_NaN();
+
+  // sum c_i x_i over the filter's order (at most the band's history, which `x` holds).
+  double Predict(double v, double f, const double* x) noexcept {
+    if (!(v == speed_mps && f == force_N)) {
+      interp.Interpolate(v, f, true, &filter);
+      speed_mps = v;
+      force_N = f;
+    }
+    double y = 0;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(filter.order); ++i)
+      y += filter.c[i] * x[i];
+    return y;
+  }
+};
 
 std::size_t NeuralNet::ParamCount() const {
   std::size_t n = 0;
@@ -199,6 +266,7 @@ std::string NeuralModelProblem(const NeuralModel& m) {
         if (!std::isfinite(p)) return where + ": non-finite linear weight";
     }
     if (!(band.scale > 0)) return where + ": scale must be positive";
+    if (const std::string p = CellArProblem(m, band); !p.empty()) return where + ": " + p;
   }
   return "";
 }
@@ -219,6 +287,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
   };
   std::string s =
       "# HapticLab neural texture model (dissertation ch. III.3; docs/modeling-neural.md)\n";
+  s += fmt::format("format_version = {}\n", kNeuralFormatVersion);
   s += fmt::format("topology = \"{}\"\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
                    m.topology == NeuralTopology::kUnified ? "unified" : "decomposed",
                    m.sample_rate_hz, m.min_speed_mps);
@@ -234,6 +303,11 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
     if (!b.nets.front().linear.empty()) {
       s += "linear = [\n";
       for (const auto& n : b.nets) s += "  " + list(n.linear) + ",\n";
+      s += "]\n";
+    }
+    if (!b.cell_ar.empty()) {  // one AR filter per grid cell, speed-major (as sigma)
+      s += "cell_ar = [\n";
+      for (const auto& a : b.cell_ar) s += "  " + list(a) + ",\n";
       s += "]\n";
     }
   }
@@ -264,6 +338,15 @@ NeuralModel LoadNeuralModel(const std::string& path) {
     }
   };
   NeuralModel m;
+  // format_version: absent in version 1 files (before Γ_U's per-cell AR part).
+  const auto version = doc["format_version"].value<int64_t>().value_or(1);
+  if (doc.contains("format_version") && !doc["format_version"].value<int64_t>())
+    d.Add(path, line(doc.get("format_version")), "format_version", "expected an integer");
+  else if (version < 1 || version > kNeuralFormatVersion)
+    throw InputError(path, line(doc.get("format_version")), "format_version",
+                     fmt::format("version {}; this build reads versions 1 to {} (written by a "
+                                 "newer HapticLab?)",
+                                 version, kNeuralFormatVersion));
   const auto topo = doc["topology"].value<std::string>();
   if (topo == "unified")
     m.topology = NeuralTopology::kUnified;
@@ -308,12 +391,31 @@ NeuralModel LoadNeuralModel(const std::string& path) {
       for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
         numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
     }
+    if (const auto* car = t->get("cell_ar")) {
+      const auto* a = car->as_array();
+      if (version < 2)
+        d.Add(path, line(car), k + ".cell_ar", "needs format_version = 2 (absent: version 1)");
+      else if (!a)
+        d.Add(path, line(car), k + ".cell_ar", "expected an array of coefficient arrays");
+      for (std::size_t j = 0; version >= 2 && a && j < a->size(); ++j) {
+        b.cell_ar.emplace_back();
+        numbers(a->get(j), fmt::format("{}.cell_ar[{}]", k, j + 1), &b.cell_ar.back());
+      }
+    }
     m.bands.push_back(std::move(b));
   }
   d.ThrowIfAny();
   if (const std::string problem = NeuralModelProblem(m); !problem.empty())
     throw InputError(path, 0, "band", problem);
+  FillNeuralCellLsf(&m);
   return m;
+}
+
+void FillNeuralCellLsf(NeuralModel* m) {
+  for (auto& b : m->bands) {
+    b.cell_lsf.clear();
+    for (const auto& a : b.cell_ar) b.cell_lsf.push_back(ArToLsf(a));
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -346,11 +448,33 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
             Biquad(ButterworthSection(b.hi_hz, m_->sample_rate_hz, q, false));
     for (const auto& n : b.nets)
       for (const int w : n.layers) widest = std::max(widest, static_cast<std::size_t>(w));
+    if (!b.cell_ar.empty()) {  // the AR bank of the band's cells, interpolated as LPC's
+      VibrationBank bank;
+      bank.sample_rate_hz = rate;
+      bank.grid_speeds_mps = m_->speeds_mps;
+      bank.grid_forces_N = m_->forces_N;
+      bank.min_speed_mps = 0;  // Step applies the model's minimum speed
+      const std::size_t nf = m_->forces_N.size();
+      for (std::size_t c = 0; c < b.cell_ar.size(); ++c) {
+        ArCell cell;
+        cell.speed_mps = m_->speeds_mps[c / nf];
+        cell.force_N = m_->forces_N[c % nf];
+        cell.coeffs = b.cell_ar[c];
+        cell.lsf = b.cell_lsf.empty() ? ArToLsf(cell.coeffs) : b.cell_lsf[c];
+        bank.cells.push_back(std::move(cell));
+      }
+      s.ar = std::make_unique<CellArMix>();
+      s.ar->interp = VibrationInterpolator(bank);
+    }
     bands_.push_back(std::move(s));
   }
   act_a_.assign(widest, 0.0);
   act_b_.assign(widest, 0.0);
 }
+
+NeuralSynth::~NeuralSynth() = default;
+NeuralSynth::NeuralSynth(NeuralSynth&&) noexcept = default;
+NeuralSynth& NeuralSynth::operator=(NeuralSynth&&) noexcept = default;
 
 void NeuralSynth::Reset() noexcept {
   for (auto& s : bands_) {
@@ -364,8 +488,12 @@ void NeuralSynth::Reset() noexcept {
 }
 
 double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept {
-  return Forward(m_->bands[band].nets[cell], m_->topology == NeuralTopology::kUnified, input,
-                 act_a_.data(), act_b_.data());
+  const NeuralBand& b = m_->bands[band];
+  const bool unified = m_->topology == NeuralTopology::kUnified;
+  double y = Forward(b.nets[unified ? 0 : cell], unified, input, act_a_.data(), act_b_.data());
+  if (unified && !b.cell_ar.empty())
+    for (std::size_t i = 0; i < b.cell_ar[cell].size(); ++i) y += b.cell_ar[cell][i] * input[i];
+  return y;
 }
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
@@ -393,6 +521,7 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
       }
       double y = 0, sig = 0;
       if (unified) y = Forward(band.nets[0], true, s.input.data(), act_a_.data(), act_b_.data());
+      if (s.ar) y += s.ar->Predict(speed_mps, force_N, s.input.data());
       for (int k = 0; k < nw; ++k) {
         const auto c = static_cast<std::size_t>(cell[k]);
         if (!unified)

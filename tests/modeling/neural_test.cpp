@@ -19,6 +19,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/vibration.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling {
@@ -84,9 +85,10 @@ NeuralFitOptions Quick(renderer::NeuralTopology t) {
   return o;
 }
 
-// A small trained model (fast): the training grid of the thesis, short recordings.
-const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t) {
-  static const auto make = [](renderer::NeuralTopology topo) {
+// A small trained model (fast): the training grid of the thesis, short recordings. `cell_ar`:
+// Γ_U with per-cell AR fits as its linear part (UnifiedLinearPart::kCellAr).
+const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool cell_ar = false) {
+  static const auto make = [](renderer::NeuralTopology topo, bool per_cell) {
     std::vector<Recording> recs;
     int k = 0;
     for (const double v : {0.04, 0.12})
@@ -97,10 +99,15 @@ const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t) {
     o.hidden_large = {8, 4};
     o.hidden_small = {6};
     for (auto& b : o.bands) b.history = 12;
+    if (per_cell) o.unified_linear = UnifiedLinearPart::kCellAr;
     return FitNeural(recs, o);
   };
-  static const auto u = make(renderer::NeuralTopology::kUnified),
-                    d = make(renderer::NeuralTopology::kDecomposed);
+  static const auto u = make(renderer::NeuralTopology::kUnified, false),
+                    d = make(renderer::NeuralTopology::kDecomposed, false);
+  if (cell_ar) {
+    static const auto uc = make(renderer::NeuralTopology::kUnified, true);
+    return uc;
+  }
   return t == renderer::NeuralTopology::kUnified ? u : d;
 }
 
@@ -216,20 +223,26 @@ TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
 }
 
 TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
-  for (const auto t : {renderer::NeuralTopology::kUnified, renderer::NeuralTopology::kDecomposed}) {
-    auto m = std::make_shared<renderer::NeuralModel>(SmallModel(t));
+  for (const int variant : {0, 1, 2}) {  // Γ_U, Γ_U with per-cell AR fits, Γ_D
+    const auto t =
+        variant < 2 ? renderer::NeuralTopology::kUnified : renderer::NeuralTopology::kDecomposed;
+    auto m = std::make_shared<renderer::NeuralModel>(SmallModel(t, variant == 1));
+    // With per-cell AR fits Γ_U's linear part is the AR bank mixed at every new condition
+    // (LSF interpolation inside Step): the guard covers it.
+    EXPECT_EQ(!m->bands[0].cell_ar.empty(), variant == 1);
     renderer::NeuralSynth a(m, 9), b(m, 9);
     std::vector<double> xa(4000), xb(4000);
+    auto force_N = [](std::size_t k) { return 0.6 + 1.2 * static_cast<double>(k % 700) / 700.0; };
     {
       test::NoAllocGuard guard;
       for (std::size_t k = 0; k < xa.size(); ++k) {
         const double v = 0.04 + 0.08 * static_cast<double>(k) / 4000.0;
-        xa[k] = a.Step(v, 1.0, true);
+        xa[k] = a.Step(v, force_N(k), true);
       }
       EXPECT_EQ(guard.count(), 0u);
     }
     for (std::size_t k = 0; k < xb.size(); ++k)
-      xb[k] = b.Step(0.04 + 0.08 * static_cast<double>(k) / 4000.0, 1.0, true);
+      xb[k] = b.Step(0.04 + 0.08 * static_cast<double>(k) / 4000.0, force_N(k), true);
     EXPECT_EQ(xa, xb);
     double p = 0;
     for (const double x : xa) {
@@ -306,6 +319,139 @@ TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
     EXPECT_NE(std::string(e.what()).find("linear weights, expected 0 or"), std::string::npos)
         << e.what();
   }
+}
+
+// Γ_U's per-cell AR part (format_version 2) round-trips exactly; a version 1 file (the
+// condition-basis linear part in each network, no format_version) still loads and plays; a
+// newer version, a per-cell part in a version 1 file and an unstable cell filter are
+// InputErrors naming the file and the field.
+TEST(Neural, UnifiedModelFilesRoundTripAndOlderVersionsLoad) {
+  test::TempDir dir;
+  const auto& m = SmallModel(renderer::NeuralTopology::kUnified, true);
+  ASSERT_EQ(m.bands[0].cell_ar.size(), 4u);
+  const auto path = dir.File("u.toml");
+  renderer::SaveNeuralModel(m, path);
+  const std::string text = test::ReadFile(path);
+  ASSERT_NE(text.find("format_version = 2\n"), std::string::npos);
+  ASSERT_NE(text.find("cell_ar = [\n  ["), std::string::npos);
+  const auto back = renderer::LoadNeuralModel(path);
+  for (std::size_t b = 0; b < m.bands.size(); ++b) {
+    EXPECT_EQ(back.bands[b].cell_ar, m.bands[b].cell_ar);
+    EXPECT_EQ(back.bands[b].cell_lsf.size(), 4u) << "LSFs filled on load";
+  }
+  auto play = [](const renderer::NeuralModel& model) {
+    renderer::NeuralSynth s(std::make_shared<renderer::NeuralModel>(model), 4);
+    std::vector<double> x(3000);
+    for (std::size_t k = 0; k < x.size(); ++k)
+      x[k] = s.Step(0.05 + 0.06 * static_cast<double>(k) / 3000.0, 1.3, true);
+    return x;
+  };
+  EXPECT_EQ(play(back), play(m));
+
+  // Version 1: the linear part as condition-basis weights in each network.
+  renderer::NeuralModel old = m;
+  for (auto& b : old.bands) {
+    const auto M = static_cast<std::size_t>(b.history);
+    b.nets[0].linear.assign(9 * M, 0.0);
+    for (std::size_t i = 0; i < b.cell_ar[0].size(); ++i) {  // 1: cell 1's AR; v': a slope
+      b.nets[0].linear[i] = b.cell_ar[0][i];
+      b.nets[0].linear[M + i] = 0.01 * b.cell_ar[3][i];
+    }
+    b.cell_ar.clear();
+    b.cell_lsf.clear();
+  }
+  renderer::SaveNeuralModel(old, path);
+  std::string v1 = test::ReadFile(path);
+  v1.erase(v1.find("format_version = 2\n"), 19);
+  test::WriteFile(dir.File("v1.toml"), v1);
+  const auto old_back = renderer::LoadNeuralModel(dir.File("v1.toml"));
+  EXPECT_EQ(old_back.bands[0].nets[0].linear, old.bands[0].nets[0].linear);
+  EXPECT_EQ(play(old_back), play(old));
+
+  auto expect_error = [&](const std::string& name, const std::string& body,
+                          const std::vector<std::string>& parts) {
+    test::WriteFile(dir.File(name), body);
+    try {
+      renderer::LoadNeuralModel(dir.File(name));
+      ADD_FAILURE() << name << " loaded";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+      for (const auto& p : parts)
+        EXPECT_NE(std::string(e.what()).find(p), std::string::npos) << e.what();
+    }
+  };
+  std::string v3 = text;
+  v3.replace(v3.find("format_version = 2"), 18, "format_version = 3");
+  expect_error("v3.toml", v3, {"format_version", "version 3", "versions 1 to 2"});
+  std::string v1_cells = text;
+  v1_cells.erase(v1_cells.find("format_version = 2\n"), 19);
+  expect_error("v1cells.toml", v1_cells, {"cell_ar", "format_version = 2"});
+  std::string unstable = text;  // first coefficient of the first cell's AR: 5 (a pole outside)
+  const auto at = unstable.find("cell_ar = [\n  [") + 15;
+  unstable.replace(at, unstable.find(',', at) - at, "5");
+  expect_error("unstable.toml", unstable, {"cell_ar[1]", "not minimum phase"});
+}
+
+// Γ_U's linear part between the training cells is the LPC bank's interpolation: the cells'
+// LSFs mixed with the grid's bilinear weights. Reference written independently of the
+// renderer's LSF code: for an AR(2), A(z) = 1 + a1 z^-1 + a2 z^-2, P(z) = (1 + z^-1)
+// (1 + (a1 + a2 - 1) z^-1 + z^-2) and Q(z) = (1 - z^-1)(1 + (a1 - a2 + 1) z^-1 + z^-2), so its
+// two LSFs have cos w_p = (1 - a1 - a2) / 2 and cos w_q = -(1 + a1 - a2) / 2. A one-band Γ_U
+// model with a silent network is then exactly that AR process (same noise, the band's 10 Hz
+// drift high-pass at the output).
+TEST(Neural, UnifiedLinearPartIsTheLpcBanksLsfInterpolation) {
+  auto m = std::make_shared<renderer::NeuralModel>();
+  m->speeds_mps = {0.04, 0.12};
+  m->forces_N = {0.5, 1.5};
+  renderer::NeuralBand band;
+  band.lo_hz = 20;
+  band.hi_hz = 1000;
+  band.decimation = 1;
+  band.history = 2;
+  renderer::NeuralNet net;
+  net.layers = {4, 1};
+  net.params.assign(net.ParamCount(), 0.0);
+  band.nets = {net};
+  band.sigma.assign(4, 0.1);
+  auto resonance = [](double f_hz, double r) {  // c = (2 r cos w, -r^2)
+    return std::vector<double>{2 * r * std::cos(2 * kPi * f_hz / 2000), -r * r};
+  };
+  band.cell_ar = {resonance(150, 0.95), resonance(250, 0.9), resonance(450, 0.9),
+                  resonance(700, 0.8)};  // (4 cm/s, 0.5 N), (4, 1.5), (12, 0.5), (12, 1.5)
+  m->bands = {band};
+  renderer::NeuralSynth synth(m, 5);
+  Rng noise(5);
+  renderer::Biquad hp(renderer::BiquadCoeffs::ButterworthHighPass(10, 2000));
+  double y1 = 0, y2 = 0, worst = 0, power = 0, coeff_gap = 0;
+  for (int k = 0; k < 6000; ++k) {
+    const double v = k < 2000 ? 0.06 : k < 4000 ? 0.09 : 0.11, f = k < 3000 ? 0.8 : 1.2;
+    const double tv = (v - 0.04) / 0.08, tf = (f - 0.5) / 1.0;
+    const double w[4] = {(1 - tv) * (1 - tf), (1 - tv) * tf, tv * (1 - tf), tv * tf};
+    double cp = 0, cq = 0, mean1 = 0, mean2 = 0;  // mixed cos of the LSFs; naive mixing
+    for (int c = 0; c < 4; ++c) {
+      const double a1 = -band.cell_ar[static_cast<std::size_t>(c)][0],
+                   a2 = -band.cell_ar[static_cast<std::size_t>(c)][1];
+      cp += w[c] * std::acos((1 - a1 - a2) / 2);
+      cq += w[c] * std::acos(-(1 + a1 - a2) / 2);
+      mean1 += w[c] * band.cell_ar[static_cast<std::size_t>(c)][0];
+      mean2 += w[c] * band.cell_ar[static_cast<std::size_t>(c)][1];
+    }
+    // Back from the mixed LSFs: a1 + a2 = 1 - 2 cos w_p, a1 - a2 = -1 - 2 cos w_q.
+    const double s = 1 - 2 * std::cos(cp), d = -1 - 2 * std::cos(cq);
+    const double c1 = -(s + d) / 2, c2 = -(s - d) / 2;
+    coeff_gap = std::max(coeff_gap, std::abs(c1 - mean1) + std::abs(c2 - mean2));
+    const double y = c1 * y1 + c2 * y2 + 0.1 * noise.Normal();
+    y2 = y1;
+    y1 = y;
+    const double want = hp.Step(y), got = synth.Step(v, f, true);
+    worst = std::max(worst, std::abs(got - want));
+    power += want * want;
+  }
+  const double rms = std::sqrt(power / 6000);
+  EXPECT_GT(rms, 0.05);
+  EXPECT_LT(worst, 1e-9 * rms) << "Γ_U's linear part is not the LSF interpolation";
+  // The check can fail: mixing the coefficients instead of the LSFs gives other filters here.
+  EXPECT_GT(coeff_gap, 0.01);
 }
 
 // The crossovers that select each band at synthesis (docs/modeling-neural.md): every band's
@@ -488,11 +634,13 @@ std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
   return recs;
 }
 
-// Data seeds of the AR-grid Fig. 3.7 test: 40, or those of HL_NEURAL_FIG37_SEEDS="41,42,43"
-// (a scratch knob for the seed tables in docs/modeling-neural.md; ctest runs the default).
+// Data seeds of the AR-grid Fig. 3.7 test: 40 and 41, or those of HL_NEURAL_FIG37_SEEDS
+// (e.g. "40,41,42,43": a scratch knob for the seed tables in docs/modeling-neural.md).
+// HL_NEURAL_FIG37_LINEAR=cells fits Γ_U's linear part as per-cell AR fits mixed like LPC's
+// (UnifiedLinearPart::kCellAr; measured worse held out, not the default).
 std::vector<std::uint64_t> Fig37Seeds() {
   const char* env = std::getenv("HL_NEURAL_FIG37_SEEDS");
-  if (env == nullptr || *env == 0) return {40};
+  if (env == nullptr || *env == 0) return {40, 41};
   std::vector<std::uint64_t> seeds;
   const std::string text(env);
   for (std::size_t at = 0; at < text.size();) {
@@ -505,34 +653,45 @@ std::vector<std::uint64_t> Fig37Seeds() {
 
 // Fig. 3.7 on the synthetic AR grids (thesis grid: train 4, 8, 12 cm/s x 0.54, 1.18, 1.91 N,
 // held out 6, 10 cm/s and 0.89, 1.40 N): LPC, Γ_U, Γ_D, training and held-out mean E_s.
-// Asserted are issue #19's targets: on the linear grid Γ_U within 0.05 of LPC on training
-// conditions and within 0.1 held out; on the nonlinear grid Γ_U below LPC held out (and
-// within 0.02 of it on training conditions). They hold on data seed 40 (this test's) and on
-// seeds 41 and 43; on seed 42 the nonlinear grid's Γ_U is 0.011 above LPC held out
-// (docs/modeling-neural.md: the linear parts' interpolation between conditions; not fixed).
+// Asserted are issue #19's targets on every data seed run: on the linear grid Γ_U within 0.05
+// of LPC on training conditions and within 0.1 held out; on the nonlinear grid Γ_U below LPC
+// held out (and within 0.02 of it on training conditions). They hold on data seeds 40, 41, 43
+// and fail on 42 (Γ_U 0.011 above LPC held out on the nonlinear grid: how the biquadratic
+// linear part interpolates on that realization; LPC's own interpolation of per-cell fits was
+// tried and is worse: docs/modeling-neural.md). Γ_D (printed, not asserted) runs on the first
+// seed only: it is half the test's cost.
 TEST(NeuralFig37, LinearAndNonlinearArGrids) {
   const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
-  std::printf("AR grid, seed | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
-  for (const std::uint64_t seed : Fig37Seeds())
+  const char* lin_env = std::getenv("HL_NEURAL_FIG37_LINEAR");
+  const bool cells = lin_env != nullptr && std::string(lin_env) == "cells";
+  std::printf("AR grid, seed | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)%s\n",
+              cells ? "  [Γ_U: per-cell AR linear part]" : "");
+  const auto seeds = Fig37Seeds();
+  for (const std::uint64_t seed : seeds)
     for (const bool nonlinear : {false, true}) {
       const auto recs = ArGrid(nonlinear, seed);
       const auto lpc = CrossValidate(recs, tv, tf, {});
       auto uo = Quick(renderer::NeuralTopology::kUnified);
+      if (cells) uo.unified_linear = UnifiedLinearPart::kCellAr;
       std::string decision;
       std::mutex mu;
       uo.progress = [&](const std::string& what, int, int) {
         std::lock_guard<std::mutex> lock(mu);
         if (what.rfind("validation E_s", 0) == 0) decision = what;
+        if (what.find("not minimum phase") != std::string::npos) std::printf("%s\n", what.c_str());
       };
       const auto u = CrossValidateNeural(recs, tv, tf, uo);
-      const auto d =
-          CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
+      CvResult d;
+      const bool run_d = seed == seeds.front();
+      if (run_d)
+        d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
       std::printf("%s grid, seed %d, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear",
                   static_cast<int>(seed), decision.c_str());
-      std::printf("%-9s %4d |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n",
-                  nonlinear ? "nonlinear" : "linear", static_cast<int>(seed), lpc.mean_es_train,
-                  lpc.mean_es_test, u.mean_es_train, u.mean_es_test, d.mean_es_train,
-                  d.mean_es_test);
+      std::printf("%-9s %4d |  %.3f  %.3f |  %.3f  %.3f | %s\n", nonlinear ? "nonlinear" : "linear",
+                  static_cast<int>(seed), lpc.mean_es_train, lpc.mean_es_test, u.mean_es_train,
+                  u.mean_es_test,
+                  run_d ? fmt::format(" {:.3f}  {:.3f}", d.mean_es_train, d.mean_es_test).c_str()
+                        : "  (not run)");
       if (nonlinear) {
         EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.02) << "seed " << seed;
         EXPECT_LT(u.mean_es_test, lpc.mean_es_test) << "seed " << seed;

@@ -58,6 +58,18 @@ struct NeuralBand {
   double scale = 1;  ///< band signal standard deviation [m/s^2]; nets work in units of it
   std::vector<NeuralNet> nets;  ///< Γ_U: one; Γ_D: one per grid cell (speed-major)
   std::vector<double> sigma;    ///< residual SD per grid cell (units of `scale`)
+  /// Γ_U's linear part interpolated as the LPC bank interpolates (file format_version 2,
+  /// issue #19): one AR(p) per grid cell (speed-major, as `sigma`; the same order p, 1 <= p
+  /// <= M, in every cell), coefficients c_1..c_p over the newest p samples of the band's
+  /// history in units of `scale` (ar.hpp's convention), each minimum phase.
+  /// At synthesis the cells' LSFs are mixed with the AR bank's weights (VibrationInterpolator:
+  /// bilinear on the grid, clamped at its edges) and converted back, and the network's output
+  /// adds sum c_i x_i; the MLP is the correction on top. Empty: no such part (the network's
+  /// own `linear`, if any, is used: files before format_version 2).
+  std::vector<std::vector<double>> cell_ar;
+  /// LSFs [rad/sample] of `cell_ar` (same shape), filled by the fit and on load; empty: the
+  /// synthesizer computes them (ArToLsf's scan: milliseconds per cell at high order).
+  std::vector<std::vector<double>> cell_lsf;
 };
 
 enum class NeuralTopology { kUnified, kDecomposed };
@@ -86,7 +98,16 @@ std::string NeuralModelProblem(const NeuralModel& m);
 /// Precondition form of NeuralModelProblem: throws PreconditionError naming the problem.
 void ValidateNeuralModel(const NeuralModel& m);
 
-/// Reads/writes a neural model file (TOML; docs/modeling-neural.md).
+/// Fills every band's `cell_lsf` from its `cell_ar`.
+/// @throws PreconditionError when a cell's AR filter is not minimum phase.
+void FillNeuralCellLsf(NeuralModel* m);
+
+/// The file format version SaveNeuralModel writes: 2 (`format_version = 2`, Γ_U's per-cell AR
+/// part `cell_ar`); files without `format_version` are version 1 and still load and play.
+inline constexpr int kNeuralFormatVersion = 2;
+
+/// Reads/writes a neural model file (TOML; docs/modeling-neural.md). Versions 1 and 2 load; a
+/// newer version is an InputError naming the file, the field and the versions read.
 /// @throws hapticlab::InputError with file, line and key.
 NeuralModel LoadNeuralModel(const std::string& path);
 void SaveNeuralModel(const NeuralModel& m, const std::string& path);
@@ -96,16 +117,21 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path);
 class NeuralSynth {
  public:
   NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t seed);
+  ~NeuralSynth();
+  NeuralSynth(NeuralSynth&&) noexcept;
+  NeuralSynth& operator=(NeuralSynth&&) noexcept;
   /// The next model-rate sample [m/s^2] at the current speed and normal force; zero (and the
   /// state cleared) when inactive or slower than the model's minimum speed.
   double Step(double speed_mps, double force_N, bool active) noexcept;
   void Reset() noexcept;
-  /// One network evaluation of band b, cell c on an input vector (for tests).
+  /// One network evaluation of band b at cell c on an input vector (for tests): Γ_D, cell
+  /// c's network; Γ_U, the network plus cell c's AR part (when the model has `cell_ar`).
   double Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept;
 
  private:
   static constexpr int kTaps = 16;  // interpolator taps per phase
   static constexpr double kButterworth4Q[2] = {0.54119610014619701, 1.3065629648763766};
+  struct CellArMix;  // Γ_U's per-cell AR part: the AR bank's interpolator and its last filter
   struct BandState {
     std::vector<double> hist;   // 2M: newest-first window at [head, head + M)
     std::vector<double> input;  // M (+2) network input
@@ -114,6 +140,7 @@ class NeuralSynth {
     PolyphaseUpsampler up;  // by γ, kTaps taps per phase
     std::array<Biquad, 2 * kMaxNeuralBands> xover{};  // crossover sections at the model rate
     int nxover = 0;
+    std::unique_ptr<CellArMix> ar;  // null: the band has no cell_ar
   };
   std::shared_ptr<const NeuralModel> m_;
   std::vector<BandState> bands_;
