@@ -1,0 +1,164 @@
+// The Fig. 3.7 comparison (dissertation ch. III.3; issue #19) of LPC, Γ_U and Γ_D by
+// cross-validation (modeling/src/neural_cv.cpp): on synthetic textures and on the linear and
+// nonlinear AR grids, trained and held out.
+
+#include <gtest/gtest.h>
+
+#include "neural_fixture.hpp"
+
+namespace hapticlab::modeling {
+namespace {
+
+// Fig. 3.7 on synthetic textures: training and cross-validation E_s of LPC, Γ_U and Γ_D on the
+// thesis's grid (train v = 4, 8, 12 cm/s x f = 0.54, 1.18, 1.91 N; held out 6, 10 cm/s x
+// 0.89, 1.40 N).
+TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
+  const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
+  struct Row {
+    double period_m, lpc_tr, lpc_cv, u_tr, u_cv, d_tr, d_cv;
+  };
+  std::vector<Row> rows;
+  for (const double period : {0.2e-3, 0.35e-3, 0.5e-3}) {
+    const auto recs = TextureGrid(period, 11);
+    const auto lpc = CrossValidate(recs, tv, tf, {});
+    const auto u = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kUnified));
+    const auto d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
+    rows.push_back({period, lpc.mean_es_train, lpc.mean_es_test, u.mean_es_train, u.mean_es_test,
+                    d.mean_es_train, d.mean_es_test});
+  }
+  std::printf("texture period | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)\n");
+  for (const auto& r : rows) {
+    std::printf("  %.2f mm      |  %.3f  %.3f |  %.3f  %.3f |  %.3f  %.3f\n", r.period_m * 1e3,
+                r.lpc_tr, r.lpc_cv, r.u_tr, r.u_cv, r.d_tr, r.d_cv);
+    for (const double e : {r.lpc_tr, r.lpc_cv, r.u_tr, r.u_cv, r.d_tr, r.d_cv}) EXPECT_LT(e, 0.5);
+    // These textures are close to a linear process driven by noise (LPC's home ground): the
+    // unified network must come as close to LPC held out as on the linear AR grid (issue #19).
+    EXPECT_LE(r.u_cv, r.lpc_cv + 0.1);
+  }
+}
+
+// The project's synthetic AR grid (tests/modeling/vibration_test.cpp): an AR(4) at 2 kHz whose
+// two resonances move with speed and force, its variance growing with both. `nonlinear`
+// adds a bounded bilinear term, 0.8 s tanh(x[k-1] / s) tanh(x[k-2] / s) with s the linear
+// part's RMS: sum and difference frequencies of the resonances, a process no linear AR model
+// is (and still stable: the term is bounded and the linear part is).
+Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed,
+                          double seconds = 2.5) {
+  const double fs = 2000;
+  const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
+  const double r1 = 0.97 - 0.02 * f, r2 = 0.9;
+  auto poly = [&](double fr, double r) {
+    return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r};
+  };
+  const auto [a1, a2] = poly(f1, r1);
+  const auto [b1, b2] = poly(f2, r2);
+  const double c[4] = {a1 + b1, a2 + b2 - a1 * b1, -a1 * b2 - a2 * b1, -a2 * b2};
+  const double sd = std::sqrt(0.5 * std::pow(v / 0.08, 1.6) * (f / 1.2));
+  Rng rng(seed);
+  const std::size_t n = static_cast<std::size_t>(seconds * fs), warm = 2000;
+  std::vector<double> x(n + warm, 0.0);
+  // RMS of the linear process for unit excitation (to scale the nonlinearity's argument).
+  double lin_rms = 1;
+  if (nonlinear) {
+    Rng r2n(seed + 999);
+    std::vector<double> y(20000, 0.0);
+    double ss = 0;
+    for (std::size_t k = 4; k < y.size(); ++k) {
+      y[k] = c[0] * y[k - 1] + c[1] * y[k - 2] + c[2] * y[k - 3] + c[3] * y[k - 4] + r2n.Normal();
+      ss += y[k] * y[k];
+    }
+    lin_rms = std::sqrt(ss / static_cast<double>(y.size()));
+  }
+  for (std::size_t k = 4; k < x.size(); ++k) {
+    double a = c[0] * x[k - 1] + c[1] * x[k - 2] + c[2] * x[k - 3] + c[3] * x[k - 4] + rng.Normal();
+    if (nonlinear)
+      a += 0.8 * lin_rms * std::tanh(x[k - 1] / lin_rms) * std::tanh(x[k - 2] / lin_rms);
+    x[k] = a;
+  }
+  Recording rec;
+  rec.speed_mps = v;
+  rec.force_N = f;
+  rec.rate_hz = fs;
+  rec.file = fmt::format("{} AR v={} f={}", nonlinear ? "nonlinear" : "linear", v, f);
+  for (std::size_t k = warm; k < x.size(); ++k) rec.acc.push_back(sd * x[k]);
+  return rec;
+}
+
+std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.06, 0.08, 0.10, 0.12})
+    for (const double f : {0.54, 0.89, 1.18, 1.40, 1.91})
+      recs.push_back(ArGridRecording(v, f, nonlinear, seed + static_cast<std::uint64_t>(k++)));
+  return recs;
+}
+
+// Data seeds of the AR-grid Fig. 3.7 test: 40 and 41, or those of HL_NEURAL_FIG37_SEEDS
+// (e.g. "40,41,42,43": a scratch knob for the seed tables in docs/modeling-neural.md).
+// HL_NEURAL_FIG37_LINEAR=cells fits Γ_U's linear part as per-cell AR fits mixed like LPC's
+// (UnifiedLinearPart::kCellAr; measured worse held out, not the default).
+std::vector<std::uint64_t> Fig37Seeds() {
+  const char* env = std::getenv("HL_NEURAL_FIG37_SEEDS");
+  if (env == nullptr || *env == 0) return {40, 41};
+  std::vector<std::uint64_t> seeds;
+  const std::string text(env);
+  for (std::size_t at = 0; at < text.size();) {
+    const auto comma = text.find(',', at);
+    seeds.push_back(std::stoull(text.substr(at, comma - at)));
+    at = comma == std::string::npos ? text.size() : comma + 1;
+  }
+  return seeds;
+}
+
+// Fig. 3.7 on the synthetic AR grids (thesis grid: train 4, 8, 12 cm/s x 0.54, 1.18, 1.91 N,
+// held out 6, 10 cm/s and 0.89, 1.40 N): LPC, Γ_U, Γ_D, training and held-out mean E_s.
+// Asserted are issue #19's targets on every data seed run: on the linear grid Γ_U within 0.05
+// of LPC on training conditions and within 0.1 held out; on the nonlinear grid Γ_U below LPC
+// held out (and within 0.02 of it on training conditions). They hold on data seeds 40, 41, 43
+// and fail on 42 (Γ_U 0.011 above LPC held out on the nonlinear grid: how the biquadratic
+// linear part interpolates on that realization; LPC's own interpolation of per-cell fits was
+// tried and is worse: docs/modeling-neural.md). Γ_D (printed, not asserted) runs on the first
+// seed only: it is half the test's cost.
+TEST(NeuralFig37, LinearAndNonlinearArGrids) {
+  const std::vector<double> tv = {0.04, 0.08, 0.12}, tf = {0.54, 1.18, 1.91};
+  const char* lin_env = std::getenv("HL_NEURAL_FIG37_LINEAR");
+  const bool cells = lin_env != nullptr && std::string(lin_env) == "cells";
+  std::printf("AR grid, seed | LPC train  cv | Γ_U train  cv | Γ_D train  cv   (mean E_s)%s\n",
+              cells ? "  [Γ_U: per-cell AR linear part]" : "");
+  const auto seeds = Fig37Seeds();
+  for (const std::uint64_t seed : seeds)
+    for (const bool nonlinear : {false, true}) {
+      const auto recs = ArGrid(nonlinear, seed);
+      const auto lpc = CrossValidate(recs, tv, tf, {});
+      auto uo = Quick(renderer::NeuralTopology::kUnified);
+      if (cells) uo.unified_linear = UnifiedLinearPart::kCellAr;
+      std::string decision;
+      std::mutex mu;
+      uo.progress = [&](const std::string& what, int, int) {
+        std::lock_guard<std::mutex> lock(mu);
+        if (what.rfind("validation E_s", 0) == 0) decision = what;
+        if (what.find("not minimum phase") != std::string::npos) std::printf("%s\n", what.c_str());
+      };
+      const auto u = CrossValidateNeural(recs, tv, tf, uo);
+      CvResult d;
+      const bool run_d = seed == seeds.front();
+      if (run_d)
+        d = CrossValidateNeural(recs, tv, tf, Quick(renderer::NeuralTopology::kDecomposed));
+      std::printf("%s grid, seed %d, Γ_U: %s\n", nonlinear ? "nonlinear" : "linear",
+                  static_cast<int>(seed), decision.c_str());
+      std::printf("%-9s %4d |  %.3f  %.3f |  %.3f  %.3f | %s\n", nonlinear ? "nonlinear" : "linear",
+                  static_cast<int>(seed), lpc.mean_es_train, lpc.mean_es_test, u.mean_es_train,
+                  u.mean_es_test,
+                  run_d ? fmt::format(" {:.3f}  {:.3f}", d.mean_es_train, d.mean_es_test).c_str()
+                        : "  (not run)");
+      if (nonlinear) {
+        EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.02) << "seed " << seed;
+        EXPECT_LT(u.mean_es_test, lpc.mean_es_test) << "seed " << seed;
+      } else {
+        EXPECT_LE(u.mean_es_train, lpc.mean_es_train + 0.05) << "seed " << seed;
+        EXPECT_LE(u.mean_es_test, lpc.mean_es_test + 0.1) << "seed " << seed;
+      }
+    }
+}
+}  // namespace
+}  // namespace hapticlab::modeling

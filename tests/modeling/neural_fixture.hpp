@@ -1,0 +1,115 @@
+#pragma once
+// Shared by the neural model tests (tests/modeling/neural*_test.cpp,
+// tests/renderer/neural*_test.cpp): synthetic texture recordings that no project simulator
+// produces, the quick fit options and a small trained model of each topology (fitted once per test
+// executable).
+
+#include <fmt/format.h>
+#include <fmt/ranges.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <mutex>
+#include <numbers>
+
+#include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/rng.hpp"
+#include "hapticlab/modeling/neural.hpp"
+#include "hapticlab/renderer/hybrid.hpp"
+#include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/vibration.hpp"
+#include "hapticlab/test/test_util.hpp"
+
+namespace hapticlab::modeling {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+// A synthetic texture recording: a stylus dragged at v over a random surface whose profile
+// has a dominant spatial period (a spatial AR(2) resonance at `period_m`), pressed with f.
+// The tip follows the surface's curvature (temporal frequency v / period) through a contact
+// resonance at 300 Hz; it cannot be pulled down harder than the load allows, so downward
+// acceleration saturates at -c f (a nonlinearity that depends on the load).
+inline Recording Texture(double v, double f, double period_m, std::uint64_t seed,
+                         double seconds = 2.5) {
+  const double fs = 5000, dx = 1e-6;
+  Rng rng(seed);
+  const std::size_t n = static_cast<std::size_t>(seconds * fs);
+  const std::size_t len = static_cast<std::size_t>(v * seconds / dx) + 16;
+  const double r = 0.995, th = 2 * kPi * dx / period_m;
+  std::vector<double> h(len, 0.0);
+  for (std::size_t i = 2; i < len; ++i)
+    h[i] = 2 * r * std::cos(th) * h[i - 1] - r * r * h[i - 2] + 1e-8 * rng.Normal();
+  auto z = [&](double x) {
+    const double u = x / dx;
+    const auto i = static_cast<std::size_t>(u);
+    return h[i] + (h[i + 1] - h[i]) * (u - static_cast<double>(i));
+  };
+  const double dt = 1 / fs;
+  // Tip resonance (300 Hz, Q 2) driven by the surface's acceleration.
+  const double w0 = 2 * kPi * 300, zeta = 0.25;
+  double y = 0, yd = 0;
+  Recording rec;
+  rec.speed_mps = v;
+  rec.force_N = f;
+  rec.rate_hz = fs;
+  rec.file = fmt::format("texture v={} f={}", v, f);
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const double t = static_cast<double>(k) * dt;
+    const double a_s = (z(v * (t + dt)) - 2 * z(v * t) + z(v * (t - dt))) / (dt * dt);
+    const double ydd = w0 * w0 * (a_s / (w0 * w0) - y) - 2 * zeta * w0 * yd;
+    yd += ydd * dt;
+    y += yd * dt;
+    double a = std::max(ydd, -6.0 * f);  // lift-off: the load limits downward acceleration
+    rec.acc.push_back(a + 0.01 * rng.Normal());
+  }
+  return rec;
+}
+
+inline std::vector<Recording> TextureGrid(double period_m, std::uint64_t seed) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.06, 0.08, 0.10, 0.12})
+    for (const double f : {0.54, 0.89, 1.18, 1.40, 1.91})
+      recs.push_back(Texture(v, f, period_m, seed + static_cast<std::uint64_t>(k++)));
+  return recs;
+}
+
+inline NeuralFitOptions Quick(renderer::NeuralTopology t) {
+  NeuralFitOptions o;
+  o.topology = t;
+  o.train.max_epochs = 40;
+  o.train.seed = 3;
+  o.input_noise = 0.3;
+  return o;
+}
+
+// A small trained model (fast): the training grid of the thesis, short recordings. `cell_ar`:
+// Γ_U with per-cell AR fits as its linear part (UnifiedLinearPart::kCellAr).
+inline const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool cell_ar = false) {
+  static const auto make = [](renderer::NeuralTopology topo, bool per_cell) {
+    std::vector<Recording> recs;
+    int k = 0;
+    for (const double v : {0.04, 0.12})
+      for (const double f : {0.54, 1.91})
+        recs.push_back(Texture(v, f, 0.5e-3, 50 + static_cast<std::uint64_t>(k++), 1.0));
+    NeuralFitOptions o = Quick(topo);
+    o.train.max_epochs = 5;
+    o.hidden_large = {8, 4};
+    o.hidden_small = {6};
+    for (auto& b : o.bands) b.history = 12;
+    if (per_cell) o.unified_linear = UnifiedLinearPart::kCellAr;
+    return FitNeural(recs, o);
+  };
+  static const auto u = make(renderer::NeuralTopology::kUnified, false),
+                    d = make(renderer::NeuralTopology::kDecomposed, false);
+  if (cell_ar) {
+    static const auto uc = make(renderer::NeuralTopology::kUnified, true);
+    return uc;
+  }
+  return t == renderer::NeuralTopology::kUnified ? u : d;
+}
+}  // namespace
+}  // namespace hapticlab::modeling
