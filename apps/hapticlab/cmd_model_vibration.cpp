@@ -117,13 +117,8 @@ void AddFitVibration(CLI::App& model) {
       holder.vibration = bank;
       std::string text = renderer::MaterialToToml(holder);
       text = text.substr(text.find("[vibration]"));  // the bank alone
-      FILE* f = std::fopen(a->out.c_str(), "w");
-      if (!f) throw std::runtime_error(a->out + ": cannot write");
-      std::fputs(("# AR bank fitted by hapticlab model fit-vibration from " + a->recordings + "\n")
-                     .c_str(),
-                 f);
-      std::fputs(text.c_str(), f);
-      if (std::fclose(f) != 0) throw std::runtime_error(a->out + ": write failed");
+      WriteTextFile(a->out, "# AR bank fitted by hapticlab model fit-vibration from " +
+                                a->recordings + "\n" + text);
       fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(),
                  bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
                  bank.order(), bank.sample_rate_hz, a->out);

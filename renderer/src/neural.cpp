@@ -6,11 +6,11 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <numbers>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/core/toml_util.hpp"
 
@@ -237,11 +237,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
       s += "]\n";
     }
   }
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  f << s;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": write failed");
+  WriteTextFile(path, s);
 }
 
 NeuralModel LoadNeuralModel(const std::string& path) {
