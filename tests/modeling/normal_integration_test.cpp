@@ -40,15 +40,8 @@ double RelativeRms(const std::vector<float>& a, const std::vector<double>& b,
 TEST(NormalIntegration, EachIntegratorRecoversAPeriodicSurfaceFromItsNormals) {
   // 3 x 2 periods over the image, 25 µm: periodic, so every method's boundary condition
   // holds; heights in metres through the pitch.
-  const double A = 25e-6, lx = kN * kPitch / 3, ly = kN * kPitch / 2;
-  const auto f =
-      Make([&](double x,
-               double y) { return A * std::sin(2 * kPi * x / lx) * std::sin(2 * kPi * y / ly); },
-           [&](double x, double y) {
-             return Eigen::Vector2d(
-                 A * 2 * kPi / lx * std::cos(2 * kPi * x / lx) * std::sin(2 * kPi * y / ly),
-                 A * 2 * kPi / ly * std::sin(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly));
-           });
+  const double A = 25e-6;
+  const auto f = Sinusoid(A, kN * kPitch / 3, kN * kPitch / 2);
   const std::vector<std::uint8_t> all(f.n.size(), 1);
   const double fc = RelativeRms(IntegrateNormals(f.n, kN, kN, kPitch), f.h),
                dct = RelativeRms(IntegrateNormalsPoisson(f.n, kN, kN, kPitch), f.h),

@@ -39,6 +39,17 @@ inline Field Make(const std::function<double(double, double)>& h,
   return f;
 }
 
+// h = A sin(2 pi x / lx) cos(2 pi y / ly): periodic over the image when lx and ly divide it.
+inline Field Sinusoid(double A, double lx, double ly) {
+  return Make([=](double x,
+                  double y) { return A * std::sin(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly); },
+              [=](double x, double y) {
+                return Eigen::Vector2d(
+                    A * 2 * kPi / lx * std::cos(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly),
+                    -A * 2 * kPi / ly * std::sin(2 * kPi * x / lx) * std::sin(2 * kPi * y / ly));
+              });
+}
+
 // Lambertian images under the dome, relative noise `noise`, optional shadowed lights.
 inline ImageStack Render(const Field& f, const std::vector<Light>& L, double noise,
                          std::uint64_t seed, int shadowed = 0) {

@@ -32,14 +32,7 @@ TEST(Photometric, DomePresetHasThirtyLightsAtThreeElevations) {
 TEST(Photometric, SinusoidRecoveredAtOnePercentNoise) {
   // Periodic over the image (the Frankot-Chellappa assumption): 4 x 3 periods, 30 µm.
   const double A = 30e-6, lx = kN * kPitch / 4, ly = kN * kPitch / 3;
-  const auto f =
-      Make([&](double x,
-               double y) { return A * std::sin(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly); },
-           [&](double x, double y) {
-             return Eigen::Vector2d(
-                 A * 2 * kPi / lx * std::cos(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly),
-                 -A * 2 * kPi / ly * std::sin(2 * kPi * x / lx) * std::sin(2 * kPi * y / ly));
-           });
+  const auto f = Sinusoid(A, lx, ly);
   const auto L = DomePreset();
   const auto r = PhotometricStereo(Render(f, L, 0.01, 1), L, {.pitch_m = kPitch});
   const auto e = Compare(f, r);
