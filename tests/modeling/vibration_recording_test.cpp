@@ -63,7 +63,7 @@ TEST(Vibration, RecordingErrorsNameTheFile) {
     std::ofstream o(dir.File("clip.csv"));
     o << "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,x_m,y_m,z_m,acc_mps2\n";
     for (std::size_t i = 0; i < clipped.size(); ++i)
-      o << i / 1000.0 << ",0,0,0," << clipped[i] << "\n";
+      o << static_cast<double>(i) / 1000.0 << ",0,0,0," << clipped[i] << "\n";
   }
   EXPECT_THROW(LoadRecording(dir.File("clip.csv")), InputError);
   // No acceleration column.
