@@ -12,7 +12,6 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <thread>
@@ -159,11 +158,7 @@ void RegisterCalibrate(CLI::App& study) {
           fs::path(a->targets).filename().string(), spec.seed, spec.simulations, spec.pool,
           spec.sweeps, final_loss);
       const std::string out = a->out.empty() ? spec.observer_out : a->out;
-      {
-        std::ofstream f(out);
-        f << ObserverToml(best, header);
-        if (!f.flush()) throw std::runtime_error("cannot write " + out);
-      }
+      WriteTextFile(out, ObserverToml(best, header));
       fmt::print("| protocol | statistic | target | weight | achieved |\n|---|---|---|---|---|\n");
       for (const auto& r : rows)
         fmt::print("| {} | {} | {:.3f} | {:g} | {:.3f} |\n", r.protocol, r.label, r.target,

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -138,26 +139,24 @@ void AddRender(CLI::App& model) {
       runner::OfflineOptions oo;
       oo.measured_normal_force = o->force_source != "model" && traj.has_forces;
       const auto res = runner::RenderOffline(m, ro, traj, oo);
-      FILE* f = std::fopen(o->out.c_str(), "w");
-      if (!f) throw std::runtime_error(o->out + ": cannot write");
-      std::fprintf(f,
-                   "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_"
-                   "contact,fault,acc_mps2\n");
+      std::string csv =
+          "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,"
+          "fault,acc_mps2\n";
       for (const auto& r : res.rows)
-        std::fprintf(f, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%d,%d,%.9g\n", r.t_s,
-                     r.force_N.x(), r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(),
-                     r.command_N.z(), r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0,
-                     r.fault ? 1 : 0, r.acc_mps2);
-      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+        fmt::format_to(
+            std::back_inserter(csv),
+            "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{:.9g}\n",
+            r.t_s, r.force_N.x(), r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(),
+            r.command_N.z(), r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0,
+            r.fault ? 1 : 0, r.acc_mps2);
+      WriteTextFile(o->out, csv);
       if (!o->vib_out.empty()) {
-        FILE* v = std::fopen(o->vib_out.c_str(), "w");
-        if (!v) throw std::runtime_error(o->vib_out + ": cannot write");
-        std::fprintf(v, "t_s,acc_mps2\n");
+        std::string vib = "t_s,acc_mps2\n";
         for (std::size_t k = 0; k < res.vibration_mps2.size(); ++k)
-          std::fprintf(v, "%.9g,%.9g\n",
-                       traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz,
-                       res.vibration_mps2[k]);
-        if (std::fclose(v) != 0) throw std::runtime_error(o->vib_out + ": write failed");
+          fmt::format_to(std::back_inserter(vib), "{:.9g},{:.9g}\n",
+                         traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz,
+                         res.vibration_mps2[k]);
+        WriteTextFile(o->vib_out, vib);
       }
       fmt::print(stderr,
                  "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: "
@@ -289,13 +288,9 @@ void AddImportPenn(CLI::App& model) {
       r.model.effects = {std::string(modeling::wb::effect::kCoulomb),
                          std::string(modeling::wb::effect::kVibrationSpeed),
                          std::string(modeling::wb::effect::kVibrationForce)};
-      FILE* f = std::fopen(o->out.c_str(), "w");
-      if (!f) throw std::runtime_error(o->out + ": cannot write");
-      const std::string text = "# Imported from " + o->xml +
-                               " (Penn Haptic Texture Toolkit format).\n" +
-                               renderer::MaterialToToml(r.model);
-      std::fputs(text.c_str(), f);
-      if (std::fclose(f) != 0) throw std::runtime_error(o->out + ": write failed");
+      WriteTextFile(o->out, "# Imported from " + o->xml +
+                                " (Penn Haptic Texture Toolkit format).\n" +
+                                renderer::MaterialToToml(r.model));
       const auto& b = r.model.vibration;
       fmt::print(
           "{}: {} models ({}), order {}, mu {:.4f}; LSF reconstruction error {:.2e}; {} -> {}\n",
@@ -374,7 +369,7 @@ void AddBuild(CLI::App& model) {
       // The geometry by reference to its .f32, relative to the model.
       const auto f32 =
           (fs::absolute(o->height).parent_path() / fs::path(o->height).stem()).string();
-      WriteModelText(o->out, renderer::MaterialToToml(mm, rel(f32)));
+      WriteTextFile(o->out, renderer::MaterialToToml(mm, rel(f32)));
       const auto m = renderer::LoadMaterial(o->out);  // validates the assembled model
       fmt::print("{}: {} ({}x{} map, {} vibration cells, f_c {:.0f} Hz; effects: {})\n", o->out,
                  m.name, m.geometry->width(), m.geometry->height(), m.vibration.cells.size(),

@@ -13,8 +13,6 @@ void AddCvVibration(CLI::App& model);
 void AddCutoff(CLI::App& model);
 // cmd_model_contact.cpp
 void AddFitContact(CLI::App& model);
-/// Writes a whole text file; errors (std::runtime_error) name the file.
-void WriteModelText(const std::string& path, const std::string& text);
 // cmd_model_photometric.cpp
 void AddPhotometric(CLI::App& model);
 

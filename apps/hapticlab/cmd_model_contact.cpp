@@ -35,14 +35,6 @@
 
 namespace hapticlab::cli {
 
-// Writes a whole text file; errors name the file.
-void WriteModelText(const std::string& path, const std::string& text) {
-  FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  const bool ok = std::fputs(text.c_str(), f) >= 0;
-  if (std::fclose(f) != 0 || !ok) throw std::runtime_error(path + ": write failed");
-}
-
 void AddFitContact(CLI::App& model) {
   struct O {
     std::string measurement, pokes, out;
@@ -95,7 +87,7 @@ void AddFitContact(CLI::App& model) {
               ci("kappa_N_per_m", f.kappa_N_per_m) + ci("mu_k", f.mu_k) +
               ci("mu_b_Ns_per_m", f.mu_b_Ns_per_m);
       text += renderer::MaterialToToml(mm);
-      WriteModelText(o->out, text);
+      WriteTextFile(o->out, text);
       renderer::LoadMaterial(o->out);  // what was written is a loadable material
       if (o->json) {
         auto est = [](const modeling::Estimate& e) {

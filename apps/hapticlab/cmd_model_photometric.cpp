@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <iterator>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -246,27 +247,20 @@ void AddPhotometric(CLI::App& model) {
       std::vector<float> h(r.height_m);
       for (auto& v : h) v -= lo;  // heights above the lowest point (outside the mask: 0)
       renderer::HeightMap(r.width, r.height, o->pitch, h).SaveRawF32(o->out);
-      {
-        FILE* g = std::fopen((o->out + ".toml").c_str(), "w");
-        if (!g) throw std::runtime_error(o->out + ".toml: cannot write");
-        std::fputs(fmt::format("[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = "
-                               "{}\npitch_m = {:.10g}\n",
-                               std::filesystem::path(o->out).filename().string(), r.width, r.height,
-                               o->pitch)
-                       .c_str(),
-                   g);
-        std::fclose(g);
-      }
+      WriteTextFile(o->out + ".toml",
+                    fmt::format("[geometry]\nkind = \"file\"\nfile = \"{}\"\nwidth = {}\nheight = "
+                                "{}\npitch_m = {:.10g}\n",
+                                std::filesystem::path(o->out).filename().string(), r.width,
+                                r.height, o->pitch));
       if (!o->csv.empty()) {
-        FILE* c = std::fopen(o->csv.c_str(), "w");
-        if (!c) throw std::runtime_error(o->csv + ": cannot write");
+        std::string csv;
         for (int i = 0; i < r.height; ++i)
           for (int j = 0; j < r.width; ++j)
-            std::fprintf(c, "%.9g%c",
-                         h[static_cast<std::size_t>(i) * static_cast<std::size_t>(r.width) +
-                           static_cast<std::size_t>(j)],
-                         j + 1 == r.width ? '\n' : ',');
-        std::fclose(c);
+            fmt::format_to(std::back_inserter(csv), "{:.9g}{}",
+                           h[static_cast<std::size_t>(i) * static_cast<std::size_t>(r.width) +
+                             static_cast<std::size_t>(j)],
+                           j + 1 == r.width ? '\n' : ',');
+        WriteTextFile(o->csv, csv);
       }
       if (!o->tiff.empty()) {
         cv::Mat m(r.height, r.width, CV_32F, h.data());

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <map>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -52,6 +53,10 @@ std::vector<double> ParseList(const std::string& s, const char* opt) {
   }
   return out;
 }
+
+// The modeling library's names for what these commands' options give it.
+const std::map<std::string, std::string> kVibFlags = {{"recordings", "--recordings"},
+                                                      {"model_rate_hz", "--rate"}};
 
 struct VibArgs {
   std::string recordings, out, order = "auto", criterion = "aic";
@@ -105,20 +110,15 @@ void AddFitVibration(CLI::App& model) {
   AddVibOptions(cmd, *a);
   cmd->add_option("-o,--out", a->out, "Bank file to write (.toml)")->required();
   cmd->callback([a] {
-    RunGuarded([&] {
+    RunGuarded(kVibFlags, [&] {
       const auto recs = modeling::LoadRecordings(a->recordings);
       const auto bank = modeling::FitVibrationBank(recs, VibOptions(*a));
       renderer::MaterialModel holder;
       holder.vibration = bank;
       std::string text = renderer::MaterialToToml(holder);
       text = text.substr(text.find("[vibration]"));  // the bank alone
-      FILE* f = std::fopen(a->out.c_str(), "w");
-      if (!f) throw std::runtime_error(a->out + ": cannot write");
-      std::fputs(("# AR bank fitted by hapticlab model fit-vibration from " + a->recordings + "\n")
-                     .c_str(),
-                 f);
-      std::fputs(text.c_str(), f);
-      if (std::fclose(f) != 0) throw std::runtime_error(a->out + ": write failed");
+      WriteTextFile(a->out, "# AR bank fitted by hapticlab model fit-vibration from " +
+                                a->recordings + "\n" + text);
       fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(),
                  bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
                  bank.order(), bank.sample_rate_hz, a->out);
@@ -165,7 +165,7 @@ void AddFitNeural(CLI::App& model) {
   cmd->add_option("--threads", o->threads, "Networks trained in parallel (0: all cores)")
       ->capture_default_str();
   cmd->callback([o] {
-    RunGuarded([&] {
+    RunGuarded(kVibFlags, [&] {
       const auto recs = modeling::LoadRecordings(o->a.recordings);
       modeling::NeuralFitOptions no;
       no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified
@@ -223,7 +223,7 @@ void AddCvVibration(CLI::App& model) {
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
   cmd->callback([=] {
-    RunGuarded([&] {
+    RunGuarded(kVibFlags, [&] {
       const auto recs = modeling::LoadRecordings(a->recordings);
       modeling::CvResult cv;
       if (*kind == "lpc") {

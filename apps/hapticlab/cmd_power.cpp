@@ -8,7 +8,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <fstream>
 #include <memory>
 
 #include "cli_common.hpp"
@@ -69,11 +68,7 @@ void ParseShard(const std::string& s, int* i, int* n) {
 
 void Emit(const stats::PowerResult& r, const PowerArgs& a) {
   const std::string js = stats::PowerToJson(r);
-  if (!a.out.empty()) {
-    std::ofstream f(a.out);
-    f << js;
-    if (!f.flush()) throw std::runtime_error("cannot write " + a.out);
-  }
+  if (!a.out.empty()) WriteTextFile(a.out, js);
   if (a.json)
     fmt::print("{}", js);
   else

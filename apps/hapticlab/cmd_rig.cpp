@@ -319,9 +319,7 @@ void RegisterRig(CLI::App& app) {
         if (o->out.empty()) {
           fmt::print("{}", text);
         } else {
-          std::ofstream f(o->out);
-          f << text;
-          if (!f) throw std::runtime_error("cannot write " + o->out);
+          WriteTextFile(o->out, text);
           fmt::print(stderr, "wrote {}\n", o->out);
         }
         return kExitOk;

@@ -8,11 +8,10 @@
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
+#include "cmd_stats_common.hpp"
 #include "commands.hpp"
-#include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
-#include "hapticlab/stats/lmm.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
@@ -21,75 +20,10 @@ namespace hapticlab::cli {
 namespace {
 
 using nlohmann::json;
-
-// NaN (undefined statistics) becomes JSON null.
-json Num(double v) { return std::isfinite(v) ? json(v) : json(); }
-
-// Options every stats subcommand shares.
-struct Common {
-  std::string csv, dv;
-  std::vector<std::string> where;  // COL=VALUE
-  std::string average_by;          // COLS
-  bool json = false;
-  bool allow_missing = false;      // rm-anova/tukey --within: --missing drop-subject
-  bool include_simulated = false;  // keep source=simulated rows next to a person's ratings
-};
-
-void AddCommon(CLI::App* cmd, Common& c) {
-  cmd->add_option("--csv", c.csv, "Long-format CSV (one row per observation)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--dv", c.dv, "Column of the response (numeric)")->required();
-  cmd->add_option("--where", c.where,
-                  "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
-  cmd->add_option("--average-by", c.average_by,
-                  "Average the response within each combination of these columns first, e.g.\n"
-                  "subject,method,material to use cell means (repetitions averaged)");
-  cmd->add_flag("--json", c.json, "Print results as JSON");
-  cmd->add_flag(
-      "--include-simulated", c.include_simulated,
-      "A CSV with a 'source' column (hapticlab export): keep the simulated observer's rows\n"
-      "although rows rated by participants are present (left out by default, with a note)");
-}
-
-// Reads the CSV with the needed key columns, applies --where and --average-by.
-stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
-  std::vector<std::pair<std::string, std::string>> cond;
-  for (const auto& w : c.where) {
-    const auto eq = w.find('=');
-    if (eq == std::string::npos || eq == 0)
-      throw InputError(kCommandLine, 0, "--where", "expected COL=VALUE, got '" + w + "'");
-    cond.emplace_back(w.substr(0, eq), w.substr(eq + 1));
-    keys.push_back(cond.back().first);
-  }
-  const auto avg = stats::SplitList(c.average_by);
-  keys.insert(keys.end(), avg.begin(), avg.end());
-  std::sort(keys.begin(), keys.end());
-  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  stats::RowFilter keep{.equal = cond, .not_equal = {}};
-  // The project's exports carry each rating's source: when a person rated any row, the
-  // simulated observer's rows are left out unless asked for (docs/analysis.md).
-  {
-    const CsvTable raw = ReadCsv(c.csv);
-    if (const auto sc = raw.Find("source"); sc && !c.include_simulated) {
-      std::size_t simulated = 0, human = 0;
-      for (const auto& row : raw.rows)
-        (row[*sc] == "simulated" ? simulated : human) += row[*sc].empty() ? 0 : 1;
-      if (simulated && human) {
-        keep.not_equal.emplace_back("source", "simulated");
-        fmt::print(stderr,
-                   "note: {}: {} rows rated by the simulated observer are left out ({} rated by "
-                   "participants); "
-                   "--include-simulated keeps them\n",
-                   c.csv, simulated, human);
-      }
-    }
-  }
-  auto t = stats::ReadLongCsv(c.csv, c.dv, keys, c.allow_missing, keep);
-  if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
-  if (!avg.empty()) t = t.Average(avg);
-  return t;
-}
+using stats_cmd::AddCommon;
+using stats_cmd::Common;
+using stats_cmd::Load;
+using stats_cmd::Num;
 
 // --missing for the ANOVA commands: a missing (empty or NA) response is an error, or drops
 // its subject (named), as afex does.
@@ -344,155 +278,6 @@ void AddShapiro(CLI::App& s) {
   });
 }
 
-json LmmJson(const stats::LmmResult& r) {
-  json fixed = json::array(), anova = json::array(), random = json::array();
-  for (const auto& c : r.fixed)
-    fixed.push_back({{"name", c.name},
-                     {"estimate", c.estimate},
-                     {"se", c.se},
-                     {"df", Num(c.df)},
-                     {"t", c.t},
-                     {"p", Num(c.p)}});
-  for (const auto& t : r.anova)
-    anova.push_back({{"term", t.term},
-                     {"num_df", t.num_df},
-                     {"den_df", Num(t.den_df)},
-                     {"F", t.F},
-                     {"p", Num(t.p)}});
-  for (const auto& g : r.random) {
-    json corr = json::array();
-    for (const auto& row : g.corr) {
-      json jr = json::array();
-      for (double v : row) jr.push_back(Num(v));
-      corr.push_back(jr);
-    }
-    random.push_back({{"group", g.group},
-                      {"levels", g.levels},
-                      {"names", g.names},
-                      {"variance", g.variance},
-                      {"sd", g.sd},
-                      {"corr", corr}});
-  }
-  return json{{"formula", r.formula},
-              {"method", r.reml ? "REML" : "ML"},
-              {"n", r.n},
-              {"fixed", fixed},
-              {"anova_type3", anova},
-              {"ddf", r.ddf},
-              {"random", random},
-              {"residual_variance", r.sigma * r.sigma},
-              {"sigma", r.sigma},
-              {"theta", r.theta},
-              {r.reml ? "REML_criterion" : "deviance", r.deviance},
-              {"logLik", r.logLik},
-              {"AIC", r.AIC},
-              {"BIC", r.BIC},
-              {"n_parameters", r.n_parameters},
-              {"convergence",
-               {{"optimizer", r.optimizer},
-                {"converged", r.converged},
-                {"evaluations", r.evaluations},
-                {"gradient_max_abs", r.gradient_max_abs},
-                {"singular", r.singular}}}};
-}
-
-void PrintLmm(const stats::LmmResult& r) {
-  fmt::print("Linear mixed model fit by {} (lme4's formulation), {} observations\nFormula: {}\n",
-             r.reml ? "REML" : "maximum likelihood", r.n, r.formula);
-  fmt::print("{} {:.4f}   logLik {:.4f}   AIC {:.4f}   BIC {:.4f}   ({} parameters)\n\n",
-             r.reml ? "REML criterion" : "deviance", r.deviance, r.logLik, r.AIC, r.BIC,
-             r.n_parameters);
-  fmt::print("Random effects:\n{:<16} {:<22} {:>12} {:>10}  {}\n", "group (levels)", "name",
-             "variance", "SD", "corr");
-  for (const auto& g : r.random)
-    for (std::size_t i = 0; i < g.names.size(); ++i) {
-      std::string corr;
-      for (std::size_t j = 0; j < i; ++j) corr += fmt::format("{:>7.3f}", g.corr[i][j]);
-      fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}  {}\n",
-                 i == 0 ? fmt::format("{} ({})", g.group, g.levels) : "", g.names[i], g.variance[i],
-                 g.sd[i], corr);
-    }
-  fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}\n\n", "Residual", "", r.sigma * r.sigma, r.sigma);
-  fmt::print(
-      "Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n",
-      r.ddf, "name", "estimate", "SE", "df", "t", "p");
-  for (const auto& c : r.fixed)
-    fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se,
-               c.df, c.t, c.p);
-  fmt::print(
-      "\nType III F tests ({} df, as lmerTest anova(m, type = 3) / afex::mixed):\n"
-      "{:<28} {:>6} {:>9} {:>10} {:>11}\n",
-      r.ddf, "term", "num df", "den df", "F", "p");
-  for (const auto& t : r.anova)
-    fmt::print("{:<28} {:>6.0f} {:>9.2f} {:>10.4f} {:>11.4g}\n", t.term, t.num_df, t.den_df, t.F,
-               t.p);
-  fmt::print(
-      "\nConvergence: {}; {} after {} deviance evaluations; max |d deviance / d theta| = "
-      "{:.2g}{}\n",
-      r.optimizer, r.converged ? "converged" : "NOT converged", r.evaluations, r.gradient_max_abs,
-      r.singular
-          ? "\nboundary (singular) fit: a variance is 0 or a correlation is +-1 (lme4's isSingular)"
-          : "");
-}
-
-void AddLmm(CLI::App& s) {
-  auto c = std::make_shared<Common>();
-  auto formula = std::make_shared<std::string>();
-  auto ml = std::make_shared<bool>(false);
-  auto ddf = std::make_shared<std::string>("satterthwaite");
-  auto* cmd = s.add_subcommand(
-      "lmm",
-      "Linear mixed model, fitted as lme4::lmer (penalised least squares, sparse Cholesky,\n"
-      "profiled REML or ML deviance), with lmerTest's Satterthwaite df for the coefficient t "
-      "tests\n"
-      "and the type 3 F tests (sum-to-zero contrasts, as afex::mixed method \"S\"). Reports the\n"
-      "random-effect variances, SDs and correlations, logLik/AIC/BIC and convergence diagnostics.\n"
-      "Numeric columns are covariates, text columns factors (as read.csv). Every row is one\n"
-      "observation (no averaging).");
-  cmd->add_option("--csv", c->csv, "Long-format CSV (one row per observation)")
-      ->required()
-      ->check(CLI::ExistingFile);
-  cmd->add_option("--formula", *formula,
-                  "lme4 formula, e.g. 'score ~ method * texture + (1 + method | participant) + (1 "
-                  "| material)'")
-      ->required();
-  cmd->add_option("--where", c->where,
-                  "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
-  auto reml = std::make_shared<bool>(false);
-  auto* reml_flag =
-      cmd->add_flag("--reml", *reml, "Restricted maximum likelihood (the default, as lmer)");
-  cmd->add_flag("--ml", *ml, "Maximum likelihood (for comparing fixed effects by likelihood ratio)")
-      ->excludes(reml_flag);
-  cmd->add_option(
-         "--ddf", *ddf,
-         "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or "
-         "kenward-roger\n"
-         "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)")
-      ->check(CLI::IsMember({"satterthwaite", "kenward-roger"}))
-      ->capture_default_str();
-  cmd->add_flag("--json", c->json, "Print results as JSON");
-  cmd->callback([=] {
-    RunGuarded([&] {
-      // The library names the fields "formula" and "ddf"; the user set them with these flags.
-      WithFlags({{"formula", "--formula"}, {"ddf", "--ddf"}}, [&] {
-        const auto f = stats::ParseLmmFormula(*formula, c->csv);
-        c->dv = f.response;
-        auto keys = f.Columns();
-        keys.erase(keys.begin());
-        stats::LmmOptions o;
-        o.reml = !*ml;
-        o.kenward_roger = *ddf == "kenward-roger";
-        const auto r = stats::FitLmm(Load(*c, keys), *formula, o);
-        if (c->json)
-          PrintJson(LmmJson(r));
-        else
-          PrintLmm(r);
-      });
-      return kExitOk;
-    });
-  });
-}
-
 }  // namespace
 
 void AddStatsCommands(CLI::App& group) {
@@ -500,7 +285,7 @@ void AddStatsCommands(CLI::App& group) {
   AddTukey(group);
   AddKruskal(group);
   AddShapiro(group);
-  AddLmm(group);
+  stats_cmd::AddLmm(group);
 }
 
 void RegisterStats(CLI::App& app) {

@@ -1,6 +1,7 @@
 #include "hapticlab/core/io.hpp"
 
 #include <fstream>
+#include <stdexcept>
 #include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -22,6 +23,14 @@ std::string ReadTextFile(const std::string& path, const std::string& what, std::
           what + " is larger than the " + std::to_string(max_bytes) + " bytes allowed");
   }
   return text;
+}
+
+void WriteTextFile(const std::string& path, std::string_view text) {
+  std::ofstream f(path, std::ios::binary | std::ios::trunc);
+  if (!f) throw std::runtime_error(path + ": cannot write");
+  f.write(text.data(), static_cast<std::streamsize>(text.size()));
+  f.close();
+  if (!f) throw std::runtime_error(path + ": write failed");
 }
 
 namespace {

@@ -67,23 +67,26 @@ Measurement ReadMeasurementCsv(const std::string& path, const MeasurementReadOpt
 }
 
 void WriteMeasurementCsv(const std::string& path, const Measurement& m) {
-  FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  std::fprintf(f, "# hapticlab-measurement v1\n");
-  if (!m.material.empty()) std::fprintf(f, "# material: %s\n", m.material.c_str());
+  std::string text = "# hapticlab-measurement v1\n";
+  if (!m.material.empty()) text += "# material: " + m.material + "\n";
   for (const auto& [k, v] : m.metadata)
-    if (k != "material" && k != "hapticlab-measurement v1")
-      std::fprintf(f, "# %s: %s\n", k.c_str(), v.c_str());
-  std::fprintf(f, "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N%s\n",
-               m.has_acceleration ? ",acc_mps2" : "");
+    if (k != "material" && k != "hapticlab-measurement v1") text += "# " + k + ": " + v + "\n";
+  text += "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N";
+  text += m.has_acceleration ? ",acc_mps2\n" : "\n";
+  auto num = [&text](double v, char sep) {
+    char buf[32];
+    const int n = std::snprintf(buf, sizeof buf, "%.17g", v);
+    text.append(buf, static_cast<std::size_t>(n));
+    text += sep;
+  };
   for (const auto& r : m.rows) {
-    std::fprintf(f, "%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g", r.t_s, r.p_m.x(),
-                 r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(), r.v_mps.z(), r.f_N.x(), r.f_N.y(),
-                 r.f_N.z());
-    if (m.has_acceleration) std::fprintf(f, ",%.17g", r.acc_mps2);
-    std::fputc('\n', f);
+    for (const double v : {r.t_s, r.p_m.x(), r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(),
+                           r.v_mps.z(), r.f_N.x(), r.f_N.y()})
+      num(v, ',');
+    num(r.f_N.z(), m.has_acceleration ? ',' : '\n');
+    if (m.has_acceleration) num(r.acc_mps2, '\n');
   }
-  if (std::fclose(f) != 0) throw std::runtime_error(path + ": write failed");
+  WriteTextFile(path, text);
 }
 
 }  // namespace hapticlab

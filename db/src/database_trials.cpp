@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <utility>
 
@@ -28,6 +29,23 @@ namespace hapticlab::db {
 
 using internal::Stmt;
 using internal::Transaction;
+
+namespace {
+
+// Runs `UPDATE trial SET <assignments> WHERE id=? AND status<>'completed'` on one trial and
+// throws, naming the database and the trial (then `consequence`), when no trial that is still
+// open has that id: a completed trial is never started or completed again.
+void UpdateOpenTrial(sqlite3* db, const std::string& path, std::int64_t trial_id,
+                     const std::string& assignments, const std::string& consequence) {
+  const std::string sql = "UPDATE trial SET " + assignments + " WHERE id=? AND status<>'completed'";
+  Stmt s(db, sql.c_str());
+  s.Bind(1, trial_id).Run();
+  if (sqlite3_changes(db) != 1)
+    throw std::runtime_error(path + ": trial " + std::to_string(trial_id) +
+                             " does not exist or is already completed" + consequence);
+}
+
+}  // namespace
 
 namespace {
 
@@ -93,13 +111,10 @@ std::vector<std::int64_t> Database::AddTrials(const std::vector<Trial>& trials) 
 }
 
 int Database::StartTrial(std::int64_t trial_id) {
-  Stmt s(db_,
-         "UPDATE trial SET status='running', attempts=attempts+1, "
-         "started_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=? AND status<>'completed'");
-  s.Bind(1, trial_id).Run();
-  if (sqlite3_changes(db_) != 1)
-    throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
-                             " does not exist or is already completed");
+  UpdateOpenTrial(db_, path_, trial_id,
+                  "status='running', attempts=attempts+1, "
+                  "started_at=strftime('%Y-%m-%dT%H:%M:%fZ','now')",
+                  "");
   return CurrentAttempt(trial_id);
 }
 
@@ -189,13 +204,10 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
     ins.Reset();
   }
   // The completion marker commits with the ratings; a completed trial cannot be completed again.
-  Stmt done(db_,
-            "UPDATE trial SET status='completed', completed_attempt=attempts, "
-            "completed_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=? AND status<>'completed'");
-  done.Bind(1, trial_id).Run();
-  if (sqlite3_changes(db_) != 1)
-    throw std::runtime_error(path_ + ": trial " + std::to_string(trial_id) +
-                             " does not exist or is already completed; ratings not stored");
+  UpdateOpenTrial(db_, path_, trial_id,
+                  "status='completed', completed_attempt=attempts, "
+                  "completed_at=strftime('%Y-%m-%dT%H:%M:%fZ','now')",
+                  "; ratings not stored");
   tx.Commit();
 }
 

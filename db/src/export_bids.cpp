@@ -8,13 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/interchange.hpp"
 #include "interchange_internal.hpp"
@@ -28,13 +28,7 @@ using internal::Alnum;
 using internal::SessionRecord;
 using nlohmann::ordered_json;
 
-void WriteText(const fs::path& p, const std::string& text) {
-  std::ofstream f(p, std::ios::binary | std::ios::trunc);
-  if (!f) throw std::runtime_error(p.string() + ": cannot write");
-  f << text;
-  f.close();
-  if (!f) throw std::runtime_error(p.string() + ": write failed");
-}
+void WriteText(const fs::path& p, const std::string& text) { WriteTextFile(p.string(), text); }
 
 void WriteJson(const fs::path& p, const ordered_json& j) { WriteText(p, j.dump(2) + "\n"); }
 

@@ -9,7 +9,6 @@
 #include <atomic>
 #include <cmath>
 #include <exception>
-#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -18,7 +17,6 @@
 #include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/measurement.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/cross_validation.hpp"
 #include "hapticlab/renderer/ar.hpp"
@@ -31,174 +29,7 @@ namespace {
 
 std::mutex g_fftw_mu;  // FFTW's planner is not thread-safe
 
-double MetaNumber(const Measurement& m, const char* key, double def) {
-  const auto it = m.metadata.find(key);
-  if (it == m.metadata.end()) return def;
-  char* end = nullptr;
-  const double v = std::strtod(it->second.c_str(), &end);
-  if (end == it->second.c_str() || !std::isfinite(v))
-    throw InputError(m.file, 0, key, "metadata is not a number: '" + it->second + "'");
-  return v;
-}
-
 }  // namespace
-
-Recording LoadRecording(const std::string& path) {
-  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
-  if (!m.has_acceleration)
-    throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
-  if (m.rows.size() < 256)
-    throw InputError(path, 0, "", "too short: at least 256 samples are needed");
-  Recording r;
-  r.file = path;
-  // Sample rate and uniform sampling.
-  std::vector<double> dt;
-  for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
-  std::vector<double> sorted(dt);
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
-  const double med = sorted[sorted.size() / 2];
-  r.rate_hz = MetaNumber(m, "rate_hz", 1.0 / med);
-  for (std::size_t i = 0; i < dt.size(); ++i)
-    if (dt[i] > 1.5 / r.rate_hz)
-      throw InputError(path, m.row_lines[i + 1], "t_s",
-                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)",
-                                   dt[i], 1.0 / r.rate_hz));
-  double lo = 1e300, hi = -1e300;
-  for (const auto& row : m.rows) {
-    r.acc.push_back(row.acc_mps2);
-    lo = std::min(lo, row.acc_mps2);
-    hi = std::max(hi, row.acc_mps2);
-  }
-  // Clipping: a long run of samples pinned at the extreme value.
-  for (const double ext : {lo, hi}) {
-    int run = 0, worst = 0;
-    for (double a : r.acc) {
-      run = a == ext ? run + 1 : 0;
-      worst = std::max(worst, run);
-    }
-    int count = 0;
-    for (double a : r.acc) count += a == ext;
-    if (count >= 20 && hi > lo)
-      throw InputError(path, 0, "acc_mps2",
-                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped",
-                                   count, ext));
-  }
-  // Condition: metadata, or steady per-row kinematics and force.
-  const bool meta = m.metadata.count("speed_mps") && m.metadata.count("force_N");
-  if (meta) {
-    r.speed_mps = MetaNumber(m, "speed_mps", 0);
-    r.force_N = MetaNumber(m, "force_N", 0);
-  } else {
-    if (!m.has_forces)
-      throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
-    std::vector<double> v, f;
-    for (const auto& row : m.rows) {
-      v.push_back(row.v_mps.head<2>().norm());
-      f.push_back(std::abs(row.f_N.z()));
-    }
-    auto mean_cv = [](const std::vector<double>& x) {
-      double s = 0, s2 = 0;
-      for (double a : x) s += a;
-      const double mean = s / static_cast<double>(x.size());
-      for (double a : x) s2 += (a - mean) * (a - mean);
-      return std::pair{mean, std::sqrt(s2 / static_cast<double>(x.size())) / std::max(mean, 1e-12)};
-    };
-    const auto [vm, vcv] = mean_cv(v);
-    const auto [fm, fcv] = mean_cv(f);
-    if (vcv > 0.25 || fcv > 0.25)
-      throw InputError(
-          path, 0, vcv > 0.25 ? "speed" : "force",
-          "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' and "
-          "'# force_N:' metadata or cut the file to its steady part");
-    r.speed_mps = vm;
-    r.force_N = fm;
-  }
-  if (!(r.speed_mps > 0) || !(r.force_N > 0))
-    throw InputError(path, 0, "speed_mps", "speed and force of the condition must be positive");
-  return r;
-}
-
-std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s) {
-  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
-  if (m.metadata.count("speed_mps") && m.metadata.count("force_N")) return {LoadRecording(path)};
-  if (!m.has_acceleration)
-    throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
-  if (!m.has_forces)
-    throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
-  if (m.rows.size() < 256)
-    throw InputError(path, 0, "", "too short: at least 256 samples are needed");
-  const double rate = MetaNumber(
-      m, "rate_hz",
-      (static_cast<double>(m.rows.size()) - 1) / (m.rows.back().t_s - m.rows.front().t_s));
-  const auto block = std::max<std::size_t>(16, static_cast<std::size_t>(0.25 * rate));
-  struct Block {
-    std::size_t begin, end;
-    double v, f;
-  };
-  std::vector<Block> blocks;
-  for (std::size_t b = 0; b + block <= m.rows.size(); b += block) {
-    double v = 0, f = 0;
-    for (std::size_t i = b; i < b + block; ++i) {
-      v += m.rows[i].v_mps.head<2>().norm();
-      f += std::abs(m.rows[i].f_N.z());
-    }
-    blocks.push_back(
-        {b, b + block, v / static_cast<double>(block), f / static_cast<double>(block)});
-  }
-  std::vector<Recording> out;
-  for (std::size_t g = 0; g < blocks.size();) {
-    std::size_t e = g + 1;
-    auto close = [](double a, double ref) {
-      return std::abs(a - ref) <= 0.15 * std::max(ref, 1e-9);
-    };
-    while (e < blocks.size() && close(blocks[e].v, blocks[g].v) && close(blocks[e].f, blocks[g].f))
-      ++e;
-    const double dur = static_cast<double>(blocks[e - 1].end - blocks[g].begin) / rate;
-    if (dur >= min_s && blocks[g].v > 0 && blocks[g].f > 0) {
-      Recording r;
-      r.file = fmt::format("{} [{:.2f}-{:.2f} s]", path, m.rows[blocks[g].begin].t_s,
-                           m.rows[blocks[e - 1].end - 1].t_s);
-      r.rate_hz = rate;
-      double v = 0, f = 0;
-      for (std::size_t i = blocks[g].begin; i < blocks[e - 1].end; ++i) {
-        r.acc.push_back(m.rows[i].acc_mps2);
-        v += m.rows[i].v_mps.head<2>().norm();
-        f += std::abs(m.rows[i].f_N.z());
-      }
-      r.speed_mps = v / static_cast<double>(r.acc.size());
-      r.force_N = f / static_cast<double>(r.acc.size());
-      out.push_back(std::move(r));
-    }
-    g = e;
-  }
-  if (out.empty())
-    throw InputError(
-        path, 0, "speed",
-        fmt::format("no steady part of at least {:.1f} s (speed and force within 15 %)", min_s));
-  return out;
-}
-
-std::vector<Recording> LoadRecordings(const std::string& dir) {
-  namespace fs = std::filesystem;
-  if (!fs::is_directory(dir)) throw InputError(dir, 0, "--recordings", "not a folder");
-  std::vector<std::string> files;
-  for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".csv") files.push_back(e.path().string());
-  std::sort(files.begin(), files.end());
-  if (files.empty()) throw InputError(dir, 0, "--recordings", "no .csv recordings in the folder");
-  std::vector<Recording> out;
-  Diagnostics d;
-  for (const auto& f : files) {
-    try {
-      for (auto& r : LoadRecordingSegments(f)) out.push_back(std::move(r));
-    } catch (const InputError& e) {
-      for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
-    }
-  }
-  d.ThrowIfAny();
-  return out;
-}
 
 std::vector<double> Resample(const std::vector<double>& x, double from_hz, double to_hz,
                              ResampleQuality q) {
@@ -402,11 +233,12 @@ CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double 
 
 std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o) {
   // Resource limit derived from the input: at most 8x upsampling, so the work and memory
-  // stay proportional to the recording (a --rate of 1e9 would otherwise ask for gigabytes).
+  // stay proportional to the recording (a model rate of 1e9 Hz would otherwise ask for
+  // gigabytes).
   constexpr double kMaxUpsampling = 8;
   if (!(o.model_rate_hz > 0) || !(o.model_rate_hz <= kMaxUpsampling * r.rate_hz))
     throw InputError(
-        r.file, 0, "--rate",
+        r.file, 0, "model_rate_hz",
         fmt::format("model rate {} Hz must be in (0, {}] Hz (at most {}x the recording's {} Hz)",
                     o.model_rate_hz, kMaxUpsampling * r.rate_hz, kMaxUpsampling, r.rate_hz));
   const auto y = Resample(r.acc, r.rate_hz, o.model_rate_hz, o.resample);

@@ -8,12 +8,12 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <numbers>
 #include <set>
 #include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
@@ -179,11 +179,7 @@ void SaveModel(const Model& m, const std::string& path, const Replay* r) {
       s += "]\n";
     }
   }
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  f << s;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": write failed");
+  WriteTextFile(path, s);
   // The file must load in the renderer as well as here.
   renderer::LoadMaterial(path);
 }

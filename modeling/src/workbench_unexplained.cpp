@@ -13,6 +13,7 @@
 #include <numeric>
 #include <set>
 #include <thread>
+#include <utility>
 
 #include "hapticlab/modeling/workbench.hpp"
 
@@ -269,21 +270,20 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
     kp[i] = 3 * ty + tx;
     kr[i] = s.speed_mps <= kPreslidingSpeed_mps ? 0 : (s.speed_mps < kSlidingSpeed_mps ? 1 : 2);
   }
+  // A force-sample quantity over every axis, each with its keys.
+  const std::pair<const AxisBins*, const std::vector<double>*> force_axes[] = {
+      {&time, &kt}, {&speed, &ks}, {&load, &kl}, {&dir, &kd}, {&pos, &kp}, {&regime, &kr}};
+  auto analyze_force = [&](const Quantity& q, const std::vector<double>& v,
+                           const std::vector<char>& use) {
+    for (const auto& [axis, keys] : force_axes) out.push_back(Analyze(q, *axis, *keys, v, use));
+  };
   // Normal force: every sample in contact.
   {
     const Quantity q{"normal_force", "normal-force residual",
                      [](double v) { return fmt::format("{:+.4f} N", v); }};
     std::vector<char> use(n);
     for (std::size_t i = 0; i < n; ++i) use[i] = r.samples()[i].contact;
-    for (const auto* a : {&time, &speed, &load, &dir, &pos, &regime})
-      out.push_back(Analyze(q, *a,
-                            a == &time    ? kt
-                            : a == &speed ? ks
-                            : a == &load  ? kl
-                            : a == &dir   ? kd
-                            : a == &pos   ? kp
-                                          : kr,
-                            res.normal_N, use));
+    analyze_force(q, res.normal_N, use);
   }
   // Friction: the friction ratio along the motion (friction / measured load) where the motion
   // has a direction.
@@ -297,15 +297,7 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
       use[i] = s.contact && s.speed_mps >= kPreslidingSpeed_mps && s.fn_N > 0.05;
       if (use[i]) v[i] = res.friction_N[i] / s.fn_N;
     }
-    for (const auto* a : {&time, &speed, &load, &dir, &pos, &regime})
-      out.push_back(Analyze(q, *a,
-                            a == &time    ? kt
-                            : a == &speed ? ks
-                            : a == &load  ? kl
-                            : a == &dir   ? kd
-                            : a == &pos   ? kp
-                                          : kr,
-                            v, use));
+    analyze_force(q, v, use);
   }
   // Vibration: the window's mean band-power residual over time, speed, load and direction; each
   // band's residual over the bands.

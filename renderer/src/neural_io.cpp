@@ -5,10 +5,10 @@
 #include <toml++/toml.h>
 
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/renderer/ar.hpp"
@@ -153,11 +153,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
       s += "]\n";
     }
   }
-  std::ofstream f(path);
-  if (!f) throw std::runtime_error(path + ": cannot write");
-  f << s;
-  f.close();
-  if (!f) throw std::runtime_error(path + ": write failed");
+  WriteTextFile(path, s);
 }
 
 NeuralModel LoadNeuralModel(const std::string& path) {

@@ -191,9 +191,7 @@ double SimDevice::Time() const noexcept {
 }
 
 void SimDevice::Reset() noexcept {
-  have_p_ = false;
-  v_mps_.setZero();
-  t_s_ = 0;
+  velocity_.Reset();
   dropout_start_s_ = -1;
   dropout_s_ = 0;
   empty_reads_ = lost_reads_ = 0;
@@ -215,15 +213,8 @@ devices::ReadResult SimDevice::Read(DeviceSample* out) noexcept {
   }
   const double q = m_.encoder_resolution_m;
   const Eigen::Vector3d p = q > 0 ? Eigen::Vector3d((s.p_m / q).array().round() * q) : s.p_m;
-  if (have_p_ && t > t_s_) {
-    const double dt = t - t_s_, a = 1 - std::exp(-2 * internal::kPi * m_.velocity_cutoff_hz * dt);
-    v_mps_ += a * ((p - p_m_) / dt - v_mps_);
-  }
-  p_m_ = p;
-  t_s_ = t;
-  have_p_ = true;
-  out->state.p_m = p_m_;
-  out->state.v_mps = v_mps_;
+  out->state.p_m = p;
+  out->state.v_mps = velocity_.Update(p, t, m_.velocity_cutoff_hz);
   out->t_s = t;
   return devices::ReadResult::kOk;
 }

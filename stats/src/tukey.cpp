@@ -3,6 +3,8 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/distributions.hpp"
@@ -17,6 +19,24 @@ void Fill(TukeyPair& p, const TukeyFamily& fam, double q_crit) {
   const double half = q_crit / std::numbers::sqrt2 * p.se;
   p.lwr = p.diff - half;
   p.upr = p.diff + half;
+}
+
+// Every pair (levels[j] - levels[i], j > i) of the family: `diff_se(i, j, &diff, &se)` gives
+// the pair's estimate and standard error; r.k and r.df must be set.
+template <class DiffSe>
+void AddPairs(TukeyResult& r, const std::vector<std::string>& levels, double conf, DiffSe diff_se) {
+  const TukeyFamily fam(r.k, r.df);
+  const double q_crit = fam.Quantile(conf);
+  for (std::size_t i = 0; i < levels.size(); ++i)
+    for (std::size_t j = i + 1; j < levels.size(); ++j) {
+      TukeyPair p;
+      p.a = levels[j];
+      p.b = levels[i];
+      diff_se(i, j, &p.diff, &p.se);
+      p.df = r.df;
+      Fill(p, fam, q_crit);
+      r.pairs.push_back(p);
+    }
 }
 
 }  // namespace
@@ -44,21 +64,12 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
   r.df = static_cast<double>(data.rows()) - r.k;
   if (!(r.df > 0)) throw InputError(data.source, 0, factor, "no error degrees of freedom left");
   r.mse = ssw / r.df;
-  const TukeyFamily fam(r.k, r.df);
-  const double q_crit = fam.Quantile(conf);
-  for (std::size_t i = 0; i < levels.size(); ++i)
-    for (std::size_t j = i + 1; j < levels.size(); ++j) {
-      const auto& si = sum[levels[i]];
-      const auto& sj = sum[levels[j]];
-      TukeyPair p;
-      p.a = levels[j];
-      p.b = levels[i];
-      p.diff = sj.first / sj.second - si.first / si.second;
-      p.se = std::sqrt(r.mse * (1.0 / si.second + 1.0 / sj.second));
-      p.df = r.df;
-      Fill(p, fam, q_crit);
-      r.pairs.push_back(p);
-    }
+  AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
+    const auto& si = sum[levels[i]];
+    const auto& sj = sum[levels[j]];
+    *diff = sj.first / sj.second - si.first / si.second;
+    *se = std::sqrt(r.mse * (1.0 / si.second + 1.0 / sj.second));
+  });
   return r;
 }
 
@@ -121,27 +132,16 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
     auto level_of = [&](std::size_t g) { return (g / stride) % kf; };
     // ng is the product of the between factors' level counts, kf one of them: exact division.
     const double per_level = static_cast<double>(ng / kf);  // NOLINT(bugprone-integer-division)
-    const TukeyFamily fam(r.k, r.df);
-    const double q_crit = fam.Quantile(conf);
-    for (std::size_t i = 0; i < kf; ++i)
-      for (std::size_t j = i + 1; j < kf; ++j) {
-        TukeyPair p;
-        p.a = levels[j];
-        p.b = levels[i];
-        double est = 0, var = 0;
-        for (std::size_t g = 0; g < ng; ++g) {
-          const double c = level_of(g) == j   ? 1 / per_level
-                           : level_of(g) == i ? -1 / per_level
-                                              : 0.0;
-          est += c * mu[g];
-          var += c * c / size_of(g);
-        }
-        p.diff = est;
-        p.se = std::sqrt(r.mse * var);
-        p.df = r.df;
-        Fill(p, fam, q_crit);
-        r.pairs.push_back(p);
+    AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
+      double est = 0, var = 0;
+      for (std::size_t g = 0; g < ng; ++g) {
+        const double c = level_of(g) == j ? 1 / per_level : level_of(g) == i ? -1 / per_level : 0.0;
+        est += c * mu[g];
+        var += c * c / size_of(g);
       }
+      *diff = est;
+      *se = std::sqrt(r.mse * var);
+    });
     return r;
   }
 
@@ -170,22 +170,13 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   r.df = multivariate ? nu : main->df2;
   // nc / kf: exact, as above.
   const double cells_per_level = static_cast<double>(nc / kf);  // NOLINT(bugprone-integer-division)
-  const TukeyFamily fam(r.k, r.df);
-  const double q_crit = fam.Quantile(conf);
-  for (std::size_t i = 0; i < kf; ++i)
-    for (std::size_t j = i + 1; j < kf; ++j) {
-      TukeyPair p;
-      p.a = levels[j];
-      p.b = levels[i];
-      std::vector<double> d(n);
-      for (std::size_t s = 0; s < n; ++s) d[s] = m[s][j] - m[s][i];
-      double var = 0;
-      p.diff = unweighted(d, &var);
-      p.se = multivariate ? std::sqrt(var * inv_n) : std::sqrt(2 * r.mse / cells_per_level * inv_n);
-      p.df = r.df;
-      Fill(p, fam, q_crit);
-      r.pairs.push_back(p);
-    }
+  AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
+    std::vector<double> d(n);
+    for (std::size_t s = 0; s < n; ++s) d[s] = m[s][j] - m[s][i];
+    double var = 0;
+    *diff = unweighted(d, &var);
+    *se = multivariate ? std::sqrt(var * inv_n) : std::sqrt(2 * r.mse / cells_per_level * inv_n);
+  });
   return r;
 }
 

@@ -1,8 +1,12 @@
-// Input limits checked before toml++ parses a text, and the size limit of ReadTextFile.
+// Input limits checked before toml++ parses a text, the size limit of ReadTextFile, and
+// WriteTextFile's bytes and errors.
 
 #include "hapticlab/core/io.hpp"
 
 #include <gtest/gtest.h>
+
+#include <filesystem>
+#include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -90,6 +94,34 @@ TEST(ReadTextFile, RefusesFilesLargerThanTheLimit) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("big.txt"), std::string::npos);
   }
+}
+
+// The message of the std::runtime_error WriteTextFile throws ("" when it succeeds).
+std::string WriteFailure(const std::string& path, const std::string& text) {
+  try {
+    WriteTextFile(path, text);
+  } catch (const std::runtime_error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(WriteTextFile, WritesTheBytesAsGivenAndReplacesTheOldFile) {
+  test::TempDir dir;
+  const std::string path = dir.File("out.txt");
+  test::WriteFile(path, std::string(100, 'o'));  // longer than what replaces it
+  const std::string bytes("a,b\r\n\0tail\n", 11);
+  ASSERT_EQ(WriteFailure(path, bytes), "");
+  EXPECT_EQ(test::ReadFile(path), bytes);  // truncated, CR and NUL kept
+}
+
+TEST(WriteTextFile, FailuresNameTheFile) {
+  test::TempDir dir;
+  const std::string missing_dir = dir.File("no/such/dir/x.toml");
+  EXPECT_EQ(WriteFailure(missing_dir, "x"), missing_dir + ": cannot write");
+  // A full disk: /dev/full accepts the open and fails the write.
+  if (!std::filesystem::exists("/dev/full")) GTEST_SKIP() << "no /dev/full on this system";
+  EXPECT_EQ(WriteFailure("/dev/full", std::string(1 << 16, 'x')), "/dev/full: write failed");
 }
 
 }  // namespace

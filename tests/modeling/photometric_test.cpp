@@ -10,83 +10,17 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
-#include <numbers>
 #include <opencv2/imgcodecs.hpp>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/rng.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "photometric_scenes.hpp"
 
 namespace hapticlab::modeling {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr int kN = 128;           // image size
-constexpr double kPitch = 20e-6;  // m per pixel
-
-struct Field {
-  std::vector<double> h;           // metres
-  std::vector<Eigen::Vector3f> n;  // true normals
-};
-
-// Height field with analytic gradient, sampled on the grid.
-Field Make(const std::function<double(double, double)>& h,
-           const std::function<Eigen::Vector2d(double, double)>& g) {
-  Field f;
-  for (int i = 0; i < kN; ++i)
-    for (int j = 0; j < kN; ++j) {
-      const double x = j * kPitch, y = i * kPitch;
-      f.h.push_back(h(x, y));
-      const auto d = g(x, y);
-      f.n.push_back(Eigen::Vector3d(-d.x(), -d.y(), 1).normalized().cast<float>());
-    }
-  return f;
-}
-
-// Lambertian images under the dome, relative noise `noise`, optional shadowed lights.
-ImageStack Render(const Field& f, const std::vector<Light>& L, double noise, std::uint64_t seed,
-                  int shadowed = 0) {
-  Rng rng(seed);
-  ImageStack s;
-  s.width = s.height = kN;
-  for (std::size_t j = 0; j < L.size(); ++j) {
-    std::vector<float> img(f.n.size());
-    for (std::size_t i = 0; i < img.size(); ++i) {
-      const double v = 0.8 * std::max(0.0, L[j].direction.dot(f.n[i].cast<double>()));
-      img[i] = static_cast<float>(v * (1 + noise * rng.Normal()));
-      // Cast shadows: the first `shadowed` lights are blocked on the left half.
-      if (static_cast<int>(j) < shadowed && (i % kN) < kN / 2) img[i] = 0;
-    }
-    s.images.push_back(img);
-  }
-  return s;
-}
-
-struct Errors {
-  double mean_angle_deg, height_rms_fraction;
-};
-
-Errors Compare(const Field& f, const PhotometricResult& r) {
-  double ang = 0;
-  for (std::size_t i = 0; i < f.n.size(); ++i)
-    ang += std::acos(std::clamp(static_cast<double>(f.n[i].dot(r.normals[i])), -1.0, 1.0));
-  double mt = 0, me = 0, lo = 1e300, hi = -1e300;
-  for (std::size_t i = 0; i < f.h.size(); ++i) {
-    mt += f.h[i];
-    me += r.height_m[i];
-    lo = std::min(lo, f.h[i]);
-    hi = std::max(hi, f.h[i]);
-  }
-  mt /= static_cast<double>(f.h.size());
-  me /= static_cast<double>(f.h.size());
-  double se = 0;
-  for (std::size_t i = 0; i < f.h.size(); ++i)
-    se += std::pow((r.height_m[i] - me) - (f.h[i] - mt), 2);
-  return {ang / static_cast<double>(f.n.size()) * 180 / kPi,
-          std::sqrt(se / static_cast<double>(f.h.size())) / (hi - lo)};
-}
+using namespace scenes;  // NOLINT(google-build-using-namespace): the shared test scenes
 
 TEST(Photometric, DomePresetHasThirtyLightsAtThreeElevations) {
   const auto d = DomePreset();
@@ -98,14 +32,7 @@ TEST(Photometric, DomePresetHasThirtyLightsAtThreeElevations) {
 TEST(Photometric, SinusoidRecoveredAtOnePercentNoise) {
   // Periodic over the image (the Frankot-Chellappa assumption): 4 x 3 periods, 30 µm.
   const double A = 30e-6, lx = kN * kPitch / 4, ly = kN * kPitch / 3;
-  const auto f =
-      Make([&](double x,
-               double y) { return A * std::sin(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly); },
-           [&](double x, double y) {
-             return Eigen::Vector2d(
-                 A * 2 * kPi / lx * std::cos(2 * kPi * x / lx) * std::cos(2 * kPi * y / ly),
-                 -A * 2 * kPi / ly * std::sin(2 * kPi * x / lx) * std::sin(2 * kPi * y / ly));
-           });
+  const auto f = Sinusoid(A, lx, ly);
   const auto L = DomePreset();
   const auto r = PhotometricStereo(Render(f, L, 0.01, 1), L, {.pitch_m = kPitch});
   const auto e = Compare(f, r);
@@ -159,25 +86,6 @@ TEST(Photometric, PlateauWithSmoothStepsRecovered) {
               100 * e.height_rms_fraction);
   EXPECT_LT(e.mean_angle_deg, 2.0);
   EXPECT_LT(e.height_rms_fraction, 0.05);
-}
-
-TEST(Photometric, PoissonIntegrationHandlesANonPeriodicTilt) {
-  // A tilted plane plus a bump: not periodic, so Frankot-Chellappa's wrap-around distorts it
-  // while the Neumann Poisson solve does not.
-  const double s = 0.05, A = 10e-6, l = kN * kPitch / 2;
-  const auto f = Make([&](double x, double y) { return s * x + A * std::sin(2 * kPi * y / l); },
-                      [&](double, double y) {
-                        return Eigen::Vector2d(s, A * 2 * kPi / l * std::cos(2 * kPi * y / l));
-                      });
-  const auto L = DomePreset();
-  const auto imgs = Render(f, L, 0.01, 9);
-  const auto poisson = Compare(
-      f, PhotometricStereo(imgs, L, {.pitch_m = kPitch, .integration = Integration::kPoisson}));
-  const auto fc = Compare(f, PhotometricStereo(imgs, L, {.pitch_m = kPitch}));
-  std::printf("tilt: Poisson height RMS %.2f %%, Frankot-Chellappa %.2f %%\n",
-              100 * poisson.height_rms_fraction, 100 * fc.height_rms_fraction);
-  EXPECT_LT(poisson.height_rms_fraction, 0.05);
-  EXPECT_GT(fc.height_rms_fraction, poisson.height_rms_fraction);
 }
 
 TEST(Photometric, SphereNormalsAreExact) {
@@ -261,96 +169,6 @@ TEST(Photometric, CommandLineFromPngsToABuiltModel) {
 // ---------------------------------------------------------------------------------------
 // Real-capture conditions: specular highlights, attached shadows, masks, frames, formats.
 
-// A sphere of radius R pixels centred in an n x n image, seen from above; `mask` is the disk
-// of radius mask_frac * R. Normals in the image frame (x = column, y = row downwards).
-struct Sphere {
-  int n = 0;
-  double R = 0;
-  std::vector<Eigen::Vector3f> normals;  // (0, 0, 1) off the sphere
-  std::vector<double> height;            // pixels, 0 off the sphere
-  std::vector<std::uint8_t> mask;
-};
-
-Sphere MakeSphere(int n, double R, double mask_frac) {
-  Sphere s;
-  s.n = n;
-  s.R = R;
-  const double c = (n - 1) / 2.0;
-  for (int i = 0; i < n; ++i)
-    for (int j = 0; j < n; ++j) {
-      const double x = j - c, y = i - c, r2 = x * x + y * y;
-      if (r2 < R * R) {
-        const double z = std::sqrt(R * R - r2);
-        s.normals.push_back(Eigen::Vector3d(x, y, z).normalized().cast<float>());
-        s.height.push_back(z);
-      } else {
-        s.normals.push_back(Eigen::Vector3f::UnitZ());
-        s.height.push_back(0);
-      }
-      s.mask.push_back(r2 < mask_frac * mask_frac * R * R ? 1 : 0);
-    }
-  return s;
-}
-
-// Twelve lights: four each at elevations 45°, 60° and 75°.
-std::vector<Light> TwelveLights() {
-  std::vector<Light> L;
-  const double el[3] = {45, 60, 75}, az0[3] = {0, 45, 0};
-  for (int e = 0; e < 3; ++e)
-    for (int a = 0; a < 4; ++a) {
-      const double el_r = el[e] * kPi / 180, az = (az0[e] + 90.0 * a) * kPi / 180;
-      L.push_back({"",
-                   Eigen::Vector3d(std::cos(el_r) * std::cos(az), std::cos(el_r) * std::sin(az),
-                                   std::sin(el_r)),
-                   0});
-    }
-  return L;
-}
-
-// Images of the sphere (a varying albedo, per-light intensities 0.8-1.2, attached shadows),
-// optionally with a Blinn-Phong highlight k_s (n.h)^shininess, h = (l + v)/|l + v|, v = +z;
-// noise: 1 % relative plus 0.001 absolute; clipped to [0, 1] like a sensor. Off the sphere:
-// a black background (noise only).
-ImageStack RenderSphere(const Sphere& s, const std::vector<Light>& L, double k_s, double shininess,
-                        std::uint64_t seed) {
-  Rng rng(seed);
-  ImageStack st;
-  st.width = st.height = s.n;
-  for (std::size_t j = 0; j < L.size(); ++j) {
-    const double scale = 0.8 + 0.4 * static_cast<double>((j * 7) % 12) / 11.0;
-    const Eigen::Vector3d hv = (L[j].direction + Eigen::Vector3d::UnitZ()).normalized();
-    std::vector<float> img(s.normals.size());
-    for (std::size_t i = 0; i < img.size(); ++i) {
-      const Eigen::Vector3d nn = s.normals[i].cast<double>();
-      const bool on = s.height[i] > 0;
-      const double rho =
-          0.45 + 0.25 * std::sin(0.21 * static_cast<double>(i % static_cast<std::size_t>(s.n))) *
-                     std::cos(0.17 * static_cast<double>(i / static_cast<std::size_t>(s.n)));
-      const double ndl = L[j].direction.dot(nn);
-      double v = on ? scale * rho * std::max(0.0, ndl) : 0.0;
-      if (on && ndl > 0 && k_s > 0)
-        v += scale * k_s * std::pow(std::max(0.0, nn.dot(hv)), shininess);
-      v = v * (1 + 0.01 * rng.Normal()) + 0.001 * rng.Normal();
-      img[i] = static_cast<float>(std::clamp(v, 0.0, 1.0));
-    }
-    st.images.push_back(std::move(img));
-  }
-  return st;
-}
-
-double AngleDeg(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-  return std::acos(std::clamp(static_cast<double>(a.normalized().dot(b.normalized())), -1.0, 1.0)) *
-         180 / kPi;
-}
-
-double MedianErrorDeg(const Sphere& s, const std::vector<Eigen::Vector3f>& n) {
-  std::vector<double> e;
-  for (std::size_t i = 0; i < n.size(); ++i)
-    if (s.mask[i]) e.push_back(AngleDeg(s.normals[i], n[i]));
-  std::nth_element(e.begin(), e.begin() + static_cast<std::ptrdiff_t>(e.size() / 2), e.end());
-  return e[e.size() / 2];
-}
-
 TEST(Photometric, ResidualRejectionHandlesHighlightsShadowsAndMask) {
   // 96 x 96, sphere of radius 40 px, masked to 0.9 R (slopes up to 64°): every light lights
   // a highlight somewhere and leaves the far side in attached shadow.
@@ -429,85 +247,6 @@ TEST(Photometric, MirroredLightFrameIsReported) {
   // A mirrored frame fits every pixel equally well (the error is the mirror, not noise).
   EXPECT_LT(MedianErrorDeg(s, right.normals), 1.0);
   EXPECT_GT(MedianErrorDeg(s, wrong_y.normals), 5.0);
-}
-
-TEST(Photometric, MaskedPoissonIntegration) {
-  // h = tilt + bump on a 60 x 44 grid (pixel units): analytic normals.
-  const int w = 60, h = 44;
-  auto height = [](double x, double y) {
-    return 0.3 * x - 0.1 * y + 6 * std::exp(-((x - 25) * (x - 25) + (y - 20) * (y - 20)) / 60);
-  };
-  auto grad = [](double x, double y) {
-    const double g = 6 * std::exp(-((x - 25) * (x - 25) + (y - 20) * (y - 20)) / 60);
-    return Eigen::Vector2d(0.3 - g * 2 * (x - 25) / 60, -0.1 - g * 2 * (y - 20) / 60);
-  };
-  std::vector<Eigen::Vector3f> n;
-  std::vector<double> truth;
-  for (int i = 0; i < h; ++i)
-    for (int j = 0; j < w; ++j) {
-      const auto g = grad(j, i);
-      n.push_back(Eigen::Vector3d(-g.x(), -g.y(), 1).normalized().cast<float>());
-      truth.push_back(height(j, i));
-    }
-  // (a) A full mask is the DCT solve's problem exactly.
-  const std::vector<std::uint8_t> full(n.size(), 1);
-  const auto a = IntegrateNormalsMasked(n, full, w, h, 1.0),
-             b = IntegrateNormalsPoisson(n, w, h, 1.0);
-  double worst = 0;
-  for (std::size_t k = 0; k < a.size(); ++k)
-    worst = std::max(worst, static_cast<double>(std::abs(a[k] - b[k])));
-  EXPECT_LT(worst, 1e-4);
-  // (b) Two regions: a disk with a hole and a separate square; outside, the normals are
-  // garbage (as a solved background would be).
-  std::vector<std::uint8_t> mask(n.size(), 0), region(n.size(), 0);
-  Rng rng(3);
-  auto noisy = n;
-  for (int i = 0; i < h; ++i)
-    for (int j = 0; j < w; ++j) {
-      const std::size_t k = static_cast<std::size_t>(i * w + j);
-      const double r2 = (j - 22.0) * (j - 22.0) + (i - 21.0) * (i - 21.0);
-      if (r2 < 19.0 * 19.0 && r2 > 5.0 * 5.0) mask[k] = region[k] = 1;
-      if (j >= 47 && j < 57 && i >= 5 && i < 35) {
-        mask[k] = 1;
-        region[k] = 2;
-      }
-      if (!mask[k])
-        noisy[k] =
-            Eigen::Vector3d(rng.Uniform(-1, 1), rng.Uniform(-1, 1), 1).normalized().cast<float>();
-    }
-  const auto masked = IntegrateNormalsMasked(noisy, mask, w, h, 1.0);
-  const auto whole = IntegrateNormalsPoisson(noisy, w, h, 1.0);
-  auto rms_in_region = [&](const std::vector<float>& z, int reg, double* mean_out) {
-    double mz = 0, mt = 0, c = 0;
-    for (std::size_t k = 0; k < z.size(); ++k)
-      if (region[k] == reg) {
-        mz += z[k];
-        mt += truth[k];
-        c += 1;
-      }
-    double se = 0;
-    for (std::size_t k = 0; k < z.size(); ++k)
-      if (region[k] == reg) se += std::pow((z[k] - mz / c) - (truth[k] - mt / c), 2);
-    if (mean_out) *mean_out = mz / c;
-    return std::sqrt(se / c);
-  };
-  double mean1 = 0, mean2 = 0;
-  const double e1 = rms_in_region(masked, 1, &mean1), e2 = rms_in_region(masked, 2, &mean2);
-  const double e_whole = rms_in_region(whole, 1, nullptr);
-  std::printf(
-      "masked Poisson: RMS %.4f and %.4f px in the two regions (range ~24 px); whole-image DCT "
-      "%.3f px\n",
-      e1, e2, e_whole);
-  EXPECT_LT(e1, 0.05);
-  EXPECT_LT(e2, 0.05);
-  EXPECT_GT(e_whole, 10 * e1);
-  EXPECT_NEAR(mean1, 0, 1e-3);
-  EXPECT_NEAR(mean2, 0, 1e-3);
-  const float lo = *std::min_element(masked.begin(), masked.end());
-  for (std::size_t k = 0; k < mask.size(); ++k)
-    if (!mask[k]) {
-      ASSERT_EQ(masked[k], lo);
-    }
 }
 
 std::string LightsError(const std::string& path) {

@@ -1,5 +1,5 @@
 #pragma once
-/// @file Small file helpers shared by the readers of user input.
+/// @file Small file helpers shared by the readers of user input and the writers of results.
 
 #include <cstddef>
 #include <string>
@@ -11,6 +11,13 @@ namespace hapticlab {
 /// than `max_bytes`).
 std::string ReadTextFile(const std::string& path, const std::string& what = "file",
                          std::size_t max_bytes = std::size_t{256} << 20);
+
+/// Writes `text` to `path`, replacing what was there (bytes as given: no newline
+/// translation). The writer of every whole-file result (models, reports, CSV tables).
+/// @throws std::runtime_error "<path>: cannot write" when the file cannot be created, or
+/// "<path>: write failed" when writing or closing it fails (a full disk): the environment
+/// failing, not bad input (docs/architecture.md, "Errors").
+void WriteTextFile(const std::string& path, std::string_view text);
 
 /// Limits every TOML reader enforces before toml++ parses a text (docs/studies.md, "Input
 /// limits"). toml++ recurses per dotted key part and per nesting level, so a hostile file

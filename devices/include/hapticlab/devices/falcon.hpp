@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hapticlab/devices/device.hpp"
+#include "hapticlab/devices/velocity_filter.hpp"
 
 namespace hapticlab::devices::falcon {
 
@@ -182,9 +183,9 @@ class FalconDevice final : public HapticDevice {
   FalconOptions o_;
   Command cmd_;
   Status status_;
-  Eigen::Vector3d p_m_{0, 0, 0.12}, v_mps_ = Eigen::Vector3d::Zero();
-  double t_s_ = 0;
+  Eigen::Vector3d p_m_{0, 0, 0.12};  // the last position: forward kinematics' next guess
   bool have_p_ = false;
+  VelocityFilter velocity_;
   int malformed_ = 0;
   std::uint64_t packets_ = 0, empty_reads_ = 0, lost_reads_ = 0;
   std::array<std::uint8_t, 64> buf_{};

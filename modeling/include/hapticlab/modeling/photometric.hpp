@@ -1,8 +1,7 @@
 #pragma once
 /// @file Photometric stereo (dissertation ch. IV.2): per-pixel albedo and normal from images
 /// of the sample under known lights (Lambertian model, eq. 4.3), then a height map by
-/// integrating the normals (Frankot-Chellappa or a Poisson solve, FFTW / Eigen). OpenCV reads
-/// the images.
+/// integrating the normals (normal_integration.hpp). OpenCV reads the images.
 ///
 /// **Image frame** (used by every direction and normal here): x along the image columns
 /// (to the right), y along the image rows (downwards, row 0 at y = 0), z up out of the sample
@@ -15,6 +14,8 @@
 #include <functional>
 #include <string>
 #include <vector>
+
+#include "hapticlab/modeling/normal_integration.hpp"
 
 namespace hapticlab::modeling {
 
@@ -67,13 +68,6 @@ ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights);
 /// Reads a mask image of any format ReadImages reads: a pixel is inside when any colour
 /// channel is non-zero. @throws InputError when unreadable or not width x height.
 std::vector<std::uint8_t> ReadMask(const std::string& path, int width, int height);
-
-/// How normals become heights.
-enum class Integration {
-  kFrankotChellappa,  ///< FFT, periodic boundary (best for textures that tile); whole image only
-  kPoisson,  ///< Poisson solve, Neumann boundary on the image edge (DCT) or on the mask boundary
-             ///< (sparse)
-};
 
 /// How lights are excluded per pixel before the Lambertian fit.
 enum class Rejection {
@@ -138,21 +132,5 @@ PhotometricResult PhotometricStereo(const ImageStack& images, const std::vector<
                                     const PhotometricOptions& options,
                                     const ImageStack* reference = nullptr,
                                     const std::function<void(double)>& progress = {});
-
-/// Frankot-Chellappa: the height whose gradient is closest (least squares, periodic
-/// boundary) to (p, q) = (dh/dx, dh/dy) in height units per pixel; scaled by pitch_m.
-std::vector<float> IntegrateNormals(const std::vector<Eigen::Vector3f>& normals, int width,
-                                    int height, double pitch_m);
-/// The least-squares height whose differences between 4-neighbours match the normals'
-/// gradients (averaged over each pair), i.e. a Poisson solve with Neumann boundary on the
-/// image edge (DCT, FFTW); zero mean; scaled by pitch_m.
-std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& normals, int width,
-                                           int height, double pitch_m);
-/// The same on an irregular domain: only pairs of neighbours both inside `mask` (non-zero)
-/// count, so the boundary condition is Neumann on the mask boundary (sparse Cholesky, Eigen).
-/// Each connected region has zero mean; outside pixels get the lowest inside height.
-std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& normals,
-                                          const std::vector<std::uint8_t>& mask, int width,
-                                          int height, double pitch_m);
 
 }  // namespace hapticlab::modeling

@@ -3,38 +3,16 @@
 /// V.1.3; the LPC method of Romano and Culbertson): preprocessing, AR fits by
 /// Levinson-Durbin, the spectral error E_s (eq. 3.1), the stationarity cut-off by the
 /// augmented Dickey-Fuller test, the AR bank over (speed, force) and its cross-validation.
+/// The recordings themselves are read by vibration_recording.hpp.
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "hapticlab/modeling/vibration_recording.hpp"
 #include "hapticlab/renderer/material.hpp"
 
 namespace hapticlab::modeling {
-
-/// One scan condition: acceleration at a steady speed and normal force.
-struct Recording {
-  std::string file;
-  double speed_mps = 0, force_N = 0;  ///< scan condition
-  double rate_hz = 0;                 ///< sample rate of `acc`
-  std::vector<double> acc;            ///< normal acceleration [m/s^2]
-};
-
-/// Reads one measurement CSV v1 with an `acc_mps2` column. Speed and force come from the
-/// `# speed_mps:` / `# force_N:` metadata or, when absent, from the rows (mean tangential
-/// speed and mean normal force, which must be steady: coefficient of variation < 25 %). The
-/// rate comes from `# rate_hz:` or the time stamps, which must be uniform (a gap of more than
-/// 1.5 sample periods is an error naming its line). Clipping (20 or more samples at the
-/// extreme value) is an error. @throws InputError naming file, line and field.
-Recording LoadRecording(const std::string& path);
-/// A recording without condition metadata, cut into its steady parts: 0.25 s blocks are
-/// grouped while their mean speed and force stay within 15 % of the group's first block;
-/// every group of at least `min_s` seconds becomes one condition. With metadata, the whole
-/// file is one condition (as LoadRecording).
-std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s = 1.0);
-/// Every `*.csv` in a folder, sorted by name (files without metadata are segmented).
-/// @throws InputError when there is none, listing every bad file.
-std::vector<Recording> LoadRecordings(const std::string& dir);
 
 /// The SoX resampler's recipes: best = very high quality (175 dB), medium = high quality
 /// (20-bit, the default), fastest = medium quality (16-bit).

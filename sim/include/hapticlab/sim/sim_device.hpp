@@ -28,6 +28,7 @@
 #include "hapticlab/core/spsc_queue.hpp"
 #include "hapticlab/devices/clock.hpp"
 #include "hapticlab/devices/device.hpp"
+#include "hapticlab/devices/velocity_filter.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
 namespace hapticlab::sim {
@@ -165,9 +166,8 @@ class SimDevice final : public devices::HapticDevice {
   const devices::Clock* clock_;
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
   Rng rng_;
-  Eigen::Vector3d p_m_ = Eigen::Vector3d::Zero(), v_mps_ = Eigen::Vector3d::Zero();
-  double t_s_ = 0, dropout_start_s_ = -1, dropout_s_ = 0;
-  bool have_p_ = false;
+  devices::VelocityFilter velocity_;
+  double dropout_start_s_ = -1, dropout_s_ = 0;
   std::atomic<std::uint64_t> reads_{0};
   std::uint64_t empty_reads_ = 0, lost_reads_ = 0;
 };

@@ -1,0 +1,71 @@
+// The options and the CSV loading every `stats` subcommand shares (cmd_stats_common.hpp).
+
+#include "cmd_stats_common.hpp"
+
+#include <fmt/core.h>
+
+#include <algorithm>
+#include <utility>
+
+#include "cli_common.hpp"
+#include "hapticlab/core/csv.hpp"
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::cli::stats_cmd {
+
+void AddCommon(CLI::App* cmd, Common& c) {
+  cmd->add_option("--csv", c.csv, "Long-format CSV (one row per observation)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--dv", c.dv, "Column of the response (numeric)")->required();
+  cmd->add_option("--where", c.where,
+                  "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
+  cmd->add_option("--average-by", c.average_by,
+                  "Average the response within each combination of these columns first, e.g.\n"
+                  "subject,method,material to use cell means (repetitions averaged)");
+  cmd->add_flag("--json", c.json, "Print results as JSON");
+  cmd->add_flag(
+      "--include-simulated", c.include_simulated,
+      "A CSV with a 'source' column (hapticlab export): keep the simulated observer's rows\n"
+      "although rows rated by participants are present (left out by default, with a note)");
+}
+
+stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
+  std::vector<std::pair<std::string, std::string>> cond;
+  for (const auto& w : c.where) {
+    const auto eq = w.find('=');
+    if (eq == std::string::npos || eq == 0)
+      throw InputError(kCommandLine, 0, "--where", "expected COL=VALUE, got '" + w + "'");
+    cond.emplace_back(w.substr(0, eq), w.substr(eq + 1));
+    keys.push_back(cond.back().first);
+  }
+  const auto avg = stats::SplitList(c.average_by);
+  keys.insert(keys.end(), avg.begin(), avg.end());
+  std::sort(keys.begin(), keys.end());
+  keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
+  stats::RowFilter keep{.equal = cond, .not_equal = {}};
+  // The project's exports carry each rating's source: when a person rated any row, the
+  // simulated observer's rows are left out unless asked for (docs/analysis.md).
+  {
+    const CsvTable raw = ReadCsv(c.csv);
+    if (const auto sc = raw.Find("source"); sc && !c.include_simulated) {
+      std::size_t simulated = 0, human = 0;
+      for (const auto& row : raw.rows)
+        (row[*sc] == "simulated" ? simulated : human) += row[*sc].empty() ? 0 : 1;
+      if (simulated && human) {
+        keep.not_equal.emplace_back("source", "simulated");
+        fmt::print(stderr,
+                   "note: {}: {} rows rated by the simulated observer are left out ({} rated by "
+                   "participants); "
+                   "--include-simulated keeps them\n",
+                   c.csv, simulated, human);
+      }
+    }
+  }
+  auto t = stats::ReadLongCsv(c.csv, c.dv, keys, c.allow_missing, keep);
+  if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
+  if (!avg.empty()) t = t.Average(avg);
+  return t;
+}
+
+}  // namespace hapticlab::cli::stats_cmd

@@ -1,0 +1,39 @@
+#pragma once
+// Pieces shared by the `stats` subcommands (cmd_stats.cpp, cmd_stats_lmm.cpp): the options
+// every one of them takes and the CSV loading they apply.
+
+#include <CLI/CLI.hpp>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "hapticlab/stats/long_table.hpp"
+
+namespace hapticlab::cli::stats_cmd {
+
+// NaN (undefined statistics) becomes JSON null.
+inline nlohmann::json Num(double v) {
+  return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json();
+}
+
+// Options every stats subcommand shares.
+struct Common {
+  std::string csv, dv;
+  std::vector<std::string> where;  // COL=VALUE
+  std::string average_by;          // COLS
+  bool json = false;
+  bool allow_missing = false;      // rm-anova/tukey --within: --missing drop-subject
+  bool include_simulated = false;  // keep source=simulated rows next to a person's ratings
+};
+
+/// --csv, --dv, --where, --average-by, --json, --include-simulated.
+void AddCommon(CLI::App* cmd, Common& c);
+
+/// Reads the CSV with the needed key columns, applies --where and --average-by.
+stats::LongTable Load(const Common& c, std::vector<std::string> keys);
+
+/// `stats lmm`.
+void AddLmm(CLI::App& s);
+
+}  // namespace hapticlab::cli::stats_cmd
