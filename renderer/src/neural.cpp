@@ -49,10 +49,6 @@ int GridWeights(const std::vector<double>& vs, const std::vector<double>& fs, do
   return k;
 }
 
-// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
-// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
-constexpr std::size_t kLinearTerms = 9, kLinearTermsQuadratic = 6;
-
 // One second-order section of a Butterworth low- or high-pass (bilinear transform with
 // pre-warping; `q` the section's quality factor). Two sections with q = 0.5412 and 1.3066
 // make the fourth-order filter (hand-written: BiquadCoeffs has only the q = 0.7071 section).
@@ -92,12 +88,12 @@ double Forward(const NeuralNet& n, bool unified, const double* in, double* a, do
   }
   double y = x[0];
   // The linear part over the M history inputs; Γ_U's coefficients are biquadratic in the
-  // scaled condition (v', f'), the last two inputs (kLinearTerms; 6-term files: quadratic).
+  // scaled condition (v', f'), the last two inputs (kNeuralLinearTerms; 6-term files: quadratic).
   if (!n.linear.empty()) {
     const std::size_t M =
         unified ? static_cast<std::size_t>(n.layers.front()) - 2 : n.linear.size();
     const double* w = n.linear.data();
-    double phi[kLinearTerms] = {1, 0, 0, 0, 0, 0, 0, 0, 0};
+    double phi[kNeuralLinearTerms] = {1, 0, 0, 0, 0, 0, 0, 0, 0};
     std::size_t terms = 1;
     if (unified) {
       const double v = in[M], f = in[M + 1];

@@ -98,12 +98,13 @@ std::string NeuralModelProblem(const NeuralModel& m) {
         if (!std::isfinite(p)) return where + ": non-finite weight";
       const auto H = static_cast<std::size_t>(band.history);
       const bool uni = m.topology == NeuralTopology::kUnified;
-      const std::size_t want_lin = H * (uni ? kLinearTerms : 1);
+      const std::size_t want_lin = H * (uni ? kNeuralLinearTerms : 1);
       if (!n.linear.empty() && n.linear.size() != want_lin &&
-          !(uni && n.linear.size() == H * kLinearTermsQuadratic))
+          !(uni && n.linear.size() == H * kNeuralLinearTermsQuadratic))
         return fmt::format(
             "{}: {} linear weights, expected 0 or {}{}", where, n.linear.size(), want_lin,
-            uni ? fmt::format(" (or {}: the quadratic basis)", H * kLinearTermsQuadratic) : "");
+            uni ? fmt::format(" (or {}: the quadratic basis)", H * kNeuralLinearTermsQuadratic)
+                : "");
       for (const double p : n.linear)
         if (!std::isfinite(p)) return where + ": non-finite linear weight";
     }

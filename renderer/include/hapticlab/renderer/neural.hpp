@@ -75,6 +75,9 @@ struct NeuralBand {
 enum class NeuralTopology { kUnified, kDecomposed };
 
 inline constexpr std::size_t kMaxNeuralBands = 8;
+/// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
+/// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
+inline constexpr std::size_t kNeuralLinearTerms = 9, kNeuralLinearTermsQuadratic = 6;
 
 struct NeuralModel {
   NeuralTopology topology = NeuralTopology::kUnified;
