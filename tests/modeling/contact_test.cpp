@@ -266,8 +266,8 @@ TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
 
 // Not a test (it asserts nothing and is disabled): the measurement aid behind the bias numbers in
 // docs/modeling-geometry-contact.md. Environment: EXP_NOISE (force noise, N), EXP_PNOISE,
-// EXP_VNOISE (position and velocity noise), EXP_RATE, EXP_SMOOTH, EXP_SG, EXP_PSMOOTH, EXP_RES
-// (ReplayOptions), EXP_SEEDS, EXP_SEED0 (first seed, 200: choices are measured on seeds other
+// EXP_VNOISE (position and velocity noise), EXP_RATE, EXP_SMOOTH, EXP_SG, EXP_PSMOOTH, EXP_ADAPT,
+// EXP_RES (ReplayOptions), EXP_SEEDS, EXP_SEED0 (first seed, 200: choices are measured on seeds other
 // than the test's), EXP_TRUELOAD=1 (replay the noise-free load: an oracle), EXP_LOADLAW=1
 // (ContactFitOptions::load_from_normal_law). Prints mu_b's, kappa's and mu_k's mean error, mu_b's
 // RMS error and RMS z (error / reported SD) over the seeds. EXP_COVER=1: instead, the coverage
@@ -287,6 +287,7 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
   ro.load_smoothing_s = env("EXP_SMOOTH", 0.02);
   ro.load_savgol = env("EXP_SG", 1) > 0;
   ro.position_smoothing_s = env("EXP_PSMOOTH", 0.02);
+  ro.position_adaptive = env("EXP_ADAPT", 1) > 0;
   ro.position_resolution_m = env("EXP_RES", 0);
   const int seeds = static_cast<int>(env("EXP_SEEDS", 6));
   if (env("EXP_COVER", 0) > 0) {  // the coverage experiment with these replay options
