@@ -66,8 +66,8 @@ void SmoothPosition(const Measurement& m, std::size_t i, std::size_t h, double* 
 // noise); in fast or sharply curving motion a short one does, where the longest would shorten the
 // path the Dahl bristle follows.
 constexpr double kIciGamma = 2.0;  // ~ the two-sided 95 % normal quantile (not tuned)
-std::size_t IciHalfWidth(const Measurement& m, std::size_t i, const std::vector<std::size_t>& halves,
-                         double sigma) {
+std::size_t IciHalfWidth(const Measurement& m, std::size_t i,
+                         const std::vector<std::size_t>& halves, double sigma) {
   std::size_t best = 0;
   for (int axis = 0; axis < 2; ++axis) {
     double lo = -std::numeric_limits<double>::infinity(), hi = -lo;
