@@ -83,6 +83,10 @@ struct ReplayOptions {
   /// Sample::x_m / y_m (what the Dahl bristle follows) by a quadratic Savitzky-Golay fit over
   /// this window [s]; an estimated position resolution is scaled to the smoothed noise. 0: raw.
   double position_smoothing_s = 0.02;
+  /// Sample::x_m / y_m by a window chosen per sample, up to position_smoothing_s, by the
+  /// intersection of confidence intervals against the position noise (long at rest, short where
+  /// the tool moves fast or turns); false: position_smoothing_s everywhere.
+  bool position_adaptive = true;
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
 };
 
