@@ -4,33 +4,18 @@
 // SessionCli.SigtermStopsCleanlyAndTheMainFileAloneHoldsTheRatings.)
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <filesystem>
 #include <string>
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "sqlite_count.hpp"
 
 namespace hapticlab {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
-
-// One value of a query through a fresh read-only connection; -1 when it cannot be read.
-int Count(const std::string& path, const std::string& sql) {
-  sqlite3* h = nullptr;
-  int n = -1;
-  if (sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(h, sql.c_str(), -1, &st, nullptr) == SQLITE_OK &&
-        sqlite3_step(st) == SQLITE_ROW)
-      n = sqlite3_column_int(st, 0);
-    sqlite3_finalize(st);
-  }
-  sqlite3_close(h);
-  return n;
-}
 
 TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   test::TempDir dir;

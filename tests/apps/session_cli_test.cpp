@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
-#include <sqlite3.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -18,6 +17,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "sqlite_count.hpp"
 
 namespace hapticlab {
 namespace {
@@ -281,23 +281,6 @@ TEST(SessionCli, PlanNumbersTrialsFromOneAndTakesACodeOrAnIndex) {
       test::RunCommand(Cli() + " study plan " + Small() + " --participant P08 --db " + db, &out),
       2);
   EXPECT_NE(out.find("no participant P08"), std::string::npos) << out;
-}
-
-// count(*) of a query through a fresh SQLite connection of its own (not the project's
-// Database class); -1 when the file cannot be read.
-int Count(const std::string& path, const std::string& sql) {
-  sqlite3* h = nullptr;
-  int n = -1;
-  if (sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr) == SQLITE_OK) {
-    sqlite3_busy_timeout(h, 5000);
-    sqlite3_stmt* st = nullptr;
-    if (sqlite3_prepare_v2(h, sql.c_str(), -1, &st, nullptr) == SQLITE_OK &&
-        sqlite3_step(st) == SQLITE_ROW)
-      n = sqlite3_column_int(st, 0);
-    sqlite3_finalize(st);
-  }
-  sqlite3_close(h);
-  return n;
 }
 
 // SIGTERM to a running `study run`: the session stops at the next trial boundary, ends
