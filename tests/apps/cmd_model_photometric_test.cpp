@@ -1,20 +1,28 @@
 // hapticlab model photometric through the command line (apps/hapticlab/cmd_model_photometric.cpp):
 // a tilted plane photographed under eight lights (16-bit binary PGM files written here byte by
 // byte, a lights file 'file lx ly lz') comes back as a plane of that slope in every output; the
-// option checks name the option. (The solver on rough, shadowed and masked surfaces, the dome
-// preset and DiLiGenT layouts: tests/modeling/photometric_test.cpp.)
+// option checks name the option. Scenes of tests/modeling/photometric_scenes.hpp written as
+// image files: a sinusoid under the dome preset through to a built model, and a sphere in
+// DiLiGenT's layout (mask, y-up lights, float outputs). (The solver itself on rough, shadowed
+// and masked surfaces: tests/modeling/photometric_test.cpp.)
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "../modeling/photometric_scenes.hpp"
+#include "hapticlab/modeling/photometric.hpp"
+#include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab {
@@ -134,3 +142,166 @@ TEST(PhotometricCli, OptionsAndLightsAreCheckedBeforeAnyWork) {
 
 }  // namespace
 }  // namespace hapticlab
+
+// The scenes rendered to image files and run through the command line.
+namespace hapticlab::modeling {
+namespace {
+
+using namespace scenes;  // NOLINT(google-build-using-namespace): the shared test scenes
+
+TEST(Photometric, CommandLineFromPngsToABuiltModel) {
+  test::TempDir dir;
+  const double A = 20e-6, l = kN * kPitch / 4;
+  const auto f = Make([&](double x, double) { return A * std::sin(2 * kPi * x / l); },
+                      [&](double x, double) {
+                        return Eigen::Vector2d(A * 2 * kPi / l * std::cos(2 * kPi * x / l), 0);
+                      });
+  const auto L = DomePreset();
+  const auto imgs = Render(f, L, 0.0, 7);
+  std::filesystem::create_directory(dir.File("img"));
+  for (std::size_t j = 0; j < L.size(); ++j) {
+    cv::Mat m(kN, kN, CV_16U);
+    for (int i = 0; i < kN * kN; ++i)
+      m.at<std::uint16_t>(i / kN, i % kN) =
+          static_cast<std::uint16_t>(65535 * imgs.images[j][static_cast<std::size_t>(i)]);
+    ASSERT_TRUE(cv::imwrite(dir.File("img/" + L[j].file), m));
+  }
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " + dir.File("img") +
+                           " --lights dome --pitch-m 2e-5 -o " + dir.File("h.f32") + " --csv " +
+                           dir.File("h.csv") + " --normals " + dir.File("n.png"),
+                       &out),
+      0)
+      << out;
+  EXPECT_TRUE(std::filesystem::exists(dir.File("n.png")));
+  test::WriteFile(
+      dir.File("contact.toml"),
+      "[contact]\ntexture_K = 900.0\n\n[friction]\nkappa_N_per_m = 2000.0\nmu_k = 0.3\n");
+  test::WriteFile(dir.File("bank.toml"),
+                  "[vibration]\nsample_rate_hz = 2000.0\n[[vibration.cells]]\nspeed_mps = 0.08\n"
+                  "force_N = 1.0\nar = [0.5]\nvariance = 1.0\n");
+  ASSERT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model build --name Sine --height " +
+                                 dir.File("h.f32.toml") + " --contact " + dir.File("contact.toml") +
+                                 " --vibration " + dir.File("bank.toml") + " -o " +
+                                 dir.File("model.toml"),
+                             &out),
+            0)
+      << out;
+  const auto m = renderer::LoadMaterial(dir.File("model.toml"));
+  EXPECT_EQ(m.geometry->width(), kN);
+  EXPECT_NEAR(m.geometry->max_m() - m.geometry->min_m(), 2 * A,
+              0.05 * 2 * A);  // 16-bit images, no noise
+  EXPECT_DOUBLE_EQ(m.friction.mu_k, 0.3);
+  // A missing image is named.
+  std::filesystem::remove(dir.File("img/light_07.png"));
+  EXPECT_EQ(
+      test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " + dir.File("img") +
+                           " --lights dome --pitch-m 2e-5 -o " + dir.File("h2.f32"),
+                       &out),
+      2);
+  EXPECT_NE(out.find("light_07.png"), std::string::npos) << out;
+}
+
+TEST(Photometric, CommandLineDiLiGenTLayoutMaskFrameAndFloatOutputs) {
+  // The layout of DiLiGenT-style data: 001.png ..., light_directions.txt (y up, directions
+  // only), filenames.txt, mask.png.
+  test::TempDir dir;
+  const auto s = MakeSphere(64, 28, 0.9);
+  const auto L = TwelveLights();
+  const auto img = RenderSphere(s, L, 0.6, 40.0, 21);
+  std::string dirs, names;
+  for (std::size_t j = 0; j < L.size(); ++j) {
+    const std::string name = fmt::format("{:03d}.png", j + 1);
+    cv::Mat m(s.n, s.n, CV_16U);
+    for (int i = 0; i < s.n * s.n; ++i)
+      m.at<std::uint16_t>(i / s.n, i % s.n) = static_cast<std::uint16_t>(
+          std::lround(65535 * img.images[j][static_cast<std::size_t>(i)]));
+    ASSERT_TRUE(cv::imwrite(dir.File(name), m));
+    dirs += fmt::format("{:.9f} {:.9f} {:.9f}\n", L[j].direction.x(), -L[j].direction.y(),
+                        L[j].direction.z());
+    names += name + "\n";
+  }
+  test::WriteFile(dir.File("light_directions.txt"), dirs);
+  test::WriteFile(dir.File("filenames.txt"), names);
+  cv::Mat mask(s.n, s.n, CV_8UC3, cv::Scalar::all(0));
+  for (int i = 0; i < s.n * s.n; ++i)
+    if (s.mask[static_cast<std::size_t>(i)])
+      mask.at<cv::Vec3b>(i / s.n, i % s.n) = cv::Vec3b(0, 0, 255);  // red: colour masks count
+  ASSERT_TRUE(cv::imwrite(dir.File("mask.png"), mask));
+  const std::string base = std::string(HL_CLI_PATH) + " model photometric --images " + dir.path() +
+                           " --lights " + dir.File("light_directions.txt") + " --image-list " +
+                           dir.File("filenames.txt") + " --mask " + dir.File("mask.png") +
+                           " --pitch-m 2e-5 -o " + dir.File("h.f32");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(base + " --lights-y-up --normals " + dir.File("n.tiff") +
+                                 " --albedo " + dir.File("a.tiff"),
+                             &out),
+            0)
+      << out;
+  EXPECT_EQ(out.find("warning"), std::string::npos) << out;
+  ASSERT_EQ(test::RunCommand(base + " --lights-y-up --normals " + dir.File("n.png") + " --albedo " +
+                                 dir.File("a.png"),
+                             &out),
+            0)
+      << out;
+  const cv::Mat nf = cv::imread(dir.File("n.tiff"), cv::IMREAD_UNCHANGED),
+                n8 = cv::imread(dir.File("n.png"), cv::IMREAD_UNCHANGED),
+                af = cv::imread(dir.File("a.tiff"), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(nf.type(), CV_32FC3);
+  ASSERT_EQ(n8.type(), CV_8UC3);
+  ASSERT_EQ(af.type(), CV_32FC1);
+  std::vector<double> err;
+  double bias = 0, off_by_more = 0, cnt = 0;
+  for (int i = 0; i < s.n; ++i)
+    for (int j = 0; j < s.n; ++j) {
+      const std::size_t k = static_cast<std::size_t>(i * s.n + j);
+      const auto v = nf.at<cv::Vec3f>(i, j);  // B, G, R = z, y, x; y up in this run
+      if (!s.mask[k]) {
+        EXPECT_EQ(v, cv::Vec3f(0, 0, 0));
+        EXPECT_EQ(af.at<float>(i, j), 0.f);
+        continue;
+      }
+      const Eigen::Vector3f truth_y_up(s.normals[k].x(), -s.normals[k].y(), s.normals[k].z());
+      err.push_back(AngleDeg(truth_y_up, Eigen::Vector3f(v[2], v[1], v[0])));
+      const auto p = n8.at<cv::Vec3b>(i, j);
+      for (int c = 0; c < 3; ++c) {
+        const double exact = 127.5 * (static_cast<double>(v[c]) + 1);
+        bias += p[c] - exact;
+        off_by_more += std::abs(p[c] - exact) > 0.5 + 1e-4 ? 1 : 0;
+        cnt += 1;
+      }
+    }
+  std::nth_element(err.begin(), err.begin() + static_cast<std::ptrdiff_t>(err.size() / 2),
+                   err.end());
+  std::printf("CLI, DiLiGenT layout with highlights: median normal error %.3f deg\n",
+              err[err.size() / 2]);
+  EXPECT_LT(err[err.size() / 2], 1.0);
+  EXPECT_EQ(off_by_more, 0);              // every 8-bit value is the float rounded ...
+  EXPECT_LT(std::abs(bias / cnt), 0.05);  // ... so no half-step bias (truncation gives -0.5)
+  // Without --lights-y-up the same run warns about the mirrored frame.
+  ASSERT_EQ(test::RunCommand(base, &out), 0) << out;
+  EXPECT_NE(out.find("--lights-y-up"), std::string::npos) << out;
+  // Bad input: exit 2 naming the file, line and field.
+  test::WriteFile(dir.File("bad.txt"),
+                  "12\n" + dirs.substr(0, dirs.find('\n')) + "\n0.1 0.2 oops\n");
+  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " +
+                                 dir.path() + " --lights " + dir.File("bad.txt") +
+                                 " --pitch-m 2e-5 -o " + dir.File("x.f32"),
+                             &out),
+            2);
+  EXPECT_NE(out.find("bad.txt:3: lz"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(base + " --integration frankot-chellappa", &out), 2);
+  EXPECT_NE(out.find("--integration"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(base + " --normals " + dir.File("n.jpg"), &out), 2);
+  test::WriteFile(dir.File("no_names.txt"), dirs);
+  EXPECT_EQ(test::RunCommand(std::string(HL_CLI_PATH) + " model photometric --images " +
+                                 dir.path() + " --lights " + dir.File("no_names.txt") +
+                                 " --pitch-m 2e-5 -o " + dir.File("x.f32"),
+                             &out),
+            2);
+  EXPECT_NE(out.find("--image-list"), std::string::npos) << out;
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling

@@ -2,7 +2,7 @@
 // table in plan order, physio recordings read back through zlib with their gaps as n/a and
 // their sidecars' units, the protocol with its hash, and the label collision refused. (The
 // official bids-validator checks datasets written through the CLI in
-// tests/apps/cmd_export_test.cpp.)
+// tests/apps/cmd_export_test.cpp, and InterchangeRecord's in export_xdf_test.cpp.)
 
 #include <gtest/gtest.h>
 #include <zlib.h>

@@ -1,10 +1,13 @@
 // The XDF export (db/src/export_xdf.cpp) read back by libxdf (Debian's libxdf-dev), a reader
 // this project did not write: one stream per recorded stream with its channels' units, every
 // timestamp on the session clock, trial starts and ratings as markers, and the file-or-folder
-// choice of the output.
+// choice of the output. InterchangeRecord: a record with a dropped-sample gap, a stored model
+// and overlapping stamps, exported to XDF (libxdf) and to BIDS (the official bids-validator).
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <xdf.h>
+#include <zlib.h>
 
 #include <filesystem>
 #include <map>
@@ -22,6 +25,7 @@ namespace hapticlab::db {
 namespace {
 
 namespace tr = test_record;
+namespace fs = std::filesystem;
 using nlohmann::json;
 
 TEST(ExportXdf, StreamsAndMarkersOnTheSessionClock) {
@@ -115,6 +119,181 @@ TEST(ExportXdf, AFileHoldsOneSessionAndAFolderOnePerSession) {
   ASSERT_EQ(x.load_xdf(files[1].path), 0);
   EXPECT_EQ(x.streams.size(), 2u);
   EXPECT_TRUE(x.eventMap.empty());
+}
+
+// The official bids-validator (npm, installed by scripts/setup into tools/bids-validator), as
+// in tests/apps/cmd_export_test.cpp.
+std::string Validator() {
+  return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator";
+}
+
+std::string Gunzip(const std::string& path) {
+  gzFile f = gzopen(path.c_str(), "rb");
+  if (!f) return "";
+  std::string s;
+  char buf[65536];
+  int n;
+  while ((n = gzread(f, buf, sizeof buf)) > 0) s.append(buf, static_cast<std::size_t>(n));
+  gzclose(f);
+  return s;
+}
+
+// Runs the validator; its JSON report (stdout) goes to a file, its Node warnings aside.
+json Validate(const std::string& dataset) {
+  std::string out;
+  const std::string report = dataset + ".validator.json";
+  // Exit status 1 means "errors found"; the JSON report says which.
+  test::RunCommand("(" + Validator() + " " + dataset + " --json > " + report + ")", &out);
+  auto j = json::parse(test::ReadFile(report), nullptr, false);
+  if (j.is_discarded()) return json{{"unparsed", test::ReadFile(report)}, {"stderr", out}};
+  return j;
+}
+
+// A record made through the db API with fixed time stamps: a dropped-sample gap inside a
+// recording, a stored material model, trials whose stamps overlap (as in a simulated
+// session) and one that starts later (as on hardware).
+TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
+  test::TempDir dir;
+  db::Database d(dir.File("g.db"));
+  const auto st = d.CreateStudy({.name = "gap study",
+                                 .protocol_toml = "# protocol",
+                                 .protocol_hash = db::HashText("# protocol")});
+  const auto p = d.AddParticipant({.study_id = st, .code = "P07"});
+  const auto se = d.StartSession({.participant_id = p});
+  // Three main trials; the second has the virtual sample on the left.
+  std::vector<db::Trial> planned;
+  for (const char* name : {"Cork", "Denim", "Towel"}) {
+    const std::string m = name;
+    const int k = static_cast<int>(planned.size());
+    planned.push_back({.session_id = se,
+                       .plan_index = k,
+                       .phase = "main",
+                       .material = m,
+                       .comparison = "virtual",
+                       .method = "FF",
+                       .left = (k == 1 ? "virtual:" : "real:") + m,
+                       .right = (k == 1 ? "real:" : "virtual:") + m});
+  }
+  const auto ids = d.AddTrials(planned);
+  auto ramp = [](std::size_t n, float base) {
+    std::vector<float> v;
+    for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);
+    return v;
+  };
+  for (const auto id : ids) {
+    d.StartTrial(id);
+    // 100 Hz, one channel: left 10 samples, 5 dropped, 5 more; right 10 samples.
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 1),
+                             .attempt = 1});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "left_force",
+                             .start_time_s = 0.15,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(5, 9),
+                             .attempt = 1});
+    d.InsertTrajectoryChunk({.trial_id = id,
+                             .stream = "right_force",
+                             .start_time_s = 0,
+                             .rate_hz = 100,
+                             .channels = {"fz_N"},
+                             .samples = ramp(10, 20),
+                             .attempt = 1});
+    d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
+  }
+  // A fourth trial that recorded samples and then faulted: not exported.
+  const auto faulted =
+      d.AddTrial({.session_id = se, .plan_index = 3, .phase = "main", .material = "Acryl"});
+  d.StartTrial(faulted);
+  d.InsertTrajectoryChunk({.trial_id = faulted,
+                           .stream = "left_force",
+                           .start_time_s = 0,
+                           .rate_hz = 100,
+                           .channels = {"fz_N"},
+                           .samples = ramp(7, 50),
+                           .attempt = 1});
+  d.SetTrialStatus(faulted, db::kTrialFaulted);
+  d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
+  // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of
+  // stimuli + 1.5 s of rating), trial 3 a minute in; an event 2.0 s in.
+  d.Exec("UPDATE session SET started_at='2026-01-01T10:00:00.000Z'");
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", ids[0]));
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.500Z' WHERE id={}", ids[1]));
+  d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:01:00.123Z' WHERE id={}", ids[2]));
+  d.LogEvent({.session_id = se, .kind = "break", .detail = "after trial 2"});
+  d.Exec("UPDATE event SET created_at='2026-01-01T10:00:02.000Z' WHERE kind='break'");
+
+  // XDF through libxdf.
+  db::ExportXdf(d, dir.File("g.xdf"));
+  Xdf x;
+  ASSERT_EQ(x.load_xdf(dir.File("g.xdf")), 0);
+  ASSERT_EQ(x.streams.size(), 4u);
+  std::map<std::string, const Xdf::Stream*> by;
+  for (const auto& s : x.streams) by[s.info.name] = &s;
+  const auto& left = *by.at("left_force");
+  ASSERT_EQ(left.time_stamps.size(), 45u);  // the faulted trial's 7 samples are not there
+  // Trial starts: 1.0 (its stamp), 1.0 + 0.3 + 1.5 = 2.8 (its stamp, 1.5, would overlap),
+  // 60.123 (to the microsecond: stamps are subtracted as integers).
+  const double starts[] = {1.0, 2.8, 60.123};
+  for (int k = 0; k < 3; ++k) {
+    const std::size_t o = static_cast<std::size_t>(k) * 15;
+    EXPECT_NEAR(left.time_stamps[o], starts[k], 1e-9) << k;
+    EXPECT_NEAR(left.time_stamps[o + 9], starts[k] + 0.09, 1e-9) << k;
+    EXPECT_NEAR(left.time_stamps[o + 10], starts[k] + 0.15, 1e-9) << k;  // after the gap
+    EXPECT_EQ(left.time_series[0][o + 10], 9.0f);
+    EXPECT_NEAR(by.at("right_force")->time_stamps[static_cast<std::size_t>(k) * 10],
+                starts[k] + 0.2, 1e-9)
+        << k;
+  }
+  std::vector<double> trial_marks, rating_marks;
+  double break_at = -1;
+  for (const auto& [ev, stream] : x.eventMap) {
+    const auto j = json::parse(ev.first);
+    if (x.streams[static_cast<std::size_t>(stream)].info.name == "ratings")
+      rating_marks.push_back(ev.second);
+    else if (j["marker"] == "trial_start")
+      trial_marks.push_back(ev.second);
+    else if (j["kind"] == "break")
+      break_at = ev.second;
+  }
+  ASSERT_EQ(trial_marks.size(), 3u);
+  ASSERT_EQ(rating_marks.size(), 3u);
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(trial_marks[static_cast<std::size_t>(k)], starts[k], 1e-9);
+    EXPECT_NEAR(rating_marks[static_cast<std::size_t>(k)], starts[k] + 0.3 + 1.5, 1e-9);
+  }
+  // The event 0.5 s after trial 2's stamp keeps that offset from trial 2's start.
+  EXPECT_NEAR(break_at, 2.8 + 0.5, 1e-9);
+
+  // BIDS: the gap as n/a rows, the stored model with its hash, and the validator's approval.
+  ASSERT_TRUE(fs::exists(Validator())) << "run scripts/setup";
+  const std::string ds = dir.File("bids");
+  db::ExportBids(d, ds);
+  const auto rows = Gunzip(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-1_recording-leftforce_physio.tsv.gz");
+  EXPECT_EQ(rows,
+            "1\n1.25\n1.5\n1.75\n2\n2.25\n2.5\n2.75\n3\n3.25\nn/a\nn/a\nn/a\nn/a\nn/"
+            "a\n9\n9.25\n9.5\n9.75\n10\n");
+  const std::string model_hash = db::HashText("[material]\nname = \"Cork\"\n");
+  const std::string model_file = ds + "/code/models/Corkv1-" + model_hash.substr(0, 12) + ".toml";
+  ASSERT_TRUE(fs::exists(model_file));
+  EXPECT_TRUE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-3_recording-leftforce_physio.tsv.gz"));
+  EXPECT_FALSE(fs::exists(
+      ds +
+      "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-4_recording-leftforce_physio.tsv.gz"));
+  EXPECT_EQ(db::HashText(test::ReadFile(model_file)), model_hash);
+  EXPECT_NE(test::ReadFile(ds + "/code/hashes.tsv").find(model_hash), std::string::npos);
+  const auto report = Validate(ds);
+  ASSERT_TRUE(report.contains("issues")) << report.dump(2);
+  EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
 }
 
 }  // namespace

@@ -1,16 +1,17 @@
-// The Falcon back-end without a device: packets against fixtures, the firmware-load state
-// machine against a scripted fake of the bootloader, kinematics, and the HapticDevice.
+// The Falcon back-end without a device (devices/src/falcon.cpp): packets against fixtures,
+// kinematics, and the HapticDevice on a scripted fake of the link (fake_falcon.hpp). The
+// firmware-load state machine: falcon_firmware_test.cpp.
 
 #include "hapticlab/devices/falcon.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstring>
-#include <deque>
 #include <fstream>
 #include <sstream>
 #include <utility>
 
+#include "fake_falcon.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -28,99 +29,6 @@ std::vector<std::uint8_t> Hex(const std::string& path) {
     while (s >> b) out.push_back(static_cast<std::uint8_t>(std::stoi(b, nullptr, 16)));
   }
   return out;
-}
-
-// A scripted Falcon: the FTDI link plus the bootloader and the SDK firmware's packet loop.
-class FakeFalcon : public UsbTransport {
- public:
-  std::vector<std::pair<int, int>> controls;  // (request, value)
-  std::vector<std::uint8_t> uploaded;
-  int drop_handshakes = 0;    // ignore this many handshake messages
-  int corrupt_echo_at = -1;   // corrupt the echo of this upload byte (once)
-  bool dead = false;          // never answers
-  bool firmware_runs = true;  // answers status packets after loading
-  bool unplugged = false;     // reads fail with a USB error
-  int split_replies_at = 0;   // > 0: the next read returns only this many payload bytes
-  std::array<std::int16_t, 3> encoders{0, 0, 0};
-  std::vector<std::array<std::int16_t, 3>> motors;  // commands seen in normal mode
-
-  int Control(std::uint8_t type, std::uint8_t req, std::uint16_t value, std::uint16_t,
-              unsigned) override {
-    EXPECT_EQ(type, 0x40);
-    controls.emplace_back(req, value);
-    if (req == ftdi::kBaudRate) baud_ = value;
-    if (req == ftdi::kModemCtrl && value == ftdi::kDtrHigh) dtr_ = true;
-    if (req == ftdi::kModemCtrl && value == ftdi::kDtrLow) dtr_ = false;
-    return 0;
-  }
-  int BulkWrite(const std::uint8_t* d, int n, unsigned) override {
-    if (dead) return n;
-    if (baud_ == ftdi::kBaud9600 && dtr_ && n == 3 && d[0] == 0x0a && d[1] == 0x43 &&
-        d[2] == 0x0d) {
-      if (drop_handshakes > 0) {
-        --drop_handshakes;
-        return n;
-      }
-      Reply({0x0a, 0x44, 0x2c, 0x0d});
-    } else if (baud_ == ftdi::kBaud140000 && !loading_ && n == 1 && d[0] == 'A') {
-      loading_ = true;
-      Reply({'A'});
-    } else if (baud_ == ftdi::kBaud140000 && loading_) {
-      std::vector<std::uint8_t> echo(d, d + n);
-      for (int i = 0; i < n; ++i) {
-        if (static_cast<int>(uploaded.size()) == corrupt_echo_at) {
-          echo[static_cast<std::size_t>(i)] ^= 0xff;
-          corrupt_echo_at = -1;
-        }
-        uploaded.push_back(d[i]);
-      }
-      Reply(echo);
-    } else if (baud_ == ftdi::kBaudNormal && n == 16 && firmware_runs) {
-      Status st;
-      // Record the motor command, answer with the encoders.
-      std::array<std::int16_t, 3> m{};
-      for (int k = 0; k < 3; ++k) {
-        std::uint16_t v = 0;
-        for (int j = 0; j < 4; ++j)
-          v = static_cast<std::uint16_t>(v | (d[1 + 4 * k + j] - 0x41) << (4 * j));
-        m[static_cast<std::size_t>(k)] = static_cast<std::int16_t>(v);
-      }
-      motors.push_back(m);
-      Command c;
-      c.motor = encoders;  // same wire format both ways
-      const auto p = EncodeCommand(c);
-      Reply(std::vector<std::uint8_t>(p.begin(), p.end()));
-    }
-    return n;
-  }
-  int BulkRead(std::uint8_t* d, int n, unsigned) override {
-    if (unplugged) return -4;  // LIBUSB_ERROR_NO_DEVICE
-    d[0] = 0x31;               // FTDI modem status bytes
-    d[1] = 0x60;
-    if (replies_.empty()) return 2;
-    auto r = replies_.front();
-    int k = std::min(static_cast<int>(r.size()), n - 2);
-    if (split_replies_at > 0)
-      k = std::min(k, std::exchange(split_replies_at, 0));  // one split read
-    std::memcpy(d + 2, r.data(), static_cast<std::size_t>(k));
-    if (k < static_cast<int>(r.size()))
-      replies_.front().erase(replies_.front().begin(), replies_.front().begin() + k);
-    else
-      replies_.pop_front();
-    return k + 2;
-  }
-
- private:
-  void Reply(std::vector<std::uint8_t> r) { replies_.push_back(std::move(r)); }
-  std::deque<std::vector<std::uint8_t>> replies_;
-  std::uint16_t baud_ = 0;
-  bool dtr_ = false, loading_ = false;
-};
-
-std::vector<std::uint8_t> Firmware(std::size_t n) {
-  std::vector<std::uint8_t> fw(n);
-  for (std::size_t i = 0; i < n; ++i) fw[i] = static_cast<std::uint8_t>((i * 37 + 11) & 0xff);
-  return fw;
 }
 
 TEST(Falcon, PacketsEncodeAndDecodeAgainstFixtures) {
@@ -144,61 +52,6 @@ TEST(Falcon, PacketsEncodeAndDecodeAgainstFixtures) {
   EXPECT_EQ(st.buttons, 0b0011);
   EXPECT_EQ(malformed, 1);
   EXPECT_FALSE(DecodeStatus(stream.data(), 20, &st));  // only the broken ones
-}
-
-TEST(Falcon, FirmwareLoadFollowsTheRecordedSequence) {
-  FakeFalcon usb;
-  usb.drop_handshakes = 7;  // the bootloader often needs a few tries
-  const auto fw = Firmware(1000);
-  const auto r = LoadFirmware(usb, fw);
-  ASSERT_TRUE(r.ok) << r.error;
-  EXPECT_EQ(r.attempts, 1);
-  EXPECT_EQ(usb.uploaded, fw);
-  // The control sequence is the recorded one.
-  std::ifstream f(std::string(HL_TEST_DATA_DIR) + "/falcon/setup_sequence.txt");
-  std::vector<std::pair<int, int>> want;
-  std::string line;
-  while (std::getline(f, line))
-    if (!line.empty() && line[0] != '#') {
-      std::istringstream s(line);
-      int a, b;
-      s >> a >> b;
-      want.emplace_back(a, b);
-    }
-  EXPECT_EQ(usb.controls, want);
-  const std::vector<LoadState> trace = {
-      LoadState::kPurge,  LoadState::kLineSetup,  LoadState::kHandshake, LoadState::kBootloader,
-      LoadState::kUpload, LoadState::kNormalMode, LoadState::kVerify,    LoadState::kDone};
-  EXPECT_EQ(r.trace, trace);
-}
-
-TEST(Falcon, FirmwareLoadRetriesAndNamesTheFailingState) {
-  {
-    FakeFalcon usb;
-    usb.corrupt_echo_at = 500;  // line noise in the first attempt
-    const auto r = LoadFirmware(usb, Firmware(1000));
-    EXPECT_TRUE(r.ok) << r.error;
-    EXPECT_EQ(r.attempts, 2);
-  }
-  {
-    FakeFalcon usb;
-    usb.dead = true;  // unpowered: the bootloader never answers
-    const auto r = LoadFirmware(usb, Firmware(100), {.attempts = 2, .handshake_tries = 5});
-    EXPECT_FALSE(r.ok);
-    EXPECT_EQ(r.attempts, 2);
-    EXPECT_EQ(r.failed_in, LoadState::kHandshake);
-    EXPECT_NE(r.error.find("bootloader handshake"), std::string::npos) << r.error;
-    EXPECT_NE(r.error.find("after 2 attempts"), std::string::npos) << r.error;
-  }
-  {
-    FakeFalcon usb;
-    usb.firmware_runs = false;  // wrong firmware: loads, then never speaks
-    const auto r = LoadFirmware(usb, Firmware(100), {.attempts = 1, .verify_tries = 4});
-    EXPECT_FALSE(r.ok);
-    EXPECT_EQ(r.failed_in, LoadState::kVerify);
-  }
-  test::TempDir dir;
-  EXPECT_THROW(ReadFirmwareFile(dir.File("missing.bin")), InputError);
 }
 
 TEST(Falcon, KinematicsRoundTripAndVirtualWork) {

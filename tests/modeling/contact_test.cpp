@@ -2,8 +2,9 @@
 // measurements generated here: strokes in every direction along curved paths with hand tremor
 // at rest, pauses, lift-offs and pokes; Hunt-Crossley normal law; vector Dahl friction with a
 // viscous term (eqs. 4.6-4.7) integrated by explicit Euler substeps; force noise 4-12 mN. The
-// generator is written for this test and shares nothing with modeling/src/workbench_sim.cpp or
-// the workbench's replay.
+// generator (contact_freehand.hpp) is written for these tests and shares nothing with
+// modeling/src/workbench_sim.cpp or the workbench's replay. The command line:
+// tests/apps/cmd_model_contact_test.cpp.
 
 #include "hapticlab/modeling/contact.hpp"
 
@@ -13,12 +14,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <map>
-#include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
 
+#include "contact_freehand.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/workbench.hpp"
@@ -28,113 +28,6 @@
 
 namespace hapticlab::modeling {
 namespace {
-
-constexpr double kPi = std::numbers::pi;
-constexpr int kSubsteps = 400;
-double g_pnoise = 1e-7, g_vnoise = 1e-4;
-
-// The truth of the free-hand sample (workbench units: the normal law is
-// f = (d / 1 mm)^n (K1mm + B1mm d_dot)).
-struct Truth {
-  double K1mm_N = 1.2, n = 1.4, B1mm_Ns_per_m = 12;
-  double kappa_N_per_m = 2500, mu_k = 0.45, mu_b_Ns_per_m = 0.57;
-};
-
-// Free-hand strokes at 1 kHz. Every stroke starts in a new random direction and curves (its
-// heading turns by up to 1.5 rad); the speed follows a raised cosine with a peak of 3-120 mm/s;
-// the load is 0.4-2 N with a slow wobble. Between strokes the hand rests with a 5 um, 9 Hz
-// tremor (pre-sliding), sometimes lifts off, and, with `pokes`, sometimes presses straight down
-// to 1.6-2.6 N and releases.
-Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, double noise_N,
-                     bool pokes) {
-  std::mt19937_64 rng(seed);
-  auto U = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
-  std::normal_distribution<double> gauss(0, 1);
-  const double fs = 1000, dt = 1 / fs, box = 0.02;
-  const std::size_t N = static_cast<std::size_t>(duration_s * fs);
-  std::vector<double> x(N), y(N), load(N);
-  std::size_t i = 0;
-  double px = 0, py = 0;
-  while (i < N) {
-    // A stroke.
-    const double len = U(0.004, 0.025), vp = std::exp(U(std::log(0.003), std::log(0.12))),
-                 T = 2 * len / vp;
-    double th = U(-kPi, kPi);
-    const double turn = U(-1.5, 1.5);
-    if (std::hypot(px + len * std::cos(th), py + len * std::sin(th)) > box)
-      th = std::atan2(-py, -px) + U(-0.5, 0.5);
-    const double L0 = std::exp(U(std::log(0.4), std::log(2.0))), wob = U(0.5, 3),
-                 ph = U(0, 2 * kPi);
-    const std::size_t n = static_cast<std::size_t>(T * fs);
-    for (std::size_t k = 0; k < n && i < N; ++k, ++i) {
-      const double tau = static_cast<double>(k) / static_cast<double>(n);
-      const double v = vp * std::pow(std::sin(kPi * tau), 2), heading = th + turn * tau;
-      px += v * dt * std::cos(heading);
-      py += v * dt * std::sin(heading);
-      x[i] = px, y[i] = py;
-      load[i] = L0 * (1 + 0.3 * std::sin(2 * kPi * wob * static_cast<double>(k) * dt + ph));
-    }
-    // Rest with tremor, a lift-off, or a poke.
-    const double u = U(0, 1);
-    const double rest = U(0.1, 0.4), trem = U(3e-6, 6e-6), tf = U(8, 10), tph = U(0, 2 * kPi);
-    const std::size_t nr = static_cast<std::size_t>(rest * fs);
-    const bool lift = u < 0.1, poke = pokes && u > 0.8;
-    const double peak = U(1.6, 2.6);
-    for (std::size_t k = 0; k < nr && i < N; ++k, ++i) {
-      const double tk = static_cast<double>(k) * dt,
-                   s = std::sin(kPi * static_cast<double>(k) / static_cast<double>(nr));
-      x[i] = px + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::cos(th));
-      y[i] = py + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::sin(th));
-      load[i] = lift ? -0.4 : (poke ? 0.1 + (peak - 0.1) * s * s : L0);
-    }
-  }
-  // A hand does not step its load: two first-order lags of 40 ms.
-  const double a = std::exp(-dt / 0.04);
-  for (int pass = 0; pass < 2; ++pass)
-    for (std::size_t k = 1; k < N; ++k) load[k] = a * load[k - 1] + (1 - a) * load[k];
-  // Penetration from the static law (negative load: above the surface), then the full force.
-  std::vector<double> d(N);
-  for (std::size_t k = 0; k < N; ++k)
-    d[k] = load[k] > 0 ? 1e-3 * std::pow(load[k] / tr.K1mm_N, 1 / tr.n) : load[k] * 1e-3;
-  Measurement m;
-  m.file = "freehand.csv";
-  double Fx = 0, Fy = 0;
-  bool was_in_contact = false;
-  for (std::size_t k = 0; k < N; ++k) {
-    const std::size_t k0 = k ? k - 1 : k, k1 = k + 1 < N ? k + 1 : k;
-    const double h = static_cast<double>(k1 - k0) * dt;
-    const double vx = (x[k1] - x[k0]) / h, vy = (y[k1] - y[k0]) / h, dd = (d[k1] - d[k0]) / h;
-    const double fn =
-        d[k] > 0 ? std::max(0.0, std::pow(d[k] / 1e-3, tr.n) * (tr.K1mm_N + tr.B1mm_Ns_per_m * dd))
-                 : 0.0;
-    const double fc = tr.mu_k * fn;
-    if (fc <= 0 || !was_in_contact || k == 0) {
-      Fx = Fy = 0;
-    } else {
-      // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 400 explicit Euler substeps.
-      const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps,
-                   sl = std::hypot(sx, sy);
-      for (int j = 0; j < kSubsteps; ++j) {
-        const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc),
-                     gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
-        Fx += gx, Fy += gy;
-      }
-      const double mag = std::hypot(Fx, Fy);
-      if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
-    }
-    was_in_contact = fc > 0;
-    MeasurementRow r;
-    r.t_s = static_cast<double>(k) * dt;
-    r.p_m = {x[k] + g_pnoise * gauss(rng), y[k] + g_pnoise * gauss(rng),
-             -d[k] + g_pnoise * gauss(rng)};
-    r.v_mps = {vx + g_vnoise * gauss(rng), vy + g_vnoise * gauss(rng), -dd + g_vnoise * gauss(rng)};
-    r.f_N = {-(Fx + tr.mu_b_Ns_per_m * vx) + noise_N * gauss(rng),
-             -(Fy + tr.mu_b_Ns_per_m * vy) + noise_N * gauss(rng), fn + noise_N * gauss(rng)};
-    m.rows.push_back(r);
-    m.row_lines.push_back(static_cast<int>(k) + 4);
-  }
-  return m;
-}
 
 // Every parameter of the fit against the truth, in the workbench's units.
 struct Compared {
@@ -425,91 +318,6 @@ TEST(ContactOneLine, RefusesTooLittleDataNamingTheFile) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("tiny.csv"), std::string::npos) << e.what();
   }
-}
-
-// ---------------------------------------------------------------------------------------------
-// Through the command line: both commands on one file, and `model build` keeping every effect.
-
-nlohmann::json RunJson(const std::string& cmd) {
-  std::string out;
-  EXPECT_EQ(test::RunCommand(cmd, &out), 0) << cmd << "\n" << out;
-  return nlohmann::json::parse(out);
-}
-
-TEST(ContactCli, FitContactAndWorkbenchFitAgreeAndBuildKeepsEveryEffect) {
-  test::TempDir dir;
-  const Truth t;
-  WriteMeasurementCsv(dir.File("m.csv"), FreeHand(t, 31, 40, 0.008, true));
-  const std::string cli = HL_CLI_PATH;
-  const auto c = RunJson(cli + " model fit-contact --json --measurement " + dir.File("m.csv") +
-                         " -o " + dir.File("c.toml"));
-  const auto w = RunJson(cli + " fit --json --quiet --measurement " + dir.File("m.csv") + " -o " +
-                         dir.File("w.toml"));
-  EXPECT_TRUE(c["usable"].get<bool>());
-  EXPECT_TRUE(w["usable"].get<bool>());
-  EXPECT_EQ(c["fit"]["friction"]["termination"], "converged");
-  // Both commands identify the same model: within 2 % of each other.
-  const std::pair<double, double> pairs[] = {
-      {c["dahl"]["mu_k"].get<double>(), w["params"]["coulomb"]["mu_k"].get<double>()},
-      {c["dahl"]["kappa"].get<double>(), w["params"]["dahl"]["kappa"].get<double>()},
-      {c["dahl"]["mu_b"].get<double>(), w["params"]["viscous"]["mu_b"].get<double>()},
-      {c["hunt_crossley"]["K1mm_N"].get<double>(), w["params"]["core"]["K1mm_N"].get<double>()},
-      {c["hunt_crossley"]["n"].get<double>(), w["params"]["hc-exponent"]["n"].get<double>()},
-      {c["hunt_crossley"]["B1mm"].get<double>(), w["params"]["hc-damping"]["B1mm"].get<double>()}};
-  for (const auto& [a, b] : pairs) EXPECT_NEAR(a, b, 0.02 * std::abs(b)) << a << " vs " << b;
-  EXPECT_NEAR(c["dahl"]["mu_k"].get<double>(), t.mu_k, 0.1 * t.mu_k);
-
-  // model build: a height map, the contact fit and a bank; nothing fitted is lost.
-  std::vector<float> h(16 * 16, 0.0f);
-  for (int k = 0; k < 256; ++k) h[static_cast<std::size_t>(k)] = 1e-5f * static_cast<float>(k % 16);
-  {
-    std::ofstream f(dir.File("h.f32"), std::ios::binary);
-    f.write(reinterpret_cast<const char*>(h.data()),
-            static_cast<std::streamsize>(h.size() * sizeof(float)));
-  }
-  test::WriteFile(
-      dir.File("h.f32.toml"),
-      "[geometry]\nkind = \"file\"\nfile = \"h.f32\"\nwidth = 16\nheight = 16\npitch_m = 1e-4\n");
-  test::WriteFile(
-      dir.File("bank.toml"),
-      "[vibration]\nsample_rate_hz = 2000.0\nspeeds_mps = [0.05, 0.1]\nforces_N = [0.5, 1.5]\n"
-      "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 0.5\nar = [0.5, -0.2]\nvariance = 1.0\n"
-      "[[vibration.cells]]\nspeed_mps = 0.05\nforce_N = 1.5\nar = [0.4, -0.2]\nvariance = 2.0\n"
-      "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 0.5\nar = [0.3, -0.1]\nvariance = 3.0\n"
-      "[[vibration.cells]]\nspeed_mps = 0.1\nforce_N = 1.5\nar = [0.2, -0.1]\nvariance = 4.0\n");
-  std::string out;
-  ASSERT_EQ(
-      test::RunCommand(cli + " model build --name Built --height " + dir.File("h.f32.toml") +
-                           " --contact " + dir.File("c.toml") + " --vibration " +
-                           dir.File("bank.toml") + " --cutoff-hz 90 -o " + dir.File("built.toml"),
-                       &out),
-      0)
-      << out;
-  const auto built = renderer::LoadMaterial(dir.File("built.toml"));
-  const auto part = renderer::LoadMaterial(dir.File("c.toml"));
-  for (const char* e : {"coulomb", "viscous", "dahl", "hc-damping", "hc-exponent",
-                        "vibration-speed", "vibration-force"})
-    EXPECT_NE(std::find(built.effects.begin(), built.effects.end(), e), built.effects.end()) << e;
-  // Every parameter exactly as fitted (the file carries 17 significant digits).
-  EXPECT_DOUBLE_EQ(built.contact.texture.K, c["hunt_crossley"]["K"].get<double>());
-  EXPECT_DOUBLE_EQ(built.contact.texture.B, c["hunt_crossley"]["B"].get<double>());
-  EXPECT_DOUBLE_EQ(built.contact.texture.n, c["hunt_crossley"]["n"].get<double>());
-  EXPECT_DOUBLE_EQ(built.friction.kappa_N_per_m, c["dahl"]["kappa"].get<double>());
-  EXPECT_DOUBLE_EQ(built.friction.mu_k, c["dahl"]["mu_k"].get<double>());
-  EXPECT_DOUBLE_EQ(built.friction.mu_b_Ns_per_m, c["dahl"]["mu_b"].get<double>());
-  EXPECT_EQ(built.contact.layer_thickness_m, part.contact.layer_thickness_m);
-  EXPECT_EQ(built.vibration.cells.size(), 4u);
-  EXPECT_DOUBLE_EQ(built.vibration.cells[3].variance, 4.0);
-  EXPECT_EQ(built.geometry->width(), 16);
-  EXPECT_DOUBLE_EQ(built.hybrid_cutoff_hz, 90);
-  // The workbench replays the built model with its fitted exponent, not n = 1.
-  const auto wm = wb::LoadModel(dir.File("built.toml"));
-  EXPECT_TRUE(wm.Has("hc-exponent"));
-  EXPECT_NEAR(wm.At(wb::key::kN), c["hunt_crossley"]["n"].get<double>(), 1e-12);
-  EXPECT_NEAR(wm.At(wb::key::kK1mm_N), c["hunt_crossley"]["K1mm_N"].get<double>(),
-              1e-9 * c["hunt_crossley"]["K1mm_N"].get<double>());
-  EXPECT_NEAR(wm.At(wb::key::kB1mm_Ns_per_m), c["hunt_crossley"]["B1mm"].get<double>(),
-              1e-9 * c["hunt_crossley"]["B1mm"].get<double>());
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // photometric_io.cpp: lights files, image lists, images and masks. Images are written by OpenCV
 // or byte by byte (the Truevision TGA layout) and read back; malformed files are InputErrors
-// naming the file, the line and the field. (photometric_test.cpp covers the common lights
-// layouts and the grey / RLE colour TGA cases.)
+// naming the file, the line and the field; the common lights layouts, DiLiGenT's, and TGA
+// files read like PNGs of the same pixels.
 
 #include <fmt/format.h>
 #include <gtest/gtest.h>
@@ -248,6 +248,112 @@ TEST(PhotometricIo, TgaVariantsAndTruncatedFiles) {
     EXPECT_EQ(Message([&] { ReadTga(dir, bytes, &w, &h); }).find(what), 0u)
         << Message([&] { ReadTga(dir, bytes, &w, &h); });
   }
+}
+
+std::string LightsError(const std::string& path) {
+  try {
+    LoadLights(path);
+  } catch (const InputError& e) {
+    const auto& d = e.diagnostics().at(0);
+    return fmt::format("{}|{}", d.line, d.field);
+  }
+  return "no error";
+}
+
+TEST(Photometric, LightsFilesInTheCommonLayouts) {
+  test::TempDir dir;
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"csv_header.csv", "file,lx,ly,lz\na.png,0,0,1\nb.png,1,0,1\nc.png,0,1,1\n"},
+      {"count_spaces.txt", "3\na.png 0 0 1\nb.png   1 0 1\n\n# comment\nc.png\t0 1 1\r\n"},
+      {"angles.txt", "file elevation_deg azimuth_deg\na.png 90 0\nb.png 45 0\nc.png, 45, 90\n"},
+      {"csv_plain.csv", "a.png,0,0,2\nb.png,2,0,2\nc.png,0,3,3"},
+  };
+  for (const auto& [name, text] : files) {
+    test::WriteFile(dir.File(name), text);
+    const auto L = LoadLights(dir.File(name));
+    ASSERT_EQ(L.size(), 3u) << name;
+    EXPECT_EQ(L[2].file, "c.png") << name;
+    EXPECT_LT((L[0].direction - Eigen::Vector3d(0, 0, 1)).norm(), 1e-12) << name;
+    EXPECT_LT((L[1].direction - Eigen::Vector3d(1, 0, 1).normalized()).norm(), 1e-12) << name;
+    EXPECT_LT((L[2].direction - Eigen::Vector3d(0, 1, 1).normalized()).norm(), 1e-12) << name;
+  }
+  EXPECT_EQ(LoadLights(dir.File("count_spaces.txt"))[2].line, 6);
+  // DiLiGenT's layout: directions only, names from a list; y up.
+  test::WriteFile(dir.File("light_directions.txt"), "0 0 1\n1 0 1\n0 -1 1\n");
+  test::WriteFile(dir.File("filenames.txt"), "001.png\n002.png\n003.png\n");
+  auto L = LoadLights(dir.File("light_directions.txt"), /*y_up=*/true);
+  EXPECT_TRUE(L[0].file.empty());
+  ApplyImageList(dir.File("filenames.txt"), L);
+  EXPECT_EQ(L[1].file, "002.png");
+  EXPECT_LT((L[2].direction - Eigen::Vector3d(0, 1, 1).normalized()).norm(), 1e-12);
+  test::WriteFile(dir.File("short_list.txt"), "001.png\n002.png\n");
+  EXPECT_THROW(ApplyImageList(dir.File("short_list.txt"), L), InputError);
+  // Errors name the right line and field, with or without a count line or header.
+  test::WriteFile(dir.File("e1.txt"), "3\na.png 0 0 1\nb.png 1 x 1\nc.png 0 1 1\n");
+  EXPECT_EQ(LightsError(dir.File("e1.txt")), "3|ly");
+  test::WriteFile(dir.File("e2.csv"), "a.png,0,0,1\nb.png,0,0,-1\nc.png,0,1,1\n");
+  EXPECT_EQ(LightsError(dir.File("e2.csv")), "2|lz");
+  test::WriteFile(dir.File("e3.txt"), "4\na.png 0 0 1\nb.png 1 0 1\nc.png 0 1 1\n");
+  EXPECT_EQ(LightsError(dir.File("e3.txt")), "1|");
+  test::WriteFile(dir.File("e4.txt"),
+                  "# rig B\nfile,lx,ly,lz\na.png,0,0,1\nb.png,1,0,1\nc.png,0,1\n");
+  EXPECT_EQ(LightsError(dir.File("e4.txt")), "5|");
+  test::WriteFile(dir.File("e5.txt"), "file,x,y,z\na.png,0,0,1\n");
+  EXPECT_EQ(LightsError(dir.File("e5.txt")), "1|file");
+  test::WriteFile(dir.File("e6.txt"), "a.png 40 0\nb.png -5 90\nc.png 40 180\n");
+  EXPECT_EQ(LightsError(dir.File("e6.txt")), "2|elevation_deg");
+}
+
+void WriteBytes(const std::string& path, const std::vector<unsigned char>& b) {
+  std::FILE* f = std::fopen(path.c_str(), "wb");
+  ASSERT_NE(f, nullptr);
+  std::fwrite(b.data(), 1, b.size(), f);
+  std::fclose(f);
+}
+
+TEST(Photometric, TgaImagesReadLikeThePngsOfTheSamePixels) {
+  test::TempDir dir;
+  const int w = 5, h = 4;
+  // Grey, uncompressed, bottom-left origin (rows stored bottom first).
+  cv::Mat grey(h, w, CV_8U);
+  for (int i = 0; i < h; ++i)
+    for (int j = 0; j < w; ++j)
+      grey.at<unsigned char>(i, j) = static_cast<unsigned char>(40 * i + 7 * j + 3);
+  std::vector<unsigned char> g;
+  for (int i = h - 1; i >= 0; --i)
+    for (int j = 0; j < w; ++j) g.push_back(grey.at<unsigned char>(i, j));
+  WriteBytes(dir.File("g.tga"), Tga(3, 8, 0, w, h, g));
+  ASSERT_TRUE(cv::imwrite(dir.File("g.png"), grey));
+  // Colour, RLE, top-left origin: row 0 one run of 5 equal pixels, then raw packets.
+  cv::Mat colour(h, w, CV_8UC3);
+  std::vector<unsigned char> rle = {0x84, 10, 200, 90};
+  for (int j = 0; j < w; ++j) colour.at<cv::Vec3b>(0, j) = cv::Vec3b(10, 200, 90);
+  for (int i = 1; i < h; ++i) {
+    rle.push_back(static_cast<unsigned char>(w - 1));
+    for (int j = 0; j < w; ++j) {
+      const cv::Vec3b px(static_cast<unsigned char>(30 * j), static_cast<unsigned char>(60 * i),
+                         static_cast<unsigned char>(5 * i * j));
+      colour.at<cv::Vec3b>(i, j) = px;
+      rle.insert(rle.end(), {px[0], px[1], px[2]});
+    }
+  }
+  WriteBytes(dir.File("c.tga"), Tga(10, 24, 0x20, w, h, rle));
+  ASSERT_TRUE(cv::imwrite(dir.File("c.png"), colour));
+  for (const std::string base : {"g", "c"}) {
+    int w1 = 0, h1 = 0, w2 = 0, h2 = 0;
+    const auto a = ReadGreyImage(dir.File(base + ".tga"), &w1, &h1),
+               b = ReadGreyImage(dir.File(base + ".png"), &w2, &h2);
+    ASSERT_EQ(w1, w);
+    ASSERT_EQ(h1, h);
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t k = 0; k < a.size(); ++k) EXPECT_EQ(a[k], b[k]) << base << " pixel " << k;
+  }
+  // A truncated file is an input error naming it.
+  auto bytes = Tga(3, 8, 0, w, h, g);
+  bytes.resize(bytes.size() - 3);
+  WriteBytes(dir.File("t.tga"), bytes);
+  int ww = 0, hh = 0;
+  EXPECT_THROW(ReadGreyImage(dir.File("t.tga"), &ww, &hh), InputError);
 }
 
 }  // namespace

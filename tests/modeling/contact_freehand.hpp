@@ -1,0 +1,128 @@
+#pragma once
+// Shared by the contact tests (tests/modeling/contact_test.cpp,
+// tests/apps/cmd_model_contact_test.cpp): free-hand measurements generated here with a known
+// truth. Written for these tests; shares nothing with modeling/src/workbench_sim.cpp or the
+// workbench's replay.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "hapticlab/modeling/contact.hpp"
+
+namespace hapticlab::modeling {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+constexpr int kSubsteps = 400;
+double g_pnoise = 1e-7,
+       g_vnoise = 1e-4;  // position and velocity noise (DISABLED_Experiment sets them)
+
+// The truth of the free-hand sample (workbench units: the normal law is
+// f = (d / 1 mm)^n (K1mm + B1mm d_dot)).
+struct Truth {
+  double K1mm_N = 1.2, n = 1.4, B1mm_Ns_per_m = 12;
+  double kappa_N_per_m = 2500, mu_k = 0.45, mu_b_Ns_per_m = 0.57;
+};
+
+// Free-hand strokes at 1 kHz. Every stroke starts in a new random direction and curves (its
+// heading turns by up to 1.5 rad); the speed follows a raised cosine with a peak of 3-120 mm/s;
+// the load is 0.4-2 N with a slow wobble. Between strokes the hand rests with a 5 um, 9 Hz
+// tremor (pre-sliding), sometimes lifts off, and, with `pokes`, sometimes presses straight down
+// to 1.6-2.6 N and releases.
+inline Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration_s, double noise_N,
+                            bool pokes) {
+  std::mt19937_64 rng(seed);
+  auto U = [&](double a, double b) { return std::uniform_real_distribution<double>(a, b)(rng); };
+  std::normal_distribution<double> gauss(0, 1);
+  const double fs = 1000, dt = 1 / fs, box = 0.02;
+  const std::size_t N = static_cast<std::size_t>(duration_s * fs);
+  std::vector<double> x(N), y(N), load(N);
+  std::size_t i = 0;
+  double px = 0, py = 0;
+  while (i < N) {
+    // A stroke.
+    const double len = U(0.004, 0.025), vp = std::exp(U(std::log(0.003), std::log(0.12))),
+                 T = 2 * len / vp;
+    double th = U(-kPi, kPi);
+    const double turn = U(-1.5, 1.5);
+    if (std::hypot(px + len * std::cos(th), py + len * std::sin(th)) > box)
+      th = std::atan2(-py, -px) + U(-0.5, 0.5);
+    const double L0 = std::exp(U(std::log(0.4), std::log(2.0))), wob = U(0.5, 3),
+                 ph = U(0, 2 * kPi);
+    const std::size_t n = static_cast<std::size_t>(T * fs);
+    for (std::size_t k = 0; k < n && i < N; ++k, ++i) {
+      const double tau = static_cast<double>(k) / static_cast<double>(n);
+      const double v = vp * std::pow(std::sin(kPi * tau), 2), heading = th + turn * tau;
+      px += v * dt * std::cos(heading);
+      py += v * dt * std::sin(heading);
+      x[i] = px, y[i] = py;
+      load[i] = L0 * (1 + 0.3 * std::sin(2 * kPi * wob * static_cast<double>(k) * dt + ph));
+    }
+    // Rest with tremor, a lift-off, or a poke.
+    const double u = U(0, 1);
+    const double rest = U(0.1, 0.4), trem = U(3e-6, 6e-6), tf = U(8, 10), tph = U(0, 2 * kPi);
+    const std::size_t nr = static_cast<std::size_t>(rest * fs);
+    const bool lift = u < 0.1, poke = pokes && u > 0.8;
+    const double peak = U(1.6, 2.6);
+    for (std::size_t k = 0; k < nr && i < N; ++k, ++i) {
+      const double tk = static_cast<double>(k) * dt,
+                   s = std::sin(kPi * static_cast<double>(k) / static_cast<double>(nr));
+      x[i] = px + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::cos(th));
+      y[i] = py + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::sin(th));
+      load[i] = lift ? -0.4 : (poke ? 0.1 + (peak - 0.1) * s * s : L0);
+    }
+  }
+  // A hand does not step its load: two first-order lags of 40 ms.
+  const double a = std::exp(-dt / 0.04);
+  for (int pass = 0; pass < 2; ++pass)
+    for (std::size_t k = 1; k < N; ++k) load[k] = a * load[k - 1] + (1 - a) * load[k];
+  // Penetration from the static law (negative load: above the surface), then the full force.
+  std::vector<double> d(N);
+  for (std::size_t k = 0; k < N; ++k)
+    d[k] = load[k] > 0 ? 1e-3 * std::pow(load[k] / tr.K1mm_N, 1 / tr.n) : load[k] * 1e-3;
+  Measurement m;
+  m.file = "freehand.csv";
+  double Fx = 0, Fy = 0;
+  bool was_in_contact = false;
+  for (std::size_t k = 0; k < N; ++k) {
+    const std::size_t k0 = k ? k - 1 : k, k1 = k + 1 < N ? k + 1 : k;
+    const double h = static_cast<double>(k1 - k0) * dt;
+    const double vx = (x[k1] - x[k0]) / h, vy = (y[k1] - y[k0]) / h, dd = (d[k1] - d[k0]) / h;
+    const double fn =
+        d[k] > 0 ? std::max(0.0, std::pow(d[k] / 1e-3, tr.n) * (tr.K1mm_N + tr.B1mm_Ns_per_m * dd))
+                 : 0.0;
+    const double fc = tr.mu_k * fn;
+    if (fc <= 0 || !was_in_contact || k == 0) {
+      Fx = Fy = 0;
+    } else {
+      // Eq. 4.6 in vector form, dF = kappa (dx - |dx| F / f_C), by 400 explicit Euler substeps.
+      const double sx = (x[k] - x[k - 1]) / kSubsteps, sy = (y[k] - y[k - 1]) / kSubsteps,
+                   sl = std::hypot(sx, sy);
+      for (int j = 0; j < kSubsteps; ++j) {
+        const double gx = tr.kappa_N_per_m * (sx - sl * Fx / fc),
+                     gy = tr.kappa_N_per_m * (sy - sl * Fy / fc);
+        Fx += gx, Fy += gy;
+      }
+      const double mag = std::hypot(Fx, Fy);
+      if (mag > fc) Fx *= fc / mag, Fy *= fc / mag;
+    }
+    was_in_contact = fc > 0;
+    MeasurementRow r;
+    r.t_s = static_cast<double>(k) * dt;
+    r.p_m = {x[k] + g_pnoise * gauss(rng), y[k] + g_pnoise * gauss(rng),
+             -d[k] + g_pnoise * gauss(rng)};
+    r.v_mps = {vx + g_vnoise * gauss(rng), vy + g_vnoise * gauss(rng), -dd + g_vnoise * gauss(rng)};
+    r.f_N = {-(Fx + tr.mu_b_Ns_per_m * vx) + noise_N * gauss(rng),
+             -(Fy + tr.mu_b_Ns_per_m * vy) + noise_N * gauss(rng), fn + noise_N * gauss(rng)};
+    m.rows.push_back(r);
+    m.row_lines.push_back(static_cast<int>(k) + 4);
+  }
+  return m;
+}
+
+}  // namespace
+}  // namespace hapticlab::modeling
