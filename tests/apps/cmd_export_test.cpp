@@ -6,7 +6,6 @@
 
 #include <gtest/gtest.h>
 #include <xdf.h>
-#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
@@ -20,6 +19,7 @@
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
+#include "hapticlab/test/bids.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab {
@@ -30,9 +30,6 @@ using nlohmann::json;
 
 // The CLI runs without this test's ASAN_OPTIONS (which only work around libxdf, below).
 std::string Cli() { return std::string("env -u ASAN_OPTIONS ") + HL_CLI_PATH; }
-std::string Validator() {
-  return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator";
-}
 
 // The unit a channel name's suffix states (STYLE.md §4), written out independently of the
 // exporter's table.
@@ -244,33 +241,12 @@ TEST_F(Interchange, XdfBadOutputIsRefusedWithTheField) {
   EXPECT_EQ(json::parse(out)["files"].size(), 2u);
 }
 
-std::string Gunzip(const std::string& path) {
-  gzFile f = gzopen(path.c_str(), "rb");
-  if (!f) return "";
-  std::string s;
-  char buf[65536];
-  int n;
-  while ((n = gzread(f, buf, sizeof buf)) > 0) s.append(buf, static_cast<std::size_t>(n));
-  gzclose(f);
-  return s;
-}
-
-// Runs the validator; its JSON report (stdout) goes to a file, its Node warnings aside.
-json Validate(const std::string& dataset) {
-  std::string out;
-  const std::string report = dataset + ".validator.json";
-  // Exit status 1 means "errors found"; the JSON report says which.
-  test::RunCommand("(" + Validator() + " " + dataset + " --json > " + report + ")", &out);
-  auto j = json::parse(test::ReadFile(report), nullptr, false);
-  if (j.is_discarded()) return json{{"unparsed", test::ReadFile(report)}, {"stderr", out}};
-  return j;
-}
-
 TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
   // The validator is part of the project's set-up; without it this test fails, never skips.
-  ASSERT_TRUE(fs::exists(Validator())) << Validator()
-                                       << " is missing: run scripts/setup (it installs the pinned "
-                                          "bids-validator with npm ci)";
+  ASSERT_TRUE(fs::exists(test::BidsValidator()))
+      << test::BidsValidator()
+      << " is missing: run scripts/setup (it installs the pinned "
+         "bids-validator with npm ci)";
   CheckRecorded(*exp_);
   const std::string ds = dir_->File("bids");
   std::string out;
@@ -278,7 +254,7 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
       test::RunCommand(Cli() + " export --db " + db_ + " --format bids --json --out " + ds, &out),
       0)
       << out;
-  const auto report = Validate(ds);
+  const auto report = test::ValidateBids(ds);
   ASSERT_TRUE(report.contains("issues")) << report.dump(2);
   EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
   for (const auto& w : report["issues"]["warnings"])
@@ -304,7 +280,7 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
       EXPECT_EQ(side["Columns"].get<std::vector<std::string>>(), chunks.front().channels);
       for (const auto& c : chunks.front().channels)
         EXPECT_EQ(side[c]["Units"], ExpectedUnit(c)) << c;
-      std::istringstream rows(Gunzip((beh / (stem + ".tsv.gz")).string()));
+      std::istringstream rows(test::Gunzip((beh / (stem + ".tsv.gz")).string()));
       std::string line;
       std::size_t n = 0;
       for (const auto& c : chunks)
@@ -340,7 +316,7 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
   auto j = json::parse(test::ReadFile(first.string()));
   j.erase("SamplingFrequency");
   test::WriteFile(first.string(), j.dump());
-  const auto broken = Validate(ds);
+  const auto broken = test::ValidateBids(ds);
   ASSERT_TRUE(broken.contains("issues")) << broken.dump(2);
   EXPECT_GT(broken["issues"]["errors"].size(), 0u);
 }

@@ -5,7 +5,6 @@
 // tests/apps/cmd_export_test.cpp, and InterchangeRecord's in export_xdf_test.cpp.)
 
 #include <gtest/gtest.h>
-#include <zlib.h>
 
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -16,6 +15,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
+#include "hapticlab/test/bids.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
@@ -24,17 +24,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-std::string Gunzip(const std::string& path) {
-  gzFile f = gzopen(path.c_str(), "rb");
-  if (!f) return "(cannot open " + path + ")";
-  std::string s;
-  char buf[4096];
-  int n = 0;
-  while ((n = gzread(f, buf, sizeof buf)) > 0) s.append(buf, static_cast<std::size_t>(n));
-  gzclose(f);
-  return s;
-}
 
 std::vector<std::vector<std::string>> Tsv(const std::string& text) {
   std::vector<std::vector<std::string>> rows;
@@ -81,9 +70,9 @@ TEST(ExportBids, DatasetLayoutTablesAndRecordings) {
   for (const auto& c : rows[0]) EXPECT_TRUE(sidecar.contains(c)) << c;
 
   // Trial B (run 2): 2 samples, 2 dropped (n/a at 100 Hz), 2 more.
-  EXPECT_EQ(Gunzip(beh + "_run-2_recording-leftforce_physio.tsv.gz"),
+  EXPECT_EQ(test::Gunzip(beh + "_run-2_recording-leftforce_physio.tsv.gz"),
             "10\t0.5\n11\t0.25\nn/a\tn/a\nn/a\tn/a\n14\t0.125\n15\t0.0625\n");
-  EXPECT_EQ(Gunzip(beh + "_run-1_recording-rightforce_physio.tsv.gz"), "5\n6\n7\n");
+  EXPECT_EQ(test::Gunzip(beh + "_run-1_recording-rightforce_physio.tsv.gz"), "5\n6\n7\n");
   const auto physio = json::parse(test::ReadFile(beh + "_run-2_recording-leftforce_physio.json"));
   EXPECT_EQ(physio["SamplingFrequency"], 100.0);
   EXPECT_EQ(physio["StartTime"], 0.0);

@@ -7,7 +7,6 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 #include <xdf.h>
-#include <zlib.h>
 
 #include <filesystem>
 #include <map>
@@ -18,6 +17,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
+#include "hapticlab/test/bids.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
@@ -119,34 +119,6 @@ TEST(ExportXdf, AFileHoldsOneSessionAndAFolderOnePerSession) {
   ASSERT_EQ(x.load_xdf(files[1].path), 0);
   EXPECT_EQ(x.streams.size(), 2u);
   EXPECT_TRUE(x.eventMap.empty());
-}
-
-// The official bids-validator (npm, installed by scripts/setup into tools/bids-validator), as
-// in tests/apps/cmd_export_test.cpp.
-std::string Validator() {
-  return std::string(HL_SOURCE_DIR) + "/tools/bids-validator/node_modules/.bin/bids-validator";
-}
-
-std::string Gunzip(const std::string& path) {
-  gzFile f = gzopen(path.c_str(), "rb");
-  if (!f) return "";
-  std::string s;
-  char buf[65536];
-  int n;
-  while ((n = gzread(f, buf, sizeof buf)) > 0) s.append(buf, static_cast<std::size_t>(n));
-  gzclose(f);
-  return s;
-}
-
-// Runs the validator; its JSON report (stdout) goes to a file, its Node warnings aside.
-json Validate(const std::string& dataset) {
-  std::string out;
-  const std::string report = dataset + ".validator.json";
-  // Exit status 1 means "errors found"; the JSON report says which.
-  test::RunCommand("(" + Validator() + " " + dataset + " --json > " + report + ")", &out);
-  auto j = json::parse(test::ReadFile(report), nullptr, false);
-  if (j.is_discarded()) return json{{"unparsed", test::ReadFile(report)}, {"stderr", out}};
-  return j;
 }
 
 // A record made through the db API with fixed time stamps: a dropped-sample gap inside a
@@ -271,10 +243,10 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   EXPECT_NEAR(break_at, 2.8 + 0.5, 1e-9);
 
   // BIDS: the gap as n/a rows, the stored model with its hash, and the validator's approval.
-  ASSERT_TRUE(fs::exists(Validator())) << "run scripts/setup";
+  ASSERT_TRUE(fs::exists(test::BidsValidator())) << "run scripts/setup";
   const std::string ds = dir.File("bids");
   db::ExportBids(d, ds);
-  const auto rows = Gunzip(
+  const auto rows = test::Gunzip(
       ds +
       "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-1_recording-leftforce_physio.tsv.gz");
   EXPECT_EQ(rows,
@@ -291,7 +263,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
       "/sub-P07/ses-1/beh/sub-P07_ses-1_task-gapstudy_run-4_recording-leftforce_physio.tsv.gz"));
   EXPECT_EQ(db::HashText(test::ReadFile(model_file)), model_hash);
   EXPECT_NE(test::ReadFile(ds + "/code/hashes.tsv").find(model_hash), std::string::npos);
-  const auto report = Validate(ds);
+  const auto report = test::ValidateBids(ds);
   ASSERT_TRUE(report.contains("issues")) << report.dump(2);
   EXPECT_EQ(report["issues"]["errors"].size(), 0u) << report["issues"]["errors"].dump(2);
 }
