@@ -115,6 +115,7 @@ void AddFitContact(CLI::App& model) {
               {"mu_k", est(f.mu_k)},
               {"mu_b", est(f.mu_b_Ns_per_m)}}},
             {"uncertainty_method", f.uncertainty_method},
+            {"friction_bootstrap", BootstrapJson(f.bootstrap)},
             {"residual_rms_N", {{"hunt_crossley", f.normal_rms_N}, {"dahl", f.friction_rms_N}}},
             {"samples", {{"strokes", f.stroke_samples}, {"pokes", f.poke_samples}}},
             {"poke_source", f.poke_source},
@@ -146,7 +147,8 @@ void AddFitContact(CLI::App& model) {
             pm(f.kappa_N_per_m), pm(f.mu_k), pm(f.mu_b_Ns_per_m), f.friction_rms_N);
         fmt::print("{}\n{}\n", FitSummaryLine(f.friction_summary),
                    FitSummaryLine(f.normal_summary));
-        fmt::print("uncertainty: {}\nwrote {}\n", f.uncertainty_method, o->out);
+        fmt::print("{}\nuncertainty: {}\nwrote {}\n", BootstrapLine(f.bootstrap),
+                   f.uncertainty_method, o->out);
       }
       if (!f.IsUsable()) {
         fmt::print(

@@ -43,11 +43,15 @@ std::string ErrorsLine(const Errors& e) {
   return s;
 }
 
-Replay Load(const std::string& measurement, const Model* model) {
-  const auto m = ReadMeasurementCsv(measurement);
+Replay Load(const std::string& measurement, const Model* model, Measurement* keep,
+            ReplayOptions* options) {
+  auto m = ReadMeasurementCsv(measurement);
   ReplayOptions o;
   if (model && model->HasVibration()) o.band_edges_hz = model->band_edges_hz;
-  return PrepareReplay(m, o);
+  auto r = PrepareReplay(m, o);
+  if (keep) *keep = std::move(m);
+  if (options) *options = o;
+  return r;
 }
 
 nlohmann::json FitReportJson(const FitReport& rep) {

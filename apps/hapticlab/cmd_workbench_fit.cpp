@@ -38,7 +38,9 @@ void AddFit(CLI::App& app) {
       "(before and after when there is a change), on all data and held out (fitted on the even\n"
       "1 s blocks, scored on the odd ones), each solve's termination, iterations, cost and\n"
       "parameters at bounds, the parameters with 95 % intervals (cluster jackknife over\n"
-      "3 s clusters of blocks), and writes the fitted model (a material TOML the renderer plays, "
+      "3 s clusters of blocks; friction's bias-corrected and its standard errors the larger of\n"
+      "that and a parametric bootstrap through the preprocessing, as `model fit-contact`), and\n"
+      "writes the fitted model (a material TOML the renderer plays, "
       "with a\n"
       "[workbench] table of every parameter). Progress goes to stderr unless --quiet.");
   cmd->add_option("--measurement", o->measurement,
@@ -61,7 +63,9 @@ void AddFit(CLI::App& app) {
       const bool given = !o->model.empty();
       if (given) start = LoadModel(o->model);
       prog.Line(fmt::format("fit: reading {}", o->measurement));
-      const auto r = Load(o->measurement, given ? &start : nullptr);
+      Measurement measured;
+      ReplayOptions replayed;
+      const auto r = Load(o->measurement, given ? &start : nullptr, &measured, &replayed);
       if (!given) AddEffects(&start, BaselineEffects(), r);
       Model after = start;
       AddEffects(&after, o->add, r);
@@ -69,7 +73,14 @@ void AddFit(CLI::App& app) {
       // --add and --model, before and after are the same fit and are reported once.
       const bool changes = given || !o->add.empty();
       prog.Line("fit: fitting on all data (with uncertainties)");
-      const auto rep = Fit(&after, r, {.uncertainty = true});
+      auto rep = Fit(&after, r, {.uncertainty = true});
+      // The friction channel as `model fit-contact` reports it: bias-corrected, with standard
+      // errors through the preprocessing (workbench_bootstrap.hpp).
+      BootstrapReport boot;
+      if (auto* cf = rep.Find(Channel::kFriction); cf && cf->summary.usable) {
+        prog.Line("fit: friction through the preprocessing (parametric bootstrap)");
+        boot = BootstrapFriction(&after, measured, replayed, {.uncertainty = true}, cf);
+      }
       const auto e_after = ComputeErrors(r, Predict(after, r), Split::kAll);
       Errors e_before = e_after;
       if (!given && !o->add.empty()) {
@@ -104,6 +115,7 @@ void AddFit(CLI::App& app) {
             {"params", params},
             {"out", o->out}};
         j.update(FitReportJson(rep));
+        if (rep.Find(Channel::kFriction)) j["friction_bootstrap"] = BootstrapJson(boot);
         PrintJson(j);
       } else {
         fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
@@ -123,6 +135,7 @@ void AddFit(CLI::App& app) {
             fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name,
                        p.value, p.sd, p.lo95, p.hi95, p.at_bound ? "  AT A BOUND" : "");
         }
+        if (rep.Find(Channel::kFriction)) fmt::print("{}\n", BootstrapLine(boot));
         fmt::print("wrote {}\n", o->out);
       }
       if (!rep.IsUsable()) {

@@ -14,7 +14,11 @@ namespace hapticlab::cli::workbench_cli {
 nlohmann::json ErrorsJson(const modeling::wb::Errors& e);
 std::string ErrorsLine(const modeling::wb::Errors& e);
 /// Reads a measurement CSV and prepares it for replay (in the model's vibration bands).
-modeling::wb::Replay Load(const std::string& measurement, const modeling::wb::Model* model);
+/// `measurement` read and prepared for replay (with `model`'s vibration bands when it has
+/// them); `keep`: the measurement as read, and `options`: how it was replayed.
+modeling::wb::Replay Load(const std::string& measurement, const modeling::wb::Model* model,
+                          Measurement* keep = nullptr,
+                          modeling::wb::ReplayOptions* options = nullptr);
 
 // ---------------------------------------------------------------------------------------------
 // Progress lines on stderr (a person waits on fits of a minute); --quiet silences them.

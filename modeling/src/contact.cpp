@@ -247,10 +247,14 @@ ContactFit FitContact(const Measurement& m, const Measurement* pokes_in,
   out.algorithm1 = AlgorithmOne(fr_replay, wb::Split::kAll, o);
   fo.normal = false;
   fo.friction = true;
-  const auto fr = wb::Fit(&model, fr_replay, fo);
-  const auto* cf = fr.Find(wb::Channel::kFriction);
+  auto fr = wb::Fit(&model, fr_replay, fo);
+  auto* cf = fr.Find(wb::Channel::kFriction);
   HL_REQUIRE(cf != nullptr, "the contact cost functor must exist");
   out.friction_summary = cf->summary;
+  if (o.bootstrap && !o.load_from_normal_law && cf->summary.usable) {
+    out.bootstrap = wb::BootstrapFriction(&model, m, o.replay, fo, cf, o.bootstrap_options);
+    if (out.bootstrap.applied) out.uncertainty_method += "; friction: " + out.bootstrap.method;
+  }
   out.kappa_N_per_m = FromParam(*cf, wb::key::kKappa_N_per_m);
   out.mu_k = FromParam(*cf, wb::key::kMuK);
   out.mu_b_Ns_per_m = FromParam(*cf, wb::key::kMuB_Ns_per_m);

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/modeling/contact.hpp"
@@ -365,6 +366,9 @@ const ChannelFit* FitReport::Find(Channel c) const {
   for (const auto& x : channels)
     if (x.channel == c) return &x;
   return nullptr;
+}
+ChannelFit* FitReport::Find(Channel c) {
+  return const_cast<ChannelFit*>(std::as_const(*this).Find(c));
 }
 
 }  // namespace hapticlab::modeling::wb

@@ -90,28 +90,14 @@ TEST(ContactFreeHand, AlgorithmOneStartsNearTheTruthFromSlidingAndTremor) {
 // Coverage of the reported 95 % intervals over 20 seeds with noise drawn from 4-12 mN: every
 // parameter's interval must cover the truth in at least 18 of them (the 90 %), and
 // every estimate must be within its tolerance. With the plain (J'J)^-1 sigma^2 of the earlier
-// engine, mu_k's interval (+- 0.002) covered the truth in none.
-// KNOWN FAILURE, so disabled (run with --gtest_also_run_disabled_tests, 20 s): mu_b is covered in
-// 16 of 20 seeds (before round 2: K1mm 19, n 19, B1mm 20, kappa 19, mu_k 19); error mean -0.34 %,
-// SD 2.07 % against a median reported SE of 1.29 %. The cause is the replay's inputs, not the
-// interval method (measured with Experiment, EXP_COVER=1; docs/modeling-geometry-contact.md): with
-// exact positions and velocities replayed at 1 kHz the jackknife's SE matches mu_b's spread (SD
-// 0.86 %, median SE 0.97 %), and what is left is a bias of -1.23 % from the force noise in the load
-// that sets the Coulomb level (errors in variables: -0.66, -1.36, -2.16 % at 4, 8, 12 mN). On the
-// test's inputs the 20 ms position smoothing and the 500 Hz replay add a per-recording error of
-// about 1 % SD (+0.67 % mean) that is systematic within a recording (RMS z 2.0 at 0.5 mN noise),
-// so no resampling of the recording sees it. A wider interval would hide these; they are fixed
-// in the replay or not at all. Round 2 (docs/modeling-geometry-contact.md, choices measured on
-// seeds 200-219 with Experiment): the load from the fitted Hunt-Crossley law (an instrument)
-// costs mu_k coverage (its own error is not in the friction's interval); a 1 kHz replay helps
-// on 200-219 (not measured here); the poke cap now selects by the smoothed load. Now: K1mm 19,
-// n 20, B1mm 20, kappa 19, mu_k 19, mu_b 16 of 20 (mu_b error mean -0.34 %, SD 2.07 %).
-// Round 3: the positions' window is chosen per sample (LPA-ICI, ReplayOptions::position_adaptive),
-// which removes the smoothing bias (mu_b +1.98 % -> -0.08 % with the noise-free load, seeds
-// 200-219) and covers everything on 200-219 (mu_k 19, mu_b 19), but on these seeds: K1mm 19, n 20,
-// B1mm 20, kappa 20, mu_k 19, mu_b 16 (error mean -1.25 %, SD 1.61 %, median SE 1.08 %): what is
-// left is the load-noise bias and a spread ~1.5x the jackknife's. Open: a SIMEX correction of the
-// load-noise bias; poke classification from the penetration path.
+// engine, mu_k's interval (+- 0.002) covered the truth in none; with the cluster jackknife alone
+// mu_b's covered it in 16 (error mean -1.25 %, SD 1.61 %, median SE 1.08 %): the replay's
+// preprocessing (the noisy load through the bristle's saturation, the smoothed positions, the
+// decimated rate) leaves a per-recording error that no resampling of the recording sees. The
+// friction is now bias-corrected and its SE taken by a parametric bootstrap through that
+// preprocessing (wb::BootstrapFriction): K1mm 19, n 20, B1mm 20, kappa 20, mu_k 20, mu_b 19
+// (mu_b error mean -0.53 %, SD 1.39 %, median SE 1.38 %); on seeds 200-219, where the choice
+// was made: 19, 19, 18, 19, 20, 18. docs/modeling-geometry-contact.md, "Round 4".
 // The coverage experiment over the 20 seeds (100-119, noise from 4-12 mN), printed per seed and
 // summarised: per parameter, how many intervals covered the truth and how many estimates were
 // within tolerance; for mu_b also the mean and SD of the relative error and the median reported SE.
@@ -154,7 +140,7 @@ Coverage RunCoverage(const ContactFitOptions& o, std::uint64_t first_seed = 100)
   return out;
 }
 
-TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
+TEST(ContactFreeHand, NinetyFivePercentIntervalsCoverTheTruth) {
   const auto c = RunCoverage({});
   for (const auto& [name, n] : c.covered) {
     EXPECT_GE(n, 18) << name << ": the 95 % interval covered the truth in " << n << " of 20 seeds";
@@ -167,7 +153,8 @@ TEST(ContactFreeHand, DISABLED_NinetyFivePercentIntervalsCoverTheTruth) {
 // EXP_VNOISE (position and velocity noise), EXP_RATE, EXP_SMOOTH, EXP_SG, EXP_PSMOOTH, EXP_ADAPT,
 // EXP_RES (ReplayOptions), EXP_SEEDS, EXP_SEED0 (first seed, 200: choices are measured on seeds
 // other than the test's), EXP_TRUELOAD=1 (replay the noise-free load: an oracle), EXP_LOADLAW=1
-// (ContactFitOptions::load_from_normal_law). Prints mu_b's, kappa's and mu_k's mean error, mu_b's
+// (ContactFitOptions::load_from_normal_law), EXP_BOOT=0 (no bootstrap correction), EXP_BOOT_B
+// (its replicates). Prints mu_b's, kappa's and mu_k's mean error, mu_b's
 // RMS error and RMS z (error / reported SD) over the seeds. EXP_COVER=1: instead, the coverage
 // experiment of the test above (from EXP_SEED0, 4-12 mN, the whole FitContact) with these replay
 // options.
@@ -192,6 +179,8 @@ TEST(ContactFreeHand, DISABLED_Experiment) {
     ContactFitOptions o;
     o.replay = ro;
     o.load_from_normal_law = env("EXP_LOADLAW", 0) > 0;
+    o.bootstrap = env("EXP_BOOT", 1) > 0;
+    o.bootstrap_options.replicates = static_cast<int>(env("EXP_BOOT_B", 20));
     RunCoverage(o, static_cast<std::uint64_t>(env("EXP_SEED0", 200)));
     return;
   }

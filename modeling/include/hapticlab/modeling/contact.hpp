@@ -11,6 +11,7 @@
 
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/modeling/workbench_bootstrap.hpp"
 
 namespace hapticlab::modeling {
 
@@ -44,6 +45,11 @@ struct ContactFitOptions {
   /// (penetration and its rate) instead of the measured, smoothed load (errors in variables;
   /// see FitContact).
   bool load_from_normal_law = false;
+  /// Correct the friction parameters for the preprocessing's bias, and take their standard
+  /// errors, by a parametric bootstrap through it (workbench_bootstrap.hpp; not with
+  /// load_from_normal_law).
+  bool bootstrap = true;
+  wb::BootstrapOptions bootstrap_options;
 };
 
 /// Algorithm 1 over the replay's samples in the split.
@@ -66,6 +72,7 @@ struct ContactFit {
   int stroke_samples = 0, poke_samples = 0;
   std::string poke_source;  ///< where the Hunt-Crossley samples came from, in words
   std::string uncertainty_method;
+  wb::BootstrapReport bootstrap;  ///< kappa, mu_k, mu_b's correction (`applied` or why not)
   bool IsUsable() const { return friction_summary.usable && normal_summary.usable; }
 };
 

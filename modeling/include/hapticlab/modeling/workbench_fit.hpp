@@ -69,6 +69,7 @@ struct FitReport {
   bool IsUsable() const;
   /// The channel's fit, or nullptr.
   const ChannelFit* Find(Channel c) const;
+  ChannelFit* Find(Channel c);
 };
 
 /// Fits the model's parameters on the split (Ceres for forces, linear least squares for the
