@@ -36,8 +36,7 @@ Measurement Circles(double sp_m, double sv_mps, double st_N, double sl_N) {
     row.t_s = t;
     const double vx = moving ? -r_m * w * std::sin(phase) : 0,
                  vy = moving ? r_m * w * std::cos(phase) : 0;
-    row.p_m = {r_m * std::cos(phase) + sp_m * g(rng), r_m * std::sin(phase) + sp_m * g(rng),
-               -1e-4};
+    row.p_m = {r_m * std::cos(phase) + sp_m * g(rng), r_m * std::sin(phase) + sp_m * g(rng), -1e-4};
     row.v_mps = {vx + sv_mps * g(rng), vy + sv_mps * g(rng), 0};
     const double load = 1 + 0.3 * std::sin(2 * std::numbers::pi * 0.5 * t);
     row.f_N = {-0.4 * load * std::sin(phase + 1) + st_N * g(rng),
