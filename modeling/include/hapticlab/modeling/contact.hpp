@@ -5,7 +5,9 @@
 /// (in its 2-D form) and refined jointly by Ceres; the normal force is Hunt-Crossley
 /// (eq. 4.11) fitted on pokes with samples above 2 N discarded. Both are the workbench's
 /// friction and normal channels (workbench.hpp), so `model fit-contact` and `hapticlab fit`
-/// agree by construction. Uncertainties: delete-one-cluster jackknife over 3 s clusters of blocks.
+/// agree by construction. Uncertainties: delete-one-cluster jackknife over 3 s clusters of blocks;
+/// the friction's bias-corrected, with standard errors at least the jackknife's, by a parametric
+/// bootstrap through the preprocessing (workbench_bootstrap.hpp).
 
 #include <string>
 
