@@ -485,11 +485,11 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
               }
           }
           set_linear_alone(linear_refit, stable ? lin_all : lin_train);
-          if (o.progress)
-            o.progress(stable ? fmt::format("{}: linear part refitted on every row", name)
-                              : fmt::format("{}: the linear part refitted on every row is not a "
-                                            "stable filter{}; the training-rows fit is kept",
-                                            name, where),
+          if (o.progress && !stable)
+            o.progress(fmt::format("{}: the linear part refitted on every row is not a stable "
+                                   "filter{}; if the linear parts alone are kept, this one keeps "
+                                   "its training-rows fit",
+                                   name, where),
                        static_cast<int>(done.load()), static_cast<int>(jobs.size()));
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
@@ -540,8 +540,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     }
     if (o.progress)
       o.progress(fmt::format("validation E_s: {:.4f} with the nonlinear part, {:.4f} with the "
-                             "linear part alone: {} kept",
-                             es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone"),
+                             "linear part alone: {} kept{}",
+                             es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone",
+                             !keep && refit ? ", refitted on every row" : ""),
                  static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
   }
   renderer::ValidateNeuralModel(m);
