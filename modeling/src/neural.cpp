@@ -163,6 +163,10 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
   // The same networks without their nonlinear part (output 0: the linear part alone), with
   // their own calibrated sigma; kept when it synthesizes the validation data better.
   std::vector<renderer::NeuralBand> linear_only = m.bands;
+  // The linear parts refitted on every row of every recording, returned in place of
+  // linear_only when validation keeps the linear parts alone (NeuralFitOptions::refit_linear_part).
+  const bool refit = o.linear_part && o.validate_nonlinear_part && o.refit_linear_part;
+  std::vector<renderer::NeuralBand> linear_refit = m.bands;
   std::atomic<std::size_t> next{0}, done{0};
   std::exception_ptr error;
   std::mutex err_mu;
@@ -221,10 +225,6 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
           return phi;
         };
-        Eigen::VectorXd wlin = Eigen::VectorXd::Zero(nlin);
-        std::vector<Eigen::VectorXd> a_cell(cells, Eigen::VectorXd::Zero(M));
-        std::vector<std::vector<double>> cell_ar;  // per_cell: the band's NeuralBand::cell_ar
-        Eigen::VectorXd ylin = Eigen::VectorXd::Zero(total);
         // Per-cell AR order: chosen as the LPC bank chooses its order (the criterion summed
         // over the recordings, at most preprocess.max_order, one order for all cells: LSF
         // interpolation needs equal orders), here on the band's training signals and at most
@@ -253,36 +253,59 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                                    j.band + 1, p_lin),
                        static_cast<int>(done.load()), static_cast<int>(jobs.size()));
         }
-        if (nlin > 0) {
+        // The linear part fitted on the training rows (all_rows false: the first 80 % of every
+        // recording, what the networks are trained beside and the model selection compares) or
+        // on every row (the refit of the linear part alone once validation has chosen it).
+        struct LinearFit {
+          Eigen::VectorXd w;                         // the network's linear weights (terms x M)
+          std::vector<Eigen::VectorXd> a_cell;       // the AR(M) at each training cell
+          std::vector<std::vector<double>> cell_ar;  // per_cell: the band's NeuralBand::cell_ar
+          Eigen::VectorXd ylin;                      // its one-step prediction of every row
+        };
+        auto fit_linear = [&](bool all_rows) {
+          LinearFit f{Eigen::VectorXd::Zero(nlin),
+                      std::vector<Eigen::VectorXd>(cells, Eigen::VectorXd::Zero(M)),
+                      {},
+                      Eigen::VectorXd::Zero(total)};
+          if (nlin == 0) return f;
+          const Eigen::Index p = per_cell ? p_lin : M;
+          // Per recording (as laid out in X): the Gram matrix and moment vector of its rows.
+          std::vector<Eigen::MatrixXd> G(use.size(), Eigen::MatrixXd::Zero(p, p));
+          std::vector<Eigen::VectorXd> g(use.size(), Eigen::VectorXd::Zero(p));
+          Eigen::Index off = 0;
+          for (const bool val : {false, true})
+            for (std::size_t u = 0; u < use.size(); ++u) {
+              const auto [a, b] = rows_of(j, use[u], val);
+              const auto n = static_cast<Eigen::Index>(b - a);
+              if (!val || all_rows) {
+                const auto Xi = X.block(off, 0, n, p);
+                G[u] += Xi.transpose() * Xi;
+                g[u] += Xi.transpose() * y.segment(off, n);
+              }
+              off += n;
+            }
           Eigen::MatrixXd A = Eigen::MatrixXd::Zero(nlin, nlin);
           Eigen::VectorXd rhs = Eigen::VectorXd::Zero(nlin);
-          Eigen::Index off = 0;
-          for (const auto i :
-               use) {  // the training rows, recording by recording (as laid out above)
-            const auto [a, b] = rows_of(j, i, false);
-            const auto n = static_cast<Eigen::Index>(b - a);
-            const auto Xi = X.block(off, 0, n, per_cell ? p_lin : M);
-            Eigen::MatrixXd G = Xi.transpose() * Xi;
-            const Eigen::VectorXd g = Xi.transpose() * y.segment(off, n);
-            off += n;
+          for (std::size_t u = 0; u < use.size(); ++u) {
+            const auto i = use[u];
             const auto c = static_cast<std::size_t>(cell_of[i]);
             if (per_cell) {
-              G.diagonal().array() += o.linear_ridge * G.trace() / static_cast<double>(p_lin);
-              a_cell[c].head(p_lin) = G.ldlt().solve(g);
+              G[u].diagonal().array() += o.linear_ridge * G[u].trace() / static_cast<double>(p);
+              f.a_cell[c].head(p) = G[u].ldlt().solve(g[u]);
               if (!renderer::IsStableAr(
-                      std::span<const double>(a_cell[c].data(), static_cast<std::size_t>(p_lin)))) {
+                      std::span<const double>(f.a_cell[c].data(), static_cast<std::size_t>(p)))) {
                 // The covariance-method fit need not be minimum phase, and LSF mixing needs
                 // it: the autocorrelation method (Levinson, as the LPC bank) always is.
                 const auto& x = sig[j.band][i];
+                const auto end = all_rows ? x.size() : rows_of(j, i, false).second;
                 const auto fit = FitAr(
-                    std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(
-                                                                   rows_of(j, i, false).second)),
-                    static_cast<int>(p_lin));
-                a_cell[c].head(p_lin) = Eigen::Map<const Eigen::VectorXd>(fit.coeffs.data(), p_lin);
+                    std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(end)),
+                    static_cast<int>(p));
+                f.a_cell[c].head(p) = Eigen::Map<const Eigen::VectorXd>(fit.coeffs.data(), p);
                 if (o.progress)
                   o.progress(fmt::format("band {}: the least-squares AR({}) at {} m/s, {} N is "
                                          "not minimum phase; the Levinson fit is used there",
-                                         j.band + 1, p_lin, recs[i].speed_mps, recs[i].force_N),
+                                         j.band + 1, p, recs[i].speed_mps, recs[i].force_N),
                              static_cast<int>(done.load()), static_cast<int>(jobs.size()));
               }
               continue;
@@ -291,28 +314,34 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                 unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N))
                         : basis(0, 0);
             for (Eigen::Index t = 0; t < terms; ++t) {
-              rhs.segment(t * M, M) += phi(t) * g;
-              for (Eigen::Index u = 0; u < terms; ++u)
-                A.block(t * M, u * M, M, M) += (phi(t) * phi(u)) * G;
+              rhs.segment(t * M, M) += phi(t) * g[u];
+              for (Eigen::Index s = 0; s < terms; ++s)
+                A.block(t * M, s * M, M, M) += (phi(t) * phi(s)) * G[u];
             }
           }
           if (per_cell) {
-            for (const auto& a : a_cell) cell_ar.emplace_back(a.data(), a.data() + p_lin);
-            wlin.resize(0);  // the network itself has no linear weights
+            for (const auto& a : f.a_cell) f.cell_ar.emplace_back(a.data(), a.data() + p);
+            f.w.resize(0);  // the network itself has no linear weights
           } else {
             const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
             A.diagonal().array() += lambda;
-            wlin = A.ldlt().solve(rhs);
+            f.w = A.ldlt().solve(rhs);
             // The AR coefficients at each training cell: the M x terms weights times phi.
-            const Eigen::Map<const Eigen::MatrixXd> W(wlin.data(), M, terms);
+            const Eigen::Map<const Eigen::MatrixXd> W(f.w.data(), M, terms);
             for (const auto i : use)
-              a_cell[static_cast<std::size_t>(cell_of[i])] =
+              f.a_cell[static_cast<std::size_t>(cell_of[i])] =
                   W * (unified ? basis(m.NormSpeed(recs[i].speed_mps), m.NormForce(recs[i].force_N))
                                : basis(0, 0));
           }
           for (Eigen::Index rr = 0; rr < total; ++rr)
-            ylin(rr) = X.row(rr).head(M).dot(a_cell[row_cell[static_cast<std::size_t>(rr)]]);
-        }
+            f.ylin(rr) = X.row(rr).head(M).dot(f.a_cell[row_cell[static_cast<std::size_t>(rr)]]);
+          return f;
+        };
+        const LinearFit lin_train = fit_linear(false);
+        // Before the input noise below: the refit, like the first fit, is on clean histories.
+        const LinearFit lin_all = refit && nlin > 0 ? fit_linear(true) : LinearFit{};
+        const Eigen::VectorXd& wlin = lin_train.w;
+        const Eigen::VectorXd& ylin = lin_train.ylin;
         const Eigen::MatrixXd Xclean = nlin > 0 ? X : Eigen::MatrixXd();
         const Eigen::VectorXd y_mlp = y - ylin;  // what the MLP learns
         // Input noise (see NeuralFitOptions::input_noise).
@@ -358,10 +387,10 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         // toward zero, so free-running synthesis driven by the one-step residual would have
         // too little power. Sigma is scaled until the free-running signal has the recording's
         // RMS inside the band (what the crossovers pass; three fixed-point passes).
-        auto sigmas = [&](bool mlp) {
+        auto sigmas = [&](bool mlp, const LinearFit& lin) {
           std::vector<double> sigma(cells, 0.0);
-          const Eigen::VectorXd p = !mlp       ? ylin
-                                    : nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + ylin)
+          const Eigen::VectorXd p = !mlp       ? lin.ylin
+                                    : nlin > 0 ? Eigen::VectorXd(net.PredictRows(Xclean) + lin.ylin)
                                                : net.PredictRows(X);
           std::vector<double> se(cells, 0.0), cnt(cells, 0.0);
           Eigen::Index row = 0;
@@ -378,7 +407,7 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             if (cnt[c] > 0) sigma[c] = std::sqrt(se[c] / cnt[c]);
           auto predict = [&](const Eigen::VectorXd& in, std::size_t c) {
             double v = mlp ? net.Predict(in) : 0.0;
-            if (nlin > 0) v += in.head(M).dot(a_cell[c]);
+            if (nlin > 0) v += in.head(M).dot(lin.a_cell[c]);
             return v;
           };
           const double rate_dec = m.sample_rate_hz / band.decimation;
@@ -416,22 +445,55 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           }
           return sigma;
         };
-        const auto with_mlp = sigmas(true);
+        const auto with_mlp = sigmas(true, lin_train);
         for (const auto i : use)
           band.sigma[static_cast<std::size_t>(cell_of[i])] =
               with_mlp[static_cast<std::size_t>(cell_of[i])];
-        if (nlin > 0) {
-          const auto without = sigmas(false);
+        // The linear part alone (the network's output 0) as selected on validation data
+        // (fitted on the training rows), and as returned when selected (refit_linear_part:
+        // the same least squares on every row, sigma recalibrated for it).
+        auto set_linear_alone = [&](std::vector<renderer::NeuralBand>& to_bands,
+                                    const LinearFit& lin) {
+          const auto without = sigmas(false, lin);
           for (const auto i : use)
-            linear_only[j.band].sigma[static_cast<std::size_t>(cell_of[i])] =
+            to_bands[j.band].sigma[static_cast<std::size_t>(cell_of[i])] =
                 without[static_cast<std::size_t>(cell_of[i])];
-          renderer::NeuralNet lin = out;
-          std::fill(lin.params.begin(), lin.params.end(), 0.0);  // the network's output is 0
-          linear_only[j.band].nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(lin);
-          linear_only[j.band].cell_ar = cell_ar;
+          renderer::NeuralNet net0{layers, std::vector<double>(out.params.size(), 0.0),
+                                   std::vector<double>(lin.w.data(), lin.w.data() + lin.w.size())};
+          to_bands[j.band].nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(net0);
+          to_bands[j.band].cell_ar = lin.cell_ar;
+        };
+        if (nlin > 0) set_linear_alone(linear_only, lin_train);
+        if (nlin > 0 && refit) {
+          // The refit must stay a stable filter wherever the model plays: Γ_U's biquadratic
+          // AR coefficients on a 21 x 21 grid over the training range (v', f') in [-1, 1]^2,
+          // Γ_D's AR at its cell (per-cell Levinson fits are minimum phase and their LSF
+          // mixing keeps them so). The least-squares AR(M) is not guaranteed stable, and a
+          // refit that is not is worse than the training-rows fit (a free-running unstable
+          // filter saturates at the clamp): that band keeps the fit on the training rows.
+          bool stable = true;
+          std::string where;
+          if (!per_cell) {
+            const Eigen::Map<const Eigen::MatrixXd> W(lin_all.w.data(), M, terms);
+            for (int iv = 0; iv <= (unified ? 20 : 0) && stable; ++iv)
+              for (int jf = 0; jf <= (unified ? 20 : 0) && stable; ++jf) {
+                const double v = unified ? -1 + 0.1 * iv : 0, fo = unified ? -1 + 0.1 * jf : 0;
+                const Eigen::VectorXd a = W * basis(v, fo);
+                stable = renderer::IsStableAr(
+                    std::span<const double>(a.data(), static_cast<std::size_t>(M)));
+                if (!stable) where = fmt::format(" at v' = {:.1f}, f' = {:.1f}", v, fo);
+              }
+          }
+          set_linear_alone(linear_refit, stable ? lin_all : lin_train);
+          if (o.progress && !stable)
+            o.progress(fmt::format("{}: the linear part refitted on every row is not a stable "
+                                   "filter{}; if the linear parts alone are kept, this one keeps "
+                                   "its training-rows fit",
+                                   name, where),
+                       static_cast<int>(done.load()), static_cast<int>(jobs.size()));
         }
         band.nets[unified ? 0 : static_cast<std::size_t>(j.cell)] = std::move(out);
-        band.cell_ar = std::move(cell_ar);
+        band.cell_ar = lin_train.cell_ar;
         if (o.progress)
           o.progress(name + ": trained", static_cast<int>(++done), static_cast<int>(jobs.size()));
       } catch (...) {
@@ -472,11 +534,15 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
     };
     const double es_mlp = validation_es(m.bands), es_lin = validation_es(linear_only);
     const bool keep = !(es_lin <= es_mlp);
-    if (!keep) m.bands = std::move(linear_only);
+    if (!keep) {
+      m.bands = std::move(refit ? linear_refit : linear_only);
+      if (refit) renderer::FillNeuralCellLsf(&m);  // the refitted cell_ar's LSFs
+    }
     if (o.progress)
       o.progress(fmt::format("validation E_s: {:.4f} with the nonlinear part, {:.4f} with the "
-                             "linear part alone: {} kept",
-                             es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone"),
+                             "linear part alone: {} kept{}",
+                             es_mlp, es_lin, keep ? "nonlinear part" : "linear part alone",
+                             !keep && refit ? ", refitted on every row" : ""),
                  static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
   }
   renderer::ValidateNeuralModel(m);

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
+
 #include "neural_fixture.hpp"
 
 namespace hapticlab::modeling {
@@ -117,8 +119,79 @@ TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
   const auto all = FitNeural(recs, o);
   EXPECT_TRUE(decision.empty());
   EXPECT_FALSE(mlp_is_zero(all)) << "trained networks are kept as trained";
-  for (std::size_t b = 0; b < all.bands.size(); ++b)  // the same linear parts either way
-    EXPECT_EQ(all.bands[b].nets[0].linear, chosen.bands[b].nets[0].linear);
+  // The linear parts are the training rows' fit either way unless the linear part alone is
+  // kept and refitted on every row (the next test).
+  o.validate_nonlinear_part = true;
+  o.refit_linear_part = false;
+  const auto unrefitted = FitNeural(recs, o);
+  for (std::size_t b = 0; b < all.bands.size(); ++b) {
+    EXPECT_EQ(all.bands[b].nets[0].linear, unrefitted.bands[b].nets[0].linear);
+    if (!linear_kept) {
+      EXPECT_EQ(all.bands[b].nets[0].linear, chosen.bands[b].nets[0].linear);
+    }
+  }
+}
+
+// When validation keeps the linear part alone, it is refitted on every row of every recording
+// (NeuralFitOptions::refit_linear_part), as the LPC bank fits whole recordings. Reference: on a
+// 2 x 2 grid the biquadratic basis takes any value at the four nodes, so the AR at each node is
+// that recording's own least-squares AR(M) (covariance method, written here with Eigen) on the
+// band's signal: for band 4 (γ = 1, low-passed to 1000 Hz: the preprocessed recording less its
+// Nyquist-frequency bin).
+TEST(Neural, TheLinearPartKeptAloneIsRefittedOnEveryRow) {
+  std::vector<Recording> recs;
+  int k = 0;
+  for (const double v : {0.04, 0.12})
+    for (const double f : {0.54, 1.91})
+      recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
+  NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
+  o.train.max_epochs = 3;
+  o.hidden_large = {6};
+  const int M = 8;
+  for (auto& b : o.bands) b.history = M;
+  std::string decision;
+  o.progress = [&](const std::string& what, int, int) {
+    if (what.rfind("validation E_s: ", 0) == 0) decision = what;
+  };
+  const auto m = FitNeural(recs, o);
+  ASSERT_NE(decision.find("linear part alone kept"), std::string::npos)
+      << "this data set must exercise the refit: " << decision;
+  const auto& band = m.bands[3];
+  ASSERT_EQ(band.decimation, 1);
+  ASSERT_EQ(band.nets[0].linear.size(), 9u * M);
+  const Eigen::Map<const Eigen::MatrixXd> W(band.nets[0].linear.data(), M, 9);
+  for (const auto& r : recs) {
+    std::vector<double> x = Preprocess(r, o.preprocess);
+    if (x.size() % 2 == 0) {  // remove the Nyquist-frequency bin (the ideal low-pass)
+      double c = 0;
+      for (std::size_t t = 0; t < x.size(); ++t) c += (t % 2 == 0 ? 1.0 : -1.0) * x[t];
+      c /= static_cast<double>(x.size());
+      for (std::size_t t = 0; t < x.size(); ++t) x[t] -= (t % 2 == 0 ? 1.0 : -1.0) * c;
+    }
+    // Least squares of x[t] on x[t-1..t-M]: on every row, and on the first 80 % (the training
+    // rows, what the fit used before the refit).
+    auto ls = [&](std::size_t rows) {
+      Eigen::MatrixXd X(static_cast<Eigen::Index>(rows), M);
+      Eigen::VectorXd y(static_cast<Eigen::Index>(rows));
+      for (std::size_t i = 0; i < rows; ++i) {
+        const std::size_t t = M + i;
+        for (int q = 0; q < M; ++q)
+          X(static_cast<Eigen::Index>(i), q) = x[t - 1 - static_cast<std::size_t>(q)];
+        y(static_cast<Eigen::Index>(i)) = x[t];
+      }
+      return Eigen::VectorXd(X.colPivHouseholderQr().solve(y));
+    };
+    const std::size_t n = x.size() - M;
+    const Eigen::VectorXd a_all = ls(n), a_train = ls(n - n / 5);
+    const double v = m.NormSpeed(r.speed_mps), f = m.NormForce(r.force_N);
+    Eigen::VectorXd phi(9);
+    phi << 1, v, f, v * v, v * f, f * f, v * v * f, v * f * f, v * v * f * f;
+    const Eigen::VectorXd a = W * phi;
+    // The ridge (1e-6 of the mean diagonal) moves the solution by far less than the 20 % of
+    // rows that the refit adds.
+    EXPECT_LT((a - a_all).norm(), 1e-3 * a_all.norm()) << r.file;
+    EXPECT_GT((a_train - a_all).norm(), 1e-2 * a_all.norm()) << r.file;
+  }
 }
 
 // Free-running synthesis of a known nonlinear AR process: the noise-driven MLP reproduces

@@ -69,6 +69,13 @@ struct NeuralFitOptions {
   /// bands of the nonlinear AR grid) and still raise the free-running E_s
   /// (docs/modeling-neural.md). false: always keep the networks. Needs linear_part.
   bool validate_nonlinear_part = true;
+  /// When validation keeps the linear parts alone, refit them on every row of every recording
+  /// (training and validation parts; the LPC bank fits its AR models on whole recordings)
+  /// and recalibrate sigma for them: select on the validation split, then refit the chosen
+  /// model on all data. The networks, when kept, are returned as trained beside the linear
+  /// parts of the training rows (an MLP learns what its linear part leaves; refitting the
+  /// linear part under it would change that). Needs validate_nonlinear_part.
+  bool refit_linear_part = true;
   int threads = 0;  ///< networks trained in parallel; 0: all cores
   /// Progress (what, networks done, total), from worker threads: every 5th training epoch of
   /// each network ("band 2: epoch 10/40, validation MSE 0.41") and when a network finishes.
