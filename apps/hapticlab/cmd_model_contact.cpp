@@ -48,7 +48,11 @@ void AddFitContact(CLI::App& model) {
       "replayed over the measured 2-D path (strokes in any direction), started by Algorithm 1 and\n"
       "refined jointly by Ceres; Hunt-Crossley K, B, n on pokes (samples above 2 N discarded).\n"
       "Pokes are the samples without sliding in --measurement, or a separate --pokes file.\n"
-      "Uncertainties: cluster jackknife over 3 s clusters of blocks, 95 % intervals. Prints each\n"
+      "Uncertainties: cluster jackknife over 3 s clusters of blocks, 95 % intervals; kappa, mu_k\n"
+      "and mu_b are bias-corrected and their standard errors at least the jackknife's, by a\n"
+      "parametric bootstrap through the preprocessing (20 simulated copies of the measurement "
+      "with\n"
+      "its own noise; docs/modeling-geometry-contact.md). Prints each\n"
       "solve's termination, iterations, cost and parameters at bounds; exits 1 when a fit is not\n"
       "usable. Writes a material model (effects, [contact], [friction]) for `model build`.");
   cmd->add_option("--measurement", o->measurement, "Strokes (and pokes): measurement CSV v1")
@@ -60,6 +64,7 @@ void AddFitContact(CLI::App& model) {
   cmd->add_flag("--json", o->json,
                 "Print "
                 "{\"hunt_crossley\":{K,B,n},\"dahl\":{kappa,mu_k,mu_b},\"uncertainty\":{...},"
+                "\"friction_bootstrap\":{...},"
                 "\"fit\":{friction,"
                 "normal_force},\"usable\"}");
   cmd->callback([o] {
