@@ -8,27 +8,26 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <utility>
 
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/workbench_model.hpp"
 #include "hapticlab/modeling/workbench_predict.hpp"
 #include "hapticlab/modeling/workbench_replay.hpp"
+#include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
 namespace {
 
-// Median absolute second difference of `f` over three consecutive rows that all pass `use`,
-// as the SD of white noise (see EstimateNoise).
+// The white-noise SD of `f` from its second differences over three consecutive rows that all
+// pass `use` (internal::NoiseSdFromSecondDifferences); 0 with fewer than 200.
 double SecondDifferenceSd(const Measurement& m, const std::function<bool(std::size_t)>& use,
                           const std::function<double(const MeasurementRow&)>& f) {
   std::vector<double> d2;
   for (std::size_t i = 1; i + 1 < m.rows.size(); ++i)
     if (use(i - 1) && use(i) && use(i + 1))
-      d2.push_back(std::abs(f(m.rows[i - 1]) - 2 * f(m.rows[i]) + f(m.rows[i + 1])));
-  if (d2.size() < 200) return 0;
-  const auto mid = d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2);
-  std::nth_element(d2.begin(), mid, d2.end());
-  return *mid / 0.674489750196 / std::sqrt(6.0);
+      d2.push_back(f(m.rows[i - 1]) - 2 * f(m.rows[i]) + f(m.rows[i + 1]));
+  return d2.size() < 200 ? 0 : internal::NoiseSdFromSecondDifferences(std::move(d2));
 }
 
 }  // namespace
@@ -74,9 +73,13 @@ BootstrapReport BootstrapFriction(Model* model, const Measurement& m, const Repl
   // (docs/modeling-geometry-contact.md): without the play in the simulation the copies' fits
   // were biased by +1.6 to +3.6 % in mu_b even without noise, a bias the recording's fit has
   // not.
+  // Friction only: without the acceleration PrepareReplay skips the vibration windows (FFTs)
+  // in the truth and in every copy.
+  Measurement copy = m;
+  copy.has_acceleration = false;
   ReplayOptions every_row = replay;
   every_row.max_force_rate_hz = 1e12;
-  Replay truth = PrepareReplay(m, every_row);
+  Replay truth = PrepareReplay(copy, every_row);
   if (truth.samples().size() != m.rows.size()) {
     out.why_not = "the replay at the full rate does not have one sample per row";
     return out;
@@ -99,15 +102,14 @@ BootstrapReport BootstrapFriction(Model* model, const Measurement& m, const Repl
   fo.uncertainty = false;
   fo.algorithm1_init = false;  // start from the model the copies were simulated from
   Rng rng(o.seed);
-  Measurement copy = m;
   std::vector<std::vector<double>> est(np);
   const auto& nz = out.noise;
   for (int b = 0; b < o.replicates; ++b) {
     for (std::size_t i = 0; i < m.rows.size(); ++i) {
       const auto& s = ts[i];
       auto& row = copy.rows[i];
-      row = m.rows[i];
-      if (!s.contact) continue;  // out of contact the rows stay as measured
+      row = m.rows[i];  // out of contact the rows stay as measured
+      if (!s.contact) continue;
       row.p_m.x() = s.x_m + rng.Normal(0, nz.position_m);
       row.p_m.y() = s.y_m + rng.Normal(0, nz.position_m);
       row.v_mps.x() = s.vx_mps + rng.Normal(0, nz.velocity_mps);

@@ -2,6 +2,8 @@
 // Internal to the workbench sources: the resolved form of a model (each effect with its
 // parameter values in ParamSpec order) and the replay kernels prediction and fitting share.
 
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -35,5 +37,16 @@ void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* f
 std::vector<double> VibrationRow(const std::vector<Resolved>& eff, const Replay::Window& w);
 /// Whether a block belongs to the split (even blocks train, odd are held out).
 bool InSplit(int block, Split s);
+
+/// Robust SD of white noise on a smooth signal from its second differences over three samples:
+/// they have variance 6 sigma^2, and their median absolute value is 0.6745 of their SD (the
+/// median ignores the signal's own curvature, reversals and contact edges). 0 for none.
+inline double NoiseSdFromSecondDifferences(std::vector<double> d2) {
+  if (d2.empty()) return 0;
+  for (auto& x : d2) x = std::abs(x);
+  const auto mid = d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2);
+  std::nth_element(d2.begin(), mid, d2.end());
+  return *mid / 0.674489750196 / std::sqrt(6.0);
+}
 
 }  // namespace hapticlab::modeling::wb::internal

@@ -11,8 +11,10 @@
 #include <limits>
 #include <mutex>
 #include <numbers>
+#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
 
@@ -111,9 +113,7 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     }
     r.position_resolution_m = 1e-6;
     if (d2.size() >= 200) {
-      std::nth_element(d2.begin(), d2.begin() + static_cast<std::ptrdiff_t>(d2.size() / 2),
-                       d2.end());
-      const double sigma = d2[d2.size() / 2] / 0.674489750196 / std::sqrt(6.0);
+      const double sigma = internal::NoiseSdFromSecondDifferences(std::move(d2));
       r.position_resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
       position_sigma_m = 0.25 * r.position_resolution_m;
     }

@@ -16,6 +16,7 @@
 #include <utility>
 
 #include "hapticlab/modeling/workbench.hpp"
+#include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
 namespace {
@@ -26,15 +27,12 @@ bool InSplit(int block, Split s) {
   return s == Split::kAll || (s == Split::kTrain) == (block % 2 == 0);
 }
 
-// Robust SD of white noise on a smooth signal: the second difference of three samples has
-// variance 6 sigma^2; its median absolute value is 0.6745 of its SD.
+// Robust SD of white noise on a smooth signal (internal::NoiseSdFromSecondDifferences), 0 with
+// fewer than 10 second differences.
 double NoiseSd(const std::vector<double>& second_differences) {
-  if (second_differences.size() < 10) return 0;
-  std::vector<double> a;
-  a.reserve(second_differences.size());
-  for (const double x : second_differences) a.push_back(std::abs(x));
-  std::nth_element(a.begin(), a.begin() + a.size() / 2, a.end());
-  return a[a.size() / 2] / 0.674489750196 / std::sqrt(6.0);
+  return second_differences.size() < 10
+             ? 0
+             : internal::NoiseSdFromSecondDifferences(second_differences);
 }
 
 // A binning of one axis.

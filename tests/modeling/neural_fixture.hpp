@@ -86,15 +86,22 @@ inline NeuralFitOptions Quick(renderer::NeuralTopology t) {
   return o;
 }
 
+// The 2 x 2 corner grid of the thesis's training conditions (4, 12 cm/s x 0.54, 1.91 N), 1 s
+// recordings of a 0.5 mm texture, data seeds from `first_seed`.
+inline std::vector<Recording> CornerGrid(std::uint64_t first_seed) {
+  std::vector<Recording> recs;
+  std::uint64_t k = 0;
+  for (const double v : {0.04, 0.12})
+    for (const double f : {0.54, 1.91})
+      recs.push_back(Texture(v, f, 0.5e-3, first_seed + k++, 1.0));
+  return recs;
+}
+
 // A small trained model (fast): the training grid of the thesis, short recordings. `cell_ar`:
 // Γ_U with per-cell AR fits as its linear part (UnifiedLinearPart::kCellAr).
 inline const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool cell_ar = false) {
   static const auto make = [](renderer::NeuralTopology topo, bool per_cell) {
-    std::vector<Recording> recs;
-    int k = 0;
-    for (const double v : {0.04, 0.12})
-      for (const double f : {0.54, 1.91})
-        recs.push_back(Texture(v, f, 0.5e-3, 50 + static_cast<std::uint64_t>(k++), 1.0));
+    const auto recs = CornerGrid(50);
     NeuralFitOptions o = Quick(topo);
     o.train.max_epochs = 5;
     o.hidden_large = {8, 4};

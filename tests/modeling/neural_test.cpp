@@ -47,11 +47,7 @@ TEST(Neural, ModelHasTheThesisStructure) {
 }
 
 TEST(Neural, TrainingReportsProgressPerEpochAndPerNetwork) {
-  std::vector<Recording> recs;
-  int k = 0;
-  for (const double v : {0.04, 0.12})
-    for (const double f : {0.54, 1.91})
-      recs.push_back(Texture(v, f, 0.5e-3, 70 + static_cast<std::uint64_t>(k++), 1.0));
+  const auto recs = CornerGrid(70);
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 5;
   o.train.patience = 10;  // all five epochs run
@@ -82,11 +78,7 @@ TEST(Neural, TrainingReportsProgressPerEpochAndPerNetwork) {
 // is reported, and the returned networks are the reported variant (linear part alone: every
 // MLP parameter zero, so the network's output is exactly its linear part).
 TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
-  std::vector<Recording> recs;
-  int k = 0;
-  for (const double v : {0.04, 0.12})
-    for (const double f : {0.54, 1.91})
-      recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
+  const auto recs = CornerGrid(90);
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 3;
   o.hidden_large = {6};
@@ -139,11 +131,7 @@ TEST(Neural, TheNonlinearPartIsKeptOnlyWhenValidationFavoursIt) {
 // band's signal: for band 4 (γ = 1, low-passed to 1000 Hz: the preprocessed recording less its
 // Nyquist-frequency bin).
 TEST(Neural, TheLinearPartKeptAloneIsRefittedOnEveryRow) {
-  std::vector<Recording> recs;
-  int k = 0;
-  for (const double v : {0.04, 0.12})
-    for (const double f : {0.54, 1.91})
-      recs.push_back(Texture(v, f, 0.5e-3, 90 + static_cast<std::uint64_t>(k++), 1.0));
+  const auto recs = CornerGrid(90);
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 3;
   o.hidden_large = {6};
