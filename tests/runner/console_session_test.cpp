@@ -68,6 +68,7 @@ struct Seen {
   int break_next = -1, break_done = -1, rated_at_break = -1;
   // A console frame's traces, to compare with the stream.
   int trace_plan = -1, trace_side = -1;
+  std::string trace_source;
   std::vector<Trace> traces;
 };
 
@@ -132,13 +133,16 @@ TEST(Screenshot, RealVsVirtualSessionThroughTheConsole) {
       seen.rated_at_break = seen.rated;
       a.end_break = true;
     }
-    // Traces: a virtual side far enough in that every trace has values.
-    if (!seen.traces_checked && cv.state == S::kExploring &&
+    // Traces: the last frame of the first virtual side on which every trace has values (the
+    // frames of that side are taken in turn; the last one is compared with the stream).
+    const bool same_side = seen.trace_source.empty() || seen.trace_source == cv.trace_source;
+    if (same_side && cv.state == S::kExploring &&
         cv.trace_source.find("virtual") != std::string::npos) {
       bool full = true;
       for (const auto& tr : cv.traces) full = full && tr.values.size() >= 2;
       if (full) {
         seen.traces_checked = true;
+        seen.trace_source = cv.trace_source;
         seen.traces = cv.traces;
         seen.trace_plan = plan;
         seen.trace_side = cv.trace_source.find("side A") != std::string::npos ? 0 : 1;

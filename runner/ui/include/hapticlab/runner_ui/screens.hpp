@@ -2,10 +2,11 @@
 /// @file The study's screens, drawn with Dear ImGui (dissertation ch. IV.5.1, V.2.1): the
 /// participant window (two white squares where the real and the virtual sample lie, a sphere
 /// cursor at the stylus, rating scales with no default position, a confirm button, the break
-/// screen) and the experimenter console (progress through the plan, the next physical sample
-/// to place, live force/speed/acceleration traces, pause/break/abort, device status and fault
-/// counters). The draw functions only need an ImGui frame, so tests run them headless; the
-/// windows (GLFW + OpenGL) are in ui_windows.hpp.
+/// screen) and the experimenter console (the session's state, progress and time to the end,
+/// the trial under way or next and the samples to place, live traces of the recorded streams
+/// with their units, timing and link health, pause/break/abort, the consent and abort modals,
+/// device status and fault counters). The draw functions only need an ImGui frame, so tests run
+/// them headless; the windows (GLFW + OpenGL) are in ui_windows.hpp.
 
 #include <Eigen/Core>
 #include <cstdint>
