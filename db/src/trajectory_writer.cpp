@@ -131,14 +131,20 @@ std::size_t TrajectoryWriter::Pass(bool all) {
     TrajectoryStream& s = *sp;
     const double period = 1.0 / s.rate_hz_;
     TrajectorySample x{};
+    bool popped = false;
     while (s.queue_.TryPop(&x)) {
       ++moved;
+      popped = true;
       // A gap (dropped samples, pause) or a step back in time starts a new chunk.
       if (s.pending_count_ > 0 && std::abs(x.t_s - (s.last_t_s_ + period)) > 0.5 * period) cut(s);
       if (s.pending_count_ == 0) s.pending_start_s_ = x.t_s;
       s.pending_.insert(s.pending_.end(), x.values.begin(), x.values.begin() + s.channels_);
       s.last_t_s_ = x.t_s;
       if (++s.pending_count_ >= options_.chunk_samples) cut(s);
+    }
+    if (popped) {  // the newest recorded sample, for a live display (TrajectoryStream::Latest)
+      s.latest_.WriteSlot() = x;
+      s.latest_.Publish();
     }
     if (all || s.closing_.load()) cut(s);
   }

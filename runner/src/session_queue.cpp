@@ -112,6 +112,9 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   const bool constrained = p.randomization.no_immediate_repeat;
   int untouched_in_a_row = 0;
   std::set<std::int64_t> break_before;  // trials the plan puts a break before
+  std::set<std::int64_t> done;          // trials completed (before a resume or now)
+  for (const auto& t : trials)
+    if (t.status == db::kTrialCompleted) done.insert(t.id);
   for (const auto& e : database.Events(session))
     if (e.kind == "break-planned" && e.trial_id) break_before.insert(*e.trial_id);
   for (const char* phase : {"training", "reference", "main"}) {
@@ -152,6 +155,23 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
         return abort({.detail = "stopped after the requested number of trials"});
       }
+      // The console shows this trial as the next one from now on: through a break and while
+      // its samples are placed.
+      const bool training = t.phase == std::string("training");
+      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1,
+                             training ? training_total : rated_total);
+      screen.training = training;
+      screen.rated_done = rated_done;
+      screen.rated_total = rated_total;
+      screen.training_done = training_done;
+      screen.training_total = training_total;
+      screen.break_before = break_before.count(t.id) && !training;
+      screen.breaks_left = 0;
+      for (const auto& b : trials)
+        if (break_before.count(b.id) && b.phase != std::string("training") && !done.count(b.id) &&
+            b.id != t.id)
+          ++screen.breaks_left;
+      if (opt.ui) opt.ui->Upcoming(screen);
       const bool requested = opt.ui && opt.ui->TakeBreakNow();
       if (opt.ui &&
           (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
@@ -171,17 +191,20 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
           return abort({.detail = "the experimenter aborted during a break"});
         }
       }
+      if (opt.ui && screen.real_sample) {
+        // No trial with a real sample starts before the experimenter confirms its samples.
+        trial_under_way = t.id;
+        const auto how = opt.ui->ConfirmPlacement(screen);
+        if (!how) return abort({.detail = "the experimenter aborted while placing the samples"});
+        database.LogEvent({.session_id = session,
+                           .trial_id = t.id,
+                           .kind = "samples-placed",
+                           .detail = fmt::format("trial {}: {}; {}", screen.plan_number,
+                                                 screen.placement, *how)});
+      }
       database.StartTrial(t.id);
       ++t.attempts;
       ++sum.executed;
-      const bool training = t.phase == std::string("training");
-      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1,
-                             training ? training_total : rated_total);
-      screen.training = training;
-      screen.rated_done = rated_done;
-      screen.rated_total = rated_total;
-      screen.training_done = training_done;
-      screen.training_total = training_total;
       trial_under_way = t.id;
       const Outcome o =
           ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
@@ -238,6 +261,7 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
         continue;
       }
       ++sum.completed;
+      done.insert(t.id);
       (training ? training_done : rated_done) += 1;
       last_material = t.material;
       Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned,

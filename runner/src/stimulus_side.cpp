@@ -60,6 +60,34 @@ void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, cons
   }
 }
 
+namespace {
+
+// The console's live frame: the newest recorded rows (the writer's copy, never the engine's
+// queue) and the engine's counters, read on this (the runner's) thread.
+LiveFrame LiveOf(const RtEngine& engine, db::TrajectoryStream* fs, db::TrajectoryStream* vs,
+                 const db::Trial& t, int screen_side, const std::string& stimulus, bool final) {
+  LiveFrame f;
+  f.plan_number = t.plan_index + 1;
+  f.side = screen_side;
+  f.stimulus = stimulus;
+  f.final = final;
+  db::TrajectorySample row{};
+  if (fs && fs->Latest(&row)) {
+    f.force_recorded = true;
+    f.force_t_s = row.t_s;
+    std::copy_n(row.values.begin(), f.force.size(), f.force.begin());
+  }
+  if (vs && vs->Latest(&row)) {
+    f.vibration_recorded = true;
+    f.vibration_t_s = row.t_s;
+    f.vibration_mps2 = row.values[0];
+  }
+  f.engine = engine.Stats();
+  return f;
+}
+
+}  // namespace
+
 SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s,
                             const RunOptions& opt, db::TrajectoryWriter* writer,
                             db::Database& database, std::int64_t session, const db::Trial& t,
@@ -133,6 +161,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
       if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
       const auto s = engine.LastSample();
+      if (opt.ui) opt.ui->Live(LiveOf(engine, fs, vs, t, screen_side, side.stimulus, false));
       if (opt.ui && !opt.ui->Stimulus(screen, screen_side, s.state.p_m, dur - el)) {
         go_on = false;
         break;
@@ -142,6 +171,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     }
   }
   engine.Stop();
+  if (opt.ui) opt.ui->Live(LiveOf(engine, fs, vs, t, screen_side, side.stimulus, true));
   if (fs) writer->CloseStream(fs);
   if (vs) writer->CloseStream(vs);
   FaultEvent e;

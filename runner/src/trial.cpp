@@ -40,12 +40,21 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index
   s.left = t.left;
   s.right = t.right;
   s.method = t.method;
-  auto what = [](const std::string& stim) {
+  s.plan_number = t.plan_index + 1;
+  // What the experimenter places: "left = real Denim, right = virtual" (the virtual side's
+  // material is not placed, so it is not named).
+  auto what = [&s](const std::string& stim) {
     const Stimulus st = ParseStimulus(stim);
-    return st.real ? "the real " + st.id + " sample" : "virtual (" + st.id + ")";
+    s.real_sample = s.real_sample || st.real;
+    return st.real ? "real " + st.id : std::string("virtual");
   };
-  s.placement = t.right.empty() ? fmt::format("left: {}; right: nothing", what(t.left))
-                                : fmt::format("left: {}; right: {}", what(t.left), what(t.right));
+  s.placement = t.right.empty() ? fmt::format("left = {}, right = nothing", what(t.left))
+                                : fmt::format("left = {}, right = {}", what(t.left), what(t.right));
+  s.sides = t.right.empty() ? 1 : 2;
+  s.stimulus_s = p.stimulus_duration_s;
+  for (const auto& ph : p.phases)
+    if (t.phase == "training" && ph.kind == PhaseKind::kTraining) s.stimulus_s = ph.duration_s;
+  s.break_s = p.break_duration_s;
   s.criteria = p.criteria;
   s.scale_min = p.scale_min;
   s.scale_max = p.scale_max;

@@ -31,6 +31,27 @@ std::vector<std::string> Channels(int n) {
   return c;
 }
 
+// The live display's copy (TrajectoryStream::Latest): nothing before the writer took a
+// sample; after a flush, the newest sample pushed, values and time as recorded.
+TEST(TrajectoryWriter, LatestIsTheNewestSampleTheWriterTook) {
+  Fixture f;
+  TrajectoryWriter w(f.path);
+  auto* s = w.OpenStream(f.trial, "force", 1000, Channels(3));
+  TrajectorySample got{};
+  EXPECT_FALSE(s->Latest(&got)) << "nothing recorded yet";
+  for (int i = 0; i < 50; ++i) {
+    const float v[3] = {static_cast<float>(i), 2.f * static_cast<float>(i), -1.f};
+    s->Push(i / 1000.0, v);
+  }
+  w.Flush();
+  ASSERT_TRUE(s->Latest(&got));
+  EXPECT_EQ(got.t_s, 49 / 1000.0);
+  EXPECT_EQ(got.values[0], 49.f);
+  EXPECT_EQ(got.values[1], 98.f);
+  EXPECT_EQ(got.values[2], -1.f);
+  w.CloseStream(s);
+}
+
 TEST(TrajectoryWriter, KeepsUpWith4kHzTimes16ChannelsWithoutProducerBlocking) {
   Fixture f;
   constexpr double kRate = 4000;

@@ -116,7 +116,11 @@ TEST_F(Headless, ConsoleButtonsReport) {
   v.participant = "P01";
   v.done = 3;
   v.total = 10;
-  v.force_N = {0.1f, 0.5f, 1.0f};
+  v.traces = {{.id = "normal",
+               .label = "normal force [N]",
+               .values = {0.1f, 0.5f, 1.0f},
+               .t_s = 0.1,
+               .none = ""}};
   v.faults = {{"stale", 2}};
   auto frame = [&](float x, float y, bool down, Drawn* d) {
     ImGuiIO& io = ImGui::GetIO();
@@ -130,7 +134,7 @@ TEST_F(Headless, ConsoleButtonsReport) {
   Drawn d;
   frame(-1, -1, false, &d);
   const auto* b = Find(d, "buttons");
-  ASSERT_TRUE(b && Find(d, "progress") && Find(d, "trace:force") && Find(d, "faults"));
+  ASSERT_TRUE(b && Find(d, "progress") && Find(d, "timing") && Find(d, "faults"));
   // Abort is the third button (110 px each, default spacing).
   const float ax = b->x0 + 2 * 110 + 2 * ImGui::GetStyle().ItemSpacing.x + 50, ay = b->cy();
   const float bx = b->x0 + 110 + ImGui::GetStyle().ItemSpacing.x + 50;  // the second button
@@ -162,7 +166,7 @@ TEST_F(Headless, ConsoleButtonsReport) {
   EXPECT_FALSE(frame(ax, ay, false, nullptr).abort);
   // A break: the countdown on the console and "End break now" where Break was.
   v.confirm_abort = false;
-  v.on_break = true;
+  v.state = ConsoleView::State::kBreak;
   v.break_remaining_s = 12.3;
   d.clear();
   frame(-1, -1, false, &d);
@@ -204,6 +208,58 @@ TEST_F(Headless, ChoiceAnswersByClickOrKey) {
   ImGui::GetIO().KeysDown['3'] = false;
   ASSERT_TRUE(a.chosen);
   EXPECT_EQ(*a.chosen, 2);
+}
+
+}  // namespace
+}  // namespace hapticlab::runner::ui
+
+namespace hapticlab::runner::ui {
+namespace {
+
+// Placing samples: the console names what goes where; the button or Enter on the console
+// confirms, only in that state and not while paused.
+TEST_F(Headless, PlaceSamplesConfirmsByButtonOrEnterOnly) {
+  ConsoleView v;
+  v.state = ConsoleView::State::kPlaceSamples;
+  v.next_placement = "left = real Denim, right = virtual";
+  auto frame = [&](float x, float y, bool down, Drawn* d) {
+    ImGuiIO& io = ImGui::GetIO();
+    io.MousePos = ImVec2(x, y);
+    io.MouseDown[0] = down;
+    ImGui::NewFrame();
+    const auto a = DrawConsole(v, d);
+    ImGui::Render();
+    return a;
+  };
+  Drawn d;
+  EXPECT_FALSE(frame(-1, -1, false, &d).samples_placed) << "nothing placed by itself";
+  ASSERT_TRUE(Find(d, "state:place") && Find(d, "place"));
+  const auto* btn = Find(d, "samples-placed");
+  ASSERT_TRUE(btn);
+  frame(btn->cx(), btn->cy(), false, nullptr);
+  frame(btn->cx(), btn->cy(), true, nullptr);
+  auto a = frame(btn->cx(), btn->cy(), false, nullptr);
+  EXPECT_TRUE(a.samples_placed);
+  EXPECT_FALSE(a.samples_placed_by_key);
+  ImGuiIO& io = ImGui::GetIO();
+  constexpr int kEnter = 257;  // GLFW_KEY_ENTER, as ui_windows.cpp maps it
+  io.KeyMap[ImGuiKey_Enter] = kEnter;
+  io.KeysDown[kEnter] = true;
+  a = frame(-1, -1, false, nullptr);
+  io.KeysDown[kEnter] = false;
+  EXPECT_TRUE(a.samples_placed && a.samples_placed_by_key);
+  frame(-1, -1, false, nullptr);
+  // Paused: neither confirms. In another state Enter places nothing.
+  v.paused = true;
+  io.KeysDown[kEnter] = true;
+  EXPECT_FALSE(frame(-1, -1, false, nullptr).samples_placed);
+  io.KeysDown[kEnter] = false;
+  frame(-1, -1, false, nullptr);
+  v.paused = false;
+  v.state = ConsoleView::State::kExploring;
+  io.KeysDown[kEnter] = true;
+  EXPECT_FALSE(frame(-1, -1, false, nullptr).samples_placed);
+  io.KeysDown[kEnter] = false;
 }
 
 }  // namespace

@@ -77,7 +77,7 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
         a.resume = true;
       }
     } else if (answer == "end break") {
-      if (cv.on_break && Find(d, "state:break")) {
+      if (cv.state == ConsoleView::State::kBreak && Find(d, "state:break")) {
         shown = true;
         a.end_break = true;
       }

@@ -1,8 +1,8 @@
 // One planned trial through the one trial path (runner/src/trial.cpp) on the simulated rig:
-// the screen's wording of what lies where; both sides run and the simulated observer rates
-// what the hand felt, one rating per criterion on the scale, the same again for the same
-// seeds; a simulated training trial without screens is recorded without rendering; a link
-// dropout faults the trial (re-queued, no ratings).
+// the screen's wording of what lies where (and whether a real sample must be placed); both sides
+// run and the simulated observer rates what the hand felt, one rating per criterion on the scale,
+// the same again for the same seeds; a simulated training trial without screens is recorded without
+// rendering; a link dropout faults the trial (re-queued, no ratings).
 
 #include "../../runner/src/trial.hpp"
 
@@ -24,13 +24,18 @@ TEST(Trial, TheScreenSaysWhatLiesWhere) {
   const auto screen = ScreenOf(s.protocol, t, 3, 12);
   EXPECT_EQ(screen.index, 3);
   EXPECT_EQ(screen.total, 12);
-  EXPECT_EQ(screen.placement, "left: the real Cork sample; right: virtual (Cork)");
+  EXPECT_EQ(screen.placement, "left = real Cork, right = virtual");
+  EXPECT_TRUE(screen.real_sample) << "the experimenter places the real Cork first";
+  EXPECT_EQ(screen.plan_number, t.plan_index + 1);
+  EXPECT_EQ(screen.sides, 2);
   EXPECT_EQ(screen.method, "Hybrid");
   EXPECT_EQ(screen.criteria, s.protocol.criteria);
   EXPECT_EQ(screen.scale_max, s.protocol.scale_max);
   const auto training = s.Trial("training", "virtual:Denim", "", "FF", 1);
-  EXPECT_EQ(ScreenOf(s.protocol, training, 1, 4).placement,
-            "left: virtual (Denim); right: nothing");
+  const auto ts = ScreenOf(s.protocol, training, 1, 4);
+  EXPECT_EQ(ts.placement, "left = virtual, right = nothing");
+  EXPECT_FALSE(ts.real_sample) << "nothing real to place for a virtual training sample";
+  EXPECT_EQ(ts.sides, 1);
 }
 
 struct Ran {

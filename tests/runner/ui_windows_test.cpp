@@ -11,6 +11,7 @@
 #include <cmath>
 #include <filesystem>
 #include <opencv2/imgcodecs.hpp>
+#include <utility>
 
 #include "screenshot_util.hpp"
 
@@ -34,17 +35,24 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
   cv.study = "ch5-hybrid-realism";
   cv.participant = "P03";
   cv.phase = "main";
-  cv.current = "trial 7: wood, hybrid (real left)";
-  cv.next_placement = "sandpaper on the left, virtual on the right";
+  cv.state = ConsoleView::State::kExploring;
+  cv.now = "trial 9: real:Wood | virtual:Wood (Hybrid)";
+  cv.next_placement = "left = real Wood, right = virtual";
   cv.done = 6;
   cv.total = 60;
   cv.training_done = 10;
   cv.training_total = 10;
-  for (int k = 0; k < 200; ++k) {
-    cv.force_N.push_back(1.0f + 0.3f * std::sin(static_cast<float>(k) * 0.1f));
-    cv.speed_mps.push_back(0.05f + 0.02f * std::sin(static_cast<float>(k) * 0.05f));
-    cv.acc_mps2.push_back(std::sin(static_cast<float>(k) * 1.3f));
+  for (const auto& [id, label] : {std::pair{"normal", "normal force [N]"},
+                                  {"tangential", "tangential force [N]"},
+                                  {"speed", "tangential speed [m/s]"},
+                                  {"vibration", "vibration command [m/s^2]"}}) {
+    Trace tr{.id = id, .label = label, .values = {}, .t_s = 1.5, .none = ""};
+    for (int k = 0; k < 200; ++k)
+      tr.values.push_back(1.0f + 0.3f * std::sin(static_cast<float>(k) * 0.1f));
+    cv.traces.push_back(tr);
   }
+  cv.health = {
+      .valid = true, .late_p50_us = 12, .late_p99_us = 48, .misses_trial = 1, .misses_session = 3};
   cv.device_status = "sim, 1000 Hz force, 10000 Hz vibration";
   cv.faults = {{"stale", 0}, {"disconnect", 0}};
   Drawn pd, cd;
@@ -104,7 +112,8 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
     EXPECT_GT(Bright(p, *it), 15) << id;
   }
   for (const auto& id :
-       {"title", "next", "phase", "device", "faults", "trace:force", "trace:speed", "trace:acc"}) {
+       {"title", "next", "phase", "time", "device", "faults", "trace:normal", "trace:tangential",
+        "trace:speed", "trace:vibration", "timing", "link", "state:exploring"}) {
     const auto* it = Find(cd, id);
     ASSERT_TRUE(it) << id;
     EXPECT_GT(Bright(c, *it), 15) << id;

@@ -8,12 +8,18 @@
 #include <cmath>
 #include <tuple>
 
+#include "screens_internal.hpp"
+
 namespace hapticlab::runner::ui {
 namespace {
 
 constexpr ImU32 kWhite = IM_COL32(255, 255, 255, 255);
 constexpr ImU32 kTrack = IM_COL32(150, 150, 150, 255);
 constexpr ImU32 kHandle = IM_COL32(80, 170, 255, 255);
+
+}  // namespace
+
+namespace internal {
 
 void Record(Drawn* d, const std::string& id, ImVec2 a, ImVec2 b) {
   if (d) d->push_back({id, a.x, a.y, b.x, b.y});
@@ -65,7 +71,12 @@ void TextRecorded(Drawn* d, const std::string& id, const std::string& text) {
   Record(d, id, p, ImVec2(p.x + sz.x, p.y + sz.y));
 }
 
-}  // namespace
+}  // namespace internal
+
+using internal::FullWindow;
+using internal::RatingScale;
+using internal::Record;
+using internal::TextRecorded;
 
 const DrawnItem* Find(const Drawn& d, const std::string& id) {
   for (const auto& x : d)
@@ -135,6 +146,7 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
   const float half = 0.5f * scale * static_cast<float>(v.square_size_m);
   for (const auto& [id, c, label] : {std::tuple{"left-square", v.left_square_m, v.left_label},
                                      std::tuple{"right-square", v.right_square_m, v.right_label}}) {
+    if (!v.right_present && std::string(id) == "right-square") continue;
     const ImVec2 m = to_px(c);
     dl->AddRectFilled(ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half), kWhite);
     Record(drawn, id, ImVec2(m.x - half, m.y - half), ImVec2(m.x + half, m.y + half));
@@ -220,121 +232,6 @@ ParticipantAction DrawParticipant(const ParticipantView& v, Drawn* drawn) {
     ImGui::SetCursorPos(ImVec2(10, size.y - 24));
     TextRecorded(drawn, "trial",
                  fmt::format("{}{} / {}", v.training ? "Training " : "", v.trial, v.trials));
-  }
-  ImGui::End();
-  return act;
-}
-
-ConsoleAction DrawConsole(const ConsoleView& v, Drawn* drawn) {
-  ConsoleAction act;
-  FullWindow("console", IM_COL32(32, 34, 40, 255));
-  TextRecorded(drawn, "title", fmt::format("Study {}   participant {}", v.study, v.participant));
-  // Progress: rated trials of the main phases (the participant window counts the same);
-  // training trials apart.
-  const ImVec2 pp = ImGui::GetCursorScreenPos();
-  const float frac = v.total > 0 ? static_cast<float>(v.done) / static_cast<float>(v.total) : 0.f;
-  ImGui::PushStyleColor(ImGuiCol_PlotHistogram, IM_COL32(60, 180, 90, 255));
-  ImGui::ProgressBar(frac, ImVec2(-1, 24),
-                     fmt::format("{} of {} rated trials", v.done, v.total).c_str());
-  ImGui::PopStyleColor();
-  Record(drawn, "progress", pp, ImVec2(pp.x + ImGui::GetContentRegionAvail().x, pp.y + 24));
-  if (v.training_total > 0)
-    TextRecorded(drawn, "training",
-                 fmt::format("Training: {} of {} trials", v.training_done, v.training_total));
-  TextRecorded(drawn, "phase", "Phase: " + v.phase);
-  // The session's state, impossible to miss: paused, on a break (with its countdown).
-  if (v.paused || v.on_break) {
-    const std::string state =
-        v.paused ? "PAUSED - the participant sees \"Please wait\". Press Resume to continue."
-                 : fmt::format("BREAK - {:.0f} s left", std::ceil(v.break_remaining_s));
-    const ImVec2 sp = ImGui::GetCursorScreenPos();
-    const float w = ImGui::GetContentRegionAvail().x;
-    ImGui::GetWindowDrawList()->AddRectFilled(
-        sp, ImVec2(sp.x + w, sp.y + 34),
-        v.paused ? IM_COL32(190, 120, 20, 255) : IM_COL32(40, 110, 190, 255));
-    ImGui::SetCursorScreenPos(ImVec2(sp.x + 8, sp.y + 6));
-    ImGui::SetWindowFontScale(1.3f);
-    TextRecorded(drawn, v.paused ? "state:paused" : "state:break", state);
-    ImGui::SetWindowFontScale(1.0f);
-    ImGui::SetCursorScreenPos(ImVec2(sp.x, sp.y + 40));
-  }
-  TextRecorded(drawn, "current", "Now: " + v.current);
-  ImGui::PushStyleColor(ImGuiCol_Text, IM_COL32(255, 210, 80, 255));
-  TextRecorded(drawn, "next", "Place next: " + v.next_placement);
-  ImGui::PopStyleColor();
-  ImGui::Separator();
-  auto trace = [&](const char* id, const char* label, const std::vector<float>& x) {
-    const ImVec2 p = ImGui::GetCursorScreenPos();
-    const float w = ImGui::GetContentRegionAvail().x;
-    const std::string overlay =
-        x.empty() ? std::string("no data") : fmt::format("{} {:.3f}", label, x.back());
-    static const float kNone = 0;
-    ImGui::PlotLines(fmt::format("##{}", id).c_str(), x.empty() ? &kNone : x.data(),
-                     x.empty() ? 1 : static_cast<int>(x.size()), 0, overlay.c_str(), FLT_MAX,
-                     FLT_MAX, ImVec2(w, 70));
-    Record(drawn, id, p, ImVec2(p.x + w, p.y + 70));
-  };
-  trace("trace:force", "force [N]", v.force_N);
-  trace("trace:speed", "speed [m/s]", v.speed_mps);
-  trace("trace:acc", "acceleration [m/s^2]", v.acc_mps2);
-  ImGui::Separator();
-  const ImVec2 bp = ImGui::GetCursorScreenPos();
-  if (v.paused)
-    act.resume = ImGui::Button("Resume", ImVec2(110, 30));
-  else
-    act.pause = ImGui::Button("Pause", ImVec2(110, 30));
-  ImGui::SameLine();
-  if (v.on_break)
-    act.end_break = ImGui::Button("End break now", ImVec2(110, 30));
-  else
-    act.take_break = ImGui::Button("Break", ImVec2(110, 30));
-  ImGui::SameLine();
-  ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
-  act.abort = ImGui::Button("Abort", ImVec2(110, 30));
-  ImGui::PopStyleColor();
-  Record(drawn, "buttons", bp, ImVec2(bp.x + 350, bp.y + 30));
-  ImGui::Separator();
-  TextRecorded(drawn, "device", "Device: " + v.device_status);
-  std::string faults;
-  for (const auto& [k, n] : v.faults)
-    faults += fmt::format("{}{} {}", faults.empty() ? "" : ", ", k, n);
-  TextRecorded(drawn, "faults", "Faults: " + (faults.empty() ? std::string("none") : faults));
-  ImGui::Separator();
-  for (std::size_t i = v.log.size() > 8 ? v.log.size() - 8 : 0; i < v.log.size(); ++i)
-    ImGui::TextUnformatted(v.log[i].c_str());
-  // Abort asks first: a modal over the console (nothing else in it reacts while it is open).
-  if (v.confirm_abort) {
-    if (!ImGui::IsPopupOpen("Abort the session?")) ImGui::OpenPopup("Abort the session?");
-    const ImVec2 size = ImGui::GetIO().DisplaySize;
-    ImGui::SetNextWindowPos(ImVec2(size.x / 2, size.y / 2), ImGuiCond_Always, ImVec2(0.5f, 0.5f));
-    ImGui::SetNextWindowSize(ImVec2(460, 0));
-    if (ImGui::BeginPopupModal("Abort the session?", nullptr,
-                               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings)) {
-      const ImVec2 mp = ImGui::GetWindowPos();
-      ImGui::TextWrapped(
-          "Abort this session now? Completed trials stay recorded; the current trial is "
-          "not. 'hapticlab study resume' continues with it later.");
-      ImGui::Spacing();
-      const ImVec2 yp = ImGui::GetCursorScreenPos();
-      ImGui::PushStyleColor(ImGuiCol_Button, IM_COL32(170, 40, 40, 255));
-      act.abort_confirmed = ImGui::Button("Abort session", ImVec2(200, 32));
-      ImGui::PopStyleColor();
-      Record(drawn, "abort-confirm", yp, ImVec2(yp.x + 200, yp.y + 32));
-      ImGui::SameLine();
-      const ImVec2 np = ImGui::GetCursorScreenPos();
-      act.abort_cancelled = ImGui::Button("Continue", ImVec2(200, 32));
-      Record(drawn, "abort-cancel", np, ImVec2(np.x + 200, np.y + 32));
-      Record(drawn, "abort-modal", mp,
-             ImVec2(mp.x + ImGui::GetWindowWidth(), mp.y + ImGui::GetWindowHeight()));
-      ImGui::EndPopup();
-    }
-    act.abort = false;
-  } else if (ImGui::IsPopupOpen("Abort the session?")) {
-    // Closed from outside (the session ended, or a cancel): close the popup too.
-    if (ImGui::BeginPopupModal("Abort the session?")) {
-      ImGui::CloseCurrentPopup();
-      ImGui::EndPopup();
-    }
   }
   ImGui::End();
   return act;

@@ -9,6 +9,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <stdexcept>
+#include <utility>
 
 namespace hapticlab::runner::ui {
 
@@ -18,6 +19,7 @@ struct Windows::Win {
   int fb_w = 0, fb_h = 0;
   std::vector<unsigned char> pixels;  // last frame, RGB, bottom row first
   double last_time = 0;
+  std::vector<unsigned int> chars;  // typed since the last frame (GLFW's character callback)
 };
 
 namespace {
@@ -49,7 +51,26 @@ Windows::Windows(const WindowOptions& o) {
     glfwSwapInterval(1);
     win->ctx = ImGui::CreateContext();
     ImGui::SetCurrentContext(win->ctx);
-    ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the study
+    ImGuiIO& io = ImGui::GetIO();
+    io.IniFilename = nullptr;  // no imgui.ini next to the study
+    // Keys: ImGui 1.86 reads io.KeysDown by the backend's codes (GLFW's, set each frame) and
+    // maps its named keys through io.KeyMap; typed text comes from the character callback.
+    for (const auto& [named, glfw_key] : {std::pair{ImGuiKey_Enter, GLFW_KEY_ENTER},
+                                          {ImGuiKey_KeyPadEnter, GLFW_KEY_KP_ENTER},
+                                          {ImGuiKey_Space, GLFW_KEY_SPACE},
+                                          {ImGuiKey_Backspace, GLFW_KEY_BACKSPACE},
+                                          {ImGuiKey_Delete, GLFW_KEY_DELETE},
+                                          {ImGuiKey_LeftArrow, GLFW_KEY_LEFT},
+                                          {ImGuiKey_RightArrow, GLFW_KEY_RIGHT},
+                                          {ImGuiKey_Home, GLFW_KEY_HOME},
+                                          {ImGuiKey_End, GLFW_KEY_END},
+                                          {ImGuiKey_Tab, GLFW_KEY_TAB},
+                                          {ImGuiKey_Escape, GLFW_KEY_ESCAPE}})
+      io.KeyMap[named] = glfw_key;
+    glfwSetWindowUserPointer(win->w, win.get());
+    glfwSetCharCallback(win->w, [](GLFWwindow* gw, unsigned int c) {
+      static_cast<Win*>(glfwGetWindowUserPointer(gw))->chars.push_back(c);
+    });
     ImGui::StyleColorsDark();
     ImGui_ImplOpenGL2_Init();
     win->last_time = glfwGetTime();
@@ -93,6 +114,10 @@ bool Windows::Frame(const ParticipantView& pv, const ConsoleView& cv, Participan
                       ? ImVec2(static_cast<float>(mx), static_cast<float>(my))
                       : ImVec2(-FLT_MAX, -FLT_MAX);
     for (int b = 0; b < 3; ++b) io.MouseDown[b] = glfwGetMouseButton(w.w, b) == GLFW_PRESS;
+    for (int k = GLFW_KEY_SPACE; k <= GLFW_KEY_LAST && k < IM_ARRAYSIZE(io.KeysDown); ++k)
+      io.KeysDown[k] = glfwGetKey(w.w, k) == GLFW_PRESS;
+    for (const unsigned int c : w.chars) io.AddInputCharacter(c);
+    w.chars.clear();
     ImGui_ImplOpenGL2_NewFrame();
     ImGui::NewFrame();
     if (i == 0) {

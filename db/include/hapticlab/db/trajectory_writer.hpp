@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hapticlab/core/spsc_queue.hpp"
+#include "hapticlab/core/triple_buffer.hpp"
 #include "hapticlab/db/database.hpp"
 
 namespace hapticlab::db {
@@ -58,6 +59,15 @@ class TrajectoryStream {
   std::uint64_t offered_count() const { return offered_.load(std::memory_order_relaxed); }
   /// The trial attempt this stream's chunks are tagged with.
   int attempt() const { return attempt_; }
+  /// The newest sample the writer thread has taken from the queue (what was recorded, as it
+  /// will be stored), for a live display; false before the first. One reader thread (the
+  /// session's), never the producer: the producer's Push is untouched by it.
+  bool Latest(TrajectorySample* out) noexcept {
+    const TrajectorySample& s = latest_.Read();
+    if (!(s.t_s >= 0)) return false;
+    *out = s;
+    return true;
+  }
 
  private:
   friend class TrajectoryWriter;
@@ -80,6 +90,7 @@ class TrajectoryStream {
   double pending_start_s_ = 0;
   double last_t_s_ = 0;
   std::size_t pending_count_ = 0;
+  TripleBuffer<TrajectorySample> latest_{TrajectorySample{-1.0, {}}};  // writer -> Latest()
 };
 
 /// Owns a database connection and a thread that drains every open stream into

@@ -51,6 +51,44 @@ struct TrialScreen {
   /// {"1", "2"} for the intervals of a 2AFC trial or {"yes", "no"}.
   std::string question;
   std::vector<std::string> answers;
+  /// The plan's 1-based number of this trial (plan_index + 1).
+  int plan_number = 0;
+  /// The left side or the right side presents a real sample: the experimenter places it
+  /// (SessionUi::ConfirmPlacement) before the trial starts.
+  bool real_sample = false;
+  /// For the console's time estimate: the stimulus time per side [s], the sides per trial
+  /// (1 for training), whether the plan puts a break before this trial, the planned breaks
+  /// after it and their duration [s].
+  double stimulus_s = 0;
+  int sides = 2;
+  bool break_before = false;
+  int breaks_left = 0;
+  double break_s = 0;
+};
+
+/// What a console shows when it asks the experimenter to confirm a participant's consent
+/// (SessionUi::ConfirmConsent): the protocol's consent document and version. (The same
+/// struct as branch `consent` declares; that branch asks for it before the first trial.)
+struct ConsentRequest {
+  std::string study, participant, document, version;
+};
+
+/// One frame of live data while a side runs (SessionUi::Live), read on the runner's thread:
+/// the newest row of the side's recorded streams as the trajectory writer took it from the
+/// engine's queue (TrajectoryStream::Latest; the force and vibration ticks are untouched) and
+/// the engine's counters and timing so far (RtEngine::Stats, atomics and histograms).
+struct LiveFrame {
+  int plan_number = 0;          ///< the trial's 1-based plan number
+  int side = 0;                 ///< the screen side: 0 left (A), 1 right (B)
+  std::string stimulus;         ///< "real:Denim", "virtual:Denim"
+  bool final = false;           ///< the side has ended: `engine` holds its totals
+  bool force_recorded = false;  ///< `force` holds a recorded row (none with --record none)
+  double force_t_s = 0;         ///< the row's time stamp on the side's clock [s]
+  std::array<float, db::kForceChannelCount> force{};  ///< in db::ForceChannel order
+  bool vibration_recorded = false;                    ///< `vibration_mps2` holds a recorded sample
+  double vibration_t_s = 0;
+  float vibration_mps2 = 0;  ///< the vibration command [m/s^2]
+  EngineStats engine;
 };
 
 /// Hooks a user interface into a session: the runner calls it from its own (main) thread.
@@ -79,6 +117,28 @@ class SessionUi {
   virtual void Event(const std::string&) {}
   /// Polled before each trial: the experimenter asked for a break (cleared by reading).
   virtual bool TakeBreakNow() { return false; }
+  /// Live data of the side being explored, before each Stimulus frame and once more (final)
+  /// when the side has ended.
+  virtual void Live(const LiveFrame& f) { (void)f; }
+  /// The trial that comes next, as soon as it is known: right after the previous trial
+  /// (rated, faulted or skipped), before a break or the placement of samples.
+  virtual void Upcoming(const TrialScreen& next) { (void)next; }
+  /// Blocks until the experimenter confirms that the samples of `t` (t.real_sample) are in
+  /// place; returns who confirmed it and how (e.g. "confirmed by the experimenter: console
+  /// button"), or nullopt when the
+  /// experimenter aborted. The runner logs the confirmation as a 'samples-placed' event and
+  /// starts no trial with a real sample before it. An interface without a placement step (a
+  /// test's scripted rater) keeps this default, which says so in the event.
+  virtual std::optional<std::string> ConfirmPlacement(const TrialScreen& t) {
+    (void)t;
+    return std::string("not confirmed: this interface has no placement step (scripted)");
+  }
+  /// Asks the experimenter to confirm the participant's consent to `r` (a modal on the
+  /// console): the experimenter code entered, or nullopt when aborted or not supported.
+  virtual std::optional<std::string> ConfirmConsent(const ConsentRequest& r) {
+    (void)r;
+    return std::nullopt;
+  }
   /// Set by the runner while a session runs: the UI records the experimenter's actions
   /// (pause, resume, abort requested / cancelled, break ended early) as session events.
   std::function<void(const std::string& kind, const std::string& detail)> log_event;
