@@ -289,9 +289,9 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                            .established_by = shown.untouched
                                                  ? std::string(source::kRunner)
                                                  : source::Watchdog(opt.device, shown.injected)});
-        const std::string line = fmt::format(
-            "{} trial {} (attempt {}) faulted: {}; runs again at the same level",
-            protocols::ToString(ph.kind), t.plan_index + 1, t.attempts, shown.detail);
+        const std::string line =
+            fmt::format("{} trial {} (attempt {}) faulted: {}; runs again at the same level",
+                        protocols::ToString(ph.kind), t.plan_index + 1, t.attempts, shown.detail);
         database.LogEvent({.session_id = session,
                            .trial_id = t.id,
                            .kind = "attempt-faulted",
@@ -303,9 +303,9 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                                     done.size() + 1, shown.detail));
         if (untouched_in_a_row >= opt.max_untouched_trials) {
           abort(fmt::format(
-              "{} trials in a row touched nothing: the rig's sample poses are probably wrong "
-              "(hapticlab rig show / rig calibrate)",
-              untouched_in_a_row),
+                    "{} trials in a row touched nothing: the rig's sample poses are probably wrong "
+                    "(hapticlab rig show / rig calibrate)",
+                    untouched_in_a_row),
                 source::kRunner);
           return out;
         }

@@ -88,11 +88,11 @@ std::int64_t RecordConsent(db::Database& database, std::int64_t session, const C
 
 std::int64_t RecordConsentNotApplicable(db::Database& database, std::int64_t session,
                                         const std::string& mode) {
-  return database.LogEvent({.session_id = session,
-                            .kind = "consent",
-                            .detail = "not applicable: simulated (no person takes part; " + mode +
-                                      ")",
-                            .established_by = source::kSessionMode});
+  return database.LogEvent(
+      {.session_id = session,
+       .kind = "consent",
+       .detail = "not applicable: simulated (no person takes part; " + mode + ")",
+       .established_by = source::kSessionMode});
 }
 
 bool HasConfirmedConsent(const db::Database& database, std::int64_t session) {

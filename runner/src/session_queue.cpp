@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <set>
@@ -28,6 +30,17 @@ void Warn(const RunOptions& o, const std::string& s) {
   if (o.warn) o.warn(s);
 }
 
+// `text` (an error message) with the database's folder left out: the record holds no path
+// that could carry a user or host name.
+std::string WithoutFolder(const db::Database& database, std::string text) {
+  const std::string name = std::filesystem::path(database.path()).filename().string();
+  for (const std::string& path :
+       {std::filesystem::absolute(database.path()).lexically_normal().string(), database.path()})
+    for (std::size_t at; !path.empty() && (at = text.find(path)) != std::string::npos;)
+      text.replace(at, path.size(), name);
+  return text;
+}
+
 // Marks a session that stopped on an error (a full disk, a database that cannot be written,
 // a device that failed to open) as 'failed', with a 'stopped' event saying why. On a full
 // disk even that may fail: then the -wal is checkpointed (freeing its frames) and it is
@@ -37,12 +50,13 @@ void MarkFailed(db::Database& database, std::int64_t session, const std::string&
   const auto mark = [&] {
     database.Exec("BEGIN IMMEDIATE");
     try {
-      database.LogEvent({.session_id = session,
-                         .kind = "stopped",
-                         .detail = "the session stopped on an error: " + why +
-                                   "; completed trials are recorded; fix the cause, then "
-                                   "'hapticlab study resume'",
-                         .established_by = source::kRunner});
+      database.LogEvent(
+          {.session_id = session,
+           .kind = "stopped",
+           .detail = "the session stopped on an error: " + WithoutFolder(database, why) +
+                     "; completed trials are recorded; fix the cause, then "
+                     "'hapticlab study resume'",
+           .established_by = source::kRunner});
       database.EndSession(session, kSessionFailed);
       database.Exec("COMMIT");
     } catch (...) {
@@ -53,6 +67,9 @@ void MarkFailed(db::Database& database, std::int64_t session, const std::string&
   for (int attempt = 0; attempt < 2; ++attempt) {
     try {
       mark();
+      Warn(opt, fmt::format("session {} stopped on an error and is marked 'failed' (a 'stopped' "
+                            "event says why); fix the cause, then 'hapticlab study resume'",
+                            session));
       return;
     } catch (const std::exception&) {
       database.Checkpoint();
@@ -176,11 +193,18 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                            const std::string& by) {
     ++sum.faults;
     database.SetTrialStatus(t.id, db::kTrialFaulted);
-    database.LogEvent(
-        {.session_id = session, .trial_id = t.id, .kind = kind, .detail = cause, .established_by = by});
+    database.LogEvent({.session_id = session,
+                       .trial_id = t.id,
+                       .kind = kind,
+                       .detail = cause,
+                       .established_by = by});
+    std::string why = cause;  // the watchdog's text may end by saying it already
+    for (const char* tail : {", trial re-queued", "; trial re-queued"})
+      if (why.size() > std::strlen(tail) && why.ends_with(tail))
+        why.resize(why.size() - std::strlen(tail));
     const std::string line =
         fmt::format("trial {} ({}, attempt {}) faulted: {}; re-queued at the end of the {} phase",
-                    t.plan_index + 1, t.phase, t.attempts, cause, t.phase);
+                    t.plan_index + 1, t.phase, t.attempts, why, t.phase);
     database.LogEvent({.session_id = session,
                        .trial_id = t.id,
                        .kind = "attempt-faulted",
@@ -245,10 +269,10 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
             {.session_id = session,
              .trial_id = t.id,
              .kind = "break",
-             .detail = fmt::format(
-                 "{:.0f} s break ({}{})", break_s,
-                 requested ? "requested by the experimenter" : "planned",
-                 speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
+             .detail =
+                 fmt::format("{:.0f} s break ({}{})", break_s,
+                             requested ? "requested by the experimenter" : "planned",
+                             speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
              .established_by = requested ? source::kConsole : source::kPlan});
         trial_under_way = t.id;
         if (!opt.ui->Break(break_s)) {
@@ -279,9 +303,9 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                       .established_by = source::kConsole});
       }
       if (o.fault) {
-        requeue(t, "device-fault", o.fault_detail,
-                o.untouched ? std::string(source::kRunner)
-                            : source::Watchdog(opt.device, o.injected));
+        requeue(
+            t, "device-fault", o.fault_detail,
+            o.untouched ? std::string(source::kRunner) : source::Watchdog(opt.device, o.injected));
         if (opt.ui)
           opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial",
                                     screen.index, o.fault_detail));
@@ -300,7 +324,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         database.CompleteTrial(t.id, o.ratings, writer.TakeReports(t.id));
         trajectory_faults = 0;
       } catch (const db::TrajectoryIncomplete& e) {
-        requeue(t, "trajectory-fault", e.what(), source::kDatabase);
+        requeue(t, "trajectory-fault", WithoutFolder(database, e.what()), source::kDatabase);
         if (opt.ui)
           opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)",
                                     training ? "training trial" : "trial", screen.index));

@@ -59,17 +59,18 @@ TEST(AuditCli, FaultedAttemptsArePrintedAndCountedByStatus) {
   const std::string db = dir.File("f.db");
   std::string out;
   // --quiet leaves out progress, not faults.
-  ASSERT_EQ(test::RunCommand(Run(db, "P01",
-                                 "--device falcon-twin --inject-faults 0.3 --record none --quiet"),
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Run(db, "P01", "--device falcon-twin --inject-faults 0.3 --record none --quiet"), &out),
+      0)
       << out;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(out, m, std::regex("(\\d+) faults re-queued"))) << out;
   const int faults = std::stoi(m[1]);
   ASSERT_GT(faults, 0) << "no fault injected: the test tests nothing\n" << out;
-  const std::regex line("P01: trial (\\d+) \\((main|reference), attempt (\\d+)\\) faulted: "
-                        "[^\\n]*disconnect[^\\n]*re-queued");
+  const std::regex line(
+      "P01: trial (\\d+) \\((main|reference), attempt (\\d+)\\) faulted: "
+      "[^\\n]*disconnect[^\\n]*re-queued");
   const auto lines = static_cast<int>(
       std::distance(std::sregex_iterator(out.begin(), out.end(), line), std::sregex_iterator()));
   EXPECT_EQ(lines, faults) << out;
@@ -89,17 +90,17 @@ TEST(AuditCli, AConsoleSessionCarriesTheExperimenterAndAResumeWithoutDisplayIsBa
   test::TempDir dir;
   const std::string db = dir.File("u.db");
   std::string out;
-  const std::string display = "ASAN_OPTIONS=detect_leaks=0 " + std::string(HL_SOURCE_DIR) +
-                              "/tests/util/with_display.sh ";
+  const std::string display =
+      "ASAN_OPTIONS=detect_leaks=0 " + std::string(HL_SOURCE_DIR) + "/tests/util/with_display.sh ";
   // A person rates: without an experimenter's confirmation the session does not start.
   EXPECT_EQ(test::RunCommand(display + Run(db, "P01", "--ui --stop-after 3 --quiet"), &out), 2)
       << out;
   EXPECT_NE(out.find("--consent-confirmed-by"), std::string::npos) << out;
   EXPECT_EQ(Count(db, "SELECT count(*) FROM participant"), 0);
-  EXPECT_EQ(test::RunCommand(
-                display + Run(db, "P01", "--ui --stop-after 3 --quiet --consent-confirmed-by E01"),
-                &out),
-            3)
+  EXPECT_EQ(
+      test::RunCommand(
+          display + Run(db, "P01", "--ui --stop-after 3 --quiet --consent-confirmed-by E01"), &out),
+      3)
       << out;
   EXPECT_EQ(Count(db,
                   "SELECT count(*) FROM event WHERE kind = 'consent' AND established_by = "
@@ -109,8 +110,8 @@ TEST(AuditCli, AConsoleSessionCarriesTheExperimenterAndAResumeWithoutDisplayIsBa
   EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
   // Resumed in its recorded mode (screens on) where there is no display: bad input naming
   // both the recorded mode and the one that could start, not a GLFW failure.
-  EXPECT_EQ(test::RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + Cli() +
-                                 " study resume --db " + db + " --participant P01 --quiet",
+  EXPECT_EQ(test::RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + Cli() + " study resume --db " +
+                                 db + " --participant P01 --quiet",
                              &out),
             2)
       << out;
@@ -127,10 +128,10 @@ TEST(AuditCli, HelpListsExitCodeThreeAndReportsHoldNoAbsolutePath) {
   const std::string db = fs::absolute(dir.File("s.db")).string();
   for (const char* p : {"P01", "P02"})
     ASSERT_EQ(test::RunCommand(Run(db, p, "--quiet --record none"), &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + db + " --out " + dir.File("rep") +
-                                 " --no-figures",
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --no-figures", &out),
+      0)
       << out;
   int files = 0;
   for (const auto& f : fs::recursive_directory_iterator(dir.File("rep"))) {

@@ -81,7 +81,7 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   o.rig = &rig;
   o.ui = &ui;
   o.consent_confirmed_by = "E01";  // a person takes part
-  o.stop_after_trials = 7;  // the training trials and three rated ones (0.5 s per side)
+  o.stop_after_trials = 7;         // the training trials and three rated ones (0.5 s per side)
   const auto s = RunStudy(p, o);
   EXPECT_EQ(s.status, "aborted");
   EXPECT_GT(ui.frames, 10);

@@ -41,7 +41,7 @@ struct Session {
   std::int64_t participant_id = 0;
   std::string started_at;          ///< ISO-8601 UTC, filled by the database when empty
   std::string ended_at;            ///< empty while running
-  std::string status = "running";  ///< running | completed | aborted | crashed
+  std::string status = "running";  ///< running | completed | aborted | failed (an error)
   std::string software_version;    ///< "<version>+<git sha>"
   std::string device;              ///< device back-end name and serial
   std::string calibration;         ///< device calibration description or hash
@@ -258,8 +258,8 @@ class Database {
 /// The one-writer lease of a study database: an advisory lock (flock) on the database file,
 /// held for the object's life, plus a `writer_lease` row naming the process id and host so
 /// a second writer is told who holds it; the row is deleted when the lease ends (a killed
-/// process leaves it, and the next writer replaces it). The lock is released by the kernel when the process
-/// ends, even on SIGKILL. Take it before opening any Database on the file and release it
+/// process leaves it, and the next writer replaces it). The lock is released by the kernel when the
+/// process ends, even on SIGKILL. Take it before opening any Database on the file and release it
 /// after every connection of this process to the file is closed (so closing its descriptor
 /// cannot drop SQLite's own locks).
 class WriterLease {

@@ -26,8 +26,8 @@ namespace source {
 inline constexpr const char* kRunner = "hapticlab:runner";  ///< the runner's own decisions
 inline constexpr const char* kPlan = "hapticlab:plan";      ///< the stored plan (breaks)
 inline constexpr const char* kSessionMode = "hapticlab:session-mode";  ///< the recorded mode
-inline constexpr const char* kConsole = "experimenter:console";  ///< an action in the console
-inline constexpr const char* kSignal = "os:signal";              ///< SIGINT / SIGTERM
+inline constexpr const char* kConsole = "experimenter:console";        ///< an action in the console
+inline constexpr const char* kSignal = "os:signal";                    ///< SIGINT / SIGTERM
 inline constexpr const char* kDatabase = "database";  ///< the trajectory writer, SQLite
 inline constexpr const char* kInjected = "simulation:inject-faults";  ///< a simulated fault
 /// "experimenter:CODE": an experimenter known by a pseudonymous code.

@@ -248,7 +248,7 @@ RunSummary ResumeStudy(const RunOptions& options);
 struct ParticipantStatus {
   std::string code;
   int planned = 0, completed = 0;
-  int faulted = 0;  ///< faulted attempts (each re-queued; 'attempt-faulted' events)
+  int faulted = 0;     ///< faulted attempts (each re-queued; 'attempt-faulted' events)
   int duplicates = 0;  ///< planned trials completed more than once (must be 0)
   std::string session_status;
 };
