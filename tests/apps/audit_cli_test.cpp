@@ -20,7 +20,7 @@ using nlohmann::json;
 
 std::string Cli() { return HL_CLI_PATH; }
 std::string Small() { return test::DataPath("protocols/small.toml"); }
-std::string Run(const std::string& db, const std::string& code, const std::string& more) {
+std::string RunCmd(const std::string& db, const std::string& code, const std::string& more) {
   return Cli() + " study run " + Small() + " --db " + db + " --participant " + code + " " + more;
 }
 
@@ -28,7 +28,7 @@ TEST(AuditCli, AHeadlessSimulatedRunRecordsConsentAsNotApplicableAndClearsTheLea
   test::TempDir dir;
   const std::string db = dir.File("s.db");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Run(db, "P01", "--quiet --record none"), &out), 0) << out;
+  ASSERT_EQ(test::RunCommand(RunCmd(db, "P01", "--quiet --record none"), &out), 0) << out;
   EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
   EXPECT_EQ(Count(db,
                   "SELECT count(*) FROM event WHERE kind = 'consent' AND detail LIKE 'not "
@@ -50,7 +50,7 @@ TEST(AuditCli, AHeadlessSimulatedRunRecordsConsentAsNotApplicableAndClearsTheLea
       << events.substr(0, 200);
   EXPECT_NE(events.find("hapticlab:session-mode"), std::string::npos);
   // A consent code for a simulated session is refused (no person takes part).
-  EXPECT_EQ(test::RunCommand(Run(db, "P02", "--quiet --consent-confirmed-by E01"), &out), 2);
+  EXPECT_EQ(test::RunCommand(RunCmd(db, "P02", "--quiet --consent-confirmed-by E01"), &out), 2);
   EXPECT_NE(out.find("--consent-confirmed-by"), std::string::npos) << out;
 }
 
@@ -59,10 +59,10 @@ TEST(AuditCli, FaultedAttemptsArePrintedAndCountedByStatus) {
   const std::string db = dir.File("f.db");
   std::string out;
   // --quiet leaves out progress, not faults.
-  ASSERT_EQ(
-      test::RunCommand(
-          Run(db, "P01", "--device falcon-twin --inject-faults 0.3 --record none --quiet"), &out),
-      0)
+  ASSERT_EQ(test::RunCommand(
+                RunCmd(db, "P01", "--device falcon-twin --inject-faults 0.3 --record none --quiet"),
+                &out),
+            0)
       << out;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(out, m, std::regex("(\\d+) faults re-queued"))) << out;
@@ -93,13 +93,14 @@ TEST(AuditCli, AConsoleSessionCarriesTheExperimenterAndAResumeWithoutDisplayIsBa
   const std::string display =
       "ASAN_OPTIONS=detect_leaks=0 " + std::string(HL_SOURCE_DIR) + "/tests/util/with_display.sh ";
   // A person rates: without an experimenter's confirmation the session does not start.
-  EXPECT_EQ(test::RunCommand(display + Run(db, "P01", "--ui --stop-after 3 --quiet"), &out), 2)
+  EXPECT_EQ(test::RunCommand(display + RunCmd(db, "P01", "--ui --stop-after 3 --quiet"), &out), 2)
       << out;
   EXPECT_NE(out.find("--consent-confirmed-by"), std::string::npos) << out;
   EXPECT_EQ(Count(db, "SELECT count(*) FROM participant"), 0);
   EXPECT_EQ(
       test::RunCommand(
-          display + Run(db, "P01", "--ui --stop-after 3 --quiet --consent-confirmed-by E01"), &out),
+          display + RunCmd(db, "P01", "--ui --stop-after 3 --quiet --consent-confirmed-by E01"),
+          &out),
       3)
       << out;
   EXPECT_EQ(Count(db,
@@ -127,7 +128,7 @@ TEST(AuditCli, HelpListsExitCodeThreeAndReportsHoldNoAbsolutePath) {
   test::TempDir dir;
   const std::string db = fs::absolute(dir.File("s.db")).string();
   for (const char* p : {"P01", "P02"})
-    ASSERT_EQ(test::RunCommand(Run(db, p, "--quiet --record none"), &out), 0) << out;
+    ASSERT_EQ(test::RunCommand(RunCmd(db, p, "--quiet --record none"), &out), 0) << out;
   ASSERT_EQ(
       test::RunCommand(
           Cli() + " analyze --db " + db + " --out " + dir.File("rep") + " --no-figures", &out),

@@ -103,6 +103,8 @@ TEST(Audit, APersonSessionNeedsAnExperimenterCodeAndRecordsItWithTheDocumentVers
   }
   o.consent_confirmed_by = "Alice";  // a name, not a code
   EXPECT_EQ(RefusedField([&] { RunStudy(p, o); }), "consent_confirmed_by");
+  EXPECT_EQ(ui.asked.size(), 1u) << "without a code the console is asked (and cannot)";
+  ui.asked.clear();
   o.consent_confirmed_by = "E01";
   EXPECT_EQ(RunStudy(p, o).status, "aborted");  // stopped after 6 trials
   int consent = 0;
