@@ -279,6 +279,13 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     const bool differs =
         CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
     const Lab lab = LoadLab(p, opt.device);
+    // A person takes part now but no experimenter confirmed consent yet (a simulated session
+    // resumed with screens, or one recorded before schema v7), or a code is given again:
+    // confirmed (or refused) before anything of this resume is written.
+    if (!opt.consent_confirmed_by.empty() ||
+        (PersonTakesPart(opt) && !HasConfirmedConsent(database, se.id)))
+      if (const auto consent = ObtainConsent(p, opt, opt.participant))
+        RecordConsent(database, se.id, *consent);
     if (differs) {
       database.LogEvent({.session_id = se.id,
                          .kind = "mode-change",
@@ -291,12 +298,6 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     } else if (recorded.actuator == "unrecorded") {
       database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
     }
-    // A person takes part now but no experimenter confirmed consent yet (a simulated session
-    // resumed with screens, or one recorded before schema v7), or a code is given again.
-    if (!opt.consent_confirmed_by.empty() ||
-        (PersonTakesPart(opt) && !HasConfirmedConsent(database, se.id)))
-      if (const auto consent = ObtainConsent(p, opt, opt.participant))
-        RecordConsent(database, se.id, *consent);
     const RunOptions& o = opt;
     const std::string unclosed =
         se.status == "running"
