@@ -107,10 +107,6 @@ class Rig {
       rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) +
                          " (sha256 " + rf.sha256.substr(0, 16) + ")";
     o->rig = &rig_;
-    if (!rig_.sim && !a.ui)
-      throw InputError(
-          kCommandLine, 0, "--ui",
-          "a hardware session takes its ratings from the participant window: add --ui");
     if (!a.rating_box.empty()) {
       if (!a.ui)
         throw InputError(kCommandLine, 0, "--rating-box",
