@@ -462,7 +462,9 @@ void RegisterStudy(CLI::App& app) {
   {
     auto a = std::make_shared<RunArgs>();
     auto* cmd = study->add_subcommand(
-        "status", "Progress of each participant: planned, completed, faulted, duplicates");
+        "status",
+        "Progress of each participant: planned, completed, faulted (attempts, each re-queued),\n"
+        "duplicates, session status (running, completed, aborted, failed)");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Only this participant");
     cmd->add_flag(
