@@ -13,7 +13,9 @@ void BuildApp(CLI::App& app) {
       "HapticLab: model real textures, render them on a force-feedback device plus a\n"
       "vibrotactile actuator, run psychophysical studies comparing real and virtual\n"
       "textures, and analyse the ratings. Run 'hapticlab COMMAND --help' for details.\n"
-      "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.");
+      "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input (the message names the\n"
+      "file, line and field), 3 'study run'/'study resume' stopped before the session's end\n"
+      "(what was completed is recorded; 'study resume' continues it).");
   app.name("hapticlab");
   app.set_version_flag("--version", fmt::format("hapticlab {} ({})", kVersion, kGitSha));
   app.require_subcommand(1);

@@ -36,6 +36,9 @@ struct RunArgs {
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
   runner::RtThreadOptions rt;
+  std::string consent_by;  ///< --consent-confirmed-by: the experimenter's code
+  /// study resume: the recorded mode (SessionMode::Describe), for a mode that cannot start
+  std::string recorded_mode;
 };
 
 // Opens the hardware and the windows a run asks for and keeps them alive for the session.
@@ -63,6 +66,17 @@ class Rig {
     rig_.calibration = rf.text;
     rig_.rig_file_hash = rf.sha256;
     std::string status = "sim (generic simulated device, simulated hand)";
+    const bool hardware = a.device != "sim" && a.device != "falcon-twin";
+    if (hardware && !a.ui) {  // before any device is opened
+      Diagnostics d;
+      d.Add(kCommandLine, 0, "--ui",
+            "a hardware session takes its ratings from the participant window: add --ui");
+      if (a.consent_by.empty())
+        d.Add(kCommandLine, 0, "--consent-confirmed-by",
+              "a person takes part in a hardware session: give the code of the experimenter who "
+              "confirmed their consent (e.g. E01), never a name");
+      d.ThrowIfAny();
+    }
     if (a.device == "sim" || a.device == "falcon-twin") {
       simulated_ = runner::OpenSimulatedRig(a.device, rf);
       rig_ = simulated_->rig;
@@ -93,10 +107,6 @@ class Rig {
       rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) +
                          " (sha256 " + rf.sha256.substr(0, 16) + ")";
     o->rig = &rig_;
-    if (!rig_.sim && !a.ui)
-      throw InputError(
-          kCommandLine, 0, "--ui",
-          "a hardware session takes its ratings from the participant window: add --ui");
     if (!a.rating_box.empty()) {
       if (!a.ui)
         throw InputError(kCommandLine, 0, "--rating-box",
@@ -107,8 +117,20 @@ class Rig {
     if (a.ui) {
       runner::ui::WindowOptions wo;
       wo.participant_fullscreen = a.fullscreen;
-      ui_ =
-          std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo, box_.get());
+      try {
+        ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo,
+                                                            box_.get());
+      } catch (const std::runtime_error& e) {
+        if (a.recorded_mode.empty()) throw;  // study run: the environment (exit 1)
+        // study resume in the recorded mode, which cannot start here.
+        throw InputError(
+            kCommandLine, 0, "--ui",
+            fmt::format("{}'s session was recorded in mode [{}], which cannot start here ({}). "
+                        "Resume it where a display is, or continue in mode [device {}, "
+                        "actuator {}, screens off, ratings simulated] with '--ui=false "
+                        "--change-mode' (logged; each rating records its source)",
+                        participant, a.recorded_mode, e.what(), a.device, a.actuator));
+      }
       o->ui = ui_.get();
       o->ui_playback_speed = a.ui_speed;
     }
@@ -180,7 +202,9 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   o.record = ParseRecord(a.record);
   o.stop_after_trials = a.stop_after;
   o.rt = a.rt;
+  o.consent_confirmed_by = a.consent_by;
   if (!a.quiet && !a.json) o.log = StderrLog(false);
+  if (!a.json) o.warn = StderrLog(false);  // faulted attempts: also with --quiet
   InstallStopHandlers();
   const auto sum = session(o);
   PrintSummary(sum, a.json);
@@ -190,7 +214,10 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
 // RunGuarded, with the runner's names for what the user gave ("participant", "db", ...)
 // shown as the options that gave them.
 void RunStudyGuarded(const std::function<int()>& body) {
-  RunGuarded({{"participant", "--participant"}, {"db", "--db"}, {"change_mode", "--change-mode"}},
+  RunGuarded({{"participant", "--participant"},
+              {"db", "--db"},
+              {"change_mode", "--change-mode"},
+              {"consent_confirmed_by", "--consent-confirmed-by"}},
              body);
 }
 
@@ -344,7 +371,14 @@ void RegisterStudy(CLI::App& app) {
         ->check(CLI::IsMember({"all", "force", "none"}))
         ->capture_default_str();
     cmd->add_flag("--json", a.json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a.quiet, "No per-trial progress");
+    cmd->add_flag("--quiet", a.quiet,
+                  "No per-trial progress (faulted attempts are still printed, on stderr)");
+    cmd->add_option(
+        "--consent-confirmed-by", a.consent_by,
+        "Code of the experimenter who confirmed the participant's consent to the protocol's\n"
+        "[consent] document and version (e.g. E01; a pseudonymous code, never a name).\n"
+        "Needed when a person takes part (--ui, or a hardware device); recorded as the\n"
+        "'consent' event. A simulated session records consent as not applicable.");
   };
   {
     auto a = std::make_shared<RunArgs>();
@@ -410,6 +444,7 @@ void RegisterStudy(CLI::App& app) {
         if (cmd->count("--ui") == 0) a->ui = rec.screens;
         if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
           a->rating_box = rec.rater.substr(std::string("rating-box:").size());
+        a->recorded_mode = rec.Describe();
         // Refused before any device or window is opened.
         runner::CheckResumeMode(
             rec,
@@ -427,7 +462,9 @@ void RegisterStudy(CLI::App& app) {
   {
     auto a = std::make_shared<RunArgs>();
     auto* cmd = study->add_subcommand(
-        "status", "Progress of each participant: planned, completed, faulted, duplicates");
+        "status",
+        "Progress of each participant: planned, completed, faulted (attempts, each re-queued),\n"
+        "duplicates, session status (running, completed, aborted, failed)");
     cmd->add_option("--db", a->db, "Study database")->required();
     cmd->add_option("--participant", a->participant, "Only this participant");
     cmd->add_flag(

@@ -52,22 +52,13 @@ json Percentiles(const LatencySummary& s) {
 }
 
 // cyclictest-like: count per microsecond of lateness up to the largest non-empty one (at most
-// 100 rows; the rest in one overflow row).
+// 100 rows; the rest, with the histogram's overflow bin, in one overflow row).
 void PrintHistogram(const LatencySummary& s) {
   constexpr std::size_t kPerUs = 2, kRows = 100;  // two 0.5 us bins per row
   std::uint64_t beyond = 0;
-  std::size_t last = 0;
-  for (std::size_t i = 0; i <= LatencySummary::kBins; ++i)
-    if (s.counts[i]) last = i;
-  for (std::size_t row = 0; row * kPerUs <= last; ++row) {
-    std::uint64_t n = 0;
-    for (std::size_t j = 0; j < kPerUs; ++j) n += s.counts[row * kPerUs + j];
-    if (row >= kRows) {
-      beyond += n;
-      continue;
-    }
-    fmt::print("  {:>4} us  {:>9}\n", row, n);
-  }
+  const auto rows = s.Rows(kPerUs, kRows, &beyond);
+  for (std::size_t row = 0; row < rows.size(); ++row)
+    fmt::print("  {:>4} us  {:>9}\n", row, rows[row]);
   if (beyond) fmt::print("  >{:>3} us  {:>9}\n", kRows - 1, beyond);
 }
 

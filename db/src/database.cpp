@@ -304,7 +304,7 @@ bool Database::Checkpoint() {
 
 namespace hapticlab::db {
 
-WriterLease::WriterLease(const std::string& db_path) {
+WriterLease::WriterLease(const std::string& db_path) : path_(db_path) {
   fd_ = ::open(db_path.c_str(), O_RDONLY | O_CREAT | O_CLOEXEC, 0644);
   if (fd_ < 0)
     throw InputError(db_path, 0, "db", std::string("cannot open: ") + std::strerror(errno));
@@ -344,7 +344,15 @@ WriterLease::WriterLease(const std::string& db_path) {
 }
 
 WriterLease::~WriterLease() {
-  if (fd_ >= 0) ::close(fd_);  // releases the flock
+  if (fd_ < 0) return;
+  // The lease ends with its holder: no host name or process id stays in the file. (Every
+  // other connection of this process to the file is closed by now; see the class comment.)
+  try {
+    Database d(path_, {.create = false, .busy_timeout_ms = 2000});
+    ExecSql(d.handle(), "DELETE FROM writer_lease");
+  } catch (...) {  // never throw from a destructor; a full disk may refuse even this
+  }
+  ::close(fd_);  // releases the flock
 }
 
 }  // namespace hapticlab::db

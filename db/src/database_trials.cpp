@@ -273,24 +273,29 @@ std::vector<std::int64_t> Database::RatedTrialsInCompletionOrder(std::int64_t se
 }
 
 std::int64_t Database::LogEvent(const Event& e) {
-  Stmt s(db_, "INSERT INTO event(session_id, trial_id, kind, detail) VALUES (?,?,?,?)");
+  Stmt s(db_,
+         "INSERT INTO event(session_id, trial_id, kind, detail, established_by) VALUES "
+         "(?,?,?,?,?)");
   s.Bind(1, e.session_id);
   if (e.trial_id)
     s.Bind(2, *e.trial_id);
   else
     s.BindNull(2);
-  s.Bind(3, e.kind).Bind(4, e.detail).Run();
+  s.Bind(3, e.kind)
+      .Bind(4, e.detail)
+      .Bind(5, e.established_by.empty() ? std::string("hapticlab") : e.established_by)
+      .Run();
   return sqlite3_last_insert_rowid(db_);
 }
 
 std::vector<Event> Database::Events(std::int64_t session_id) const {
   Stmt s(db_,
-         "SELECT id, session_id, trial_id, kind, detail, created_at FROM event "
+         "SELECT id, session_id, trial_id, kind, detail, created_at, established_by FROM event "
          "WHERE session_id=? ORDER BY id");
   s.Bind(1, session_id);
   std::vector<Event> out;
   while (s.Step()) {
-    Event e{s.Int(0), s.Int(1), std::nullopt, s.Text(3), s.Text(4), s.Text(5)};
+    Event e{s.Int(0), s.Int(1), std::nullopt, s.Text(3), s.Text(4), s.Text(5), s.Text(6)};
     if (!s.IsNull(2)) e.trial_id = s.Int(2);
     out.push_back(std::move(e));
   }

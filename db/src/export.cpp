@@ -96,15 +96,16 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
   }
   {
     CsvOut out((fs::path(out_dir) / "events.csv").string());
-    out.Row({"study", "participant", "session_id", "trial_id", "kind", "detail", "created_at"});
+    out.Row({"study", "participant", "session_id", "trial_id", "kind", "detail", "created_at",
+             "established_by"});
     Stmt q(h,
-           "SELECT st.name, p.code, e.session_id, e.trial_id, e.kind, e.detail, e.created_at "
-           "FROM event e JOIN session s ON e.session_id = s.id JOIN participant p ON "
-           "s.participant_id = p.id JOIN study st ON p.study_id = st.id ORDER BY e.id");
+           "SELECT st.name, p.code, e.session_id, e.trial_id, e.kind, e.detail, e.created_at, "
+           "e.established_by FROM event e JOIN session s ON e.session_id = s.id JOIN participant "
+           "p ON s.participant_id = p.id JOIN study st ON p.study_id = st.id ORDER BY e.id");
     while (q.Step())
       out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)),
                q.IsNull(3) ? std::string() : std::to_string(q.Int(3)), q.Text(4), q.Text(5),
-               q.Text(6)});
+               q.Text(6), q.Text(7)});
     files.push_back(out.Close());
   }
   if (trajectories) {

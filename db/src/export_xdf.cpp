@@ -158,7 +158,10 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
   }
   for (std::size_t i = 0; i < s.events.size(); ++i) {
     const auto& e = s.events[i];
-    nlohmann::json j{{"marker", "event"}, {"kind", e.kind}, {"detail", e.detail}};
+    nlohmann::json j{{"marker", "event"},
+                     {"kind", e.kind},
+                     {"detail", e.detail},
+                     {"established_by", e.established_by}};
     for (const auto& t : s.trials)
       if (e.trial_id && *e.trial_id == t.trial.id) j["plan_index"] = t.trial.plan_index;
     events.emplace_back(s.event_time_s[i], j.dump());

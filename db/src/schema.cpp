@@ -205,6 +205,29 @@ CREATE TABLE side_timing (
   UNIQUE (trial_id, attempt, side, loop)
 );
 )sql",
+    // v7: each event names who or what established the fact it states (docs/studies.md, "The
+    // audit trail"): an experimenter's code, the participant, hapticlab itself, a device
+    // back-end, the operating system, the simulation. Older events are marked 'unrecorded';
+    // the migrations' own events as theirs. Before v7 every session with a person rating got
+    // a 'consent' event "consent form signed" that nobody confirmed: it is marked so, and a
+    // 'consent-unconfirmed' event says it (the record itself is not rewritten).
+    R"sql(
+ALTER TABLE event ADD COLUMN established_by TEXT NOT NULL DEFAULT '';
+UPDATE event SET established_by = 'unrecorded (before schema v7)';
+UPDATE event SET established_by = 'hapticlab:migration'
+  WHERE kind IN ('mode-inferred', 'trajectory-unattributed');
+UPDATE event SET established_by = 'nobody: written by hapticlab at every session start before ' ||
+  'schema v7, without asking anyone'
+  WHERE kind = 'consent' AND detail = 'consent form signed';
+UPDATE event SET established_by = 'hapticlab:session-mode'
+  WHERE kind = 'consent' AND detail = 'simulated participant';
+INSERT INTO event(session_id, kind, detail, established_by)
+  SELECT session_id, 'consent-unconfirmed',
+         'schema v7 migration: this session''s consent event ("consent form signed") was ' ||
+         'written by hapticlab without anyone confirming it; the signed form is the only ' ||
+         'evidence of consent', 'hapticlab:migration'
+  FROM event WHERE kind = 'consent' AND detail = 'consent form signed';
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

@@ -86,6 +86,32 @@ std::string MaterialIds(const Protocol& p) {
   return s.empty() ? std::string("none") : s;
 }
 
+// [consent]: both keys, plain one-line text; the document is named, not located (an absolute
+// path would carry a user or host name into the study record).
+void ReadConsent(const toml::table& t, Reader& r, Protocol* p) {
+  r.Known(t, "consent", {"document", "version"});
+  p->consent_line = Reader::Line(&t);
+  const auto text = [&](const char* key, std::size_t max, const char* what) {
+    const std::string full = std::string("consent.") + key;
+    const auto v = r.Get<std::string>(t, "consent", key, true, what);
+    if (!v) return std::string();
+    const bool plain = !v->empty() && v->size() <= max &&
+                       std::none_of(v->begin(), v->end(), [](unsigned char c) { return c < 0x20; });
+    if (!plain)
+      r.Error(t.get(key), full, fmt::format("expected {} (1..{} characters, one line)", what, max));
+    else if ((*v)[0] == '/' || (*v)[0] == '~' || (v->size() > 1 && (*v)[1] == ':'))
+      r.Error(t.get(key), full,
+              "expected the document's name or title, not an absolute path (it would put a "
+              "user or host name into the study record)");
+    else
+      return *v;
+    return std::string();
+  };
+  p->consent_document =
+      text("document", 256, "the consent document's name or title, e.g. \"consent-form.pdf\"");
+  p->consent_version = text("version", 64, "its version, e.g. \"2026-03\"");
+}
+
 const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
 const std::set<std::string> kAnalyses{"rm-anova",  "tukey",       "kruskal", "grouping",
                                       "aggregate", "correlation", "shapiro", "lmm"};
@@ -155,7 +181,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   p.text = text;
   r.Known(doc, "",
           {"study", "material", "method", "phase", "randomization", "breaks", "masking_noise",
-           "analysis"});
+           "consent", "analysis"});
 
   // [study]
   if (const toml::table* s = doc["study"].as_table()) {
@@ -400,6 +426,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     p.masking_level_dB =
         r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
   }
+  if (const toml::table* t = doc["consent"].as_table()) ReadConsent(*t, r, &p);
   if (const toml::table* t = doc["analysis"].as_table()) {
     r.Known(*t, "analysis", {"tests", "lmm_formula"});
     p.analyses = r.Strings(*t, "analysis", "tests", false);

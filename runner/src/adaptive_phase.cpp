@@ -12,6 +12,7 @@
 #include "hapticlab/psychophysics/quest_plus.hpp"
 #include "hapticlab/psychophysics/simulated_observer.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/runner/audit.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 #include "stimulus_side.hpp"
 
@@ -64,6 +65,7 @@ struct Presented {
   bool aborted = false;    // the experimenter aborted during an interval
   bool fault = false;      // the watchdog tripped, or an interval touched nothing
   bool untouched = false;  // an interval touched nothing (the rig's sample poses?)
+  bool injected = false;   // the fault was injected by the simulation (--inject-faults)
   std::string detail;
 };
 
@@ -113,6 +115,7 @@ Presented PresentIntervals(const std::vector<renderer::MaterialModel>& intervals
     *stimulus_s += dur;
     if (r.fault) {
       out.fault = true;
+      out.injected = inject_dropout;
       out.detail = "watchdog: " + r.detail + "; force was zeroed, trial repeated";
       return out;
     }
@@ -210,7 +213,8 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
       if (opt.stop_after_trials >= 0 && *executed >= opt.stop_after_trials) {
         database.LogEvent({.session_id = session,
                            .kind = "abort",
-                           .detail = "stopped after the requested number of trials"});
+                           .detail = "stopped after the requested number of trials",
+                           .established_by = source::CommandLine("--stop-after")});
         database.EndSession(session, "aborted");
         out.aborted = true;
         return out;
@@ -261,9 +265,12 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
       const Presented shown =
           PresentIntervals(intervals, method, p, t, opt, rig, rng, writer, database, session,
                            &screen, protocols::ToString(ph.kind), &out.stimulus_s);
-      const auto abort = [&](const std::string& why) {
-        database.LogEvent(
-            {.session_id = session, .trial_id = t.id, .kind = "abort", .detail = why});
+      const auto abort = [&](const std::string& why, const char* by = source::kConsole) {
+        database.LogEvent({.session_id = session,
+                           .trial_id = t.id,
+                           .kind = "abort",
+                           .detail = why,
+                           .established_by = by});
         database.EndSession(session, "aborted");
         out.aborted = true;
       };
@@ -278,15 +285,28 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
         database.LogEvent({.session_id = session,
                            .trial_id = t.id,
                            .kind = "device-fault",
-                           .detail = shown.detail});
+                           .detail = shown.detail,
+                           .established_by = shown.untouched
+                                                 ? std::string(source::kRunner)
+                                                 : source::Watchdog(opt.device, shown.injected)});
+        const std::string line =
+            fmt::format("{} trial {} (attempt {}) faulted: {}; runs again at the same level",
+                        protocols::ToString(ph.kind), t.plan_index + 1, t.attempts, shown.detail);
+        database.LogEvent({.session_id = session,
+                           .trial_id = t.id,
+                           .kind = "attempt-faulted",
+                           .detail = line,
+                           .established_by = source::kRunner});
+        if (opt.warn) opt.warn(line);
         if (opt.ui)
           opt.ui->Event(fmt::format("{} trial {}: {}", protocols::ToString(ph.kind),
                                     done.size() + 1, shown.detail));
         if (untouched_in_a_row >= opt.max_untouched_trials) {
           abort(fmt::format(
-              "{} trials in a row touched nothing: the rig's sample poses are probably wrong "
-              "(hapticlab rig show / rig calibrate)",
-              untouched_in_a_row));
+                    "{} trials in a row touched nothing: the rig's sample poses are probably wrong "
+                    "(hapticlab rig show / rig calibrate)",
+                    untouched_in_a_row),
+                source::kRunner);
           return out;
         }
         continue;  // the same trial (same level) runs again

@@ -4,6 +4,8 @@
 
 #include <chrono>
 #include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <set>
@@ -12,6 +14,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/runner/audit.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 #include "trial.hpp"
 
@@ -23,11 +26,79 @@ using sim::Observer;
 void Log(const RunOptions& o, const std::string& s) {
   if (o.log) o.log(s);
 }
+void Warn(const RunOptions& o, const std::string& s) {
+  if (o.warn) o.warn(s);
+}
+
+// `text` (an error message) with the database's folder left out: the record holds no path
+// that could carry a user or host name.
+std::string WithoutFolder(const db::Database& database, std::string text) {
+  const std::string name = std::filesystem::path(database.path()).filename().string();
+  for (const std::string& path :
+       {std::filesystem::absolute(database.path()).lexically_normal().string(), database.path()})
+    for (std::size_t at; !path.empty() && (at = text.find(path)) != std::string::npos;)
+      text.replace(at, path.size(), name);
+  return text;
+}
+
+// Marks a session that stopped on an error (a full disk, a database that cannot be written,
+// a device that failed to open) as 'failed', with a 'stopped' event saying why. On a full
+// disk even that may fail: then the -wal is checkpointed (freeing its frames) and it is
+// tried once more; failing that, the session stays 'running' and 'study resume' says so.
+void MarkFailed(db::Database& database, std::int64_t session, const std::string& why,
+                const RunOptions& opt) {
+  const auto mark = [&] {
+    database.Exec("BEGIN IMMEDIATE");
+    try {
+      database.LogEvent(
+          {.session_id = session,
+           .kind = "stopped",
+           .detail = "the session stopped on an error: " + WithoutFolder(database, why) +
+                     "; completed trials are recorded; fix the cause, then "
+                     "'hapticlab study resume'",
+           .established_by = source::kRunner});
+      database.EndSession(session, kSessionFailed);
+      database.Exec("COMMIT");
+    } catch (...) {
+      database.Exec("ROLLBACK");
+      throw;
+    }
+  };
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    try {
+      mark();
+      Warn(opt, fmt::format("session {} stopped on an error and is marked 'failed' (a 'stopped' "
+                            "event says why); fix the cause, then 'hapticlab study resume'",
+                            session));
+      return;
+    } catch (const std::exception&) {
+      database.Checkpoint();
+    }
+  }
+  Warn(opt, fmt::format("session {} could not be marked as stopped (the database cannot be "
+                        "written); it stays 'running' until 'hapticlab study resume'",
+                        session));
+}
+
+RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
+                   const db::Participant& part, const RunOptions& opt);
 
 }  // namespace
 
 RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t session,
                           const db::Participant& part, const RunOptions& opt) {
+  try {
+    return Execute(database, lab, session, part, opt);
+  } catch (const std::exception& e) {
+    MarkFailed(database, session, e.what(), opt);
+    throw;
+  }
+}
+
+namespace {
+
+RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
+                   const db::Participant& part, const RunOptions& opt) {
   const auto& p = *lab.protocol;
   const auto t0 = std::chrono::steady_clock::now();
   RunSummary sum;
@@ -68,7 +139,10 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   HL_REQUIRE(rig->sim != nullptr || opt.ui != nullptr,
              "a hardware session needs RunOptions::ui (the participant window gives the ratings)");
   if (opt.device != "sim" || opt.rig)
-    database.LogEvent({.session_id = session, .kind = "device", .detail = rig->description});
+    database.LogEvent({.session_id = session,
+                       .kind = "device",
+                       .detail = rig->description,
+                       .established_by = source::Device(opt.device)});
   // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
   struct Noise {
     devices::MaskingNoise* n;
@@ -106,9 +180,39 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   } ui_events{opt.ui};
   if (opt.ui)
     opt.ui->log_event = [&](const std::string& kind, const std::string& detail) {
-      database.LogEvent(
-          {.session_id = session, .trial_id = trial_under_way, .kind = kind, .detail = detail});
+      database.LogEvent({.session_id = session,
+                         .trial_id = trial_under_way,
+                         .kind = kind,
+                         .detail = detail,
+                         .established_by = source::kConsole});
     };
+  // A faulted attempt of trial `t`: its cause as an event (established by `by`), then the
+  // runner's re-queue as an 'attempt-faulted' event (counted by 'study status') and a line on
+  // the log even without progress lines. The caller re-queues `t`.
+  const auto requeue = [&](db::Trial& t, const char* kind, const std::string& cause,
+                           const std::string& by) {
+    ++sum.faults;
+    database.SetTrialStatus(t.id, db::kTrialFaulted);
+    database.LogEvent({.session_id = session,
+                       .trial_id = t.id,
+                       .kind = kind,
+                       .detail = cause,
+                       .established_by = by});
+    std::string why = cause;  // the watchdog's text may end by saying it already
+    for (const char* tail : {", trial re-queued", "; trial re-queued"})
+      if (why.size() > std::strlen(tail) && why.ends_with(tail))
+        why.resize(why.size() - std::strlen(tail));
+    const std::string line =
+        fmt::format("trial {} ({}, attempt {}) faulted: {}; re-queued at the end of the {} phase",
+                    t.plan_index + 1, t.phase, t.attempts, why, t.phase);
+    database.LogEvent({.session_id = session,
+                       .trial_id = t.id,
+                       .kind = "attempt-faulted",
+                       .detail = line,
+                       .established_by = source::kRunner});
+    Warn(opt, part.code + ": " + line);
+    t.status = db::kTrialFaulted;
+  };
   const bool constrained = p.randomization.no_immediate_repeat;
   int untouched_in_a_row = 0;
   std::set<std::int64_t> break_before;  // trials the plan puts a break before
@@ -137,7 +241,8 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
           database.LogEvent({.session_id = session,
                              .trial_id = queue[0].id,
                              .kind = "constraint-relaxed",
-                             .detail = "only trials of the same material remain in the phase"});
+                             .detail = "only trials of the same material remain in the phase",
+                             .established_by = source::kRunner});
       }
       db::Trial t = queue[pick];
       queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
@@ -150,10 +255,12 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
                                    sig,
                                    sig == SIGINT    ? "SIGINT"
                                    : sig == SIGTERM ? "SIGTERM"
-                                                    : "signal")});
+                                                    : "signal"),
+             .established_by = source::kSignal});
       }
       if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
-        return abort({.detail = "stopped after the requested number of trials"});
+        return abort({.detail = "stopped after the requested number of trials",
+                      .established_by = source::CommandLine("--stop-after")});
       }
       // The console shows this trial as the next one from now on: through a break and while
       // its samples are placed.
@@ -182,13 +289,15 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
             {.session_id = session,
              .trial_id = t.id,
              .kind = "break",
-             .detail = fmt::format(
-                 "{:.0f} s break ({}{})", break_s,
-                 requested ? "requested by the experimenter" : "planned",
-                 speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : "")});
+             .detail =
+                 fmt::format("{:.0f} s break ({}{})", break_s,
+                             requested ? "requested by the experimenter" : "planned",
+                             speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
+             .established_by = requested ? source::kConsole : source::kPlan});
         trial_under_way = t.id;
         if (!opt.ui->Break(break_s)) {
-          return abort({.detail = "the experimenter aborted during a break"});
+          return abort({.detail = "the experimenter aborted during a break",
+                        .established_by = source::kConsole});
         }
       }
       if (opt.ui && screen.real_sample) {
@@ -213,25 +322,23 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       if (o.aborted) {
         return abort({.trial_id = t.id,
                       .detail = "the experimenter aborted in the console; 'study resume' continues "
-                                "with this trial"});
+                                "with this trial",
+                      .established_by = source::kConsole});
       }
       if (o.fault) {
-        ++sum.faults;
-        database.SetTrialStatus(t.id, db::kTrialFaulted);
-        database.LogEvent({.session_id = session,
-                           .trial_id = t.id,
-                           .kind = "device-fault",
-                           .detail = o.fault_detail});
+        requeue(
+            t, "device-fault", o.fault_detail,
+            o.untouched ? std::string(source::kRunner) : source::Watchdog(opt.device, o.injected));
         if (opt.ui)
           opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial",
                                     screen.index, o.fault_detail));
-        t.status = db::kTrialFaulted;
         queue.push_back(t);
         if (untouched_in_a_row >= opt.max_untouched_trials) {
           return abort({.detail = fmt::format(
                             "{} trials in a row touched nothing: the rig's sample poses are "
                             "probably wrong (hapticlab rig show / rig calibrate)",
-                            untouched_in_a_row)});
+                            untouched_in_a_row),
+                        .established_by = source::kRunner});
         }
         continue;
       }
@@ -240,23 +347,15 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
         database.CompleteTrial(t.id, o.ratings, writer.TakeReports(t.id));
         trajectory_faults = 0;
       } catch (const db::TrajectoryIncomplete& e) {
-        ++sum.faults;
-        database.SetTrialStatus(t.id, db::kTrialFaulted);
-        database.LogEvent({.session_id = session,
-                           .trial_id = t.id,
-                           .kind = "trajectory-fault",
-                           .detail = e.what()});
+        requeue(t, "trajectory-fault", WithoutFolder(database, e.what()), source::kDatabase);
         if (opt.ui)
           opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)",
                                     training ? "training trial" : "trial", screen.index));
-        if (++trajectory_faults >= kMaxTrajectoryFaults) {
-          database.EndSession(session, "aborted");
+        if (++trajectory_faults >= kMaxTrajectoryFaults)
           throw std::runtime_error(
-              fmt::format("{} trials in a row could not store their trajectories; last: {}; "
-                          "fix the cause, then 'hapticlab study resume'",
+              fmt::format("{} trials in a row could not store their trajectories (a full disk "
+                          "or a database that cannot be written); last: {}",
                           trajectory_faults, e.what()));
-        }
-        t.status = db::kTrialFaulted;
         queue.push_back(t);
         continue;
       }
@@ -280,5 +379,7 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
   database.EndSession(session, "completed");
   return finish("completed");
 }
+
+}  // namespace
 
 }  // namespace hapticlab::runner::internal

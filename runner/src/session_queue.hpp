@@ -11,8 +11,12 @@
 
 namespace hapticlab::runner::internal {
 
+// Status of a session that stopped on an error (a full disk, ...): 'study resume' continues it.
+inline constexpr const char* kSessionFailed = "failed";
+
 // Executes the session's remaining trials and ends the session ("completed" or "aborted").
-// Faulted trials go to the end of their phase.
+// Faulted trials go to the end of their phase. An error (exception) marks the session
+// "failed" with a 'stopped' event naming it, then propagates.
 RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t session,
                           const db::Participant& part, const RunOptions& opt);
 

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "hapticlab/db/timing.hpp"
+#include "hapticlab/runner/audit.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
 
 namespace hapticlab::runner::internal {
@@ -180,7 +181,8 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
                        .trial_id = t.id,
                        .kind = "device-fault",
                        .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
-                                             e.t_s, side.label, e.tick)});
+                                             e.t_s, side.label, e.tick),
+                       .established_by = source::Watchdog(opt.device, side.dropout_at_s >= 0)});
   const auto st = engine.Stats();
   out.stats = st;
   SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);

@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <algorithm>
 #include <atomic>
 #include <filesystem>
 #include <map>
@@ -16,6 +17,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/audit.hpp"
 #include "hapticlab/runner/plan_json.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "lab.hpp"
@@ -48,7 +50,8 @@ void LogPlanEvents(db::Database& database, std::int64_t session,
           {.session_id = session,
            .trial_id = ids[i],
            .kind = "break-planned",
-           .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s)});
+           .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s),
+           .established_by = source::kPlan});
 }
 
 // Checkpoints the WAL into the main file when a session ends, however it ends (completed,
@@ -109,6 +112,12 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
 void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool ui) {
   internal::CheckAdaptivePhases(p, device, ui);
   (void)LoadLab(p, device);
+  const bool person = ui || (device != "sim" && device != "falcon-twin");
+  if (person && p.consent_document.empty())
+    throw InputError(p.file, 0, "consent",
+                     "a session with a person (screens or a hardware device) records the consent "
+                     "document the experimenter confirmed: add [consent] document = \"...\", "
+                     "version = \"...\" (docs/studies.md)");
 }
 
 int ParticipantIndex(const std::string& db_path, const std::string& study,
@@ -133,6 +142,12 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
   internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
   const Lab lab = LoadLab(p, opt.device);
+  // Consent as it happened: "not applicable" when no person takes part, else confirmed by an
+  // experimenter on the command line (checked here, before anything is written) or in the
+  // console, which asks below once the database accepts this participant.
+  std::optional<ConsentRecord> consent;
+  const bool ask_console = PersonTakesPart(opt) && opt.consent_confirmed_by.empty() && opt.ui;
+  if (!ask_console) consent = ObtainConsent(p, opt, opt.participant);
   const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);
@@ -183,6 +198,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       : json{{"description", "generic simulated rig"}}},
       {"model_hashes", models},
       {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
+  if (ask_console) consent = ObtainConsent(p, opt, opt.participant);
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
   database.Exec("BEGIN IMMEDIATE");
   std::int64_t session;
@@ -211,10 +227,10 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       .left = t.left,
                       .right = t.right});
     for (const auto& r : rows) ids.push_back(database.AddTrial(r));
-    database.LogEvent({.session_id = session,
-                       .kind = "consent",
-                       .detail = mode.rater == db::kRaterSimulated ? "simulated participant"
-                                                                   : "consent form signed"});
+    if (consent)
+      RecordConsent(database, session, *consent);
+    else
+      RecordConsentNotApplicable(database, session, mode.Describe());
     LogPlanEvents(database, session, plan, ids, p);
     database.Exec("COMMIT");
   } catch (...) {
@@ -263,11 +279,19 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     const bool differs =
         CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
     const Lab lab = LoadLab(p, opt.device);
+    // A person takes part now but no experimenter confirmed consent yet (a simulated session
+    // resumed with screens, or one recorded before schema v7), or a code is given again:
+    // confirmed (or refused) before anything of this resume is written.
+    if (!opt.consent_confirmed_by.empty() ||
+        (PersonTakesPart(opt) && !HasConfirmedConsent(database, se.id)))
+      if (const auto consent = ObtainConsent(p, opt, opt.participant))
+        RecordConsent(database, se.id, *consent);
     if (differs) {
       database.LogEvent({.session_id = se.id,
                          .kind = "mode-change",
                          .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
-                                               recorded.Describe(), now.Describe())});
+                                               recorded.Describe(), now.Describe()),
+                         .established_by = source::CommandLine("--change-mode")});
       database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
       Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant,
                            recorded.Describe(), now.Describe()));
@@ -275,14 +299,20 @@ RunSummary ResumeStudy(const RunOptions& opt) {
       database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
     }
     const RunOptions& o = opt;
+    const std::string unclosed =
+        se.status == "running"
+            ? "; the previous run ended without closing the session (killed, crashed, or a "
+              "full disk)"
+            : "";
     database.Exec(
         fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
     int done = 0;
     for (const auto& t : database.Trials(se.id)) done += t.status == db::kTrialCompleted;
     database.LogEvent({.session_id = se.id,
                        .kind = "resume",
-                       .detail = fmt::format("resumed with {} of {} trials completed", done,
-                                             database.Trials(se.id).size())});
+                       .detail = fmt::format("resumed with {} of {} trials completed{}", done,
+                                             database.Trials(se.id).size(), unclosed),
+                       .established_by = source::CommandLine("study resume")});
     Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant,
                          se.id, done, now.Describe()));
     const CheckpointAtEnd checkpoint{&database};
@@ -305,14 +335,20 @@ std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
       std::map<int, int> completions;
       for (const auto& se : database.Sessions(part.id)) {
         s.session_status = se.status;
+        // Faulted attempts, each re-queued: the runner's 'attempt-faulted' events (schema v7;
+        // an older session counts the trials still waiting in 'faulted').
+        int attempts_faulted = 0, waiting = 0;
+        for (const auto& e : database.Events(se.id))
+          attempts_faulted += e.kind == "attempt-faulted";
         for (const auto& t : database.Trials(se.id)) {
           ++s.planned;
           if (t.status == db::kTrialCompleted) {
             ++s.completed;
             ++completions[t.plan_index];
           }
-          if (t.status == db::kTrialFaulted) ++s.faulted;
+          waiting += t.status == db::kTrialFaulted;
         }
+        s.faulted += std::max(attempts_faulted, waiting);
       }
       for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
       out.push_back(s);

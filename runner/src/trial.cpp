@@ -6,8 +6,10 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/runner/audit.hpp"
 #include "stimulus_side.hpp"
 
 namespace hapticlab::runner::internal {
@@ -26,11 +28,36 @@ bool RateInUi(SessionUi& ui, const TrialScreen& screen, const protocols::Protoco
   if (!r || r->size() != p.criteria.size()) return false;
   const double rt = std::chrono::duration<double>(std::chrono::steady_clock::now() - shown).count();
   for (std::size_t i = 0; i < p.criteria.size(); ++i)
-    out->push_back({p.criteria[i], std::clamp((*r)[i], p.scale_min, p.scale_max), rt, source});
+    out->push_back({p.criteria[i], ScaleValue((*r)[i], p.scale_min, p.scale_max), rt, source});
   return true;
 }
 
 }  // namespace
+
+}  // namespace hapticlab::runner::internal
+
+namespace hapticlab::runner {
+
+double ScaleValue(double v, double lo, double hi) {
+  if (!std::isfinite(v) || !(hi > lo)) return std::clamp(v, lo, hi);
+  // The step: the largest power of ten giving the scale at least 100 steps (1 on 0..100).
+  // A decimal step is applied as a division by an exact integer, so the stored value is
+  // the double nearest the decimal (0.37, not 0.37000000000000005).
+  const int k = static_cast<int>(std::floor(std::log10((hi - lo) / 100)));
+  double snapped;
+  if (k >= 0) {
+    const double step = std::pow(10.0, k);
+    snapped = lo + std::round((v - lo) / step) * step;
+  } else {
+    const double per_unit = std::pow(10.0, -k);
+    snapped = std::round(v * per_unit) / per_unit;
+  }
+  return std::clamp(snapped, lo, hi);
+}
+
+}  // namespace hapticlab::runner
+
+namespace hapticlab::runner::internal {
 
 TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index, int total) {
   TrialScreen s;
@@ -109,7 +136,8 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
           {.session_id = session,
            .trial_id = t.id,
            .kind = "device-fault",
-           .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated"});
+           .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated",
+           .established_by = source::Watchdog(opt.device, false)});
       if (opt.ui) opt.ui->Event(fmt::format("training trial {}: {}", t.plan_index + 1, r.detail));
     }
     return out;
@@ -157,6 +185,7 @@ Outcome ExecuteTrial(const Lab& lab, const Observer& observer, const db::Trial& 
   }
   if (!faults.empty()) {
     out.fault = true;
+    out.injected = inject_dropout;
     out.fault_detail = "watchdog: " + fmt::format("{}", fmt::join(faults, "; ")) +
                        "; force was zeroed, trial re-queued";
     return out;

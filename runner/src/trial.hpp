@@ -19,6 +19,7 @@ struct Outcome {
   bool aborted = false;  // the experimenter aborted in the UI
   bool fault = false;
   bool untouched = false;  // a side where the stylus never met the surface
+  bool injected = false;   // the fault was injected by the simulation (--inject-faults)
   std::string fault_detail;
   std::vector<db::Rating> ratings;
   double stimulus_s = 0;

@@ -40,7 +40,9 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
   ReportResult res;
   db::Database d(db_path, {.create = false, .read_only = true});
   auto md = w.Open("report.md");
-  md << "# HapticLab analysis report\n\nDatabase: `" << db_path << "`\n\n"
+  // The database by its file name: a folder would carry a user or host name into the report.
+  md << "# HapticLab analysis report\n\nDatabase: `" << fs::path(db_path).filename().string()
+     << "`\n\n"
      << "Scores are similarity ratings on the protocol's scale. Repetitions are averaged per "
         "participant x cell "
         "before repeated-measures ANOVA (as afex does). Tukey comparisons of a within-subject "

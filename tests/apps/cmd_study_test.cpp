@@ -131,10 +131,23 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
             2);
   EXPECT_NE(out.find("--firmware"), std::string::npos) << out;
   EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") +
-                                 " --participant P01 --device dhd",
+                                 " --participant P01 --device dhd --ui",
                              &out),
             2);
   EXPECT_NE(out.find("SDK"), std::string::npos) << out;
+  // Headless on hardware: refused before any device opens, naming the window and, as a
+  // person takes part, the experimenter who confirmed consent.
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") +
+                                 " --participant P01 --device falcon",
+                             &out),
+            2);
+  EXPECT_NE(out.find("--ui"), std::string::npos) << out;
+  EXPECT_NE(out.find("--consent-confirmed-by"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " study run " + Small() + " --db " + dir.File("b.db") +
+                                 " --participant P01 --device falcon --consent-confirmed-by E01",
+                             &out),
+            2);
+  EXPECT_EQ(out.find("--consent-confirmed-by"), std::string::npos) << out;
   EXPECT_FALSE(std::filesystem::exists(dir.File("b.db")));
   // With a display (Xvfb), the windows open and the session runs (the first trials are
   // unrated training, so no one needs to click).
@@ -145,7 +158,8 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
     ASSERT_EQ(test::RunCommand("ASAN_OPTIONS=detect_leaks=0 " + std::string(HL_SOURCE_DIR) +
                                    "/tests/util/with_display.sh " + Cli() + " study run " +
                                    Small() + " --db " + dir.File("c.db") +
-                                   " --participant P01 --ui --stop-after 3 --quiet",
+                                   " --participant P01 --ui --stop-after 3 --quiet "
+                                   "--consent-confirmed-by E01",
                                &out),
               3)
         << out;

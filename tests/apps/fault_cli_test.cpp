@@ -73,6 +73,18 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
   ASSERT_NE(rc, 0) << "the size limit never bit: the test tests nothing\n" << out;
   EXPECT_EQ(rc, 1) << out;
   EXPECT_NE(out.find(db), std::string::npos) << out;
+  {
+    // The session is marked, and an event says why it stopped (naming no folder).
+    db::Database d(db, {.create = false, .read_only = true});
+    const auto se = d.Sessions(d.Participants(d.Studies().at(0).id).at(0).id).at(0);
+    EXPECT_EQ(se.status, "failed");
+    int stopped = 0;
+    for (const auto& e : d.Events(se.id)) {
+      stopped += e.kind == "stopped";
+      EXPECT_EQ(e.detail.find(dir.path()), std::string::npos) << e.detail;
+    }
+    EXPECT_EQ(stopped, 1);
+  }
   ASSERT_EQ(
       test::RunCommand(Cli() + " study resume --db " + db + " --participant P01 --quiet", &out), 0)
       << out;

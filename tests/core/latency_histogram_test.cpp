@@ -66,5 +66,35 @@ TEST(LatencyHistogram, MergeAndSparseFormKeepEveryCount) {
   EXPECT_FALSE(back.ParseSparse("99999:1", 0));
 }
 
+// `rig check`'s text histogram (rows of 1 us): a tick in the overflow bin (>= 5 ms) is counted
+// once, in the overflow row, and nothing is read past the bins (the row loop used to read
+// counts[kBins + 1], an "> 99 us" row of 80664 for 3004 ticks).
+TEST(LatencyHistogram, RowsCountATickInTheOverflowBinOnce) {
+  LatencyHistogram h;
+  h.Add(7e-3);  // overflow bin only
+  std::uint64_t beyond = 99;
+  auto rows = h.Snapshot().Rows(2, 100, &beyond);
+  EXPECT_TRUE(rows.empty());
+  EXPECT_EQ(beyond, 1u);
+  // Mixed: 3 ticks at 0.2 us (row 0), 2 at 1.7 us (row 1), one at 150 us (past the 100 rows),
+  // one in the overflow bin. Counted by hand, not by the histogram.
+  for (int i = 0; i < 3; ++i) h.Add(0.2e-6);
+  for (int i = 0; i < 2; ++i) h.Add(1.7e-6);
+  h.Add(150e-6);
+  const auto s = h.Snapshot();
+  rows = s.Rows(2, 100, &beyond);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_EQ(rows[0], 3u);
+  EXPECT_EQ(rows[1], 2u);
+  EXPECT_EQ(beyond, 2u);
+  EXPECT_EQ(rows[0] + rows[1] + beyond, s.total);
+  // Every bin a row of its own, 10001 rows asked: the overflow bin still counts once.
+  rows = s.Rows(1, LatencySummary::kBins + 1, &beyond);
+  EXPECT_EQ(beyond, 1u);
+  std::uint64_t sum = beyond;
+  for (const auto n : rows) sum += n;
+  EXPECT_EQ(sum, s.total);
+}
+
 }  // namespace
 }  // namespace hapticlab

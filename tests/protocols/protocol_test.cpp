@@ -18,6 +18,8 @@ std::string Small() { return test::ReadFile(test::DataPath("protocols/small.toml
 TEST(Protocol, ParsesTheSmallStudy) {
   const auto p = LoadProtocol(test::DataPath("protocols/small.toml"));
   EXPECT_EQ(p.name, "test-small");
+  EXPECT_EQ(p.consent_document, "test-small consent form");
+  EXPECT_EQ(p.consent_version, "2026-11");
   EXPECT_EQ(p.materials.size(), 4u);
   EXPECT_EQ(p.methods.size(), 2u);
   EXPECT_TRUE(p.methods[1].vibration);  // default
@@ -63,6 +65,14 @@ TEST(Protocol, EveryValidationErrorNamesFileLineAndKey) {
        "breaks.every_trials: expected an integer 0..10000"},
       {"seed = 42", "seed = 42\nparticipant_code = \"([A-Z\"",
        "study.participant_code: not a valid regular expression"},
+      // [consent]: both keys, one line each, a name rather than a path (no user or host name).
+      {"document = \"test-small consent form\"", "document = \"/home/alice/consent.pdf\"",
+       "consent.document: expected the document's name or title, not an absolute path"},
+      {"document = \"test-small consent form\"", "document = \"\"",
+       "consent.document: expected the consent document's name or title"},
+      {"version = \"2026-11\"", "versoin = \"2026-11\"", "consent.versoin: unknown key"},
+      {"version = \"2026-11\"", "", "consent.version: missing"},
+      {"version = \"2026-11\"", "version = 3", "consent.version: expected its version"},
       // Input limits before toml++ parses (its recursion would overflow the stack).
       {"seed = 42", "seed = 42\n" + deep_key + " = 1", "more than 32 dotted parts"},
   };

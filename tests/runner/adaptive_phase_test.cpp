@@ -297,6 +297,7 @@ TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
   test::TempDir dir;
   std::string text = Protocol(kStaircase);
   text = text.substr(0, text.find("[phase.simulated_observer]"));  // not needed with a UI
+  text += "\n[consent]\ndocument = \"jnd consent form\"\nversion = \"1\"\n";
   std::ofstream(dir.File("p.toml")) << text;
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   FirstIntervalUi ui;
@@ -304,7 +305,8 @@ TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
                .participant = "P01",
                .record = RecordMode::kNone,
                .ui = &ui,
-               .ui_playback_speed = 1e6};
+               .ui_playback_speed = 1e6,
+               .consent_confirmed_by = "E01"};  // a person answers
   const auto s = RunStudy(p, o);
   EXPECT_EQ(s.status, "aborted");
   EXPECT_EQ(ui.intervals_seen,

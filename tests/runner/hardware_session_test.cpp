@@ -80,7 +80,8 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   o.device = "circling";
   o.rig = &rig;
   o.ui = &ui;
-  o.stop_after_trials = 7;  // the training trials and three rated ones (0.5 s per side)
+  o.consent_confirmed_by = "E01";  // a person takes part
+  o.stop_after_trials = 7;         // the training trials and three rated ones (0.5 s per side)
   const auto s = RunStudy(p, o);
   EXPECT_EQ(s.status, "aborted");
   EXPECT_GT(ui.frames, 10);
@@ -145,6 +146,7 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   o.device = "circling";
   o.rig = &rig;
   o.ui = &ui;
+  o.consent_confirmed_by = "E01";  // a person takes part
   o.stop_after_trials = 6;
   const auto s = RunStudy(p, o);
   EXPECT_GE(s.faults, 1);

@@ -151,7 +151,8 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   o.participant = "P05";
   o.record = RecordMode::kNone;
   o.ui = &ui;
-  o.ui_playback_speed = 200;  // the sim's strokes, played fast
+  o.consent_confirmed_by = "E01";  // a person rates
+  o.ui_playback_speed = 200;       // the sim's strokes, played fast
   EXPECT_EQ(RunStudy(p, o).status, "aborted");
   EXPECT_GT(ui.stimulus_frames, 0);
   EXPECT_GE(ui.breaks, 1) << "the experimenter's break request";

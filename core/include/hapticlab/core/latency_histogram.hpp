@@ -47,6 +47,26 @@ struct LatencySummary {
     total += o.total;
     max_s = std::max(max_s, o.max_s);
   }
+  /// A coarser text histogram: counts per row of `per_row` bins for the first `rows` rows, up
+  /// to the last non-empty one, and in `*beyond` every count after them, the overflow bin's
+  /// included. Each count is in exactly one place (they add up to `total`).
+  std::vector<std::uint64_t> Rows(std::size_t per_row, std::size_t rows,
+                                  std::uint64_t* beyond) const {
+    std::vector<std::uint64_t> out;
+    *beyond = 0;
+    if (per_row == 0) return out;
+    for (std::size_t i = 0; i <= kBins; ++i) {
+      if (counts[i] == 0) continue;
+      const std::size_t row = i / per_row;
+      if (i == kBins || row >= rows) {
+        *beyond += counts[i];
+        continue;
+      }
+      if (out.size() <= row) out.resize(row + 1, 0);
+      out[row] += counts[i];
+    }
+    return out;
+  }
   /// Sparse text form for storage: "bin:count bin:count ..." (non-empty bins only).
   std::string Sparse() const {
     std::string s;

@@ -12,7 +12,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 6;
+inline constexpr int kSchemaVersion = 7;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -41,7 +41,7 @@ struct Session {
   std::int64_t participant_id = 0;
   std::string started_at;          ///< ISO-8601 UTC, filled by the database when empty
   std::string ended_at;            ///< empty while running
-  std::string status = "running";  ///< running | completed | aborted | crashed
+  std::string status = "running";  ///< running | completed | aborted | failed (an error)
   std::string software_version;    ///< "<version>+<git sha>"
   std::string device;              ///< device back-end name and serial
   std::string calibration;         ///< device calibration description or hash
@@ -88,7 +88,8 @@ struct Rating {
   std::string source;
 };
 
-/// An event in a session: break, pause, abort, device fault, trial re-queue...
+/// An event in a session: break, pause, abort, device fault, trial re-queue... (the audit
+/// trail: docs/studies.md).
 struct Event {
   std::int64_t id = 0;
   std::int64_t session_id = 0;
@@ -96,6 +97,11 @@ struct Event {
   std::string kind;
   std::string detail;
   std::string created_at;
+  /// Who or what established the fact the event states (schema v7), e.g.
+  /// "experimenter:E01", "participant", "hapticlab:runner", "device:falcon",
+  /// "simulation:inject-faults", "os:signal" (runner/audit.hpp). Empty when stored:
+  /// "hapticlab".
+  std::string established_by;
 };
 
 /// A chunk of a trajectory stream: samples at a constant rate, packed float32 row-major
@@ -251,8 +257,9 @@ class Database {
 
 /// The one-writer lease of a study database: an advisory lock (flock) on the database file,
 /// held for the object's life, plus a `writer_lease` row naming the process id and host so
-/// a second writer is told who holds it. The lock is released by the kernel when the process
-/// ends, even on SIGKILL. Take it before opening any Database on the file and release it
+/// a second writer is told who holds it; the row is deleted when the lease ends (a killed
+/// process leaves it, and the next writer replaces it). The lock is released by the kernel when the
+/// process ends, even on SIGKILL. Take it before opening any Database on the file and release it
 /// after every connection of this process to the file is closed (so closing its descriptor
 /// cannot drop SQLite's own locks).
 class WriterLease {
@@ -265,6 +272,7 @@ class WriterLease {
   WriterLease& operator=(const WriterLease&) = delete;
 
  private:
+  std::string path_;
   int fd_ = -1;
 };
 

@@ -84,6 +84,11 @@ struct Protocol {
   /// Participant codes must match this ECMAScript regular expression (`[study]
   /// participant_code`); the default allows 1-3 capital letters and 2-4 digits (P07, AB123).
   std::string participant_code = "^[A-Z]{1,3}[0-9]{2,4}$";
+  /// `[consent] document, version`: the consent document participants sign and its version
+  /// (a session with a person records the consent confirmed against them; empty: none given,
+  /// which only a simulated session accepts). `consent_line`: the table's line (messages).
+  std::string consent_document, consent_version;
+  int consent_line = 0;
   std::vector<std::string>
       analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm
   /// `[analysis] lmm_formula`: the linear mixed model of the "lmm" analysis, fitted per

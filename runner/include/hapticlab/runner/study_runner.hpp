@@ -91,6 +91,18 @@ struct LiveFrame {
   EngineStats engine;
 };
 
+/// What a console shows when it asks the experimenter to confirm a participant's consent
+/// (SessionUi::ConfirmConsent): the protocol's `[consent]` document and version.
+struct ConsentRequest {
+  std::string study, participant, document, version;
+};
+
+/// A person's rating `v` as stored: on the scale's step (the largest power of ten giving
+/// [lo, hi] at least 100 steps: 1 on 0..100, 0.01 on 0..1), clamped to the scale. A rating
+/// from the window (a float mouse position) or a rating box is stored as that scale value,
+/// e.g. 80, not 80.000001192092896.
+double ScaleValue(double v, double lo, double hi);
+
 /// Hooks a user interface into a session: the runner calls it from its own (main) thread.
 /// A GLFW implementation is runner/session_ui.hpp; tests script it.
 class SessionUi {
@@ -109,6 +121,16 @@ class SessionUi {
   /// default and cannot run adaptive phases (they abort at their first trial).
   virtual std::optional<int> Choose(const TrialScreen& t) {
     (void)t;
+    return std::nullopt;
+  }
+  /// Asked once before the session's first trial when a person takes part and consent was
+  /// not confirmed on the command line: blocks until the experimenter confirms that the
+  /// participant consented to `r.document` version `r.version`, and returns the
+  /// experimenter's pseudonymous code; nullopt when it was not confirmed. The runner records
+  /// it with RecordConsent (via "console"). A UI that cannot ask keeps this default: the
+  /// session then needs RunOptions::consent_confirmed_by.
+  virtual std::optional<std::string> ConfirmConsent(const ConsentRequest& r) {
+    (void)r;
     return std::nullopt;
   }
   /// Blocks through a break with a countdown. false: aborted.
@@ -215,6 +237,14 @@ struct RunOptions {
   /// What the loop threads ask for on the real clock (spin, SCHED_FIFO, mlockall, CPU);
   /// outcomes are stored per trial side (db/timing.hpp). Ignored on a virtual clock.
   RtThreadOptions rt;
+  /// Lines a person must see even without progress lines: each faulted attempt (trial plan
+  /// number, cause, re-queued) and why a session stopped on an error (may be empty).
+  std::function<void(const std::string&)> warn;
+  /// The experimenter's pseudonymous code confirming, before the session, that the
+  /// participant consented to the protocol's `[consent]` document (`--consent-confirmed-by`).
+  /// Needed when a person takes part (PersonTakesPart) unless the UI asks
+  /// (SessionUi::ConfirmConsent); refused for a simulated session. runner/audit.hpp.
+  std::string consent_confirmed_by;
 };
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.
@@ -243,7 +273,8 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
 /// Every check `RunStudy` makes before it writes anything, for `study validate`: adaptive
 /// phases runnable on the device, the profiles file (looked up relative to the protocol
 /// file's folder) present and naming every material's profile, every model file present and
-/// loadable. @throws InputError listing every problem (file, line, key, path looked up)
+/// loadable, and for a session with a person (`ui`, or a hardware device) the protocol's
+/// `[consent]` document. @throws InputError listing every problem (file, line, key, path)
 void CheckRunnable(const protocols::Protocol& protocol, const std::string& device = "sim",
                    bool ui = false);
 
@@ -276,7 +307,8 @@ RunSummary ResumeStudy(const RunOptions& options);
 
 struct ParticipantStatus {
   std::string code;
-  int planned = 0, completed = 0, faulted = 0;
+  int planned = 0, completed = 0;
+  int faulted = 0;     ///< faulted attempts (each re-queued; 'attempt-faulted' events)
   int duplicates = 0;  ///< planned trials completed more than once (must be 0)
   std::string session_status;
 };
