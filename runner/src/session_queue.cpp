@@ -309,7 +309,10 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
                            .trial_id = t.id,
                            .kind = "samples-placed",
                            .detail = fmt::format("trial {}: {}; {}", screen.plan_number,
-                                                 screen.placement, *how)});
+                                                 screen.placement, *how),
+                           .established_by = how->starts_with("not confirmed")
+                                                 ? source::kRunner
+                                                 : source::kConsole});
       }
       database.StartTrial(t.id);
       ++t.attempts;

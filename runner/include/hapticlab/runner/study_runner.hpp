@@ -66,13 +66,6 @@ struct TrialScreen {
   double break_s = 0;
 };
 
-/// What a console shows when it asks the experimenter to confirm a participant's consent
-/// (SessionUi::ConfirmConsent): the protocol's consent document and version. (The same
-/// struct as branch `consent` declares; that branch asks for it before the first trial.)
-struct ConsentRequest {
-  std::string study, participant, document, version;
-};
-
 /// One frame of live data while a side runs (SessionUi::Live), read on the runner's thread:
 /// the newest row of the side's recorded streams as the trajectory writer took it from the
 /// engine's queue (TrajectoryStream::Latest; the force and vibration ticks are untouched) and
@@ -154,12 +147,6 @@ class SessionUi {
   virtual std::optional<std::string> ConfirmPlacement(const TrialScreen& t) {
     (void)t;
     return std::string("not confirmed: this interface has no placement step (scripted)");
-  }
-  /// Asks the experimenter to confirm the participant's consent to `r` (a modal on the
-  /// console): the experimenter code entered, or nullopt when aborted or not supported.
-  virtual std::optional<std::string> ConfirmConsent(const ConsentRequest& r) {
-    (void)r;
-    return std::nullopt;
   }
   /// Set by the runner while a session runs: the UI records the experimenter's actions
   /// (pause, resume, abort requested / cancelled, break ended early) as session events.
