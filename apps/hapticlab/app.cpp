@@ -5,6 +5,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/version.hpp"
+#include "hapticlab/stats/psychometric_report.hpp"
 
 namespace hapticlab::cli {
 
@@ -21,7 +22,7 @@ void BuildApp(CLI::App& app) {
   RegisterExport(app);
   RegisterModel(app);
   RegisterDemo(app);
-  RegisterStats(app);
+  RegisterStats(app, stats::DrawPsychometricPlot);
   RegisterStudy(app);
   RegisterAnalyze(app);
   RegisterWorkbench(app);

@@ -15,6 +15,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/stats/psychometric_csv.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -59,12 +60,17 @@ FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a,
   FitRow r;
   r.who = who;
   r.trials = static_cast<int>(a.size());
-  const auto d = ToData(a);
-  r.fit = FitPsychometric(d, o);
-  if (r.fit.usable) {
-    if (auto x = psychophysics::StimulusAt(o.shape, r.fit.params, spec.jnd_performance)) r.jnd = *x;
-    r.boot = BootstrapPsychometric(d, o, r.fit, replicates, seed, 0.95, spec.jnd_performance);
-  }
+  // The same summary as `stats psychometric` (psychometric_csv.hpp).
+  auto s = SummarizePsychometric(ToData(a), {.fit = o,
+                                             .performances = {},
+                                             .jnd_performance = spec.jnd_performance,
+                                             .reference = 0,
+                                             .replicates = replicates,
+                                             .seed = seed,
+                                             .level = 0.95});
+  r.fit = std::move(s.fit);
+  r.boot = std::move(s.boot);
+  r.jnd = s.jnd;
   return r;
 }
 
