@@ -6,6 +6,7 @@
 #include "commands.hpp"
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/stats/psychometric_report.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli {
 

@@ -37,9 +37,11 @@ std::uintmax_t FileBytes(const std::string& path) {
 std::string Summary(const ExportOpts& o, const std::vector<db::ExportedFile>& files,
                     std::uintmax_t bytes, double seconds) {
   std::size_t rows = 0, streams = 0, samples = 0, tables = 0, physio = 0, physio_samples = 0;
+  std::size_t beh = 0, beh_rows = 0;
   for (const auto& f : files) {
     rows += f.rows, streams += f.streams, samples += f.samples;
     if (f.path.ends_with(".csv") || f.path.ends_with(".tsv")) ++tables;
+    if (f.path.ends_with("_beh.tsv")) ++beh, beh_rows += f.rows;
     if (f.path.ends_with("_physio.tsv.gz")) ++physio, physio_samples += f.rows;
   }
   std::string what;
@@ -47,8 +49,8 @@ std::string Summary(const ExportOpts& o, const std::vector<db::ExportedFile>& fi
     what = fmt::format("{} XDF file{}, {} streams, {} samples", files.size(),
                        files.size() == 1 ? "" : "s", streams, samples);
   else if (o.format == "bids")
-    what = fmt::format("{} files: {} rating tables ({} rows), {} physio recordings ({} samples)",
-                       files.size(), tables, rows - physio_samples, physio, physio_samples);
+    what = fmt::format("{} files: {} rating tables ({} ratings), {} physio recordings ({} samples)",
+                       files.size(), beh, beh_rows, physio, physio_samples);
   else
     what = fmt::format("{} tables, {} rows", tables, rows);
   return fmt::format("{} export of {}: {} -> {} ({}, {:.1f} s)", o.format, o.db, what, o.out,
@@ -78,12 +80,12 @@ int RunExport(const ExportOpts& o) {
   } else {
     // The trajectory tables can be hundreds of MB: their size is said before either choice.
     const auto size = db::CountTrajectories(database);
+    const std::string what = fmt::format("{} samples of {} streams, about {} as CSV",
+                                         size.samples, size.streams,
+                                         Megabytes(size.estimated_bytes));
     if (size.samples > 0)
-      log(fmt::format(o.trajectories ? "writing trajectories: {} samples of {} streams, about {} "
-                                       "as CSV"
-                                     : "trajectories left out ({} samples of {} streams, about {} "
-                                       "as CSV): --trajectories writes them",
-                      size.samples, size.streams, Megabytes(size.estimated_bytes)));
+      log(o.trajectories ? "writing trajectories: " + what
+                         : "trajectories left out (" + what + "): --trajectories writes them");
     files = db::ExportCsv(database, o.out, o.trajectories, log);
   }
   std::uintmax_t bytes = 0;

@@ -10,6 +10,7 @@
 #include "cli_common.hpp"
 #include "cmd_stats_common.hpp"
 #include "commands.hpp"
+#include "stats_commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
@@ -288,6 +289,10 @@ void AddStatsCommands(CLI::App& group, const PsychometricFigure& draw) {
   stats_cmd::AddLmm(group);
   stats_cmd::AddPsychometric(group, draw);
 }
+
+void AddStatsCommands(CLI::App& group) { AddStatsCommands(group, {}); }
+
+void RegisterStats(CLI::App& app) { RegisterStats(app, {}); }
 
 void RegisterStats(CLI::App& app, const PsychometricFigure& draw) {
   auto* s = app.add_subcommand(

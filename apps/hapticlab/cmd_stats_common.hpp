@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "commands.hpp"
+#include "stats_commands.hpp"
 #include "hapticlab/stats/long_table.hpp"
 
 namespace hapticlab::cli::stats_cmd {

@@ -8,6 +8,7 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/stats/psychometric_report.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -141,6 +142,35 @@ PsychometricSummary SummarizePsychometric(const PsychometricData& data,
                                  o.jnd_performance, o.performances);
   if (o.reference > 0) s.weber_ci = {s.boot.jnd.lo / o.reference, s.boot.jnd.hi / o.reference};
   return s;
+}
+
+// Declared in psychometric_report.hpp; defined here, with no plotting or database code
+// beside it, so that the lean hapticlab-stats (whose `psychometric` bins its data) links
+// neither PLplot nor SQLite.
+PsychometricData BinForPlot(const PsychometricData& pooled, int max_bins) {
+  PsychometricData d = PoolByStimulus(pooled);  // not const: returned by move below
+  if (static_cast<int>(d.x.size()) <= max_bins) return d;
+  int total = 0;
+  for (int n : d.n) total += n;
+  PsychometricData out;
+  double sx = 0;
+  int n = 0, k = 0, bin = 0;
+  int cum = 0;
+  for (std::size_t i = 0; i < d.x.size(); ++i) {
+    sx += d.x[i] * d.n[i];
+    n += d.n[i];
+    k += d.k[i];
+    cum += d.n[i];
+    // Close the bin when the running count passes its share of the trials.
+    if (cum * max_bins >= (bin + 1) * total || i + 1 == d.x.size()) {
+      out.x.push_back(sx / n);
+      out.n.push_back(n);
+      out.k.push_back(k);
+      sx = 0, n = 0, k = 0;
+      ++bin;
+    }
+  }
+  return out;
 }
 
 }  // namespace hapticlab::stats

@@ -98,32 +98,6 @@ std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const st
   return out;
 }
 
-PsychometricData BinForPlot(const PsychometricData& pooled, int max_bins) {
-  PsychometricData d = PoolByStimulus(pooled);  // not const: returned by move below
-  if (static_cast<int>(d.x.size()) <= max_bins) return d;
-  int total = 0;
-  for (int n : d.n) total += n;
-  PsychometricData out;
-  double sx = 0;
-  int n = 0, k = 0, bin = 0;
-  int cum = 0;
-  for (std::size_t i = 0; i < d.x.size(); ++i) {
-    sx += d.x[i] * d.n[i];
-    n += d.n[i];
-    k += d.k[i];
-    cum += d.n[i];
-    // Close the bin when the running count passes its share of the trials.
-    if (cum * max_bins >= (bin + 1) * total || i + 1 == d.x.size()) {
-      out.x.push_back(sx / n);
-      out.n.push_back(n);
-      out.k.push_back(k);
-      sx = 0, n = 0, k = 0;
-      ++bin;
-    }
-  }
-  return out;
-}
-
 std::vector<std::string> DrawPsychometricPlot(const PsychometricPlot& p, const std::string& base) {
   if (p.binned.x.empty()) throw std::invalid_argument("psychometric plot without data");
   const auto [lo_it, hi_it] = std::minmax_element(p.binned.x.begin(), p.binned.x.end());

@@ -21,7 +21,7 @@ std::string Ecc2() { return test::DataPath("psychometric/ecc2.csv"); }
 const std::string kEcc2Args =
     " --level Contr --correct Correct --incorrect Incorrect --by task,Size";
 
-json Run(const std::string& binary, const std::string& args) {
+json RunJson(const std::string& binary, const std::string& args) {
   std::string out;
   const int rc = test::RunCommand(binary + args + " --json", &out);
   EXPECT_EQ(rc, 0) << out;
@@ -54,7 +54,7 @@ TEST(StatsPsychometricCli, EveryLinkEqualsRAndThresholdsTheClosedForm) {
   for (const std::string link :
        {"logit", "probit", "weibull", "mafc-logit:4", "mafc-probit:4", "mafc-weibull:4"}) {
     SCOPED_TRACE(link);
-    const json j = Run(Cli(), " stats psychometric --csv " + Ecc2() + kEcc2Args + " --link " +
+    const json j = RunJson(Cli(), " stats psychometric --csv " + Ecc2() + kEcc2Args + " --link " +
                                   link + " --performance 0.6,0.75,0.9 --bootstrap 0");
     ASSERT_EQ(j["groups"].size(), 8u);
     for (const auto& g : j["groups"]) {
@@ -98,10 +98,11 @@ TEST(StatsPsychometricCli, EveryLinkEqualsRAndThresholdsTheClosedForm) {
 // reference with its interval scaled alike; the lean binary prints the same JSON.
 TEST(StatsPsychometricCli, BootstrapWeberAndTheLeanBinary) {
   const std::string args = " --csv " + Ecc2() + kEcc2Args +
-                           " --link mafc-logit:4 --bootstrap 200 --seed 7 --reference 0.5";
-  const json j = Run(Cli(), " stats psychometric" + args);
+                           " --link mafc-logit:4 --bootstrap 200 --reference 0.5";
+  const json j = RunJson(Cli(), " stats psychometric" + args + " --seed 7");
   std::string lean;
-  ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + " psychometric" + args + " --json",
+  ASSERT_EQ(test::RunCommand(
+                std::string(HL_STATS_CLI_PATH) + " psychometric" + args + " --seed 7 --json",
                              &lean),
             0)
       << lean;
@@ -117,7 +118,7 @@ TEST(StatsPsychometricCli, BootstrapWeberAndTheLeanBinary) {
     EXPECT_EQ(g["bootstrap_replicates"].get<int>() + g["bootstrap_failed"].get<int>(), 200);
   }
   // A different seed gives different intervals (the bootstrap is not a constant).
-  const json k = Run(Cli(), " stats psychometric" + args + " --seed 8");
+  const json k = RunJson(Cli(), " stats psychometric" + args + " --seed 8");
   EXPECT_NE(k["groups"][0]["threshold"]["lo"], j["groups"][0]["threshold"]["lo"]);
 }
 
