@@ -80,9 +80,8 @@ int RunExport(const ExportOpts& o) {
   } else {
     // The trajectory tables can be hundreds of MB: their size is said before either choice.
     const auto size = db::CountTrajectories(database);
-    const std::string what = fmt::format("{} samples of {} streams, about {} as CSV",
-                                         size.samples, size.streams,
-                                         Megabytes(size.estimated_bytes));
+    const std::string what = fmt::format("{} samples of {} streams, about {} as CSV", size.samples,
+                                         size.streams, Megabytes(size.estimated_bytes));
     if (size.samples > 0)
       log(o.trajectories ? "writing trajectories: " + what
                          : "trajectories left out (" + what + "): --trajectories writes them");
@@ -140,8 +139,8 @@ void RegisterExport(CLI::App& app) {
   cmd->add_option("--participant", o->participant, "xdf: only this participant's sessions");
   cmd->add_flag("--trajectories", o->trajectories,
                 "csv: also write the trajectories, one CSV per stream (their size is printed\n"
-                "first; for the demo's 3 participants about 100 MB). Without it: ratings,\n"
-                "trials and events only");
+                "first: about 100 MB per participant recorded by the demo). Without it:\n"
+                "ratings, trials and events only");
   // Kept for scripts written before trajectories became opt-in (issue #32): the default now.
   cmd->add_flag("--no-trajectories", o->no_trajectories, "")->group("");
   cmd->add_flag("--quiet", o->quiet, "No progress lines (the summary is still printed)");

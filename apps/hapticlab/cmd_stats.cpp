@@ -10,12 +10,12 @@
 #include "cli_common.hpp"
 #include "cmd_stats_common.hpp"
 #include "commands.hpp"
-#include "stats_commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli {
 namespace {

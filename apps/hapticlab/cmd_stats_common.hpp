@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "stats_commands.hpp"
 #include "hapticlab/stats/long_table.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli::stats_cmd {
 

@@ -34,7 +34,7 @@ json Interval(double value, const stats::BootstrapInterval& ci) {
 }
 
 std::string Text(double value, const stats::BootstrapInterval& ci) {
-  const std::string v = std::isfinite(value) ? fmt::format("{:.6g}", value) : "n/a";
+  std::string v = std::isfinite(value) ? fmt::format("{:.6g}", value) : "n/a";
   if (!std::isfinite(ci.lo) && !std::isfinite(ci.hi)) return v;
   return fmt::format("{} [{:.6g}, {:.6g}]", v, ci.lo, ci.hi);
 }
@@ -50,8 +50,8 @@ json GroupJson(const stats::PsychometricGroup& g, const stats::PsychometricSumma
   for (const auto& [col, val] : g.keys) keys[col] = val;
   const auto& f = s.fit;
   const int params = 2 + (o.lapse ? 1 : 0);
-  json j{{"group", keys},      {"name", g.Name()},     {"rows", g.data.x.size()},
-         {"trials", s.trials}, {"usable", f.usable},   {"message", f.message},
+  json j{{"group", keys},      {"name", g.Name()},          {"rows", g.data.x.size()},
+         {"trials", s.trials}, {"usable", f.usable},        {"message", f.message},
          {"figure", figure},   {"iterations", f.iterations}};
   if (!f.usable) return j;
   json at = json::array();
@@ -117,9 +117,9 @@ stats::PsychometricSummaryOptions Prepare(const PsyOpts& o, const stats::Psychom
                      fmt::format("expected a value in (0, {:.4g}) for this link", 1 - link.guess));
   for (const double p : o.performances)
     if (!(p > link.guess && p < 1))
-      throw InputError(kCommandLine, 0, "--performance",
-                       fmt::format("{} is outside ({:.4g}, 1), the range of link {}", p,
-                                   link.guess, link.name));
+      throw InputError(
+          kCommandLine, 0, "--performance",
+          fmt::format("{} is outside ({:.4g}, 1), the range of link {}", p, link.guess, link.name));
   if (!(o.jnd_at > link.guess && o.jnd_at < 1))
     throw InputError(kCommandLine, 0, "--jnd-at",
                      fmt::format("{} is outside ({:.4g}, 1), the range of link {}", o.jnd_at,
@@ -154,8 +154,8 @@ int Run(const PsyOpts& o, const PsychometricFigure& draw) {
   const auto options = Prepare(o, *link);
   auto columns = o.columns;
   columns.by = stats::SplitList(o.by);
-  const auto groups = stats::ReadPsychometricCsv(
-      o.csv, columns, link->shape == psychophysics::Shape::kWeibull);
+  const auto groups =
+      stats::ReadPsychometricCsv(o.csv, columns, link->shape == psychophysics::Shape::kWeibull);
   json out = json::array();
   int usable = 0;
   std::uint64_t seed = o.seed;

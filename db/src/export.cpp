@@ -3,9 +3,9 @@
 #include <fmt/format.h>
 #include <fmt/ranges.h>
 
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <cstdio>
 #include <map>
 #include <memory>
 #include <set>
@@ -173,8 +173,8 @@ std::vector<ExportedFile> WriteTrajectories(const Database& db, const std::strin
       tables.Chunk(q, prefix + std::to_string(q.Int(0)) + ",");
     }
     if (progress)
-      progress(fmt::format("{} ({}): {} trajectory samples of {} trials", who.Text(1),
-                           who.Text(2), tables.samples() - before, trials.size()));
+      progress(fmt::format("{} ({}): {} trajectory samples of {} trials", who.Text(1), who.Text(2),
+                           tables.samples() - before, trials.size()));
   }
   return tables.Close();
 }

@@ -216,8 +216,7 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
                       "or choose one participant",
                       sessions.size()));
     files.push_back(WriteSession(sessions[0], out));
-    if (progress)
-      progress(Progress(sessions[0], 1, files.back().streams, files.back().samples));
+    if (progress) progress(Progress(sessions[0], 1, files.back().streams, files.back().samples));
     return files;
   }
   std::error_code ec;

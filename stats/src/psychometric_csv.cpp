@@ -19,9 +19,9 @@ using psychophysics::Shape;
 int Count(const CsvTable& t, std::size_t row, std::size_t col, const char* what) {
   const double v = t.Number(row, col);
   if (!(v >= 0 && v <= std::numeric_limits<int>::max() && v == std::floor(v)))
-    throw InputError(t.file, t.row_lines[row], t.header[col],
-                     fmt::format("expected a whole number of {} >= 0, got '{}'", what,
-                                 t.rows[row][col]));
+    throw InputError(
+        t.file, t.row_lines[row], t.header[col],
+        fmt::format("expected a whole number of {} >= 0, got '{}'", what, t.rows[row][col]));
   return static_cast<int>(v);
 }
 
@@ -32,16 +32,18 @@ std::optional<PsychometricLink> ParsePsychometricLink(const std::string& text, s
       {"logit", Shape::kLogistic}, {"probit", Shape::kNormal}, {"weibull", Shape::kWeibull}};
   const auto colon = text.find(':');
   const bool mafc = text.rfind("mafc-", 0) == 0;
-  const std::string base = mafc ? text.substr(5, colon == std::string::npos ? colon : colon - 5)
-                                : text.substr(0, colon);
+  const std::string base =
+      mafc ? text.substr(5, colon == std::string::npos ? colon : colon - 5) : text.substr(0, colon);
   const auto shape = kShapes.find(base);
   auto fail = [&](const std::string& w) {
     if (why) *why = w;
     return std::nullopt;
   };
   if (shape == kShapes.end() || (!mafc && colon != std::string::npos))
-    return fail("expected logit, probit, weibull, mafc-logit:m, mafc-probit:m or mafc-weibull:m, "
-                "got '" + text + "'");
+    return fail(
+        "expected logit, probit, weibull, mafc-logit:m, mafc-probit:m or mafc-weibull:m, "
+        "got '" +
+        text + "'");
   PsychometricLink link{.name = text, .shape = shape->second, .guess = 0};
   if (mafc) {
     const std::string m = colon == std::string::npos ? "" : text.substr(colon + 1);
@@ -80,20 +82,20 @@ std::vector<PsychometricGroup> ReadPsychometricCsv(const std::string& path,
     const int line = t.row_lines[r];
     const double x = t.Number(r, level);
     if (!std::isfinite(x))
-      throw InputError(path, line, c.level, "expected a finite stimulus level, got '" +
-                                                t.rows[r][level] + "'");
-    if (positive_levels && !(x > 0))
       throw InputError(path, line, c.level,
-                       "expected a level > 0: a Weibull link fits ln(level), got '" +
-                           t.rows[r][level] + "'");
+                       "expected a finite stimulus level, got '" + t.rows[r][level] + "'");
+    if (positive_levels && !(x > 0))
+      throw InputError(
+          path, line, c.level,
+          "expected a level > 0: a Weibull link fits ln(level), got '" + t.rows[r][level] + "'");
     const int k = Count(t, r, correct, "correct trials");
     const int other = Count(t, r, total, by_trials ? "trials" : "incorrect trials");
     if (!by_trials && other > std::numeric_limits<int>::max() - k)
       throw InputError(path, line, c.incorrect, "correct + incorrect trials exceed 2^31 - 1");
     const int n = by_trials ? other : k + other;
     if (by_trials && n < 1)
-      throw InputError(path, line, c.trials, "expected at least 1 trial, got '" +
-                                                 t.rows[r][total] + "'");
+      throw InputError(path, line, c.trials,
+                       "expected at least 1 trial, got '" + t.rows[r][total] + "'");
     if (by_trials && k > n)
       throw InputError(path, line, c.correct,
                        fmt::format("{} correct of {} trials: expected at most the trials "

@@ -55,15 +55,15 @@ TEST(StatsPsychometricCli, EveryLinkEqualsRAndThresholdsTheClosedForm) {
        {"logit", "probit", "weibull", "mafc-logit:4", "mafc-probit:4", "mafc-weibull:4"}) {
     SCOPED_TRACE(link);
     const json j = RunJson(Cli(), " stats psychometric --csv " + Ecc2() + kEcc2Args + " --link " +
-                                  link + " --performance 0.6,0.75,0.9 --bootstrap 0");
+                                      link + " --performance 0.6,0.75,0.9 --bootstrap 0");
     ASSERT_EQ(j["groups"].size(), 8u);
     for (const auto& g : j["groups"]) {
       SCOPED_TRACE(g["name"].get<std::string>());
       std::size_t r = 0;
-      while (r < ref.rows.size() &&
-             !(ref.rows[r][ref.Require("link")] == link &&
-               ref.rows[r][ref.Require("task")] == g["group"]["task"] &&
-               ref.Number(r, ref.Require("size")) == std::stod(g["group"]["Size"].get<std::string>())))
+      while (r < ref.rows.size() && !(ref.rows[r][ref.Require("link")] == link &&
+                                      ref.rows[r][ref.Require("task")] == g["group"]["task"] &&
+                                      ref.Number(r, ref.Require("size")) ==
+                                          std::stod(g["group"]["Size"].get<std::string>())))
         ++r;
       ASSERT_LT(r, ref.rows.size());
       const double a = ref.Number(r, ref.Require("a")), b = ref.Number(r, ref.Require("b"));
@@ -97,14 +97,14 @@ TEST(StatsPsychometricCli, EveryLinkEqualsRAndThresholdsTheClosedForm) {
 // Intervals from the parametric bootstrap hold the estimate; the Weber fraction is JND /
 // reference with its interval scaled alike; the lean binary prints the same JSON.
 TEST(StatsPsychometricCli, BootstrapWeberAndTheLeanBinary) {
-  const std::string args = " --csv " + Ecc2() + kEcc2Args +
-                           " --link mafc-logit:4 --bootstrap 200 --reference 0.5";
+  const std::string args =
+      " --csv " + Ecc2() + kEcc2Args + " --link mafc-logit:4 --bootstrap 200 --reference 0.5";
   const json j = RunJson(Cli(), " stats psychometric" + args + " --seed 7");
   std::string lean;
-  ASSERT_EQ(test::RunCommand(
-                std::string(HL_STATS_CLI_PATH) + " psychometric" + args + " --seed 7 --json",
-                             &lean),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(std::string(HL_STATS_CLI_PATH) + " psychometric" + args + " --seed 7 --json",
+                       &lean),
+      0)
       << lean;
   EXPECT_EQ(json::parse(lean), j);
   for (const auto& g : j["groups"]) {

@@ -207,8 +207,8 @@ TEST(PsychometricLink, ParsesTheNamedLinksAndRefusesOthers) {
   ASSERT_TRUE(w);
   EXPECT_EQ(w->shape, Shape::kWeibull);
   EXPECT_EQ(w->guess, 0);
-  for (const char* bad : {"mafc-logit", "mafc-logit:1", "mafc-logit:x", "logit:2", "cauchit",
-                          "mafc-logit:4x", ""}) {
+  for (const char* bad :
+       {"mafc-logit", "mafc-logit:1", "mafc-logit:x", "logit:2", "cauchit", "mafc-logit:4x", ""}) {
     EXPECT_FALSE(ParsePsychometricLink(bad, &why)) << bad;
     EXPECT_FALSE(why.empty()) << bad;
   }
@@ -217,7 +217,8 @@ TEST(PsychometricLink, ParsesTheNamedLinksAndRefusesOthers) {
 // Bad cells are refused with the file, the line and the column named.
 TEST(PsychometricCsv, NamesFileLineAndColumnOfABadCell) {
   test::TempDir dir;
-  const PsychometricColumns cols{.level = "x", .correct = "k", .trials = "n", .incorrect = "", .by = {}};
+  const PsychometricColumns cols{
+      .level = "x", .correct = "k", .trials = "n", .incorrect = "", .by = {}};
   auto error_of = [&](const std::string& body, bool positive = false) -> std::string {
     test::WriteFile(dir.File("d.csv"), "x,k,n\n" + body);
     try {

@@ -45,7 +45,6 @@ TrajectorySize CountTrajectories(const Database& db);
 /// @param trajectories false: ratings, trials and events only (trajectories stay in the db)
 /// @param progress with trajectories, one line per participant
 std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_dir,
-                                    bool trajectories = true,
-                                    const ExportProgress& progress = {});
+                                    bool trajectories = true, const ExportProgress& progress = {});
 
 }  // namespace hapticlab::db

@@ -38,7 +38,7 @@ struct PsychometricColumns {
 struct PsychometricGroup {
   std::vector<std::pair<std::string, std::string>> keys;  ///< (column, value); empty: all rows
   PsychometricData data;                                  ///< in file order, not pooled
-  std::string Name() const;  ///< "task=DET, Size=12.4", or "all"
+  std::string Name() const;                               ///< "task=DET, Size=12.4", or "all"
 };
 
 /// Reads the CSV into groups in the order their first rows appear. Every kept cell is checked:
