@@ -5,6 +5,8 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/version.hpp"
+#include "hapticlab/stats/psychometric_report.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli {
 
@@ -23,7 +25,7 @@ void BuildApp(CLI::App& app) {
   RegisterExport(app);
   RegisterModel(app);
   RegisterDemo(app);
-  RegisterStats(app);
+  RegisterStats(app, stats::DrawPsychometricPlot);
   RegisterStudy(app);
   RegisterAnalyze(app);
   RegisterWorkbench(app);

@@ -15,6 +15,7 @@
 #include "hapticlab/stats/nonparametric.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -280,22 +281,27 @@ void AddShapiro(CLI::App& s) {
 
 }  // namespace
 
-void AddStatsCommands(CLI::App& group) {
+void AddStatsCommands(CLI::App& group, const PsychometricFigure& draw) {
   AddRmAnova(group);
   AddTukey(group);
   AddKruskal(group);
   AddShapiro(group);
   stats_cmd::AddLmm(group);
+  stats_cmd::AddPsychometric(group, draw);
 }
 
-void RegisterStats(CLI::App& app) {
+void AddStatsCommands(CLI::App& group) { AddStatsCommands(group, {}); }
+
+void RegisterStats(CLI::App& app) { RegisterStats(app, {}); }
+
+void RegisterStats(CLI::App& app, const PsychometricFigure& draw) {
   auto* s = app.add_subcommand(
       "stats",
       "Statistics on any long-format CSV (see docs/analysis.md):\n"
-      "rm-anova, tukey, kruskal, shapiro, lmm. The same commands, with a fast start\n"
-      "(no GUI, device or modeling libraries loaded): hapticlab-stats COMMAND");
+      "rm-anova, tukey, kruskal, shapiro, lmm, psychometric. The same commands, with a fast\n"
+      "start (no GUI, device or modeling libraries loaded): hapticlab-stats COMMAND");
   s->require_subcommand(1);
-  AddStatsCommands(*s);
+  AddStatsCommands(*s, draw);
 }
 
 }  // namespace hapticlab::cli

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hapticlab/stats/long_table.hpp"
+#include "stats_commands.hpp"
 
 namespace hapticlab::cli::stats_cmd {
 
@@ -35,5 +36,9 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys);
 
 /// `stats lmm`.
 void AddLmm(CLI::App& s);
+
+/// `stats psychometric` (cmd_stats_psychometric.cpp); `draw` writes its figures (empty in the
+/// lean hapticlab-stats, which links no plotting library).
+void AddPsychometric(CLI::App& s, PsychometricFigure draw);
 
 }  // namespace hapticlab::cli::stats_cmd

@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   try {
     CLI::App app{
         "hapticlab-stats: the statistics of 'hapticlab stats' (rm-anova, tukey, kruskal,\n"
-        "shapiro, lmm) on any long-format CSV, in a binary that starts fast (see "
+        "shapiro, lmm, psychometric) on any CSV, in a binary that starts fast (see "
         "docs/analysis.md).\n"
         "Exit codes: 0 ok, 1 the work failed, 2 bad usage or bad input.",
         "hapticlab-stats"};

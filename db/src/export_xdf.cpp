@@ -80,7 +80,8 @@ std::string Footer(double first_s, double last_s, std::size_t n) {
          Tag("sample_count", std::to_string(n)) + "<clock_offsets></clock_offsets>";
 }
 
-std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
+// Writes one session's file; returns it with its stream and sample counts.
+ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
   internal::XdfWriter w(path);
   const std::string source =
       "hapticlab:" + s.study.name + ":" + s.participant.code + ":ses-" + std::to_string(s.number);
@@ -194,13 +195,20 @@ std::size_t WriteSession(const SessionRecord& s, const std::string& path) {
   w.StreamFooter(ratings_id, Footer(ratings.empty() ? 0 : ratings.front().first,
                                     ratings.empty() ? 0 : ratings.back().first, ratings.size()));
   w.Close();
-  return written;
+  return {.path = path, .rows = 0, .streams = streams.size() + 2, .samples = written};
+}
+
+std::string Progress(const SessionRecord& s, std::size_t sessions, std::size_t streams,
+                     std::size_t samples) {
+  return fmt::format("{}: {} session{}, {} streams, {} samples", s.participant.code, sessions,
+                     sessions == 1 ? "" : "s", streams, samples);
 }
 
 }  // namespace
 
 std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
-                                    const std::string& participant) {
+                                    const std::string& participant,
+                                    const ExportProgress& progress) {
   const auto sessions = internal::LoadSessions(db, participant);
   std::vector<ExportedFile> files;
   if (out.ends_with(".xdf")) {
@@ -210,18 +218,26 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
           fmt::format("a file name holds one session and the selection has {}; name a directory, "
                       "or choose one participant",
                       sessions.size()));
-    files.push_back({out, WriteSession(sessions[0], out)});
+    files.push_back(WriteSession(sessions[0], out));
+    if (progress) progress(Progress(sessions[0], 1, files.back().streams, files.back().samples));
     return files;
   }
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw std::runtime_error(out + ": cannot create directory: " + ec.message());
-  for (const auto& s : sessions) {
+  std::size_t n = 0, streams = 0, samples = 0;  // of the participant so far
+  for (std::size_t i = 0; i < sessions.size(); ++i) {
+    const auto& s = sessions[i];
     const std::string path =
         (fs::path(out) / fmt::format("sub-{}_ses-{}_task-{}.xdf", s.participant.code, s.number,
                                      internal::Alnum(s.study.name)))
             .string();
-    files.push_back({path, WriteSession(s, path)});
+    files.push_back(WriteSession(s, path));
+    ++n, streams += files.back().streams, samples += files.back().samples;
+    if (i + 1 == sessions.size() || sessions[i + 1].participant.id != s.participant.id) {
+      if (progress) progress(Progress(s, n, streams, samples));
+      n = streams = samples = 0;
+    }
   }
   return files;
 }

@@ -48,6 +48,17 @@ Eval Evaluate(const PsychometricData& d, const std::vector<double>& gx, Shape s,
   return e;
 }
 
+// The saturated model's log-likelihood without the binomial coefficients (k/n per bin).
+double SaturatedLogLik(const PsychometricData& d) {
+  double s = 0;
+  for (std::size_t i = 0; i < d.n.size(); ++i) {
+    const double n = d.n[i], k = d.k[i];
+    if (k > 0) s += k * std::log(k / n);
+    if (n - k > 0) s += (n - k) * std::log((n - k) / n);
+  }
+  return s;
+}
+
 double LogChooseSum(const PsychometricData& d) {
   double s = 0;
   for (std::size_t i = 0; i < d.n.size(); ++i)
@@ -114,6 +125,13 @@ PsychometricFit FitFixedLapse(const PsychometricData& d, const std::vector<doubl
   f.b = b;
   f.log_likelihood = e.ll + LogChooseSum(d);
   f.final_cost = -f.log_likelihood;
+  f.deviance = std::max(0.0, 2 * (SaturatedLogLik(d) - e.ll));
+  if (const double det = e.i00 * e.i11 - e.i01 * e.i01; det > 0) {
+    f.se_a = std::sqrt(e.i11 / det);
+    f.se_b = std::sqrt(e.i00 / det);
+  } else {
+    f.se_a = f.se_b = std::numeric_limits<double>::quiet_NaN();
+  }
   f.params.guess = guess;
   f.params.lapse = lapse;
   f.params.slope = b;
@@ -214,15 +232,24 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d,
                                             const PsychometricFitOptions& o,
                                             const PsychometricFit& fit, int replicates,
                                             std::uint64_t seed, double level,
-                                            double jnd_performance) {
+                                            double jnd_performance,
+                                            const std::vector<double>& performances) {
   HL_REQUIRE(fit.usable, "bootstrap: the fit is not usable: " + fit.message);
   HL_REQUIRE(replicates >= 2 && level > 0 && level < 1,
              "bootstrap: needs >= 2 replicates and 0 < level < 1");
+  for (const double p : performances)
+    HL_REQUIRE(p > o.guess && p < 1, "bootstrap: each performance must be in (guess, 1)");
   PsychometricBootstrap out;
   out.level = level;
   out.jnd = {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   Rng rng(seed);
   std::vector<double> thr, slope, jnd;
+  std::vector<std::vector<double>> at(performances.size());
+  // A replicate whose lapse leaves the performance unreachable counts as infinitely far.
+  const auto stimulus_at = [&o](const psychophysics::PsychometricParams& p, double perf) {
+    const auto x = psychophysics::StimulusAt(o.shape, p, perf);
+    return x ? *x : std::numeric_limits<double>::infinity();
+  };
   PsychometricData sim = d;
   for (int r = 0; r < replicates; ++r) {
     for (std::size_t i = 0; i < d.x.size(); ++i) {
@@ -238,13 +265,15 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d,
     }
     thr.push_back(f.params.threshold);
     slope.push_back(f.params.slope);
-    if (jnd_performance > o.guess && jnd_performance < 1) {
-      // A replicate whose lapse leaves the performance unreachable counts as infinitely far.
-      const auto x = psychophysics::StimulusAt(o.shape, f.params, jnd_performance);
-      jnd.push_back(x ? *x : std::numeric_limits<double>::infinity());
-    }
+    if (jnd_performance > o.guess && jnd_performance < 1)
+      jnd.push_back(stimulus_at(f.params, jnd_performance));
+    for (std::size_t j = 0; j < performances.size(); ++j)
+      at[j].push_back(stimulus_at(f.params, performances[j]));
   }
   out.replicates = static_cast<int>(thr.size());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  out.stimulus_at.assign(performances.size(), BootstrapInterval{nan, nan});
+  out.threshold = out.slope = {nan, nan};
   if (thr.size() < 2) return out;
   // Percentile interval (type 7 quantiles, as R's quantile()).
   auto quantile = [](std::vector<double> v, double q) {
@@ -258,6 +287,8 @@ PsychometricBootstrap BootstrapPsychometric(const PsychometricData& d,
   out.threshold = {quantile(thr, tail), quantile(thr, 1 - tail)};
   out.slope = {quantile(slope, tail), quantile(slope, 1 - tail)};
   out.jnd = jnd.empty() ? out.jnd : BootstrapInterval{quantile(jnd, tail), quantile(jnd, 1 - tail)};
+  for (std::size_t j = 0; j < at.size(); ++j)
+    out.stimulus_at[j] = {quantile(at[j], tail), quantile(at[j], 1 - tail)};
   return out;
 }
 

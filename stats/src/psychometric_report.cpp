@@ -15,6 +15,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/stats/psychometric_csv.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -59,12 +60,17 @@ FitRow FitOne(const std::string& who, const std::vector<AdaptiveAnswer>& a,
   FitRow r;
   r.who = who;
   r.trials = static_cast<int>(a.size());
-  const auto d = ToData(a);
-  r.fit = FitPsychometric(d, o);
-  if (r.fit.usable) {
-    if (auto x = psychophysics::StimulusAt(o.shape, r.fit.params, spec.jnd_performance)) r.jnd = *x;
-    r.boot = BootstrapPsychometric(d, o, r.fit, replicates, seed, 0.95, spec.jnd_performance);
-  }
+  // The same summary as `stats psychometric` (psychometric_csv.hpp).
+  auto s = SummarizePsychometric(ToData(a), {.fit = o,
+                                             .performances = {},
+                                             .jnd_performance = spec.jnd_performance,
+                                             .reference = 0,
+                                             .replicates = replicates,
+                                             .seed = seed,
+                                             .level = 0.95});
+  r.fit = std::move(s.fit);
+  r.boot = std::move(s.boot);
+  r.jnd = s.jnd;
   return r;
 }
 
@@ -89,32 +95,6 @@ std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const st
         }
         if (has_level && has_correct) out.push_back(a);
       }
-  return out;
-}
-
-PsychometricData BinForPlot(const PsychometricData& pooled, int max_bins) {
-  PsychometricData d = PoolByStimulus(pooled);  // not const: returned by move below
-  if (static_cast<int>(d.x.size()) <= max_bins) return d;
-  int total = 0;
-  for (int n : d.n) total += n;
-  PsychometricData out;
-  double sx = 0;
-  int n = 0, k = 0, bin = 0;
-  int cum = 0;
-  for (std::size_t i = 0; i < d.x.size(); ++i) {
-    sx += d.x[i] * d.n[i];
-    n += d.n[i];
-    k += d.k[i];
-    cum += d.n[i];
-    // Close the bin when the running count passes its share of the trials.
-    if (cum * max_bins >= (bin + 1) * total || i + 1 == d.x.size()) {
-      out.x.push_back(sx / n);
-      out.n.push_back(n);
-      out.k.push_back(k);
-      sx = 0, n = 0, k = 0;
-      ++bin;
-    }
-  }
   return out;
 }
 

@@ -321,5 +321,81 @@ TEST_F(Interchange, BidsAcceptedByTheOfficialValidator) {
   EXPECT_GT(broken["issues"]["errors"].size(), 0u);
 }
 
+// Quiet exports (issue #32): one progress line per participant on stderr and one summary on
+// stdout, never a line per file; CSV trajectories only on request, their size said first;
+// XDF counted in streams and samples.
+TEST_F(Interchange, ExportsPrintOneLinePerParticipantAndASummary) {
+  std::size_t samples = 0;
+  for (const auto& [stream, n] : exp_->samples) samples += n;
+  auto lines = [](const std::string& text) {
+    std::vector<std::string> v;
+    std::istringstream in(text);
+    for (std::string l; std::getline(in, l);) v.push_back(l);
+    return v;
+  };
+  auto has_trajectories = [](const std::string& dir) {
+    for (const auto& e : fs::directory_iterator(dir))
+      if (e.path().filename().string().rfind("trajectory_", 0) == 0) return true;
+    return false;
+  };
+  std::string out;
+  const std::string csv = dir_->File("quiet_csv");
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db_ + " --out " + csv, &out), 0) << out;
+  auto l = lines(out);
+  ASSERT_EQ(l.size(), 2u) << out;
+  EXPECT_NE(l[0].find("trajectories left out (" + std::to_string(samples) + " samples"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(l[0].find("--trajectories"), std::string::npos) << out;
+  EXPECT_NE(l[1].find("3 tables"), std::string::npos) << out;
+  EXPECT_FALSE(has_trajectories(csv));
+
+  const std::string full = dir_->File("full_csv");
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " export --db " + db_ + " --out " + full + " --trajectories", &out),
+      0)
+      << out;
+  l = lines(out);
+  ASSERT_EQ(l.size(), 3u) << out;  // the size, P01's line, the summary
+  EXPECT_NE(l[0].find("writing trajectories: " + std::to_string(samples) + " samples"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(l[1].find("P01"), std::string::npos) << out;
+  EXPECT_NE(l[1].find(std::to_string(samples) + " trajectory samples"), std::string::npos) << out;
+  EXPECT_TRUE(has_trajectories(full));
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " export --db " + db_ + " --out " + full + " --trajectories --quiet", &out),
+            0);
+  EXPECT_EQ(lines(out).size(), 1u) << out;
+
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db_ + " --format bids --out " + dir_->File("quiet_bids"), &out),
+      0)
+      << out;
+  l = lines(out);
+  ASSERT_EQ(l.size(), 2u) << out;
+  EXPECT_EQ(l[0].rfind("sub-P01 (P01): ", 0), 0u) << out;
+  EXPECT_NE(l[1].find(std::to_string(samples) + " samples"), std::string::npos) << out;
+  EXPECT_EQ(out.find("rows)"), std::string::npos) << out;
+
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " export --db " + db_ + " --format xdf --out " + dir_->File("quiet_xdf"), &out),
+      0)
+      << out;
+  EXPECT_NE(out.find(std::to_string(exp_->samples.size() + 2) + " streams"), std::string::npos)
+      << out;
+  EXPECT_EQ(out.find("rows"), std::string::npos) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db_ + " --format xdf --json --out " +
+                                 dir_->File("quiet_xdf2"),
+                             &out),
+            0)
+      << out;
+  const auto j = json::parse(out)["files"][0];
+  EXPECT_EQ(j["streams"], exp_->samples.size() + 2) << out;
+  EXPECT_FALSE(j.contains("rows")) << out;
+}
+
 }  // namespace
 }  // namespace hapticlab

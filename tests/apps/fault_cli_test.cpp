@@ -209,8 +209,9 @@ TEST(FaultCli, AnalyzeAndExportRefuseDamagedRecordsAndBadScores) {
   // A chunk deleted after completion: export refuses instead of writing a short trajectory.
   db::Database(dir.File("chunks.db"))
       .Exec("DELETE FROM trajectory_chunk WHERE id = (SELECT max(id) FROM trajectory_chunk)");
-  EXPECT_EQ(test::RunCommand(
-                Cli() + " export --db " + dir.File("chunks.db") + " --out " + dir.File("x"), &out),
+  EXPECT_EQ(test::RunCommand(Cli() + " export --db " + dir.File("chunks.db") + " --out " +
+                                 dir.File("x") + " --trajectories",
+                             &out),
             2);
   EXPECT_NE(out.find("export refused"), std::string::npos) << out;
   // Damaged pages: quick_check fails, both commands refuse with a clear message.

@@ -36,12 +36,14 @@ TEST(ExportXdf, StreamsAndMarkersOnTheSessionClock) {
   ASSERT_EQ(files.size(), 1u);
   // 8 + 3 samples of trial A, 4 of B (the faulted trial's 5 are not exported), 3 events
   // (two trial starts and the break), 2 ratings.
-  EXPECT_EQ(files[0].rows, 4u + 3u + 4u + 3u + 2u);
+  EXPECT_EQ(files[0].samples, 4u + 3u + 4u + 3u + 2u);
+  EXPECT_EQ(files[0].rows, 0u);  // a binary file has streams and samples, not rows
   Xdf x;
   ASSERT_EQ(x.load_xdf(dir.File("s.xdf")), 0);
   std::map<std::string, const Xdf::Stream*> by;
   for (const auto& s : x.streams) by[s.info.name] = &s;
   ASSERT_EQ(by.size(), 4u);
+  EXPECT_EQ(files[0].streams, x.streams.size());
   const auto& left = *by.at("left_force");
   EXPECT_EQ(left.info.channel_count, 2);
   EXPECT_EQ(left.info.nominal_srate, 100);

@@ -7,8 +7,10 @@
 #include <cmath>
 
 #include "hapticlab/core/csv.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/stats/psychometric_csv.hpp"
 #include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -17,9 +19,9 @@ namespace {
 
 using psychophysics::Shape;
 
-// The issue asks for agreement to 1e-4. Both sides converge far tighter (glm with
+// Issue #32 asks for agreement to 1e-6. Both sides converge far tighter (glm with
 // epsilon = 1e-14; Fisher scoring to 1e-13 in log-likelihood), so this is the only slack.
-constexpr double kRTol = 1e-4;
+constexpr double kRTol = 1e-6;
 
 PsychometricData Ecc2(const std::string& task, double size) {
   const CsvTable t = ReadCsv(test::DataPath("psychometric/ecc2.csv"));
@@ -151,6 +153,93 @@ TEST(PsychometricFit, RecoversLapseWhenFree) {
   EXPECT_NEAR(f.params.slope, 4.0, 0.1);
   o.lapse_free = false;
   EXPECT_LT(FitPsychometric(d, o).log_likelihood, f.log_likelihood);
+}
+
+// Every link of `stats psychometric --link` on every task x Size group of ecc2, read through
+// the command's CSV reader, against R's glm (tests/data/psychometric/ecc2_links.csv):
+// coefficients, standard errors, residual deviance and log-likelihood to 1e-6.
+TEST(PsychometricFit, EveryLinkMatchesRGlmOnEveryEcc2Group) {
+  const CsvTable ref = ReadCsv(test::DataPath("psychometric/ecc2_links.csv"));
+  ASSERT_EQ(ref.rows.size(), 48u);  // 8 groups x 6 links
+  const auto groups = ReadPsychometricCsv(test::DataPath("psychometric/ecc2.csv"),
+                                          {.level = "Contr",
+                                           .correct = "Correct",
+                                           .trials = "",
+                                           .incorrect = "Incorrect",
+                                           .by = {"task", "Size"}},
+                                          true);
+  ASSERT_EQ(groups.size(), 8u);
+  auto rel = [](double a, double b) { return std::abs(a - b) / std::max(1.0, std::abs(b)); };
+  int checked = 0;
+  for (std::size_t r = 0; r < ref.rows.size(); ++r) {
+    const std::string task = ref.rows[r][ref.Require("task")];
+    const double size = ref.Number(r, ref.Require("size"));
+    const std::string link_name = ref.rows[r][ref.Require("link")];
+    SCOPED_TRACE(task + " " + std::to_string(size) + " " + link_name);
+    const PsychometricGroup* g = nullptr;
+    for (const auto& x : groups)
+      if (x.keys[0].second == task && std::stod(x.keys[1].second) == size) g = &x;
+    ASSERT_NE(g, nullptr);
+    ASSERT_EQ(g->data.x.size(), 6u);
+    std::string why;
+    const auto link = ParsePsychometricLink(link_name, &why);
+    ASSERT_TRUE(link) << why;
+    const auto f = FitPsychometric(g->data, {.shape = link->shape, .guess = link->guess});
+    ASSERT_TRUE(f.usable) << f.message;
+    EXPECT_LT(rel(f.a, ref.Number(r, ref.Require("a"))), kRTol) << f.a;
+    EXPECT_LT(rel(f.b, ref.Number(r, ref.Require("b"))), kRTol) << f.b;
+    EXPECT_LT(rel(f.se_a, ref.Number(r, ref.Require("se_a"))), kRTol) << f.se_a;
+    EXPECT_LT(rel(f.se_b, ref.Number(r, ref.Require("se_b"))), kRTol) << f.se_b;
+    EXPECT_LT(rel(f.deviance, ref.Number(r, ref.Require("deviance"))), kRTol) << f.deviance;
+    EXPECT_LT(rel(f.log_likelihood, ref.Number(r, ref.Require("loglik"))), kRTol);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 48);
+}
+
+TEST(PsychometricLink, ParsesTheNamedLinksAndRefusesOthers) {
+  std::string why;
+  const auto m = ParsePsychometricLink("mafc-probit:3", &why);
+  ASSERT_TRUE(m);
+  EXPECT_EQ(m->shape, Shape::kNormal);
+  EXPECT_DOUBLE_EQ(m->guess, 1.0 / 3);
+  const auto w = ParsePsychometricLink("weibull", &why);
+  ASSERT_TRUE(w);
+  EXPECT_EQ(w->shape, Shape::kWeibull);
+  EXPECT_EQ(w->guess, 0);
+  for (const char* bad :
+       {"mafc-logit", "mafc-logit:1", "mafc-logit:x", "logit:2", "cauchit", "mafc-logit:4x", ""}) {
+    EXPECT_FALSE(ParsePsychometricLink(bad, &why)) << bad;
+    EXPECT_FALSE(why.empty()) << bad;
+  }
+}
+
+// Bad cells are refused with the file, the line and the column named.
+TEST(PsychometricCsv, NamesFileLineAndColumnOfABadCell) {
+  test::TempDir dir;
+  const PsychometricColumns cols{
+      .level = "x", .correct = "k", .trials = "n", .incorrect = "", .by = {}};
+  auto error_of = [&](const std::string& body, bool positive = false) -> std::string {
+    test::WriteFile(dir.File("d.csv"), "x,k,n\n" + body);
+    try {
+      ReadPsychometricCsv(dir.File("d.csv"), cols, positive);
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "no error";
+  };
+  const std::string f = dir.File("d.csv");
+  EXPECT_NE(error_of("1,2,4\nabc,2,4\n").find(f + ":3"), std::string::npos);
+  EXPECT_NE(error_of("1,2,4\nabc,2,4\n").find("x"), std::string::npos);
+  EXPECT_NE(error_of("1,5,4\n").find(f + ":2"), std::string::npos) << error_of("1,5,4\n");
+  EXPECT_NE(error_of("1,5,4\n").find("k"), std::string::npos);
+  EXPECT_NE(error_of("1,2.5,4\n").find("whole number"), std::string::npos);
+  EXPECT_NE(error_of("1,-1,4\n").find("whole number"), std::string::npos);
+  EXPECT_NE(error_of("1,0,0\n").find("at least 1 trial"), std::string::npos);
+  EXPECT_NE(error_of("1,1,1e300\n").find(f + ":2"), std::string::npos);
+  EXPECT_NE(error_of("inf,1,2\n").find("finite"), std::string::npos);
+  EXPECT_NE(error_of("0,1,2\n", true).find("> 0"), std::string::npos);
+  EXPECT_EQ(error_of("1,1,2\n", true), "no error");
 }
 
 }  // namespace

@@ -1,7 +1,8 @@
-# Reference fits for tests/stats/psychometric_test.cpp: maximum-likelihood psychometric
-# functions fitted by R's glm (binomial family) with psyphy's links for the guess rate.
+# Reference fits for tests/stats/psychometric_test.cpp and tests/apps/cmd_stats_psychometric_test.cpp:
+# maximum-likelihood psychometric functions fitted by R's glm (binomial family), plain and
+# with psyphy's links for the guess rate. Writes ecc2.csv, ecc2_fits.csv and ecc2_links.csv.
 #
-# Data: psyphy's `ecc2` ("4-afc Detection and Identification of Letters", Yssaad-Fesselier
+# Data: psyphy's (GPL; see README.md here) `ecc2` ("4-afc Detection and Identification of Letters", Yssaad-Fesselier
 # and Knoblauch 2006, doi:10.1016/j.visres.2005.11.008), the 48 rows as shipped, written to
 # ecc2.csv. Regenerate with (Debian 12: r-base-core 4.2.2, r-cran-psyphy 0.2-3):
 #   Rscript tests/data/psychometric/ecc2_reference.R tests/data/psychometric
@@ -55,3 +56,32 @@ for (size in c(12.4, 20.6)) {
 res <- do.call(rbind, rows)
 write.csv(res, file.path(out, "ecc2_fits.csv"), row.names = FALSE, quote = FALSE)
 print(res)
+
+# ecc2_links.csv: every task x Size group of ecc2 under each link of `hapticlab stats
+# psychometric --link` (guess 0 for logit, probit, weibull; 1/4 for the mafc links), lapse 0:
+# the coefficients (intercept a, slope b of eta = a + b g(x)), their standard errors, the
+# residual deviance and the log-likelihood, all to 15 significant digits.
+links <- list(
+  list(name = "logit", link = binomial("logit"), log_x = FALSE),
+  list(name = "probit", link = binomial("probit"), log_x = FALSE),
+  list(name = "weibull", link = binomial("cloglog"), log_x = TRUE),
+  list(name = "mafc-logit:4", link = binomial(mafc.logit(4)), log_x = FALSE),
+  list(name = "mafc-probit:4", link = binomial(mafc.probit(4)), log_x = FALSE),
+  list(name = "mafc-weibull:4", link = binomial(mafc.cloglog(4)), log_x = TRUE))
+g15 <- function(v) sprintf("%.15g", v)
+lrows <- list()
+for (task in levels(ecc2$task)) for (size in sort(unique(ecc2$Size))) {
+  d <- sub(task, size)
+  for (l in links) {
+    f <- if (l$log_x) glm(cbind(Correct, Incorrect) ~ log(Contr), l$link, d, control = ctl)
+         else glm(cbind(Correct, Incorrect) ~ Contr, l$link, d, control = ctl)
+    se <- sqrt(diag(vcov(f)))
+    lrows[[length(lrows) + 1]] <- data.frame(task = task, size = size, link = l$name,
+      a = g15(coef(f)[1]), b = g15(coef(f)[2]), se_a = g15(se[1]), se_b = g15(se[2]),
+      deviance = g15(deviance(f)), df_residual = df.residual(f),
+      loglik = g15(as.numeric(logLik(f))), iterations = f$iter)
+  }
+}
+lres <- do.call(rbind, lrows)
+write.csv(lres, file.path(out, "ecc2_links.csv"), row.names = FALSE, quote = FALSE)
+print(lres)

@@ -27,7 +27,9 @@ namespace hapticlab::db {
 /// Only completed trials are exported (a faulted or aborted attempt's samples are not).
 /// Throws InputError (CLI exit 2) when two participants map to one BIDS label, and
 /// std::runtime_error naming the file on I/O failure.
-std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_dir);
+/// `progress`: one line per participant written.
+std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_dir,
+                                     const ExportProgress& progress = {});
 
 /// Writes XDF files, one per session. `out` ending in ".xdf" names the file and then the
 /// selection must hold exactly one session; otherwise `out` is a directory (created when
@@ -38,9 +40,11 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
 /// `ratings` (string markers at stimulus end + response time). Every timestamp is on one
 /// clock: seconds since the session started (docs/analysis.md, "XDF clock").
 /// @param participant only this participant's sessions (empty: all)
+/// @param progress one line per participant written
 /// Throws InputError (exit 2) for an unknown participant or a file name with several
 /// sessions; std::runtime_error naming the file on I/O failure.
 std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
-                                    const std::string& participant = "");
+                                    const std::string& participant = "",
+                                    const ExportProgress& progress = {});
 
 }  // namespace hapticlab::db

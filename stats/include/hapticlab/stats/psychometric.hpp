@@ -43,6 +43,11 @@ struct PsychometricFit : SolverSummary {
   psychophysics::PsychometricParams params;  ///< threshold, slope, guess, lapse
   double a = 0, b = 0;                       ///< linear predictor eta = a + b g(x)
   double log_likelihood = 0;  ///< including the binomial coefficients (as R's logLik)
+  /// Residual deviance 2 (logL_saturated - logL), as R's deviance() of the glm fit.
+  double deviance = 0;
+  /// Standard errors of a and b from the inverse expected information at the estimate (R's
+  /// vcov() of the glm fit, dispersion 1); conditional on the lapse rate when it is free.
+  double se_a = 0, se_b = 0;
 };
 
 /// Data the model cannot describe (n < 1, k outside 0..n, x <= 0 for a Weibull, fewer than
@@ -60,17 +65,21 @@ struct PsychometricBootstrap {
   double level = 0.95;
   BootstrapInterval threshold, slope;  ///< percentile intervals
   BootstrapInterval jnd;  ///< of StimulusAt(jnd_performance) when one was asked for, else NaN
+  /// Of StimulusAt(p) for each p of `performances` (same order); a replicate whose lapse
+  /// leaves p unreachable counts as +infinity, so an interval may end at inf.
+  std::vector<BootstrapInterval> stimulus_at;
 };
 
 /// Parametric bootstrap: `replicates` data sets drawn from the fitted function at the same
 /// stimuli and trial counts, each refitted with the same options; percentile intervals at
-/// `level`; with `jnd_performance` in (guess, 1) also of the stimulus at that performance.
-/// Deterministic for a seed.
+/// `level`; with `jnd_performance` in (guess, 1) also of the stimulus at that performance, and
+/// of the stimulus at each of `performances` (each in (guess, 1)). Deterministic for a seed.
 PsychometricBootstrap BootstrapPsychometric(const PsychometricData& data,
                                             const PsychometricFitOptions& options,
                                             const PsychometricFit& fit, int replicates,
                                             std::uint64_t seed, double level = 0.95,
-                                            double jnd_performance = -1);
+                                            double jnd_performance = -1,
+                                            const std::vector<double>& performances = {});
 
 /// Pools trials with equal x (sorted by x): for binned plots and compact fits.
 PsychometricData PoolByStimulus(const PsychometricData& d);
