@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <memory>
 #include <set>
@@ -241,6 +242,24 @@ std::vector<double> ReadAxes(SNDFILE* f, const SF_INFO& info, const std::vector<
   return naxes == 1 ? std::move(whole[0]) : Dft321(whole);
 }
 
+// libsndfile opens a WAV whose data chunk runs past the end of the file and reads what is
+// there; its log (never shown to the user) records "data : ANNOUNCED (should be FOUND)".
+void CheckNotTruncated(SNDFILE* f, const std::string& path) {
+  std::vector<char> log(16384, '\0');
+  sf_command(f, SFC_GET_LOG_INFO, log.data(), static_cast<int>(log.size()) - 1);
+  const std::string text(log.data());
+  for (std::size_t at = 0; (at = text.find("data :", at)) != std::string::npos; ++at) {
+    if (at > 0 && text[at - 1] != '\n') continue;
+    long long announced = 0, found = 0;
+    if (std::sscanf(text.c_str() + at, "data : %lld (should be %lld)", &announced, &found) == 2 &&
+        announced > found)
+      throw InputError(path, 0, "frames",
+                       fmt::format("truncated: the header announces {} bytes of samples, the "
+                                   "file holds {}",
+                                   announced, found));
+  }
+}
+
 }  // namespace
 
 Recording ReadSoundRecording(const std::string& path, const SoundLabels& defaults) {
@@ -249,6 +268,7 @@ Recording ReadSoundRecording(const std::string& path, const SoundLabels& default
   if (std::filesystem::exists(side)) l = MergeLabels(defaults, ReadSoundSidecar(side));
   SF_INFO info{};
   const SndPtr f = Open(path, &info);
+  CheckNotTruncated(f.get(), path);
   if (info.channels < 1 || info.samplerate <= 0)
     throw InputError(path, 0, "", "the header gives no channels or no sample rate");
   std::vector<int> cols;

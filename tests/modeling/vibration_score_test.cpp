@@ -52,7 +52,7 @@ TEST(VibrationScore, TheRightTextureScoresLowestAndLevelsAreRatios) {
   EXPECT_GT(l.es, 0.5);  // unnormalised E_s punishes the level
   const auto n1 = ScoreVibration(low, r, {.level_normalised = true});
   const auto n3 = ScoreVibration(low, loud, {.level_normalised = true});
-  EXPECT_NEAR(n1.es, n3.es, 1e-9);
+  EXPECT_NEAR(n1.es, n3.es, 1e-6 * n1.es);  // the resampler is linear to rounding
 }
 
 TEST(VibrationScore, UnlabelledRecordingsTakeAOneCellModelsConditionOnly) {
