@@ -48,6 +48,7 @@ int RunCli(const std::string& args, std::string* out) {
 
 TEST(ModelScoreCli, ScoresAndIdentifiesTexturesFromWavFiles) {
   test::TempDir dir;
+  std::filesystem::create_directories(dir.File("models"));
   for (const auto& [name, peak] : {std::pair{"low", 150.0}, std::pair{"high", 600.0}}) {
     std::filesystem::create_directories(dir.File(std::string("rec_") + name));
     WriteTexture(dir.File(std::string("rec_") + name + "/a.wav"), peak, 10, 0.01);
