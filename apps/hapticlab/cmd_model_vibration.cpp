@@ -124,8 +124,9 @@ void AddFitVibration(CLI::App& model) {
       const bool calibrated = modeling::AllCalibrated(recs);
       WriteTextFile(a->out, "# AR bank fitted by hapticlab model fit-vibration from " +
                                 a->recordings + "\n" +
-                                (calibrated ? "" : "# uncalibrated: variances in the recordings' "
-                                                   "own units squared, not (m/s^2)^2\n") +
+                                (calibrated ? ""
+                                            : "# uncalibrated: variances in the recordings' "
+                                              "own units squared, not (m/s^2)^2\n") +
                                 text);
       fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}{}\n", recs.size(),
                  bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
@@ -192,8 +193,8 @@ void AddFitNeural(CLI::App& model) {
       const auto m = modeling::FitNeural(recs, no);
       renderer::SaveNeuralModel(m, o->a.out);
       fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}{}\n",
-                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(), o->topology,
-                 m.bands.size(), o->a.out, CalibrationNote(modeling::AllCalibrated(recs)));
+                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(),
+                 o->a.out, CalibrationNote(modeling::AllCalibrated(recs)));
       return kExitOk;
     });
   });

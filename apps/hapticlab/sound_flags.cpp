@@ -51,14 +51,13 @@ modeling::SoundLabels Labels(const SoundFlags& f) {
       char* end = nullptr;
       const long v = std::strtol(part.c_str(), &end, 10);
       if (part.empty() || *end != '\0' || v < 1 || v > 64)
-        throw InputError(kCommandLine, 0, "--axes",
-                         "expected 1 to 3 channel numbers from 1, e.g. 1,2,3; got '" + f.axes +
-                             "'");
+        throw InputError(
+            kCommandLine, 0, "--axes",
+            "expected 1 to 3 channel numbers from 1, e.g. 1,2,3; got '" + f.axes + "'");
       l.axes.push_back(static_cast<int>(v));
       a = b + 1;
     }
-    if (l.axes.size() > 3)
-      throw InputError(kCommandLine, 0, "--axes", "at most 3 axes (x, y, z)");
+    if (l.axes.size() > 3) throw InputError(kCommandLine, 0, "--axes", "at most 3 axes (x, y, z)");
   }
   if (l.unlabelled && (l.speed_mps || l.force_N))
     throw InputError(kCommandLine, 0, "--unlabelled", "together with --speed or --force");
@@ -85,8 +84,8 @@ int CheckVibrationOnly(const std::string& file, const modeling::SoundLabels& lab
   std::string format = "measurement CSV v1, vibration only (t_s, acc_mps2)";
   if (modeling::IsSoundFile(file)) {
     const auto info = modeling::ProbeSound(file);
-    format = fmt::format("{}, {} channel{}", info.format, info.channels,
-                         info.channels == 1 ? "" : "s");
+    format =
+        fmt::format("{}, {} channel{}", info.format, info.channels, info.channels == 1 ? "" : "s");
   }
   double lo = HUGE_VAL, hi = -HUGE_VAL, ss = 0;
   for (const double v : r.acc) {
@@ -117,9 +116,9 @@ int CheckVibrationOnly(const std::string& file, const modeling::SoundLabels& lab
   fmt::print("{}: vibration only ({}), {} samples, {:.3f} s at {:.1f} Hz\n", file, format,
              r.acc.size(), duration, r.rate_hz);
   fmt::print("  axes      {}{}\n", r.channels, r.channels > 1 ? " (reduced to one by DFT321)" : "");
-  fmt::print("  condition {}\n", r.labelled ? fmt::format("{:.4g} m/s, {:.4g} N", r.speed_mps,
-                                                          r.force_N)
-                                            : std::string("unlabelled"));
+  fmt::print("  condition {}\n", r.labelled
+                                     ? fmt::format("{:.4g} m/s, {:.4g} N", r.speed_mps, r.force_N)
+                                     : std::string("unlabelled"));
   fmt::print("  acc       {:+.6g} .. {:+.6g}, RMS {:.6g} {}\n", lo, hi, rms, unit);
   return kExitOk;
 }

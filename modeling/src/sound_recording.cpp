@@ -53,23 +53,23 @@ int IntegerBits(int format) {
 
 std::string FormatWords(int format) {
   const int major = format & SF_FORMAT_TYPEMASK, sub = format & SF_FORMAT_SUBMASK;
-  const std::string container = major == SF_FORMAT_FLAC                                ? "FLAC"
-                                : major == SF_FORMAT_WAV || major == SF_FORMAT_WAVEX ? "WAV"
-                                : major == SF_FORMAT_RF64                             ? "RF64"
-                                                                                      : "sound file";
+  const char* container = major == SF_FORMAT_FLAC                              ? "FLAC"
+                          : major == SF_FORMAT_WAV || major == SF_FORMAT_WAVEX ? "WAV"
+                          : major == SF_FORMAT_RF64                            ? "RF64"
+                                                                               : "sound file";
   if (const int bits = IntegerBits(format)) return fmt::format("{}, {}-bit PCM", container, bits);
-  if (sub == SF_FORMAT_FLOAT) return container + ", 32-bit float";
-  if (sub == SF_FORMAT_DOUBLE) return container + ", 64-bit float";
+  if (sub == SF_FORMAT_FLOAT) return std::string(container) + ", 32-bit float";
+  if (sub == SF_FORMAT_DOUBLE) return std::string(container) + ", 64-bit float";
   return container;
 }
 
 SndPtr Open(const std::string& path, SF_INFO* info) {
-  if (!std::filesystem::is_regular_file(path))
-    throw InputError(path, 0, "", "no such file");
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path, 0, "", "no such file");
   SNDFILE* f = sf_open(path.c_str(), SFM_READ, info);
   if (!f)
-    throw InputError(path, 0, "", "not a readable WAV or FLAC file (damaged, truncated in its "
-                                  "header, or another format)");
+    throw InputError(path, 0, "",
+                     "not a readable WAV or FLAC file (damaged, truncated in its "
+                     "header, or another format)");
   return SndPtr(f);
 }
 
@@ -211,8 +211,7 @@ std::vector<double> ReadAxes(SNDFILE* f, const SF_INFO& info, const std::vector<
   std::vector<double> block(kBlockFrames * nch);
   long long total = 0;
   for (;;) {
-    const sf_count_t got =
-        sf_readf_double(f, block.data(), static_cast<sf_count_t>(kBlockFrames));
+    const sf_count_t got = sf_readf_double(f, block.data(), static_cast<sf_count_t>(kBlockFrames));
     if (got <= 0) break;
     const auto n = static_cast<std::size_t>(got);
     for (std::size_t a = 0; a < naxes; ++a) {
@@ -220,8 +219,9 @@ std::vector<double> ReadAxes(SNDFILE* f, const SF_INFO& info, const std::vector<
       for (std::size_t i = 0; i < n; ++i) {
         const double v = block[i * nch + c];
         if (!std::isfinite(v))
-          throw InputError(path, 0, fmt::format("channel {}", c + 1),
-                           fmt::format("sample {} is not finite", total + static_cast<long long>(i)));
+          throw InputError(
+              path, 0, fmt::format("channel {}", c + 1),
+              fmt::format("sample {} is not finite", total + static_cast<long long>(i)));
         clipped[a] += v >= top || v <= -1.0 ? (bits ? 1 : 0) : 0;
         if (!stream) whole[a].push_back(v);
       }
@@ -235,9 +235,9 @@ std::vector<double> ReadAxes(SNDFILE* f, const SF_INFO& info, const std::vector<
                                  info.frames, total));
   for (std::size_t a = 0; a < naxes; ++a)
     if (clipped[a] >= kClipRun)
-      throw InputError(path, 0, fmt::format("channel {}", cols[a] + 1),
-                       fmt::format("{} samples sit at full scale: the recording clipped",
-                                   clipped[a]));
+      throw InputError(
+          path, 0, fmt::format("channel {}", cols[a] + 1),
+          fmt::format("{} samples sit at full scale: the recording clipped", clipped[a]));
   if (stream) return reducer->Finish();
   return naxes == 1 ? std::move(whole[0]) : Dft321(whole);
 }

@@ -133,8 +133,7 @@ std::vector<ArFit> Levinson(const Autocorr& ac, int pmax, OrderCriterion criteri
     f.variance = err;
     f.order = m;
     f.criterion =
-        n * std::log(err) +
-        (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(n));
+        n * std::log(err) + (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(n));
     out.push_back(std::move(f));
   }
   return out;

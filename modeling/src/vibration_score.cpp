@@ -69,7 +69,7 @@ VibrationScore ScoreVibration(const renderer::MaterialModel& m, const Recording&
   const auto& bank = m.vibration;
   if (m.neural) {
     s.kind = m.neural->topology == renderer::NeuralTopology::kUnified ? "neural unified"
-                                                                       : "neural decomposed";
+                                                                      : "neural decomposed";
     s.model_rate_hz = m.neural->sample_rate_hz;
   } else {
     s.kind = bank.cells.front().ma.empty() ? "ar bank" : "arma bank";

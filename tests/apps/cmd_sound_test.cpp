@@ -92,15 +92,15 @@ TEST(SoundCli, WavRecordingsThroughTheVibrationCommands) {
   WriteWavGrid(dir.File("wav"));
   std::string out;
   ASSERT_EQ(RunCli("model fit-vibration --recordings " + dir.File("wav") + " --order 4 -o " +
-                    dir.File("bank.toml"),
-                &out),
+                       dir.File("bank.toml"),
+                   &out),
             0)
       << out;
   EXPECT_NE(out.find("5 recordings -> 4 cells (grid)"), std::string::npos) << out;  // pooled
   EXPECT_EQ(out.find("uncalibrated"), std::string::npos) << out;
   ASSERT_EQ(RunCli("model cv-vibration --recordings " + dir.File("wav") +
-                    " --order 4 --train-speeds 0.05,0.1 --train-forces 0.5,1 --json",
-                &out),
+                       " --order 4 --train-speeds 0.05,0.1 --train-forces 0.5,1 --json",
+                   &out),
             0)
       << out;
   const auto cv = nlohmann::json::parse(out);
@@ -109,8 +109,8 @@ TEST(SoundCli, WavRecordingsThroughTheVibrationCommands) {
   EXPECT_EQ(cv["conditions"][4]["file"], dir.File("wav/c3b.wav"));
   EXPECT_EQ(cv["calibrated"], true);
   ASSERT_EQ(RunCli("model fit-neural --recordings " + dir.File("wav") +
-                    " --topology decomposed --epochs 1 --threads 1 -o " + dir.File("n.toml"),
-                &out),
+                       " --topology decomposed --epochs 1 --threads 1 -o " + dir.File("n.toml"),
+                   &out),
             0)
       << out;
   EXPECT_NE(out.find("5 recordings (2 speeds x 2 forces)"), std::string::npos) << out;
@@ -136,24 +136,24 @@ TEST(SoundCli, UncalibratedAndUnlabelledSayItOrAreRefused) {
   EXPECT_NE(out.find("unlabelled"), std::string::npos) << out;
   EXPECT_NE(out.find("uncalibrated"), std::string::npos) << out;
   // No condition: the fit says which file and what to give.
-  EXPECT_EQ(RunCli("model fit-vibration --recordings " + dir.File("u") + " -o " +
-                    dir.File("b.toml"),
-                &out),
-            2);
+  EXPECT_EQ(
+      RunCli("model fit-vibration --recordings " + dir.File("u") + " -o " + dir.File("b.toml"),
+             &out),
+      2);
   EXPECT_NE(out.find(dir.File("u/a.wav")), std::string::npos) << out;
   EXPECT_NE(out.find("--speed"), std::string::npos) << out;
   // With the condition on the command line it fits, and the bank says it is uncalibrated.
   ASSERT_EQ(RunCli("model fit-vibration --recordings " + dir.File("u") +
-                    " --speed 0.1 --force 1 --uncalibrated --order 3 -o " + dir.File("b.toml"),
-                &out),
+                       " --speed 0.1 --force 1 --uncalibrated --order 3 -o " + dir.File("b.toml"),
+                   &out),
             0)
       << out;
   EXPECT_NE(out.find("uncalibrated"), std::string::npos) << out;
   EXPECT_NE(test::ReadFile(dir.File("b.toml")).find("# uncalibrated"), std::string::npos);
   // Contradicting flags.
-  EXPECT_EQ(RunCli("model cutoff --recording " + dir.File("u/a.wav") + " --scale 2 --uncalibrated",
-                &out),
-            2);
+  EXPECT_EQ(
+      RunCli("model cutoff --recording " + dir.File("u/a.wav") + " --scale 2 --uncalibrated", &out),
+      2);
   EXPECT_NE(out.find("--uncalibrated"), std::string::npos) << out;
 }
 
@@ -162,19 +162,19 @@ TEST(SoundCli, VibrationOnlyCsvThroughEveryCommand) {
   WriteCsvGrid(dir.File("csv"));
   std::string out;
   ASSERT_EQ(RunCli("model fit-vibration --recordings " + dir.File("csv") + " --order 4 -o " +
-                    dir.File("bank.toml"),
-                &out),
+                       dir.File("bank.toml"),
+                   &out),
             0)
       << out;
   ASSERT_EQ(RunCli("model cv-vibration --recordings " + dir.File("csv") +
-                    " --order 4 --train-speeds 0.05,0.1 --train-forces 0.5,1",
-                &out),
+                       " --order 4 --train-speeds 0.05,0.1 --train-forces 0.5,1",
+                   &out),
             0)
       << out;
   EXPECT_NE(out.find(dir.File("csv/v2.csv")), std::string::npos) << out;
   ASSERT_EQ(RunCli("model fit-neural --recordings " + dir.File("csv") +
-                    " --topology decomposed --epochs 1 --threads 1 -o " + dir.File("n.toml"),
-                &out),
+                       " --topology decomposed --epochs 1 --threads 1 -o " + dir.File("n.toml"),
+                   &out),
             0)
       << out;
   ASSERT_EQ(RunCli("model cutoff --recording " + dir.File("csv/v0.csv"), &out), 0) << out;
@@ -194,7 +194,10 @@ TEST(SoundCli, WorkbenchRefusesVibrationOnlyFilesNamingThem) {
   for (const std::string& file : {dir.File("csv/v0.csv"), dir.File("wav/a.wav")}) {
     for (const char* cmd : {"compare", "diagnose --quiet"}) {
       std::string out;
-      EXPECT_EQ(RunCli(std::string(cmd) + " --model " + dir.File("m.toml") + " --measurement " + file, &out), 2)
+      EXPECT_EQ(
+          RunCli(std::string(cmd) + " --model " + dir.File("m.toml") + " --measurement " + file,
+                 &out),
+          2)
           << cmd << " " << file << ": " << out;
       EXPECT_NE(out.find(file), std::string::npos) << out;
       EXPECT_NE(out.find("vibration only"), std::string::npos) << out;
@@ -208,12 +211,11 @@ TEST(SoundCli, BadSoundInputExitsTwoNamingFileAndField) {
   WriteWavGrid(dir.File("wav"));
   std::string out;
   test::WriteFile(dir.File("wav/c1.toml"), "[recording]\nspeed_mps = 0.05\nforse_N = 1.0\n");
-  EXPECT_EQ(RunCli("model fit-vibration --recordings " + dir.File("wav") + " -o " +
-                    dir.File("b.toml"),
-                &out),
-            2);
-  EXPECT_NE(out.find(dir.File("wav/c1.toml") + ":3: recording.forse_N"), std::string::npos)
-      << out;
+  EXPECT_EQ(
+      RunCli("model fit-vibration --recordings " + dir.File("wav") + " -o " + dir.File("b.toml"),
+             &out),
+      2);
+  EXPECT_NE(out.find(dir.File("wav/c1.toml") + ":3: recording.forse_N"), std::string::npos) << out;
   const auto wav = dir.File("wav/c0.wav");
   std::filesystem::resize_file(wav, std::filesystem::file_size(wav) / 3);
   EXPECT_EQ(RunCli("model cutoff --recording " + wav, &out), 2);

@@ -200,16 +200,15 @@ TEST(SoundRecording, BadFilesNameTheFileAndField) {
 TEST(SoundRecording, FoldersMixSoundAndCsvAndUnlabelledOnesAreRefusedByFits) {
   test::TempDir dir;
   WriteSound(dir.File("u.wav"), SF_FORMAT_WAV | SF_FORMAT_PCM_16, 10000, 1, Resonance(4000, 6));
-  test::WriteFile(dir.File("v.csv"),
-                  "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,acc_mps2\n" +
-                      [] {
-                        std::string s;
-                        const auto x = Resonance(3000, 7);
-                        for (std::size_t i = 0; i < x.size(); ++i)
-                          s += std::to_string(static_cast<double>(i) / 2000.0) + "," +
-                               std::to_string(x[i]) + "\n";
-                        return s;
-                      }());
+  test::WriteFile(
+      dir.File("v.csv"),
+      "# hapticlab-measurement v1\n# speed_mps: 0.1\n# force_N: 1\nt_s,acc_mps2\n" + [] {
+        std::string s;
+        const auto x = Resonance(3000, 7);
+        for (std::size_t i = 0; i < x.size(); ++i)
+          s += std::to_string(static_cast<double>(i) / 2000.0) + "," + std::to_string(x[i]) + "\n";
+        return s;
+      }());
   const auto recs = LoadRecordings(dir.path());
   ASSERT_EQ(recs.size(), 2u);
   EXPECT_FALSE(recs[0].labelled);  // u.wav, sorted first

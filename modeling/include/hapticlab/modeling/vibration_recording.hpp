@@ -29,9 +29,9 @@ struct Recording {
   double speed_mps = 0, force_N = 0;  ///< scan condition
   double rate_hz = 0;                 ///< sample rate of `acc`
   std::vector<double> acc;            ///< normal acceleration [m/s^2] (file units if uncalibrated)
-  bool labelled = true;    ///< false: the condition is unknown (speed and force are 0)
-  bool calibrated = true;  ///< false: `acc` is in the file's own units, not m/s^2
-  int channels = 1;        ///< axes reduced into `acc` (by DFT321 when more than one)
+  bool labelled = true;               ///< false: the condition is unknown (speed and force are 0)
+  bool calibrated = true;             ///< false: `acc` is in the file's own units, not m/s^2
+  int channels = 1;                   ///< axes reduced into `acc` (by DFT321 when more than one)
 };
 
 /// Reads one measurement CSV v1 with an `acc_mps2` column. Speed and force come from the
@@ -67,4 +67,3 @@ std::vector<Recording> PoolByCondition(const std::vector<Recording>& recordings)
 bool AllCalibrated(const std::vector<Recording>& recordings);
 
 }  // namespace hapticlab::modeling
-
