@@ -48,7 +48,7 @@ std::string ErrorsLine(const Errors& e) {
 Replay Load(const std::string& measurement, const Model* model, Measurement* keep,
             ReplayOptions* options) {
   // Vibration-only recordings: a clear refusal, not a missing column.
-  const char* kNeeds =
+  constexpr const char* kNeeds =
       "holds vibration only; fit, compare and diagnose replay positions, velocities and forces "
       "(measurement CSV v1 with x_m..fz_N). Its vibration can be checked with `measurement "
       "check`, `model cutoff`, `model fit-vibration` and `model cv-vibration`";
@@ -150,8 +150,10 @@ void AddMeasurement(CLI::App& app) {
     AddSoundFlags(cmd, o->sound);
     cmd->callback([o] {
       RunGuarded([&] {
-        if (IsVibrationOnly(o->file)) return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
-        const auto m = ReadMeasurementCsv(o->file);
+        if (modeling::IsSoundFile(o->file))
+          return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
+        const auto m = ReadMeasurementCsv(o->file, {.allow_vibration_only = true});
+        if (!m.has_kinematics) return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
         const auto s = Summarize(m);
         if (o->json) {
           nlohmann::json ranges;

@@ -9,7 +9,6 @@
 
 #include "cli_common.hpp"
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/sound_recording.hpp"
 
 namespace hapticlab::cli {
@@ -71,12 +70,6 @@ modeling::SoundLabels Labels(const SoundFlags& f) {
 
 std::string CalibrationNote(bool calibrated) {
   return calibrated ? "" : " (uncalibrated: acceleration in the recordings' own units)";
-}
-
-bool IsVibrationOnly(const std::string& file) {
-  if (modeling::IsSoundFile(file)) return true;
-  const auto m = ReadMeasurementCsv(file, {.kinematics_only = true, .allow_vibration_only = true});
-  return !m.has_kinematics;
 }
 
 int CheckVibrationOnly(const std::string& file, const modeling::SoundLabels& labels, bool json) {

@@ -33,7 +33,5 @@ std::string CalibrationNote(bool calibrated);
 /// `measurement check` of a sound file or a vibration-only CSV (no kinematics): format,
 /// samples, rate, axes, condition, calibration, level. Returns the exit code.
 int CheckVibrationOnly(const std::string& file, const modeling::SoundLabels& labels, bool json);
-/// True when `file` is a sound file or a CSV without kinematics.
-bool IsVibrationOnly(const std::string& file);
 
 }  // namespace hapticlab::cli

@@ -122,8 +122,7 @@ TEST(SoundRecording, FloatWavPicksTheAxisItIsToldAndFlacReadsBack) {
   EXPECT_EQ(s.force_N, 2.0);
   EXPECT_NEAR(s.acc[10], -static_cast<float>(x[10]), 1e-7);
 
-  std::vector<double> mono(x);
-  WriteSound(dir.File("m.flac"), SF_FORMAT_FLAC | SF_FORMAT_PCM_16, 44100, 1, mono);
+  WriteSound(dir.File("m.flac"), SF_FORMAT_FLAC | SF_FORMAT_PCM_16, 44100, 1, x);
   EXPECT_EQ(ProbeSound(dir.File("m.flac")).format, "FLAC, 16-bit PCM");
   const Recording m = LoadRecording(dir.File("m.flac"));
   ASSERT_EQ(m.acc.size(), x.size());
