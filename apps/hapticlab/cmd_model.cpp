@@ -394,6 +394,8 @@ void RegisterModel(CLI::App& app) {
   AddFitNeural(*model);
   AddCvVibration(*model);
   AddCutoff(*model);
+  AddScore(*model);
+  AddIdentify(*model);
   AddFitContact(*model);
   AddPhotometric(*model);
   AddBuild(*model);

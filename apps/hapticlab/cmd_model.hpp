@@ -11,6 +11,9 @@ void AddFitVibration(CLI::App& model);
 void AddFitNeural(CLI::App& model);
 void AddCvVibration(CLI::App& model);
 void AddCutoff(CLI::App& model);
+// cmd_model_score.cpp
+void AddScore(CLI::App& model);
+void AddIdentify(CLI::App& model);
 // cmd_model_contact.cpp
 void AddFitContact(CLI::App& model);
 // cmd_model_photometric.cpp

@@ -33,6 +33,7 @@
 #include "hapticlab/renderer/penn_import.hpp"
 #include "hapticlab/runner/offline.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "sound_flags.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -61,13 +62,16 @@ const std::map<std::string, std::string> kVibFlags = {{"recordings", "--recordin
 struct VibArgs {
   std::string recordings, out, order = "auto", criterion = "aic";
   double rate = 2000, band_lo = 20;
+  SoundFlags sound;
 };
 
+constexpr const char* kRecordingsHelp =
+    "Folder of recordings, one or more per (speed, force) condition (pooled): measurement CSV "
+    "v1 with acc_mps2 (kinematics optional), WAV or FLAC (docs/formats.md)";
+
 void AddVibOptions(CLI::App* cmd, VibArgs& a) {
-  cmd->add_option(
-         "--recordings", a.recordings,
-         "Folder of measurement CSV v1 files with acc_mps2, one per (speed, force) condition")
-      ->required();
+  cmd->add_option("--recordings", a.recordings, kRecordingsHelp)->required();
+  AddSoundFlags(cmd, a.sound);
   cmd->add_option("--rate", a.rate, "Model sample rate [Hz] (2000 in the thesis)")
       ->capture_default_str();
   cmd->add_option("--order", a.order, "AR order: a number, or auto (information criterion)")
@@ -111,17 +115,22 @@ void AddFitVibration(CLI::App& model) {
   cmd->add_option("-o,--out", a->out, "Bank file to write (.toml)")->required();
   cmd->callback([a] {
     RunGuarded(kVibFlags, [&] {
-      const auto recs = modeling::LoadRecordings(a->recordings);
+      const auto recs = modeling::LoadRecordings(a->recordings, Labels(a->sound));
       const auto bank = modeling::FitVibrationBank(recs, VibOptions(*a));
       renderer::MaterialModel holder;
       holder.vibration = bank;
       std::string text = renderer::MaterialToToml(holder);
       text = text.substr(text.find("[vibration]"));  // the bank alone
+      const bool calibrated = modeling::AllCalibrated(recs);
       WriteTextFile(a->out, "# AR bank fitted by hapticlab model fit-vibration from " +
-                                a->recordings + "\n" + text);
-      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}\n", recs.size(),
+                                a->recordings + "\n" +
+                                (calibrated ? ""
+                                            : "# uncalibrated: variances in the recordings' "
+                                              "own units squared, not (m/s^2)^2\n") +
+                                text);
+      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}{}\n", recs.size(),
                  bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
-                 bank.order(), bank.sample_rate_hz, a->out);
+                 bank.order(), bank.sample_rate_hz, a->out, CalibrationNote(calibrated));
       return kExitOk;
     });
   });
@@ -146,9 +155,8 @@ void AddFitNeural(CLI::App& model) {
       "30-25-15-5; Γ_D: one per band and grid cell, 30-25-15-5 for band 1 and 30-15-5 for the\n"
       "others), Adam with mini-batches and early stopping. Writes a neural model file; reference\n"
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");
-  cmd->add_option("--recordings", o->a.recordings,
-                  "Folder of measurement CSV v1 files with acc_mps2, one per condition")
-      ->required();
+  cmd->add_option("--recordings", o->a.recordings, kRecordingsHelp)->required();
+  AddSoundFlags(cmd, o->a.sound);
   cmd->add_option("--topology", o->topology, "unified (Γ_U) or decomposed (Γ_D)")
       ->check(CLI::IsMember({"unified", "decomposed"}))
       ->capture_default_str();
@@ -166,7 +174,9 @@ void AddFitNeural(CLI::App& model) {
       ->capture_default_str();
   cmd->callback([o] {
     RunGuarded(kVibFlags, [&] {
-      const auto recs = modeling::LoadRecordings(o->a.recordings);
+      const auto loaded = modeling::LoadRecordings(o->a.recordings, Labels(o->a.sound));
+      modeling::RequireConditions(loaded, "fit-neural");
+      const auto recs = modeling::PoolByCondition(loaded);  // one per grid cell
       modeling::NeuralFitOptions no;
       no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified
                                              : renderer::NeuralTopology::kDecomposed;
@@ -182,8 +192,9 @@ void AddFitNeural(CLI::App& model) {
       };
       const auto m = modeling::FitNeural(recs, no);
       renderer::SaveNeuralModel(m, o->a.out);
-      fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}\n", recs.size(),
-                 m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(), o->a.out);
+      fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}{}\n",
+                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(),
+                 o->a.out, CalibrationNote(modeling::AllCalibrated(recs)));
       return kExitOk;
     });
   });
@@ -224,7 +235,8 @@ void AddCvVibration(CLI::App& model) {
       ->check(CLI::Range(1, 10000));
   cmd->callback([=] {
     RunGuarded(kVibFlags, [&] {
-      const auto recs = modeling::LoadRecordings(a->recordings);
+      const auto recs = modeling::LoadRecordings(a->recordings, Labels(a->sound));
+      const bool calibrated = modeling::AllCalibrated(recs);
       modeling::CvResult cv;
       if (*kind == "lpc") {
         cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"),
@@ -260,28 +272,35 @@ void AddCvVibration(CLI::App& model) {
       }
       if (*json_out) {
         nlohmann::json rows = nlohmann::json::array();
-        for (const auto& r : cv.rows)
-          rows.push_back({{"speed_mps", r.speed_mps},
+        for (std::size_t i = 0; i < cv.rows.size(); ++i) {
+          const auto& r = cv.rows[i];
+          rows.push_back({{"file", recs[i].file},
+                          {"speed_mps", r.speed_mps},
                           {"force_N", r.force_N},
                           {"split", r.train ? "train" : "test"},
                           {"es", r.es}});
+        }
         PrintJson(nlohmann::json{{"model_kind", *kind},
+                                 {"calibrated", calibrated},
                                  {"conditions", rows},
                                  {"mean_es_train", cv.mean_es_train},
                                  {"mean_es_test", cv.mean_es_test},
                                  {"order", cv.order}});
         return kExitOk;
       }
-      fmt::print("{:>10} {:>9} {:>6} {:>7}\n", "speed m/s", "force N", "split", "E_s");
-      for (const auto& r : cv.rows)
-        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}\n", r.speed_mps, r.force_N,
-                   r.train ? "train" : "test", r.es);
+      fmt::print("{:>10} {:>9} {:>6} {:>7}  {}\n", "speed m/s", "force N", "split", "E_s", "file");
+      for (std::size_t i = 0; i < cv.rows.size(); ++i) {
+        const auto& r = cv.rows[i];
+        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}  {}\n", r.speed_mps, r.force_N,
+                   r.train ? "train" : "test", r.es, recs[i].file);
+      }
       const bool any_test =
           std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
-      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}\n", *kind, cv.mean_es_train,
+      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n", *kind, cv.mean_es_train,
                  any_test ? fmt::format("{:.3f}", cv.mean_es_test)
                           : std::string("n/a (no held-out conditions)"),
-                 *kind == "lpc" ? fmt::format(" (AR order {})", cv.order) : std::string());
+                 *kind == "lpc" ? fmt::format(" (AR order {})", cv.order) : std::string(),
+                 CalibrationNote(calibrated));
       return kExitOk;
     });
   });
@@ -297,14 +316,18 @@ void AddCutoff(CLI::App& model) {
       "Stationarity cut-off (dissertation ch. III.5): the smallest high-pass cut-off in the range\n"
       "whose filtered recording rejects a unit root (augmented Dickey-Fuller, 5 %). It becomes\n"
       "the material's hybrid filter f_c.");
-  cmd->add_option("--recording", *file, "Measurement CSV v1 with acc_mps2")->required();
+  auto sound = std::make_shared<SoundFlags>();
+  cmd->add_option("--recording", *file,
+                  "Measurement CSV v1 with acc_mps2 (kinematics optional), WAV or FLAC")
+      ->required();
+  AddSoundFlags(cmd, *sound);
   cmd->add_option("--from", *lo, "Lowest cut-off [Hz]")->capture_default_str();
   cmd->add_option("--to", *hi, "Highest cut-off [Hz]")->capture_default_str();
   cmd->add_option("--step", *step, "Step [Hz]")->capture_default_str();
   cmd->add_flag("--json", *json_out, "Print the result and every cut-off tried as JSON");
   cmd->callback([=] {
     RunGuarded([&] {
-      const auto r = modeling::LoadRecording(*file);
+      const auto r = modeling::LoadRecording(*file, Labels(*sound));
       const auto c = modeling::StationarityCutoff(r.acc, r.rate_hz, *lo, *hi, *step);
       if (*json_out) {
         nlohmann::json tried = nlohmann::json::array();

@@ -16,8 +16,10 @@
 #include "commands.hpp"
 #include "fit_summary_json.hpp"
 #include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/sound_recording.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/stats/plot.hpp"
+#include "sound_flags.hpp"
 #include "workbench_cli.hpp"
 
 namespace hapticlab::cli {
@@ -45,7 +47,17 @@ std::string ErrorsLine(const Errors& e) {
 
 Replay Load(const std::string& measurement, const Model* model, Measurement* keep,
             ReplayOptions* options) {
-  auto m = ReadMeasurementCsv(measurement);
+  // Vibration-only recordings: a clear refusal, not a missing column.
+  constexpr const char* kNeeds =
+      "holds vibration only; fit, compare and diagnose replay positions, velocities and forces "
+      "(measurement CSV v1 with x_m..fz_N). Its vibration can be checked with `measurement "
+      "check`, `model cutoff`, `model fit-vibration` and `model cv-vibration`";
+  if (modeling::IsSoundFile(measurement))
+    throw InputError(measurement, 0, "x_m", std::string("a WAV/FLAC recording ") + kNeeds);
+  auto m = ReadMeasurementCsv(measurement, {.allow_vibration_only = true});
+  if (!m.has_kinematics)
+    throw InputError(measurement, 0, "x_m",
+                     std::string("the file (t_s, acc_mps2, no x_m, y_m, z_m) ") + kNeeds);
   ReplayOptions o;
   if (model && model->HasVibration()) o.band_edges_hz = model->band_edges_hz;
   auto r = PrepareReplay(m, o);
@@ -124,17 +136,24 @@ void AddMeasurement(CLI::App& app) {
     struct O {
       std::string file;
       bool json = false;
+      SoundFlags sound;
     };
     auto o = std::make_shared<O>();
     auto* cmd = grp->add_subcommand(
         "check",
         "Read a measurement CSV v1 (errors name file, line and column) and summarize it:\n"
-        "duration, rate, ranges per column, gaps, samples in contact, warnings.");
-    cmd->add_option("FILE", o->file, "Measurement CSV v1")->required();
+        "duration, rate, ranges per column, gaps, samples in contact, warnings. A WAV/FLAC\n"
+        "file or a vibration-only CSV (t_s, acc_mps2) is summarized as a vibration recording:\n"
+        "format, rate, axes, condition, calibration, level.");
+    cmd->add_option("FILE", o->file, "Measurement CSV v1, WAV or FLAC")->required();
     cmd->add_flag("--json", o->json, "As JSON");
+    AddSoundFlags(cmd, o->sound);
     cmd->callback([o] {
       RunGuarded([&] {
-        const auto m = ReadMeasurementCsv(o->file);
+        if (modeling::IsSoundFile(o->file))
+          return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
+        const auto m = ReadMeasurementCsv(o->file, {.allow_vibration_only = true});
+        if (!m.has_kinematics) return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
         const auto s = Summarize(m);
         if (o->json) {
           nlohmann::json ranges;

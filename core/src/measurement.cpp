@@ -10,6 +10,27 @@
 #include "hapticlab/core/io.hpp"
 
 namespace hapticlab {
+namespace {
+
+// t_s and acc_mps2 only: a vibration recording without kinematics.
+Measurement ParseVibrationOnly(const CsvTable& t, std::size_t ct, std::size_t ca, Measurement m) {
+  m.has_kinematics = m.has_forces = false;
+  m.has_acceleration = true;
+  m.rows.resize(t.rows.size());
+  m.row_lines = t.row_lines;
+  for (std::size_t r = 0; r < t.rows.size(); ++r) {
+    for (const std::size_t c : {ct, ca})
+      if (!std::isfinite(t.Number(r, c)))
+        throw InputError(m.file, t.row_lines[r], t.header[c], "value is not finite");
+    m.rows[r].t_s = t.Number(r, ct);
+    m.rows[r].acc_mps2 = t.Number(r, ca);
+    if (r > 0 && !(m.rows[r].t_s > m.rows[r - 1].t_s))
+      throw InputError(m.file, t.row_lines[r], "t_s", "time must increase");
+  }
+  return m;
+}
+
+}  // namespace
 
 Measurement ParseMeasurementCsv(const std::string& text, const std::string& name,
                                 const MeasurementReadOptions& o) {
@@ -22,6 +43,9 @@ Measurement ParseMeasurementCsv(const std::string& text, const std::string& name
       !t.comments.empty() && t.comments[0].rfind("hapticlab-measurement v1", 0) == 0;
   if (!tagged) throw InputError(name, 1, "", "first line must be '# hapticlab-measurement v1'");
   const std::size_t ct = t.Require("t_s");
+  if (o.allow_vibration_only && !t.Find("x_m") && !t.Find("y_m") && !t.Find("z_m") &&
+      t.Find("acc_mps2"))
+    return ParseVibrationOnly(t, ct, *t.Find("acc_mps2"), std::move(m));
   const std::size_t cx = t.Require("x_m"), cy = t.Require("y_m"), cz = t.Require("z_m");
   const auto cvx = t.Find("vx_mps"), cvy = t.Find("vy_mps"), cvz = t.Find("vz_mps");
   const bool has_v = cvx && cvy && cvz;

@@ -18,6 +18,7 @@ bool NearAny(const std::vector<double>& set, double x) {
 CvResult CrossValidateModel(const std::vector<Recording>& recs, const std::vector<double>& tv,
                             const std::vector<double>& tf, const VibrationFitOptions& preprocess,
                             const CvFit& fit, std::uint64_t seed) {
+  RequireConditions(recs, "cv-vibration");
   auto training = [&](const Recording& r) {
     return NearAny(tv, r.speed_mps) && NearAny(tf, r.force_N);
   };

@@ -24,7 +24,9 @@ CvResult CrossValidateNeural(const std::vector<Recording>& recs, const std::vect
   return CrossValidateModel(
       recs, tv, tf, o.preprocess,
       [&](const std::vector<Recording>& train) -> ConditionSynthesizer {
-        auto model = std::make_shared<const renderer::NeuralModel>(FitNeural(train, o));
+        // Several recordings of one condition train as one (FitNeural takes one per cell).
+        auto model =
+            std::make_shared<const renderer::NeuralModel>(FitNeural(PoolByCondition(train), o));
         return [model](const Recording& r, std::size_t n, std::uint64_t s) {
           return SynthesizeNeural(*model, r.speed_mps, r.force_N, n, s);
         };

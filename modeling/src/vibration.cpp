@@ -68,9 +68,12 @@ std::vector<double> BandLimit(const std::vector<double>& x, double fs, double lo
 
 namespace {
 
-// Levinson-Durbin on the biased autocorrelation of x for orders 1..pmax: every order's
-// coefficients, prediction-error variance and criterion in one pass.
-std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCriterion criterion) {
+// The biased autocorrelation of x (mean removed) at lags 0..pmax, and the sample count.
+struct Autocorr {
+  std::vector<double> r;
+  double n = 0;
+};
+Autocorr Autocorrelation(const std::vector<double>& x, int pmax) {
   const int n = static_cast<int>(x.size());
   HL_REQUIRE(pmax >= 1 && pmax <= renderer::kMaxArOrder, "AR order must be 1..64");
   if (n < 4 * pmax)
@@ -89,6 +92,27 @@ std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCrit
       s += xc[static_cast<std::size_t>(i)] * xc[static_cast<std::size_t>(i - lag)];
     r[static_cast<std::size_t>(lag)] = s / n;
   }
+  return {r, static_cast<double>(n)};
+}
+
+// Several recordings of one condition pooled: their autocorrelations weighted by length (the
+// autocorrelation of the recordings as one sample, without products across their seams), so
+// the pooled Toeplitz matrix stays positive definite and the fit minimum phase.
+Autocorr Pool(const std::vector<const Autocorr*>& parts) {
+  Autocorr out{std::vector<double>(parts.front()->r.size(), 0.0), 0};
+  for (const Autocorr* p : parts) {
+    for (std::size_t k = 0; k < out.r.size(); ++k) out.r[k] += p->n * p->r[k];
+    out.n += p->n;
+  }
+  for (auto& v : out.r) v /= out.n;
+  return out;
+}
+
+// Levinson-Durbin on an autocorrelation for orders 1..pmax: every order's coefficients,
+// prediction-error variance and criterion in one pass.
+std::vector<ArFit> Levinson(const Autocorr& ac, int pmax, OrderCriterion criterion) {
+  const std::vector<double>& r = ac.r;
+  const double n = ac.n;
   if (!(r[0] > 0)) throw std::invalid_argument("the recording is constant");
   std::vector<double> a(static_cast<std::size_t>(pmax) + 1, 0.0), prev;
   double err = r[0];
@@ -109,11 +133,14 @@ std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCrit
     f.variance = err;
     f.order = m;
     f.criterion =
-        n * std::log(err) +
-        (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(static_cast<double>(n)));
+        n * std::log(err) + (criterion == OrderCriterion::kAic ? 2.0 * m : m * std::log(n));
     out.push_back(std::move(f));
   }
   return out;
+}
+
+std::vector<ArFit> LevinsonAll(const std::vector<double>& x, int pmax, OrderCriterion criterion) {
+  return Levinson(Autocorrelation(x, pmax), pmax, criterion);
 }
 
 }  // namespace
@@ -245,43 +272,59 @@ std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o)
   return BandLimit(y, o.model_rate_hz, o.band_lo_hz, 0.475 * o.model_rate_hz);
 }
 
+namespace {
+
+// Every recording's autocorrelation (preprocessed), in parallel over recordings; the first
+// error is rethrown.
+std::vector<Autocorr> Autocorrelations(const std::vector<Recording>& recs, int pmax,
+                                       const VibrationFitOptions& o) {
+  std::vector<Autocorr> acs(recs.size());
+  const unsigned hw = o.threads > 0 ? static_cast<unsigned>(o.threads)
+                                    : std::max(1u, std::thread::hardware_concurrency());
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;
+  std::mutex error_mu;
+  auto work = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < recs.size();) {
+      try {
+        acs[i] = Autocorrelation(Preprocess(recs[i], o), pmax);
+      } catch (...) {
+        std::lock_guard lock(error_mu);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned t = 1; t < std::min<std::size_t>(hw, recs.size()); ++t) pool.emplace_back(work);
+  work();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+  return acs;
+}
+
+}  // namespace
+
 renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs,
                                          const VibrationFitOptions& o) {
   HL_REQUIRE(!recs.empty(), "no recordings to fit");
-  // Every recording's fits of every order in one Levinson pass each.
-  // (in parallel over recordings: each is independent; the first error is rethrown).
+  RequireConditions(recs, "fit-vibration");
   const int pmax = o.order > 0 ? o.order : o.max_order;
-  std::vector<std::vector<ArFit>> fits(recs.size());
-  {
-    const unsigned hw = o.threads > 0 ? static_cast<unsigned>(o.threads)
-                                      : std::max(1u, std::thread::hardware_concurrency());
-    std::atomic<std::size_t> next{0};
-    std::exception_ptr error;
-    std::mutex error_mu;
-    auto work = [&] {
-      for (std::size_t i; (i = next.fetch_add(1)) < recs.size();) {
-        try {
-          fits[i] = LevinsonAll(Preprocess(recs[i], o), pmax, o.criterion);
-        } catch (...) {
-          std::lock_guard lock(error_mu);
-          if (!error) error = std::current_exception();
-        }
-      }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned t = 1; t < std::min<std::size_t>(hw, recs.size()); ++t) pool.emplace_back(work);
-    work();
-    for (auto& t : pool) t.join();
-    if (error) std::rethrow_exception(error);
-  }
+  const std::vector<Autocorr> acs = Autocorrelations(recs, pmax, o);
+  // One fit per (speed, force) condition: the recordings of a condition pooled.
+  std::map<std::pair<double, double>, std::vector<const Autocorr*>> by_condition;
+  for (std::size_t i = 0; i < recs.size(); ++i)
+    by_condition[{recs[i].speed_mps, recs[i].force_N}].push_back(&acs[i]);
+  std::map<std::pair<double, double>, std::vector<ArFit>> fits;
+  for (const auto& [cond, parts] : by_condition)
+    fits[cond] = Levinson(Pool(parts), pmax, o.criterion);
   // One order for the whole bank (LSF interpolation needs equal orders): the criterion's
-  // choice summed over the recordings.
+  // choice summed over the conditions.
   int order = o.order;
   if (order == 0) {
     double best = std::numeric_limits<double>::infinity();
     for (int p = 1; p <= pmax; ++p) {
       double total = 0;
-      for (const auto& f : fits) total += f[static_cast<std::size_t>(p - 1)].criterion;
+      for (const auto& [cond, f] : fits) total += f[static_cast<std::size_t>(p - 1)].criterion;
       if (total < best) {
         best = total;
         order = p;
@@ -291,39 +334,33 @@ renderer::VibrationBank FitVibrationBank(const std::vector<Recording>& recs,
   renderer::VibrationBank b;
   b.sample_rate_hz = o.model_rate_hz;
   std::set<double> speeds, forces;
-  for (const auto& r : recs) {
-    speeds.insert(r.speed_mps);
-    forces.insert(r.force_N);
+  for (const auto& [cond, f] : fits) {
+    speeds.insert(cond.first);
+    forces.insert(cond.second);
   }
-  std::map<std::pair<double, double>, std::size_t> at;
-  for (std::size_t i = 0; i < recs.size(); ++i) {
-    if (!at.emplace(std::pair{recs[i].speed_mps, recs[i].force_N}, i).second)
-      throw InputError(recs[i].file, 0, "speed_mps",
-                       "two recordings share this (speed, force) condition");
-  }
-  auto cell = [&](std::size_t i) {
-    const ArFit& fit = fits[i][static_cast<std::size_t>(order - 1)];
+  auto cell = [&](const std::pair<double, double>& cond) {
+    const ArFit& fit = fits.at(cond)[static_cast<std::size_t>(order - 1)];
     renderer::ArCell c;
-    c.speed_mps = recs[i].speed_mps;
-    c.force_N = recs[i].force_N;
+    c.speed_mps = cond.first;
+    c.force_N = cond.second;
     c.coeffs = fit.coeffs;
     c.variance = fit.variance;
     c.lsf = renderer::ArToLsf(c.coeffs);
     return c;
   };
-  if (speeds.size() * forces.size() == recs.size()) {  // a full grid
+  if (speeds.size() * forces.size() == fits.size()) {  // a full grid
     b.grid_speeds_mps.assign(speeds.begin(), speeds.end());
     b.grid_forces_N.assign(forces.begin(), forces.end());
     for (double v : speeds)
-      for (double f : forces) b.cells.push_back(cell(at.at({v, f})));
+      for (double f : forces) b.cells.push_back(cell({v, f}));
   } else {
     std::vector<double> xs, ys;
-    for (std::size_t i = 0; i < recs.size(); ++i) {
-      b.cells.push_back(cell(i));
-      xs.push_back(recs[i].speed_mps);
-      ys.push_back(recs[i].force_N);
+    for (const auto& [cond, f] : fits) {
+      b.cells.push_back(cell(cond));
+      xs.push_back(cond.first);
+      ys.push_back(cond.second);
     }
-    if (recs.size() >= 3) b.triangles = renderer::DelaunayTriangulate(xs, ys);
+    if (fits.size() >= 3) b.triangles = renderer::DelaunayTriangulate(xs, ys);
   }
   return b;
 }

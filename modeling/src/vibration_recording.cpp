@@ -12,6 +12,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/measurement.hpp"
+#include "hapticlab/modeling/sound_recording.hpp"
 
 namespace hapticlab::modeling {
 namespace {
@@ -28,8 +29,10 @@ double MetaNumber(const Measurement& m, const char* key, double def) {
 
 }  // namespace
 
-Recording LoadRecording(const std::string& path) {
-  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
+Recording LoadRecording(const std::string& path, const SoundLabels& labels) {
+  if (IsSoundFile(path)) return ReadSoundRecording(path, labels);
+  const Measurement m =
+      ReadMeasurementCsv(path, {.kinematics_only = true, .allow_vibration_only = true});
   if (!m.has_acceleration)
     throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
   if (m.rows.size() < 256)
@@ -69,8 +72,19 @@ Recording LoadRecording(const std::string& path) {
                        fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped",
                                    count, ext));
   }
-  // Condition: metadata, or steady per-row kinematics and force.
+  if (const auto it = m.metadata.find("calibration"); it != m.metadata.end()) {
+    if (it->second != "uncalibrated" && it->second != "calibrated")
+      throw InputError(path, 0, "calibration",
+                       "expected 'calibrated' or 'uncalibrated', got '" + it->second + "'");
+    r.calibrated = it->second == "calibrated";
+  }
+  // Condition: metadata, or steady per-row kinematics and force; unknown for a vibration-only
+  // file without metadata.
   const bool meta = m.metadata.count("speed_mps") && m.metadata.count("force_N");
+  if (!meta && !m.has_kinematics) {
+    r.labelled = false;
+    return r;
+  }
   if (meta) {
     r.speed_mps = MetaNumber(m, "speed_mps", 0);
     r.force_N = MetaNumber(m, "force_N", 0);
@@ -104,9 +118,13 @@ Recording LoadRecording(const std::string& path) {
   return r;
 }
 
-std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s) {
-  const Measurement m = ReadMeasurementCsv(path, {.kinematics_only = true});
-  if (m.metadata.count("speed_mps") && m.metadata.count("force_N")) return {LoadRecording(path)};
+std::vector<Recording> LoadRecordingSegments(const std::string& path, double min_s,
+                                             const SoundLabels& labels) {
+  if (IsSoundFile(path)) return {ReadSoundRecording(path, labels)};
+  const Measurement m =
+      ReadMeasurementCsv(path, {.kinematics_only = true, .allow_vibration_only = true});
+  if ((m.metadata.count("speed_mps") && m.metadata.count("force_N")) || !m.has_kinematics)
+    return {LoadRecording(path)};
   if (!m.has_acceleration)
     throw InputError(path, 0, "acc_mps2", "column is missing: a vibration recording needs it");
   if (!m.has_forces)
@@ -164,25 +182,65 @@ std::vector<Recording> LoadRecordingSegments(const std::string& path, double min
   return out;
 }
 
-std::vector<Recording> LoadRecordings(const std::string& dir) {
+std::vector<Recording> LoadRecordings(const std::string& dir, const SoundLabels& labels) {
   namespace fs = std::filesystem;
   if (!fs::is_directory(dir)) throw InputError(dir, 0, "recordings", "not a folder");
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir))
-    if (e.path().extension() == ".csv") files.push_back(e.path().string());
+    if (e.path().extension() == ".csv" || IsSoundFile(e.path().string()))
+      files.push_back(e.path().string());
   std::sort(files.begin(), files.end());
-  if (files.empty()) throw InputError(dir, 0, "recordings", "no .csv recordings in the folder");
+  if (files.empty())
+    throw InputError(dir, 0, "recordings", "no .csv, .wav or .flac recordings in the folder");
   std::vector<Recording> out;
   Diagnostics d;
   for (const auto& f : files) {
     try {
-      for (auto& r : LoadRecordingSegments(f)) out.push_back(std::move(r));
+      for (auto& r : LoadRecordingSegments(f, 1.0, labels)) out.push_back(std::move(r));
     } catch (const InputError& e) {
       for (const auto& x : e.diagnostics()) d.Add(x.file, x.line, x.field, x.message);
     }
   }
   d.ThrowIfAny();
   return out;
+}
+
+void RequireConditions(const std::vector<Recording>& recs, const std::string& command) {
+  Diagnostics d;
+  for (const auto& r : recs)
+    if (!r.labelled)
+      d.Add(r.file, 0, "speed_mps",
+            command +
+                " needs the scan condition, and this recording has none: give speed_mps and "
+                "force_N (in a sidecar NAME.toml or '# speed_mps:'/'# force_N:' metadata) or "
+                "--speed and --force");
+  d.ThrowIfAny();
+}
+
+std::vector<Recording> PoolByCondition(const std::vector<Recording>& recs) {
+  std::vector<Recording> out;
+  for (const auto& r : recs) {
+    auto same = std::find_if(out.begin(), out.end(), [&](const Recording& o) {
+      return o.labelled && r.labelled && o.speed_mps == r.speed_mps && o.force_N == r.force_N;
+    });
+    if (same == out.end()) {
+      out.push_back(r);
+      continue;
+    }
+    if (same->rate_hz != r.rate_hz)
+      throw InputError(r.file, 0, "rate_hz",
+                       fmt::format("pooled with {} at {} Hz, but recorded at {} Hz; resample "
+                                   "one of them",
+                                   same->file, same->rate_hz, r.rate_hz));
+    same->file += " + " + r.file;
+    same->acc.insert(same->acc.end(), r.acc.begin(), r.acc.end());
+    same->calibrated = same->calibrated && r.calibrated;
+  }
+  return out;
+}
+
+bool AllCalibrated(const std::vector<Recording>& recs) {
+  return std::all_of(recs.begin(), recs.end(), [](const Recording& r) { return r.calibrated; });
 }
 
 }  // namespace hapticlab::modeling

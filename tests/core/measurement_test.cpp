@@ -65,5 +65,35 @@ TEST(Measurement, ErrorsNameFileLineAndColumn) {
   }
 }
 
+TEST(Measurement, VibrationOnlyFilesAreAKindWhenAskedFor) {
+  const std::string text =
+      "# hapticlab-measurement v1\n# speed_mps: 0.1\nt_s,acc_mps2\n0,0.5\n0.001,-0.25\n";
+  const auto m = ParseMeasurementCsv(text, "v.csv", {.allow_vibration_only = true});
+  EXPECT_FALSE(m.has_kinematics);
+  EXPECT_FALSE(m.has_forces);
+  EXPECT_TRUE(m.has_acceleration);
+  ASSERT_EQ(m.rows.size(), 2u);
+  EXPECT_EQ(m.rows[1].t_s, 0.001);
+  EXPECT_EQ(m.rows[1].acc_mps2, -0.25);
+  EXPECT_EQ(m.metadata.at("speed_mps"), "0.1");
+  // Without the option, or with a bad cell, it is refused naming the file, line and column.
+  try {
+    ParseMeasurementCsv(text, "v.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("x_m"), std::string::npos) << e.what();
+  }
+  try {
+    ParseMeasurementCsv(text + "0.002,inf\n", "v.csv", {.allow_vibration_only = true});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("v.csv:6: acc_mps2"), std::string::npos) << e.what();
+  }
+  // A file with positions stays a kinematic measurement.
+  EXPECT_THROW(ParseMeasurementCsv("# hapticlab-measurement v1\nt_s,x_m,acc_mps2\n0,0,0\n", "p.csv",
+                                   {.allow_vibration_only = true}),
+               InputError);
+}
+
 }  // namespace
 }  // namespace hapticlab

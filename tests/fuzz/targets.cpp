@@ -69,6 +69,8 @@ int MeasurementCsv(std::string_view data, const std::string&) {
   return Expect([&] {
     ParseMeasurementCsv(std::string(data), "m.csv");
     ParseMeasurementCsv(std::string(data), "m.csv", {.kinematics_only = true});
+    ParseMeasurementCsv(std::string(data), "m.csv",
+                        {.kinematics_only = true, .allow_vibration_only = true});
   });
 }
 

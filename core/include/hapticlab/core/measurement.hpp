@@ -7,6 +7,10 @@
 ///   # key: value            (free metadata: speed_mps, force_N, rate_hz, ...)
 ///   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N[,acc_mps2]
 ///
+/// or, vibration only (the readers that accept it say so):
+///
+///   t_s,acc_mps2
+///
 /// Forces are those the surface exerts on the tool. Rows are in time order.
 
 #include <Eigen/Core>
@@ -30,6 +34,9 @@ struct Measurement {
   std::map<std::string, std::string> metadata;
   bool has_forces = true;
   bool has_acceleration = false;
+  /// false for a vibration-only file (t_s and acc_mps2, no positions): see
+  /// MeasurementReadOptions::allow_vibration_only.
+  bool has_kinematics = true;
   std::vector<MeasurementRow> rows;
   std::vector<int> row_lines;  ///< 1-based source line of each row (for messages)
 };
@@ -39,6 +46,10 @@ struct MeasurementReadOptions {
   /// Only t_s and positions are required; velocities missing -> central differences,
   /// forces missing -> zeros with has_forces = false.
   bool kinematics_only = false;
+  /// A file with t_s and acc_mps2 and none of x_m, y_m, z_m is read as vibration only
+  /// (has_kinematics = has_forces = false; positions, velocities and forces zero). Without
+  /// this option such a file is refused for its missing x_m column.
+  bool allow_vibration_only = false;
 };
 
 /// Reads a measurement CSV v1. Throws InputError naming file, line and column for missing
