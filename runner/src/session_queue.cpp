@@ -182,6 +182,8 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       screen.rated_total = rated_total;
       screen.training_done = training_done;
       screen.training_total = training_total;
+      screen.plan_number = t.plan_index + 1;
+      screen.plan_total = sum.planned;
       trial_under_way = t.id;
       const Outcome o =
           ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
@@ -240,8 +242,10 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
       ++sum.completed;
       (training ? training_done : rated_done) += 1;
       last_material = t.material;
-      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned,
-                           t.phase, t.material, t.method.empty() ? t.comparison : t.method));
+      // The plan's 1-based number, as `study plan`, events.csv and the exports number it.
+      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part.code,
+                           t.plan_index + 1, sum.planned, t.phase, t.material,
+                           t.method.empty() ? t.comparison : t.method, sum.completed, sum.planned));
     }
   }
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.

@@ -58,7 +58,7 @@ TEST(ExportBids, DatasetLayoutTablesAndRecordings) {
     ADD_FAILURE() << "no column " << name;
     return std::size_t{0};
   };
-  EXPECT_EQ(rows[1][col("trial")], "0");
+  EXPECT_EQ(rows[1][col("trial")], "1");  // plan index 0: the plan's trial 1
   EXPECT_EQ(rows[1][col("material")], "Cork");
   EXPECT_EQ(rows[1][col("score")], "60");
   EXPECT_EQ(rows[1][col("response_time")], "0.5");
