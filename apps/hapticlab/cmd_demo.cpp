@@ -132,9 +132,9 @@ void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
   }
   // Named relative to the protocol (no absolute path in the output).
   const std::string observer =
-      p.observer.empty() ? model.Describe()
-                         : fmt::format("the protocol's {} (sha256 {})", p.observer,
-                                       model.sha256.substr(0, 16));
+      p.observer.empty()
+          ? model.Describe()
+          : fmt::format("the protocol's {} (sha256 {})", p.observer, model.sha256.substr(0, 16));
   fmt::print(
       "power: participants for 80 % power on the method effect (p < 0.05; {} simulated studies per "
       "count, "

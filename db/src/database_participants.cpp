@@ -49,9 +49,10 @@ std::optional<Study> Database::FindStudy(const std::string& name) const {
 }
 
 std::vector<Study> Database::Studies() const {
-  Stmt s(db_,
-         "SELECT id, name, protocol_toml, protocol_hash, seed, protocol_canonical_sha256 FROM study "
-         "ORDER BY id");
+  Stmt s(
+      db_,
+      "SELECT id, name, protocol_toml, protocol_hash, seed, protocol_canonical_sha256 FROM study "
+      "ORDER BY id");
   std::vector<Study> out;
   while (s.Step())
     out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4)),

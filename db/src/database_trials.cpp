@@ -185,8 +185,8 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
                         "reported (another process wrote this trial)",
                         n, c, attempt));
     if (!problems.empty())
-      throw TrajectoryIncomplete(fmt::format("{}: {} attempt {}: trajectories not whole: {}",
-                                             path_, TrialName(db_, trial_id), attempt,
+      throw TrajectoryIncomplete(fmt::format("{}: {} attempt {}: trajectories not whole: {}", path_,
+                                             TrialName(db_, trial_id), attempt,
                                              fmt::join(problems, "; ")));
     Stmt ins(db_,
              "INSERT INTO trajectory_stream(trial_id, attempt, stream, rate_hz, samples_offered, "
@@ -270,10 +270,10 @@ std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
     // SQLite stores any type in a REAL column; text or NULL is damage, never a score of 0.
     for (int col : {1, 2})
       if (!s.IsNumber(col) || !std::isfinite(s.Real(col)))
-        throw InputError(path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
-                         fmt::format("{} criterion '{}': '{}' is not a finite number",
-                                     TrialName(db_, trial_id), s.Text(0),
-                                     s.IsNull(col) ? "NULL" : s.Text(col)));
+        throw InputError(
+            path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
+            fmt::format("{} criterion '{}': '{}' is not a finite number", TrialName(db_, trial_id),
+                        s.Text(0), s.IsNull(col) ? "NULL" : s.Text(col)));
     out.push_back({s.Text(0), s.Real(1), s.Real(2), s.Text(3)});
   }
   return out;

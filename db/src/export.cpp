@@ -117,13 +117,14 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
     // One file per (stream, channel layout); a second layout of one stream name gets a suffix.
     std::map<std::pair<std::string, std::string>, std::unique_ptr<CsvOut>> outs;
     std::map<std::string, int> layouts_per_stream;
-    Stmt q(h, (std::string("SELECT st.name, p.code, t.plan_index + 1, c.stream, c.channels, "
-                           "c.start_time_s, c.rate_hz, c.sample_count, c.samples") +
-               kTrialJoin +
-               "JOIN trajectory_chunk c ON c.trial_id = t.id AND c.attempt = t.completed_attempt "
-               "WHERE t.status = 'completed' ORDER BY c.stream, s.id, t.plan_index, c.start_time_s, "
-               "c.id")
-                  .c_str());
+    Stmt q(h,
+           (std::string("SELECT st.name, p.code, t.plan_index + 1, c.stream, c.channels, "
+                        "c.start_time_s, c.rate_hz, c.sample_count, c.samples") +
+            kTrialJoin +
+            "JOIN trajectory_chunk c ON c.trial_id = t.id AND c.attempt = t.completed_attempt "
+            "WHERE t.status = 'completed' ORDER BY c.stream, s.id, t.plan_index, c.start_time_s, "
+            "c.id")
+               .c_str());
     std::vector<float> buf;
     while (q.Step()) {
       const std::string stream = q.Text(3);

@@ -128,7 +128,8 @@ void Diff(const toml::node* a, const toml::node* b, const std::string& path,
   }
   std::string old_value = Canonical(a), new_value = Canonical(b);
   if (old_value != new_value)
-    out->push_back({.key = path, .old_value = std::move(old_value), .new_value = std::move(new_value)});
+    out->push_back(
+        {.key = path, .old_value = std::move(old_value), .new_value = std::move(new_value)});
 }
 
 }  // namespace

@@ -55,14 +55,14 @@ std::int64_t FindOrCreateStudy(db::Database& database, const protocols::Protocol
     recorded = db::HashText(protocols::CanonicalFormOfText(s->protocol_toml, "recorded"));
   } catch (const InputError&) {
     if (s->protocol_hash == db::HashText(p.text)) return s->id;
-    throw InputError(db_path, 0, "study",
-                     fmt::format("study '{}' in this database was recorded before protocols were "
-                                 "compared by content, and its recorded text cannot be read as "
-                                 "TOML: only the raw texts could be compared, and they differ "
-                                 "(hash {}, now {}). Use a new database or restore the protocol "
-                                 "file exactly",
-                                 p.name, s->protocol_hash.substr(0, 12),
-                                 db::HashText(p.text).substr(0, 12)));
+    throw InputError(
+        db_path, 0, "study",
+        fmt::format("study '{}' in this database was recorded before protocols were "
+                    "compared by content, and its recorded text cannot be read as "
+                    "TOML: only the raw texts could be compared, and they differ "
+                    "(hash {}, now {}). Use a new database or restore the protocol "
+                    "file exactly",
+                    p.name, s->protocol_hash.substr(0, 12), db::HashText(p.text).substr(0, 12)));
   }
   if (recorded != identity) RefuseChanged(*s, p, recorded, db_path);
   database.SetStudyCanonicalHash(s->id, recorded);

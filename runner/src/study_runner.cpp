@@ -175,9 +175,10 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                      fmt::format("participant {} was reserved with plan index {}; run it without "
                                  "--index or with --index {}",
                                  opt.participant, reserved->index, reserved->index));
-  const int index = reserved                      ? reserved->index
-                    : opt.participant_index >= 0 ? opt.participant_index
-                                                 : static_cast<int>(database.Participants(study_id).size());
+  const int index = reserved ? reserved->index
+                    : opt.participant_index >= 0
+                        ? opt.participant_index
+                        : static_cast<int>(database.Participants(study_id).size());
   const db::Participant part{.study_id = study_id,
                              .code = opt.participant,
                              .index = index,

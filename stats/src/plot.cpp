@@ -173,8 +173,8 @@ void DescribeSvg(const std::string& file, const std::string& title, const std::s
   const auto open = svg.find("<svg");
   const auto end = open == std::string::npos ? open : svg.find('>', open);
   if (end == std::string::npos) throw std::runtime_error(file + ": not an SVG file");
-  svg.insert(end + 1, "\n<title>" + XmlEscaped(title) + "</title>\n<desc>" + XmlEscaped(note) +
-                          "</desc>");
+  svg.insert(end + 1,
+             "\n<title>" + XmlEscaped(title) + "</title>\n<desc>" + XmlEscaped(note) + "</desc>");
   WriteTextFile(file, svg);
 }
 

@@ -157,8 +157,11 @@ std::string PowerToJson(const PowerResult& r) {
       {"model", r.ObserverDescription()},
       {"file", r.observer_file.empty() ? json(nullptr) : json(r.observer_file)},
       {"sha256", r.observer_sha256.empty() ? json(nullptr) : json(r.observer_sha256)}};
-  json j = {{"protocol", r.protocol}, {"observer", observer}, {"simulations", r.simulations},
-            {"seed", r.seed},         {"rows", rows}};
+  json j = {{"protocol", r.protocol},
+            {"observer", observer},
+            {"simulations", r.simulations},
+            {"seed", r.seed},
+            {"rows", rows}};
   if (r.shards > 1) {
     j["shard"] = r.shard;
     j["shards"] = r.shards;

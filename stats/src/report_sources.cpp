@@ -128,8 +128,8 @@ LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated
                   fmt::format(
                       "study '{}' participant {} trial {} criterion '{}': score {} (response "
                       "time {} s) is outside the protocol's scale [{}, {}] or negative",
-                      st.name, p.code, tr.plan_index + 1, r.criterion, r.score, r.response_time_s, proto.scale_min,
-                      proto.scale_max));
+                      st.name, p.code, tr.plan_index + 1, r.criterion, r.score, r.response_time_s,
+                      proto.scale_min, proto.scale_max));
             if (r.source == db::kRaterSimulated) {
               if (human && !include_simulated) {
                 ++src.simulated_excluded[st.name];

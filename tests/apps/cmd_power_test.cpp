@@ -48,18 +48,17 @@ std::string Sha256sum(const std::string& file) {
 TEST(PowerCli, ACustomCodePatternAnswersAndTheObserverIsNamed) {
   CustomStudy s(true);
   std::string out;
-  ASSERT_EQ(test::RunCommand(s.Power(" --json --plot " + s.dir.File("curves") + " 2>/dev/null"),
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(s.Power(" --json --plot " + s.dir.File("curves") + " 2>/dev/null"), &out), 0)
       << out;
   const json j = json::parse(out);
   EXPECT_EQ(j["observer"]["file"], s.observer);
   EXPECT_EQ(j["observer"]["sha256"], Sha256sum(s.observer));
   EXPECT_EQ(j["observer"]["model"], s.observer + " (sha256 " + Sha256sum(s.observer) + ")");
   const std::string svg = test::ReadFile(s.dir.File("curves.svg"));
-  EXPECT_NE(svg.find("<desc>observer: " + s.observer + " (sha256 " + Sha256sum(s.observer) +
-                     ")</desc>"),
-            std::string::npos);
+  EXPECT_NE(
+      svg.find("<desc>observer: " + s.observer + " (sha256 " + Sha256sum(s.observer) + ")</desc>"),
+      std::string::npos);
   ASSERT_EQ(test::RunCommand(s.Power(""), &out), 0) << out;
   EXPECT_NE(out.find("observer: " + s.observer + " (sha256 "), std::string::npos) << out;
 }

@@ -35,13 +35,12 @@ TEST(TrialNumberCli, LogPlanEventsAndExportsAgree) {
                              &log),
             0)
       << log;
-  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --format csv --out " +
-                             dir.File("x")),
+  ASSERT_EQ(test::RunCommand(Cli() + " export --db " + db + " --format csv --out " + dir.File("x")),
             0);
   std::string plan;
-  ASSERT_EQ(test::RunCommand(Cli() + " study plan " + protocol + " --participant P01 --db " + db,
-                             &plan),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " study plan " + protocol + " --participant P01 --db " + db, &plan),
+      0)
       << plan;
   // The plan as `study plan` prints it: number -> (phase, material); breaks before numbers.
   std::map<int, std::pair<std::string, std::string>> planned;

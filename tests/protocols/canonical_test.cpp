@@ -54,7 +54,8 @@ TEST(CanonicalForm, CommentsFormattingKeyOrderAndNumberSpellingDoNotChangeIt) {
 
 TEST(CanonicalDifferences, NameTheKeyTheOldAndTheNewValue) {
   const std::string base = Small();
-  const auto changes = CanonicalDifferences(base, Replace(base, "repetitions = 2", "repetitions = 3"));
+  const auto changes =
+      CanonicalDifferences(base, Replace(base, "repetitions = 2", "repetitions = 3"));
   ASSERT_EQ(changes.size(), 1u);
   EXPECT_EQ(changes[0].key, "phase[2].repetitions");
   EXPECT_EQ(changes[0].old_value, "2");

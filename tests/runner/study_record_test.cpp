@@ -70,9 +70,8 @@ TEST(StudyRecord, AnOlderDatabaseIsComparedByTheContentOfItsRecordedText) {
   test::TempDir dir;
   const auto p = Written(dir, "p.toml");
   const auto commented = Written(dir, "c.toml", [](std::string* t) { *t += "\n# the end\n"; });
-  const auto changed = Written(dir, "r.toml", [](std::string* t) {
-    t->replace(t->find("seed = 42"), 9, "seed = 43");
-  });
+  const auto changed = Written(
+      dir, "r.toml", [](std::string* t) { t->replace(t->find("seed = 42"), 9, "seed = 43"); });
   {
     db::Database old(dir.File("s.db"), {.migrate_to = 6});
     old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('test-small', '" +
@@ -90,8 +89,9 @@ TEST(StudyRecord, AnUnreadableRecordedTextFallsBackToTheRawHashAndSaysSo) {
   test::TempDir dir;
   const auto p = Written(dir, "p.toml");
   db::Database d(dir.File("s.db"));
-  d.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('test-small', "
-         "'not [toml', 'abc', 42)");
+  d.Exec(
+      "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('test-small', "
+      "'not [toml', 'abc', 42)");
   const std::string why = Refusal(d, p);
   EXPECT_NE(why.find("only the raw texts could be compared"), std::string::npos) << why;
 }

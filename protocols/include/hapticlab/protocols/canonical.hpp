@@ -28,9 +28,9 @@ std::string CanonicalFormOfText(const std::string& toml_text, const std::string&
 
 /// One semantic difference between two protocol texts.
 struct ProtocolChange {
-  std::string key;         ///< e.g. "phase[2].repetitions", "material[3]"
-  std::string old_value;   ///< canonical JSON of the old value; "(absent)" when added
-  std::string new_value;   ///< canonical JSON of the new value; "(absent)" when removed
+  std::string key;               ///< e.g. "phase[2].repetitions", "material[3]"
+  std::string old_value;         ///< canonical JSON of the old value; "(absent)" when added
+  std::string new_value;         ///< canonical JSON of the new value; "(absent)" when removed
   std::string Describe() const;  ///< "phase[2].repetitions: 3 -> 4"
 };
 

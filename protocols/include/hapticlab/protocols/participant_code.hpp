@@ -31,6 +31,7 @@ std::string FormatCode(const CodeFormat& f, long n);
 
 /// The lowest-numbered code of the format that matches p's pattern and is not in `taken`.
 /// @throws InputError when every number of the width is taken or refused by the pattern
-std::string NextFreeCode(const Protocol& p, const CodeFormat& f, const std::set<std::string>& taken);
+std::string NextFreeCode(const Protocol& p, const CodeFormat& f,
+                         const std::set<std::string>& taken);
 
 }  // namespace hapticlab::protocols
