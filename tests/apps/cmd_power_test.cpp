@@ -34,7 +34,7 @@ struct CustomStudy {
   }
   std::string Power(const std::string& extra) const {
     return std::string(HL_CLI_PATH) + " study power " + protocol +
-           " --participants 3 --simulations 4 --pool 1 --quiet" + extra;
+           " --participants 3,4 --simulations 4 --pool 1 --quiet" + extra;
   }
 };
 
