@@ -82,7 +82,7 @@ CodeFormat InferCodeFormat(const Protocol& p, const std::string& prefix,
 std::string NextFreeCode(const Protocol& p, const CodeFormat& f,
                          const std::set<std::string>& taken) {
   for (long n = 1; n < Limit(f.digits); ++n) {
-    const std::string code = FormatCode(f, n);
+    std::string code = FormatCode(f, n);
     if (!taken.count(code) && Matches(p, code)) return code;
   }
   throw InputError(p.file, 0, "study.participant_code",
