@@ -246,8 +246,8 @@ void RegisterStudy(CLI::App& app) {
         "plan",
         "Print a participant's exact trial list (deterministic from protocol, seed and plan "
         "index).\n"
-        "Trials are numbered from 1, as the console and the log number them; plan_index (JSON,\n"
-        "exports) counts from 0.");
+        "Trials are numbered from 1, as the log, the console, events.csv and every export number\n"
+        "them; plan_index in the JSON counts from 0.");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
     auto* idx =
         cmd->add_option(
