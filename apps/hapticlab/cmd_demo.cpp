@@ -101,12 +101,15 @@ std::string RealTimeCheck(const std::string& profiles_path) {
 }
 
 // One line of `study power`: participants for 80 % power on the method effect, from the
-// demo's own participants' interactions re-rated by fresh simulated observers.
+// demo's own participants' interactions re-rated by fresh simulated observers of the
+// protocol's observer model (the calibrated studies/shin2019/observer.toml for the default
+// protocol; the built-in uncalibrated one for a protocol that names none), named in the line.
 void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
   bool has_main = false;
   for (const auto& v : pool.participants)
     for (const auto& t : v) has_main |= t.phase == "main";
   if (!has_main || p.methods.size() < 2) return;
+  const auto model = runner::ChooseObserver(p, p.observer.empty() ? "builtin" : "");
   stats::PowerOptions po;
   // A quick estimate (a few seconds): 40 studies per count; `study power` for more.
   po.participants = {4, 6, 8, 12, 16, 24};
@@ -116,8 +119,8 @@ void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
   const auto t0 = std::chrono::steady_clock::now();
   const auto r = stats::SimulatePower(
       p.name,
-      [&pool](int n, Rng& rng) {
-        return runner::SimulateRatings(pool, pool.observer, n, rng, true);
+      [&pool, &model](int n, Rng& rng) {
+        return runner::SimulateRatings(pool, model.params, n, rng, true);
       },
       po);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -127,11 +130,16 @@ void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
     line += fmt::format("{}{}: {}", line.empty() ? "" : ", ", c,
                         n ? fmt::format("{}", n) : "more than 24");
   }
+  // Named relative to the protocol (no absolute path in the output).
+  const std::string observer =
+      p.observer.empty()
+          ? model.Describe()
+          : fmt::format("the protocol's {} (sha256 {})", p.observer, model.sha256.substr(0, 16));
   fmt::print(
       "power: participants for 80 % power on the method effect (p < 0.05; {} simulated studies per "
       "count, "
-      "{:.1f} s; hapticlab study power): {}\n",
-      po.simulations, s, line);
+      "{:.1f} s; observer {}; hapticlab study power): {}\n",
+      po.simulations, s, observer, line);
 }
 
 }  // namespace

@@ -2,15 +2,12 @@
 
 #include <fmt/core.h>
 
-#include <filesystem>
 #include <memory>
-#include <set>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
-#include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/study_record.hpp"
 
 namespace hapticlab::cli {
 
@@ -19,41 +16,27 @@ void RegisterParticipant(CLI::App& app) {
       "participant", "Participant codes (pseudonymous by construction; docs/studies.md)");
   part->require_subcommand(1);
   struct O {
-    std::string protocol, db, prefix = "P";
+    std::string protocol, db, prefix;
   };
   auto o = std::make_shared<O>();
   auto* cmd = part->add_subcommand(
       "new",
-      "Print the next free participant code of a study: PREFIX and the lowest number (two\n"
-      "digits or more) that matches the protocol's [study] participant_code pattern and is not\n"
-      "yet in the database. Nothing is written; the code is taken when 'study run' uses it.");
+      "Reserve and print the next free participant code of a study: a prefix and the lowest\n"
+      "number that matches the protocol's [study] participant_code pattern and is not yet in\n"
+      "the database (e.g. P01 for the default pattern, NU001 for \"^NU[0-9]{3}$\"). The code is\n"
+      "stored as reserved (with its plan index) in the database, created when missing, so two\n"
+      "calls never return the same code; 'study status' lists it as reserved and 'study run\n"
+      "--participant CODE' runs it. The protocol must be the one the database's study was run\n"
+      "with (compared by content; comments and formatting do not count).");
   cmd->add_option("--protocol", o->protocol, "Study protocol (.toml)")->required();
-  cmd->add_option("--db", o->db, "Study database (may not exist yet)")->required();
-  cmd->add_option("--prefix", o->prefix, "Letters before the number")->capture_default_str();
+  cmd->add_option("--db", o->db, "Study database (created when missing)")->required();
+  cmd->add_option("--prefix", o->prefix,
+                  "Letters before the number (default: the pattern's fixed start, else P)");
   cmd->callback([o] {
-    RunGuarded({{"db", "--db"}}, [&] {
+    RunGuarded({{"db", "--db"}, {"study", "--db"}}, [&] {
       const auto p = protocols::LoadProtocol(o->protocol);
-      std::set<std::string> taken;
-      if (std::filesystem::exists(o->db)) {
-        const db::Database d = db::OpenForReading(o->db);
-        if (const auto st = d.FindStudy(p.name))
-          for (const auto& x : d.Participants(st->id)) taken.insert(x.code);
-      }
-      for (int n = 1; n <= 9999; ++n) {
-        const std::string code = fmt::format("{}{:02d}", o->prefix, n);
-        if (taken.count(code)) continue;
-        try {
-          protocols::CheckParticipantCode(p, code);
-        } catch (const InputError&) {
-          continue;
-        }
-        fmt::print("{}\n", code);
-        return kExitOk;
-      }
-      throw InputError(o->protocol, 0, "--prefix",
-                       "no free code '" + o->prefix +
-                           "NN' matches the protocol's participant_code pattern " +
-                           p.participant_code);
+      fmt::print("{}\n", runner::ReserveParticipant(o->db, p, o->prefix).code);
+      return kExitOk;
     });
   });
 }

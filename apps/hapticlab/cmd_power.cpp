@@ -22,7 +22,7 @@ namespace hapticlab::cli {
 namespace {
 
 struct PowerArgs {
-  std::string protocol, participants = "8,12,16,20,30", effect, plot, out, shard;
+  std::string protocol, participants = "8,12,16,20,30", effect, plot, out, shard, observer;
   std::vector<std::string> merge;
   long simulations = 200;
   std::uint64_t seed = 1;
@@ -89,8 +89,10 @@ void RegisterPower(CLI::App& study) {
       "method:material) for several participant counts: the probability of p < 0.05 with a 95 %\n"
       "Wilson interval and the mean partial eta^2. A pool of simulated participants runs through\n"
       "the runner once (the physics); each simulated study re-rates their interactions with fresh\n"
-      "simulated observers (the protocol's observer file). Reproducible from --seed whatever the\n"
-      "thread count or sharding.");
+      "simulated observers of one observer model: the protocol's [study] observer file, or\n"
+      "--observer. Power depends on that model: the text, JSON and plot name it (file and\n"
+      "SHA-256, or \"built-in uncalibrated\"), and without one the command refuses (exit 2).\n"
+      "Reproducible from --seed whatever the thread count or sharding.");
   cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml); not with --merge");
   cmd->add_option("--participants", a->participants, "Participant counts, increasing")
       ->capture_default_str();
@@ -99,6 +101,10 @@ void RegisterPower(CLI::App& study) {
       ->capture_default_str();
   cmd->add_option("--effect", a->effect,
                   "Report only this effect: method, material or method:material");
+  cmd->add_option("--observer", a->observer,
+                  "Observer model: an observer file (sim::Observer, e.g. the calibrated\n"
+                  "studies/shin2019/observer.toml), or 'builtin' for the uncalibrated defaults\n"
+                  "(default: the protocol's [study] observer)");
   cmd->add_option("--seed", a->seed, "Seed of the simulations")->capture_default_str();
   cmd->add_option("--pool", a->pool,
                   "Simulated participants whose physics is recorded through the runner")
@@ -141,6 +147,7 @@ void RegisterPower(CLI::App& study) {
         o.effects = {a->effect};
       }
       const auto p = protocols::LoadProtocol(a->protocol);
+      const auto model = runner::ChooseObserver(p, a->observer);  // before the physics
       const auto t0 = std::chrono::steady_clock::now();
       const auto log = StderrLog(a->quiet);
       const auto pool = runner::RecordFeltPool(p, a->pool, a->threads, log);
@@ -156,18 +163,21 @@ void RegisterPower(CLI::App& study) {
             last = pct;
           }
         };
-      const auto obs = pool.observer;
-      const auto r = stats::SimulatePower(
+      const auto& obs = model.params;
+      auto r = stats::SimulatePower(
           p.name,
           [&pool, &obs](int n, Rng& rng) {
             return runner::SimulateRatings(pool, obs, n, rng, true);
           },
           o);
+      r.observer_file = model.file;
+      r.observer_sha256 = model.sha256;
       const double t_all =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       long studies = 0;
       for (long s = o.shard; s < o.simulations; s += o.shards) ++studies;
       studies *= static_cast<long>(o.participants.size());
+      log("observer: " + model.Describe());
       log(
           fmt::format("pool of {} participants through the runner: {:.1f} s; {} simulated studies: "
                       "{:.1f} s ({:.0f} studies/s)",

@@ -273,8 +273,8 @@ void RegisterStudy(CLI::App& app) {
         "plan",
         "Print a participant's exact trial list (deterministic from protocol, seed and plan "
         "index).\n"
-        "Trials are numbered from 1, as the console and the log number them; plan_index (JSON,\n"
-        "exports) counts from 0.");
+        "Trials are numbered from 1, as the log, the console, events.csv and every export number\n"
+        "them; plan_index in the JSON counts from 0.");
     cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
     auto* idx =
         cmd->add_option(
@@ -395,10 +395,12 @@ void RegisterStudy(CLI::App& app) {
         "'study resume'; 2 bad input; 1 any other failure.");
     cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
-    cmd->add_option("--participant", a->participant, "Pseudonymous participant code, e.g. P07")
+    cmd->add_option("--participant", a->participant,
+                    "Pseudonymous participant code, e.g. P07: a new one, or one reserved by\n"
+                    "'participant new' (it runs with its reserved plan index)")
         ->required();
     cmd->add_option("--index", a->index,
-                    "Plan index of the participant (default: the next free one)");
+                    "Plan index of the participant (default: the reserved or the next free one)");
     hardware_options(cmd, *a);
     session_options(cmd, *a);
     cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");

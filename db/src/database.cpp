@@ -228,29 +228,41 @@ std::string Database::QuickCheck() const {
 }
 
 std::vector<std::string> Database::VerifyTrajectories() const {
+  // Trials named as people know them: participant code and plan number, not the row id.
+  constexpr const char* kWho =
+      " JOIN session se ON se.id = t.session_id JOIN participant p ON p.id = se.participant_id ";
   std::vector<std::string> out;
   {
-    Stmt q(
-        db_,
-        "SELECT t.id, s.stream, s.samples_written, (SELECT coalesce(sum(c.sample_count), 0) "
-        "FROM trajectory_chunk c WHERE c.trial_id = t.id AND c.attempt = t.completed_attempt "
-        "AND c.stream = s.stream) FROM trial t JOIN trajectory_stream s ON s.trial_id = t.id "
-        "AND s.attempt = t.completed_attempt WHERE t.status = 'completed' ORDER BY t.id, s.stream");
+    Stmt q(db_,
+           (std::string("SELECT t.plan_index + 1, s.stream, s.samples_written, (SELECT "
+                        "coalesce(sum(c.sample_count), 0) FROM trajectory_chunk c WHERE c.trial_id "
+                        "= t.id AND c.attempt = t.completed_attempt AND c.stream = s.stream), "
+                        "p.code FROM trial t JOIN trajectory_stream s ON s.trial_id = t.id AND "
+                        "s.attempt = t.completed_attempt") +
+            kWho + "WHERE t.status = 'completed' ORDER BY t.id, s.stream")
+               .c_str());
     while (q.Step())
       if (q.Int(2) != q.Int(3))
-        out.push_back(fmt::format("trial {} stream {}: {} samples stored, {} at completion",
-                                  q.Int(0), q.Text(1), q.Int(3), q.Int(2)));
+        out.push_back(
+            fmt::format("participant {} trial {} stream {}: {} samples stored, {} at completion",
+                        q.Text(4), q.Int(0), q.Text(1), q.Int(3), q.Int(2)));
   }
   Stmt q(db_,
-         "SELECT c.trial_id, c.stream, sum(c.sample_count) FROM trajectory_chunk c JOIN trial t "
-         "ON t.id = c.trial_id AND c.attempt = t.completed_attempt WHERE t.status = 'completed' "
-         "AND EXISTS (SELECT 1 FROM trajectory_stream s WHERE s.trial_id = t.id AND s.attempt = "
-         "t.completed_attempt) AND NOT EXISTS (SELECT 1 FROM trajectory_stream s WHERE "
-         "s.trial_id = t.id AND s.attempt = t.completed_attempt AND s.stream = c.stream) "
-         "GROUP BY c.trial_id, c.stream ORDER BY c.trial_id, c.stream");
+         (std::string("SELECT t.plan_index + 1, c.stream, sum(c.sample_count), p.code FROM "
+                      "trajectory_chunk c JOIN trial t ON t.id = c.trial_id AND c.attempt = "
+                      "t.completed_attempt") +
+          kWho +
+          "WHERE t.status = 'completed' AND EXISTS (SELECT 1 FROM trajectory_stream s WHERE "
+          "s.trial_id = t.id AND s.attempt = t.completed_attempt) AND NOT EXISTS (SELECT 1 "
+          "FROM trajectory_stream s WHERE s.trial_id = t.id AND s.attempt = "
+          "t.completed_attempt AND s.stream = c.stream) GROUP BY c.trial_id, c.stream ORDER BY "
+          "c.trial_id, c.stream")
+             .c_str());
   while (q.Step())
-    out.push_back(fmt::format("trial {} stream {}: {} samples stored that no check covers",
-                              q.Int(0), q.Text(1), q.Int(2)));
+    out.push_back(
+        fmt::format("participant {} trial {} stream {}: {} samples stored that no "
+                    "check covers",
+                    q.Text(3), q.Int(0), q.Text(1), q.Int(2)));
   return out;
 }
 

@@ -30,11 +30,14 @@ using internal::Stmt;
 
 std::int64_t Database::CreateStudy(const Study& st) {
   HL_REQUIRE(!st.name.empty(), "study name must not be empty");
-  Stmt s(db_, "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES (?,?,?,?)");
+  Stmt s(db_,
+         "INSERT INTO study(name, protocol_toml, protocol_hash, seed, protocol_canonical_sha256) "
+         "VALUES (?,?,?,?,?)");
   s.Bind(1, st.name)
       .Bind(2, st.protocol_toml)
       .Bind(3, st.protocol_hash.empty() ? HashText(st.protocol_toml) : st.protocol_hash)
       .Bind(4, static_cast<std::int64_t>(st.seed))
+      .Bind(5, st.protocol_canonical_sha256)
       .Run();
   return sqlite3_last_insert_rowid(db_);
 }
@@ -46,12 +49,26 @@ std::optional<Study> Database::FindStudy(const std::string& name) const {
 }
 
 std::vector<Study> Database::Studies() const {
-  Stmt s(db_, "SELECT id, name, protocol_toml, protocol_hash, seed FROM study ORDER BY id");
+  Stmt s(
+      db_,
+      "SELECT id, name, protocol_toml, protocol_hash, seed, protocol_canonical_sha256 FROM study "
+      "ORDER BY id");
   std::vector<Study> out;
   while (s.Step())
-    out.push_back(
-        {s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4))});
+    out.push_back({s.Int(0), s.Text(1), s.Text(2), s.Text(3), static_cast<std::uint64_t>(s.Int(4)),
+                   s.Text(5)});
   return out;
+}
+
+void Database::SetStudyCanonicalHash(std::int64_t study_id, const std::string& sha256) {
+  Stmt s(db_, "UPDATE study SET protocol_canonical_sha256=? WHERE id=?");
+  s.Bind(1, sha256).Bind(2, study_id).Run();
+}
+
+bool Database::IsReserved(std::int64_t participant_id) const {
+  Stmt s(db_, "SELECT count(*) FROM session WHERE participant_id=?");
+  s.Bind(1, participant_id);
+  return s.Step() && s.Int(0) == 0;
 }
 
 std::int64_t Database::AddParticipant(const Participant& p) {

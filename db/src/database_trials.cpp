@@ -32,6 +32,21 @@ using internal::Transaction;
 
 namespace {
 
+// A trial as a person knows it: "participant P01 trial 5" (its 1-based number in the
+// participant's plan), never its database id.
+std::string TrialName(sqlite3* db, std::int64_t trial_id) {
+  Stmt s(db,
+         "SELECT p.code, t.plan_index + 1 FROM trial t JOIN session se ON se.id = t.session_id "
+         "JOIN participant p ON p.id = se.participant_id WHERE t.id = ?");
+  s.Bind(1, trial_id);
+  if (!s.Step()) return fmt::format("trial (row {}, no longer in the database)", trial_id);
+  return fmt::format("participant {} trial {}", s.Text(0), s.Int(1));
+}
+
+}  // namespace
+
+namespace {
+
 // Runs `UPDATE trial SET <assignments> WHERE id=? AND status<>'completed'` on one trial and
 // throws, naming the database and the trial (then `consequence`), when no trial that is still
 // open has that id: a completed trial is never started or completed again.
@@ -170,8 +185,9 @@ void Database::CompleteTrial(std::int64_t trial_id, const std::vector<Rating>& r
                         "reported (another process wrote this trial)",
                         n, c, attempt));
     if (!problems.empty())
-      throw TrajectoryIncomplete(fmt::format("{}: trial {} attempt {}: trajectories not whole: {}",
-                                             path_, trial_id, attempt, fmt::join(problems, "; ")));
+      throw TrajectoryIncomplete(fmt::format("{}: {} attempt {}: trajectories not whole: {}", path_,
+                                             TrialName(db_, trial_id), attempt,
+                                             fmt::join(problems, "; ")));
     Stmt ins(db_,
              "INSERT INTO trajectory_stream(trial_id, attempt, stream, rate_hz, samples_offered, "
              "samples_dropped, samples_written) VALUES (?,?,?,?,?,?,?)");
@@ -254,9 +270,10 @@ std::vector<Rating> Database::Ratings(std::int64_t trial_id) const {
     // SQLite stores any type in a REAL column; text or NULL is damage, never a score of 0.
     for (int col : {1, 2})
       if (!s.IsNumber(col) || !std::isfinite(s.Real(col)))
-        throw InputError(path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
-                         fmt::format("trial {} criterion '{}': '{}' is not a finite number",
-                                     trial_id, s.Text(0), s.IsNull(col) ? "NULL" : s.Text(col)));
+        throw InputError(
+            path_, 0, col == 1 ? "rating.score" : "rating.response_time_s",
+            fmt::format("{} criterion '{}': '{}' is not a finite number", TrialName(db_, trial_id),
+                        s.Text(0), s.IsNull(col) ? "NULL" : s.Text(col)));
     out.push_back({s.Text(0), s.Real(1), s.Real(2), s.Text(3)});
   }
   return out;

@@ -93,7 +93,7 @@ class TrajectoryTables {
   TrajectoryTables(const Database& db, std::string out_dir)
       : db_(db), out_dir_(std::move(out_dir)) {}
 
-  // Writes one chunk's samples: `keys` is the row's escaped "study,participant,trial_id,".
+  // Writes one chunk's samples: `keys` is the row's escaped "study,participant,trial,".
   void Chunk(Stmt& q, const std::string& keys) {
     const std::string stream = q.Text(1), layout = q.Text(2);
     auto& out = outs_[{stream, layout}];
@@ -102,7 +102,7 @@ class TrajectoryTables {
       const int n = ++layouts_per_stream_[stream];
       std::string name = "trajectory_" + stream + (n > 1 ? "_" + std::to_string(n) : "") + ".csv";
       out = std::make_unique<CsvOut>((std::filesystem::path(out_dir_) / name).string());
-      std::vector<std::string> header{"study", "participant", "trial_id", "t_s"};
+      std::vector<std::string> header{"study", "participant", "trial", "t_s"};
       header.insert(header.end(), channels.begin(), channels.end());
       out->Row(header);
     }
@@ -160,10 +160,11 @@ std::vector<ExportedFile> WriteTrajectories(const Database& db, const std::strin
            "ORDER BY st.id, p.id");
   while (who.Step()) {
     Stmt q(db.handle(),
-           "SELECT t.id, c.stream, c.channels, c.start_time_s, c.rate_hz, c.sample_count, "
-           "c.samples FROM session s JOIN trial t ON t.session_id = s.id JOIN trajectory_chunk c "
-           "ON c.trial_id = t.id AND c.attempt = t.completed_attempt WHERE s.participant_id = ? "
-           "AND t.status = 'completed' ORDER BY t.id, c.stream, c.start_time_s, c.id");
+           "SELECT t.plan_index + 1, c.stream, c.channels, c.start_time_s, c.rate_hz, "
+           "c.sample_count, c.samples FROM session s JOIN trial t ON t.session_id = s.id JOIN "
+           "trajectory_chunk c ON c.trial_id = t.id AND c.attempt = t.completed_attempt WHERE "
+           "s.participant_id = ? AND t.status = 'completed' ORDER BY t.plan_index, c.stream, "
+           "c.start_time_s, c.id");
     q.Bind(1, who.Int(0));
     const std::string prefix = CsvEscape(who.Text(2)) + "," + CsvEscape(who.Text(1)) + ",";
     const std::size_t before = tables.samples();
@@ -192,47 +193,46 @@ std::vector<ExportedFile> ExportCsv(const Database& db, const std::string& out_d
 
   {
     CsvOut out((fs::path(out_dir) / "ratings.csv").string());
-    out.Row({"study", "participant", "session_id", "trial_id", "plan_index", "phase", "material",
-             "comparison", "method", "repetition", "left", "right", "criterion", "score",
-             "response_time_s", "source"});
-    Stmt q(h, (std::string("SELECT st.name, p.code, s.id, t.id, t.plan_index, t.phase, "
+    out.Row({"study", "participant", "session_id", "trial", "phase", "material", "comparison",
+             "method", "repetition", "left", "right", "criterion", "score", "response_time_s",
+             "source"});
+    Stmt q(h, (std::string("SELECT st.name, p.code, s.id, t.plan_index + 1, t.phase, "
                            "t.material, t.comparison, t.method, t.repetition, t.left_stimulus, "
                            "t.right_stimulus, r.criterion, r.score, r.response_time_s, r.source") +
                kTrialJoin + "JOIN rating r ON r.trial_id = t.id ORDER BY s.id, t.plan_index, r.id")
                   .c_str());
     while (q.Step())
-      out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)), std::to_string(q.Int(3)),
-               std::to_string(q.Int(4)), q.Text(5), q.Text(6), q.Text(7), q.Text(8),
-               std::to_string(q.Int(9)), q.Text(10), q.Text(11), q.Text(12), Num(q.Real(13)),
-               Num(q.Real(14)), q.Text(15)});
+      out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)), std::to_string(q.Int(3)), q.Text(4),
+               q.Text(5), q.Text(6), q.Text(7), std::to_string(q.Int(8)), q.Text(9), q.Text(10),
+               q.Text(11), Num(q.Real(12)), Num(q.Real(13)), q.Text(14)});
     files.push_back(out.Close());
   }
   {
     CsvOut out((fs::path(out_dir) / "trials.csv").string());
-    out.Row({"study", "participant", "session_id", "trial_id", "plan_index", "phase", "material",
-             "comparison", "method", "repetition", "left", "right", "status", "attempts",
-             "started_at", "completed_at"});
-    Stmt q(h, (std::string("SELECT st.name, p.code, s.id, t.id, t.plan_index, t.phase, "
+    out.Row({"study", "participant", "session_id", "trial", "phase", "material", "comparison",
+             "method", "repetition", "left", "right", "status", "attempts", "started_at",
+             "completed_at"});
+    Stmt q(h, (std::string("SELECT st.name, p.code, s.id, t.plan_index + 1, t.phase, "
                            "t.material, t.comparison, t.method, t.repetition, t.left_stimulus, "
                            "t.right_stimulus, t.status, t.attempts, coalesce(t.started_at,''), "
                            "coalesce(t.completed_at,'')") +
                kTrialJoin + "ORDER BY s.id, t.plan_index, t.id")
                   .c_str());
     while (q.Step())
-      out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)), std::to_string(q.Int(3)),
-               std::to_string(q.Int(4)), q.Text(5), q.Text(6), q.Text(7), q.Text(8),
-               std::to_string(q.Int(9)), q.Text(10), q.Text(11), q.Text(12),
-               std::to_string(q.Int(13)), q.Text(14), q.Text(15)});
+      out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)), std::to_string(q.Int(3)), q.Text(4),
+               q.Text(5), q.Text(6), q.Text(7), std::to_string(q.Int(8)), q.Text(9), q.Text(10),
+               q.Text(11), std::to_string(q.Int(12)), q.Text(13), q.Text(14)});
     files.push_back(out.Close());
   }
   {
     CsvOut out((fs::path(out_dir) / "events.csv").string());
-    out.Row({"study", "participant", "session_id", "trial_id", "kind", "detail", "created_at",
+    out.Row({"study", "participant", "session_id", "trial", "kind", "detail", "created_at",
              "established_by"});
     Stmt q(h,
-           "SELECT st.name, p.code, e.session_id, e.trial_id, e.kind, e.detail, e.created_at, "
-           "e.established_by FROM event e JOIN session s ON e.session_id = s.id JOIN participant "
-           "p ON s.participant_id = p.id JOIN study st ON p.study_id = st.id ORDER BY e.id");
+           "SELECT st.name, p.code, e.session_id, t.plan_index + 1, e.kind, e.detail, "
+           "e.created_at, e.established_by FROM event e JOIN session s ON e.session_id = s.id "
+           "JOIN participant p ON s.participant_id = p.id JOIN study st ON p.study_id = st.id "
+           "LEFT JOIN trial t ON t.id = e.trial_id ORDER BY e.id");
     while (q.Step())
       out.Row({q.Text(0), q.Text(1), std::to_string(q.Int(2)),
                q.IsNull(3) ? std::string() : std::to_string(q.Int(3)), q.Text(4), q.Text(5),

@@ -77,8 +77,9 @@ constexpr const char* kReadme =
     "- `sub-*/ses-*/beh/*_beh.tsv`: one row per rating, with the trial's conditions\n"
     "  (columns described in the matching `_beh.json`).\n"
     "- `sub-*/ses-*/beh/*_run-<n>_recording-<stream>_physio.tsv.gz`: the force and vibration\n"
-    "  trajectories of trial n (n = plan index + 1; the `trial` column of `_beh.tsv` is the\n"
-    "  plan index), one file per recorded stream, time zero at the start of that stimulus\n"
+    "  trajectories of trial n (the `trial` column of `_beh.tsv`: the trial's 1-based number\n"
+    "  in the participant's plan), one file per recorded stream, time zero at the start of that "
+    "stimulus\n"
     "  (the left stimulus, then the right one). Units and channel meanings in the `.json`\n"
     "  sidecars. Samples missing inside a recording are `n/a`.\n"
     "- `code/`: the study protocols and any material models stored in the database, with\n"
@@ -93,8 +94,9 @@ ordered_json BehSidecar(const SessionRecord& s) {
       "with a "
       "stylus and rates them on the protocol's criteria.";
   j["trial"] = {{"Description",
-                 "the trial's position in the participant's resolved plan (0-based); "
-                 "physio recordings of the trial carry run-<trial + 1>"}};
+                 "the trial's number in the participant's resolved plan (from 1, as HapticLab's "
+                 "plan, log and console number it); physio recordings of the trial carry "
+                 "run-<trial>"}};
   j["phase"] = {{"Description", "study phase"},
                 {"Levels",
                  {{"training", "familiarisation"},
@@ -196,6 +198,7 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
   for (const auto& st : db.Studies()) {
     studies.insert(st.name);
     for (const auto& p : db.Participants(st.id)) {
+      if (db.IsReserved(p.id)) continue;  // a code reserved by `participant new`: no data
       const std::string label = Alnum(p.code);
       const auto [it, fresh] = owner.emplace(label, p.code);
       if (!fresh)
@@ -297,7 +300,7 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
     for (const auto* t : by_plan) {
       const auto& x = t->trial;
       for (const auto& r : t->ratings) {
-        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index,
+        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index + 1,
                            Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
                            x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
                            Num(r.score), Num(r.response_time_s), Cell(r.source));

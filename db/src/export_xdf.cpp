@@ -145,7 +145,7 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
   for (const auto& t : s.trials) {
     const auto& x = t.trial;
     events.emplace_back(t.origin_s, nlohmann::json{{"marker", "trial_start"},
-                                                   {"plan_index", x.plan_index},
+                                                   {"trial", x.plan_index + 1},
                                                    {"phase", x.phase},
                                                    {"material", x.material},
                                                    {"comparison", x.comparison},
@@ -164,7 +164,7 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
                      {"detail", e.detail},
                      {"established_by", e.established_by}};
     for (const auto& t : s.trials)
-      if (e.trial_id && *e.trial_id == t.trial.id) j["plan_index"] = t.trial.plan_index;
+      if (e.trial_id && *e.trial_id == t.trial.id) j["trial"] = t.trial.plan_index + 1;
     events.emplace_back(s.event_time_s[i], j.dump());
   }
   std::stable_sort(events.begin(), events.end(),
@@ -173,7 +173,7 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
   for (const auto& t : s.trials)
     for (const auto& r : t.ratings)
       ratings.emplace_back(t.origin_s + t.stimulus_s + r.response_time_s,
-                           nlohmann::json{{"plan_index", t.trial.plan_index},
+                           nlohmann::json{{"trial", t.trial.plan_index + 1},
                                           {"criterion", r.criterion},
                                           {"score", r.score},
                                           {"response_time_s", r.response_time_s},

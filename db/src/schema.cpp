@@ -228,6 +228,14 @@ INSERT INTO event(session_id, kind, detail, established_by)
          'evidence of consent', 'hapticlab:migration'
   FROM event WHERE kind = 'consent' AND detail = 'consent form signed';
 )sql",
+    // v8: the protocol's identity is the SHA-256 of its canonical form
+    // (protocols/canonical.hpp: parsed content, comments and formatting left out). Older
+    // studies get it from their recorded text when a protocol is next checked against them
+    // (SQL cannot parse TOML); until then it is empty. A participant row without a session is
+    // a code reserved by `participant new`.
+    R"sql(
+ALTER TABLE study ADD COLUMN protocol_canonical_sha256 TEXT NOT NULL DEFAULT '';
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

@@ -252,6 +252,8 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                                                static_cast<std::uint64_t>(t.attempts)));
       TrialScreen screen;
       screen.index = static_cast<int>(done.size()) + 1;
+      screen.plan_number = t.plan_index + 1;  // the plan grows by one trial at a time
+      screen.plan_total = t.plan_index + 1;
       screen.left = screen.right = fmt::format("virtual:{}", a.material);
       screen.method = a.method;
       screen.placement = "nothing to place: every interval is virtual";
@@ -339,7 +341,7 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
                  {kPhase, static_cast<double>(pi), 0}});
       ++out.completed;
       if (opt.log)
-        opt.log(fmt::format("{} trial {} ({} = {:.4g}, x = {:.4g}): {}",
+        opt.log(fmt::format("trial {} ({} {}: {} = {:.4g}, x = {:.4g}): {}", t.plan_index + 1,
                             protocols::ToString(ph.kind), done.size() + 1, a.parameter, value, x,
                             ans.positive ? "positive" : "negative"));
     }

@@ -10,7 +10,10 @@
 #include <thread>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/protocols/participant_code.hpp"
 
 namespace hapticlab::runner {
 
@@ -21,6 +24,30 @@ sim::ObserverParams ProtocolObserver(const protocols::Protocol& p) {
   if (!p.observer.empty()) return sim::LoadObserver((dir / p.observer).string());
   if (!p.profiles.empty()) return sim::LoadProfiles((dir / p.profiles).string()).observer;
   return {};
+}
+
+std::string ObserverModel::Describe() const {
+  return file.empty() ? std::string("built-in uncalibrated")
+                      : fmt::format("{} (sha256 {})", file, sha256);
+}
+
+ObserverModel ChooseObserver(const protocols::Protocol& p, const std::string& choice,
+                             const std::string& option) {
+  ObserverModel m;
+  if (choice == "builtin") return m;
+  if (choice.empty() && p.observer.empty())
+    throw InputError(p.file, 0, option,
+                     "the protocol names no simulated observer ([study] observer) and power "
+                     "depends on it: give " +
+                         option +
+                         " FILE (a calibrated observer, e.g. studies/shin2019/observer.toml) or " +
+                         option + " builtin (uncalibrated defaults)");
+  m.file = choice.empty()
+               ? (fs::path(p.file).parent_path() / p.observer).lexically_normal().string()
+               : choice;
+  m.params = sim::LoadObserver(m.file);
+  m.sha256 = db::HashText(ReadTextFile(m.file, "observer file"));
+  return m;
 }
 
 FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads,
@@ -46,6 +73,8 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
       fs::remove_all(dir, ec);
     }
   } cleanup{tmp};
+  // Codes the protocol's own pattern accepts (RunStudy checks them).
+  const protocols::CodeFormat codes = protocols::InferCodeFormat(p);
   std::atomic<int> next{0};
   std::exception_ptr error;
   std::mutex m;
@@ -54,7 +83,7 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
       try {
         RunOptions o;
         o.db_path = (tmp / fmt::format("pool{}.db", i)).string();
-        o.participant = fmt::format("P{:02d}", first_index + i + 1);
+        o.participant = protocols::FormatCode(codes, first_index + i + 1);
         o.participant_index = first_index + i;
         o.record = RecordMode::kNone;
         auto& out = pool.participants[static_cast<std::size_t>(i)];

@@ -272,6 +272,7 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       screen.rated_total = rated_total;
       screen.training_done = training_done;
       screen.training_total = training_total;
+      screen.plan_total = sum.planned;
       screen.break_before = break_before.count(t.id) && !training;
       screen.breaks_left = 0;
       for (const auto& b : trials)
@@ -366,8 +367,10 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
       done.insert(t.id);
       (training ? training_done : rated_done) += 1;
       last_material = t.material;
-      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done", part.code, sum.completed, sum.planned,
-                           t.phase, t.material, t.method.empty() ? t.comparison : t.method));
+      // The plan's 1-based number, as `study plan`, events.csv and the exports number it.
+      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part.code,
+                           t.plan_index + 1, sum.planned, t.phase, t.material,
+                           t.method.empty() ? t.comparison : t.method, sum.completed, sum.planned));
     }
   }
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.

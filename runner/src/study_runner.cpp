@@ -16,10 +16,12 @@
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/protocols/canonical.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/audit.hpp"
 #include "hapticlab/runner/plan_json.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/runner/study_record.hpp"
 #include "lab.hpp"
 #include "session_queue.hpp"
 
@@ -52,6 +54,24 @@ void LogPlanEvents(db::Database& database, std::int64_t session,
            .kind = "break-planned",
            .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s),
            .established_by = source::kPlan});
+}
+
+// What `study resume` says when the protocol file on disk is no longer the recorded text.
+std::string ProtocolOnDiskNote(const std::string& recorded, const std::string& on_disk) {
+  std::vector<protocols::ProtocolChange> changes;
+  try {
+    changes = protocols::CanonicalDifferences(recorded, on_disk);
+  } catch (const InputError&) {
+    return "note: the protocol file on disk changed since the session began (it is not valid "
+           "TOML now); resuming with the recorded text";
+  }
+  if (changes.empty())
+    return "note: the protocol file on disk differs from the recorded text in comments or "
+           "formatting only; resuming with the recorded text";
+  std::string list;
+  for (const auto& c : changes) list += (list.empty() ? "" : "; ") + c.Describe();
+  return "note: the protocol file on disk changed since the session began (" + list +
+         "); resuming with the recorded text";
 }
 
 // Checkpoints the WAL into the main file when a session ends, however it ends (completed,
@@ -101,7 +121,12 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
   for (const auto& st : database.Studies())
     if (const auto part = database.FindParticipant(st.id, participant)) {
       const auto sessions = database.Sessions(part->id);
-      if (sessions.empty()) break;
+      if (sessions.empty())
+        throw InputError(db_path, 0, "participant",
+                         participant +
+                             " is reserved and has no session yet; start it with 'hapticlab "
+                             "study run PROTOCOL --participant " +
+                             participant + "'");
       const auto& se = sessions.back();
       return {se.device, se.actuator, se.screens, se.rater};
     }
@@ -152,23 +177,21 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   db::Database database(opt.db_path);
   const std::string hash = db::HashText(p.text);
   const SessionMode mode = ModeOf(opt);
-  std::int64_t study_id;
-  if (auto s = database.FindStudy(p.name)) {
-    if (s->protocol_hash != hash)
-      throw InputError(
-          opt.db_path, 0, "study",
-          "study '" + p.name + "' in this database was run with a different protocol text (hash " +
-              s->protocol_hash.substr(0, 12) + "); use a new database or restore the protocol");
-    study_id = s->id;
-  } else {
-    study_id = database.CreateStudy(
-        {.name = p.name, .protocol_toml = p.text, .protocol_hash = hash, .seed = p.seed});
-  }
-  if (database.FindParticipant(study_id, opt.participant))
+  const std::int64_t study_id = FindOrCreateStudy(database, p, opt.db_path);
+  // A code reserved by `participant new` (a participant without a session) runs with the plan
+  // index it was given; any other known code already has its session.
+  const auto reserved = database.FindParticipant(study_id, opt.participant);
+  if (reserved && !database.IsReserved(reserved->id))
     throw InputError(opt.db_path, 0, "participant",
                      "participant " + opt.participant +
                          " already has a session; continue it with 'hapticlab study resume'");
-  const int index = opt.participant_index >= 0
+  if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
+    throw InputError(opt.db_path, 0, "participant",
+                     fmt::format("participant {} was reserved with plan index {}; run it without "
+                                 "--index or with --index {}",
+                                 opt.participant, reserved->index, reserved->index));
+  const int index = reserved ? reserved->index
+                    : opt.participant_index >= 0
                         ? opt.participant_index
                         : static_cast<int>(database.Participants(study_id).size());
   const db::Participant part{.study_id = study_id,
@@ -182,6 +205,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   const json plan_json = PlanToJson(plan);
   const json prov = {
       {"protocol_hash", hash},
+      {"protocol_canonical_sha256", ProtocolIdentity(p)},
       // Relative to the database's folder (an absolute path would carry a user name).
       {"protocol_path",
        fs::weakly_canonical(fs::absolute(p.file))
@@ -204,7 +228,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   std::int64_t session;
   std::vector<std::int64_t> ids;
   try {
-    const auto pid = database.AddParticipant(part);
+    const auto pid = reserved ? reserved->id : database.AddParticipant(part);
     session = database.StartSession(
         {.participant_id = pid,
          .software_version = std::string(kVersion) + "+" + kGitSha,
@@ -253,7 +277,11 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     if (!part) continue;
     const auto sessions = database.Sessions(part->id);
     if (sessions.empty())
-      throw InputError(opt.db_path, 0, "participant", opt.participant + " has no session");
+      throw InputError(opt.db_path, 0, "participant",
+                       opt.participant +
+                           " is reserved and has no session yet; start it with 'hapticlab study "
+                           "run PROTOCOL --participant " +
+                           opt.participant + "'");
     const auto& se = sessions.back();
     if (se.status == "completed")
       throw InputError(opt.db_path, 0, "participant",
@@ -270,9 +298,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
     if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
-      Log(opt,
-          "note: the protocol file on disk changed since the session began; resuming with the "
-          "recorded text");
+      Log(opt, ProtocolOnDiskNote(st.protocol_toml, ReadTextFile(path)));
     // The recorded mode, or with --change-mode the new one (logged).
     const SessionMode recorded{se.device, se.actuator, se.screens, se.rater};
     const SessionMode now = ModeOf(opt);
@@ -351,6 +377,7 @@ std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
         s.faulted += std::max(attempts_faulted, waiting);
       }
       for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
+      if (s.session_status.empty()) s.session_status = "reserved";  // `participant new`
       out.push_back(s);
     }
   if (!participant.empty() && out.empty())

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/stats/descriptive.hpp"
 
@@ -150,6 +151,33 @@ void DrawBoxes(const BoxPlot& b) {
   }
 }
 
+std::string XmlEscaped(const std::string& s) {
+  std::string out;
+  for (const char c : s) {
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else
+      out += c;
+  }
+  return out;
+}
+
+// cairo draws text as glyph outlines: the SVG gets its title and note as <title> and <desc>
+// (what a screen reader or a search reads), right after the opening <svg> tag.
+void DescribeSvg(const std::string& file, const std::string& title, const std::string& note) {
+  std::string svg = ReadTextFile(file, "figure");
+  const auto open = svg.find("<svg");
+  const auto end = open == std::string::npos ? open : svg.find('>', open);
+  if (end == std::string::npos) throw std::runtime_error(file + ": not an SVG file");
+  svg.insert(end + 1,
+             "\n<title>" + XmlEscaped(title) + "</title>\n<desc>" + XmlEscaped(note) + "</desc>");
+  WriteTextFile(file, svg);
+}
+
 template <class F>
 std::vector<std::string> Both(const std::string& base, int w, int h, F draw) {
   std::vector<std::string> files;
@@ -171,7 +199,7 @@ std::vector<std::string> DrawBarChart(const BarChart& c, const std::string& base
 
 std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base) {
   HL_REQUIRE(!l.x.empty() && !l.series.empty(), "line plot without data");
-  return Both(base, 800, 480, [&] {
+  auto files = Both(base, 800, 480, [&] {
     std::vector<std::vector<PLFLT>> ys;
     double lo = 1e300, hi = -1e300;
     for (const auto& [name, y] : l.series) {
@@ -190,6 +218,11 @@ std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base
     plwind(l.x.front(), l.x.back(), lo, hi + 0.1 * (hi - lo));
     plbox("bcnst", 0, 0, "bcnstv", 0, 0);
     pllab(l.x_label.c_str(), (l.log_y ? "log10 " + l.y_label : l.y_label).c_str(), l.title.c_str());
+    if (!l.note.empty()) {
+      plschr(0, 0.6);
+      plmtex("t", 0.6, 0.5, 0.5, l.note.c_str());
+      plschr(0, 0.8);
+    }
     std::vector<PLFLT> x(l.x.begin(), l.x.end());
     for (std::size_t s = 0; s < ys.size(); ++s) {
       plcol0(1 + static_cast<int>(s % 8));
@@ -201,6 +234,8 @@ std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base
       plptex(lx + 0.06 * (l.x.back() - l.x.front()), ly, 1, 0, 0, l.series[s].first.c_str());
     }
   });
+  if (!l.note.empty()) DescribeSvg(base + ".svg", l.title, l.note);
+  return files;
 }
 
 std::vector<std::string> DrawBoxPlot(const BoxPlot& b, const std::string& base) {

@@ -129,6 +129,11 @@ void WilsonInterval(long hits, long n, double* low, double* high) {
   *high = std::min(1.0, centre + half);
 }
 
+std::string PowerResult::ObserverDescription() const {
+  return observer_file.empty() ? std::string("built-in uncalibrated")
+                               : fmt::format("{} (sha256 {})", observer_file, observer_sha256);
+}
+
 std::string PowerToJson(const PowerResult& r) {
   json rows = json::array();
   for (const auto& row : r.rows) {
@@ -148,8 +153,15 @@ std::string PowerToJson(const PowerResult& r) {
     }
     rows.push_back({{"participants", row.participants}, {"effects", effects}});
   }
-  json j = {
-      {"protocol", r.protocol}, {"simulations", r.simulations}, {"seed", r.seed}, {"rows", rows}};
+  const json observer = {
+      {"model", r.ObserverDescription()},
+      {"file", r.observer_file.empty() ? json(nullptr) : json(r.observer_file)},
+      {"sha256", r.observer_sha256.empty() ? json(nullptr) : json(r.observer_sha256)}};
+  json j = {{"protocol", r.protocol},
+            {"observer", observer},
+            {"simulations", r.simulations},
+            {"seed", r.seed},
+            {"rows", rows}};
   if (r.shards > 1) {
     j["shard"] = r.shard;
     j["shards"] = r.shards;
@@ -166,6 +178,9 @@ PowerResult PowerFromJson(const std::string& text, const std::string& file) {
     r.seed = j.at("seed").get<std::uint64_t>();
     r.shard = j.value("shard", 0);
     r.shards = j.value("shards", 1);
+    const json& obs = j.at("observer");
+    r.observer_file = obs.at("file").is_null() ? "" : obs.at("file").get<std::string>();
+    r.observer_sha256 = obs.at("sha256").is_null() ? "" : obs.at("sha256").get<std::string>();
     for (const auto& row : j.at("rows")) {
       PowerRow pr{.participants = row.at("participants").get<int>(), .effects = {}};
       for (const auto& e : row.at("effects"))
@@ -195,8 +210,9 @@ PowerResult MergePower(const std::vector<PowerResult>& parts,
     const auto& p = parts[i];
     const std::string& f = i < files.size() ? files[i] : std::string();
     if (p.protocol != m.protocol || p.seed != m.seed || p.simulations != m.simulations ||
-        p.shards != parts[0].shards)
-      throw InputError(f, 0, "protocol/seed/simulations/shards",
+        p.shards != parts[0].shards || p.observer_file != m.observer_file ||
+        p.observer_sha256 != m.observer_sha256)
+      throw InputError(f, 0, "protocol/observer/seed/simulations/shards",
                        "does not belong to the same run as " + files[0]);
     if (!seen.insert(p.shard).second)
       throw InputError(f, 0, "shard", fmt::format("shard {} given twice", p.shard));
@@ -227,6 +243,7 @@ PowerResult MergePower(const std::vector<PowerResult>& parts,
 
 std::string PowerTable(const PowerResult& r) {
   std::ostringstream os;
+  os << "observer: " << r.ObserverDescription() << "\n";
   os << fmt::format("{:>12} {:>10} {:>16} {:>7} {:>17} {:>9}\n", "participants", "criterion",
                     "effect", "power", "95% CI (Wilson)", "mean pes");
   for (const auto& row : r.rows)
@@ -242,6 +259,7 @@ std::string PowerTable(const PowerResult& r) {
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base) {
   LinePlot l;
   l.title = fmt::format("{}: power (p < 0.05), {} simulations each", r.protocol, r.simulations);
+  l.note = "observer: " + r.ObserverDescription();
   l.x_label = "participants";
   l.y_label = "power";
   std::map<std::string, std::vector<double>> curves;

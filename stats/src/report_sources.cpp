@@ -126,10 +126,10 @@ LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated
               throw InputError(
                   db_path, 0, "rating.score",
                   fmt::format(
-                      "study '{}' trial {} criterion '{}': score {} (response time {} s) is "
-                      "outside the protocol's scale [{}, {}] or negative",
-                      st.name, tr.id, r.criterion, r.score, r.response_time_s, proto.scale_min,
-                      proto.scale_max));
+                      "study '{}' participant {} trial {} criterion '{}': score {} (response "
+                      "time {} s) is outside the protocol's scale [{}, {}] or negative",
+                      st.name, p.code, tr.plan_index + 1, r.criterion, r.score, r.response_time_s,
+                      proto.scale_min, proto.scale_max));
             if (r.source == db::kRaterSimulated) {
               if (human && !include_simulated) {
                 ++src.simulated_excluded[st.name];

@@ -48,6 +48,8 @@ TEST(StudyCli, DemoRunsEndToEnd) {
   }
   EXPECT_NE(out.find("power: participants for 80 % power on the method effect"), std::string::npos)
       << out;
+  // ... rated by the protocol's calibrated observer, named with its hash.
+  EXPECT_NE(out.find("observer the protocol's observer.toml (sha256 "), std::string::npos) << out;
   // The methods section carries timing figures: the sessions ran on a virtual clock, so the
   // report says so and adds the real-clock check's percentiles (measured, not asserted).
   const std::string md = test::ReadFile(report);

@@ -135,12 +135,12 @@ TEST_F(Interchange, XdfReadBackByLibxdf) {
     const auto j = json::parse(ev.first);
     if (stream == index["events"]) {
       if (j["marker"] == "trial_start")
-        trial_start[j["plan_index"].get<int>()] = ev.second;
+        trial_start[j["trial"].get<int>() - 1] = ev.second;  // plan index
       else
         logged_events += j["marker"] == "event";
     } else {
       ASSERT_EQ(stream, index["ratings"]);
-      rating_marker[{j["plan_index"].get<int>(), j["criterion"].get<std::string>()}] = {
+      rating_marker[{j["trial"].get<int>() - 1, j["criterion"].get<std::string>()}] = {
           j["score"].get<double>(), ev.second};
     }
   }

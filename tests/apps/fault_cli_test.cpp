@@ -177,7 +177,11 @@ TEST(FaultCli, ParticipantCodesByConstructionAndNothingWrittenForARefusedOne) {
   EXPECT_EQ(out, "P02\n");
   db::Database d(db, {.create = false, .read_only = true});
   ASSERT_EQ(d.Studies().size(), 1u);
-  ASSERT_EQ(d.Participants(d.Studies()[0].id).size(), 1u);
+  // P01 with its session, P02 reserved by the second `participant new`.
+  const auto parts = d.Participants(d.Studies()[0].id);
+  ASSERT_EQ(parts.size(), 2u);
+  EXPECT_FALSE(d.IsReserved(parts[0].id));
+  EXPECT_TRUE(d.IsReserved(parts[1].id));
   // Provenance names the protocol relative to the database's folder: no home folder in it.
   const auto prov =
       json::parse(d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0].provenance_json);

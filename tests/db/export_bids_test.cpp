@@ -41,6 +41,8 @@ TEST(ExportBids, DatasetLayoutTablesAndRecordings) {
   test::TempDir dir;
   Database d(dir.File("b.db"));
   test_record::Fill(d);
+  // A code reserved by `participant new` (no session) has no data: not a BIDS subject.
+  d.AddParticipant({.study_id = d.Studies()[0].id, .code = "P02", .index = 1});
   const std::string ds = dir.File("bids");
   const auto files = ExportBids(d, ds);
   EXPECT_EQ(json::parse(test::ReadFile(ds + "/dataset_description.json"))["BIDSVersion"], "1.9.0");
@@ -58,7 +60,7 @@ TEST(ExportBids, DatasetLayoutTablesAndRecordings) {
     ADD_FAILURE() << "no column " << name;
     return std::size_t{0};
   };
-  EXPECT_EQ(rows[1][col("trial")], "0");
+  EXPECT_EQ(rows[1][col("trial")], "1");  // plan index 0: the plan's trial 1
   EXPECT_EQ(rows[1][col("material")], "Cork");
   EXPECT_EQ(rows[1][col("score")], "60");
   EXPECT_EQ(rows[1][col("response_time")], "0.5");
@@ -100,7 +102,8 @@ TEST(ExportBids, CodesThatShareALabelAreRefused) {
   Database d(dir.File("b.db"));
   test_record::Fill(d);
   const auto other = d.CreateStudy({.name = "Other", .protocol_toml = "# q", .seed = 2});
-  d.AddParticipant({.study_id = other, .code = "P01"});  // sub-P01, as P-01
+  // sub-P01, as P-01; with a session (a code only reserved has no data and is not exported).
+  d.StartSession({.participant_id = d.AddParticipant({.study_id = other, .code = "P01"})});
   try {
     ExportBids(d, dir.File("bids"));
     ADD_FAILURE() << "two participants were written as one";

@@ -19,8 +19,9 @@ TEST(Export, TablesRoundTripThroughCsv) {
   const auto st = db.CreateStudy({.name = "ch5, hybrid", .protocol_toml = "x", .seed = 3});
   const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
   const auto se = db.StartSession({.participant_id = p});
+  // Plan indices 4 and 7 (plan numbers 5 and 8), unlike the rows' ids 1 and 2.
   const auto ids = db.AddTrials({{.session_id = se,
-                                  .plan_index = 0,
+                                  .plan_index = 4,
                                   .phase = "main",
                                   .material = "Denim",
                                   .comparison = "virtual",
@@ -28,12 +29,13 @@ TEST(Export, TablesRoundTripThroughCsv) {
                                   .left = "real",
                                   .right = "virtual"},
                                  {.session_id = se,
-                                  .plan_index = 1,
+                                  .plan_index = 7,
                                   .phase = "reference",
                                   .material = "Cork",
                                   .comparison = "Velvet"}});
   db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
-  db.LogEvent({.session_id = se, .kind = "break", .detail = "after \"block\" 1"});
+  db.LogEvent(
+      {.session_id = se, .trial_id = ids[1], .kind = "break", .detail = "after \"block\" 1"});
   std::vector<float> samples;
   for (int i = 0; i < 30; ++i) samples.push_back(std::sin(0.1f * static_cast<float>(i)) * 1e-3f);
   db.InsertTrajectoryChunk({.trial_id = ids[0],
@@ -51,6 +53,9 @@ TEST(Export, TablesRoundTripThroughCsv) {
   EXPECT_EQ(ratings.rows[0][ratings.Require("study")], "ch5, hybrid");
   EXPECT_EQ(ratings.rows[0][ratings.Require("participant")], "P02");
   EXPECT_EQ(ratings.rows[0][ratings.Require("method")], "hybrid");
+  // Trials by their plan number (plan index + 1), never the database id.
+  EXPECT_EQ(ratings.rows[0][ratings.Require("trial")], "5");
+  EXPECT_FALSE(ratings.Find("trial_id"));
   std::map<std::string, double> score;
   for (std::size_t r = 0; r < ratings.rows.size(); ++r)
     score[ratings.rows[r][ratings.Require("criterion")]] =
@@ -62,13 +67,16 @@ TEST(Export, TablesRoundTripThroughCsv) {
   ASSERT_EQ(trials.rows.size(), 2u);
   EXPECT_EQ(trials.rows[0][trials.Require("status")], "completed");
   EXPECT_EQ(trials.rows[1][trials.Require("comparison")], "Velvet");
+  EXPECT_EQ(trials.rows[1][trials.Require("trial")], "8");
 
   const auto events = ReadCsv(dir.File("out/events.csv"));
   ASSERT_EQ(events.rows.size(), 1u);
   EXPECT_EQ(events.rows[0][events.Require("detail")], "after \"block\" 1");
+  EXPECT_EQ(events.rows[0][events.Require("trial")], "8");
 
   const auto traj = ReadCsv(dir.File("out/trajectory_force.csv"));
   ASSERT_EQ(traj.rows.size(), 10u);
+  EXPECT_EQ(traj.rows[0][traj.Require("trial")], "5");
   for (std::size_t i = 0; i < 10; ++i) {
     EXPECT_NEAR(traj.Number(i, traj.Require("t_s")), 0.5 + 0.001 * static_cast<double>(i), 1e-12);
     EXPECT_EQ(static_cast<float>(traj.Number(i, traj.Require("x_m"))), samples[i * 3]);

@@ -79,7 +79,7 @@ TEST(ExportXdf, StreamsAndMarkersOnTheSessionClock) {
   std::map<int, double> start_of;
   double break_at = -1;
   for (const auto& [t, j] : events) {
-    if (j["marker"] == "trial_start") start_of[j["plan_index"].get<int>()] = t;
+    if (j["marker"] == "trial_start") start_of[j["trial"].get<int>() - 1] = t;
     if (j["marker"] == "event" && j["kind"] == "break") break_at = t;
   }
   EXPECT_NEAR(start_of.at(0), tr::kTrialAStart_s, 1e-9);
@@ -88,7 +88,7 @@ TEST(ExportXdf, StreamsAndMarkersOnTheSessionClock) {
   // Ratings at the stimuli's end + the response time: 1.0 + 0.07 + 0.5, 1.57 + 0.06 + 0.25.
   std::map<int, std::pair<double, double>> rating_of;
   for (const auto& [t, j] : ratings)
-    rating_of[j["plan_index"].get<int>()] = {t, j["score"].get<double>()};
+    rating_of[j["trial"].get<int>() - 1] = {t, j["score"].get<double>()};
   EXPECT_NEAR(rating_of.at(0).first, 1.57, 1e-9);
   EXPECT_EQ(rating_of.at(0).second, 60);
   EXPECT_NEAR(rating_of.at(1).first, 1.88, 1e-9);

@@ -12,7 +12,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 7;
+inline constexpr int kSchemaVersion = 8;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -21,6 +21,9 @@ struct Study {
   std::string protocol_toml;  ///< the protocol file exactly as run
   std::string protocol_hash;  ///< hex digest of protocol_toml
   std::uint64_t seed = 0;     ///< study seed; participants derive theirs from it
+  /// Hex SHA-256 of the protocol's canonical form (protocols/canonical.hpp), the protocol's
+  /// identity (schema v7; empty in a study recorded before it until the runner fills it in).
+  std::string protocol_canonical_sha256;
 };
 
 /// A participant, known only by a pseudonymous code.
@@ -177,9 +180,13 @@ class Database {
   std::int64_t CreateStudy(const Study& s);
   std::optional<Study> FindStudy(const std::string& name) const;
   std::vector<Study> Studies() const;
+  /// Records the canonical hash of a study recorded before schema v7.
+  void SetStudyCanonicalHash(std::int64_t study_id, const std::string& sha256);
   std::int64_t AddParticipant(const Participant& p);
   std::optional<Participant> FindParticipant(std::int64_t study_id, const std::string& code) const;
   std::vector<Participant> Participants(std::int64_t study_id) const;
+  /// True when the participant has no session yet: a code reserved by `participant new`.
+  bool IsReserved(std::int64_t participant_id) const;
 
   // Sessions.
   std::int64_t StartSession(const Session& s);

@@ -31,12 +31,14 @@ struct TrajectorySize {
 /// Counts what the trajectory CSVs would hold, from the chunks' stored counts (no blob read).
 TrajectorySize CountTrajectories(const Database& db);
 
-/// Writes into `out_dir` (created when missing):
+/// Every file names a trial by `trial`, its 1-based number in the participant's plan (as
+/// `study plan`, the run's log and the console number it); database ids of trials never
+/// appear. Writes into `out_dir` (created when missing):
 /// - `ratings.csv`: one row per rating, with its study, participant, trial and design cells
 ///   and its source ("simulated" or the participant's input device; docs/formats.md);
 /// - `trials.csv`: one row per trial with status and attempts;
 /// - `events.csv`: one row per event;
-/// - `trajectory_<stream>.csv`: one row per sample (study, participant, trial_id, t_s, then
+/// - `trajectory_<stream>.csv`: one row per sample (study, participant, trial, t_s, then
 ///   the stream's channels) of each completed trial's completing attempt only. Floats are
 ///   printed with 9 significant digits, so float32 samples round-trip exactly.
 /// Throws std::runtime_error naming the file on I/O failure, and InputError (naming the

@@ -45,6 +45,24 @@ FeltPool RecordFeltPool(const protocols::Protocol& protocol, int pool_size, int 
 /// The observer of a protocol as the runner would load it (observer file, else profiles).
 sim::ObserverParams ProtocolObserver(const protocols::Protocol& protocol);
 
+/// The simulated observer model that rates simulated studies (power depends on it), and how
+/// to name it.
+struct ObserverModel {
+  sim::ObserverParams params;
+  std::string file;    ///< the observer file (as given, or the protocol's folder joined with
+                       ///< its `[study] observer`); "" for the built-in defaults
+  std::string sha256;  ///< hex SHA-256 of the file's bytes; "" for the built-in defaults
+  /// "FILE (sha256 HEX)" or "built-in uncalibrated".
+  std::string Describe() const;
+};
+
+/// `choice` "": the protocol's `[study] observer` file; "builtin": sim::ObserverParams'
+/// uncalibrated defaults; anything else: an observer file (sim::LoadObserver).
+/// @throws InputError naming the protocol and `option` when `choice` is "" and the protocol
+///         names no observer file, or as sim::LoadObserver
+ObserverModel ChooseObserver(const protocols::Protocol& protocol, const std::string& choice,
+                             const std::string& option = "--observer");
+
 /// A simulated study of `participants` participants rated by `observer`: long table with keys
 /// participant, criterion, phase, material, comparison, method (response score); with
 /// `main_only` just the main phase's rows and the keys participant, criterion, method,

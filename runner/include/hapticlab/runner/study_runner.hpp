@@ -39,6 +39,9 @@ struct TrialScreen {
   /// 1-based number of this trial among the rated trials of the planned phases, and how
   /// many there are; a training trial (`training`) counts among the training trials instead.
   int index = 0, total = 0;
+  /// The trial's number in the participant's plan (1-based) and the plan's length: the one
+  /// number the run's log, `study plan`, events.csv and the exports give this trial.
+  int plan_number = 0, plan_total = 0;
   bool training = false;
   int rated_done = 0, rated_total = 0;  ///< rated trials completed / planned (console progress)
   int training_done = 0, training_total = 0;  ///< training trials completed / planned
@@ -51,8 +54,6 @@ struct TrialScreen {
   /// {"1", "2"} for the intervals of a 2AFC trial or {"yes", "no"}.
   std::string question;
   std::vector<std::string> answers;
-  /// The plan's 1-based number of this trial (plan_index + 1).
-  int plan_number = 0;
   /// The left side or the right side presents a real sample: the experimenter places it
   /// (SessionUi::ConfirmPlacement) before the trial starts.
   bool real_sample = false;

@@ -48,6 +48,8 @@ struct LinePlot {
   std::vector<double> x;
   std::vector<std::pair<std::string, std::vector<double>>> series;  ///< name, y per x
   bool log_y = false;  ///< plot log10(y) (labelled as such)
+  /// A smaller line under the title (e.g. the model the curves assume); also the SVG's <desc>.
+  std::string note;
 };
 /// `<base>.svg` and `<base>.png`.
 std::vector<std::string> DrawLinePlot(const LinePlot& plot, const std::string& base);

@@ -38,6 +38,11 @@ struct PowerRow {
 
 struct PowerResult {
   std::string protocol;
+  /// The simulated observer model that rated the studies (power depends on it): its file and
+  /// the SHA-256 of the file's bytes, both empty for the built-in uncalibrated defaults.
+  std::string observer_file, observer_sha256;
+  /// "FILE (sha256 HEX)" or "built-in uncalibrated".
+  std::string ObserverDescription() const;
   long simulations = 0;  ///< simulations per participant count (of the whole run, all shards)
   std::uint64_t seed = 0;
   int shard = 0, shards = 1;  ///< which part of the simulations this result holds (merged: 0 of 1)
@@ -74,19 +79,21 @@ PowerResult SimulatePower(const std::string& protocol, const StudyGenerator& gen
 /// Wilson score interval (95 %) for `hits` successes in `n` trials.
 void WilsonInterval(long hits, long n, double* low, double* high);
 
-/// JSON as documented in docs/studies.md (`power`, `ci_low`, `ci_high`, `mean_pes`), plus
+/// JSON as documented in docs/studies.md (`observer`, `power`, `ci_low`, `ci_high`,
+/// `mean_pes`), plus
 /// `shard`, `shards` and the raw tallies (`hits`, `runs`, `sum_pes`) that --merge reads.
 std::string PowerToJson(const PowerResult& r);
 /// @throws InputError naming the file and what is wrong
 PowerResult PowerFromJson(const std::string& text, const std::string& file);
-/// Sums shards of one run (same protocol, seed, simulations, participant counts; each shard
-/// once). @throws InputError when they do not fit together
+/// Sums shards of one run (same protocol, observer, seed, simulations, participant counts;
+/// each shard once). @throws InputError when they do not fit together
 PowerResult MergePower(const std::vector<PowerResult>& parts,
                        const std::vector<std::string>& files);
 
-/// Text table: one line per participant count and effect.
+/// Text table: the observer, then one line per participant count and effect.
 std::string PowerTable(const PowerResult& r);
-/// Power curves (one per criterion x effect) as <base>.svg/.png; returns the files.
+/// Power curves (one per criterion x effect) as <base>.svg/.png, the observer named under the
+/// title (and in the SVG's <desc>); returns the files.
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base);
 
 /// Smallest participant count whose power for (criterion, effect) is >= target; 0: none.
