@@ -43,7 +43,7 @@ TEST(AuditCli, AHeadlessSimulatedRunRecordsConsentAsNotApplicableAndClearsTheLea
       0)
       << out;
   const auto events = test::ReadFile(dir.File("x/events.csv"));
-  EXPECT_EQ(events.rfind("study,participant,session_id,trial_id,kind,detail,created_at,"
+  EXPECT_EQ(events.rfind("study,participant,session_id,trial,kind,detail,created_at,"
                          "established_by\n",
                          0),
             0u)
