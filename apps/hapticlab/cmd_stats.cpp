@@ -326,7 +326,13 @@ void AddShapiro(CLI::App& s) {
       json groups = json::array();
       auto one = [&](const std::string& name, const std::vector<double>& y) {
         stats::ShapiroResult r;
-        Fitted(t, [&] { r = stats::ShapiroWilk(y); });
+        Fitted(t, [&] {
+          try {
+            r = stats::ShapiroWilk(y);
+          } catch (const std::invalid_argument& e) {  // too few or many values, no spread
+            throw InputError(t.source, 0, c->dv, "group " + name + ": " + e.what());
+          }
+        });
         RequireFinite(t, {{name + " W", r.W}, {name + " p", r.p}});
         groups.push_back({{"group", name}, {"n", r.n}, {"W", r.W}, {"p", r.p}});
       };

@@ -45,6 +45,9 @@ void Rect(double x0, double x1, double y0, double y1) {
   plline(5, bx, by);
 }
 
+// Markers of the curves (UTF-8 glyphs drawn by plstring, as pllegend draws its symbols).
+constexpr const char* kMarkers[] = {"●", "■", "▲", "◆", "▼", "✚", "✖", "★"};
+
 // Legend entries outside the viewport, to the right of the data. `kind` per entry:
 // PL_LEGEND_COLOR_BOX (bars, boxes) or PL_LEGEND_LINE | PL_LEGEND_SYMBOL (curves).
 void Legend(const std::vector<std::string>& names, const std::vector<PLINT>& kind,
@@ -55,38 +58,39 @@ void Legend(const std::vector<std::string>& names, const std::vector<PLINT>& kin
   std::vector<PLINT> colours, patterns(names.size(), 0), styles(names.size(), 1);
   std::vector<PLFLT> scales(names.size(), 0.9), widths(names.size(), 1.5), sym_scales(names.size(), 1);
   std::vector<PLINT> sym_numbers(names.size(), 1);
-  static const char* kSymbols[] = {"#(225)", "#(228)", "#(227)", "#(224)", "#(852)", "#(851)",
-                                   "#(229)", "#(226)"};
+
   for (std::size_t i = 0; i < names.size(); ++i) {
     text.push_back(names[i].c_str());
     colours.push_back(1 + static_cast<PLINT>(i % 8));
-    sym.push_back(kSymbols[(symbols.empty() ? i : static_cast<std::size_t>(symbols[i])) % 8]);
+    sym.push_back(kMarkers[(symbols.empty() ? i : static_cast<std::size_t>(symbols[i])) % 8]);
   }
   std::vector<PLINT> text_colours(names.size(), 15);
   PLFLT w = 0, h = 0;
-  plschr(0, 0.75);
-  pllegend(&w, &h, 0, PL_POSITION_RIGHT | PL_POSITION_TOP | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT,
-           0.02, 0.0, 0.04, 0, 15, 1, n, 1, n, kind.data(), 0.8, 1.0, 2.0, 0.0,
+  // Right of the viewport, its middle level with the viewport's.
+  pllegend(&w, &h, 0, PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.02, 0.0,
+           0.04, 0, 15, 1, n, 1, n, kind.data(), 0.8, 0.8, 1.8, 0.0,
            text_colours.data(), text.data(), colours.data(), patterns.data(), scales.data(),
            widths.data(), colours.data(), styles.data(), widths.data(), colours.data(),
            sym_scales.data(), sym_numbers.data(), sym.data());
   plschr(0, 0.8);
 }
 
-// A note under the plot at the right (what error bars or lines show).
+// A note under the plot at the right (what error bars or lines show); `offset` in the axis
+// labels' character heights.
 void Note(const std::string& text, double offset) {
   if (text.empty()) return;
+  constexpr double kLabel = 0.8, kNote = 0.65;  // character scales
   plcol0(15);
-  plschr(0, 0.65);
-  plmtex("b", offset, 1.0, 1.0, text.c_str());
-  plschr(0, 0.8);
+  plschr(0, kNote);
+  plmtex("b", offset * kLabel / kNote, 1.0, 1.0, text.c_str());
+  plschr(0, kLabel);
 }
 
 // The right edge of the viewport: room for the legend's longest name.
 double RightEdge(const std::vector<std::string>& names) {
   std::size_t longest = 0;
   for (const auto& n : names) longest = std::max(longest, n.size());
-  return std::clamp(0.95 - 0.012 * static_cast<double>(longest + 5), 0.6, 0.9);
+  return std::clamp(0.95 - 0.009 * static_cast<double>(longest + 6), 0.6, 0.9);
 }
 
 void DrawBars(const BarChart& c) {
@@ -106,7 +110,7 @@ void DrawBars(const BarChart& c) {
   const double w = 0.8 / std::max(ns, 1);
   // The x-axis label below the group labels (vertical labels take about 0.7 character
   // heights per character).
-  const double x_label_at = ng > 4 ? 1.5 + 0.7 * static_cast<double>(longest) : 3.0;
+  const double x_label_at = ng > 4 ? 2.0 + 0.75 * static_cast<double>(longest) : 3.0;
   plmtex("b", x_label_at, 0.5, 0.5, c.x_label.c_str());
   if (!c.error_label.empty()) Note("error bars: " + c.error_label, x_label_at + 1.4);
   // A single unnamed group: each bar is labelled with its series name (no legend needed).
@@ -229,21 +233,22 @@ void DrawLines(const LinePlot& l) {
   // Reference lines first (dashed grey), so the curves lie on top.
   plcol0(8);
   pllsty(2);
+  // Labels where curves rarely are: below a level line at the right end (rising curves
+  // are above it there), right of a vertical line low in the plot.
   for (const auto& [y, label] : l.hlines) {
     pljoin(l.x.front() - pad_x, y, l.x.back() + pad_x, y);
-    plptex(l.x.front(), y + 0.015 * (hi - lo), 1, 0, 0, label.c_str());
+    plptex(l.x.back(), y - 0.05 * (hi - lo), 1, 0, 1.0, label.c_str());
   }
   for (const auto& [x, label] : l.vlines) {
     pljoin(x, lo - pad_y, x, hi + pad_y);
-    plptex(x, lo + 0.03 * (hi - lo), 0, 1, 0, (" " + label).c_str());
+    plptex(x + 0.01 * (l.x.back() - l.x.front()), lo + 0.2 * (hi - lo), 1, 0, 0, label.c_str());
   }
   pllsty(1);
   std::vector<PLFLT> x(l.x.begin(), l.x.end());
-  static const PLINT kGlyphs[] = {225, 228, 227, 224, 852, 851, 229, 226};
   for (std::size_t s = 0; s < ys.size(); ++s) {
     plcol0(1 + static_cast<int>(s % 8));
     plline(static_cast<PLINT>(x.size()), x.data(), ys[s].data());
-    if (l.markers) plpoin(static_cast<PLINT>(x.size()), x.data(), ys[s].data(), kGlyphs[s % 8]);
+    if (l.markers) plstring(static_cast<PLINT>(x.size()), x.data(), ys[s].data(), kMarkers[s % 8]);
   }
   Legend(names,
          std::vector<PLINT>(names.size(),

@@ -71,13 +71,17 @@ std::uint32_t PngPixelsPerMetre(const std::string& file) {
   return png[at + 12] == 1 ? v : 0;
 }
 
-// The plot frame's right edge: the rightmost column whose black run is over half the height.
+// The plot frame's right edge: the rightmost column that is dark (antialiased black) over
+// half the image's height.
 int FrameRight(const cv::Mat& img) {
   int right = -1;
   for (int x = 0; x < img.cols; ++x) {
-    int black = 0;
-    for (int y = 0; y < img.rows; ++y) black += img.at<cv::Vec3b>(y, x) == cv::Vec3b(0, 0, 0);
-    if (black > img.rows / 2) right = x;
+    int dark = 0;
+    for (int y = 0; y < img.rows; ++y) {
+      const auto& p = img.at<cv::Vec3b>(y, x);
+      dark += p[0] < 128 && p[1] < 128 && p[2] < 128;
+    }
+    if (dark > img.rows / 2) right = x;
   }
   return right;
 }
