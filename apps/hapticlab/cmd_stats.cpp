@@ -114,10 +114,17 @@ void AddRmAnova(CLI::App& s) {
       if (c->json) {
         json effects = json::array();
         for (const auto& e : r.effects) {
-          json j = {{"effect", e.effect}, {"df1", e.df1},   {"df2", e.df2},
-                    {"F", e.F},           {"p", e.p},       {"pes", e.pes},
-                    {"SS", e.SS},         {"SS_error", e.SS_error}, {"MSE", e.MSE},
-                    {"p_used", stats::UsedP(e, corr)}, {"between_only", e.between_only}};
+          json j = {{"effect", e.effect},
+                    {"df1", e.df1},
+                    {"df2", e.df2},
+                    {"F", e.F},
+                    {"p", e.p},
+                    {"pes", e.pes},
+                    {"SS", e.SS},
+                    {"SS_error", e.SS_error},
+                    {"MSE", e.MSE},
+                    {"p_used", stats::UsedP(e, corr)},
+                    {"between_only", e.between_only}};
           if (!e.between_only) {  // a between-subjects term has no sphericity question
             j["mauchly_W"] = Num(e.mauchly_W);
             j["mauchly_p"] = Num(e.mauchly_p);
@@ -236,9 +243,9 @@ void AddTukey(CLI::App& s) {
       }
       std::vector<std::pair<std::string, double>> values;
       for (const auto& p : r.pairs)
-        for (const auto& [n, x] : {std::pair{"diff", p.diff}, std::pair{"lwr", p.lwr},
-                                   std::pair{"upr", p.upr}, std::pair{"p_adj", p.p_adj},
-                                   std::pair{"se", p.se}, std::pair{"q", p.q}})
+        for (const auto& [n, x] :
+             {std::pair{"diff", p.diff}, std::pair{"lwr", p.lwr}, std::pair{"upr", p.upr},
+              std::pair{"p_adj", p.p_adj}, std::pair{"se", p.se}, std::pair{"q", p.q}})
           values.emplace_back(p.a + " - " + p.b + " " + n, x);
       RequireFinite(checked, values);
       if (c->json) {

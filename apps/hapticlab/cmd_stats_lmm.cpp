@@ -160,8 +160,8 @@ void AddLmm(CLI::App& s) {
         std::vector<std::pair<std::string, double>> values{
             {"sigma", r.sigma}, {"logLik", r.logLik}, {"deviance", r.deviance}};
         for (const auto& f : r.fixed)
-          for (const auto& [n, x] : {std::pair{"estimate", f.estimate}, std::pair{"se", f.se},
-                                     std::pair{"t", f.t}})
+          for (const auto& [n, x] :
+               {std::pair{"estimate", f.estimate}, std::pair{"se", f.se}, std::pair{"t", f.t}})
             values.emplace_back(f.name + " " + n, x);
         for (const auto& t : r.anova) values.emplace_back(t.term + " F", t.F);
         for (const auto& g : r.random)

@@ -419,12 +419,14 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
               "expected an lme4 formula 'score ~ fixed terms + (1 | participant)', got '" +
                   p.lmm_formula + "'");
     // afex's names for the sphericity correction the report judges within effects by.
-    p.correction = r.Get<std::string>(*t, "analysis", "correction", false, "\"GG\", \"HF\" or \"none\"")
-                       .value_or(p.correction);
+    p.correction =
+        r.Get<std::string>(*t, "analysis", "correction", false, "\"GG\", \"HF\" or \"none\"")
+            .value_or(p.correction);
     if (p.correction != "GG" && p.correction != "HF" && p.correction != "none")
       r.Error(t->get("correction"), "analysis.correction",
               "expected \"GG\" (Greenhouse-Geisser, afex's default), \"HF\" (Huynh-Feldt) or "
-              "\"none\", got '" + p.correction + "'");
+              "\"none\", got '" +
+                  p.correction + "'");
   } else {
     p.analyses = {"rm-anova",  "tukey",       "kruskal", "grouping",
                   "aggregate", "correlation", "shapiro"};

@@ -422,7 +422,8 @@ Correction ParseCorrection(const std::string& name, const std::string& source,
   if (name == "none") return Correction::kNone;
   throw InputError(source, 0, field,
                    "expected GG (Greenhouse-Geisser, afex's default), HF (Huynh-Feldt) or none, "
-                   "got '" + name + "'");
+                   "got '" +
+                       name + "'");
 }
 
 const char* CorrectionName(Correction c) {

@@ -56,7 +56,8 @@ void Legend(const std::vector<std::string>& names, const std::vector<PLINT>& kin
   if (n == 0) return;
   std::vector<const char*> text, sym;
   std::vector<PLINT> colours, patterns(names.size(), 0), styles(names.size(), 1);
-  std::vector<PLFLT> scales(names.size(), 0.9), widths(names.size(), 1.5), sym_scales(names.size(), 1);
+  std::vector<PLFLT> scales(names.size(), 0.9), widths(names.size(), 1.5),
+      sym_scales(names.size(), 1);
   std::vector<PLINT> sym_numbers(names.size(), 1);
 
   for (std::size_t i = 0; i < names.size(); ++i) {
@@ -68,10 +69,10 @@ void Legend(const std::vector<std::string>& names, const std::vector<PLINT>& kin
   PLFLT w = 0, h = 0;
   // Right of the viewport, its middle level with the viewport's.
   pllegend(&w, &h, 0, PL_POSITION_RIGHT | PL_POSITION_OUTSIDE | PL_POSITION_VIEWPORT, 0.02, 0.0,
-           0.04, 0, 15, 1, n, 1, n, kind.data(), 0.8, 0.8, 1.8, 0.0,
-           text_colours.data(), text.data(), colours.data(), patterns.data(), scales.data(),
-           widths.data(), colours.data(), styles.data(), widths.data(), colours.data(),
-           sym_scales.data(), sym_numbers.data(), sym.data());
+           0.04, 0, 15, 1, n, 1, n, kind.data(), 0.8, 0.8, 1.8, 0.0, text_colours.data(),
+           text.data(), colours.data(), patterns.data(), scales.data(), widths.data(),
+           colours.data(), styles.data(), widths.data(), colours.data(), sym_scales.data(),
+           sym_numbers.data(), sym.data());
   plschr(0, 0.8);
 }
 
@@ -250,9 +251,8 @@ void DrawLines(const LinePlot& l) {
     plline(static_cast<PLINT>(x.size()), x.data(), ys[s].data());
     if (l.markers) plstring(static_cast<PLINT>(x.size()), x.data(), ys[s].data(), kMarkers[s % 8]);
   }
-  Legend(names,
-         std::vector<PLINT>(names.size(),
-                            l.markers ? PL_LEGEND_LINE | PL_LEGEND_SYMBOL : PL_LEGEND_LINE));
+  Legend(names, std::vector<PLINT>(names.size(),
+                                   l.markers ? PL_LEGEND_LINE | PL_LEGEND_SYMBOL : PL_LEGEND_LINE));
 }
 
 void DrawQq(const QqPlot& q) {
@@ -264,8 +264,8 @@ void DrawQq(const QqPlot& q) {
   const boost::math::normal normal;
   std::vector<PLFLT> x(n);
   for (std::size_t i = 0; i < n; ++i)
-    x[i] = boost::math::quantile(normal, (static_cast<double>(i + 1) - a) /
-                                             (static_cast<double>(n) + 1 - 2 * a));
+    x[i] = boost::math::quantile(
+        normal, (static_cast<double>(i + 1) - a) / (static_cast<double>(n) + 1 - 2 * a));
   // qqline: through the (type 7) quartiles of the sample and of the normal.
   const auto type7 = [&](double p) {
     const double h = (static_cast<double>(n) - 1) * p;

@@ -259,6 +259,7 @@ std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string
   }
   for (const auto& n : order)
     if (curves[n].size() == l.x.size()) l.series.emplace_back(n, curves[n]);
+  l.markers = true;
   l.y_min = 0;
   l.y_max = 1;
   l.hlines.emplace_back(kTargetPower, "power 0.8");

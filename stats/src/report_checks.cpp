@@ -4,9 +4,9 @@
 
 #include <cmath>
 #include <filesystem>
-#include <tuple>
 #include <ostream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "hapticlab/stats/anova.hpp"

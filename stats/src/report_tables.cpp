@@ -111,8 +111,7 @@ void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Proto
 void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a,
                 Correction correction) {
   const bool corrected = correction != Correction::kNone;
-  const std::string cname =
-      correction == Correction::kGG ? "Greenhouse-Geisser" : "Huynh-Feldt";
+  const std::string cname = correction == Correction::kGG ? "Greenhouse-Geisser" : "Huynh-Feldt";
   md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
      << (a.dropped_subjects.empty()
              ? ""
@@ -136,21 +135,19 @@ void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a,
                           : e.mauchly_defined   ? fmt::format("{:.3f}", e.mauchly_W)
                                                 : "n/a";
     const std::string p_w = !within || e.df1 <= 1 ? "-"
-                            : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "")
-                                                : "n/a";
+                            : e.mauchly_defined   ? P(e.mauchly_p) + (violated ? " (violated)" : "")
+                                                  : "n/a";
     md << fmt::format("| {}{} | {} | {} | {} | {:.3f} | {} | {} | {} | {} |\n", e.effect,
                       Stars(p_used).empty() ? "" : "*", df,
                       e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F),
-                      P(p_used), e.pes, W, p_w,
-                      within ? fmt::format("{:.3f}", e.gg_epsilon) : "-",
+                      P(p_used), e.pes, W, p_w, within ? fmt::format("{:.3f}", e.gg_epsilon) : "-",
                       within ? fmt::format("{:.3f}", e.hf_epsilon) : "-");
     const auto num = [&](double v) { return within ? fmt::format("{:.10g}", v) : std::string(); };
-    csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{},{},{},{},{},{:.10g}\n", e.effect,
-                       e.df1, e.df2, e.F, e.p, e.pes,
-                       within && std::isfinite(e.mauchly_W) ? num(e.mauchly_W) : "",
-                       within && std::isfinite(e.mauchly_p) ? num(e.mauchly_p) : "",
-                       num(e.gg_epsilon), num(e.p_gg), num(e.hf_epsilon), num(e.p_hf),
-                       CorrectionName(correction), p_used);
+    csv << fmt::format(
+        "{},{},{},{:.10g},{:.10g},{:.10g},{},{},{},{},{},{},{},{:.10g}\n", e.effect, e.df1, e.df2,
+        e.F, e.p, e.pes, within && std::isfinite(e.mauchly_W) ? num(e.mauchly_W) : "",
+        within && std::isfinite(e.mauchly_p) ? num(e.mauchly_p) : "", num(e.gg_epsilon),
+        num(e.p_gg), num(e.hf_epsilon), num(e.p_hf), CorrectionName(correction), p_used);
     if (violated && corrected)
       notes.push_back(fmt::format(
           "**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The {} correction is used "

@@ -252,7 +252,8 @@ TEST(StatsCli, BetweenEffectsCarryNoSphericityFieldsAndPUsedFollowsTheCorrection
   for (const std::string correction : {"GG", "HF", "none"}) {
     const auto j = Stats("rm-anova --csv " + Mixed() +
                          " --dv score --subject subject --within method --between group "
-                         "--correction " + correction);
+                         "--correction " +
+                         correction);
     EXPECT_EQ(j["correction"], correction);
     for (const auto& e : j["effects"]) {
       const double p_used = e["p_used"].get<double>();
@@ -313,13 +314,12 @@ TEST(StatsCli, ExtremeValuesGiveFiniteResultsOrANamedRefusal) {
   for (const std::string scale : {"e-300", "e-310", "e300", "e150"})
     files.push_back(write("all" + std::to_string(files.size()) + ".csv",
                           [&](int i) { return base[static_cast<std::size_t>(i)][2] + scale; }));
-  const std::vector<std::string> commands{
-      "rm-anova --dv score --subject subject --within cond",
-      "tukey --dv score --subject subject --factor cond",
-      "tukey --dv score --factor cond",
-      "kruskal --dv score --group cond",
-      "shapiro --dv score --by cond",
-      "lmm --formula 'score ~ cond + (1 | subject)'"};
+  const std::vector<std::string> commands{"rm-anova --dv score --subject subject --within cond",
+                                          "tukey --dv score --subject subject --factor cond",
+                                          "tukey --dv score --factor cond",
+                                          "kruskal --dv score --group cond",
+                                          "shapiro --dv score --by cond",
+                                          "lmm --formula 'score ~ cond + (1 | subject)'"};
   int refused = 0, answered = 0;
   for (const std::string& binary : {Cli() + " stats", std::string(HL_STATS_CLI_PATH)})
     for (const auto& f : files)

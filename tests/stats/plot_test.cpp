@@ -184,6 +184,7 @@ TEST(Plot, PowerLinesHaveMarkersAndQqPlotsTheirPoints) {
   l.vlines = {{16, "n = 16"}};
   l.y_min = 0;
   l.y_max = 1;
+  l.markers = true;
   const auto with = DrawLinePlot(l, dir.File("with"));
   l.markers = false;
   const auto without = DrawLinePlot(l, dir.File("without"));

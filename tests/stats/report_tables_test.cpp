@@ -139,15 +139,21 @@ TEST(ReportTables, AnovaTableUsesTheCorrectedPWhereSphericityIsViolated) {
 TEST(ReportTables, BetweenEffectsHaveNoSphericityCells) {
   RmAnovaResult a;
   a.subjects = {"a", "b", "c"};
-  a.effects.push_back({.effect = "group", .between_only = true, .df1 = 1, .df2 = 4, .F = 9,
-                       .p = 0.04, .pes = 0.7, .gg_epsilon = 1, .p_gg = 0.04});
+  a.effects.push_back({.effect = "group",
+                       .between_only = true,
+                       .df1 = 1,
+                       .df2 = 4,
+                       .F = 9,
+                       .p = 0.04,
+                       .pes = 0.7,
+                       .gg_epsilon = 1,
+                       .p_gg = 0.04});
   std::ostringstream md, csv;
   AnovaTable(md, csv, a);
   EXPECT_NE(md.str().find("| group* | 1, 4 | 9.000 | 0.040 | 0.700 | - | - | - | - |"),
             std::string::npos)
       << md.str();
-  EXPECT_NE(csv.str().find("group,1,4,9,0.04,0.7,,,,,,,GG,0.04\n"), std::string::npos)
-      << csv.str();
+  EXPECT_NE(csv.str().find("group,1,4,9,0.04,0.7,,,,,,,GG,0.04\n"), std::string::npos) << csv.str();
 }
 
 }  // namespace

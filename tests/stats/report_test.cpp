@@ -243,8 +243,8 @@ TEST(Report, StarsTableAndTextFollowTheCorrectedPWhereMauchlyCannotBeComputed) {
              });
   for (const std::string correction : {"", "none"}) {
     const auto out = dir.File("rep" + correction);
-    const auto r = Analyze(dir.File("few.db"),
-                           {.out_dir = out, .figures = false, .correction = correction});
+    const auto r =
+        Analyze(dir.File("few.db"), {.out_dir = out, .figures = false, .correction = correction});
     const std::string md = test::ReadFile(r.markdown);
     const std::string csv = test::ReadFile(out + "/few_roughness_rmanova.csv");
     SCOPED_TRACE(correction.empty() ? "GG (the protocol's default)" : correction);

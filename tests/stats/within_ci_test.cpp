@@ -66,8 +66,7 @@ std::map<std::vector<std::string>, std::pair<double, double>> Formula(
       raw[cell].push_back(s.first / s.second);
     }
   }
-  const double t975 =
-      boost::math::quantile(boost::math::students_t(n - 1), 0.975);
+  const double t975 = boost::math::quantile(boost::math::students_t(n - 1), 0.975);
   std::map<std::vector<std::string>, std::pair<double, double>> out;
   for (const auto& [cell, d] : dev) {
     double m = 0, ss = 0;

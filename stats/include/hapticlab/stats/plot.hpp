@@ -56,8 +56,8 @@ struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<double> x;
   std::vector<std::pair<std::string, std::vector<double>>> series;  ///< name, y per x
-  bool log_y = false;  ///< plot log10(y) (labelled as such)
-  bool markers = true;  ///< a symbol at each point (a different one per series)
+  bool log_y = false;   ///< plot log10(y) (labelled as such)
+  bool markers = false;  ///< a symbol at each point (a different one per series)
   /// Reference lines across the plot (y value or x value, label), e.g. power 0.8.
   std::vector<std::pair<double, std::string>> hlines, vlines;
   double y_min = NAN, y_max = NAN;  ///< fixed y range (NaN: from the data)

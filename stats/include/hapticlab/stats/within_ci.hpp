@@ -25,7 +25,6 @@ struct WithinCi {
 /// mean, half-width = t(1 − (1 − level)/2, n − 1) sd(y'_cell) / sqrt(n) sqrt(J / (J − 1)).
 /// @throws InputError when `factors` is empty or a column is missing
 std::vector<WithinCi> WithinSubjectCi(const LongTable& data, const std::string& subject,
-                                      const std::vector<std::string>& factors,
-                                      double level = 0.95);
+                                      const std::vector<std::string>& factors, double level = 0.95);
 
 }  // namespace hapticlab::stats
