@@ -31,10 +31,15 @@ using stats_cmd::RequireFinite;
 std::vector<std::pair<std::string, double>> AnovaValues(const stats::RmAnovaResult& r) {
   std::vector<std::pair<std::string, double>> v;
   for (const auto& e : r.effects) {
-    for (const auto& [n, x] : {std::pair{"F", e.F}, std::pair{"p", e.p}, std::pair{"pes", e.pes},
-                               std::pair{"SS", e.SS}, std::pair{"SS_error", e.SS_error}})
+    for (const auto& [n, x] :
+         {std::pair{"F", e.F}, std::pair{"p", e.p}, std::pair{"pes", e.pes}, std::pair{"SS", e.SS},
+          std::pair{"SS_error", e.SS_error}, std::pair{"MSE", e.MSE}})
       v.emplace_back(e.effect + " " + n, x);
     if (e.between_only) continue;
+    if (e.mauchly_defined) {
+      v.emplace_back(e.effect + " Mauchly W", e.mauchly_W);
+      v.emplace_back(e.effect + " Mauchly p", e.mauchly_p);
+    }
     for (const auto& [n, x] : {std::pair{"GG epsilon", e.gg_epsilon}, std::pair{"p GG", e.p_gg},
                                std::pair{"HF epsilon", e.hf_epsilon}, std::pair{"p HF", e.p_hf}})
       v.emplace_back(e.effect + " " + n, x);
@@ -108,7 +113,8 @@ void AddRmAnova(CLI::App& s) {
       json normality;
       try {
         const auto sw = stats::ShapiroWilk(stats::AnovaResiduals(r));
-        normality = {{"test", "Shapiro-Wilk"}, {"n", sw.n}, {"W", sw.W}, {"p", sw.p}};
+        if (std::isfinite(sw.W) && std::isfinite(sw.p))
+          normality = {{"test", "Shapiro-Wilk"}, {"n", sw.n}, {"W", sw.W}, {"p", sw.p}};
       } catch (const std::invalid_argument&) {  // < 3 or > 5000 residuals, or no spread
       }
       if (c->json) {
@@ -245,7 +251,8 @@ void AddTukey(CLI::App& s) {
       for (const auto& p : r.pairs)
         for (const auto& [n, x] :
              {std::pair{"diff", p.diff}, std::pair{"lwr", p.lwr}, std::pair{"upr", p.upr},
-              std::pair{"p_adj", p.p_adj}, std::pair{"se", p.se}, std::pair{"q", p.q}})
+              std::pair{"p_adj", p.p_adj}, std::pair{"se", p.se}, std::pair{"q", p.q},
+              std::pair{"df", p.df}})
           values.emplace_back(p.a + " - " + p.b + " " + n, x);
       RequireFinite(checked, values);
       if (c->json) {

@@ -159,10 +159,10 @@ void AddLmm(CLI::App& s) {
         Fitted(data, [&] { r = stats::FitLmm(data, *formula, o); });
         std::vector<std::pair<std::string, double>> values{
             {"sigma", r.sigma}, {"logLik", r.logLik}, {"deviance", r.deviance}};
-        for (const auto& f : r.fixed)
+        for (const auto& b : r.fixed)
           for (const auto& [n, x] :
-               {std::pair{"estimate", f.estimate}, std::pair{"se", f.se}, std::pair{"t", f.t}})
-            values.emplace_back(f.name + " " + n, x);
+               {std::pair{"estimate", b.estimate}, std::pair{"se", b.se}, std::pair{"t", b.t}})
+            values.emplace_back(b.name + " " + n, x);
         for (const auto& t : r.anova) values.emplace_back(t.term + " F", t.F);
         for (const auto& g : r.random)
           for (std::size_t i = 0; i < g.sd.size(); ++i)
