@@ -206,7 +206,8 @@ void DrawBoxes(const BoxPlot& b) {
   }
 }
 
-void DrawLines(const LinePlot& l) {
+// `dpi`: the device's units per inch (curves are drawn about 0.6 pt wide on either device).
+void DrawLines(const LinePlot& l, double dpi) {
   std::vector<std::vector<PLFLT>> ys;
   double lo = 1e300, hi = -1e300;
   for (const auto& [name, y] : l.series) {
@@ -248,7 +249,9 @@ void DrawLines(const LinePlot& l) {
   std::vector<PLFLT> x(l.x.begin(), l.x.end());
   for (std::size_t s = 0; s < ys.size(); ++s) {
     plcol0(1 + static_cast<int>(s % 8));
+    plwidth(std::max(1.0, 0.6 * dpi / 72));
     plline(static_cast<PLINT>(x.size()), x.data(), ys[s].data());
+    plwidth(1);
     if (l.markers) plstring(static_cast<PLINT>(x.size()), x.data(), ys[s].data(), kMarkers[s % 8]);
   }
   Legend(names, std::vector<PLINT>(names.size(),
@@ -324,7 +327,7 @@ std::vector<std::string> Both(const std::string& base, F draw) {
   for (const auto& [dev, ext, dpi] :
        {std::tuple{"svgcairo", ".svg", 72.0}, std::tuple{"pngcairo", ".png", kPngDpi}}) {
     Begin(dev, base + ext, dpi);
-    draw();
+    draw(dpi);
     plend();
     if (std::string(ext) == ".png") SetPngDpi(base + ext, dpi);
     files.push_back(base + ext);
@@ -336,22 +339,22 @@ std::vector<std::string> Both(const std::string& base, F draw) {
 
 std::vector<std::string> DrawBarChart(const BarChart& c, const std::string& base) {
   HL_REQUIRE(!c.groups.empty() && !c.series.empty(), "bar chart without data");
-  return Both(base, [&] { DrawBars(c); });
+  return Both(base, [&](double) { DrawBars(c); });
 }
 
 std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base) {
   HL_REQUIRE(!l.x.empty() && !l.series.empty(), "line plot without data");
-  return Both(base, [&] { DrawLines(l); });
+  return Both(base, [&](double dpi) { DrawLines(l, dpi); });
 }
 
 std::vector<std::string> DrawBoxPlot(const BoxPlot& b, const std::string& base) {
   HL_REQUIRE(b.groups.size() == b.samples.size() && !b.groups.empty(), "box plot without data");
-  return Both(base, [&] { DrawBoxes(b); });
+  return Both(base, [&](double) { DrawBoxes(b); });
 }
 
 std::vector<std::string> DrawQqPlot(const QqPlot& q, const std::string& base) {
   HL_REQUIRE(q.sample.size() >= 3, "Q-Q plot of fewer than 3 values");
-  return Both(base, [&] { DrawQq(q); });
+  return Both(base, [&](double) { DrawQq(q); });
 }
 
 }  // namespace hapticlab::stats
