@@ -9,6 +9,7 @@
 #include <cmath>
 #include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "hapticlab/core/csv.hpp"
@@ -86,16 +87,36 @@ namespace {
   }
   const int line = extreme < t.lines.size() ? static_cast<int>(t.lines[extreme]) : 0;
   const double v = t.rows() ? t.y[extreme] : NAN;
+  // The typical deviation from the median (median absolute deviation), to tell one value
+  // that dwarfs the rest from a column on the wrong scale.
+  std::vector<double> finite;
+  for (double y : t.y)
+    if (!std::isnan(y)) finite.push_back(y);
+  std::vector<double> dev;
+  double mad = 0;
+  if (!finite.empty()) {
+    std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
+    const double median = finite[finite.size() / 2];
+    for (double y : finite) dev.push_back(std::abs(y - median));
+    std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
+    mad = dev[dev.size() / 2];
+  }
+  const double big = std::max(std::abs(lo), std::abs(hi));
   std::string why;
   if (hi == lo)
     why = fmt::format("every value of {} is {:g}: the response does not vary, so {} is undefined",
                       column, lo, what);
-  else if (std::max(std::abs(lo), std::abs(hi)) > 1e100 || hi - lo < 1e-100)
+  else if (big > 1e150 || hi - lo < 1e-150)
     why = fmt::format(
         "{} is not finite: the values of {} range from {:g} to {:g} (this row: {:g}), and their "
         "squares overflow or underflow double precision; rescale the column (e.g. to the rating "
         "scale) or correct the value",
         what, column, lo, hi, v);
+  else if (mad > 0 && std::abs(v) / mad > 1e12)
+    why = fmt::format(
+        "{} is not finite: this row's {} ({:g}) is {:.0e} times the typical deviation of the "
+        "others, beyond double precision's 16 digits (they vanish next to it); correct the value",
+        what, column, v, std::abs(v) / mad);
   else
     why = fmt::format(
         "{} is not finite: the model fits the values of {} exactly (no residual variance), so "
@@ -109,7 +130,10 @@ namespace {
 void RequireFinite(const stats::LongTable& t,
                    const std::vector<std::pair<std::string, double>>& values) {
   for (const auto& [name, v] : values)
-    if (!std::isfinite(v)) Refuse(t, fmt::format("{} = {}", name, v));
+    if (!std::isfinite(v))
+      Refuse(t, name + (std::isnan(v) ? " (not a number)"
+                        : v > 0       ? " (+infinity)"
+                                      : " (-infinity)"));
 }
 
 void Fitted(const stats::LongTable& t, const std::function<void()>& fit) {
