@@ -40,8 +40,10 @@ std::vector<std::pair<std::string, double>> AnovaValues(const stats::RmAnovaResu
       v.emplace_back(e.effect + " Mauchly W", e.mauchly_W);
       v.emplace_back(e.effect + " Mauchly p", e.mauchly_p);
     }
+    // The Huynh-Feldt epsilon itself may be undefined (0/0 with two subjects, NaN in R too;
+    // JSON null): p HF then uses the Greenhouse-Geisser epsilon and is checked.
     for (const auto& [n, x] : {std::pair{"GG epsilon", e.gg_epsilon}, std::pair{"p GG", e.p_gg},
-                               std::pair{"HF epsilon", e.hf_epsilon}, std::pair{"p HF", e.p_hf}})
+                               std::pair{"p HF", e.p_hf}})
       v.emplace_back(e.effect + " " + n, x);
   }
   return v;

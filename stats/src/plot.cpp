@@ -27,8 +27,8 @@ constexpr int kPalette[][3] = {{0, 114, 178},  {230, 159, 0}, {0, 158, 115},  {2
 void Begin(const char* device, const std::string& file, double dpi) {
   plsdev(device);
   plsfnam(file.c_str());
-  plspage(dpi, dpi, static_cast<PLINT>(std::lround(kFigureWidth_in * dpi)),
-          static_cast<PLINT>(std::lround(kFigureHeight_in * dpi)), 0, 0);
+  plspage(dpi, dpi, static_cast<PLINT>(std::lround(kFigureWidthInches * dpi)),
+          static_cast<PLINT>(std::lround(kFigureHeightInches * dpi)), 0, 0);
   plscolbg(255, 255, 255);
   plinit();
   plscol0(0, 255, 255, 255);

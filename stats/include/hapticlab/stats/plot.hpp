@@ -20,7 +20,7 @@ struct BarSeries {
 };
 
 /// Figures are 6.5 x 3.8 inches (a journal's full text width); the PNG is 300 dpi.
-inline constexpr double kFigureWidth_in = 6.5, kFigureHeight_in = 3.8, kPngDpi = 300;
+inline constexpr double kFigureWidthInches = 6.5, kFigureHeightInches = 3.8, kPngDpi = 300;
 
 struct BarChart {
   /// error_label names the error bars in a note under the chart ("error bars: <label>"),
@@ -56,7 +56,7 @@ struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<double> x;
   std::vector<std::pair<std::string, std::vector<double>>> series;  ///< name, y per x
-  bool log_y = false;   ///< plot log10(y) (labelled as such)
+  bool log_y = false;    ///< plot log10(y) (labelled as such)
   bool markers = false;  ///< a symbol at each point (a different one per series)
   /// Reference lines across the plot (y value or x value, label), e.g. power 0.8.
   std::vector<std::pair<double, std::string>> hlines, vlines;
