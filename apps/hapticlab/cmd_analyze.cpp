@@ -14,7 +14,7 @@ namespace hapticlab::cli {
 
 void RegisterAnalyze(CLI::App& app) {
   struct O {
-    std::string db, out;
+    std::string db, out, correction;
     bool no_figures = false, json = false, include_simulated = false;
   };
   auto o = std::make_shared<O>();
@@ -22,8 +22,9 @@ void RegisterAnalyze(CLI::App& app) {
       "analyze",
       "Run the analyses each study's protocol declares on its database and write a report:\n"
       "report.md, CSV tables (aggregates, rmANOVA, Tukey, grouping) and figures (SVG and PNG):\n"
-      "bar charts with 95% CI and Tukey asterisks, per-material bars with A/B/C letters\n"
-      "against the real-real limits, box plots (docs/analysis.md). Staircase and QUEST+ phases:\n"
+      "bar charts with 95% within-subject CIs and Tukey asterisks, per-material bars with\n"
+      "A/B/C letters against the real-real limits, box plots, a Q-Q plot of the ANOVA's\n"
+      "residuals (docs/analysis.md). Staircase and QUEST+ phases:\n"
       "psychometric fits with bootstrap intervals, JND, Weber fraction and the fitted curve over\n"
       "the binned answers (docs/psychophysics.md). A damaged database (SQLite quick_check) or a\n"
       "score that is not a number on the protocol's scale is refused (exit 2).");
@@ -35,11 +36,17 @@ void RegisterAnalyze(CLI::App& app) {
       "--include-simulated", o->include_simulated,
       "Keep the simulated observer's ratings in a study that also holds ratings by participants\n"
       "(left out by default; the report says how many)");
+  cmd->add_option("--correction", o->correction,
+                  "Sphericity correction whose p decides the significance of within effects,\n"
+                  "afex's names: GG (Greenhouse-Geisser), HF (Huynh-Feldt) or none; overrides\n"
+                  "each protocol's [analysis] correction (default there: GG, as afex)")
+      ->check(CLI::IsMember({"GG", "HF", "none"}));
   cmd->callback([o] {
     RunGuarded({{"db", "--db"}, {"out", "--out"}}, [&] {
       const auto r = stats::Analyze(o->db, {.out_dir = o->out,
                                             .figures = !o->no_figures,
-                                            .include_simulated = o->include_simulated});
+                                            .include_simulated = o->include_simulated,
+                                            .correction = o->correction});
       if (o->json) {
         fmt::print(
             "{}\n",

@@ -23,8 +23,32 @@ namespace {
 using nlohmann::json;
 using stats_cmd::AddCommon;
 using stats_cmd::Common;
+using stats_cmd::Fitted;
 using stats_cmd::Load;
 using stats_cmd::Num;
+using stats_cmd::RequireFinite;
+
+// Every statistic of an ANOVA table the commands print (sphericity fields of within terms).
+std::vector<std::pair<std::string, double>> AnovaValues(const stats::RmAnovaResult& r) {
+  std::vector<std::pair<std::string, double>> v;
+  for (const auto& e : r.effects) {
+    for (const auto& [n, x] :
+         {std::pair{"F", e.F}, std::pair{"p", e.p}, std::pair{"pes", e.pes}, std::pair{"SS", e.SS},
+          std::pair{"SS_error", e.SS_error}, std::pair{"MSE", e.MSE}})
+      v.emplace_back(e.effect + " " + n, x);
+    if (e.between_only) continue;
+    if (e.mauchly_defined) {
+      v.emplace_back(e.effect + " Mauchly W", e.mauchly_W);
+      v.emplace_back(e.effect + " Mauchly p", e.mauchly_p);
+    }
+    // The Huynh-Feldt epsilon itself may be undefined (0/0 with two subjects, NaN in R too;
+    // JSON null): p HF then uses the Greenhouse-Geisser epsilon and is checked.
+    for (const auto& [n, x] : {std::pair{"GG epsilon", e.gg_epsilon}, std::pair{"p GG", e.p_gg},
+                               std::pair{"p HF", e.p_hf}})
+      v.emplace_back(e.effect + " " + n, x);
+  }
+  return v;
+}
 
 // --missing for the ANOVA commands: a missing (empty or NA) response is an error, or drops
 // its subject (named), as afex does.
@@ -68,6 +92,12 @@ void AddRmAnova(CLI::App& s) {
   cmd->add_option(
       "--between", *between,
       "Between-subject factors, comma-separated (e.g. group): each subject has one level");
+  auto correction = std::make_shared<std::string>("GG");
+  cmd->add_option("--correction", *correction,
+                  "Sphericity correction whose p decides significance (p_used) for within\n"
+                  "effects, afex's names: GG (Greenhouse-Geisser, afex's default), HF, none")
+      ->check(CLI::IsMember({"GG", "HF", "none"}))
+      ->capture_default_str();
   cmd->callback([=] {
     RunGuarded([&] {
       const auto factors = stats::SplitList(*within);
@@ -77,28 +107,47 @@ void AddRmAnova(CLI::App& s) {
       std::vector<std::string> keys = factors;
       keys.insert(keys.end(), groups.begin(), groups.end());
       keys.push_back(*subject);
-      const auto r = stats::RmAnova(Load(*c, keys), *subject, factors, groups);
+      const auto data = Load(*c, keys);
+      const auto corr = stats::ParseCorrection(*correction, kCommandLine, "--correction");
+      stats::RmAnovaResult r;
+      Fitted(data, [&] { r = stats::RmAnova(data, *subject, factors, groups); });
+      RequireFinite(data, AnovaValues(r));
+      // The residuals' normality (afex's residuals(), as performance::check_normality).
+      json normality;
+      try {
+        const auto sw = stats::ShapiroWilk(stats::AnovaResiduals(r));
+        if (std::isfinite(sw.W) && std::isfinite(sw.p))
+          normality = {{"test", "Shapiro-Wilk"}, {"n", sw.n}, {"W", sw.W}, {"p", sw.p}};
+      } catch (const std::invalid_argument&) {  // < 3 or > 5000 residuals, or no spread
+      }
       if (c->json) {
         json effects = json::array();
-        for (const auto& e : r.effects)
-          effects.push_back({{"effect", e.effect},
-                             {"df1", e.df1},
-                             {"df2", e.df2},
-                             {"F", e.F},
-                             {"p", e.p},
-                             {"pes", e.pes},
-                             {"SS", e.SS},
-                             {"SS_error", e.SS_error},
-                             {"MSE", e.MSE},
-                             {"mauchly_W", Num(e.mauchly_W)},
-                             {"mauchly_p", Num(e.mauchly_p)},
-                             {"mauchly_p_firstorder", Num(e.mauchly_p_firstorder)},
-                             {"gg_epsilon", Num(e.gg_epsilon)},
-                             {"p_gg", Num(e.p_gg)},
-                             {"hf_epsilon", Num(e.hf_epsilon)},
-                             {"p_hf", Num(e.p_hf)},
-                             {"between_only", e.between_only}});
+        for (const auto& e : r.effects) {
+          json j = {{"effect", e.effect},
+                    {"df1", e.df1},
+                    {"df2", e.df2},
+                    {"F", e.F},
+                    {"p", e.p},
+                    {"pes", e.pes},
+                    {"SS", e.SS},
+                    {"SS_error", e.SS_error},
+                    {"MSE", e.MSE},
+                    {"p_used", stats::UsedP(e, corr)},
+                    {"between_only", e.between_only}};
+          if (!e.between_only) {  // a between-subjects term has no sphericity question
+            j["mauchly_W"] = Num(e.mauchly_W);
+            j["mauchly_p"] = Num(e.mauchly_p);
+            j["mauchly_p_firstorder"] = Num(e.mauchly_p_firstorder);
+            j["gg_epsilon"] = Num(e.gg_epsilon);
+            j["p_gg"] = Num(e.p_gg);
+            j["hf_epsilon"] = Num(e.hf_epsilon);
+            j["p_hf"] = Num(e.p_hf);
+          }
+          effects.push_back(std::move(j));
+        }
         PrintJson(json{{"effects", effects},
+                       {"correction", *correction},
+                       {"residual_normality", normality},
                        {"subjects", r.subjects.size()},
                        {"dropped_subjects", r.dropped_subjects},
                        {"dropped", DroppedJson(r)}});
@@ -133,6 +182,16 @@ void AddRmAnova(CLI::App& s) {
             "Type 3 sums of squares (sum-to-zero contrasts), as afex; error df {:.0f} = subjects - "
             "between cells.\n",
             r.error_df);
+      fmt::print("Significance (--correction {}): ", *correction);
+      for (std::size_t i = 0; i < r.effects.size(); ++i)
+        fmt::print("{}{} p = {:.4g}{}", i ? ", " : "", r.effects[i].effect,
+                   stats::UsedP(r.effects[i], corr),
+                   stats::UsedP(r.effects[i], corr) < 0.05 ? " *" : "");
+      fmt::print("\n");
+      if (!normality.is_null())
+        fmt::print("Residuals (afex's residuals()): Shapiro-Wilk W = {:.5f}, p = {:.4g}, n = {}\n",
+                   normality["W"].get<double>(), normality["p"].get<double>(),
+                   normality["n"].get<int>());
       return kExitOk;
     });
   });
@@ -167,10 +226,13 @@ void AddTukey(CLI::App& s) {
     RunGuarded([&] {
       stats::TukeyResult r;
       stats::RmAnovaResult a;
+      stats::LongTable checked;
       if (subject->empty()) {
         if (!between->empty())
           throw InputError(c->csv, 0, "--between", "needs --subject (a mixed design)");
-        r = stats::TukeyBetween(Load(*c, {*factor}), *factor);
+        const auto data = Load(*c, {*factor});
+        Fitted(data, [&] { r = stats::TukeyBetween(data, *factor); });
+        checked = data;
       } else {
         const auto groups = stats::SplitList(*between);
         const bool factor_between =
@@ -181,9 +243,21 @@ void AddTukey(CLI::App& s) {
         auto keys = factors;
         keys.insert(keys.end(), groups.begin(), groups.end());
         keys.push_back(*subject);
-        a = stats::RmAnova(Load(*c, keys), *subject, factors, groups);
-        r = stats::TukeyWithin(a, *factor, *method == "multivariate");
+        const auto data = Load(*c, keys);
+        Fitted(data, [&] {
+          a = stats::RmAnova(data, *subject, factors, groups);
+          r = stats::TukeyWithin(a, *factor, *method == "multivariate");
+        });
+        checked = data;
       }
+      std::vector<std::pair<std::string, double>> values;
+      for (const auto& p : r.pairs)
+        for (const auto& [n, x] :
+             {std::pair{"diff", p.diff}, std::pair{"lwr", p.lwr}, std::pair{"upr", p.upr},
+              std::pair{"p_adj", p.p_adj}, std::pair{"se", p.se}, std::pair{"q", p.q},
+              std::pair{"df", p.df}})
+          values.emplace_back(p.a + " - " + p.b + " " + n, x);
+      RequireFinite(checked, values);
       if (c->json) {
         json pairs = json::array();
         for (const auto& p : r.pairs)
@@ -230,7 +304,15 @@ void AddKruskal(CLI::App& s) {
   cmd->add_option("--group", *group, "Grouping column")->required();
   cmd->callback([=] {
     RunGuarded([&] {
-      const auto k = stats::KruskalWallis(Load(*c, {*group}), *group);
+      const auto data = Load(*c, {*group});
+      stats::KruskalResult k;
+      Fitted(data, [&] { k = stats::KruskalWallis(data, *group); });
+      std::vector<std::pair<std::string, double>> values{{"H", k.H}, {"p", k.p}};
+      for (const auto& d : k.dunn) {
+        values.emplace_back(d.a + " vs " + d.b + " z", d.z);
+        values.emplace_back(d.a + " vs " + d.b + " p", d.p);
+      }
+      RequireFinite(data, values);
       if (c->json) {
         json dunn = json::array();
         for (const auto& d : k.dunn)
@@ -260,7 +342,15 @@ void AddShapiro(CLI::App& s) {
           Load(*c, by->empty() ? std::vector<std::string>{} : std::vector<std::string>{*by});
       json groups = json::array();
       auto one = [&](const std::string& name, const std::vector<double>& y) {
-        const auto r = stats::ShapiroWilk(y);
+        stats::ShapiroResult r;
+        Fitted(t, [&] {
+          try {
+            r = stats::ShapiroWilk(y);
+          } catch (const std::invalid_argument& e) {  // too few or many values, no spread
+            throw InputError(t.source, 0, c->dv, "group " + name + ": " + e.what());
+          }
+        });
+        RequireFinite(t, {{name + " W", r.W}, {name + " p", r.p}});
         groups.push_back({{"group", name}, {"n", r.n}, {"W", r.W}, {"p", r.p}});
       };
       if (by->empty())

@@ -5,7 +5,11 @@
 #include <fmt/core.h>
 
 #include <algorithm>
+#include <boost/math/policies/error_handling.hpp>
+#include <cmath>
+#include <stdexcept>
 #include <utility>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "hapticlab/core/csv.hpp"
@@ -66,6 +70,88 @@ stats::LongTable Load(const Common& c, std::vector<std::string> keys) {
   if (t.rows() == 0) throw InputError(c.csv, 0, "--where", "no rows left after filtering");
   if (!avg.empty()) t = t.Average(avg);
   return t;
+}
+
+namespace {
+
+// The refusal of a non-finite statistic `what`: why, in words, and where.
+[[noreturn]] void Refuse(const stats::LongTable& t, const std::string& what) {
+  const std::string column = t.y_name.empty() ? std::string("response") : t.y_name;
+  double lo = INFINITY, hi = -INFINITY;
+  std::size_t extreme = 0;
+  for (std::size_t r = 0; r < t.rows(); ++r) {
+    if (std::isnan(t.y[r])) continue;
+    lo = std::min(lo, t.y[r]);
+    hi = std::max(hi, t.y[r]);
+    if (std::abs(t.y[r]) > std::abs(t.y[extreme]) || std::isnan(t.y[extreme])) extreme = r;
+  }
+  const int line = extreme < t.lines.size() ? static_cast<int>(t.lines[extreme]) : 0;
+  const double v = t.rows() ? t.y[extreme] : NAN;
+  // The typical deviation from the median (median absolute deviation), to tell one value
+  // that dwarfs the rest from a column on the wrong scale.
+  std::vector<double> finite;
+  for (double y : t.y)
+    if (!std::isnan(y)) finite.push_back(y);
+  std::vector<double> dev;
+  double mad = 0;
+  if (!finite.empty()) {
+    std::nth_element(finite.begin(), finite.begin() + finite.size() / 2, finite.end());
+    const double median = finite[finite.size() / 2];
+    for (double y : finite) dev.push_back(std::abs(y - median));
+    std::nth_element(dev.begin(), dev.begin() + dev.size() / 2, dev.end());
+    mad = dev[dev.size() / 2];
+  }
+  const double big = std::max(std::abs(lo), std::abs(hi));
+  std::string why;
+  if (hi == lo)
+    why = fmt::format("every value of {} is {:g}: the response does not vary, so {} is undefined",
+                      column, lo, what);
+  else if (big > 1e150 || hi - lo < 1e-150)
+    why = fmt::format(
+        "{} is not finite: the values of {} range from {:g} to {:g} (this row: {:g}), and their "
+        "squares overflow or underflow double precision; rescale the column (e.g. to the rating "
+        "scale) or correct the value",
+        what, column, lo, hi, v);
+  else if (mad > 0 && std::abs(v) / mad > 1e12)
+    why = fmt::format(
+        "{} is not finite: this row's {} ({:g}) is {:.0e} times the typical deviation of the "
+        "others, beyond double precision's 16 digits (they vanish next to it); correct the value",
+        what, column, v, std::abs(v) / mad);
+  else
+    why = fmt::format(
+        "{} is not finite: the model fits the values of {} exactly (no residual variance), so "
+        "the test is undefined",
+        what, column);
+  throw InputError(t.source, line, column, why);
+}
+
+}  // namespace
+
+void RequireFinite(const stats::LongTable& t,
+                   const std::vector<std::pair<std::string, double>>& values) {
+  for (const auto& [name, v] : values)
+    if (!std::isfinite(v))
+      Refuse(t, name + (std::isnan(v) ? " (not a number)"
+                        : v > 0       ? " (+infinity)"
+                                      : " (-infinity)"));
+}
+
+void Fitted(const stats::LongTable& t, const std::function<void()>& fit) {
+  // Boost.Math reports a non-finite argument or a failed series as these; its text names
+  // library functions, not the data, so it never reaches the user as it is.
+  try {
+    fit();
+  } catch (const std::domain_error&) {
+    Refuse(t, "a distribution function's argument");
+  } catch (const std::overflow_error&) {
+    Refuse(t, "an intermediate result");
+  } catch (const std::underflow_error&) {
+    Refuse(t, "an intermediate result");
+  } catch (const boost::math::evaluation_error&) {
+    Refuse(t, "a series evaluation");
+  } catch (const boost::math::rounding_error&) {
+    Refuse(t, "a rounded value");
+  }
 }
 
 }  // namespace hapticlab::cli::stats_cmd

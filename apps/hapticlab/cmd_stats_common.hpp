@@ -4,8 +4,10 @@
 
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hapticlab/stats/long_table.hpp"
@@ -33,6 +35,18 @@ void AddCommon(CLI::App* cmd, Common& c);
 
 /// Reads the CSV with the needed key columns, applies --where and --average-by.
 stats::LongTable Load(const Common& c, std::vector<std::string> keys);
+
+/// Refuses (InputError, exit 2) a result with a statistic that is not finite, naming the
+/// response column and its most extreme row (file line) and saying why: a response that does
+/// not vary, values whose squares overflow or underflow double precision, or an exact fit.
+/// `values`: (name, value) of every statistic the command prints.
+void RequireFinite(const stats::LongTable& t,
+                   const std::vector<std::pair<std::string, double>>& values);
+
+/// Runs `fit`; a numeric library's failure on the data (Boost.Math's domain, overflow or
+/// evaluation errors, which would print library text) becomes the same refusal as
+/// RequireFinite's, naming the column and row.
+void Fitted(const stats::LongTable& t, const std::function<void()>& fit);
 
 /// `stats lmm`.
 void AddLmm(CLI::App& s);

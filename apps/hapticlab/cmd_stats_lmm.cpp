@@ -154,7 +154,20 @@ void AddLmm(CLI::App& s) {
         stats::LmmOptions o;
         o.reml = !*ml;
         o.kenward_roger = *ddf == "kenward-roger";
-        const auto r = stats::FitLmm(Load(*c, keys), *formula, o);
+        const auto data = Load(*c, keys);
+        stats::LmmResult r;
+        Fitted(data, [&] { r = stats::FitLmm(data, *formula, o); });
+        std::vector<std::pair<std::string, double>> values{
+            {"sigma", r.sigma}, {"logLik", r.logLik}, {"deviance", r.deviance}};
+        for (const auto& b : r.fixed)
+          for (const auto& [n, x] :
+               {std::pair{"estimate", b.estimate}, std::pair{"se", b.se}, std::pair{"t", b.t}})
+            values.emplace_back(b.name + " " + n, x);
+        for (const auto& t : r.anova) values.emplace_back(t.term + " F", t.F);
+        for (const auto& g : r.random)
+          for (std::size_t i = 0; i < g.sd.size(); ++i)
+            values.emplace_back(g.group + " " + g.names[i] + " SD", g.sd[i]);
+        RequireFinite(data, values);
         if (c->json)
           PrintJson(LmmJson(r));
         else

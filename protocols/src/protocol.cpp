@@ -187,9 +187,10 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   if (const toml::table* s = doc["study"].as_table()) {
     r.Known(*s, "study",
             {"name", "description", "seed", "criteria", "scale", "stimulus_duration_s", "profiles",
-             "observer", "participant_code"});
+             "observer", "participant_code", "title"});
     p.name = r.Get<std::string>(*s, "study", "name", true, "a string").value_or("");
     p.description = r.Get<std::string>(*s, "study", "description", false, "a string").value_or("");
+    p.title = r.Get<std::string>(*s, "study", "title", false, "a string").value_or(p.name);
     if (auto seed = r.Get<std::int64_t>(*s, "study", "seed", true, "a non-negative integer")) {
       if (*seed < 0) r.Error(s->get("seed"), "study.seed", "expected a non-negative integer");
       p.seed = static_cast<std::uint64_t>(*seed);
@@ -428,7 +429,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   }
   if (const toml::table* t = doc["consent"].as_table()) ReadConsent(*t, r, &p);
   if (const toml::table* t = doc["analysis"].as_table()) {
-    r.Known(*t, "analysis", {"tests", "lmm_formula"});
+    r.Known(*t, "analysis", {"tests", "lmm_formula", "correction"});
     p.analyses = r.Strings(*t, "analysis", "tests", false);
     for (const auto& a : p.analyses)
       if (!kAnalyses.count(a))
@@ -444,6 +445,15 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
       r.Error(t->get("lmm_formula"), "analysis.lmm_formula",
               "expected an lme4 formula 'score ~ fixed terms + (1 | participant)', got '" +
                   p.lmm_formula + "'");
+    // afex's names for the sphericity correction the report judges within effects by.
+    p.correction =
+        r.Get<std::string>(*t, "analysis", "correction", false, "\"GG\", \"HF\" or \"none\"")
+            .value_or(p.correction);
+    if (p.correction != "GG" && p.correction != "HF" && p.correction != "none")
+      r.Error(t->get("correction"), "analysis.correction",
+              "expected \"GG\" (Greenhouse-Geisser, afex's default), \"HF\" (Huynh-Feldt) or "
+              "\"none\", got '" +
+                  p.correction + "'");
   } else {
     p.analyses = {"rm-anova",  "tukey",       "kruskal", "grouping",
                   "aggregate", "correlation", "shapiro"};

@@ -407,11 +407,59 @@ RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
       // below the theoretical floor 1/df (even below 0), where R returns NaN: we floor it.
       // (n = 2 makes it 0/0: then Greenhouse-Geisser is used.)
       const double hf = std::clamp(std::isfinite(sp.hf) ? sp.hf : sp.gg, 1.0 / df_w, 1.0);
+      e.hf_epsilon_used = hf;
       e.p_hf = PfUpper(e.F, e.df1 * hf, e.df2 * hf);
       res.effects.push_back(e);
     }
   }
   return res;
+}
+
+Correction ParseCorrection(const std::string& name, const std::string& source,
+                           const std::string& field) {
+  if (name == "GG") return Correction::kGG;
+  if (name == "HF") return Correction::kHF;
+  if (name == "none") return Correction::kNone;
+  throw InputError(source, 0, field,
+                   "expected GG (Greenhouse-Geisser, afex's default), HF (Huynh-Feldt) or none, "
+                   "got '" +
+                       name + "'");
+}
+
+const char* CorrectionName(Correction c) {
+  return c == Correction::kGG ? "GG" : c == Correction::kHF ? "HF" : "none";
+}
+
+double UsedEpsilon(const AnovaEffect& e, Correction c) {
+  if (e.between_only || c == Correction::kNone) return 1;
+  return c == Correction::kGG ? e.gg_epsilon : e.hf_epsilon_used;
+}
+
+double UsedP(const AnovaEffect& e, Correction c) {
+  if (e.between_only || c == Correction::kNone) return e.p;
+  return c == Correction::kGG ? e.p_gg : e.p_hf;
+}
+
+std::vector<double> AnovaResiduals(const RmAnovaResult& a) {
+  const std::size_t n = a.cells.size(), cells = n ? a.cells[0].size() : 0;
+  // Cell means per between group (the fitted values of the multivariate lm).
+  std::map<int, std::vector<double>> sum;
+  std::map<int, int> count;
+  for (std::size_t s = 0; s < n; ++s) {
+    const int g = s < a.subject_group.size() ? a.subject_group[s] : 0;
+    auto& v = sum[g];
+    v.resize(cells, 0.0);
+    for (std::size_t c = 0; c < cells; ++c) v[c] += a.cells[s][c];
+    count[g] += 1;
+  }
+  std::vector<double> r;
+  r.reserve(n * cells);
+  for (std::size_t s = 0; s < n; ++s) {
+    const int g = s < a.subject_group.size() ? a.subject_group[s] : 0;
+    for (std::size_t c = 0; c < cells; ++c)
+      r.push_back(a.cells[s][c] - sum[g][c] / static_cast<double>(count[g]));
+  }
+  return r;
 }
 
 }  // namespace hapticlab::stats

@@ -256,6 +256,9 @@ std::string PowerTable(const PowerResult& r) {
   return os.str();
 }
 
+// The conventional target power (Cohen 1988) the figure marks.
+constexpr double kTargetPower = 0.8;
+
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base) {
   LinePlot l;
   l.title = fmt::format("{}: power (p < 0.05), {} simulations each", r.protocol, r.simulations);
@@ -274,6 +277,20 @@ std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string
   }
   for (const auto& n : order)
     if (curves[n].size() == l.x.size()) l.series.emplace_back(n, curves[n]);
+  l.markers = true;
+  l.y_min = 0;
+  l.y_max = 1;
+  l.hlines.emplace_back(kTargetPower, "power 0.8");
+  // The chosen sample size: the smallest participant count from which every curve that
+  // reaches 0.8 stays at or above it (a curve of a null effect never does and is ignored).
+  double chosen = NAN;
+  for (const auto& [name, y] : l.series) {
+    std::size_t from = y.size();
+    while (from > 0 && y[from - 1] >= kTargetPower) --from;
+    if (from == y.size()) continue;
+    chosen = std::isnan(chosen) ? l.x[from] : std::max(chosen, l.x[from]);
+  }
+  if (std::isfinite(chosen)) l.vlines.emplace_back(chosen, fmt::format("n = {:.0f}", chosen));
   return DrawLinePlot(l, base);
 }
 

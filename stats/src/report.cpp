@@ -25,6 +25,7 @@
 #include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
+#include "hapticlab/stats/within_ci.hpp"
 #include "report_internal.hpp"
 
 namespace hapticlab::stats {
@@ -47,12 +48,16 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         "participant x cell "
         "before repeated-measures ANOVA (as afex does). Tukey comparisons of a within-subject "
         "factor use the pooled "
-        "error of its effect (emmeans `model = \"univariate\"`). Error bars are 95 % confidence "
-        "intervals of "
-        "participant means. Outliers (1.5 IQR, Tukey's hinges) are counted, not removed.\n";
+        "error of its effect (emmeans `model = \"univariate\"`). Error bars beside these "
+        "within-subject tests are 95 % within-subject confidence intervals (Cousineau 2005 with "
+        "Morey's 2008 correction, as afex_plot and Rmisc::summarySEwithin). Outliers (1.5 IQR, "
+        "Tukey's hinges) are counted, not removed.\n";
   for (const auto& st : d.Studies()) {
     const auto proto = protocols::ParseProtocol(st.protocol_toml, "(protocol of " + st.name + ")");
     const std::set<std::string> tests(proto.analyses.begin(), proto.analyses.end());
+    const Correction correction =
+        o.correction.empty() ? ParseCorrection(proto.correction, st.name, "analysis.correction")
+                             : ParseCorrection(o.correction, "<command line>", "--correction");
     const auto study = all.Where({{"study", st.name}});
     if (study.rows() == 0) continue;
     res.studies.push_back(st.name);
@@ -144,7 +149,7 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       const std::size_t n_participants = cm.Levels("participant").size();
       std::optional<RmAnovaResult> anova;
       std::string anova_why;
-      if (tests.count("rm-anova") || tests.count("tukey")) {
+      if (tests.count("rm-anova") || tests.count("tukey") || tests.count("shapiro")) {
         if (within.empty())
           anova_why =
               "it needs a within factor with two or more levels (this study has one method and one "
@@ -161,8 +166,9 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       if (tests.count("rm-anova")) {
         if (anova) {
           auto csv = w.Open(fmt::format("{}_{}_rmanova.csv", sid, Safe(crit)));
-          csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf\n";
-          AnovaTable(md, csv, *anova);
+          csv << "effect,df1,df2,F,p,pes,mauchly_W,mauchly_p,gg_epsilon,p_gg,hf_epsilon,p_hf,"
+                 "correction,p_used\n";
+          AnovaTable(md, csv, *anova, correction);
         } else {
           NotRun(md, "rm-anova", anova_why);
         }
@@ -184,15 +190,15 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
              << "):\n\n"
              << "| pair | diff | 95 % CI | p adj |\n|---|---|---|---|\n";
           BarChart bc;
-          bc.title = fmt::format("{}: {} similarity", st.name, crit);
+          bc.title = fmt::format("{}: {} similarity", proto.title, crit);
           bc.x_label = "rendering method";
           bc.y_label = crit + " similarity";
-          bc.error_label = "95% CI";
+          bc.error_label = kWithinCiLabel;
           bc.groups = {""};
-          for (const auto& me : methods) {
-            const auto [m, ci] = MeanCi(cm.Where({{"method", me}}));
-            bc.series.push_back({me, {m}, {ci}});
-          }
+          const auto ci = WithinSubjectCi(cm, "participant", {"method"});
+          for (const auto& me : methods)
+            for (const auto& c : ci)
+              if (c.cell[0] == me) bc.series.push_back({me, {c.mean}, {c.half_width}});
           for (const auto& pr : tk.pairs) {
             md << fmt::format("| {} - {} | {:.2f} | [{:.2f}, {:.2f}] | {}{} |\n", pr.a, pr.b,
                               pr.diff, pr.lwr, pr.upr, P(pr.p_adj), Stars(pr.p_adj));
@@ -211,7 +217,8 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             w.Add(DrawBarChart(bc, base));
             md << "\n![" << crit << " by method](" << fs::path(base).filename().string()
                << ".png)\n"
-               << "\n(* p < 0.05, ** p < 0.01, Tukey HSD.)\n";
+               << "\n(Error bars: " << kWithinCiLabel << " of the participants' method means; "
+               << "* p < 0.05, ** p < 0.01, Tukey HSD.)\n";
           }
         }
       }
@@ -251,20 +258,11 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
       }
       // Per-material bars by method (Figs. 4.8, 5.8).
       BarChart bm;
-      bm.title = fmt::format("{}: {} similarity by material", st.name, crit);
+      bm.title = fmt::format("{}: {} similarity by material", proto.title, crit);
       bm.x_label = "material";
       bm.y_label = crit + " similarity";
-      bm.error_label = "95% CI";
       bm.groups = materials;
-      for (const auto& me : methods) {
-        BarSeries s{me, {}, {}};
-        for (const auto& ma : materials) {
-          const auto [m, ci] = MeanCi(cm.Where({{"material", ma}, {"method", me}}));
-          s.mean.push_back(m);
-          s.err.push_back(ci);
-        }
-        bm.series.push_back(s);
-      }
+      MaterialSeries(bm, cm, methods, materials);
       // Letters against the real-real limits (Fig. 4.5).
       if (tests.count("grouping")) {
         if (methods.size() != 1) {
@@ -320,7 +318,7 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
             s.mean.push_back(upper);
             s.err.push_back(Describe(same.y).se);
           }
-          bm.error_label = "95% CI (limits: SE)";
+          bm.error_label += "; limits: SE";
         }
       }
       // Kruskal-Wallis on the cell means by method (or by material in a one-method study).
@@ -338,9 +336,10 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         const auto base =
             (fs::path(w.dir()) / fmt::format("{}_{}_materials", sid, Safe(crit))).string();
         w.Add(DrawBarChart(bm, base));
-        md << "\n![" << crit << " by material](" << fs::path(base).filename().string() << ".png)\n";
+        md << "\n![" << crit << " by material](" << fs::path(base).filename().string()
+           << ".png)\n\n(Error bars: " << bm.error_label << ".)\n";
         BoxPlot bp;
-        bp.title = fmt::format("{}: {} ratings", st.name, crit);
+        bp.title = fmt::format("{}: {} ratings", proto.title, crit);
         bp.x_label = "rendering method";
         bp.y_label = crit + " similarity";
         for (const auto& me : methods) {
@@ -351,35 +350,19 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         w.Add(DrawBoxPlot(bp, bbase));
         md << "\n![" << crit << " box plot](" << fs::path(bbase).filename().string() << ".png)\n";
       }
-      // Normality (of the participant x cell means the ANOVA uses) and outliers per method.
+      // Normality of the ANOVA's residuals (afex's residuals()), and outliers per method.
       if (tests.count("shapiro")) {
-        md << "\n| method | Shapiro-Wilk W (cell means) | p | normality | boxplot outliers (raw) "
-              "|\n|---|---|---|---|---|\n";
-        std::vector<std::string> flags;
+        if (anova)
+          ResidualNormality(md, w, fmt::format("{}_{}", sid, Safe(crit)), *anova, correction,
+                            o.figures, fmt::format("{}: {} residuals", proto.title, crit));
+        else
+          NotRun(md, "shapiro", "it tests the repeated-measures ANOVA's residuals: " + anova_why);
+        md << "\n| method | boxplot outliers (raw ratings, 1.5 IQR) |\n|---|---|\n";
         for (const auto& me : methods) {
-          const auto c = cells.Where({{"method", me}});
           const auto raw = cm.Where({{"method", me}});
-          std::string wcell = "n/a", pcell = "n/a",
-                      verdict = "not tested (fewer than 3 cell means or no spread)";
-          if (c.rows() >= 3 && c.rows() <= 5000) {
-            try {
-              const auto s = ShapiroWilk(c.y);
-              wcell = fmt::format("{:.4f}", s.W);
-              pcell = P(s.p);
-              verdict = s.p < 0.05 ? "**violated**" : "not rejected";
-              if (s.p < 0.05)
-                flags.push_back(fmt::format(
-                    "**Normality violated** for method {}: Shapiro-Wilk W = {:.4f}, {} "
-                    "(< 0.05) on its {} cell means. The ANOVA's p-values may be off; the "
-                    "rank-based Kruskal-Wallis test (`kruskal`) does not assume normality.",
-                    me, s.W, PEq(s.p), c.rows()));
-            } catch (const std::invalid_argument&) {
-            }
-          }
-          md << fmt::format("| {} | {} | {} | {} | {} of {} |\n", me, wcell, pcell, verdict,
+          md << fmt::format("| {} | {} of {} |\n", me,
                             Outliers(raw.y, QuartileRule::kHinges).outliers.size(), raw.rows());
         }
-        for (const auto& f : flags) md << "\n" << f << "\n";
       }
     }
     // Correlation of overall similarity with the criteria (Table 4.2), on trial ratings.

@@ -13,6 +13,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/long_table.hpp"
+#include "hapticlab/stats/plot.hpp"
 
 namespace hapticlab::stats::report_internal {
 
@@ -56,7 +57,24 @@ void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Proto
                      const std::string& crit, const LongTable& cm,
                      const std::vector<std::string>& methods,
                      const std::vector<std::string>& materials, double upper);
-/// The rmANOVA table with Mauchly's test beside each effect.
-void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a);
+/// The rmANOVA table with Mauchly's test beside each effect. Stars, the df and p columns and
+/// every sentence follow one rule: an effect is significant when the p of `correction` (the
+/// corrected p of a within effect, the plain p of a between one) is below 0.05.
+void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a,
+                Correction correction = Correction::kGG);
+/// What the error bars beside within-subject tests show (figures and captions).
+inline constexpr const char* kWithinCiLabel = "95% within-subject CI (Cousineau-Morey)";
+/// The per-material bars of each method (Figs. 4.8, 5.8) with within-subject CIs over the
+/// method x material cells (WithinSubjectCi); between-subject CIs of participant means where
+/// the cells do not vary within participants. Sets chart.series and chart.error_label.
+void MaterialSeries(BarChart& chart, const LongTable& cm, const std::vector<std::string>& methods,
+                    const std::vector<std::string>& materials);
+/// A departure from normality matters to a conclusion whose p lies in [kStakeLow, kStakeHigh).
+inline constexpr double kStakeLow = 0.01, kStakeHigh = 0.10;
+/// Shapiro-Wilk on the rmANOVA's residuals (AnovaResiduals), a Q-Q figure
+/// (`<base_name>_qq.svg/.png`), and advice only where an effect's p is in the stake band.
+void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
+                       const RmAnovaResult& a, Correction correction, bool figures,
+                       const std::string& title);
 
 }  // namespace hapticlab::stats::report_internal

@@ -106,9 +106,12 @@ void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Proto
   }
 }
 
-// The rmANOVA table with Mauchly's test beside each effect, and every violated assumption
-// said in words with the correction used.
-void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
+// The rmANOVA table with Mauchly's test beside each effect. One rule decides significance
+// (UsedP under `correction`): the star, the df and p columns and every sentence follow it.
+void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a,
+                Correction correction) {
+  const bool corrected = correction != Correction::kNone;
+  const std::string cname = correction == Correction::kGG ? "Greenhouse-Geisser" : "Huynh-Feldt";
   md << "\nRepeated-measures ANOVA (" << a.subjects.size() << " participants"
      << (a.dropped_subjects.empty()
              ? ""
@@ -118,42 +121,71 @@ void AnovaTable(std::ostream& md, std::ostream& csv, const RmAnovaResult& a) {
   for (std::size_t i = 0; i < a.dropped_subjects.size(); ++i)
     md << "- dropped " << a.dropped_subjects[i] << ": " << a.dropped_reasons[i] << "\n";
   if (!a.dropped_subjects.empty()) md << "\n";
-  md << "| factor | df | F | p | partial eta^2 | Mauchly W | p (Mauchly) | GG eps | p (GG) |\n"
+  md << "| factor | df | F | p | partial eta^2 | Mauchly W | p (Mauchly) | GG eps | HF eps |\n"
         "|---|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> notes;
   for (const auto& e : a.effects) {
-    const bool violated = e.mauchly_defined && e.df1 > 1 && e.mauchly_p < 0.05;
-    const double p_used = violated ? e.p_gg : e.p;
-    const std::string W = e.between_only || e.df1 <= 1 ? "-"
-                          : e.mauchly_defined          ? fmt::format("{:.3f}", e.mauchly_W)
-                                                       : "n/a";
-    const std::string p_w = e.between_only || e.df1 <= 1 ? "-"
-                            : e.mauchly_defined ? P(e.mauchly_p) + (violated ? " (violated)" : "")
+    const bool within = !e.between_only;
+    const bool testable = within && e.mauchly_defined && e.df1 > 1;
+    const bool violated = testable && e.mauchly_p < 0.05;
+    const double p_used = UsedP(e, correction), eps = UsedEpsilon(e, correction);
+    const std::string df = eps == 1 ? fmt::format("{:.0f}, {:.0f}", e.df1, e.df2)
+                                    : fmt::format("{:.2f}, {:.2f}", e.df1 * eps, e.df2 * eps);
+    const std::string W = !within || e.df1 <= 1 ? "-"
+                          : e.mauchly_defined   ? fmt::format("{:.3f}", e.mauchly_W)
                                                 : "n/a";
-    md << fmt::format("| {}{} | {:.0f}, {:.0f} | {} | {} | {:.3f} | {} | {} | {:.3f} | {} |\n",
-                      e.effect, p_used < 0.05 ? "*" : "", e.df1, e.df2,
-                      e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F), P(e.p),
-                      e.pes, W, p_w, e.gg_epsilon, P(e.p_gg));
-    csv << fmt::format("{},{},{},{:.10g},{:.10g},{:.10g},{},{},{:.10g},{:.10g},{:.10g},{:.10g}\n",
-                       e.effect, e.df1, e.df2, e.F, e.p, e.pes,
-                       std::isfinite(e.mauchly_W) ? fmt::format("{:.10g}", e.mauchly_W) : "",
-                       std::isfinite(e.mauchly_p) ? fmt::format("{:.10g}", e.mauchly_p) : "",
-                       e.gg_epsilon, e.p_gg, e.hf_epsilon, e.p_hf);
-    if (violated)
+    const std::string p_w = !within || e.df1 <= 1 ? "-"
+                            : e.mauchly_defined   ? P(e.mauchly_p) + (violated ? " (violated)" : "")
+                                                  : "n/a";
+    md << fmt::format("| {}{} | {} | {} | {} | {:.3f} | {} | {} | {} | {} |\n", e.effect,
+                      Stars(p_used).empty() ? "" : "*", df,
+                      e.F < 1e5 ? fmt::format("{:.3f}", e.F) : fmt::format("{:.3g}", e.F),
+                      P(p_used), e.pes, W, p_w, within ? fmt::format("{:.3f}", e.gg_epsilon) : "-",
+                      within ? fmt::format("{:.3f}", e.hf_epsilon) : "-");
+    const auto num = [&](double v) { return within ? fmt::format("{:.10g}", v) : std::string(); };
+    csv << fmt::format(
+        "{},{},{},{:.10g},{:.10g},{:.10g},{},{},{},{},{},{},{},{:.10g}\n", e.effect, e.df1, e.df2,
+        e.F, e.p, e.pes, within && std::isfinite(e.mauchly_W) ? num(e.mauchly_W) : "",
+        within && std::isfinite(e.mauchly_p) ? num(e.mauchly_p) : "", num(e.gg_epsilon),
+        num(e.p_gg), num(e.hf_epsilon), num(e.p_hf), CorrectionName(correction), p_used);
+    if (violated && corrected)
       notes.push_back(fmt::format(
-          "**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The Greenhouse-Geisser "
-          "correction is used (epsilon = {:.3f}, corrected {}).",
-          e.effect, e.mauchly_W, PEq(e.mauchly_p), e.gg_epsilon, PEq(e.p_gg)));
-    else if (!e.between_only && e.df1 > 1 && !e.mauchly_defined)
+          "**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The {} correction is used "
+          "(epsilon = {:.3f}, corrected {}).",
+          e.effect, e.mauchly_W, PEq(e.mauchly_p), cname, eps, PEq(p_used)));
+    else if (violated)
       notes.push_back(fmt::format(
-          "Mauchly's test does not exist for {} (more levels than participants - 1); read "
-          "the Greenhouse-Geisser corrected p.",
-          e.effect));
+          "**Sphericity violated** for {}: Mauchly's W = {:.3f}, {}. The uncorrected p above "
+          "assumes sphericity (`correction = \"none\"`); the Greenhouse-Geisser corrected p is "
+          "{:.3f}.",
+          e.effect, e.mauchly_W, PEq(e.mauchly_p), e.p_gg));
+    else if (within && e.df1 > 1 && !e.mauchly_defined)
+      notes.push_back(
+          corrected
+              ? fmt::format(
+                    "Mauchly's test does not exist for {} (more levels than participants - 1): "
+                    "sphericity cannot be tested, and the {} corrected p above is the one used "
+                    "(epsilon = {:.3f}, {}).",
+                    e.effect, cname, eps, PEq(p_used))
+              : fmt::format(
+                    "Mauchly's test does not exist for {} (more levels than participants - 1): "
+                    "the uncorrected p above assumes a sphericity that cannot be tested "
+                    "(`correction = \"none\"`); the Greenhouse-Geisser corrected p is {:.3f}.",
+                    e.effect, e.p_gg));
   }
-  md << "\nSignificant factors (p < 0.05; the Greenhouse-Geisser p where sphericity is violated) "
-        "are marked by *. "
-        "Mauchly's test is shown for factors with more than two levels (with two, sphericity holds "
-        "trivially).\n";
+  if (corrected)
+    md << fmt::format(
+        "\nSignificance rule: an effect is marked * when its p < 0.05, where df and p of "
+        "within-subject effects are {} corrected (afex's default; the protocol's `[analysis] "
+        "correction = \"{}\"`), whatever Mauchly's test says, and between-subject effects "
+        "need no correction. The uncorrected p is in the CSV. Mauchly's test is shown for "
+        "factors with more than two levels (with two, sphericity holds trivially).\n",
+        cname, CorrectionName(correction));
+  else
+    md << "\nSignificance rule: an effect is marked * when its uncorrected p < 0.05 (the "
+          "protocol's `[analysis] correction = \"none\"`: sphericity is assumed). Mauchly's test "
+          "is shown for factors with more than two levels (with two, sphericity holds "
+          "trivially).\n";
   for (const auto& n : notes) md << "\n" << n << "\n";
 }
 

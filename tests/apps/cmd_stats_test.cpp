@@ -2,8 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <fstream>
+#include <functional>
 #include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
 
 #include "hapticlab/test/test_util.hpp"
 
@@ -241,6 +246,102 @@ TEST(StatsCli, ReportFitsTheProtocolsLmm) {
   EXPECT_NE(md.find("| participant (Intercept) |"), std::string::npos) << md;
   EXPECT_EQ(md.find("Not fitted"), std::string::npos) << md;
   EXPECT_TRUE(std::ifstream(dir.File("rep/test-small_roughness_lmm.csv")).good());
+}
+
+TEST(StatsCli, BetweenEffectsCarryNoSphericityFieldsAndPUsedFollowsTheCorrection) {
+  for (const std::string correction : {"GG", "HF", "none"}) {
+    const auto j = Stats("rm-anova --csv " + Mixed() +
+                         " --dv score --subject subject --within method --between group "
+                         "--correction " +
+                         correction);
+    EXPECT_EQ(j["correction"], correction);
+    for (const auto& e : j["effects"]) {
+      const double p_used = e["p_used"].get<double>();
+      if (e["between_only"].get<bool>()) {
+        for (const char* key : {"gg_epsilon", "p_gg", "hf_epsilon", "p_hf", "mauchly_W"})
+          EXPECT_FALSE(e.contains(key)) << e["effect"] << " " << key;
+        EXPECT_EQ(p_used, e["p"].get<double>());
+      } else {
+        const char* key = correction == "GG" ? "p_gg" : correction == "HF" ? "p_hf" : "p";
+        EXPECT_EQ(p_used, e[key].get<double>()) << e["effect"];
+      }
+    }
+    // The residuals' normality is reported beside the table.
+    EXPECT_EQ(j["residual_normality"]["test"], "Shapiro-Wilk");
+  }
+}
+
+// Every number in a command's JSON is finite; the only nulls are statistics that do not
+// exist by design (the residuals' test where it cannot run, a correlation matrix's cells).
+void ExpectFiniteJson(const json& j, const std::string& path, const std::string& what) {
+  if (j.is_object()) {
+    for (const auto& [k, v] : j.items()) ExpectFiniteJson(v, path + "/" + k, what);
+  } else if (j.is_array()) {
+    for (std::size_t i = 0; i < j.size(); ++i) ExpectFiniteJson(j[i], path, what);
+  } else if (j.is_null()) {
+    EXPECT_TRUE(path.ends_with("/residual_normality") || path.find("/corr") != std::string::npos)
+        << what << ": null at " << path;
+  } else if (j.is_number()) {
+    EXPECT_TRUE(std::isfinite(j.get<double>())) << what << ": " << path;
+  }
+}
+
+// Fuzz of the stats readers with extreme values: one score replaced, or every score scaled
+// into the far tails of double precision. Each command either answers with finite numbers
+// (exit 0) or refuses naming the column and the file (exit 2); never exit 1, never library
+// text.
+TEST(StatsCli, ExtremeValuesGiveFiniteResultsOrANamedRefusal) {
+  test::TempDir dir;
+  std::vector<std::array<std::string, 3>> base;  // subject, cond, score
+  for (int s = 0; s < 6; ++s)
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 2; ++r)
+        base.push_back({"S" + std::to_string(s), "c" + std::to_string(c),
+                        std::to_string(40 + 3 * c + ((s * 7 + c * 3 + r * 5) % 11))});
+  const auto write = [&](const std::string& name, const std::function<std::string(int)>& score) {
+    std::string text = "subject,cond,score\n";
+    for (std::size_t i = 0; i < base.size(); ++i)
+      text += base[i][0] + "," + base[i][1] + "," + score(static_cast<int>(i)) + "\n";
+    test::WriteFile(dir.File(name), text);
+    return dir.File(name);
+  };
+  std::vector<std::string> files;
+  for (const std::string v : {"1e300", "-1e300", "1e100", "-1e100", "1e-300", "4.9e-324",
+                              "2.225e-309", "1.7976931348623157e308"})
+    files.push_back(write("one" + std::to_string(files.size()) + ".csv", [&](int i) {
+      return i == 7 ? v : base[static_cast<std::size_t>(i)][2];
+    }));
+  for (const std::string scale : {"e-300", "e-310", "e300", "e150"})
+    files.push_back(write("all" + std::to_string(files.size()) + ".csv",
+                          [&](int i) { return base[static_cast<std::size_t>(i)][2] + scale; }));
+  const std::vector<std::string> commands{"rm-anova --dv score --subject subject --within cond",
+                                          "tukey --dv score --subject subject --factor cond",
+                                          "tukey --dv score --factor cond",
+                                          "kruskal --dv score --group cond",
+                                          "shapiro --dv score --by cond",
+                                          "lmm --formula 'score ~ cond + (1 | subject)'"};
+  int refused = 0, answered = 0;
+  for (const std::string& binary : {Cli() + " stats", std::string(HL_STATS_CLI_PATH)})
+    for (const auto& f : files)
+      for (const auto& cmd : commands) {
+        const std::string what = binary + " " + cmd + " on " + f;
+        std::string out;
+        const int rc = test::RunCommand(binary + " " + cmd + " --csv " + f + " --json 2>&1", &out);
+        EXPECT_TRUE(rc == 0 || rc == 2) << what << " exit " << rc << ": " << out;
+        EXPECT_EQ(out.find("boost"), std::string::npos) << what << ": " << out;
+        EXPECT_EQ(out.find("Error in function"), std::string::npos) << what << ": " << out;
+        if (rc == 0) {
+          ++answered;
+          ExpectFiniteJson(json::parse(out.substr(out.find('{'))), "", what);
+        } else if (rc == 2) {
+          ++refused;
+          EXPECT_NE(out.find(f), std::string::npos) << what << ": the file is named: " << out;
+          EXPECT_NE(out.find("score"), std::string::npos) << what << ": the column: " << out;
+        }
+      }
+  // Both outcomes occur: rank-based tests answer, sums of squares of 1e300 are refused.
+  EXPECT_GT(answered, 0);
+  EXPECT_GT(refused, 0);
 }
 
 }  // namespace

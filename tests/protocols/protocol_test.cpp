@@ -153,5 +153,25 @@ kind = "main"
   }
 }
 
+TEST(Protocol, TitleAndSphericityCorrectionHaveDefaultsAndAfexsNames) {
+  const auto p = ParseProtocol(Small(), "small.toml");
+  EXPECT_EQ(p.title, p.name);     // no [study] title: the name
+  EXPECT_EQ(p.correction, "GG");  // afex's default
+  std::string text = Small();
+  text.replace(text.find("[study]\n"), 8, "[study]\ntitle = \"A small study\"\n");
+  text += "\n[analysis]\ntests = [\"rm-anova\"]\ncorrection = \"HF\"\n";
+  const auto q = ParseProtocol(text, "q.toml");
+  EXPECT_EQ(q.title, "A small study");
+  EXPECT_EQ(q.correction, "HF");
+  const std::string bad = Small() + "\n[analysis]\ntests = [\"rm-anova\"]\ncorrection = \"gg\"\n";
+  try {
+    ParseProtocol(bad, "bad.toml");
+    FAIL() << "a correction by another name was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("analysis.correction"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("\"GG\""), std::string::npos) << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace hapticlab::protocols

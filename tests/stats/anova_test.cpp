@@ -69,5 +69,25 @@ TEST(RmAnova, ErrorsNameTheProblem) {
   EXPECT_THROW(RmAnova(Make({{"S1", "a", 1}}), "subject", {"nope"}), InputError);
 }
 
+TEST(Correction, UsedPFollowsAfexsNamesAndLeavesBetweenEffectsAlone) {
+  AnovaEffect within{.effect = "m", .df1 = 4, .df2 = 8, .p = 0.02};
+  within.gg_epsilon = 0.3;
+  within.p_gg = 0.12;
+  within.hf_epsilon = 0.5;
+  within.hf_epsilon_used = 0.5;
+  within.p_hf = 0.07;
+  EXPECT_EQ(UsedP(within, ParseCorrection("GG", "f", "c")), 0.12);
+  EXPECT_EQ(UsedP(within, ParseCorrection("HF", "f", "c")), 0.07);
+  EXPECT_EQ(UsedP(within, ParseCorrection("none", "f", "c")), 0.02);
+  EXPECT_EQ(UsedEpsilon(within, Correction::kGG), 0.3);
+  EXPECT_EQ(UsedEpsilon(within, Correction::kNone), 1.0);
+  AnovaEffect between{.effect = "g", .between_only = true, .df1 = 1, .df2 = 8, .p = 0.04};
+  between.p_gg = between.p_hf = 0.04;
+  EXPECT_EQ(UsedP(between, Correction::kGG), 0.04);
+  EXPECT_EQ(UsedEpsilon(between, Correction::kHF), 1.0);
+  EXPECT_THROW(ParseCorrection("gg", "f", "c"), InputError);
+  EXPECT_STREQ(CorrectionName(Correction::kHF), "HF");
+}
+
 }  // namespace
 }  // namespace hapticlab::stats

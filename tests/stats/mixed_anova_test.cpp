@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -11,6 +12,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
+#include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/stats/tukey.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -167,6 +169,41 @@ TEST(MixedAnova, AnEmptyBetweenCellIsAnError) {
     EXPECT_NE(std::string(e.what()).find("between cell group=novice"), std::string::npos)
         << e.what();
   }
+}
+
+// The residuals the report's normality check tests are afex's residuals() of the aov_ez fit,
+// and Shapiro-Wilk on them is R's shapiro.test(residuals(fit)), on two of afex's real data
+// sets (tests/data/stats/residuals_reference.R wrote the CSVs and the JSON).
+void CompareResiduals(const RmAnovaResult& r, const json& ref) {
+  auto mine = AnovaResiduals(r);
+  std::vector<double> theirs;
+  for (const auto& row : ref["residuals"]) theirs.push_back(row["residual"].get<double>());
+  ASSERT_EQ(mine.size(), theirs.size());
+  ASSERT_EQ(static_cast<int>(mine.size()), ref["n"].get<int>());
+  std::sort(mine.begin(), mine.end());
+  std::sort(theirs.begin(), theirs.end());
+  for (std::size_t i = 0; i < mine.size(); ++i) EXPECT_NEAR(mine[i], theirs[i], 1e-9) << i;
+  const auto sw = ShapiroWilk(AnovaResiduals(r));
+  EXPECT_NEAR(sw.W, ref["W"].get<double>(), 1e-12);
+  EXPECT_NEAR(sw.p, ref["p"].get<double>(), 1e-9);
+}
+
+json ResidualRef(const char* data_set) {
+  std::ifstream f(test::DataPath("stats/residuals_reference.json"));
+  return json::parse(f)[data_set];
+}
+
+TEST(AnovaResiduals, WithinDesignEqualsAfexAndShapiroTestOnMd121) {
+  const auto t = ReadLongCsv(test::DataPath("stats/md_12_1.csv"), "rt", {"id", "angle", "noise"});
+  CompareResiduals(RmAnova(t, "id", {"angle", "noise"}), ResidualRef("md_12_1"));
+}
+
+TEST(AnovaResiduals, MixedDesignEqualsAfexAndShapiroTestOnObrienKaiser) {
+  // Residuals are taken from the cell means of each between group (treatment x gender).
+  const auto t = ReadLongCsv(test::DataPath("stats/obk_long.csv"), "value",
+                             {"id", "treatment", "gender", "phase", "hour"});
+  CompareResiduals(RmAnova(t, "id", {"phase", "hour"}, {"treatment", "gender"}),
+                   ResidualRef("obk_long"));
 }
 
 }  // namespace

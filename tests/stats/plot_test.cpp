@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -60,6 +61,31 @@ Extent TallestSpan(const cv::Mat& img, const cv::Vec3b& colour) {
   return best;
 }
 
+// The pHYs chunk's horizontal resolution (0: none), read from the PNG's bytes.
+std::uint32_t PngPixelsPerMetre(const std::string& file) {
+  const std::string png = test::ReadFile(file);
+  const auto at = png.find("pHYs");
+  if (at == std::string::npos || at + 13 > png.size()) return 0;
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(png[at + 4 + i]);
+  return png[at + 12] == 1 ? v : 0;
+}
+
+// The plot frame's right edge: the rightmost column that is dark (antialiased black) over
+// half the image's height.
+int FrameRight(const cv::Mat& img) {
+  int right = -1;
+  for (int x = 0; x < img.cols; ++x) {
+    int dark = 0;
+    for (int y = 0; y < img.rows; ++y) {
+      const auto& p = img.at<cv::Vec3b>(y, x);
+      dark += p[0] < 128 && p[1] < 128 && p[2] < 128;
+    }
+    if (dark > img.rows / 2) right = x;
+  }
+  return right;
+}
+
 TEST(Plot, BarHeightsAreProportionalToTheMeans) {
   test::TempDir dir;
   BarChart c{.title = "t", .x_label = "x", .y_label = "score", .error_label = "95% CI"};
@@ -72,8 +98,10 @@ TEST(Plot, BarHeightsAreProportionalToTheMeans) {
   EXPECT_NE(test::ReadFile(files[0]).find("<svg"), std::string::npos);
   const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty()) << files[1];
-  EXPECT_EQ(img.cols, 900);
-  EXPECT_EQ(img.rows, 520);
+  // 6.5 x 3.8 inches at 300 dpi, and the PNG says so (pHYs: 11811 pixels per metre).
+  EXPECT_EQ(img.cols, 1950);
+  EXPECT_EQ(img.rows, 1140);
+  EXPECT_EQ(PngPixelsPerMetre(files[1]), 11811u);
   const auto a = TallestColumn(img, kBlue), b = TallestColumn(img, kOrange);
   ASSERT_GT(a.height(), 100) << "no bar of the first series";
   ASSERT_GT(b.height(), 50) << "no bar of the second series";
@@ -119,6 +147,61 @@ TEST(Plot, LinePlotWritesBothFormatsAndEmptyChartsAreRefused) {
   mismatched.groups = {"a", "b"};
   mismatched.samples = {{1}};
   EXPECT_THROW(DrawBoxPlot(mismatched, dir.File("e")), PreconditionError);
+}
+
+TEST(Plot, TheLegendSitsOutsideTheDataArea) {
+  // Two groups x two series: the legend's colour boxes lie right of the frame, the bars left.
+  test::TempDir dir;
+  BarChart c{.title = "Hybrid realism: roughness",
+             .x_label = "material",
+             .y_label = "score",
+             .error_label = "95% within-subject CI (Cousineau-Morey)"};
+  c.groups = {"Cork", "Denim"};
+  c.series = {{.name = "FF", .mean = {90, 95}, .err = {3, 3}},
+              {.name = "Hybrid", .mean = {97, 92}, .err = {2, 2}}};
+  const auto files = DrawBarChart(c, dir.File("legend"));
+  const cv::Mat img = cv::imread(files.at(1), cv::IMREAD_COLOR);
+  ASSERT_FALSE(img.empty());
+  const int frame = FrameRight(img);
+  ASSERT_GT(frame, img.cols / 2);
+  for (const auto& colour : {kBlue, kOrange}) {
+    int inside = 0, outside = 0;
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x)
+        if (img.at<cv::Vec3b>(y, x) == colour) (x < frame ? inside : outside) += 1;
+    EXPECT_GT(inside, 1000) << "the bars";
+    EXPECT_GT(outside, 100) << "the legend's box";
+  }
+  // The bars reach up to 97 % of the scale: nothing of the legend lies over them.
+  EXPECT_GT(TallestColumn(img, kOrange).height(), 500);
+}
+
+TEST(Plot, PowerLinesHaveMarkersAndQqPlotsTheirPoints) {
+  test::TempDir dir;
+  LinePlot l{.title = "power", .x_label = "participants", .y_label = "power", .x = {8, 12, 16}};
+  l.series = {{"roughness method", {0.3, 0.7, 0.9}}};
+  l.hlines = {{0.8, "power 0.8"}};
+  l.vlines = {{16, "n = 16"}};
+  l.y_min = 0;
+  l.y_max = 1;
+  l.markers = true;
+  const auto with = DrawLinePlot(l, dir.File("with"));
+  l.markers = false;
+  const auto without = DrawLinePlot(l, dir.File("without"));
+  const auto count = [](const std::string& file) {
+    const cv::Mat img = cv::imread(file, cv::IMREAD_COLOR);
+    int n = 0;
+    for (int y = 0; y < img.rows; ++y)
+      for (int x = 0; x < img.cols; ++x) n += img.at<cv::Vec3b>(y, x) == kBlue;
+    return n;
+  };
+  // The markers add blue pixels along the curve beyond the line's own.
+  EXPECT_GT(count(with.at(1)), count(without.at(1)) + 200);
+  QqPlot q{.title = "residuals", .y_label = "residual", .sample = {-2, -1, -0.5, 0, 0.4, 1, 2.2}};
+  const auto qq = DrawQqPlot(q, dir.File("qq"));
+  EXPECT_GT(count(qq.at(1)), 100);  // the points (palette slot 1)
+  EXPECT_EQ(PngPixelsPerMetre(qq.at(1)), 11811u);
+  EXPECT_THROW(DrawQqPlot(QqPlot{.sample = {1, 2}}, dir.File("e")), PreconditionError);
 }
 
 }  // namespace

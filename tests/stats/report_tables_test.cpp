@@ -112,16 +112,48 @@ TEST(ReportTables, AnovaTableUsesTheCorrectedPWhereSphericityIsViolated) {
   const std::string m = md.str();
   EXPECT_NE(m.find("(5 participants, 1 dropped for missing cells)"), std::string::npos) << m;
   EXPECT_NE(m.find("- dropped f: no rating for method=FF"), std::string::npos) << m;
-  EXPECT_NE(m.find("| method | 2, 8 | 5.000 | 0.030 | 0.500 | 0.100 | 0.010 (violated) | 0.600 | "
-                   "0.080 |"),
+  // GG (the default): the df and p columns are the corrected ones, and no star.
+  EXPECT_NE(m.find("| method | 1.20, 4.80 | 5.000 | 0.080 | 0.500 | 0.100 | 0.010 (violated) | "
+                   "0.600 | 0.000 |"),
             std::string::npos)
       << m;
-  EXPECT_NE(m.find("| material* | 1, 4 | 20.000 | 0.010 | 0.800 | - | - |"), std::string::npos)
+  EXPECT_NE(m.find("| material* | 1, 4 | 20.000 | 0.010 | 0.800 | - | - | 1.000 |"),
+            std::string::npos)
       << m;
   EXPECT_NE(m.find("**Sphericity violated** for method"), std::string::npos) << m;
+  EXPECT_NE(m.find("corrected p = 0.080"), std::string::npos) << m;
   EXPECT_EQ(m.find("Sphericity violated** for material"), std::string::npos) << m;
-  EXPECT_NE(csv.str().find("method,2,8,5,0.03,0.5,0.1,0.01,0.6,0.08,"), std::string::npos)
+  EXPECT_NE(m.find("Significance rule: "), std::string::npos) << m;
+  EXPECT_NE(csv.str().find("method,2,8,5,0.03,0.5,0.1,0.01,0.6,0.08,0,0,GG,0.08\n"),
+            std::string::npos)
       << csv.str();
+  // correction = "none": the uncorrected p decides, and the text says what it assumes.
+  std::ostringstream md0, csv0;
+  AnovaTable(md0, csv0, a, Correction::kNone);
+  const std::string m0 = md0.str();
+  EXPECT_NE(m0.find("| method* | 2, 8 | 5.000 | 0.030 |"), std::string::npos) << m0;
+  EXPECT_NE(m0.find("The uncorrected p above assumes sphericity"), std::string::npos) << m0;
+  EXPECT_NE(csv0.str().find(",none,0.03\n"), std::string::npos) << csv0.str();
+}
+
+TEST(ReportTables, BetweenEffectsHaveNoSphericityCells) {
+  RmAnovaResult a;
+  a.subjects = {"a", "b", "c"};
+  a.effects.push_back({.effect = "group",
+                       .between_only = true,
+                       .df1 = 1,
+                       .df2 = 4,
+                       .F = 9,
+                       .p = 0.04,
+                       .pes = 0.7,
+                       .gg_epsilon = 1,
+                       .p_gg = 0.04});
+  std::ostringstream md, csv;
+  AnovaTable(md, csv, a);
+  EXPECT_NE(md.str().find("| group* | 1, 4 | 9.000 | 0.040 | 0.700 | - | - | - | - |"),
+            std::string::npos)
+      << md.str();
+  EXPECT_NE(csv.str().find("group,1,4,9,0.04,0.7,,,,,,,GG,0.04\n"), std::string::npos) << csv.str();
 }
 
 }  // namespace

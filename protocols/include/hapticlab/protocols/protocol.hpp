@@ -66,6 +66,8 @@ struct Protocol {
   std::string file;  ///< path it was read from
   std::string text;  ///< the protocol file exactly (stored with the study)
   std::string name, description;
+  /// `[study] title`: the study's name in figure titles and headings (default: `name`).
+  std::string title;
   std::uint64_t seed = 1;  ///< study seed; participants derive theirs from it
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
@@ -95,6 +97,10 @@ struct Protocol {
   /// criterion to the main phase's ratings (columns: score, participant, method, material,
   /// comparison, repetition).
   std::string lmm_formula = "score ~ method + (1 | participant) + (1 | material)";
+  /// `[analysis] correction`: the sphericity correction (afex's names) whose p decides the
+  /// significance of within-subject effects with more than one df: "GG" (default), "HF",
+  /// "none" (docs/analysis.md, "One rule for significance").
+  std::string correction = "GG";
   const Material* FindMaterial(const std::string& id) const;
   const Method* FindMethod(const std::string& name) const;
 };

@@ -45,6 +45,7 @@ struct AnovaEffect {
   double mauchly_W = 0, mauchly_p = 0, mauchly_chi2 = 0, mauchly_p_firstorder = 0;
   double gg_epsilon = 0, p_gg = 0;
   double hf_epsilon = 0, p_hf = 0;  ///< hf_epsilon uncapped; p_hf uses min(1, ε)
+  double hf_epsilon_used = 1;       ///< the ε p_hf uses: min(1, ε) floored at 1/df
 };
 
 struct RmAnovaResult {
@@ -80,6 +81,27 @@ struct RmAnovaResult {
 RmAnovaResult RmAnova(const LongTable& data, const std::string& subject,
                       const std::vector<std::string>& within,
                       const std::vector<std::string>& between = {});
+
+/// The sphericity correction of within-subject effects, by afex's names (the `correction`
+/// argument of afex::anova_table): "GG" Greenhouse-Geisser (afex's default), "HF" Huynh-Feldt,
+/// "none". As afex, a correction applies to every within effect, whatever Mauchly's test says;
+/// unlike afex (car), which prints uncorrected df where the covariance is singular (no
+/// Mauchly test), the ε computed from that covariance is applied there too, so a p that
+/// assumes an untestable sphericity is never the one a conclusion rests on.
+enum class Correction { kGG, kHF, kNone };
+/// "GG", "HF" or "none". @throws InputError naming `source` and `field` otherwise.
+Correction ParseCorrection(const std::string& name, const std::string& source,
+                           const std::string& field);
+const char* CorrectionName(Correction c);
+/// The ε `c` applies to `e` (1 for between-only effects and for kNone).
+double UsedEpsilon(const AnovaEffect& e, Correction c);
+/// The p that decides whether `e` is significant under `c` (p, p_gg or p_hf).
+double UsedP(const AnovaEffect& e, Correction c);
+
+/// Residuals of the fit, as afex's residuals() of an aov_ez fit (the residuals of its
+/// multivariate lm): each kept subject's cell mean minus the mean of that cell over the
+/// subjects of its between group. Subject-major (a.subjects' order), cells as in a.cells.
+std::vector<double> AnovaResiduals(const RmAnovaResult& a);
 
 /// One-way between-subjects ANOVA (every row an independent observation). Sums of squares
 /// are formed from centred values (two passes), which keeps NIST StRD's hard cases

@@ -1,9 +1,13 @@
 #pragma once
 /// @file Report figures through PLplot (cairo devices): bar charts with error bars and
-/// significance marks like the dissertation's Figs. 4.5, 5.7 and 5.8, and box plots. Every
-/// figure is written as both SVG and PNG.
+/// significance marks like the dissertation's Figs. 4.5, 5.7 and 5.8, box plots, line plots
+/// and normal Q-Q plots. Every figure is written as SVG (vector, sized in inches) and as PNG
+/// at 300 dpi (the resolution recorded in the file's pHYs chunk), the journals' minimum for
+/// line art with shading. Legends sit outside the data area, to the right.
 
+#include <cmath>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace hapticlab::stats {
@@ -15,8 +19,13 @@ struct BarSeries {
   std::vector<double> err;   ///< half-length of the error bar (SE or CI half-width)
 };
 
+/// Figures are 6.5 x 3.8 inches (a journal's full text width); the PNG is 300 dpi.
+inline constexpr double kFigureWidthInches = 6.5, kFigureHeightInches = 3.8, kPngDpi = 300;
+
 struct BarChart {
-  std::string title, x_label, y_label, error_label;  ///< error_label e.g. "95% CI"
+  /// error_label names the error bars in a note under the chart ("error bars: <label>"),
+  /// e.g. "95% within-subject CI (Cousineau-Morey)".
+  std::string title, x_label, y_label, error_label;
   /// Groups along the x axis; a single unnamed group ({""}) labels each bar with its series.
   std::vector<std::string> groups;
   std::vector<BarSeries> series;
@@ -47,11 +56,24 @@ struct LinePlot {
   std::string title, x_label, y_label;
   std::vector<double> x;
   std::vector<std::pair<std::string, std::vector<double>>> series;  ///< name, y per x
-  bool log_y = false;  ///< plot log10(y) (labelled as such)
+  bool log_y = false;    ///< plot log10(y) (labelled as such)
+  bool markers = false;  ///< a symbol at each point (a different one per series)
+  /// Reference lines across the plot (y value or x value, label), e.g. power 0.8.
+  std::vector<std::pair<double, std::string>> hlines, vlines;
+  double y_min = NAN, y_max = NAN;  ///< fixed y range (NaN: from the data)
   /// A smaller line under the title (e.g. the model the curves assume); also the SVG's <desc>.
   std::string note;
 };
 /// `<base>.svg` and `<base>.png`.
 std::vector<std::string> DrawLinePlot(const LinePlot& plot, const std::string& base);
+
+/// Normal Q-Q plot: the sorted sample against standard normal quantiles at R's ppoints(n),
+/// with the line through the first and third quartiles (R's qqnorm and qqline).
+struct QqPlot {
+  std::string title, y_label;
+  std::vector<double> sample;
+};
+/// `<base>.svg` and `<base>.png`. @throws PreconditionError with fewer than 3 values.
+std::vector<std::string> DrawQqPlot(const QqPlot& plot, const std::string& base);
 
 }  // namespace hapticlab::stats

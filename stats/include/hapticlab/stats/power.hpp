@@ -92,8 +92,10 @@ PowerResult MergePower(const std::vector<PowerResult>& parts,
 
 /// Text table: the observer, then one line per participant count and effect.
 std::string PowerTable(const PowerResult& r);
-/// Power curves (one per criterion x effect) as <base>.svg/.png, the observer named under the
-/// title (and in the SVG's <desc>); returns the files.
+/// Power curves (one per criterion x effect, with markers) as <base>.svg/.png, the observer
+/// named under the title (and in the SVG's <desc>), with the 0.8 line and the chosen sample
+/// size marked: the smallest participant count from which every curve that reaches 0.8 stays
+/// there. Returns the files.
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base);
 
 /// Smallest participant count whose power for (criterion, effect) is >= target; 0: none.

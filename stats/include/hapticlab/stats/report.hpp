@@ -21,6 +21,9 @@ struct ReportOptions {
   /// Keep the simulated observer's ratings in a study that also holds a person's ratings
   /// (by default they are excluded there, and the report says how many).
   bool include_simulated = false;
+  /// The sphericity correction of within effects ("GG", "HF", "none"; afex's names),
+  /// overriding each protocol's `[analysis] correction`; empty: the protocol's.
+  std::string correction;
 };
 
 struct ReportResult {
