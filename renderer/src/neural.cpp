@@ -142,13 +142,15 @@ std::size_t NeuralNet::ParamCount() const {
   return n;
 }
 
+// Clamped to [-1, 1]: outside the training grid the model plays its edge (as the AR bank and
+// Γ_D's bilinear weights do) instead of extrapolating the condition basis and the networks.
 double NeuralModel::NormSpeed(double v) const {
   const double lo = speeds_mps.front(), hi = speeds_mps.back();
-  return hi > lo ? 2 * (v - lo) / (hi - lo) - 1 : 0;
+  return hi > lo ? std::clamp(2 * (v - lo) / (hi - lo) - 1, -1.0, 1.0) : 0;
 }
 double NeuralModel::NormForce(double f) const {
   const double lo = forces_N.front(), hi = forces_N.back();
-  return hi > lo ? 2 * (f - lo) / (hi - lo) - 1 : 0;
+  return hi > lo ? std::clamp(2 * (f - lo) / (hi - lo) - 1, -1.0, 1.0) : 0;
 }
 
 std::vector<NeuralBand> DefaultNeuralBands() {
@@ -244,6 +246,7 @@ double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* i
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
   const NeuralModel& m = *m_;
+  if (runaway_) return 0;  // muted
   if (!active || !(speed_mps >= m.min_speed_mps) || !std::isfinite(force_N)) {
     if (running_) Reset();
     return 0;
@@ -275,8 +278,11 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
         sig += w[k] * band.sigma[c];
       }
       y += sig * noise_.Normal();
-      if (!std::isfinite(y)) y = 0;
-      y = std::clamp(y, -10.0, 10.0);  // keep the feedback inside the trained range
+      if (!(std::abs(y) <= kNeuralMaxLevel)) {  // non-finite or runaway: mute (the caller faults)
+        runaway_ = true;
+        Reset();
+        return 0;
+      }
       s.head = s.head == 0 ? static_cast<int>(M) - 1 : s.head - 1;
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
       s.up.Push(s.hp.Step(y));
