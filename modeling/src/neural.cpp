@@ -168,29 +168,16 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         Eigen::Index terms = unified && !per_cell ? 9 : 1, nlin = o.linear_part ? terms * M : 0;
         const auto active = ActiveConditionTerms(nv, nf);
         auto basis = [&](double v, double fo) { return ConditionBasis(v, fo, terms); };
-        // Per-cell AR order: chosen as the LPC bank chooses its order (the criterion summed
-        // over the recordings, at most preprocess.max_order, one order for all cells: LSF
-        // interpolation needs equal orders), here on the band's training signals and at most
-        // M. Why not M = 50 itself: the LSFs of a high-order fit are mostly spurious pairs,
-        // and a resonance that moves between two cells changes which LSF pair carries it, so
-        // mixing them splits it into two weaker ones instead of moving it (held out on the
-        // AR grids, data seed 40: E_s 0.265 and 0.318 with order 50, LPC 0.222 and 0.276).
+        // Per-cell AR order: as the LPC bank chooses its order (PerCellArOrder).
         Eigen::Index p_lin = M;
         auto choose_p_lin = [&] {
-          const int pmax = o.preprocess.order > 0 ? std::min(M, o.preprocess.order)
-                                                  : std::min(M, o.preprocess.max_order);
-          std::vector<double> crit(static_cast<std::size_t>(pmax), 0.0);
+          std::vector<std::vector<double>> train;
           for (const auto i : use) {
             const auto& x = sig[j.band][i];
-            const std::vector<double> train(
+            train.emplace_back(
                 x.begin(), x.begin() + static_cast<std::ptrdiff_t>(rows_of(j, i, false).second));
-            for (int p = o.preprocess.order > 0 ? pmax : 1; p <= pmax; ++p)
-              crit[static_cast<std::size_t>(p - 1)] +=
-                  FitAr(train, p, pmax, o.preprocess.criterion).criterion;
           }
-          p_lin = pmax;
-          if (o.preprocess.order <= 0)
-            p_lin = 1 + std::distance(crit.begin(), std::min_element(crit.begin(), crit.end()));
+          p_lin = PerCellArOrder(train, M, o.preprocess);
           if (o.progress)
             o.progress(fmt::format("band {}: per-cell AR order {} (as the LPC bank chooses)",
                                    j.band + 1, p_lin),
@@ -277,6 +264,17 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                 rhs.segment(t * M, M).setZero();
               }
             f.w = A.ldlt().solve(rhs);
+            if (!unified && !renderer::IsStableAr(std::span<const double>(f.w.data(), M))) {
+              // Γ_D's covariance-method fit at its cell need not be minimum phase: Levinson's is.
+              const auto& x = sig[j.band][use.front()];
+              const auto end = all_rows ? x.size() : rows_of(j, use.front(), false).second;
+              f.w = Eigen::Map<const Eigen::VectorXd>(
+                  FitAr(
+                      std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(end)),
+                      M)
+                      .coeffs.data(),
+                  M);
+            }
             // The AR coefficients at each training cell: the M x terms weights times phi.
             const Eigen::Map<const Eigen::MatrixXd> W(f.w.data(), M, terms);
             for (const auto i : use)

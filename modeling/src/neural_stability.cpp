@@ -1,11 +1,12 @@
-// The stability of the neural models' linear parts over the conditions they play (issue #33):
-// the largest pole radius over the training grid's rectangle, and Γ_U's condition basis sized
-// to the grid (neural_internal.hpp, neural.hpp).
+// The neural models' linear parts (issue #33): their stability over the conditions they play
+// (the largest pole radius over the training grid's rectangle), Γ_U's condition basis sized to
+// the grid, and the per-cell AR order (neural_internal.hpp, neural.hpp).
 
 #include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/modeling/neural.hpp"
@@ -30,6 +31,22 @@ std::array<bool, kConditionTerms> ActiveConditionTerms(std::size_t speeds, std::
   std::array<bool, kConditionTerms> on{};
   for (std::size_t t = 0; t < on.size(); ++t) on[t] = kDegV[t] <= dv && kDegF[t] <= df;
   return on;
+}
+
+int PerCellArOrder(const std::vector<std::vector<double>>& train, int M,
+                   const VibrationFitOptions& pre) {
+  // Why not M = 50 itself: the LSFs of a high-order fit are mostly spurious pairs, and a
+  // resonance that moves between two cells changes which LSF pair carries it, so mixing them
+  // splits it into two weaker ones instead of moving it (held out on the AR grids, data seed 40:
+  // E_s 0.265 and 0.318 with order 50, LPC 0.222 and 0.276).
+  const int pmax = pre.order > 0 ? std::min(M, pre.order) : std::min(M, pre.max_order);
+  if (pre.order > 0) return pmax;
+  std::vector<double> crit(static_cast<std::size_t>(pmax), 0.0);
+  for (const auto& x : train)
+    for (int p = 1; p <= pmax; ++p)
+      crit[static_cast<std::size_t>(p - 1)] += FitAr(x, p, pmax, pre.criterion).criterion;
+  return 1 +
+         static_cast<int>(std::distance(crit.begin(), std::min_element(crit.begin(), crit.end())));
 }
 
 Eigen::VectorXd ConditionBasis(double v, double f, Eigen::Index terms) {
