@@ -133,8 +133,7 @@ double HybridRenderer::VibrationTick() noexcept {
   // Run the model at its rate; upsample band-limited (integer ratio) or linearly.
   double a;
   if (upsample_) {
-    if (up_phase_ == 0)
-      up_.Push(ModelSample(f));
+    if (up_phase_ == 0) up_.Push(ModelSample(f));
     a = up_.Output(up_phase_);
     up_phase_ = up_phase_ + 1 == up_.factor() ? 0 : up_phase_ + 1;
   } else {

@@ -248,9 +248,9 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   if (render) cmd = renderer_.ForceTick(sample, now_s);
   if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
   // The watchdog has the last word: zero force on any fault or lost read, this very tick.
-  const Eigen::Vector3d command =
-      watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate,
-                      render ? cmd.force_N : Eigen::Vector3d::Zero(), render && cmd.vibration_fault);
+  const Eigen::Vector3d command = watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate,
+                                                  render ? cmd.force_N : Eigen::Vector3d::Zero(),
+                                                  render && cmd.vibration_fault);
   const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault || !render;
   if (watchdog_.last() == FaultKind::kDisconnect) {
     disconnects_.fetch_add(1, std::memory_order_relaxed);

@@ -109,9 +109,9 @@ TEST(WorkbenchFitCli, StribeckStrokesFitWithMuBAtItsBoundAndDiagnoseRanksStribec
                              &out),
             0)
       << out;
-  ASSERT_EQ(test::RunCommand(
-                Cli() + " fit --json --quiet --measurement " + meas + " -o " + model, &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " fit --json --quiet --measurement " + meas + " -o " + model, &out),
+      0)
       << out;
   const auto j = nlohmann::json::parse(out);
   const auto& mu_b = j["estimates"]["viscous"]["mu_b"];
@@ -125,10 +125,10 @@ TEST(WorkbenchFitCli, StribeckStrokesFitWithMuBAtItsBoundAndDiagnoseRanksStribec
       EXPECT_TRUE(p["at_bound"].get<bool>()) << p.dump();
   }
   EXPECT_EQ(test::RunCommand(Cli() + " model check " + model, &out), 0) << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " diagnose --json --quiet --model " + model +
-                                 " --measurement " + meas,
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " diagnose --json --quiet --model " + model + " --measurement " + meas, &out),
+      0)
       << out;
   const auto dx = nlohmann::json::parse(out);
   ASSERT_FALSE(dx["candidates"].empty());

@@ -103,7 +103,7 @@ inline std::vector<Recording> CornerGrid(std::uint64_t first_seed) {
 // part's RMS: sum and difference frequencies of the resonances, a process no linear AR model
 // is (and still stable: the term is bounded and the linear part is).
 inline Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed,
-                          double seconds = 2.5) {
+                                 double seconds = 2.5) {
   const double fs = 2000;
   const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
   const double r1 = 0.97 - 0.02 * f, r2 = 0.9;

@@ -116,10 +116,9 @@ TEST(NeuralStability, GammaUIsStableOverTheHullAndHoldsOutWholeSpeedRows) {
     }
     es /= held;
     const auto lpc = CrossValidate(all, g.v, g.f, {});
-    const double s =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::printf("%s grid, %d held-out recordings: E_s Γ_U %.3f, LPC %.3f (%.1f s)\n",
-                grid.c_str(), held, es, lpc.mean_es_test, s);
+    const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::printf("%s grid, %d held-out recordings: E_s Γ_U %.3f, LPC %.3f (%.1f s)\n", grid.c_str(),
+                held, es, lpc.mean_es_test, s);
     EXPECT_LE(es, lpc.mean_es_test + 0.1) << grid;
   }
 }

@@ -115,8 +115,7 @@ TEST(WorkbenchFiles, AModelThatWouldNotReadBackIsNeverWritten) {
     SaveModel(m, out.string());
     FAIL() << "a model with mu_b < 0 was written";
   } catch (const PreconditionError& e) {
-    EXPECT_NE(std::string(e.what()).find("friction.mu_b_Ns_per_m"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("friction.mu_b_Ns_per_m"), std::string::npos) << e.what();
   }
   EXPECT_EQ(test::ReadFile(out.string()), before) << "the old file is kept";
   EXPECT_FALSE(std::filesystem::exists(out.string() + ".writing"));

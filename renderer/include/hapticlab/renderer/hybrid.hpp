@@ -46,7 +46,7 @@ struct ForceCommand {
   Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< commanded (filtered, clamped) [N]
   ForceOutput raw;                                    ///< unfiltered model output
   bool fault = false;                                 ///< this tick was a fault: force is zero
-  bool vibration_fault = false;  ///< the fault is the vibration model's (muted, runaway)
+  bool vibration_fault = false;                       ///< the vibration model's fault (runaway)
   bool saturated = false;                             ///< the limit clamped this tick
 };
 
