@@ -75,9 +75,10 @@ struct NeuralBand {
 enum class NeuralTopology { kUnified, kDecomposed };
 
 inline constexpr std::size_t kMaxNeuralBands = 8;
-/// The neural model's declared maximum level: a band's sample beyond +-10 of its RMS (`scale`)
-/// is runaway, not texture (a noise-driven process with unit RMS essentially never reaches
-/// it). NeuralSynth mutes itself there (runaway()).
+/// The neural model's declared maximum level, +-10 of a band's RMS (`scale`): the feedback is
+/// clamped there, and a band whose RMS over about 0.25 s exceeds half of it (an unstable
+/// filter sitting at the clamp, not a noise-driven process that touches it now and then) or
+/// any non-finite sample is a runaway: NeuralSynth mutes itself (runaway()).
 inline constexpr double kNeuralMaxLevel = 10;
 /// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
 /// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
@@ -129,8 +130,8 @@ class NeuralSynth {
   NeuralSynth(NeuralSynth&&) noexcept;
   NeuralSynth& operator=(NeuralSynth&&) noexcept;
   /// The next model-rate sample [m/s^2] at the current speed and normal force; zero (and the
-  /// state cleared) when inactive or slower than the model's minimum speed. A band sample that
-  /// is not finite or exceeds kNeuralMaxLevel (an unstable model running away) mutes the
+  /// state cleared) when inactive or slower than the model's minimum speed. A runaway band
+  /// (kNeuralMaxLevel: not finite, or its short-term RMS above half the level) mutes the
   /// synthesizer: zero from then on, runaway() true, until ClearRunaway().
   double Step(double speed_mps, double force_N, bool active) noexcept;
   void Reset() noexcept;  ///< clears the state (not the runaway latch)
