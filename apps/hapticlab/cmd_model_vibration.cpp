@@ -28,6 +28,7 @@
 #include "hapticlab/modeling/neural.hpp"
 #include "hapticlab/modeling/photometric.hpp"
 #include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/energy.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/penn_import.hpp"
@@ -63,6 +64,7 @@ struct VibArgs {
   std::string recordings, out, order = "auto", criterion = "aic";
   double rate = 2000, band_lo = 20;
   SoundFlags sound;
+  int max_order = 30;
 };
 
 constexpr const char* kRecordingsHelp =
@@ -76,6 +78,11 @@ void AddVibOptions(CLI::App* cmd, VibArgs& a) {
       ->capture_default_str();
   cmd->add_option("--order", a.order, "AR order: a number, or auto (information criterion)")
       ->capture_default_str();
+  cmd->add_option("--max-order", a.max_order,
+                  "Largest AR order the criterion may choose (--order auto); an order at this "
+                  "cap is reported")
+      ->check(CLI::Range(1, renderer::kMaxArOrder))
+      ->capture_default_str();
   cmd->add_option("--criterion", a.criterion, "Order criterion")
       ->check(CLI::IsMember({"aic", "bic"}))
       ->capture_default_str();
@@ -87,6 +94,7 @@ modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
   modeling::VibrationFitOptions o;
   o.model_rate_hz = a.rate;
   o.band_lo_hz = a.band_lo;
+  o.max_order = a.max_order;
   o.criterion =
       a.criterion == "bic" ? modeling::OrderCriterion::kBic : modeling::OrderCriterion::kAic;
   if (a.order != "auto") {
@@ -99,6 +107,13 @@ modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
     if (o.order < 1 || o.order > 64) throw InputError(kCommandLine, 0, "--order", "expected 1..64");
   }
   return o;
+}
+
+// The criterion chose the cap itself: it may want a larger order.
+std::string AtCapNote(const VibArgs& a, int order) {
+  return a.order == "auto" && order == a.max_order
+             ? fmt::format(" (the --max-order cap: the {} may prefer more)", a.criterion)
+             : std::string();
 }
 
 }  // namespace
@@ -128,9 +143,10 @@ void AddFitVibration(CLI::App& model) {
                                             : "# uncalibrated: variances in the recordings' "
                                               "own units squared, not (m/s^2)^2\n") +
                                 text);
-      fmt::print("{} recordings -> {} cells ({}), order {} at {:.0f} Hz -> {}{}\n", recs.size(),
+      fmt::print("{} recordings -> {} cells ({}), order {}{} at {:.0f} Hz -> {}{}\n", recs.size(),
                  bank.cells.size(), bank.grid_speeds_mps.empty() ? "triangulated" : "grid",
-                 bank.order(), bank.sample_rate_hz, a->out, CalibrationNote(calibrated));
+                 bank.order(), AtCapNote(*a, bank.order()), bank.sample_rate_hz, a->out,
+                 CalibrationNote(calibrated));
       return kExitOk;
     });
   });
@@ -299,7 +315,8 @@ void AddCvVibration(CLI::App& model) {
       fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n", *kind, cv.mean_es_train,
                  any_test ? fmt::format("{:.3f}", cv.mean_es_test)
                           : std::string("n/a (no held-out conditions)"),
-                 *kind == "lpc" ? fmt::format(" (AR order {})", cv.order) : std::string(),
+                 *kind == "lpc" ? fmt::format(" (AR order {}{})", cv.order, AtCapNote(*a, cv.order))
+                                : std::string(),
                  CalibrationNote(calibrated));
       return kExitOk;
     });
@@ -311,11 +328,14 @@ void AddCutoff(CLI::App& model) {
   auto lo = std::make_shared<double>(50), hi = std::make_shared<double>(150),
        step = std::make_shared<double>(10);
   auto json_out = std::make_shared<bool>(false);
+  auto max_s = std::make_shared<double>(0);
   auto* cmd = model.add_subcommand(
       "cutoff",
       "Stationarity cut-off (dissertation ch. III.5): the smallest high-pass cut-off in the range\n"
-      "whose filtered recording rejects a unit root (augmented Dickey-Fuller, 5 %). It becomes\n"
-      "the material's hybrid filter f_c.");
+      "whose filtered recording rejects a unit root (augmented Dickey-Fuller, 5 %, on the whole\n"
+      "recording unless --max-seconds). It becomes the material's hybrid filter f_c. When the\n"
+      "lowest cut-off tried already passes, it says \"stationary at every tested cut-off\" with\n"
+      "the statistic: the range, not the recording, set the value (try a lower --from).");
   auto sound = std::make_shared<SoundFlags>();
   cmd->add_option("--recording", *file,
                   "Measurement CSV v1 with acc_mps2 (kinematics optional), WAV or FLAC")
@@ -324,11 +344,17 @@ void AddCutoff(CLI::App& model) {
   cmd->add_option("--from", *lo, "Lowest cut-off [Hz]")->capture_default_str();
   cmd->add_option("--to", *hi, "Highest cut-off [Hz]")->capture_default_str();
   cmd->add_option("--step", *step, "Step [Hz]")->capture_default_str();
+  cmd->add_option("--max-seconds", *max_s,
+                  "Test only the first this many seconds (0: the whole recording)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--json", *json_out, "Print the result and every cut-off tried as JSON");
   cmd->callback([=] {
     RunGuarded([&] {
       const auto r = modeling::LoadRecording(*file, Labels(*sound));
-      const auto c = modeling::StationarityCutoff(r.acc, r.rate_hz, *lo, *hi, *step);
+      const auto c =
+          modeling::StationarityCutoff(r.acc, r.rate_hz, *lo, *hi, *step,
+                                       static_cast<std::size_t>(std::llround(*max_s * r.rate_hz)));
       if (*json_out) {
         nlohmann::json tried = nlohmann::json::array();
         for (const auto& [fc, adf] : c.tried)
@@ -340,7 +366,17 @@ void AddCutoff(CLI::App& model) {
         PrintJson(
             nlohmann::json{{"found", c.found},
                            {"cutoff_hz", c.found ? nlohmann::json(c.cutoff_hz) : nlohmann::json()},
+                           {"stationary_at_every_cutoff", c.stationary_at_every_cutoff},
+                           {"samples", c.samples},
+                           {"seconds", static_cast<double>(c.samples) / r.rate_hz},
                            {"tried", tried}});
+      } else if (c.stationary_at_every_cutoff) {
+        const auto& adf = c.tried.front().second;
+        fmt::print(
+            "stationary at every tested cut-off: already at the lowest, {:.1f} Hz (ADF {:.2f} < "
+            "{:.2f} at 5 %, {} lags, {:.1f} s); f_c is at most {:.1f} Hz, try a lower --from\n",
+            c.cutoff_hz, adf.statistic, adf.critical_5pct, adf.lags,
+            static_cast<double>(c.samples) / r.rate_hz, c.cutoff_hz);
       } else if (c.found) {
         fmt::print("f_c = {:.1f} Hz (ADF {:.2f} < {:.2f} at 5 %)\n", c.cutoff_hz,
                    c.tried.back().second.statistic, c.tried.back().second.critical_5pct);

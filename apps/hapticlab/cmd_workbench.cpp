@@ -18,6 +18,7 @@
 #include "hapticlab/core/measurement.hpp"
 #include "hapticlab/modeling/sound_recording.hpp"
 #include "hapticlab/modeling/workbench.hpp"
+#include "hapticlab/renderer/material.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include "sound_flags.hpp"
 #include "workbench_cli.hpp"
@@ -35,6 +36,20 @@ nlohmann::json ErrorsJson(const Errors& e) {
               {"friction_ratio", e.friction_ratio_rms}};
   if (e.vibration.present) j["rms"]["vibration_Es"] = e.vibration.normalized;
   return j;
+}
+
+std::string VibrationNotScored(const std::string& path, const Model& model, const Replay& r) {
+  if (model.HasVibration() || !r.has_vibration) return "";
+  const auto mat = renderer::LoadMaterial(path);
+  const char* kind = mat.neural ? "a neural model ([neural])"
+                     : !mat.vibration.empty()
+                         ? "an AR bank ([vibration] cells, e.g. from `model fit-vibration`)"
+                         : nullptr;
+  if (kind == nullptr) return "";
+  return fmt::format(
+      "vibration not scored: {}'s vibration is {}, and this command scores the workbench's "
+      "band model only; E_s by speed and force: `hapticlab model cv-vibration`",
+      path, kind);
 }
 
 std::string ErrorsLine(const Errors& e) {

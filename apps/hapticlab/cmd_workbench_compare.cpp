@@ -179,6 +179,7 @@ void AddCompare(CLI::App& app) {
       const auto m = LoadModel(o->model);
       const auto r = Load(o->measurement, &m);
       const auto c = Compare(m, r);
+      const std::string vib_note = VibrationNotScored(o->model, m, r);
       const auto axes = RankResidualAxes(m, r, Predict(m, r));
       const auto largest = LargestFailures(c, 5);
       std::vector<std::string> files;
@@ -216,10 +217,12 @@ void AddCompare(CLI::App& app) {
                                  {"rms", j["rms"]},
                                  {"summary", {{"axes", ax}, {"largest", lg}}},
                                  {"breakdown", b},
-                                 {"plots", files}});
+                                 {"plots", files},
+                                 {"vibration_not_scored", vib_note}});
         return kExitOk;
       }
       fmt::print("{} on {}: {}\n", o->model, o->measurement, ErrorsLine(c.errors));
+      if (!vib_note.empty()) fmt::print("{}\n", vib_note);
       fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
       for (std::size_t k = 0; k < axes.size() && k < 5; ++k)
         fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, axes[k].channel,

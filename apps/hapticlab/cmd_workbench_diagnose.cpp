@@ -76,6 +76,7 @@ void AddDiagnose(CLI::App& app) {
         };
       }
       const auto dx = Diagnose(m, r, opt);
+      const std::string vib_note = VibrationNotScored(o->model, m, r);
       const auto& u = dx.unexplained;
       if (o->json) {
         nlohmann::json c = nlohmann::json::array();
@@ -108,10 +109,12 @@ void AddDiagnose(CLI::App& app) {
             {"baseline_channels", dx.baseline_channel},
             {"candidates", c},
             {"unexplained",
-             {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}}});
+             {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}},
+            {"vibration_not_scored", vib_note}});
         return kExitOk;
       }
       if (u.flagged) fmt::print("{}\n\n", u.summary);
+      if (!vib_note.empty()) fmt::print("{}\n\n", vib_note);
       fmt::print("held-out error of {} (refitted on the training blocks): {:.4f}", o->model,
                  dx.baseline_error);
       for (const auto& [k, v] : dx.baseline_channel) fmt::print(", {} {:.4f}", k, v);

@@ -42,6 +42,7 @@ inline nlohmann::json BootstrapJson(const modeling::wb::BootstrapReport& b) {
                       {"fit", p.fit},
                       {"bias", p.bias},
                       {"corrected", p.corrected},
+                      {"at_bound", p.clamped},
                       {"jackknife_sd", p.jackknife_sd},
                       {"bootstrap_sd", p.bootstrap_sd},
                       {"sd", p.sd}});
@@ -61,8 +62,9 @@ inline std::string BootstrapLine(const modeling::wb::BootstrapReport& b) {
   if (!b.applied) return "friction bootstrap: not applied (" + b.why_not + ")";
   std::string line = fmt::format("friction bootstrap ({} simulated copies): bias", b.replicates);
   for (const auto& p : b.params)
-    line += fmt::format(" {} {:+.3g} ({:+.2f} %)", p.name, p.bias,
-                        p.fit != 0 ? 100 * p.bias / p.fit : 0.0);
+    line += fmt::format(" {} {:+.3g} ({:+.2f} %{})", p.name, p.bias,
+                        p.fit != 0 ? 100 * p.bias / p.fit : 0.0,
+                        p.clamped ? fmt::format(", held at its bound {:.6g}", p.corrected) : "");
   return line + ", corrected";
 }
 

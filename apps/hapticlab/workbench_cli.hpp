@@ -35,6 +35,13 @@ struct Progress {
 
 nlohmann::json FitReportJson(const modeling::wb::FitReport& rep);
 
+/// Why the vibration channel of `model` (read from `path`) is not scored on `r`, or "" when it
+/// is (or the measurement has no acceleration): compare and diagnose score the workbench's band
+/// model only, and a renderer AR bank (`model fit-vibration`) or neural model is refused
+/// explicitly instead of being dropped without a word (issue #33).
+std::string VibrationNotScored(const std::string& path, const modeling::wb::Model& model,
+                               const modeling::wb::Replay& r);
+
 void AddFit(CLI::App& app);
 void AddCompare(CLI::App& app);
 void AddDiagnose(CLI::App& app);

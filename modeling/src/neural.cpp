@@ -2,7 +2,6 @@
 
 #include <fmt/format.h>
 
-#include <Eigen/Core>
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
@@ -160,49 +159,31 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         // rows. Γ_U with per-cell AR fits (UnifiedLinearPart::kCellAr): one AR(M) per
         // recording, on its own rows; at synthesis the cells' fits are mixed as the LPC bank's
         // (renderer/neural.cpp). Otherwise the features are phi(v', f') (x) x (Γ_D: phi = 1;
-        // Γ_U with kConditionBasis: the biquadratic basis of renderer/neural.cpp), and phi is
-        // constant within a recording, so the normal matrix is sum over recordings of
-        // (phi phi^T) (x) (X_i^T X_i): one M x M Gram matrix per recording instead of 9 M
-        // features per row. Either way the linear part at a training cell is one AR(M),
-        // `a_cell[c]`, which predicts that cell's rows.
-        const bool per_cell = unified && o.unified_linear == UnifiedLinearPart::kCellAr;
-        const Eigen::Index terms = unified && !per_cell ? 9 : 1,
-                           nlin = o.linear_part ? terms * M : 0;
-        auto basis = [&](double v, double fo) {
-          Eigen::VectorXd phi(terms);
-          phi(0) = 1;
-          if (terms == 9)
-            phi << 1, v, fo, v * v, v * fo, fo * fo, v * v * fo, v * fo * fo, v * v * fo * fo;
-          return phi;
-        };
-        // Per-cell AR order: chosen as the LPC bank chooses its order (the criterion summed
-        // over the recordings, at most preprocess.max_order, one order for all cells: LSF
-        // interpolation needs equal orders), here on the band's training signals and at most
-        // M. Why not M = 50 itself: the LSFs of a high-order fit are mostly spurious pairs,
-        // and a resonance that moves between two cells changes which LSF pair carries it, so
-        // mixing them splits it into two weaker ones instead of moving it (held out on the
-        // AR grids, data seed 40: E_s 0.265 and 0.318 with order 50, LPC 0.222 and 0.276).
+        // Γ_U: the condition basis, with no more terms than the grid has nodes: issue #33, the 9
+        // terms on a 2 x 2 grid were underdetermined and unstable between nodes; the terms
+        // ActiveConditionTerms leaves out are fitted as zero), phi constant within a recording:
+        // the normal matrix is sum over recordings of (phi phi^T) (x) (X_i^T X_i). Either way
+        // the linear part at a training cell is one AR(M), `a_cell[c]`.
+        bool per_cell = unified && o.unified_linear == UnifiedLinearPart::kCellAr;
+        Eigen::Index terms = unified && !per_cell ? 9 : 1, nlin = o.linear_part ? terms * M : 0;
+        const auto active = ActiveConditionTerms(nv, nf);
+        auto basis = [&](double v, double fo) { return ConditionBasis(v, fo, terms); };
+        // Per-cell AR order: as the LPC bank chooses its order (PerCellArOrder).
         Eigen::Index p_lin = M;
-        if (per_cell && o.linear_part) {
-          const int pmax = o.preprocess.order > 0 ? std::min(M, o.preprocess.order)
-                                                  : std::min(M, o.preprocess.max_order);
-          std::vector<double> crit(static_cast<std::size_t>(pmax), 0.0);
+        auto choose_p_lin = [&] {
+          std::vector<std::vector<double>> train;
           for (const auto i : use) {
             const auto& x = sig[j.band][i];
-            const std::vector<double> train(
+            train.emplace_back(
                 x.begin(), x.begin() + static_cast<std::ptrdiff_t>(rows_of(j, i, false).second));
-            for (int p = o.preprocess.order > 0 ? pmax : 1; p <= pmax; ++p)
-              crit[static_cast<std::size_t>(p - 1)] +=
-                  FitAr(train, p, pmax, o.preprocess.criterion).criterion;
           }
-          p_lin = pmax;
-          if (o.preprocess.order <= 0)
-            p_lin = 1 + std::distance(crit.begin(), std::min_element(crit.begin(), crit.end()));
+          p_lin = PerCellArOrder(train, M, o.preprocess);
           if (o.progress)
             o.progress(fmt::format("band {}: per-cell AR order {} (as the LPC bank chooses)",
                                    j.band + 1, p_lin),
                        static_cast<int>(done.load()), static_cast<int>(jobs.size()));
-        }
+        };
+        if (per_cell && o.linear_part) choose_p_lin();
         // The linear part fitted on the training rows (all_rows false: the first 80 % of every
         // recording, what the networks are trained beside and the model selection compares) or
         // on every row (the refit of the linear part alone once validation has chosen it).
@@ -275,7 +256,25 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
           } else {
             const double lambda = o.linear_ridge * A.trace() / static_cast<double>(nlin);
             A.diagonal().array() += lambda;
+            for (Eigen::Index t = 0; t < terms; ++t)
+              if (terms > 1 && !active[static_cast<std::size_t>(t)]) {  // fitted as zero
+                A.middleRows(t * M, M).setZero();
+                A.middleCols(t * M, M).setZero();
+                A.block(t * M, t * M, M, M).setIdentity();
+                rhs.segment(t * M, M).setZero();
+              }
             f.w = A.ldlt().solve(rhs);
+            if (!unified && !renderer::IsStableAr(std::span<const double>(f.w.data(), M))) {
+              // Γ_D's covariance-method fit at its cell need not be minimum phase: Levinson's is.
+              const auto& x = sig[j.band][use.front()];
+              const auto end = all_rows ? x.size() : rows_of(j, use.front(), false).second;
+              f.w = Eigen::Map<const Eigen::VectorXd>(
+                  FitAr(
+                      std::vector<double>(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(end)),
+                      M)
+                      .coeffs.data(),
+                  M);
+            }
             // The AR coefficients at each training cell: the M x terms weights times phi.
             const Eigen::Map<const Eigen::MatrixXd> W(f.w.data(), M, terms);
             for (const auto i : use)
@@ -287,7 +286,24 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
             f.ylin(rr) = X.row(rr).head(M).dot(f.a_cell[row_cell[static_cast<std::size_t>(rr)]]);
           return f;
         };
-        const LinearFit lin_train = fit_linear(false);
+        LinearFit lin_train = fit_linear(false);
+        // Stable wherever the model plays, at fit time: the condition basis's filter over a
+        // fine grid of the hull; where it is not, per-cell AR fits mixed in LSF form (stable by
+        // construction) before the network learns what the linear part leaves.
+        if (const auto hull = unified && !per_cell && nlin > 0
+                                  ? ConditionBasisMaxRadius(Eigen::Map<const Eigen::MatrixXd>(
+                                        lin_train.w.data(), M, terms))
+                                  : NeuralPoleRadius{};
+            !(hull.radius < 1)) {
+          if (o.progress)
+            o.progress(fmt::format("band {}: the condition basis has a pole at radius {:.3f}; "
+                                   "fitted per cell and mixed in LSF form instead",
+                                   j.band + 1, hull.radius),
+                       static_cast<int>(done.load()), static_cast<int>(jobs.size()));
+          per_cell = true, terms = 1, nlin = M;
+          choose_p_lin();
+          lin_train = fit_linear(false);
+        }
         // Before the input noise below: the refit, like the first fit, is on clean histories.
         const LinearFit lin_all = refit && nlin > 0 ? fit_linear(true) : LinearFit{};
         const Eigen::VectorXd& wlin = lin_train.w;
@@ -415,24 +431,16 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
         };
         if (nlin > 0) set_linear_alone(linear_only, lin_train);
         if (nlin > 0 && refit) {
-          // The refit must stay a stable filter wherever the model plays: Γ_U's biquadratic
-          // AR coefficients on a 21 x 21 grid over the training range (v', f') in [-1, 1]^2,
-          // Γ_D's AR at its cell (per-cell Levinson fits are minimum phase and their LSF
-          // mixing keeps them so). The least-squares AR(M) is not guaranteed stable, and a
-          // refit that is not is worse than the training-rows fit (a free-running unstable
-          // filter saturates at the clamp): that band keeps the fit on the training rows.
+          // The refit must stay a stable filter wherever the model plays, as the training-rows
+          // fit is (above; Γ_D's at its cell, where its linear weights are one AR(M)): a refit
+          // that is not keeps the training-rows fit (per-cell Levinson fits always are).
           bool stable = true;
           std::string where;
           if (!per_cell) {
-            const Eigen::Map<const Eigen::MatrixXd> W(lin_all.w.data(), M, terms);
-            for (int iv = 0; iv <= (unified ? 20 : 0) && stable; ++iv)
-              for (int jf = 0; jf <= (unified ? 20 : 0) && stable; ++jf) {
-                const double v = unified ? -1 + 0.1 * iv : 0, fo = unified ? -1 + 0.1 * jf : 0;
-                const Eigen::VectorXd a = W * basis(v, fo);
-                stable = renderer::IsStableAr(
-                    std::span<const double>(a.data(), static_cast<std::size_t>(M)));
-                if (!stable) where = fmt::format(" at v' = {:.1f}, f' = {:.1f}", v, fo);
-              }
+            const auto hull = ConditionBasisMaxRadius(
+                Eigen::Map<const Eigen::MatrixXd>(lin_all.w.data(), M, terms), unified ? 41 : 1);
+            stable = hull.radius < 1;
+            if (!stable) where = fmt::format(" (pole radius {:.3f})", hull.radius);
           }
           set_linear_alone(linear_refit, stable ? lin_all : lin_train);
           if (o.progress && !stable)
@@ -480,6 +488,9 @@ renderer::NeuralModel FitNeural(const std::vector<Recording>& recs, const Neural
                              !keep && refit ? ", refitted on every row" : ""),
                  static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
   }
+  RequireStableLinearParts(m, [&](const std::string& what) {
+    if (o.progress) o.progress(what, static_cast<int>(jobs.size()), static_cast<int>(jobs.size()));
+  });
   renderer::ValidateNeuralModel(m);
   return m;
 }

@@ -206,31 +206,43 @@ AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
     dy[static_cast<std::size_t>(t - 1)] =
         y[static_cast<std::size_t>(t)] - y[static_cast<std::size_t>(t - 1)];
   // Every lag order is fitted on the same sample (t = max_lags + 1 .. T - 1) so AICs compare.
-  const int n = T - 1 - max_lags;
+  // The regressors of lag order p are the first 2 + p columns of the full design [1, y[-1],
+  // dy[-1..-max_lags]], so one Householder QR of the full design (no pivoting) gives every
+  // nested fit: R's leading k x k block and the first k entries of Q'z are those of the first k
+  // columns, RSS_k = sum_{i>=k} (Q'z)_i^2 (one QR instead of max_lags + 1, which makes the
+  // whole of a long recording affordable).
+  const int n = T - 1 - max_lags, K = 2 + max_lags;
+  Eigen::MatrixXd X(n, K);
+  Eigen::VectorXd z(n);
+  for (int i = 0; i < n; ++i) {
+    const int t = max_lags + 1 + i;  // index into y; dy[t-1] = y[t] - y[t-1]
+    z(i) = dy[static_cast<std::size_t>(t - 1)];
+    X(i, 0) = 1.0;
+    X(i, 1) = y[static_cast<std::size_t>(t - 1)];
+    for (int j = 1; j <= max_lags; ++j) X(i, 1 + j) = dy[static_cast<std::size_t>(t - 1 - j)];
+  }
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(X);
+  const Eigen::VectorXd qz = qr.householderQ().adjoint() * z;
+  const Eigen::MatrixXd R = qr.matrixQR().topRows(K).triangularView<Eigen::Upper>();
   AdfResult best;
   double best_aic = std::numeric_limits<double>::infinity();
+  std::vector<double> tail(static_cast<std::size_t>(K) + 1);  // tail[k] = sum_{i>=k} qz_i^2
+  tail[static_cast<std::size_t>(K)] = qz.tail(n - K).squaredNorm();
+  for (int i = K - 1; i >= 0; --i)
+    tail[static_cast<std::size_t>(i)] = tail[static_cast<std::size_t>(i) + 1] + qz(i) * qz(i);
   for (int p = 0; p <= max_lags; ++p) {
-    Eigen::MatrixXd X(n, 2 + p);
-    Eigen::VectorXd z(n);
-    for (int i = 0; i < n; ++i) {
-      const int t = max_lags + 1 + i;  // index into y; dy[t-1] = y[t] - y[t-1]
-      z(i) = dy[static_cast<std::size_t>(t - 1)];
-      X(i, 0) = 1.0;
-      X(i, 1) = y[static_cast<std::size_t>(t - 1)];
-      for (int j = 1; j <= p; ++j) X(i, 1 + j) = dy[static_cast<std::size_t>(t - 1 - j)];
-    }
-    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(X);
-    const Eigen::VectorXd beta = qr.solve(z);
-    const Eigen::VectorXd res = z - X * beta;
-    const double rss = res.squaredNorm();
-    const double aic = n * std::log(rss / n) + 2.0 * (2 + p);
-    if (aic < best_aic) {
-      best_aic = aic;
-      const double s2 = rss / (n - 2 - p);
-      const Eigen::MatrixXd cov = (X.transpose() * X).inverse() * s2;
-      best.statistic = beta(1) / std::sqrt(cov(1, 1));
-      best.lags = p;
-    }
+    const int k = 2 + p;
+    const double rss = tail[static_cast<std::size_t>(k)];
+    const double aic = n * std::log(rss / n) + 2.0 * k;
+    if (!(aic < best_aic)) continue;
+    best_aic = aic;
+    // gamma = beta(1); its variance s2 [(R_k'R_k)^-1](1,1) = s2 |row 1 of R_k^-1|^2.
+    const auto Rk = R.topLeftCorner(k, k).triangularView<Eigen::Upper>();
+    const Eigen::VectorXd beta = Rk.solve(qz.head(k));
+    const Eigen::MatrixXd Rinv = Rk.solve(Eigen::MatrixXd::Identity(k, k));
+    const double s2 = rss / (n - k);
+    best.statistic = beta(1) / std::sqrt(s2 * Rinv.row(1).squaredNorm());
+    best.lags = p;
   }
   // MacKinnon (2010), Table 2, constant and no trend, 5 %: beta_inf, beta_1, beta_2.
   const double nobs = n;
@@ -244,14 +256,17 @@ CutoffResult StationarityCutoff(const std::vector<double>& x, double fs, double 
   HL_REQUIRE(lo > 0 && hi >= lo && step > 0 && hi < 0.5 * fs,
              "cut-off range must satisfy 0 < lo <= hi < fs/2 and step > 0");
   CutoffResult r;
-  const std::vector<double> part(
-      x.begin(), x.begin() + static_cast<std::ptrdiff_t>(std::min(x.size(), max_samples)));
+  const std::size_t used = max_samples == 0 ? x.size() : std::min(x.size(), max_samples);
+  r.samples = used;
+  const std::vector<double> part(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(used));
   for (double fc = lo; fc <= hi + 1e-9; fc += step) {
     const auto adf = AugmentedDickeyFuller(BandLimit(part, fs, fc, 0));
     r.tried.emplace_back(fc, adf);
     if (adf.rejects_unit_root) {
       r.found = true;
       r.cutoff_hz = fc;
+      // Already at the lowest cut-off tried: the search range bounds f_c from above only.
+      r.stationary_at_every_cutoff = r.tried.size() == 1;
       break;
     }
   }

@@ -140,7 +140,11 @@ BootstrapReport BootstrapFriction(Model* model, const Measurement& m, const Repl
     for (const double e : est[k]) mean += e / B;
     for (const double e : est[k]) ss += (e - mean) * (e - mean);
     p.bias = mean - pe.value;
-    p.corrected = pe.value - p.bias;
+    // The correction stays in the physical range (mu_b >= 0, kappa > 0, ...): a bias larger
+    // than the fit's distance to its bound puts the estimate at the bound, and says so.
+    const double raw = pe.value - p.bias;
+    p.corrected = std::clamp(raw, pe.bound_lo, pe.bound_hi);
+    p.clamped = p.corrected != raw;
     p.jackknife_sd = pe.sd;
     p.bootstrap_sd = std::sqrt(ss / (B - 1));
     p.sd = std::sqrt(std::max(pe.sd * pe.sd, p.bootstrap_sd * p.bootstrap_sd) +
@@ -153,8 +157,16 @@ BootstrapReport BootstrapFriction(Model* model, const Measurement& m, const Repl
     const double t = pe.sd > 0 ? (pe.hi95 - pe.value) / pe.sd : 1.96;  // the fit's t quantile
     pe.value = p.corrected;
     pe.sd = p.sd;
-    pe.lo95 = pe.value - t * pe.sd;
-    pe.hi95 = pe.value + t * pe.sd;
+    // At a bound the interval is one-sided: from the bound, as far as the spread reaches.
+    pe.lo95 = std::max(pe.value - t * pe.sd, pe.bound_lo);
+    pe.hi95 = std::min(pe.value + t * pe.sd, pe.bound_hi);
+    if (p.clamped) {
+      pe.at_bound = true;
+      friction->summary.at_bounds.push_back(fmt::format(
+          "{}.{} at its {} bound ({:.6g}) after the bootstrap's bias correction ({:.6g} - {:+.3g})",
+          pe.effect, pe.name, pe.value == pe.bound_lo ? "lower" : "upper", pe.value, p.fit,
+          p.bias));
+    }
     model->params[pe.effect][pe.name] = p.corrected;
   }
   out.applied = true;

@@ -195,6 +195,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
     pe.name = spec.name;
     pe.value = x[k] * cost->scale[k];
     pe.lo95 = pe.hi95 = pe.value;
+    pe.bound_lo = spec.lo;
+    pe.bound_hi = spec.hi;
     // At a bound: within 1e-6 of the parameter's range (or of its scale, for open ranges).
     const double tol = 1e-6 * std::max(1.0, std::min(hi[k] - lo[k], 1e6));
     const bool at_lo = x[k] - lo[k] <= tol, at_hi = hi[k] - x[k] <= tol;
@@ -258,8 +260,9 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   for (std::size_t k = 0; k < np; ++k) {
     auto& pe = out.params[k];
     pe.sd = std::sqrt(std::max(out.covariance[k * np + k], 0.0));
-    pe.lo95 = pe.value - t * pe.sd;
-    pe.hi95 = pe.value + t * pe.sd;
+    // The interval stays in the physical range: a one-sided interval at a bound.
+    pe.lo95 = std::max(pe.value - t * pe.sd, pe.bound_lo);
+    pe.hi95 = std::min(pe.value + t * pe.sd, pe.bound_hi);
   }
   return out;
 }

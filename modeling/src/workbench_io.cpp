@@ -11,9 +11,11 @@
 #include <numbers>
 #include <set>
 #include <sstream>
+#include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
@@ -179,9 +181,25 @@ void SaveModel(const Model& m, const std::string& path, const Replay* r) {
       s += "]\n";
     }
   }
-  WriteTextFile(path, s);
-  // The file must load in the renderer as well as here.
-  renderer::LoadMaterial(path);
+  // Never leave a file this program would refuse to read: write beside the target, read it
+  // back with LoadModel (the renderer's checks and the workbench's), and only then move it into
+  // place. A model that does not read back is this program's error, not the user's input.
+  const std::string tmp = path + ".writing";
+  WriteTextFile(tmp, s);  // std::runtime_error (exit 1) when the file cannot be written
+  try {
+    LoadModel(tmp);
+  } catch (const InputError& e) {
+    std::error_code ec;
+    std::filesystem::remove(tmp, ec);
+    throw PreconditionError(fmt::format(
+        "the fitted model would not read back, so {} was not written: {}", path, e.what()));
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw std::runtime_error(path + ": cannot write (the model could not be moved into place)");
+  }
 }
 
 Model LoadModel(const std::string& path) {

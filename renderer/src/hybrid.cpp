@@ -64,6 +64,11 @@ void HybridRenderer::Fault(std::atomic<std::uint64_t>& counter) noexcept {
 ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noexcept {
   counters_.force_ticks.fetch_add(1, std::memory_order_relaxed);
   ForceCommand cmd;
+  if (vib_fault_pending_.exchange(false, std::memory_order_acq_rel)) {
+    cmd.fault = cmd.vibration_fault = true;
+    Fault(counters_.vibration_faults);
+    return cmd;
+  }
   const bool finite = in.state.p_m.allFinite() && in.state.v_mps.allFinite() &&
                       std::isfinite(in.t_s) && std::isfinite(now_s) &&
                       (!in.has_normal_force || std::isfinite(in.normal_force_N));
@@ -111,14 +116,24 @@ ForceCommand HybridRenderer::ForceTick(const DeviceSample& in, double now_s) noe
   return cmd;
 }
 
+double HybridRenderer::ModelSample(const ArFilter& f) noexcept {
+  if (vib_muted_.load(std::memory_order_relaxed)) return 0;
+  const double x = neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f);
+  // The AR bank's filters are stable by construction (LSF interpolation): only a non-finite
+  // sample is a fault there; the neural synthesizer also mutes itself beyond its level.
+  if (std::isfinite(x) && !(neural_ && neural_->runaway())) return x;
+  vib_muted_.store(true, std::memory_order_release);
+  vib_fault_pending_.store(true, std::memory_order_release);
+  return 0;
+}
+
 double HybridRenderer::VibrationTick() noexcept {
   counters_.vibration_ticks.fetch_add(1, std::memory_order_relaxed);
   const ArFilter& f = filter_box_.Read();
   // Run the model at its rate; upsample band-limited (integer ratio) or linearly.
   double a;
   if (upsample_) {
-    if (up_phase_ == 0)
-      up_.Push(neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f));
+    if (up_phase_ == 0) up_.Push(ModelSample(f));
     a = up_.Output(up_phase_);
     up_phase_ = up_phase_ + 1 == up_.factor() ? 0 : up_phase_ + 1;
   } else {
@@ -126,15 +141,17 @@ double HybridRenderer::VibrationTick() noexcept {
     while (phase_ >= 1.0) {
       phase_ -= 1.0;
       prev_ = next_;
-      next_ = neural_ ? neural_->Step(f.speed_mps, f.force_N, f.active) : synth_.Step(f);
+      next_ = ModelSample(f);
     }
     a = prev_ + (next_ - prev_) * phase_;
   }
-  if (!f.active) {
-    // Clear the model's state now (both calls do nothing when it is already clear).
-    if (neural_)
+  const bool muted = vib_muted_.load(std::memory_order_relaxed);
+  if (!f.active || muted) {
+    // Clear the model's state now (both calls do nothing when it is already clear; a muted
+    // model is not run again).
+    if (!muted && neural_)
       neural_->Step(0, 0, false);
-    else
+    else if (!muted)
       synth_.StepWith(f, 0.0);
     prev_ = next_ = 0;
     up_.Reset();

@@ -6,9 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
 #include <optional>
-#include <sstream>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -97,9 +95,8 @@ class Reader {
 void CheckKnownKeys(Reader& r, const toml::table& t, const std::string& prefix,
                     std::initializer_list<const char*> known) {
   for (const auto& [k, v] : t) {
-    bool ok = false;
-    for (const char* name : known) ok = ok || k.str() == name;
-    if (!ok)
+    const std::string_view key = k.str();  // (clang 14 cannot capture a structured binding)
+    if (std::none_of(known.begin(), known.end(), [&](const char* name) { return key == name; }))
       r.Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()),
               "unknown key (a typo?)");
   }
@@ -144,7 +141,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
                    VibrationBank* bank, int depth) {
   CheckKnownKeys(r, t, "vibration",
                  {"file", "sample_rate_hz", "min_speed_mps", "max_speed_mps", "max_force_N",
-                  "speeds_mps", "forces_N", "cells", "triangles"});
+                  "light_force_N", "speeds_mps", "forces_N", "cells", "triangles"});
   if (auto f = r.String(t, "vibration", "file", false)) {
     ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
     return;
@@ -153,6 +150,7 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
   if (auto v = r.Number(t, "vibration", "min_speed_mps", false)) bank->min_speed_mps = *v;
   if (auto v = r.Number(t, "vibration", "max_speed_mps", false)) bank->max_speed_mps = *v;
   if (auto v = r.Number(t, "vibration", "max_force_N", false)) bank->max_force_N = *v;
+  if (auto v = r.Number(t, "vibration", "light_force_N", false)) bank->light_force_N = *v;
   bank->grid_speeds_mps = r.Numbers(t, "vibration", "speeds_mps", false);
   bank->grid_forces_N = r.Numbers(t, "vibration", "forces_N", false);
   const toml::node* cells_node = t.get("cells");
@@ -397,6 +395,7 @@ void ValidateMaterial(const MaterialModel& m) {
   if (!b.empty()) {
     if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
     if (!(b.min_speed_mps >= 0)) d.Add(f, 0, "vibration.min_speed_mps", "must be >= 0");
+    if (!(b.light_force_N >= 0)) d.Add(f, 0, "vibration.light_force_N", "must be >= 0 (0: off)");
     if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
       d.Add(f, 0, "vibration.max_speed_mps",
             fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
@@ -469,6 +468,7 @@ std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_f
                      b.sample_rate_hz, b.min_speed_mps);
     if (b.max_speed_mps > 0) s += fmt::format("max_speed_mps = {:.17g}\n", b.max_speed_mps);
     if (b.max_force_N > 0) s += fmt::format("max_force_N = {:.17g}\n", b.max_force_N);
+    if (b.light_force_N > 0) s += fmt::format("light_force_N = {:.17g}\n", b.light_force_N);
     auto list = [](const std::vector<double>& v) {
       std::string o = "[";
       for (std::size_t i = 0; i < v.size(); ++i) o += fmt::format("{}{:.17g}", i ? ", " : "", v[i]);

@@ -10,6 +10,9 @@
 #include "hapticlab/renderer/vibration.hpp"
 
 namespace hapticlab::renderer {
+
+// The runaway detector's averaging time [s] (NeuralSynth::Step).
+constexpr double kRunawayWindow_s = 0.25;
 namespace {
 
 // Bilinear weights on the grid (clamped at the edges): up to four cells, speed-major index.
@@ -142,13 +145,15 @@ std::size_t NeuralNet::ParamCount() const {
   return n;
 }
 
+// Clamped to [-1, 1]: outside the training grid the model plays its edge (as the AR bank and
+// Γ_D's bilinear weights do) instead of extrapolating the condition basis and the networks.
 double NeuralModel::NormSpeed(double v) const {
   const double lo = speeds_mps.front(), hi = speeds_mps.back();
-  return hi > lo ? 2 * (v - lo) / (hi - lo) - 1 : 0;
+  return hi > lo ? std::clamp(2 * (v - lo) / (hi - lo) - 1, -1.0, 1.0) : 0;
 }
 double NeuralModel::NormForce(double f) const {
   const double lo = forces_N.front(), hi = forces_N.back();
-  return hi > lo ? 2 * (f - lo) / (hi - lo) - 1 : 0;
+  return hi > lo ? std::clamp(2 * (f - lo) / (hi - lo) - 1, -1.0, 1.0) : 0;
 }
 
 std::vector<NeuralBand> DefaultNeuralBands() {
@@ -171,7 +176,9 @@ NeuralSynth::NeuralSynth(std::shared_ptr<const NeuralModel> model, std::uint64_t
   std::size_t widest = 1;
   for (const auto& b : m_->bands) {
     BandState s;
-    s.hist.assign(2 * static_cast<std::size_t>(b.history), 0.0);
+    // 2M history (newest-first window at [head, head + M)) and, last, the band's short-term
+    // mean square (the runaway detector below; kept here so Reset clears it with the history).
+    s.hist.assign(2 * static_cast<std::size_t>(b.history) + 1, 0.0);
     s.input.assign(static_cast<std::size_t>(b.nets.front().layers.front()), 0.0);
     const double rate = m_->sample_rate_hz / b.decimation;
     if (&b == &m_->bands.front())
@@ -244,6 +251,7 @@ double NeuralSynth::Evaluate(std::size_t band, std::size_t cell, const double* i
 
 double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept {
   const NeuralModel& m = *m_;
+  if (runaway_) return 0;  // muted
   if (!active || !(speed_mps >= m.min_speed_mps) || !std::isfinite(force_N)) {
     if (running_) Reset();
     return 0;
@@ -275,8 +283,18 @@ double NeuralSynth::Step(double speed_mps, double force_N, bool active) noexcept
         sig += w[k] * band.sigma[c];
       }
       y += sig * noise_.Normal();
-      if (!std::isfinite(y)) y = 0;
-      y = std::clamp(y, -10.0, 10.0);  // keep the feedback inside the trained range
+      // Runaway (issue #33): a non-finite sample, or a band whose RMS over about 0.25 s exceeds
+      // half the declared maximum level (the clamp): an unstable filter sits at the clamp, a
+      // stable model that touches it now and then (a lightly damped resonance) does not.
+      const double alpha = 1 / (kRunawayWindow_s * m.sample_rate_hz / band.decimation);
+      double& ms = s.hist.back();
+      if (std::isfinite(y)) ms += alpha * (std::min(y * y, kNeuralMaxLevel * kNeuralMaxLevel) - ms);
+      if (!std::isfinite(y) || ms > 0.25 * kNeuralMaxLevel * kNeuralMaxLevel) {
+        runaway_ = true;  // mute (the caller faults)
+        Reset();
+        return 0;
+      }
+      y = std::clamp(y, -kNeuralMaxLevel, kNeuralMaxLevel);  // feedback inside the trained range
       s.head = s.head == 0 ? static_cast<int>(M) - 1 : s.head - 1;
       s.hist[static_cast<std::size_t>(s.head)] = s.hist[static_cast<std::size_t>(s.head) + M] = y;
       s.up.Push(s.hp.Step(y));

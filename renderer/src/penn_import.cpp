@@ -239,6 +239,8 @@ PennImport ImportPennXml(const std::string& path) {
   // The toolkit renders down to 0.05 mm/s; below it it interpolates at speed ~0, where its
   // files hold var = 0 boundary models: silent, as the renderer is below min_speed_mps.
   bank.min_speed_mps = kPennMinSpeed_mps;
+  // A force below 0.05 N it interpolates at 1e-4 N, next to its silent force-0 models.
+  bank.light_force_N = kPennLightForce_N;
   // The geometry is flat: the vibration carries the whole texture, so no hybrid split.
   m.hybrid_cutoff_hz = 0;
   ValidateMaterial(m);

@@ -122,6 +122,8 @@ void VibrationInterpolator::Interpolate(double speed_mps, double force_N, bool i
     speed_mps = bank_.max_speed_mps - kSaturationMarginSpeed_mps;
   if (bank_.max_force_N > 0 && force_N > bank_.max_force_N)
     force_N = bank_.max_force_N - kSaturationMarginForce_N;
+  else if (force_N < bank_.light_force_N)  // the toolkit's light-load rule
+    force_N = kLightForceAs_N;
   const CellWeights w = Weights(speed_mps, force_N);
   std::fill(lsf_.begin(), lsf_.end(), 0.0);
   std::fill(ma_lsf_.begin(), ma_lsf_.end(), 0.0);

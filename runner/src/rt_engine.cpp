@@ -249,7 +249,8 @@ void RtEngine::ForceStep(std::uint64_t k, double now_s, double late_s) noexcept 
   if (render && cmd.raw.in_contact) contact_ticks_.fetch_add(1, std::memory_order_relaxed);
   // The watchdog has the last word: zero force on any fault or lost read, this very tick.
   const Eigen::Vector3d command = watchdog_.Check(rr, sample, now_s, late_s, 1.0 / rate,
-                                                  render ? cmd.force_N : Eigen::Vector3d::Zero());
+                                                  render ? cmd.force_N : Eigen::Vector3d::Zero(),
+                                                  render && cmd.vibration_fault);
   const bool fault = watchdog_.last() != FaultKind::kNone || cmd.fault || !render;
   if (watchdog_.last() == FaultKind::kDisconnect) {
     disconnects_.fetch_add(1, std::memory_order_relaxed);
@@ -339,6 +340,7 @@ EngineStats RtEngine::Stats() const {
   s.nan_faults = watchdog_.count(FaultKind::kNaN);
   s.stale_faults = watchdog_.count(FaultKind::kStale);
   s.bad_commands = watchdog_.count(FaultKind::kBadCommand);
+  s.vibration_faults = watchdog_.count(FaultKind::kVibrationModel);
   s.force_jitter_max_s = force_jitter_max_.load();
   s.force_jitter_mean_s =
       s.force_ticks ? force_jitter_sum_.load() / static_cast<double>(s.force_ticks) : 0;

@@ -188,9 +188,11 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
   SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
   if (engine.watchdog().tripped()) {
     out.fault = true;
-    out.detail =
-        fmt::format("{}: {} disconnects, {} NaN, {} stale, {} missed-deadline faults", side.label,
-                    st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults);
+    out.detail = fmt::format(
+        "{}: {} disconnects, {} NaN, {} stale, {} missed-deadline, {} vibration-model "
+        "faults",
+        side.label, st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults,
+        st.vibration_faults);
   } else if (static_cast<double>(st.contact_ticks) <
              kMinContactFraction * static_cast<double>(st.force_ticks)) {
     out.untouched = true;

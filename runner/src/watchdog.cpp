@@ -18,6 +18,8 @@ const char* FaultName(FaultKind k) {
       return "deadline-miss";
     case FaultKind::kBadCommand:
       return "bad-command";
+    case FaultKind::kVibrationModel:
+      return "vibration-model";
   }
   return "?";
 }
@@ -34,8 +36,8 @@ void Watchdog::Reset() noexcept {
 }
 
 Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const DeviceSample& s, double now_s,
-                                double late_s, double period_s,
-                                const Eigen::Vector3d& force) noexcept {
+                                double late_s, double period_s, const Eigen::Vector3d& force,
+                                bool vibration_fault) noexcept {
   ++tick_;
   misses_ = late_s > period_s ? misses_ + 1 : 0;
   FaultKind k = FaultKind::kNone;
@@ -61,6 +63,8 @@ Eigen::Vector3d Watchdog::Check(devices::ReadResult read, const DeviceSample& s,
     k = FaultKind::kDeadlineMiss;
   else if (!force.allFinite() || force.norm() > o_.max_force_N * (1 + 1e-9))
     k = FaultKind::kBadCommand;
+  else if (vibration_fault)
+    k = FaultKind::kVibrationModel;
   run_ = k != FaultKind::kNone && k == last_ ? run_ + 1 : 0;
   last_ = k;
   if (k == FaultKind::kNone) return force;

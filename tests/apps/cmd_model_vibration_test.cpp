@@ -39,6 +39,40 @@ void WriteGrid(const std::string& dir) {
     }
 }
 
+// model cutoff reads the whole recording (before issue #33, silently its first 20 000
+// samples), or the first --max-seconds.
+TEST(ModelCli, CutoffTestsTheWholeRecordingOrTheWindowAsked) {
+  test::TempDir dir;
+  std::string s =
+      "# hapticlab-measurement v1\n# speed_mps: 0.08\n# force_N: 1.2\n"
+      "t_s,x_m,y_m,z_m,acc_mps2\n";
+  double a1 = 0, a2 = 0;
+  std::uint64_t state = 99;
+  for (int i = 0; i < 30000; ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const double e = static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5;
+    const double a = 1.6 * a1 - 0.9 * a2 + e;
+    a2 = a1;
+    a1 = a;
+    s += std::to_string(i / 2000.0) + ",0,0,0," + std::to_string(a) + "\n";
+  }
+  test::WriteFile(dir.File("long.csv"), s);
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " model cutoff --json --recording " + dir.File("long.csv"), &out), 0)
+      << out;
+  auto j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["samples"], 30000);
+  EXPECT_NEAR(j["seconds"].get<double>(), 15.0, 1e-6);
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " model cutoff --json --max-seconds 2 --recording " + dir.File("long.csv"), &out),
+      0)
+      << out;
+  j = nlohmann::json::parse(out);
+  EXPECT_EQ(j["samples"], 4000);
+}
+
 TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
   test::TempDir dir;
   std::filesystem::create_directory(dir.File("rec"));
@@ -75,6 +109,28 @@ TEST(ModelCli, FitVibrationCrossValidateAndCutoff) {
       << out;
   EXPECT_EQ(nlohmann::json::parse(out)["cutoff_hz"],
             50.0);  // already stationary at the first cut-off
+  // Issue #33: it says so, with the statistic, and the test ran on the whole recording.
+  EXPECT_TRUE(nlohmann::json::parse(out)["stationary_at_every_cutoff"].get<bool>()) << out;
+  EXPECT_EQ(nlohmann::json::parse(out)["samples"], 6000) << out;
+  ASSERT_EQ(test::RunCommand(Cli() + " model cutoff --recording " + dir.File("rec/r0.csv"), &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("stationary at every tested cut-off: already at the lowest, 50.0 Hz (ADF -"),
+            std::string::npos)
+      << out;
+  // The AR order cap is an option, and an order at the cap is reported as such.
+  ASSERT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") +
+                                 " -o " + dir.File("bank1.toml") + " --max-order 1",
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("order 1 (the --max-order cap: the aic may prefer more)"), std::string::npos)
+      << out;
+  EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("rec") +
+                                 " -o " + dir.File("bank0.toml") + " --max-order 0",
+                             &out),
+            2)
+      << out;
   // A folder without recordings is bad input.
   std::filesystem::create_directory(dir.File("empty"));
   EXPECT_EQ(test::RunCommand(Cli() + " model fit-vibration --recordings " + dir.File("empty") +

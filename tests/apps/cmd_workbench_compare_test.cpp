@@ -102,5 +102,59 @@ TEST(WorkbenchCompareCli, AMissingModelOrMeasurementIsNamed) {
   EXPECT_NE(out.find(dir.File("m.csv")), std::string::npos) << out;
 }
 
+// Issue #33: a model whose vibration is a renderer AR bank (the dissertation's own LPC model,
+// from `model fit-vibration`) is not scored by compare's band model; compare says so instead of
+// dropping the vibration channel without a word. The workbench's own band model is scored.
+TEST(WorkbenchCompareCli, AnArBankModelsVibrationIsRefusedExplicitly) {
+  test::TempDir dir;
+  const auto meas = dir.File("m.csv");
+  std::string out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " measurement simulate --duration 5 --seed 3 -o " + meas + " > /dev/null", &out),
+      0)
+      << out;
+  // A 2 x 2 AR(1) bank, written by hand in the renderer's format.
+  std::string bank =
+      "[vibration]\nsample_rate_hz = 2000.0\nmin_speed_mps = 0.01\nspeeds_mps = [0.04, 0.12]\n"
+      "forces_N = [0.5, 1.5]\n";
+  for (const char* v : {"0.04", "0.12"})
+    for (const char* f : {"0.5", "1.5"})
+      bank += std::string("[[vibration.cells]]\nspeed_mps = ") + v + "\nforce_N = " + f +
+              "\nar = [0.5]\nvariance = 1.0\n";
+  test::WriteFile(dir.File("bank.toml"), bank);
+  test::WriteFile(dir.File("ar.toml"),
+                  "name = \"x\"\n[contact]\ntexture_K = 1000.0\n[friction]\nkappa_N_per_m = "
+                  "3000.0\nmu_k = 0.3\n[vibration]\nfile = \"bank.toml\"\n");
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " compare --json --model " + dir.File("ar.toml") + " --measurement " + meas,
+                &out),
+            0)
+      << out;
+  auto j = nlohmann::json::parse(out);
+  EXPECT_FALSE(j["channels"].contains("vibration")) << out;
+  EXPECT_NE(j["vibration_not_scored"].get<std::string>().find("is an AR bank"), std::string::npos)
+      << out;
+  ASSERT_EQ(test::RunCommand(
+                Cli() + " compare --model " + dir.File("ar.toml") + " --measurement " + meas, &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("vibration not scored: " + dir.File("ar.toml")), std::string::npos) << out;
+  // The workbench's fitted model has the band model: scored, nothing refused.
+  ASSERT_EQ(test::RunCommand(Cli() + " fit --quiet --measurement " + meas + " -o " +
+                                 dir.File("f.toml") + " > /dev/null",
+                             &out),
+            0)
+      << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " compare --json --model " + dir.File("f.toml") + " --measurement " + meas, &out),
+      0)
+      << out;
+  j = nlohmann::json::parse(out);
+  EXPECT_TRUE(j["channels"].contains("vibration")) << out;
+  EXPECT_EQ(j["vibration_not_scored"], "");
+}
+
 }  // namespace
 }  // namespace hapticlab

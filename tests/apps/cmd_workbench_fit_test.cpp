@@ -91,6 +91,50 @@ TEST(WorkbenchFitCli, RecoversTheTruthAndWritesTheRendererTablesFromTheParameter
   EXPECT_EQ(test::RunCommand(Cli() + " model check " + model, &out), 0) << out;
 }
 
+// Issue #33's hidden-effect case: strokes whose low-speed friction falls with speed (a
+// Stribeck law, dmu_s 0.25 over v_s 4 mm/s, and no viscous friction in the truth). The
+// baseline's viscous term would fit a negative mu_b; it stops at its bound 0, and the
+// bootstrap's bias correction once pushed it to -0.000123, so `fit` wrote a model it then
+// refused to read (exit 2) and `diagnose` could not run. Now: exit 0, mu_b at its bound with an
+// interval from it, a model that loads, and `diagnose` ranks stribeck first.
+TEST(WorkbenchFitCli, StribeckStrokesFitWithMuBAtItsBoundAndDiagnoseRanksStribeckFirst) {
+  test::TempDir dir;
+  const auto meas = dir.File("m.csv"), model = dir.File("f.toml");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() +
+                                 " measurement simulate --duration 60 --seed 5 --effects coulomb "
+                                 "dahl stribeck hc-damping hc-exponent vibration-speed "
+                                 "vibration-force -o " +
+                                 meas + " > /dev/null",
+                             &out),
+            0)
+      << out;
+  ASSERT_EQ(
+      test::RunCommand(Cli() + " fit --json --quiet --measurement " + meas + " -o " + model, &out),
+      0)
+      << out;
+  const auto j = nlohmann::json::parse(out);
+  const auto& mu_b = j["estimates"]["viscous"]["mu_b"];
+  EXPECT_EQ(mu_b["value"].get<double>(), 0.0) << mu_b.dump();
+  EXPECT_EQ(mu_b["lo95"].get<double>(), 0.0) << "the interval runs from the bound";
+  EXPECT_GE(mu_b["hi95"].get<double>(), 0.0);
+  EXPECT_EQ(j["params"]["viscous"]["mu_b"].get<double>(), 0.0);
+  for (const auto& p : j["friction_bootstrap"]["params"]) {
+    EXPECT_GE(p["corrected"].get<double>(), 0.0) << p.dump();  // every friction parameter >= 0
+    if (p["name"] == "mu_b" && p["fit"].get<double>() - p["bias"].get<double>() < 0)
+      EXPECT_TRUE(p["at_bound"].get<bool>()) << p.dump();
+  }
+  EXPECT_EQ(test::RunCommand(Cli() + " model check " + model, &out), 0) << out;
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " diagnose --json --quiet --model " + model + " --measurement " + meas, &out),
+      0)
+      << out;
+  const auto dx = nlohmann::json::parse(out);
+  ASSERT_FALSE(dx["candidates"].empty());
+  EXPECT_EQ(dx["candidates"][0]["effect"], "stribeck") << dx["candidates"].dump(1);
+}
+
 TEST(WorkbenchFitCli, BadInputNamesTheFileOrTheOptionBeforeAnyWork) {
   test::TempDir dir;
   std::string out;

@@ -39,53 +39,7 @@ TEST(NeuralFig37, LpcUnifiedAndDecomposedOnOneTable) {
   }
 }
 
-// The project's synthetic AR grid (tests/modeling/vibration_test.cpp): an AR(4) at 2 kHz whose
-// two resonances move with speed and force, its variance growing with both. `nonlinear`
-// adds a bounded bilinear term, 0.8 s tanh(x[k-1] / s) tanh(x[k-2] / s) with s the linear
-// part's RMS: sum and difference frequencies of the resonances, a process no linear AR model
-// is (and still stable: the term is bounded and the linear part is).
-Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64_t seed,
-                          double seconds = 2.5) {
-  const double fs = 2000;
-  const double f1 = 120 + 900 * v + 30 * f * f, f2 = 2.2 * f1;
-  const double r1 = 0.97 - 0.02 * f, r2 = 0.9;
-  auto poly = [&](double fr, double r) {
-    return std::pair{2 * r * std::cos(2 * kPi * fr / fs), -r * r};
-  };
-  const auto [a1, a2] = poly(f1, r1);
-  const auto [b1, b2] = poly(f2, r2);
-  const double c[4] = {a1 + b1, a2 + b2 - a1 * b1, -a1 * b2 - a2 * b1, -a2 * b2};
-  const double sd = std::sqrt(0.5 * std::pow(v / 0.08, 1.6) * (f / 1.2));
-  Rng rng(seed);
-  const std::size_t n = static_cast<std::size_t>(seconds * fs), warm = 2000;
-  std::vector<double> x(n + warm, 0.0);
-  // RMS of the linear process for unit excitation (to scale the nonlinearity's argument).
-  double lin_rms = 1;
-  if (nonlinear) {
-    Rng r2n(seed + 999);
-    std::vector<double> y(20000, 0.0);
-    double ss = 0;
-    for (std::size_t k = 4; k < y.size(); ++k) {
-      y[k] = c[0] * y[k - 1] + c[1] * y[k - 2] + c[2] * y[k - 3] + c[3] * y[k - 4] + r2n.Normal();
-      ss += y[k] * y[k];
-    }
-    lin_rms = std::sqrt(ss / static_cast<double>(y.size()));
-  }
-  for (std::size_t k = 4; k < x.size(); ++k) {
-    double a = c[0] * x[k - 1] + c[1] * x[k - 2] + c[2] * x[k - 3] + c[3] * x[k - 4] + rng.Normal();
-    if (nonlinear)
-      a += 0.8 * lin_rms * std::tanh(x[k - 1] / lin_rms) * std::tanh(x[k - 2] / lin_rms);
-    x[k] = a;
-  }
-  Recording rec;
-  rec.speed_mps = v;
-  rec.force_N = f;
-  rec.rate_hz = fs;
-  rec.file = fmt::format("{} AR v={} f={}", nonlinear ? "nonlinear" : "linear", v, f);
-  for (std::size_t k = warm; k < x.size(); ++k) rec.acc.push_back(sd * x[k]);
-  return rec;
-}
-
+// ArGridRecording: neural_fixture.hpp.
 std::vector<Recording> ArGrid(bool nonlinear, std::uint64_t seed) {
   std::vector<Recording> recs;
   int k = 0;

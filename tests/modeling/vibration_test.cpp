@@ -101,13 +101,48 @@ TEST(Vibration, AdfTellsARandomWalkFromAStationaryAr1) {
   EXPECT_FALSE(w.rejects_unit_root) << w.statistic;
   EXPECT_TRUE(a.rejects_unit_root) << a.statistic;
   EXPECT_NEAR(a.critical_5pct, -2.862, 0.002);
-  // High-passing the walk at 50 Hz makes it stationary at the first cut-off tried.
+  // High-passing the walk at 50 Hz makes it stationary at the first cut-off tried: the range,
+  // not the recording, set the value, and the result says so; the whole recording was tested.
   const auto c = StationarityCutoff(walk, 2000, 50, 150, 10);
   EXPECT_TRUE(c.found);
   EXPECT_DOUBLE_EQ(c.cutoff_hz, 50);
+  EXPECT_TRUE(c.stationary_at_every_cutoff);
+  EXPECT_EQ(c.samples, walk.size());
+  EXPECT_EQ(StationarityCutoff(walk, 2000, 50, 150, 10, 1000).samples, 1000u);
   // A cut-off far below the walk's time scale leaves its unit root.
   const auto low = StationarityCutoff(walk, 2000, 0.001, 0.001, 1);
   EXPECT_FALSE(low.found);
+  EXPECT_FALSE(low.stationary_at_every_cutoff);
+  // Found above the lowest cut-off tried: a value of the recording, not of the range.
+  const auto up = StationarityCutoff(walk, 2000, 0.001, 100.001, 50);
+  ASSERT_TRUE(up.found);
+  EXPECT_GT(up.cutoff_hz, 0.001);
+  EXPECT_FALSE(up.stationary_at_every_cutoff);
+}
+
+// The ADF statistic and its AIC lag choice against R's lm() on the same regressions. The
+// series is deterministic so both sides build the same numbers. R (base only):
+//   T <- 400; e <- sin((1:T) * 1.7) + 0.5 * cos(((1:T)^2) * 0.013); y <- numeric(T)
+//   y[1] <- e[1]; for (t in 2:T) y[t] <- 0.95 * y[t-1] + e[t]
+//   L <- 16; s <- (L+2):T; n <- length(s); z <- y[s] - y[s-1]; best <- Inf
+//   for (p in 0:L) { X <- cbind(y[s-1]); if (p > 0) for (j in 1:p) X <- cbind(X, y[s-j] -
+//     y[s-j-1]); fit <- lm(z ~ X); aic <- n * log(sum(residuals(fit)^2) / n) + 2 * (2 + p)
+//     if (aic < best) { best <- aic; bp <- p; st <- summary(fit)$coefficients[2, 3] } }
+// gives bp 16, st -4.451083952784; with L <- 5: bp 5, st -5.890682465220.
+TEST(Vibration, AdfMatchesRsLinearModelOnTheSameRegressions) {
+  const int T = 400;
+  std::vector<double> y(T);
+  for (int t = 0; t < T; ++t) {
+    const double k = t + 1;  // R's 1-based index
+    const double e = std::sin(k * 1.7) + 0.5 * std::cos(k * k * 0.013);
+    y[static_cast<std::size_t>(t)] = t == 0 ? e : 0.95 * y[static_cast<std::size_t>(t - 1)] + e;
+  }
+  const auto schwert = AugmentedDickeyFuller(y);  // L = floor(12 (400 / 100)^(1/4)) = 16
+  EXPECT_EQ(schwert.lags, 16);
+  EXPECT_NEAR(schwert.statistic, -4.451083952784, 1e-8);
+  const auto five = AugmentedDickeyFuller(y, 5);
+  EXPECT_EQ(five.lags, 5);
+  EXPECT_NEAR(five.statistic, -5.890682465220, 1e-8);
 }
 
 TEST(Vibration, LevinsonRecoversAKnownAr) {

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
@@ -92,6 +93,44 @@ TEST(WorkbenchFiles, SavedModelsLoadInTheRendererAndRoundTrip) {
   bad("K1mm_N = ", "K1mm_X = ", "workbench.params.core.K1mm_X");
   bad("[workbench.params.coulomb]\nmu_k = ", "[workbench.params.coulomb]\nmu_k = \"high\" #",
       "workbench.params.coulomb.mu_k");
+}
+
+// Issue #33: SaveModel never leaves a file it would refuse to read (a bias-corrected mu_b of
+// -0.000123 was written, then refused as bad input, exit 2): the model is read back before it
+// replaces the target; a model that does not read back is the program's error
+// (PreconditionError, nothing written, the old file kept), a file that cannot be written an
+// environment failure (std::runtime_error), neither an InputError (exit 2).
+TEST(WorkbenchFiles, AModelThatWouldNotReadBackIsNeverWritten) {
+  test::TempDir dir;
+  const auto in = std::filesystem::path(dir.path()) / "mat.toml";
+  std::ofstream(in) << "name = \"m\"\n[contact]\ntexture_K = 2000\n"
+                       "[friction]\nkappa_N_per_m = 2500\nmu_k = 0.35\nmu_b_Ns_per_m = 0.2\n";
+  Model m = LoadModel(in.string());
+  const auto out = std::filesystem::path(dir.path()) / "out.toml";
+  SaveModel(m, out.string());
+  EXPECT_NEAR(LoadModel(out.string()).At(key::kMuB_Ns_per_m), 0.2, 1e-12);
+  const std::string before = test::ReadFile(out.string());
+  m.Set(key::kMuB_Ns_per_m, -1.23e-4);
+  try {
+    SaveModel(m, out.string());
+    FAIL() << "a model with mu_b < 0 was written";
+  } catch (const PreconditionError& e) {
+    EXPECT_NE(std::string(e.what()).find("friction.mu_b_Ns_per_m"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(test::ReadFile(out.string()), before) << "the old file is kept";
+  EXPECT_FALSE(std::filesystem::exists(out.string() + ".writing"));
+  m.Set(key::kMuB_Ns_per_m, 0.0);  // at its bound: reads back
+  SaveModel(m, out.string());
+  EXPECT_EQ(LoadModel(out.string()).At(key::kMuB_Ns_per_m), 0.0);
+  const auto nowhere = std::filesystem::path(dir.path()) / "no" / "such" / "dir" / "x.toml";
+  try {
+    SaveModel(m, nowhere.string());
+    FAIL() << "wrote into a missing folder";
+  } catch (const InputError&) {
+    FAIL() << "an unwritable path is not bad input";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot write"), std::string::npos) << e.what();
+  }
 }
 
 TEST(WorkbenchFiles, RendererMaterialsAreReadAsBaselineModels) {

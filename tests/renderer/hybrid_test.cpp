@@ -92,6 +92,54 @@ TEST(Hybrid, TicksAllocateNothing) {
   EXPECT_EQ(guard.count(), 0u);
 }
 
+// Issue #33: an unstable vibration model (a neural model whose linear part has a pole at
+// radius 1.05) is muted by the vibration tick and raised as a fault on the next force tick:
+// zero force that tick, counted once; the actuator is silent from then on; nothing allocated.
+// The same model with radius 0.9 plays and never faults.
+TEST(Hybrid, AnUnstableVibrationModelIsMutedAndFaultsTheNextForceTick) {
+  for (const double radius : {0.9, 1.05}) {
+    const auto m = test::NeuralResonanceMaterial(radius);
+    HybridRenderer r(m, RenderOptions{});
+    std::vector<double> vib, fault_force;
+    vib.reserve(20000);
+    fault_force.reserve(100);
+    int faults = 0, fault_tick = -1;
+    {
+      test::NoAllocGuard guard;
+      for (int k = 0; k < 2000; ++k) {
+        const auto cmd = r.ForceTick(Sample(k * 5e-5, 0.2e-3, 0.05, k * 1e-3), k * 1e-3);
+        if (cmd.fault) {
+          EXPECT_TRUE(cmd.vibration_fault);
+          EXPECT_EQ(cmd.force_N.norm(), 0.0);
+          ++faults;
+          if (fault_tick < 0) fault_tick = k;
+        }
+        for (int j = 0; j < 10; ++j) vib.push_back(r.VibrationTick());
+      }
+      EXPECT_EQ(guard.count(), 0u);
+    }
+    double peak = 0, late = 0;
+    for (std::size_t i = 0; i < vib.size(); ++i) {
+      peak = std::max(peak, std::abs(vib[i]));
+      if (i >= vib.size() - 2000) late = std::max(late, std::abs(vib[i]));
+    }
+    if (radius < 1) {
+      EXPECT_EQ(faults, 0);
+      EXPECT_FALSE(r.vibration_muted());
+      EXPECT_GT(late, 0.05) << "the stable model plays";
+    } else {
+      EXPECT_EQ(faults, 1) << "one fault, on the force tick after the runaway";
+      EXPECT_EQ(r.counters().vibration_faults.load(), 1u);
+      EXPECT_TRUE(r.vibration_muted());
+      EXPECT_GT(fault_tick, 0);
+      // Never above the model's declared maximum (kNeuralMaxLevel x the band's RMS of 1, plus
+      // the high-pass's overshoot), and silent after the mute.
+      EXPECT_LT(peak, 2 * kNeuralMaxLevel);
+      EXPECT_LT(late, 1e-9);
+    }
+  }
+}
+
 TEST(Hybrid, VibrationFollowsContactAndIsHighPassed) {
   const auto m = test::TexturedMaterial();
   RenderOptions o;

@@ -266,6 +266,36 @@ TEST(PennToolkitSemantics, OneKilohertzArmaSetPlaysTheAnalyticSpectrumUpsampled)
   }
 }
 
+// Light loads (issue #33): the toolkit interpolates a force below 0.05 N at 1e-4 N, next to its
+// silent force-0 models; at 0.01 and 0.04 N the renderer must play that model, not the one at
+// the actual force (10-25x louder on the toolkit's own files).
+TEST(PennToolkitSemantics, LightLoadsPlayTheModelTheToolkitInterpolatesAtEssentiallyZero) {
+  test::TempDir dir;
+  const auto spec = test::MakePennSet(false);
+  test::WriteFile(dir.File("Models_AR.xml"), test::PennXml(spec));
+  const auto imp = ImportPennXml(dir.File("Models_AR.xml"));
+  EXPECT_DOUBLE_EQ(imp.model.vibration.light_force_N, 0.05);
+  for (const double force_N : {0.01, 0.04}) {
+    const std::string where = fmt::format("140 mm/s, {} N", force_N);
+    const auto y = RenderStroke(imp.model, 140, force_N, 2.5);
+    ExpectLikeToolkit(y, test::PennExpected(spec, 140, force_N),
+                      {{100, 200}, {200, 400}, {400, 800}, {800, 1600}}, 0.10, 1.5, where);
+    // The actual force's model would be far louder: the rule is what makes the difference.
+    const double at_actual = std::sqrt(test::PennExpected(spec, 140, force_N, false).Power());
+    EXPECT_LT(Rms(y), 0.3 * at_actual) << where;
+  }
+  // The rule survives the material file, and 0.05 N itself is above it.
+  const auto back = ParseMaterial(MaterialToToml(imp.model), "back.toml");
+  EXPECT_DOUBLE_EQ(back.vibration.light_force_N, 0.05);
+  VibrationInterpolator interp(back.vibration);
+  ArFilter light, zero, at;
+  interp.Interpolate(0.14, 0.04, true, &light);
+  interp.Interpolate(0.14, kLightForceAs_N, true, &zero);
+  interp.Interpolate(0.14, 0.05, true, &at);
+  EXPECT_EQ(light.sigma, zero.sigma);
+  EXPECT_GT(at.sigma, 10 * light.sigma);
+}
+
 TEST(PennToolkitSemantics, BoundaryModelsAreSilentAndTheRangeSaturatesJustInside) {
   test::TempDir dir;
   const auto spec = test::MakePennSet(true);
@@ -273,10 +303,17 @@ TEST(PennToolkitSemantics, BoundaryModelsAreSilentAndTheRangeSaturatesJustInside
   const auto imp = ImportPennXml(dir.File("Models_ARMA.xml"));
   VibrationInterpolator interp(imp.model.vibration);
   ArFilter f;
-  // On the force-0 and speed-0 boundary every weighted model has var = 0: silent, in contact.
-  for (const auto& [v, fn] : {std::pair{0.12, 0.0}, std::pair{0.2, 0.0}, std::pair{0.0, 1.8}}) {
-    interp.Interpolate(v, fn, true, &f);
-    EXPECT_EQ(f.sigma, 0.0) << v << " m/s, " << fn << " N";
+  // On the speed-0 boundary every weighted model has var = 0: silent, in contact. A force of 0
+  // is interpolated at 1e-4 N (the light-load rule), a hair inside the silent force-0 models.
+  interp.Interpolate(0.0, 1.8, true, &f);
+  EXPECT_EQ(f.sigma, 0.0);
+  for (const double v : {0.12, 0.2}) {
+    ArFilter zero, light;
+    interp.Interpolate(v, 0.0, true, &zero);
+    interp.Interpolate(v, kLightForceAs_N, true, &light);
+    EXPECT_EQ(zero.sigma, light.sigma) << v << " m/s";
+    interp.Interpolate(v, 0.9, true, &f);
+    EXPECT_LT(zero.sigma, 0.02 * f.sigma) << v << " m/s";
   }
   // Beyond the range: the filter is the one just inside (maxSpeed - 0.01 mm/s, maxForce - 0.01 N).
   ArFilter beyond, inside;

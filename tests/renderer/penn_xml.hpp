@@ -133,7 +133,8 @@ inline std::string PennXml(const PennSetSpec& s) {
   return x + "</modelSet>\n";
 }
 
-// The model the toolkit plays at (speed, force): saturated as HashAndInterp2 does, weights
+// The model the toolkit plays at (speed, force): saturated as HashAndInterp2 does (and, with
+// `light_load_rule`, a force below 0.05 N taken as 1e-4 N, its "essentially zero"), weights
 // from the file's triangle containing the point, LSFs, variance and gain mixed linearly.
 struct PennReference {
   std::vector<double> c, b;  // AR c_1..c_p (a[k] = sum c_i a[k-i] + ...), MA b_1..b_q
@@ -160,9 +161,13 @@ struct PennReference {
   double Power() const { return MeanPsd(0, 0.5 * rate_hz) * 0.5 * rate_hz; }
 };
 
-inline PennReference PennExpected(const PennSetSpec& s, double speed_mmps, double force_N) {
+inline PennReference PennExpected(const PennSetSpec& s, double speed_mmps, double force_N,
+                                  bool light_load_rule = true) {
   if (speed_mmps > s.max_speed_mmps) speed_mmps = s.max_speed_mmps - 0.01;
-  if (force_N > s.max_force_N) force_N = s.max_force_N - 0.01;
+  if (force_N > s.max_force_N)
+    force_N = s.max_force_N - 0.01;
+  else if (light_load_rule && force_N < 0.05)
+    force_N = 1e-4;
   PennReference r;
   r.rate_hz = s.rate_hz;
   r.arma = s.q > 0;

@@ -1,10 +1,14 @@
 #pragma once
 // Materials built in code for renderer tests.
 
+#include <cmath>
+#include <memory>
+#include <numbers>
 #include <random>
 
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/neural.hpp"
 
 namespace hapticlab::test {
 
@@ -45,6 +49,36 @@ inline renderer::MaterialModel TexturedMaterial() {
   m.geometry = std::make_shared<renderer::HeightMap>(256, 256, 20e-6, h);
   m.vibration = GridBank();
   m.hybrid_cutoff_hz = 100;
+  return m;
+}
+
+// TexturedMaterial with a Γ_U neural vibration model whose linear part is one AR(2) resonance
+// at 200 Hz with pole radius `radius` everywhere (the network's own output is zero): stable
+// below 1, a runaway above (the issue-#33 case of a model that was kept unstable).
+inline renderer::MaterialModel NeuralResonanceMaterial(double radius) {
+  auto nm = std::make_shared<renderer::NeuralModel>();
+  nm->topology = renderer::NeuralTopology::kUnified;
+  nm->sample_rate_hz = 2000;
+  nm->min_speed_mps = 0.01;
+  nm->speeds_mps = {0.02, 0.1};
+  nm->forces_N = {0.1, 3.0};
+  renderer::NeuralBand b;
+  b.lo_hz = 20;
+  b.hi_hz = 900;
+  b.decimation = 1;
+  b.history = 2;
+  b.scale = 1;
+  renderer::NeuralNet n;
+  n.layers = {4, 1};
+  n.params.assign(5, 0.0);
+  n.linear.assign(renderer::kNeuralLinearTerms * 2, 0.0);
+  n.linear[0] = 2 * radius * std::cos(2 * std::numbers::pi * 200 / 2000);  // constant term
+  n.linear[1] = -radius * radius;
+  b.nets = {n};
+  b.sigma.assign(4, 0.1);
+  nm->bands = {b};
+  auto m = TexturedMaterial();
+  m.neural = nm;
   return m;
 }
 

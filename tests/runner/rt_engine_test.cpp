@@ -274,5 +274,46 @@ TEST(RtEngineLink, A50msDropoutFaultsTheTrialWithZeroForceFromItsFirstTick) {
   EXPECT_LT(engine.Stats().force_ticks, 320u) << "a disconnect ends the run";
 }
 
+// Issue #33: a vibration model that runs away (a neural model with a pole at radius 1.05) is
+// muted by the renderer and is a real-time fault of the trial like the others: the watchdog
+// trips, counts it and queues its event, the tick after it commands zero force; nothing is
+// allocated in the loops. The stable model (radius 0.9) plays a clean trial.
+TEST(RtEngine, ARunawayVibrationModelFaultsTheTrial) {
+  for (const double radius : {0.9, 1.05}) {
+    const auto m = test::NeuralResonanceMaterial(radius);
+    renderer::HybridRenderer r(m, renderer::RenderOptions{});
+    devices::VirtualClock clock;
+    FlakyLink dev(clock, 0.0, 1e9, 0.0);  // never lost
+    EngineOptions eo;
+    eo.virtual_clock = &clock;
+    RtEngine engine(r, dev, nullptr, eo);
+    engine.Start();
+    {
+      test::NoAllocGuard guard;
+      engine.AdvanceTo(1.0);
+      EXPECT_EQ(guard.count(), 0u);
+    }
+    engine.Stop();
+    const auto st = engine.Stats();
+    if (radius < 1) {
+      EXPECT_FALSE(engine.watchdog().tripped());
+      EXPECT_EQ(st.vibration_faults, 0u);
+      continue;
+    }
+    EXPECT_TRUE(engine.watchdog().tripped());
+    EXPECT_EQ(st.vibration_faults, 1u);
+    EXPECT_EQ(r.counters().vibration_faults.load(), 1u);
+    EXPECT_TRUE(r.vibration_muted());
+    FaultEvent e;
+    ASSERT_TRUE(engine.watchdog().PopEvent(&e));
+    EXPECT_EQ(e.kind, FaultKind::kVibrationModel);
+    EXPECT_STREQ(FaultName(e.kind), "vibration-model");
+    std::size_t zero_in_contact = 0;
+    for (const auto& [t, f] : dev.forces) zero_in_contact += t > 0.01 && t < 0.99 && f == 0.0;
+    EXPECT_GE(zero_in_contact, 1u) << "the fault tick commands zero force";
+    EXPECT_LE(zero_in_contact, 2u) << "one fault (the force model restarts after it)";
+  }
+}
+
 }  // namespace
 }  // namespace hapticlab::runner

@@ -103,6 +103,19 @@ CvResult CrossValidateNeural(const std::vector<Recording>& recordings,
                              const std::vector<double>& train_forces_N, const NeuralFitOptions& o,
                              std::uint64_t seed = 1);
 
+/// Where a band's linear part comes closest to instability.
+struct NeuralPoleRadius {
+  double radius = 0;                  ///< the largest pole radius of the linear AR filter
+  double speed_mps = 0, force_N = 0;  ///< where on the grid it is
+};
+/// The largest pole radius of band `band`'s linear part over an n x n grid spanning the
+/// training grid's rectangle (the hull of its conditions; the synthesizer clamps a condition
+/// outside it to its edge), the filter formed as renderer::NeuralSynth forms it: Γ_U's
+/// condition basis W phi(v', f'), or its per-cell AR fits mixed in LSF form; Γ_D's cells'
+/// linear weights mixed with the bilinear weights. Radius 0: no linear part. FitNeural refuses a
+/// model whose radius is not below 1 in every band.
+NeuralPoleRadius NeuralMaxPoleRadius(const renderer::NeuralModel& m, std::size_t band, int n = 41);
+
 /// Synthesizes `n` samples at the model rate for a condition (after `settle` samples).
 std::vector<double> SynthesizeNeural(const renderer::NeuralModel& m, double speed_mps,
                                      double force_N, std::size_t n, std::uint64_t seed,

@@ -58,19 +58,26 @@ struct AdfResult {
   bool rejects_unit_root = false;
 };
 /// Augmented Dickey-Fuller test with a constant; lags 0..max_lags chosen by AIC (default
-/// max 12 (T/100)^(1/4), Schwert's rule).
+/// max 12 (T/100)^(1/4), Schwert's rule), every order fitted on the same sample from one QR of
+/// the largest design.
 AdfResult AugmentedDickeyFuller(const std::vector<double>& x, int max_lags = -1);
 
 struct CutoffResult {
   bool found = false;
   double cutoff_hz = 0;  ///< smallest cut-off whose high-passed signal rejects a unit root
+  /// The lowest cut-off tried already rejects a unit root: the recording is stationary at every
+  /// tested cut-off, and the search range bounds f_c from above only (cutoff_hz is `lo`, a
+  /// property of the range, not of the recording).
+  bool stationary_at_every_cutoff = false;
+  std::size_t samples = 0;  ///< samples the test ran on
   std::vector<std::pair<double, AdfResult>> tried;
 };
 /// Ch. III.5: high-pass at each cut-off from lo to hi (step) and take the first at which the
-/// ADF test rejects a unit root at 5 %. The ADF runs on at most `max_samples` samples.
+/// ADF test rejects a unit root at 5 %. The ADF runs on the first `max_samples` samples (0:
+/// the whole recording, the default).
 CutoffResult StationarityCutoff(const std::vector<double>& x, double rate_hz, double lo_hz = 50,
                                 double hi_hz = 150, double step_hz = 10,
-                                std::size_t max_samples = 20000);
+                                std::size_t max_samples = 0);
 
 struct VibrationFitOptions {
   double model_rate_hz = 2000;  ///< 2 kHz in the thesis

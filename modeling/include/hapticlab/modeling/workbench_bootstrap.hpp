@@ -34,7 +34,10 @@ struct BootstrapParam {
   std::string effect, name;
   double fit = 0;        ///< the fit on the data as measured
   double bias = 0;       ///< mean of the copies' fits minus the model they were simulated from
-  double corrected = 0;  ///< fit - bias
+  double corrected = 0;  ///< fit - bias, held within the parameter's physical range
+  /// The bias correction crossed the physical range (e.g. mu_b < 0): `corrected` is the bound,
+  /// and the interval runs from it (ParamEstimate::at_bound is set).
+  bool clamped = false;
   double jackknife_sd = 0, bootstrap_sd = 0;  ///< the fit's standard errors, each way
   double sd = 0;  ///< standard error of `corrected`: sqrt(max(jk^2, bs^2) + bs^2 / replicates)
 };

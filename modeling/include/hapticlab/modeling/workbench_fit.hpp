@@ -45,7 +45,11 @@ struct ParamEstimate {
   std::string effect, name;
   double value = 0;
   double sd = 0;              ///< standard error (0 when not computed)
-  double lo95 = 0, hi95 = 0;  ///< 95 % interval: value -+ t(0.975, clusters - 1) sd
+  double lo95 = 0, hi95 = 0;  ///< 95 % interval: value -+ t(0.975, clusters - 1) sd, within
+                              ///< [bound_lo, bound_hi]
+  /// The parameter's physical range (its ParamSpec's [lo, hi]): the estimate and its interval
+  /// stay inside it after every correction (the bootstrap's bias correction included).
+  double bound_lo = -1e300, bound_hi = 1e300;
   bool at_bound = false;
 };
 

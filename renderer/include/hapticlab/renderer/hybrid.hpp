@@ -6,7 +6,11 @@
 ///
 /// Safety (every tick): non-finite device data, data older than `stale_after_s`, or a
 /// non-finite result command zero force on that very tick, reset the filters and count a
-/// fault; the commanded force's magnitude never exceeds `max_force_N`.
+/// fault; the commanded force's magnitude never exceeds `max_force_N`. A vibration model that
+/// runs away (a non-finite sample, or a neural model beyond its declared maximum level,
+/// kNeuralMaxLevel) is muted by the vibration tick for the rest of the renderer's life, and the
+/// next force tick is a fault (zero force, `vibration_faults`, ForceCommand::vibration_fault):
+/// the vibration thread only sets an atomic flag, nothing is allocated or locked.
 
 #include <atomic>
 #include <cstdint>
@@ -42,6 +46,7 @@ struct ForceCommand {
   Eigen::Vector3d force_N = Eigen::Vector3d::Zero();  ///< commanded (filtered, clamped) [N]
   ForceOutput raw;                                    ///< unfiltered model output
   bool fault = false;                                 ///< this tick was a fault: force is zero
+  bool vibration_fault = false;                       ///< the vibration model's fault (runaway)
   bool saturated = false;                             ///< the limit clamped this tick
 };
 
@@ -52,6 +57,7 @@ struct RtCounters {
   std::atomic<std::uint64_t> nan_faults{0};
   std::atomic<std::uint64_t> stale_faults{0};
   std::atomic<std::uint64_t> saturations{0};
+  std::atomic<std::uint64_t> vibration_faults{0};  ///< vibration models muted for running away
 };
 
 class HybridRenderer {
@@ -67,6 +73,8 @@ class HybridRenderer {
   double VibrationTick() noexcept;
 
   const RtCounters& counters() const { return counters_; }
+  /// The vibration model ran away and is muted (vibration thread's view).
+  bool vibration_muted() const { return vib_muted_.load(std::memory_order_acquire); }
   const RenderOptions& options() const { return options_; }
   double cutoff_hz() const { return cutoff_hz_; }
   /// Taps per phase of the band-limited upsampler (model rate -> vibration rate).
@@ -76,6 +84,7 @@ class HybridRenderer {
 
  private:
   void Fault(std::atomic<std::uint64_t>& counter) noexcept;
+  double ModelSample(const ArFilter& f) noexcept;  // the next model-rate sample, guarded
 
   RenderOptions options_;
   double cutoff_hz_;
@@ -94,6 +103,8 @@ class HybridRenderer {
   bool upsample_ = false;  // integer rate ratio: band-limited polyphase upsampling
   PolyphaseUpsampler up_;
   int up_phase_ = 0;
+  std::atomic<bool> vib_muted_{false};          // set by the vibration thread, never cleared
+  std::atomic<bool> vib_fault_pending_{false};  // vibration thread -> the next force tick
   RtCounters counters_;
 };
 

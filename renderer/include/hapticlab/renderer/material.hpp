@@ -55,6 +55,9 @@ struct ArCell {
 /// 0.01 mm/s and 0.01 N: "slightly inside the convex hull because of rounding errors").
 inline constexpr double kSaturationMarginSpeed_mps = 1e-5;
 inline constexpr double kSaturationMarginForce_N = 0.01;
+/// The force a light load is interpolated at (VibrationBank::light_force_N): the Penn
+/// toolkit's 1e-4 N.
+inline constexpr double kLightForceAs_N = 1e-4;
 
 /// The AR bank over (speed, normal force). Either a regular grid (`speeds_mps` x `forces_N`,
 /// cells row-major with force fastest) or scattered cells with a triangulation.
@@ -71,6 +74,10 @@ struct VibrationBank {
   /// kSaturationMarginForce_N.
   double max_speed_mps = 0;
   double max_force_N = 0;
+  /// The Penn toolkit's light-load rule (0: off): a force below light_force_N (not above
+  /// max_force_N) is interpolated as kLightForceAs_N, "essentially zero", near the bank's
+  /// force-0 boundary; import-penn sets 0.05 N as the toolkit renders.
+  double light_force_N = 0;
   bool empty() const { return cells.empty(); }
   int order() const { return cells.empty() ? 0 : static_cast<int>(cells[0].coeffs.size()); }
 };

@@ -75,6 +75,11 @@ struct NeuralBand {
 enum class NeuralTopology { kUnified, kDecomposed };
 
 inline constexpr std::size_t kMaxNeuralBands = 8;
+/// The neural model's declared maximum level, +-10 of a band's RMS (`scale`): the feedback is
+/// clamped there, and a band whose RMS over about 0.25 s exceeds half of it (an unstable
+/// filter sitting at the clamp, not a noise-driven process that touches it now and then) or
+/// any non-finite sample is a runaway: NeuralSynth mutes itself (runaway()).
+inline constexpr double kNeuralMaxLevel = 10;
 /// Γ_U's condition basis of the linear part: the biquadratic tensor basis (1, v', v'^2) x
 /// (1, f', f'^2), 9 terms; files from before 2026-11-23 have its first 6 terms (quadratic).
 inline constexpr std::size_t kNeuralLinearTerms = 9, kNeuralLinearTermsQuadratic = 6;
@@ -85,7 +90,8 @@ struct NeuralModel {
   double min_speed_mps = 0.01;               ///< off below this speed (as the AR bank)
   std::vector<double> speeds_mps, forces_N;  ///< the training grid (ascending)
   std::vector<NeuralBand> bands;
-  /// Γ_U condition inputs: v and f mapped linearly from [lo, hi] of the grid to [-1, 1].
+  /// Γ_U condition inputs: v and f mapped linearly from [lo, hi] of the grid to [-1, 1],
+  /// clamped there (outside the grid the model plays its edge).
   double NormSpeed(double v) const;
   double NormForce(double f) const;
 };
@@ -124,9 +130,13 @@ class NeuralSynth {
   NeuralSynth(NeuralSynth&&) noexcept;
   NeuralSynth& operator=(NeuralSynth&&) noexcept;
   /// The next model-rate sample [m/s^2] at the current speed and normal force; zero (and the
-  /// state cleared) when inactive or slower than the model's minimum speed.
+  /// state cleared) when inactive or slower than the model's minimum speed. A runaway band
+  /// (kNeuralMaxLevel: not finite, or its short-term RMS above half the level) mutes the
+  /// synthesizer: zero from then on, runaway() true, until ClearRunaway().
   double Step(double speed_mps, double force_N, bool active) noexcept;
-  void Reset() noexcept;
+  void Reset() noexcept;  ///< clears the state (not the runaway latch)
+  bool runaway() const noexcept { return runaway_; }
+  void ClearRunaway() noexcept { runaway_ = false; }
   /// One network evaluation of band b at cell c on an input vector (for tests): Γ_D, cell
   /// c's network; Γ_U, the network plus cell c's AR part (when the model has `cell_ar`).
   double Evaluate(std::size_t band, std::size_t cell, const double* input) noexcept;
@@ -150,6 +160,7 @@ class NeuralSynth {
   std::vector<double> act_a_, act_b_;  // activations
   Rng noise_;
   bool running_ = false;
+  bool runaway_ = false;
 };
 
 }  // namespace hapticlab::renderer

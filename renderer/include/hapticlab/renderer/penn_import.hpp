@@ -22,6 +22,9 @@ namespace hapticlab::renderer {
 
 /// The toolkit's lowest rendered speed, 0.05 mm/s: an imported bank's min_speed_mps.
 inline constexpr double kPennMinSpeed_mps = 5e-5;
+/// Below this load the toolkit interpolates at kLightForceAs_N (1e-4 N): an imported bank's
+/// light_force_N.
+inline constexpr double kPennLightForce_N = 0.05;
 
 struct PennImport {
   MaterialModel model;     ///< mu -> friction.mu_k; the bank; contact left at defaults;

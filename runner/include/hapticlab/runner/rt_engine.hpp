@@ -96,6 +96,8 @@ struct EngineStats {
   std::uint64_t force_deadline_misses = 0, vibration_deadline_misses = 0;
   std::uint64_t disconnects = 0, miss_faults = 0, nan_faults = 0, stale_faults = 0,
                 bad_commands = 0;
+  /// Runaway vibration models muted by the renderer (FaultKind::kVibrationModel).
+  std::uint64_t vibration_faults = 0;
   std::uint64_t recording_overflows = 0;
   std::uint64_t contact_ticks = 0;  ///< force ticks with the stylus inside the model's surface
   std::uint64_t empty_reads = 0, lost_reads = 0;  ///< reads with no new data, lost reads

@@ -24,11 +24,12 @@ enum class FaultKind : std::uint8_t {
   kNaN,
   kStale,
   kDeadlineMiss,
-  kBadCommand
+  kBadCommand,
+  kVibrationModel  ///< the renderer muted a runaway vibration model (ForceCommand::vibration_fault)
 };
-inline constexpr int kFaultKinds = 6;
-const char* FaultName(
-    FaultKind k);  ///< "disconnect", "nan", "stale", "deadline-miss", "bad-command"
+inline constexpr int kFaultKinds = 7;
+/// "disconnect", "nan", "stale", "deadline-miss", "bad-command", "vibration-model"
+const char* FaultName(FaultKind k);
 
 struct WatchdogOptions {
   double stale_after_s = 0.005;    ///< device data older than this is stale
@@ -52,10 +53,12 @@ class Watchdog {
   explicit Watchdog(const WatchdogOptions& o = {});
   /// One force tick: what the device read gave, the sample rendered (the newest good one;
   /// ignored on a lost read), the loop's time, how late the tick woke, and the force the
-  /// renderer wants. Returns the force to command: `force`, or zero on a fault (the same
-  /// tick) and on any lost read (a short loss zeroes the force without faulting the trial).
+  /// renderer wants (and whether the renderer reported its vibration model muted this tick).
+  /// Returns the force to command: `force`, or zero on a fault (the same tick) and on any lost
+  /// read (a short loss zeroes the force without faulting the trial).
   Eigen::Vector3d Check(devices::ReadResult read, const DeviceSample& s, double now_s,
-                        double late_s, double period_s, const Eigen::Vector3d& force) noexcept;
+                        double late_s, double period_s, const Eigen::Vector3d& force,
+                        bool vibration_fault = false) noexcept;
   /// The fault of the last Check (kNone when healthy).
   FaultKind last() const { return last_; }
   /// Any fault since Reset: the trial is faulted.
