@@ -393,10 +393,29 @@ void ValidateMaterial(const MaterialModel& m) {
   if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
   if (!(m.hybrid_cutoff_hz >= 0))
     d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
+  // Physical ranges (docs/formats.md, "Bounds"): generous for any real sample, but a typo of
+  // 1e100 would otherwise reach the force loop.
+  auto at_most = [&](double v, double max, const std::string& field, const char* unit) {
+    if (v > max) d.Add(f, 0, field, fmt::format("{:g} is above the {:g} {} allowed", v, max, unit));
+  };
+  for (const auto * [ p, prefix ] : {std::pair{&m.contact.texture, "contact.texture"},
+                                     std::pair{&m.contact.base, "contact.base"}}) {
+    at_most(p->K, 1e12, std::string(prefix) + "_K", "N/m^n");
+    at_most(p->B, 1e12, std::string(prefix) + "_B", "N s/m^(n+1)");
+  }
+  at_most(m.contact.layer_thickness_m, 0.1, "contact.layer_thickness_m", "m");
+  at_most(m.friction.kappa_N_per_m, 1e9, "friction.kappa_N_per_m", "N/m");
+  at_most(m.friction.mu_k, 10, "friction.mu_k", "");
+  at_most(m.friction.mu_b_Ns_per_m, 1e4, "friction.mu_b_Ns_per_m", "Ns/m");
+  at_most(m.hybrid_cutoff_hz, 1e5, "hybrid.cutoff_hz", "Hz");
   const auto& b = m.vibration;
   if (!b.empty()) {
-    if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
-    if (!(b.min_speed_mps >= 0)) d.Add(f, 0, "vibration.min_speed_mps", "must be >= 0");
+    if (!(b.sample_rate_hz > 0 && b.sample_rate_hz <= 1e6))
+      d.Add(f, 0, "vibration.sample_rate_hz", "must be in (0, 1e6]");
+    if (!(b.min_speed_mps >= 0 && b.min_speed_mps <= 100))
+      d.Add(f, 0, "vibration.min_speed_mps", "must be in [0, 100]");
+    at_most(b.max_speed_mps, 100, "vibration.max_speed_mps", "m/s");
+    at_most(b.max_force_N, 1e3, "vibration.max_force_N", "N");
     if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
       d.Add(f, 0, "vibration.max_speed_mps",
             fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));

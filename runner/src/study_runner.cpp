@@ -194,8 +194,9 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
          .software_version = std::string(kVersion) + "+" + kGitSha,
          .device = opt.device,
          .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
-         .provenance_json = prov.dump(),
-         .plan_json = plan_json.dump(),
+         // Paths in the provenance may hold bytes that are not UTF-8: replaced, not thrown.
+         .provenance_json = prov.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+         .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
          .actuator = mode.actuator,
          .screens = mode.screens,
          .rater = mode.rater});
