@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -17,6 +18,10 @@ int Guard(const std::function<int()>& body) {
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitBadInput;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The environment refused a file operation: the path and the reason, as a sentence.
+    fmt::print(stderr, "failed: {}: {}\n", e.path1().string(), e.code().message());
+    return kExitFailure;
   } catch (const PreconditionError& e) {
     fmt::print(stderr, "internal error (please report): {}\n", e.what());
     return kExitFailure;

@@ -34,7 +34,7 @@ void RegisterParticipant(CLI::App& app) {
     RunGuarded({{"db", "--db"}}, [&] {
       const auto p = protocols::LoadProtocol(o->protocol);
       std::set<std::string> taken;
-      if (std::filesystem::exists(o->db)) {
+      if (std::error_code ec; std::filesystem::exists(o->db, ec)) {
         const db::Database d = db::OpenForReading(o->db);
         if (const auto st = d.FindStudy(p.name))
           for (const auto& x : d.Participants(st->id)) taken.insert(x.code);

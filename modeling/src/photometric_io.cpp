@@ -322,14 +322,15 @@ bool IsTga(const std::string& path) {
 }
 
 cv::Mat ReadAny(const std::string& path) {
+  std::error_code ec;  // a name too long to look up is "not found", not a filesystem_error
   if (IsTga(path) && !cv::haveImageReader(path)) {
-    if (!std::filesystem::exists(path)) throw InputError(path, 0, "", "image not found");
+    if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "", "image not found");
     return ReadTga(path);
   }
   cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (m.empty())
     throw InputError(path, 0, "",
-                     std::filesystem::exists(path)
+                     std::filesystem::exists(path, ec)
                          ? "cannot read image (a format OpenCV reads, or TGA)"
                          : "image not found");
   return m;

@@ -292,7 +292,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto w = r.Number(*g, "geometry", "width", true);
       const auto h = r.Number(*g, "geometry", "height", true);
       const auto p = r.Number(*g, "geometry", "pitch_m", true);
-      if (p && *p <= 0) r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be > 0");
+      if (p && !(*p > 0 && *p <= 0.01))
+        r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be in (0, 0.01] m");
       // Range-checked before the narrowing cast; the file's size is checked by LoadRawF32.
       constexpr double kMaxSide = 1 << 20;  // samples along one side
       bool sides_ok = true;
@@ -315,8 +316,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto a = r.Number(*g, "geometry", "amplitude_m", true);
       const auto l = r.Number(*g, "geometry", "wavelength_m", true);
       if (a && l) {
-        if (*a < 0 || *l <= 0)
-          r.Error(g, "geometry", "amplitude_m must be >= 0 and wavelength_m > 0");
+        if (!(*a >= 0 && *a <= 0.01 && *l > 0 && *l <= 1))
+          r.Error(g, "geometry", "amplitude_m must be in [0, 0.01] m and wavelength_m in (0, 1] m");
         else
           m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
       }
@@ -398,8 +399,8 @@ void ValidateMaterial(const MaterialModel& m) {
   auto at_most = [&](double v, double max, const std::string& field, const char* unit) {
     if (v > max) d.Add(f, 0, field, fmt::format("{:g} is above the {:g} {} allowed", v, max, unit));
   };
-  for (const auto * [ p, prefix ] : {std::pair{&m.contact.texture, "contact.texture"},
-                                     std::pair{&m.contact.base, "contact.base"}}) {
+  for (const auto& [p, prefix] : {std::pair{&m.contact.texture, "contact.texture"},
+                                  std::pair{&m.contact.base, "contact.base"}}) {
     at_most(p->K, 1e12, std::string(prefix) + "_K", "N/m^n");
     at_most(p->B, 1e12, std::string(prefix) + "_B", "N s/m^(n+1)");
   }

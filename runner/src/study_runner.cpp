@@ -93,7 +93,8 @@ SessionMode ModeOf(const RunOptions& o) {
 }
 
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);
   for (const auto& st : database.Studies())
     if (const auto part = database.FindParticipant(st.id, participant)) {
@@ -113,7 +114,8 @@ void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool
 
 int ParticipantIndex(const std::string& db_path, const std::string& study,
                      const std::string& code) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);
   const auto st = database.FindStudy(study);
   if (!st) throw InputError(db_path, 0, "participant", "no study '" + study + "' in this database");
@@ -230,7 +232,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
 }
 
 RunSummary ResumeStudy(const RunOptions& opt) {
-  if (!fs::exists(opt.db_path)) throw InputError(opt.db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(opt.db_path, ec))
+    throw InputError(opt.db_path, 0, "db", "no such database");
   const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   for (const auto& st : database.Studies()) {
@@ -254,7 +257,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
-    if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
+    if (std::error_code ec; !path.empty() && fs::exists(path, ec) &&
+                            db::HashText(ReadTextFile(path)) != st.protocol_hash)
       Log(opt,
           "note: the protocol file on disk changed since the session began; resuming with the "
           "recorded text");
@@ -295,7 +299,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
 
 std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
                                            const std::string& participant) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
   std::vector<ParticipantStatus> out;
   for (const auto& st : database.Studies())

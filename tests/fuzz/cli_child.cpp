@@ -97,7 +97,7 @@ std::string ForbiddenText(const std::string& output) {
       "stoi",           "stod",           "stoll",        "bad_alloc",
       "json.exception", "internal error", "precondition", "terminate called",
       "prepare '",      "SELECT ",        "INSERT INTO",  "UPDATE ",
-      "CREATE TABLE",   "(in: ",          "std::",
+      "CREATE TABLE",   "(in: ",          "std::",        "filesystem error",
   };
   for (const char* s : kForbidden)
     if (output.find(s) != std::string::npos) return s;
