@@ -247,11 +247,11 @@ TableShape ShapeOf(sqlite3* db) {
 
 // The tables and columns of the current schema, from a fresh in-memory database (once).
 const TableShape& ExpectedShape() {
-  static const TableShape shape = [] {
+  static const TableShape kShape = [] {
     const Database fresh(":memory:");
     return ShapeOf(fresh.handle());
   }();
-  return shape;
+  return kShape;
 }
 
 }  // namespace

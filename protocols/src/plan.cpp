@@ -173,19 +173,12 @@ void BalanceSides(std::vector<Item>& items, bool balance, Rng& rng) {
   }
 }
 
-}  // namespace
-
-std::uint64_t ParticipantSeed(const Protocol& p, int participant_index) {
-  return DeriveSeed(p.seed, static_cast<std::uint64_t>(participant_index));
-}
-
-std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
-  if (participant_index < 0) throw InputError(p.file, 0, "participant", "index must be >= 0");
-  // The plan's size, counted before anything is built (the counts are bounded when parsed,
-  // their products are not).
+// The plan's size, counted before anything is built (the counts are bounded when parsed,
+// their products are not).
+double PlannedTrials(const Protocol& p) {
   double planned = 0;
+  const double m = static_cast<double>(p.materials.size());
   for (const auto& ph : p.phases) {
-    const double m = static_cast<double>(p.materials.size());
     if (ph.adaptive) continue;
     if (ph.kind == PhaseKind::kTraining)
       planned += m;
@@ -197,7 +190,18 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
     else
       planned += ph.repetitions * m * static_cast<double>(p.methods.size());
   }
-  if (planned > static_cast<double>(kMaxPlannedTrials))
+  return planned;
+}
+
+}  // namespace
+
+std::uint64_t ParticipantSeed(const Protocol& p, int participant_index) {
+  return DeriveSeed(p.seed, static_cast<std::uint64_t>(participant_index));
+}
+
+std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
+  if (participant_index < 0) throw InputError(p.file, 0, "participant", "index must be >= 0");
+  if (const double planned = PlannedTrials(p); planned > static_cast<double>(kMaxPlannedTrials))
     throw InputError(p.file, 0, "phase",
                      fmt::format("the phases plan {:.0f} trials per participant, more than the {} "
                                  "allowed (fewer materials, methods, pairs or repetitions)",

@@ -80,7 +80,7 @@ TEST(CliRegression, PhotometricInputs) {
 }
 
 TEST(CliRegression, Protocols) {
-  auto validate = [](const std::string& file, std::vector<int> allowed) {
+  auto validate = [](const std::string& file, const std::vector<int>& allowed) {
     return [=](const std::string& s) {
       WriteStudyFiles(s);
       return Job{.args = {"study", "validate", Put(s, "p.toml", Regression(file))},
@@ -157,7 +157,7 @@ TEST(CliRegression, LargeCsvFilesStayWithinTheBound) {
 
 // An SQLite file with the given statements applied to the seed study database.
 std::string Tampered(const std::string& slot, const std::string& sql) {
-  const std::string path = Put(slot, "s.db", StudyDatabaseSeed(slot));
+  std::string path = Put(slot, "s.db", StudyDatabaseSeed(slot));
   sqlite3* db = nullptr;
   sqlite3_open(path.c_str(), &db);
   sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr);
