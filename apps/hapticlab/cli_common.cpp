@@ -4,6 +4,7 @@
 
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -17,14 +18,13 @@ int Guard(const std::function<int()>& body) {
   } catch (const InputError& e) {
     fmt::print(stderr, "error: {}\n", e.what());
     return kExitBadInput;
+  } catch (const std::filesystem::filesystem_error& e) {
+    // The environment refused a file operation: the path and the reason, as a sentence.
+    fmt::print(stderr, "failed: {}: {}\n", e.path1().string(), e.code().message());
+    return kExitFailure;
   } catch (const PreconditionError& e) {
     fmt::print(stderr, "internal error (please report): {}\n", e.what());
     return kExitFailure;
-  } catch (const std::invalid_argument& e) {
-    // Transitional: library code still throwing std::invalid_argument for user data is being
-    // moved to InputError (docs/architecture.md, "Errors"); until then it stays exit 2.
-    fmt::print(stderr, "error: {}\n", e.what());
-    return kExitBadInput;
   } catch (const std::exception& e) {
     fmt::print(stderr, "failed: {}\n", e.what());
     return kExitFailure;
@@ -70,7 +70,13 @@ void WithFlags(const std::map<std::string, std::string>& flags, const std::funct
   }
 }
 
-void PrintJson(const nlohmann::json& j) { fmt::print("{}\n", j.dump(2)); }
+void PrintJson(const nlohmann::json& j) { fmt::print("{}\n", JsonText(j, 2)); }
+
+std::string JsonText(const nlohmann::json& j, int indent) {
+  // Strings from user files and paths may hold bytes that are not UTF-8: replaced (U+FFFD),
+  // never thrown as nlohmann's "invalid UTF-8" text.
+  return j.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
+}
 
 std::function<void(const std::string&)> StderrLog(bool quiet) {
   if (quiet) return [](const std::string&) {};

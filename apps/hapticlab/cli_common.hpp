@@ -22,7 +22,7 @@ inline constexpr int kExitStopped = 3;
 inline constexpr const char* kCommandLine = "<command line>";
 
 /// Runs a command body, mapping exceptions to exit codes and messages on stderr:
-/// InputError and std::invalid_argument -> 2, anything else -> 1.
+/// InputError -> 2, anything else -> 1.
 int Guard(const std::function<int()>& body);
 
 /// Guard for CLI11 callbacks: runs `body` and turns a non-zero exit into CLI11's exit path.
@@ -43,6 +43,9 @@ void WithFlags(const std::map<std::string, std::string>& flags, const std::funct
 
 /// A command's --json output: `j` indented by two spaces, then a newline, on stdout.
 void PrintJson(const nlohmann::json& j);
+
+/// `j` as text (`indent` < 0: one line); bytes that are not UTF-8 become U+FFFD.
+std::string JsonText(const nlohmann::json& j, int indent = -1);
 
 /// The progress log of a long command: each line to stderr, or nowhere when `quiet`.
 std::function<void(const std::string&)> StderrLog(bool quiet);

@@ -50,8 +50,7 @@ void RegisterAnalyze(CLI::App& app) {
       if (o->json) {
         fmt::print(
             "{}\n",
-            nlohmann::json{{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}.dump(
-                2));
+            JsonText({{"report", r.markdown}, {"files", r.files}, {"studies", r.studies}}, 2));
       } else {
         fmt::print("report: {} ({} files, studies: {})\n", r.markdown, r.files.size(),
                    fmt::join(r.studies, ", "));

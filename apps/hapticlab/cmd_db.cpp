@@ -30,9 +30,10 @@ void RegisterDb(CLI::App& app) {
   cmd->add_option("DEST", o->dest, "New file for the copy (never overwritten)")->required();
   cmd->callback([o] {
     RunGuarded([&] {
-      if (!std::filesystem::is_regular_file(o->src))
+      std::error_code ec;  // a path that cannot be looked up is not there
+      if (!std::filesystem::is_regular_file(o->src, ec))
         throw InputError(o->src, 0, "SRC", "no such database file");
-      if (std::filesystem::exists(o->dest))
+      if (std::filesystem::exists(o->dest, ec))
         throw InputError(o->dest, 0, "DEST", "already exists; a backup never overwrites a file");
       const db::Database src(o->src, {.create = false, .read_only = true});
       src.Backup(o->dest);

@@ -74,7 +74,7 @@ void AddCheck(CLI::App& model) {
       if (*json)
         PrintJson(j);
       else
-        fmt::print("{}: ok\n{}\n", *path, j.dump(2));
+        fmt::print("{}: ok\n{}\n", *path, JsonText(j, 2));
       return kExitOk;
     });
   });
@@ -199,16 +199,17 @@ void AddEnergy(CLI::App& model) {
   cmd->add_flag("--json", o->json, "Print {\"energy_J\", \"closed_form_J\", ...} as JSON");
   cmd->callback([o] {
     RunGuarded([&] {
-      const auto comma = o->sine.find(',');
+      auto comma = o->sine.find(',');
       double a = 0, l = 0;
       try {
-        if (comma == std::string::npos) throw std::invalid_argument("");
         a = std::stod(o->sine.substr(0, comma));
-        l = std::stod(o->sine.substr(comma + 1));
-      } catch (const std::exception&) {
+        l = comma == std::string::npos ? 0 : std::stod(o->sine.substr(comma + 1));
+      } catch (const std::exception&) {  // std::stod's own errors: not a number
+        comma = std::string::npos;
+      }
+      if (comma == std::string::npos)
         throw InputError(kCommandLine, 0, "--sine",
                          "expected AMPLITUDE_M,WAVELENGTH_M, got '" + o->sine + "'");
-      }
       if (!(a > 0) || !(l > 0))
         throw InputError(kCommandLine, 0, "--sine", "amplitude and wavelength must be > 0");
       renderer::MaterialModel m;
@@ -336,7 +337,7 @@ void AddBuild(CLI::App& model) {
       auto rel = [&](const std::string& p) {
         return fs::relative(fs::absolute(p), outdir).string();
       };
-      auto quoted = [](const std::string& p) { return nlohmann::json(p).dump(); };
+      auto quoted = [](const std::string& p) { return JsonText(nlohmann::json(p)); };
       // Each part is read through the renderer's material parser (its own file named in errors).
       // Parts without the tables a material requires get neutral ones (not used).
       auto parse = [](std::string text, const std::string& path, bool contact_part) {

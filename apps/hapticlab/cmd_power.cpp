@@ -55,13 +55,13 @@ std::vector<int> ParseCounts(const std::string& s) {
 
 void ParseShard(const std::string& s, int* i, int* n) {
   const auto slash = s.find('/');
+  bool ok = slash != std::string::npos;
   try {
-    if (slash == std::string::npos) throw std::invalid_argument("no slash");
-    *i = std::stoi(s.substr(0, slash));
-    *n = std::stoi(s.substr(slash + 1));
-  } catch (const std::exception&) {
-    throw InputError(kCommandLine, 0, "--shard", "expected i/N, e.g. 0/8, got '" + s + "'");
+    if (ok) *i = std::stoi(s.substr(0, slash)), *n = std::stoi(s.substr(slash + 1));
+  } catch (const std::exception&) {  // std::stoi's own errors: not a number
+    ok = false;
   }
+  if (!ok) throw InputError(kCommandLine, 0, "--shard", "expected i/N, e.g. 0/8, got '" + s + "'");
   if (*n < 1 || *i < 0 || *i >= *n)
     throw InputError(kCommandLine, 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
 }

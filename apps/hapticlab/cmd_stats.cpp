@@ -118,7 +118,7 @@ void AddRmAnova(CLI::App& s) {
         const auto sw = stats::ShapiroWilk(stats::AnovaResiduals(r));
         if (std::isfinite(sw.W) && std::isfinite(sw.p))
           normality = {{"test", "Shapiro-Wilk"}, {"n", sw.n}, {"W", sw.W}, {"p", sw.p}};
-      } catch (const std::invalid_argument&) {  // < 3 or > 5000 residuals, or no spread
+      } catch (const InputError&) {  // < 3 or > 5000 residuals, or no spread
       }
       if (c->json) {
         json effects = json::array();
@@ -346,8 +346,9 @@ void AddShapiro(CLI::App& s) {
         Fitted(t, [&] {
           try {
             r = stats::ShapiroWilk(y);
-          } catch (const std::invalid_argument& e) {  // too few or many values, no spread
-            throw InputError(t.source, 0, c->dv, "group " + name + ": " + e.what());
+          } catch (const InputError& e) {  // too few or many values, no spread
+            throw InputError(t.source, 0, c->dv,
+                             "group " + name + ": " + e.diagnostics().front().message);
           }
         });
         RequireFinite(t, {{name + " W", r.W}, {name + " p", r.p}});

@@ -5,11 +5,12 @@
 #include <fstream>
 #include <sstream>
 
+#include "csv_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 
 namespace hapticlab {
-namespace {
+namespace internal {
 
 std::string Trim(const std::string& s) {
   const auto b = s.find_first_not_of(" \t\r");
@@ -53,7 +54,10 @@ std::vector<std::string> SplitLine(const std::string& line, const std::string& f
   return cells;
 }
 
-}  // namespace
+}  // namespace internal
+
+using internal::SplitLine;
+using internal::Trim;
 
 std::optional<std::size_t> CsvTable::Find(const std::string& column) const {
   for (std::size_t i = 0; i < header.size(); ++i)
@@ -110,6 +114,12 @@ CsvTable ParseCsv(const std::string& text, const std::string& name) {
       throw InputError(name, lineno, "",
                        "row has " + std::to_string(cells.size()) + " cells, header has " +
                            std::to_string(t.header.size()));
+    // Cells are held as strings (about 40 bytes each): the table is bounded before it grows
+    // past a few hundred MB (measurement CSVs are streamed instead: measurement.cpp).
+    if ((t.rows.size() + 1) * t.header.size() > internal::kCsvMaxCells)
+      throw InputError(name, lineno, "",
+                       "more than " + std::to_string(internal::kCsvMaxCells) +
+                           " cells; a table this large is not read as text cells");
     t.rows.push_back(std::move(cells));
     t.row_lines.push_back(lineno);
   }

@@ -13,7 +13,18 @@ std::string Diagnostic::ToString() const {
   return s;
 }
 
+// A hostile file must not grow the list (and the message) without bound: the first
+// kMaxDiagnostics problems are kept, then one line says that more were found.
+constexpr std::size_t kMaxDiagnostics = 100;
+
 void Diagnostics::Add(std::string file, int line, std::string field, std::string message) {
+  if (items_.size() > kMaxDiagnostics) return;
+  if (items_.size() == kMaxDiagnostics) {
+    items_.push_back({std::move(file), 0, "",
+                      "... and more problems (only the first " + std::to_string(kMaxDiagnostics) +
+                          " are listed)"});
+    return;
+  }
   items_.push_back({std::move(file), line, std::move(field), std::move(message)});
 }
 

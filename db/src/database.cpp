@@ -16,11 +16,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <map>
+#include <set>
 #include <stdexcept>
 #include <thread>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/participant_code.hpp"
 #include "hapticlab/core/status.hpp"
 #include "schema.hpp"
 #include "sqlite_util.hpp"
@@ -31,17 +34,7 @@ using internal::ExecSql;
 using internal::Stmt;
 using internal::Transaction;
 
-bool IsPseudonymousCode(const std::string& code) {
-  if (code.empty() || code.size() > 32) return false;
-  bool digit = false;
-  for (unsigned char c : code) {
-    if (std::isdigit(c))
-      digit = true;
-    else if (!std::isalpha(c) && c != '-' && c != '_')
-      return false;
-  }
-  return digit;
-}
+bool IsPseudonymousCode(const std::string& code) { return PseudonymousCodeProblem(code).empty(); }
 
 Database OpenForReading(const std::string& path) {
   struct stat st {};
@@ -146,12 +139,14 @@ Database::Database(const std::string& path, const OpenOptions& options) : path_(
       // FULL: a committed transaction survives power loss, not only a process crash.
       ExecSql(db_, "PRAGMA synchronous = FULL");
       Migrate(options.migrate_to);
+      if (options.migrate_to == kSchemaVersion && path != ":memory:") CheckShape();
     } else {
       const int v = SchemaVersion();
       if (v > kSchemaVersion)
         throw std::runtime_error(path + ": schema version " + std::to_string(v) +
                                  " is newer than this build supports (" +
                                  std::to_string(kSchemaVersion) + ")");
+      if (v == kSchemaVersion) CheckShape();
     }
   } catch (...) {
     sqlite3_close(db_);
@@ -183,7 +178,9 @@ int Database::SchemaVersion() const {
     Stmt any(db_, "SELECT count(*) FROM sqlite_master WHERE type='table'");
     any.Step();
     if (any.Int(0) != 0)
-      throw std::runtime_error(path_ + ": not a HapticLab database (no schema_version table)");
+      throw InputError(path_, 0, "db",
+                       "not a HapticLab study database (an SQLite file without its "
+                       "schema_version table)");
     return 0;
   }
   Stmt v(db_, "SELECT max(version) FROM schema_version");
@@ -213,11 +210,70 @@ void Database::Migrate(int target) {
               "CREATE TABLE schema_version (version INTEGER NOT NULL, applied_at TEXT NOT NULL "
               "DEFAULT (strftime('%Y-%m-%dT%H:%M:%fZ','now')))");
     }
-    ExecSql(db_, internal::MigrationSql(k));
+    try {
+      ExecSql(db_, internal::MigrationSql(k));
+    } catch (const std::runtime_error&) {
+      // SQLITE_ERROR here: a table or column the migration adds is there already, or one it
+      // changes is missing: the file's tables do not match its recorded version.
+      if ((sqlite3_errcode(db_) & 0xff) != SQLITE_ERROR) throw;  // I/O, a full disk, ...
+      throw InputError(path_, 0, "db",
+                       fmt::format("the file says schema version {}, but its tables do not match "
+                                   "it (migration to version {} failed: {}): it was changed "
+                                   "outside HapticLab; restore it from a backup",
+                                   current, k, sqlite3_errmsg(db_)));
+    }
     Stmt ins(db_, "INSERT INTO schema_version(version) VALUES (?)");
     ins.Bind(1, k).Run();
   }
   tx.Commit();
+}
+
+namespace {
+
+using TableShape = std::map<std::string, std::set<std::string>>;  // table -> its columns
+
+TableShape ShapeOf(sqlite3* db) {
+  TableShape shape;
+  Stmt t(db, "SELECT name FROM sqlite_master WHERE type = 'table' ORDER BY name");
+  while (t.Step()) shape[t.Text(0)];
+  for (auto& [table, columns] : shape) {
+    // pragma_table_info takes the table's name as a bound value: no SQL is built from names.
+    Stmt c(db, "SELECT name FROM pragma_table_info(?)");
+    c.Bind(1, table);
+    while (c.Step()) columns.insert(c.Text(0));
+  }
+  return shape;
+}
+
+// The tables and columns of the current schema, from a fresh in-memory database (once).
+const TableShape& ExpectedShape() {
+  static const TableShape kShape = [] {
+    const Database fresh(":memory:");
+    return ShapeOf(fresh.handle());
+  }();
+  return kShape;
+}
+
+}  // namespace
+
+void Database::CheckShape() const {
+  const TableShape have = ShapeOf(db_);
+  for (const auto& [table, columns] : ExpectedShape()) {
+    const auto t = have.find(table);
+    std::string missing = t == have.end() ? "table '" + table + "'" : "";
+    if (missing.empty())
+      for (const auto& c : columns)
+        if (!t->second.count(c)) {
+          missing = "column '" + c + "' of table '" + table + "'";
+          break;
+        }
+    if (!missing.empty())
+      throw InputError(path_, 0, "db",
+                       "not a HapticLab study database of schema version " +
+                           std::to_string(kSchemaVersion) + " (" + missing +
+                           " is missing): it was changed outside HapticLab, or is another "
+                           "program's file; restore it from a backup");
+  }
 }
 
 std::string Database::QuickCheck() const {

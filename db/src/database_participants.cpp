@@ -19,6 +19,7 @@
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/participant_code.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
 #include "schema.hpp"
@@ -72,11 +73,13 @@ bool Database::IsReserved(std::int64_t participant_id) const {
 }
 
 std::int64_t Database::AddParticipant(const Participant& p) {
-  if (!IsPseudonymousCode(p.code))
+  // Whatever the protocol's pattern allowed: the record holds no names, dates or numbers.
+  if (const std::string why = PseudonymousCodeProblem(p.code); !why.empty())
     throw InputError("<command line>", 0, "participant",
-                     "'" + p.code +
-                         "' is not a pseudonymous code: use 1-32 letters, digits, "
-                         "'-' or '_' including at least one digit (e.g. P07); never a name");
+                     "'" + p.code + "' is not a pseudonymous code (" + why +
+                         "): use 1-32 letters, digits, '-' or '_' with at least one digit, no "
+                         "more than 3 letters in a row and at most 5 digits (e.g. P07); never a "
+                         "name, birth date or phone number");
   Stmt s(db_, "INSERT INTO participant(study_id, code, idx, seed) VALUES (?,?,?,?)");
   s.Bind(1, p.study_id)
       .Bind(2, p.code)

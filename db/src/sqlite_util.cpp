@@ -38,7 +38,9 @@ void ThrowSqlite(sqlite3* db, const std::string& what) {
 
 Stmt::Stmt(sqlite3* db, const char* sql) : db_(db) {
   if (sqlite3_prepare_v2(db, sql, -1, &s_, nullptr) != SQLITE_OK)
-    ThrowSqlite(db, std::string("prepare '") + sql + "'");
+    // The statement's text stays out of the message (users read it); a prepare fails on a file
+    // whose tables are not this build's (Database checks the shape when it opens a file).
+    ThrowSqlite(db, "a query on the study record");
 }
 Stmt::~Stmt() { sqlite3_finalize(s_); }
 
@@ -100,9 +102,9 @@ void ExecSql(sqlite3* db, const char* sql) {
     std::string msg = err ? err : "unknown error";
     sqlite3_free(err);
     const std::string plain = Explain(sqlite3_extended_errcode(db));
+    (void)sql;  // not in the message: users read it
     throw std::runtime_error(std::string(sqlite3_db_filename(db, "main")) + ": " +
-                             (plain.empty() ? "" : plain + ": ") + msg +
-                             " (in: " + std::string(sql).substr(0, 80) + ")");
+                             (plain.empty() ? "" : plain + ": ") + msg);
   }
 }
 

@@ -10,6 +10,8 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "hapticlab/core/status.hpp"
+
 namespace hapticlab::modeling {
 namespace {
 
@@ -71,10 +73,10 @@ class RealDft {
 }  // namespace
 
 std::vector<double> Dft321(const std::vector<std::vector<double>>& axes) {
-  if (axes.empty()) throw std::invalid_argument("DFT321 needs at least one axis");
+  HL_REQUIRE(!axes.empty(), "DFT321 needs at least one axis");
   const std::size_t n = axes[0].size();
   for (const auto& a : axes)
-    if (a.size() != n) throw std::invalid_argument("DFT321: the axes differ in length");
+    HL_REQUIRE(a.size() == n, "DFT321: the axes differ in length");
   if (n < 2) return n == 1 ? std::vector<double>{axes[0][0]} : std::vector<double>{};
   RealDft dft(n);
   std::vector<std::complex<double>> sum(dft.bins());
@@ -94,8 +96,8 @@ struct Dft321Stream::Fft {
 
 Dft321Stream::Dft321Stream(int axes, std::size_t frame)
     : axes_(axes), n_(frame), hop_(frame / 2), fft_(std::make_unique<Fft>(frame)) {
-  if (axes < 1 || frame < 4 || frame % 2 != 0)
-    throw std::invalid_argument("DFT321 stream: at least one axis and an even frame >= 4");
+  HL_REQUIRE(axes >= 1 && frame >= 4 && frame % 2 == 0,
+             "DFT321 stream: at least one axis and an even frame >= 4");
   buf_.assign(static_cast<std::size_t>(axes), std::vector<double>(n_, 0.0));
   window_.resize(n_);
   for (std::size_t i = 0; i < n_; ++i)  // periodic sqrt-Hann: w^2 + w^2(shifted by n/2) = 1

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
 
@@ -135,7 +136,7 @@ MlpTrainSummary Mlp::Train(const Eigen::MatrixXd& X, const Eigen::VectorXd& y,
   const auto nval =
       static_cast<Eigen::Index>(std::floor(o.validation_fraction * static_cast<double>(n)));
   const Eigen::Index ntr = n - nval;
-  if (ntr < o.batch) throw std::invalid_argument("too few samples for one mini-batch");
+  if (ntr < o.batch) throw InputError("", 0, "samples", "too few samples for one mini-batch");
   auto mse = [&](Eigen::Index from, Eigen::Index to) {
     if (to <= from) return 0.0;
     const Eigen::VectorXd p = PredictRows(X.middleRows(from, to - from));

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
 
 namespace hapticlab::modeling {
@@ -144,7 +145,8 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
     for (std::size_t i = 0; i < npx; ++i) r.mask[i] = o.mask[i] ? 1 : 0;
   const bool irregular = std::find(r.mask.begin(), r.mask.end(), 0) != r.mask.end();
   if (irregular && o.integration == Integration::kFrankotChellappa)
-    throw std::invalid_argument(
+    throw InputError(
+        "", 0, "integration",
         "Frankot-Chellappa integrates the whole image; a mask needs the Poisson solve");
   r.albedo.assign(npx, 0.f);
   r.normals.assign(npx, Eigen::Vector3f::Zero());

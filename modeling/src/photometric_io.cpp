@@ -23,6 +23,8 @@ namespace hapticlab::modeling {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
+// Lines a lights file or image list may hold: a little over kMaxLights (docs/formats.md).
+constexpr std::size_t kMaxTextLines = kMaxLights + 2;
 
 Eigen::Vector3d FromAngles(double elev_deg, double azim_deg) {
   const double e = elev_deg * kPi / 180, a = azim_deg * kPi / 180;
@@ -55,15 +57,20 @@ std::vector<TextLine> SplitCells(const std::string& text, const std::string& pat
     std::string cell;
     bool after_comma = false, have_cell = false;
     for (std::size_t i = first; i <= s.size(); ++i) {
-      const char c = i < s.size() ? s[i] : '\0';
-      if (c == ',' || c == ' ' || c == '\t' || c == '\0') {
+      const bool at_end = i == s.size();  // the end of the line, not a NUL byte in it
+      const char c = at_end ? ',' : s[i];
+      if (static_cast<unsigned char>(c) < 0x20 && c != '\t')
+        throw InputError(path, number, "",
+                         fmt::format("control character (byte 0x{:02x}) in a text file",
+                                     static_cast<unsigned char>(c)));
+      if (at_end || c == ',' || c == ' ' || c == '\t') {
         if (have_cell) {
           tl.cells.push_back(cell);
           cell.clear();
           have_cell = false;
           after_comma = false;
         }
-        if (c == ',') {
+        if (c == ',' && !at_end) {
           if (after_comma || tl.cells.empty())
             throw InputError(path, number, "", "empty cell between commas");
           after_comma = true;
@@ -74,6 +81,9 @@ std::vector<TextLine> SplitCells(const std::string& text, const std::string& pat
       }
     }
     if (after_comma) throw InputError(path, number, "", "line ends with a comma");
+    if (tl.cells.empty()) continue;  // only separators: nothing on the line
+    if (out.size() >= kMaxTextLines)
+      throw InputError(path, number, "", fmt::format("more than {} lines", kMaxTextLines));
     out.push_back(std::move(tl));
     if (end == text.size()) break;
   }
@@ -123,8 +133,14 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
     std::optional<std::size_t> count;
     int count_line = 0;
     if (k < lines.size() && IsCount(lines[k])) {
-      count = static_cast<std::size_t>(std::stoul(lines[k].cells[0]));
+      const auto& digits = lines[k].cells[0];
+      std::size_t n = 0;
+      const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), n);
       count_line = lines[k].line;
+      if (r.ec != std::errc() || n < 3 || n > kMaxLights)
+        throw InputError(path, count_line, "count",
+                         fmt::format("'{}' lights; expected 3..{}", digits, kMaxLights));
+      count = n;
       ++k;
     }
     // Columns: from a header (every cell non-numeric) or from the first row's shape.
@@ -191,6 +207,9 @@ std::vector<Light> LoadLights(const std::string& path, bool y_up) {
                          "light at or below the sample plane (z must be > 0)");
       out.push_back(light);
     }
+    if (out.size() > kMaxLights)
+      throw InputError(path, lines.back().line, "",
+                       fmt::format("{} lights; at most {} are read", out.size(), kMaxLights));
     if (count && *count != out.size())
       throw InputError(
           path, count_line, "",
@@ -244,9 +263,17 @@ cv::Mat ReadTga(const std::string& path) {
                               : 0);
   const std::size_t bytes = static_cast<std::size_t>(bpp / 8),
                     n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  // The header's size is checked against the bytes present before anything is allocated: raw
+  // data holds `bytes` per pixel, an RLE packet (1 header byte + at least `bytes`) at most 128.
+  if (at > d.size()) throw bad("header, id and colour map run past the end of the file");
+  const std::size_t present = d.size() - at;
+  if ((type == 2 || type == 3) && present < n * bytes)
+    throw bad(fmt::format("pixel data truncated ({}x{} pixels need {} bytes, {} present)", w, h,
+                          n * bytes, present));
+  if ((type == 10 || type == 11) && n > 128 * (present / (1 + bytes)))
+    throw bad(fmt::format("RLE data truncated ({} bytes cannot hold {}x{} pixels)", present, w, h));
   std::vector<unsigned char> px(n * bytes);
   if (type == 2 || type == 3) {
-    if (d.size() < at + px.size()) throw bad("pixel data truncated");
     std::copy(d.begin() + static_cast<std::ptrdiff_t>(at),
               d.begin() + static_cast<std::ptrdiff_t>(at + px.size()), px.begin());
   } else {
@@ -273,7 +300,8 @@ cv::Mat ReadTga(const std::string& path) {
   for (int i = 0; i < h; ++i)
     for (int j = 0; j < w; ++j) {
       const std::size_t src =
-          static_cast<std::size_t>((top ? i : h - 1 - i) * w + (right_to_left ? w - 1 - j : j)) *
+          (static_cast<std::size_t>(top ? i : h - 1 - i) * static_cast<std::size_t>(w) +
+           static_cast<std::size_t>(right_to_left ? w - 1 - j : j)) *
           bytes;
       unsigned char* dst = m.ptr<unsigned char>(i) +
                            static_cast<std::size_t>(j) * static_cast<std::size_t>(m.channels());
@@ -294,14 +322,15 @@ bool IsTga(const std::string& path) {
 }
 
 cv::Mat ReadAny(const std::string& path) {
+  std::error_code ec;  // a name too long to look up is "not found", not a filesystem_error
   if (IsTga(path) && !cv::haveImageReader(path)) {
-    if (!std::filesystem::exists(path)) throw InputError(path, 0, "", "image not found");
+    if (!std::filesystem::exists(path, ec)) throw InputError(path, 0, "", "image not found");
     return ReadTga(path);
   }
   cv::Mat m = cv::imread(path, cv::IMREAD_UNCHANGED);
   if (m.empty())
     throw InputError(path, 0, "",
-                     std::filesystem::exists(path)
+                     std::filesystem::exists(path, ec)
                          ? "cannot read image (a format OpenCV reads, or TGA)"
                          : "image not found");
   return m;
@@ -360,6 +389,13 @@ ImageStack ReadImages(const std::string& dir, const std::vector<Light>& lights) 
     if (s.images.empty()) {
       s.width = w;
       s.height = h;
+      const double stack_bytes = static_cast<double>(lights.size()) * w * h * sizeof(float);
+      if (stack_bytes > static_cast<double>(kMaxImageStackBytes))
+        throw InputError(
+            path, 0, "",
+            fmt::format("{} images of {}x{} pixels need {:.1f} GiB, more than the "
+                        "{} GiB allowed",
+                        lights.size(), w, h, stack_bytes / (1 << 30), kMaxImageStackBytes >> 30));
     } else if (w != s.width || h != s.height) {
       throw InputError(path, 0, "",
                        fmt::format("image is {}x{}, the first was {}x{}", w, h, s.width, s.height));

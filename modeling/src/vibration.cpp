@@ -77,7 +77,7 @@ Autocorr Autocorrelation(const std::vector<double>& x, int pmax) {
   const int n = static_cast<int>(x.size());
   HL_REQUIRE(pmax >= 1 && pmax <= renderer::kMaxArOrder, "AR order must be 1..64");
   if (n < 4 * pmax)
-    throw std::invalid_argument(fmt::format("{} samples are too few for order {}", n, pmax));
+    throw InputError("", 0, "samples", fmt::format("{} samples are too few for order {}", n, pmax));
   double mean = 0;
   for (double v : x) mean += v;
   mean /= n;
@@ -113,7 +113,7 @@ Autocorr Pool(const std::vector<const Autocorr*>& parts) {
 std::vector<ArFit> Levinson(const Autocorr& ac, int pmax, OrderCriterion criterion) {
   const std::vector<double>& r = ac.r;
   const double n = ac.n;
-  if (!(r[0] > 0)) throw std::invalid_argument("the recording is constant");
+  if (!(r[0] > 0)) throw InputError("", 0, "samples", "the recording is constant");
   std::vector<double> a(static_cast<std::size_t>(pmax) + 1, 0.0), prev;
   double err = r[0];
   std::vector<ArFit> out;
@@ -155,7 +155,8 @@ ArFit FitAr(const std::vector<double>& x, int order, int max_order, OrderCriteri
 
 std::vector<double> WelchMagnitude(const std::vector<double>& x, int segment) {
   if (segment < 16 || static_cast<std::size_t>(segment) > x.size())
-    throw std::invalid_argument("spectrum: the signal needs at least one segment of samples");
+    throw InputError("", 0, "samples",
+                     "spectrum: the signal needs at least one segment of samples");
   const auto n = static_cast<std::size_t>(segment);
   std::vector<double> w(n);
   for (std::size_t i = 0; i < n; ++i)
@@ -193,13 +194,13 @@ double SpectralError(const std::vector<double>& a, const std::vector<double>& b,
     num += (ma[k] - mb[k]) * (ma[k] - mb[k]);
     den += ma[k] * ma[k];
   }
-  if (!(den > 0)) throw std::invalid_argument("E_s: the measured signal has no energy");
+  if (!(den > 0)) throw InputError("", 0, "samples", "E_s: the measured signal has no energy");
   return std::sqrt(num / den);
 }
 
 AdfResult AugmentedDickeyFuller(const std::vector<double>& y, int max_lags) {
   const int T = static_cast<int>(y.size());
-  if (T < 50) throw std::invalid_argument("ADF needs at least 50 samples");
+  if (T < 50) throw InputError("", 0, "samples", "ADF needs at least 50 samples");
   if (max_lags < 0) max_lags = static_cast<int>(std::floor(12 * std::pow(T / 100.0, 0.25)));
   std::vector<double> dy(static_cast<std::size_t>(T - 1));
   for (int t = 1; t < T; ++t)
@@ -277,12 +278,17 @@ std::vector<double> Preprocess(const Recording& r, const VibrationFitOptions& o)
   // Resource limit derived from the input: at most 8x upsampling, so the work and memory
   // stay proportional to the recording (a model rate of 1e9 Hz would otherwise ask for
   // gigabytes).
-  constexpr double kMaxUpsampling = 8;
-  if (!(o.model_rate_hz > 0) || !(o.model_rate_hz <= kMaxUpsampling * r.rate_hz))
-    throw InputError(
-        r.file, 0, "model_rate_hz",
-        fmt::format("model rate {} Hz must be in (0, {}] Hz (at most {}x the recording's {} Hz)",
-                    o.model_rate_hz, kMaxUpsampling * r.rate_hz, kMaxUpsampling, r.rate_hz));
+  // At most 64x downsampling too: soxr's filter for an extreme ratio (1e-6 Hz from 10 kHz)
+  // runs for hours.
+  constexpr double kMaxUpsampling = 8, kMaxDownsampling = 64;
+  const double lo = std::max(r.rate_hz / kMaxDownsampling, 2 * std::max(0.0, o.band_lo_hz));
+  if (!(o.model_rate_hz > lo) || !(o.model_rate_hz <= kMaxUpsampling * r.rate_hz))
+    throw InputError(r.file, 0, "model_rate_hz",
+                     fmt::format("model rate {} Hz must be in ({:g}, {:g}] Hz (at most {:g}x "
+                                 "above or {:g}x below the recording's {:g} Hz, and above twice "
+                                 "the band's low edge {:g} Hz)",
+                                 o.model_rate_hz, lo, kMaxUpsampling * r.rate_hz, kMaxUpsampling,
+                                 kMaxDownsampling, r.rate_hz, o.band_lo_hz));
   const auto y = Resample(r.acc, r.rate_hz, o.model_rate_hz, o.resample);
   return BandLimit(y, o.model_rate_hz, o.band_lo_hz, 0.475 * o.model_rate_hz);
 }

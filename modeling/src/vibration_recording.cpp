@@ -184,7 +184,8 @@ std::vector<Recording> LoadRecordingSegments(const std::string& path, double min
 
 std::vector<Recording> LoadRecordings(const std::string& dir, const SoundLabels& labels) {
   namespace fs = std::filesystem;
-  if (!fs::is_directory(dir)) throw InputError(dir, 0, "recordings", "not a folder");
+  std::error_code ec;  // a name too long to look up is "not a folder", not a filesystem_error
+  if (!fs::is_directory(dir, ec)) throw InputError(dir, 0, "recordings", "not a folder");
   std::vector<std::string> files;
   for (const auto& e : fs::directory_iterator(dir))
     if (e.path().extension() == ".csv" || IsSoundFile(e.path().string()))

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
+#include <unordered_map>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
@@ -15,47 +17,127 @@ struct Item {
   std::string key;  // what may not repeat on consecutive trials (the material)
 };
 
+// A Fenwick tree of 0/1 counts: prefix sums and the k-th set position in O(log n).
+class Fenwick {
+ public:
+  explicit Fenwick(std::size_t n) : t_(n + 1, 0) {
+    for (std::size_t i = 1; i <= n; ++i) {  // all ones, built in O(n)
+      t_[i] += 1;
+      if (const std::size_t j = i + (i & (~i + 1)); j <= n) t_[j] += t_[i];
+    }
+  }
+  void Remove(std::size_t pos) {
+    for (std::size_t i = pos + 1; i < t_.size(); i += i & (~i + 1)) --t_[i];
+  }
+  std::size_t Prefix(std::size_t end) const {  // ones in [0, end)
+    std::size_t s = 0;
+    for (std::size_t i = end; i > 0; i -= i & (~i + 1)) s += t_[i];
+    return s;
+  }
+  std::size_t Kth(std::size_t k) const {  // position of the (k+1)-th one
+    std::size_t pos = 0, step = 1;
+    while (step * 2 < t_.size()) step *= 2;
+    for (; step > 0; step /= 2)
+      if (pos + step < t_.size() && t_[pos + step] <= k) k -= t_[pos += step];
+    return pos;
+  }
+
+ private:
+  std::vector<std::size_t> t_;
+};
+
 // Orders `items` randomly such that no two consecutive items share a key (and the first
 // differs from `prev`). Greedy with the majority rule: when a key holds more than half of
-// what is left it must go next; this succeeds whenever any valid order exists.
+// what is left it must go next; this succeeds whenever any valid order exists. Each step picks
+// uniformly among the remaining items allowed next, in their original order (the draws of the
+// plain quadratic version, so plans stay what they were), in O(log^2 n) with Fenwick trees.
 std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev, bool constrained,
                                 Rng& rng, const Protocol& p, const Phase& ph) {
   if (!constrained) {
     rng.Shuffle(items);
     return items;
   }
+  const std::size_t n = items.size();
+  std::map<std::string, std::size_t> key_ids;
+  for (const auto& it : items) key_ids.emplace(it.key, 0);
+  std::vector<std::string> keys;
+  for (auto& [k, id] : key_ids) id = keys.size(), keys.push_back(k);
+  std::vector<std::size_t> key_of(n), rank(n);
+  std::vector<std::vector<std::size_t>> positions(keys.size());  // per key, ascending
+  for (std::size_t i = 0; i < n; ++i) {
+    key_of[i] = key_ids[items[i].key];
+    rank[i] = positions[key_of[i]].size();
+    positions[key_of[i]].push_back(i);
+  }
+  Fenwick all(n);
+  std::vector<Fenwick> per_key;
+  std::vector<std::size_t> count(keys.size());
+  std::set<std::pair<std::size_t, std::size_t>> by_count;  // (remaining, key)
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    per_key.emplace_back(positions[k].size());
+    count[k] = positions[k].size();
+    by_count.emplace(count[k], k);
+  }
+  auto last_id = [&](const std::string& key) -> std::ptrdiff_t {
+    const auto f = key_ids.find(key);
+    return f == key_ids.end() ? -1 : static_cast<std::ptrdiff_t>(f->second);
+  };
+  std::ptrdiff_t last = last_id(prev);
   std::vector<Item> out;
-  std::string last = prev;
-  while (!items.empty()) {
-    std::map<std::string, int> count;
-    for (const auto& it : items) ++count[it.key];
-    const int rem = static_cast<int>(items.size());
-    // A key with c > ceil(rem / 2) cannot be placed at all; one with 2c - 1 == rem must go now.
-    for (const auto& [k, c] : count) {
-      if (2 * c - 1 > rem || (2 * c - 1 == rem && k == last))
-        throw InputError(
-            p.file, ph.line, "randomization.no_immediate_repeat",
-            fmt::format(
-                "the {} phase cannot avoid immediate repeats: '{}' fills {} of the {} remaining "
-                "trials{}",
-                ToString(ph.kind), k, c, rem,
-                k == last ? " and also ended the previous block" : ""));
-    }
-    std::string forced;
-    for (const auto& [k, c] : count)
-      if (2 * c - 1 == rem) forced = k;
-    std::vector<std::size_t> candidates;
-    for (std::size_t i = 0; i < items.size(); ++i)
-      if (items[i].key != last && (forced.empty() || items[i].key == forced))
-        candidates.push_back(i);
-    if (candidates.empty())
+  out.reserve(n);
+  for (std::size_t rem = n; rem > 0; --rem) {
+    // A key with 2c - 1 > rem cannot be placed at all; one with 2c - 1 == rem must go now (at
+    // most one key can be either).
+    const auto [cmax, kmax] = *by_count.rbegin();
+    const std::size_t clast = last >= 0 ? count[static_cast<std::size_t>(last)] : 0;
+    const bool stuck_last = last >= 0 && 2 * clast - 1 == rem;
+    if (2 * cmax - 1 > rem || stuck_last) {
+      const std::size_t k = stuck_last ? static_cast<std::size_t>(last) : kmax;
       throw InputError(
           p.file, ph.line, "randomization.no_immediate_repeat",
-          fmt::format("the {} phase cannot avoid immediate repeats", ToString(ph.kind)));
-    const std::size_t pick = candidates[rng.Below(candidates.size())];
-    last = items[pick].key;
+          fmt::format(
+              "the {} phase cannot avoid immediate repeats: '{}' fills {} of the {} "
+              "remaining trials{}",
+              ToString(ph.kind), keys[k], count[k], rem,
+              static_cast<std::ptrdiff_t>(k) == last ? " and also ended the previous block" : ""));
+    }
+    std::size_t pick = 0;
+    if (2 * cmax - 1 == rem) {  // forced: one of kmax's items, in their order
+      pick = positions[kmax][per_key[kmax].Kth(rng.Below(cmax))];
+    } else {
+      const std::size_t candidates = rem - clast;
+      if (candidates == 0)
+        throw InputError(
+            p.file, ph.line, "randomization.no_immediate_repeat",
+            fmt::format("the {} phase cannot avoid immediate repeats", ToString(ph.kind)));
+      const std::size_t j = rng.Below(candidates);
+      // The smallest position whose prefix holds j + 1 remaining items of another key.
+      auto allowed_before = [&](std::size_t end) {
+        std::size_t s = all.Prefix(end);
+        if (last >= 0) {
+          const auto& lp = positions[static_cast<std::size_t>(last)];
+          s -= per_key[static_cast<std::size_t>(last)].Prefix(
+              static_cast<std::size_t>(std::lower_bound(lp.begin(), lp.end(), end) - lp.begin()));
+        }
+        return s;
+      };
+      std::size_t lo = 0, hi = n - 1;
+      while (lo < hi) {
+        const std::size_t mid = lo + (hi - lo) / 2;
+        if (allowed_before(mid + 1) >= j + 1)
+          hi = mid;
+        else
+          lo = mid + 1;
+      }
+      pick = lo;
+    }
+    const std::size_t k = key_of[pick];
+    all.Remove(pick);
+    per_key[k].Remove(rank[pick]);
+    by_count.erase({count[k], k});
+    if (--count[k] > 0) by_count.emplace(count[k], k);
+    last = static_cast<std::ptrdiff_t>(k);
     out.push_back(std::move(items[pick]));
-    items.erase(items.begin() + static_cast<std::ptrdiff_t>(pick));
   }
   return out;
 }
@@ -91,6 +173,26 @@ void BalanceSides(std::vector<Item>& items, bool balance, Rng& rng) {
   }
 }
 
+// The plan's size, counted before anything is built (the counts are bounded when parsed,
+// their products are not).
+double PlannedTrials(const Protocol& p) {
+  double planned = 0;
+  const double m = static_cast<double>(p.materials.size());
+  for (const auto& ph : p.phases) {
+    if (ph.adaptive) continue;
+    if (ph.kind == PhaseKind::kTraining)
+      planned += m;
+    else if (ph.kind == PhaseKind::kReference)
+      planned += ph.repetitions *
+                 ((ph.same_pairs ? m : 0) + static_cast<double>(ph.explicit_pairs.empty()
+                                                                    ? ph.different_pairs
+                                                                    : ph.explicit_pairs.size()));
+    else
+      planned += ph.repetitions * m * static_cast<double>(p.methods.size());
+  }
+  return planned;
+}
+
 }  // namespace
 
 std::uint64_t ParticipantSeed(const Protocol& p, int participant_index) {
@@ -99,6 +201,11 @@ std::uint64_t ParticipantSeed(const Protocol& p, int participant_index) {
 
 std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
   if (participant_index < 0) throw InputError(p.file, 0, "participant", "index must be >= 0");
+  if (const double planned = PlannedTrials(p); planned > static_cast<double>(kMaxPlannedTrials))
+    throw InputError(p.file, 0, "phase",
+                     fmt::format("the phases plan {:.0f} trials per participant, more than the {} "
+                                 "allowed (fewer materials, methods, pairs or repetitions)",
+                                 planned, kMaxPlannedTrials));
   Rng rng(ParticipantSeed(p, participant_index));
   // Different-material reference pairs are drawn once per study (the same for everyone).
   Rng study_rng(DeriveSeed(p.seed, 0xFFFF'FFFFull));
@@ -130,12 +237,17 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
       if (!ph.explicit_pairs.empty()) {
         pairs.insert(pairs.end(), ph.explicit_pairs.begin(), ph.explicit_pairs.end());
       } else if (ph.different_pairs > 0) {
-        std::vector<std::pair<std::string, std::string>> all;
-        for (std::size_t i = 0; i < p.materials.size(); ++i)
-          for (std::size_t j = i + 1; j < p.materials.size(); ++j)
-            all.emplace_back(p.materials[i].id, p.materials[j].id);
+        // Indices, not names, are shuffled (the same draws): m (m - 1) / 2 pairs for m <=
+        // kMaxMaterials.
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
+        all.reserve(p.materials.size() * (p.materials.size() - 1) / 2);
+        for (std::uint32_t i = 0; i < p.materials.size(); ++i)
+          for (std::uint32_t j = i + 1; j < p.materials.size(); ++j) all.emplace_back(i, j);
         study_rng.Shuffle(all);
-        pairs.insert(pairs.end(), all.begin(), all.begin() + ph.different_pairs);
+        for (int k = 0; k < ph.different_pairs; ++k) {
+          const auto [i, j] = all[static_cast<std::size_t>(k)];
+          pairs.emplace_back(p.materials[i].id, p.materials[j].id);
+        }
       }
       for (int rep = 0; rep < ph.repetitions; ++rep)
         for (const auto& [a, b] : pairs)
@@ -180,12 +292,15 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
           order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
         std::string prev = prev0;
         std::vector<std::size_t> starts;  // positions in `items` where a block begins
+        // Each block's items in their order, grouped in one pass (names are unique).
+        std::unordered_map<std::string, std::size_t> block_of;
+        for (std::size_t i = 0; i < blocks.size(); ++i) block_of.emplace(blocks[i], i);
+        std::vector<std::vector<Item>> grouped(blocks.size());
+        for (auto& it : all)
+          grouped[block_of.at(by_method ? it.trial.method : it.trial.material)].push_back(
+              std::move(it));
         for (int b : order) {
-          std::vector<Item> block;
-          for (const auto& it : all)
-            if ((by_method ? it.trial.method : it.trial.material) ==
-                blocks[static_cast<std::size_t>(b)])
-              block.push_back(it);
+          auto& block = grouped[static_cast<std::size_t>(b)];
           auto ordered = NoRepeatOrder(std::move(block), prev, constrained, rng, p, ph);
           if (!ordered.empty()) {
             prev = ordered.back().key;

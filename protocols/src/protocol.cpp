@@ -1,18 +1,20 @@
 #include "hapticlab/protocols/protocol.hpp"
 
 #include <fmt/format.h>
+#include <re2/re2.h>
 #include <toml++/toml.h>
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <fstream>
-#include <regex>
 #include <set>
 #include <sstream>
 
 #include "adaptive_internal.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/core/participant_code.hpp"
 #include "hapticlab/core/toml_util.hpp"
 
 namespace hapticlab::protocols {
@@ -82,7 +84,11 @@ class Reader {
 // The protocol's material ids, comma-separated, for messages.
 std::string MaterialIds(const Protocol& p) {
   std::string s;
-  for (const auto& m : p.materials) s += (s.empty() ? "" : ", ") + m.id;
+  std::size_t shown = 0;
+  for (const auto& m : p.materials) {
+    if (++shown > 20) return s + fmt::format(", ... ({} in all)", p.materials.size());
+    s += (s.empty() ? "" : ", ") + m.id;
+  }
   return s.empty() ? std::string("none") : s;
 }
 
@@ -110,6 +116,13 @@ void ReadConsent(const toml::table& t, Reader& r, Protocol* p) {
   p->consent_document =
       text("document", 256, "the consent document's name or title, e.g. \"consent-form.pdf\"");
   p->consent_version = text("version", 64, "its version, e.g. \"2026-03\"");
+}
+
+// How many entries of an array of tables are read: all, or (with an error) the first `max`.
+std::size_t Bounded(Reader& r, const toml::array& a, const std::string& key, std::size_t max) {
+  if (a.size() <= max) return a.size();
+  r.Error(&a, key, fmt::format("{} entries; at most {} are allowed", a.size(), max));
+  return max;
 }
 
 const std::set<std::string> kAlgorithms{"wall", "norm", "fric1", "fric2", "none"};
@@ -145,16 +158,30 @@ const Method* Protocol::FindMethod(const std::string& n) const {
   return nullptr;
 }
 
+namespace {
+
+// The pattern compiled by RE2, whose matching time is linear in the code's length whatever the
+// pattern (no backtracking: `^(A|A)*B$` costs what `^A*B$` costs). std::regex backtracked.
+RE2::Options CodePatternOptions() {
+  RE2::Options o;
+  o.set_log_errors(false);
+  o.set_max_mem(std::int64_t{1} << 20);  // a 128-character pattern needs far less
+  return o;
+}
+
+}  // namespace
+
 bool ValidCodePattern(const std::string& pattern, std::string* why) {
-  // Bounded: std::regex compiles and matches recursively.
-  if (pattern.empty() || pattern.size() > 128) {
-    if (why) *why = "expected a regular expression of 1..128 characters";
+  if (pattern.empty() || pattern.size() > kMaxCodePatternBytes) {
+    if (why)
+      *why = fmt::format("expected a regular expression of 1..{} characters", kMaxCodePatternBytes);
     return false;
   }
-  try {
-    const std::regex re(pattern, std::regex::ECMAScript);
-  } catch (const std::regex_error& e) {
-    if (why) *why = std::string("not a valid regular expression: ") + e.what();
+  const RE2 re(pattern, CodePatternOptions());
+  if (!re.ok()) {
+    if (why)
+      *why = "not a valid regular expression (RE2 syntax: no back-references or look-arounds): " +
+             re.error();
     return false;
   }
   return true;
@@ -168,8 +195,11 @@ void CheckParticipantCode(const Protocol& p, const std::string& code) {
   // The code must be short and plain before the pattern is even tried.
   bool plain = !code.empty() && code.size() <= 32;
   for (unsigned char c : code) plain = plain && (std::isalnum(c) || c == '-' || c == '_');
-  if (!plain || !std::regex_match(code, std::regex(p.participant_code, std::regex::ECMAScript)))
+  if (!plain || !RE2::FullMatch(code, RE2(p.participant_code, CodePatternOptions())))
     throw InputError(p.file, 0, "participant", "'" + code + "' is not " + rule);
+  // The database's own rule, whatever the pattern admits (Anna_Kowalski_19850312).
+  if (const std::string why = PseudonymousCodeProblem(code); !why.empty())
+    throw InputError(p.file, 0, "participant", "'" + code + "' is not " + rule + " (" + why + ")");
 }
 
 Protocol ParseProtocol(const std::string& text, const std::string& file) {
@@ -201,8 +231,9 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     if (const toml::node* sc = s->get("scale")) {
       const toml::array* a = sc->as_array();
       if (!a || a->size() != 2 || !(*a)[0].value<double>() || !(*a)[1].value<double>() ||
-          !(*(*a)[0].value<double>() < *(*a)[1].value<double>()))
-        r.Error(sc, "study.scale", "expected [min, max] with min < max");
+          !(*(*a)[0].value<double>() < *(*a)[1].value<double>()) ||
+          !std::isfinite(*(*a)[0].value<double>()) || !std::isfinite(*(*a)[1].value<double>()))
+        r.Error(sc, "study.scale", "expected [min, max] with finite min < max");
       else {
         p.scale_min = *(*a)[0].value<double>();
         p.scale_max = *(*a)[1].value<double>();
@@ -230,7 +261,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   // [[material]]
   std::set<std::string> ids;
   if (const toml::array* ms = doc["material"].as_array()) {
-    for (std::size_t i = 0; i < ms->size(); ++i) {
+    for (std::size_t i = 0, n = Bounded(r, *ms, "material", kMaxMaterials); i < n; ++i) {
       const std::string pre = fmt::format("material[{}]", i);
       const toml::table* t = (*ms)[i].as_table();
       if (!t) {
@@ -256,7 +287,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   // [[method]]
   std::set<std::string> names;
   if (const toml::array* ms = doc["method"].as_array()) {
-    for (std::size_t i = 0; i < ms->size(); ++i) {
+    for (std::size_t i = 0, n = Bounded(r, *ms, "method", kMaxMethods); i < n; ++i) {
       const std::string pre = fmt::format("method[{}]", i);
       const toml::table* t = (*ms)[i].as_table();
       if (!t) {
@@ -285,7 +316,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   // [[phase]]
   bool has_main = false, has_adaptive = false;
   if (const toml::array* ps = doc["phase"].as_array()) {
-    for (std::size_t i = 0; i < ps->size(); ++i) {
+    for (std::size_t i = 0, n = Bounded(r, *ps, "phase", kMaxPhases); i < n; ++i) {
       const std::string pre = fmt::format("phase[{}]", i);
       const toml::table* t = (*ps)[i].as_table();
       if (!t) {
@@ -337,7 +368,8 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         r.Error(t->get("method"), pre + ".method", "only a training phase takes a method");
       }
       ph.duration_s = r.Get<double>(*t, pre, "duration_s", false, "a number").value_or(30);
-      if (!(ph.duration_s > 0)) r.Error(t->get("duration_s"), pre + ".duration_s", "expected > 0");
+      if (!(ph.duration_s > 0 && ph.duration_s <= 3600))
+        r.Error(t->get("duration_s"), pre + ".duration_s", "expected 0 < seconds <= 3600");
       ph.same_pairs = r.Get<bool>(*t, pre, "same_pairs", false, "true or false").value_or(true);
       if (const toml::node* dp = t->get("different_pairs")) {
         if (auto n = dp->value<std::int64_t>()) {
@@ -355,10 +387,10 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
             if (!a0 || !a1)
               r.Error(&x, pre + ".different_pairs",
                       "expected [\"A\", \"B\"] with two different material ids");
-            else if (!p.FindMaterial(*a0) || !p.FindMaterial(*a1))
+            else if (!ids.count(*a0) || !ids.count(*a1))
               r.Error(&x, pre + ".different_pairs",
                       fmt::format("unknown material id '{}' (the [[material]] ids are: {})",
-                                  !p.FindMaterial(*a0) ? *a0 : *a1, MaterialIds(p)));
+                                  !ids.count(*a0) ? *a0 : *a1, MaterialIds(p)));
             else if (*a0 == *a1)
               r.Error(&x, pre + ".different_pairs",
                       fmt::format("a pair needs two different materials, got '{}' twice", *a0));
@@ -419,6 +451,8 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
     else
       p.break_every_trials = static_cast<int>(every);
     p.break_duration_s = r.Get<double>(*t, "breaks", "duration_s", false, "a number").value_or(60);
+    if (!(p.break_duration_s >= 0 && p.break_duration_s <= 3600))
+      r.Error(t->get("duration_s"), "breaks.duration_s", "expected 0 <= seconds <= 3600");
   }
   if (const toml::table* t = doc["masking_noise"].as_table()) {
     r.Known(*t, "masking_noise", {"enabled", "level_dB"});
@@ -426,6 +460,9 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
         r.Get<bool>(*t, "masking_noise", "enabled", false, "true or false").value_or(true);
     p.masking_level_dB =
         r.Get<double>(*t, "masking_noise", "level_dB", false, "a number").value_or(70);
+    // Headphone noise above 100 dB harms hearing within minutes; a finite level is required.
+    if (!(p.masking_level_dB >= 0 && p.masking_level_dB <= 100))
+      r.Error(t->get("level_dB"), "masking_noise.level_dB", "expected 0 <= dB <= 100");
   }
   if (const toml::table* t = doc["consent"].as_table()) ReadConsent(*t, r, &p);
   if (const toml::table* t = doc["analysis"].as_table()) {

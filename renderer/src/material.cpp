@@ -290,7 +290,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto w = r.Number(*g, "geometry", "width", true);
       const auto h = r.Number(*g, "geometry", "height", true);
       const auto p = r.Number(*g, "geometry", "pitch_m", true);
-      if (p && *p <= 0) r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be > 0");
+      if (p && !(*p > 0 && *p <= 0.01))
+        r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be in (0, 0.01] m");
       // Range-checked before the narrowing cast; the file's size is checked by LoadRawF32.
       constexpr double kMaxSide = 1 << 20;  // samples along one side
       bool sides_ok = true;
@@ -313,8 +314,8 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
       const auto a = r.Number(*g, "geometry", "amplitude_m", true);
       const auto l = r.Number(*g, "geometry", "wavelength_m", true);
       if (a && l) {
-        if (*a < 0 || *l <= 0)
-          r.Error(g, "geometry", "amplitude_m must be >= 0 and wavelength_m > 0");
+        if (!(*a >= 0 && *a <= 0.01 && *l > 0 && *l <= 1))
+          r.Error(g, "geometry", "amplitude_m must be in [0, 0.01] m and wavelength_m in (0, 1] m");
         else
           m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
       }
@@ -372,68 +373,6 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
 
 MaterialModel LoadMaterial(const std::string& path) {
   return ParseMaterial(ReadTextFile(path, "material model"), path);
-}
-
-void ValidateMaterial(const MaterialModel& m) {
-  Diagnostics d;
-  const std::string& f = m.source_path;
-  auto hc = [&](const HuntCrossleyParams& p, const std::string& prefix, bool allow_zero_k) {
-    if (!(p.K > 0) && !(allow_zero_k && p.K == 0))
-      d.Add(f, 0, prefix + "_K", "stiffness must be > 0");
-    if (p.B < 0) d.Add(f, 0, prefix + "_B", "damping must be >= 0");
-    if (!(p.n >= 1 && p.n <= 2)) d.Add(f, 0, prefix + "_n", "exponent must be in [1, 2]");
-  };
-  hc(m.contact.texture, "contact.texture", false);
-  hc(m.contact.base, "contact.base", true);
-  if (m.contact.layer_thickness_m < 0) d.Add(f, 0, "contact.layer_thickness_m", "must be >= 0");
-  if (!(m.friction.kappa_N_per_m > 0)) d.Add(f, 0, "friction.kappa_N_per_m", "must be > 0");
-  if (!(m.friction.mu_k >= 0)) d.Add(f, 0, "friction.mu_k", "must be >= 0");
-  if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
-  if (!(m.hybrid_cutoff_hz >= 0))
-    d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
-  const auto& b = m.vibration;
-  if (!b.empty()) {
-    if (!(b.sample_rate_hz > 0)) d.Add(f, 0, "vibration.sample_rate_hz", "must be > 0");
-    if (!(b.min_speed_mps >= 0)) d.Add(f, 0, "vibration.min_speed_mps", "must be >= 0");
-    if (!(b.light_force_N >= 0)) d.Add(f, 0, "vibration.light_force_N", "must be >= 0 (0: off)");
-    if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
-      d.Add(f, 0, "vibration.max_speed_mps",
-            fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
-    if (!(b.max_force_N == 0 || b.max_force_N > kSaturationMarginForce_N))
-      d.Add(f, 0, "vibration.max_force_N",
-            fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginForce_N));
-    const std::size_t p = b.cells[0].coeffs.size();
-    for (std::size_t i = 0; i < b.cells.size(); ++i) {
-      if (b.cells[i].coeffs.size() != p)
-        d.Add(
-            f, 0, fmt::format("vibration.cells[{}].ar", i),
-            fmt::format("order {} differs from the first cell's {}", b.cells[i].coeffs.size(), p));
-      if (b.cells[i].ma.size() != b.cells[0].ma.size())
-        d.Add(f, 0, fmt::format("vibration.cells[{}].ma", i),
-              "MA order differs from the first cell's");
-      if (b.cells[i].lsf.size() != b.cells[i].coeffs.size() ||
-          b.cells[i].ma_lsf.size() != b.cells[i].ma.size())
-        d.Add(f, 0, fmt::format("vibration.cells[{}]", i), "LSFs missing (unstable filter?)");
-    }
-    const bool grid = !b.grid_speeds_mps.empty() || !b.grid_forces_N.empty();
-    if (grid) {
-      const auto n = b.grid_speeds_mps.size() * b.grid_forces_N.size();
-      if (n != b.cells.size())
-        d.Add(f, 0, "vibration.cells",
-              fmt::format("a {} x {} grid needs {} cells, found {}", b.grid_speeds_mps.size(),
-                          b.grid_forces_N.size(), n, b.cells.size()));
-      for (const auto* axis : {&b.grid_speeds_mps, &b.grid_forces_N})
-        for (std::size_t i = 1; i < axis->size(); ++i)
-          if (!((*axis)[i] > (*axis)[i - 1]))
-            d.Add(f, 0, axis == &b.grid_speeds_mps ? "vibration.speeds_mps" : "vibration.forces_N",
-                  "grid values must be strictly ascending");
-    } else if (b.cells.size() > 1 && b.triangles.empty()) {
-      d.Add(f, 0, "vibration.triangles",
-            "scattered cells need a triangulation: give triangles, a grid, or at least 3 "
-            "non-collinear cells to triangulate");
-    }
-  }
-  d.ThrowIfAny();
 }
 
 std::string MaterialToToml(const MaterialModel& m, const std::string& geometry_file) {

@@ -3,6 +3,8 @@
 #include <fmt/format.h>
 
 #include <filesystem>
+#include <map>
+#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
@@ -42,8 +44,9 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
     d.Add(p.file, 0, "study.profiles",
           "the simulated lab needs a profiles file (ground truth of each sample)");
   bool have_profiles = false;
+  std::error_code ec;  // a path too long to look up is "no such file", not a filesystem_error
   if (!p.profiles.empty()) {
-    if (!fs::is_regular_file(dir / p.profiles))
+    if (!fs::is_regular_file(dir / p.profiles, ec))
       d.Add(p.file, 0, "study.profiles", "no such file " + where(p.profiles));
     else
       have_profiles = attempt(0, "study.profiles", [&] {
@@ -51,16 +54,19 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       });
   }
   if (!p.observer.empty()) {
-    if (!fs::is_regular_file(dir / p.observer))
+    if (!fs::is_regular_file(dir / p.observer, ec))
       d.Add(p.file, 0, "study.observer", "no such file " + where(p.observer));
     else
       attempt(0, "study.observer",
               [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
   }
+  // One placeholder model (and hash) per profile, however many materials share it: building
+  // one takes milliseconds, and a protocol may name up to 1000 materials.
+  std::map<std::string, std::pair<renderer::MaterialModel, std::string>> built;
   for (const auto& m : p.materials) {
     const bool placeholder = m.model == "placeholder";
     if (!placeholder) {
-      if (!fs::is_regular_file(dir / m.model)) {
+      if (!fs::is_regular_file(dir / m.model, ec)) {
         d.Add(p.file, m.line, "material.model",
               "material '" + m.id + "': no model file " + where(m.model));
       } else {
@@ -99,9 +105,14 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       continue;
     }
     if (placeholder) {
-      auto model = sim::PlaceholderModel(prof->second);
-      lab.model_hashes[m.id] = db::HashText(renderer::MaterialToToml(model));
-      lab.models.emplace(m.id, std::move(model));
+      auto it = built.find(m.profile);
+      if (it == built.end()) {
+        auto model = sim::PlaceholderModel(prof->second);
+        auto hash = db::HashText(renderer::MaterialToToml(model));
+        it = built.emplace(m.profile, std::pair{std::move(model), std::move(hash)}).first;
+      }
+      lab.model_hashes[m.id] = it->second.second;
+      lab.models.emplace(m.id, it->second.first);
     }
   }
   d.ThrowIfAny();

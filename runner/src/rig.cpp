@@ -32,6 +32,9 @@ std::string Vec(const Eigen::Vector3d& v) {
   return fmt::format("[{:.6g}, {:.6g}, {:.6g}]", v.x(), v.y(), v.z());
 }
 
+// Positions and offsets in a rig file: a bench, not a building.
+constexpr double kMaxRigLength_m = 10;
+
 // Reads [x, y, z] at `t[key]`; reports a problem and keeps `*out` when malformed.
 void ReadVec(const toml::table& t, const std::string& table, const char* key, Eigen::Vector3d* out,
              Diagnostics& d, const std::string& path, bool required) {
@@ -51,8 +54,13 @@ void ReadVec(const toml::table& t, const std::string& table, const char* key, Ei
   Eigen::Vector3d v;
   for (std::size_t i = 0; i < 3; ++i) {
     const auto x = (*a)[i].value<double>();
-    if (!x || !std::isfinite(*x)) {
-      d.Add(path, line, field, "expected [x, y, z] (three finite numbers)");
+    // Lengths of a bench rig lie within kMaxRigLength_m; axes are directions, but their
+    // squares must stay finite when normalised.
+    const double max_abs = field.ends_with("_m") ? kMaxRigLength_m : 1e6;
+    if (!x || !(std::abs(*x) <= max_abs)) {
+      d.Add(path, line, field,
+            fmt::format("expected [x, y, z] (three finite numbers, each within +-{:g}{})", max_abs,
+                        field.ends_with("_m") ? " m" : ""));
       return;
     }
     v[static_cast<Eigen::Index>(i)] = *x;

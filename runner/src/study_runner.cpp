@@ -116,7 +116,8 @@ SessionMode ModeOf(const RunOptions& o) {
 }
 
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);
   for (const auto& st : database.Studies())
     if (const auto part = database.FindParticipant(st.id, participant)) {
@@ -147,7 +148,8 @@ void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool
 
 int ParticipantIndex(const std::string& db_path, const std::string& study,
                      const std::string& code) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);
   const auto st = database.FindStudy(study);
   if (!st) throw InputError(db_path, 0, "participant", "no study '" + study + "' in this database");
@@ -234,8 +236,9 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
          .software_version = std::string(kVersion) + "+" + kGitSha,
          .device = opt.device,
          .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
-         .provenance_json = prov.dump(),
-         .plan_json = plan_json.dump(),
+         // Paths in the provenance may hold bytes that are not UTF-8: replaced, not thrown.
+         .provenance_json = prov.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+         .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
          .actuator = mode.actuator,
          .screens = mode.screens,
          .rater = mode.rater});
@@ -269,7 +272,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
 }
 
 RunSummary ResumeStudy(const RunOptions& opt) {
-  if (!fs::exists(opt.db_path)) throw InputError(opt.db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(opt.db_path, ec))
+    throw InputError(opt.db_path, 0, "db", "no such database");
   const db::WriterLease lease(opt.db_path);  // one writer per study database
   db::Database database(opt.db_path);
   for (const auto& st : database.Studies()) {
@@ -297,7 +301,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     // The protocol text comes from the database; its folder (for models and profiles) from
     // where it was run.
     auto p = protocols::ParseProtocol(st.protocol_toml, path);
-    if (!path.empty() && fs::exists(path) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
+    if (std::error_code ec; !path.empty() && fs::exists(path, ec) &&
+                            db::HashText(ReadTextFile(path)) != st.protocol_hash)
       Log(opt, ProtocolOnDiskNote(st.protocol_toml, ReadTextFile(path)));
     // The recorded mode, or with --change-mode the new one (logged).
     const SessionMode recorded{se.device, se.actuator, se.screens, se.rater};
@@ -350,7 +355,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
 
 std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
                                            const std::string& participant) {
-  if (!fs::exists(db_path)) throw InputError(db_path, 0, "db", "no such database");
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
   const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
   std::vector<ParticipantStatus> out;
   for (const auto& st : database.Studies())

@@ -12,6 +12,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
@@ -99,7 +100,7 @@ std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const st
 }
 
 std::vector<std::string> DrawPsychometricPlot(const PsychometricPlot& p, const std::string& base) {
-  if (p.binned.x.empty()) throw std::invalid_argument("psychometric plot without data");
+  HL_REQUIRE(!p.binned.x.empty(), "a psychometric plot needs data");
   const auto [lo_it, hi_it] = std::minmax_element(p.binned.x.begin(), p.binned.x.end());
   double x0 = *lo_it, x1 = *hi_it;
   if (std::isfinite(p.jnd)) x0 = std::min(x0, p.jnd), x1 = std::max(x1, p.jnd);

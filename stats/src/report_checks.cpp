@@ -9,6 +9,7 @@
 #include <tuple>
 #include <vector>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include "hapticlab/stats/shapiro.hpp"
@@ -53,7 +54,7 @@ void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name
   ShapiroResult s;
   try {
     s = ShapiroWilk(e);
-  } catch (const std::invalid_argument&) {
+  } catch (const InputError&) {
     md << "not tested (fewer than 3 residuals, more than 5000, or no spread).\n";
     return;
   }

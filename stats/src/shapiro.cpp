@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/distributions.hpp"
 
 namespace hapticlab::stats {
@@ -28,13 +29,14 @@ double Qnorm(double p) {
 ShapiroResult ShapiroWilk(std::vector<double> x) {
   const int n = static_cast<int>(x.size());
   if (n < 3 || n > 5000)
-    throw std::invalid_argument("Shapiro-Wilk needs 3 to 5000 values, got " + std::to_string(n));
+    throw InputError("", 0, "values",
+                     "Shapiro-Wilk needs 3 to 5000 values, got " + std::to_string(n));
   for (double v : x)
-    if (!std::isfinite(v)) throw std::invalid_argument("Shapiro-Wilk: non-finite value");
+    if (!std::isfinite(v)) throw InputError("", 0, "values", "Shapiro-Wilk: non-finite value");
   std::sort(x.begin(), x.end());
   const double range = x.back() - x.front();
   if (!(range > 1e-10 * std::max(1.0, std::abs(x.front()))))
-    throw std::invalid_argument("Shapiro-Wilk: all values are identical");
+    throw InputError("", 0, "values", "Shapiro-Wilk: all values are identical");
 
   // Coefficients a_1..a_{n/2} (Royston's polynomial approximations).
   static const double kC1[] = {0.0, 0.221157, -0.147981, -2.07119, 4.434685, -2.706056};

@@ -43,10 +43,15 @@ TEST(CliCommon, GuardMapsEachKindOfErrorToItsExitCode) {
   EXPECT_EQ(Guarded([]() -> int { throw std::runtime_error("disk full"); }, &err),
             cli::kExitFailure);
   EXPECT_EQ(err, "failed: disk full\n");
-  // Transitional: std::invalid_argument from library code still counts as bad input.
+  // Data a library computation cannot use (it names the data, not a file): bad input, exit 2.
+  EXPECT_EQ(
+      Guarded([]() -> int { throw InputError("", 0, "samples", "the recording is constant"); },
+              &err),
+      cli::kExitBadInput);
+  EXPECT_EQ(err, "error: samples: the recording is constant\n");
+  // The "Transitional" branch is gone: std::invalid_argument is library text, not bad input.
   EXPECT_EQ(Guarded([]() -> int { throw std::invalid_argument("bad k"); }, &err),
-            cli::kExitBadInput);
-  EXPECT_EQ(err, "error: bad k\n");
+            cli::kExitFailure);
 }
 
 TEST(CliCommon, WithFlagsNamesTheFlagsThatSetTheFieldsAndKeepsEverythingElse) {

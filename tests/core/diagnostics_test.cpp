@@ -31,6 +31,15 @@ TEST(Diagnostics, CollectsEveryProblemAndThrowsOnceWithAllOfThem) {
   }
 }
 
+TEST(Diagnostics, KeepsTheFirstHundredProblemsAndSaysThereAreMore) {
+  Diagnostics d;
+  for (int i = 1; i <= 100000; ++i) d.Add("p.toml", i, "material", "bad");
+  ASSERT_EQ(d.size(), 101u);  // a hostile file cannot grow the list (or the message)
+  EXPECT_EQ(d.items()[99].line, 100);
+  EXPECT_NE(d.items()[100].message.find("and more problems"), std::string::npos);
+  EXPECT_LT(d.ToString().size(), 5000u);
+}
+
 TEST(Diagnostics, ASingleInputErrorCarriesItsDiagnostic) {
   const InputError e("<command line>", 0, "shard", "expected i/N with 0 <= i < N");
   ASSERT_EQ(e.diagnostics().size(), 1u);

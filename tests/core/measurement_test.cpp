@@ -28,6 +28,33 @@ TEST(Measurement, ReadsAndRoundTrips) {
   EXPECT_EQ(back.rows[0].f_N, m.rows[0].f_N);
 }
 
+TEST(Measurement, ReadsLineByLineWithinItsBounds) {
+  const std::string head =
+      "\xEF\xBB\xBF# hapticlab-measurement v1\r\n# material: Cork\r\n"
+      "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N\r\n";
+  // A byte-order mark, CRLF and a last line without a newline read as the plain file does.
+  const auto m =
+      ParseMeasurementCsv(head + "0,1,2,3,4,5,6,7,8,9\r\n\r\n0.5,1,2,3,4,5,6,7,8,-9", "b.csv");
+  ASSERT_EQ(m.rows.size(), 2u);
+  EXPECT_EQ(m.material, "Cork");
+  EXPECT_EQ(m.row_lines, (std::vector<int>{4, 6}));
+  EXPECT_DOUBLE_EQ(m.rows[1].f_N.z(), -9);
+  test::TempDir dir;
+  test::WriteFile(dir.File("b.csv"), head + "0,1,2,3,4,5,6,7,8,9\r\n\r\n0.5,1,2,3,4,5,6,7,8,-9");
+  EXPECT_EQ(ReadMeasurementCsv(dir.File("b.csv")).rows[1].t_s, 0.5);
+  // A NUL byte ends no number; a line longer than 1 MiB is refused, not read whole.
+  EXPECT_THROW(
+      ParseMeasurementCsv(head + "0,1,2,3,4,5,6,7,8,9" + std::string(1, '\0') + "1\n", "z.csv"),
+      InputError);
+  try {
+    ParseMeasurementCsv(head + "0," + std::string(2 << 20, '1'), "l.csv");
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("l.csv:4: line longer than 1 MiB"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(Measurement, KinematicsOnlyDifferentiatesPositions) {
   const auto m = ParseMeasurementCsv(
       "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n1,3,0,0\n", "k.csv",

@@ -71,6 +71,37 @@ TEST(Database, RefusesFilesFromTheFutureAndForeignFiles) {
   EXPECT_THROW(Database(dir.File("b.db")), std::runtime_error);
 }
 
+TEST(Database, RefusesFilesWhoseTablesAreNotTheSchemaWithoutSql) {
+  test::TempDir dir;
+  auto refused = [&](const std::string& name, const std::string& sql, const char* expect) {
+    const std::string path = dir.File(name);
+    {
+      Database db(path);
+      Populate(db, kSchemaVersion);
+      db.Exec(sql);
+    }
+    for (bool reading : {true, false}) {
+      try {
+        if (reading)
+          OpenForReading(path);
+        else
+          Database d(path);
+        ADD_FAILURE() << sql << " was accepted";
+      } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(path), std::string::npos) << what;
+        EXPECT_NE(what.find(expect), std::string::npos) << what;
+        for (const char* raw : {"SELECT", "prepare", "quick_check", "no such table"})
+          EXPECT_EQ(what.find(raw), std::string::npos) << what;
+      }
+    }
+  };
+  refused("dropped.db", "DROP TABLE rating", "table 'rating' is missing");
+  // A migration that cannot run again: the version says 1, the tables are the latest.
+  refused("rolled_back.db", "DELETE FROM schema_version WHERE version > 1",
+          "do not match it (migration to version 2 failed");
+}
+
 TEST(Database, ForeignKeysAreEnforced) {
   test::TempDir dir;
   Database db(dir.File("a.db"));

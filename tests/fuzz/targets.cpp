@@ -27,7 +27,7 @@ int Expect(F&& f) {
   } catch (const std::bad_alloc&) {
     throw;  // memory proportional to an unchecked number in the input
   } catch (const std::exception&) {
-    // InputError, std::runtime_error, std::invalid_argument: the reader refused the input.
+    // InputError, std::runtime_error: the reader refused the input.
   }
   return 0;
 }

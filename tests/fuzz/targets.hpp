@@ -1,7 +1,7 @@
 #pragma once
 // One fuzz entry point per reader of untrusted input. Each parses `data` the way the
 // program does and returns normally for any input, valid or not: the reader's own errors
-// (InputError, std::runtime_error, std::invalid_argument) are expected and swallowed. A
+// (InputError, std::runtime_error) are expected and swallowed. A
 // crash, a sanitizer report, an allocation failure (std::bad_alloc: memory proportional to an
 // unchecked number) or a hang is a finding. Used by the gtest mutation harness
 // (fuzz_test.cpp) and, when built with clang, by one libFuzzer binary per target.

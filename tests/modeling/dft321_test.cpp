@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 
 namespace hapticlab::modeling {
@@ -76,8 +77,8 @@ TEST(Dft321, OneAxisComesBackUnchanged) {
 }
 
 TEST(Dft321, RefusesAxesOfDifferentLengths) {
-  EXPECT_THROW(Dft321({{1, 2, 3}, {1, 2}}), std::invalid_argument);
-  EXPECT_THROW(Dft321({}), std::invalid_argument);
+  EXPECT_THROW(Dft321({{1, 2, 3}, {1, 2}}), PreconditionError);
+  EXPECT_THROW(Dft321({}), PreconditionError);
 }
 
 // The stream form over frames much shorter than the signal: exact where the definition is

@@ -102,6 +102,43 @@ TEST(PhotometricIo, MalformedLightsFilesNameFileLineAndField) {
   EXPECT_EQ(Where([&] { LoadLights(dir.File("missing.txt")); }).find(dir.File("missing.txt")), 0u);
 }
 
+TEST(PhotometricIo, LightsFilesAndImageHeadersAreBoundedBeforeAllocation) {
+  test::TempDir dir;
+  const auto at = [&](const std::string& name, const std::string& text) {
+    test::WriteFile(dir.File(name), text);
+    std::string w = Where([&] { LoadLights(dir.File(name)); });
+    if (w.rfind(dir.path() + "/", 0) == 0) w.erase(0, dir.path().size() + 1);
+    return w;
+  };
+  // One NUL byte crashed the reader (cells[0] of an empty line); a count past the bound was
+  // std::stoul's out_of_range.
+  EXPECT_EQ(at("nul.txt", std::string(1, '\0')), "nul.txt|1|");
+  EXPECT_EQ(at("count.txt", "99999999999999999999999\n0 0 1\n"), "count.txt|1|count");
+  EXPECT_EQ(at("count2.txt", "2000\n0 0 1\n"), "count2.txt|1|count");
+  std::string many;
+  for (std::size_t i = 0; i <= kMaxLights; ++i) many += "0 0.1 1\n";
+  EXPECT_NE(Message([&] {
+              at("many.txt", many);
+              LoadLights(dir.File("many.txt"));
+            }).find("at most 1024"),
+            std::string::npos);
+  // A TGA header claiming 65535 x 65535 RLE pixels in 576 bytes: refused before the 17 GB.
+  std::string tga(18, '\0');
+  tga[2] = 10;  // RLE colour
+  tga[12] = tga[13] = tga[14] = tga[15] = static_cast<char>(0xFF);
+  tga[16] = 32;
+  tga += std::string(576, '\x7f');
+  test::WriteFile(dir.File("big.tga"), tga);
+  int w = 0, h = 0;
+  EXPECT_NE(Message([&] { ReadGreyImage(dir.File("big.tga"), &w, &h); }).find("RLE data truncated"),
+            std::string::npos);
+  tga[2] = 2;  // the same claim, uncompressed
+  test::WriteFile(dir.File("raw.tga"), tga);
+  EXPECT_NE(
+      Message([&] { ReadGreyImage(dir.File("raw.tga"), &w, &h); }).find("pixel data truncated"),
+      std::string::npos);
+}
+
 TEST(PhotometricIo, ImageListsNameTheLineOfAMalformedEntry) {
   test::TempDir dir;
   test::WriteFile(dir.File("l.txt"), "0 0 1\n1 0 1\n0 1 1\n");

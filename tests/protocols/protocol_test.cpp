@@ -1,5 +1,6 @@
 #include "hapticlab/protocols/protocol.hpp"
 
+#include <fmt/format.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -112,6 +113,62 @@ TEST(Protocol, ParticipantCodesFollowThePatternAndAreNeverNames) {
   const auto q = ParseProtocol(text, "q.toml");
   EXPECT_NO_THROW(CheckParticipantCode(q, "lab2-014"));
   EXPECT_THROW(CheckParticipantCode(q, "P07"), InputError);
+}
+
+TEST(Protocol, CodePatternsMatchInLinearTimeAndNeverAdmitNames) {
+  // std::regex backtracked 2^31 times here (437 s); RE2 does not backtrack.
+  std::string text = Small();
+  text.replace(text.find("seed = 42"), 9, "seed = 42\nparticipant_code = \"^(A|A)*B$\"");
+  const auto p = ParseProtocol(text, "p.toml");
+  EXPECT_THROW(CheckParticipantCode(p, std::string(31, 'A') + "C"), InputError);
+  // A pattern that admits anything: the code's own shape still refuses names and dates.
+  text = Small();
+  text.replace(text.find("seed = 42"), 9, "seed = 42\nparticipant_code = \"^[A-Za-z_0-9-]+$\"");
+  const auto q = ParseProtocol(text, "q.toml");
+  EXPECT_NO_THROW(CheckParticipantCode(q, "lab2-014"));
+  for (const char* bad : {"Anna_Kowalski_19850312", "1985-03-12", "JohnSmith1985"})
+    EXPECT_THROW(CheckParticipantCode(q, bad), InputError) << bad;
+  // Back-references and look-arounds are not RE2 syntax: refused when the protocol is read.
+  for (const char* pattern : {"^(A)\\1$", "^(?=P)P[0-9]+$"}) {
+    std::string why;
+    EXPECT_FALSE(ValidCodePattern(pattern, &why)) << pattern;
+    EXPECT_NE(why.find("RE2"), std::string::npos) << why;
+  }
+}
+
+TEST(Protocol, SizesAndNumbersAreBoundedWhenRead) {
+  auto problems = [](const std::string& text) {
+    try {
+      ParseProtocol(text, "b.toml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string small = Small();
+  const std::string head = small.substr(0, small.find("[[material]]")),
+                    tail = small.substr(small.find("[[method]]"));
+  std::string many;
+  for (std::size_t i = 0; i <= kMaxMaterials; ++i)
+    many += fmt::format("[[material]]\nid = \"m{}\"\n", i);
+  EXPECT_NE(problems(head + many + tail).find("1001 entries; at most 1000"), std::string::npos);
+  // 1000 materials x 2 methods x 11 repetitions: more trials than a plan may hold.
+  many.clear();
+  for (std::size_t i = 0; i < kMaxMaterials; ++i)
+    many += fmt::format("[[material]]\nid = \"m{}\"\n", i);
+  std::string big = head + many + tail;
+  big.replace(big.find("repetitions = 2"), 15, "repetitions = 11");
+  EXPECT_NE(problems(big).find("more than the 20000 allowed"), std::string::npos) << problems(big);
+  for (const char* level : {"inf", "180.0", "-5.0"})
+    EXPECT_NE(problems(small + "\n[masking_noise]\nlevel_dB = " + level + "\n")
+                  .find("masking_noise.level_dB"),
+              std::string::npos)
+        << level;
+  for (const char* seconds : {"1e300", "nan", "-1.0"}) {
+    std::string text = small;
+    text.replace(text.find("duration_s = 30"), 15, std::string("duration_s = ") + seconds);
+    EXPECT_NE(problems(text).find("breaks.duration_s"), std::string::npos) << seconds;
+  }
 }
 
 TEST(Protocol, ReportsAllProblemsAtOnce) {

@@ -143,8 +143,8 @@ class TrajectoryIncomplete : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// True when `code` is a pseudonymous participant code: 1-32 characters of letters, digits,
-/// '-' or '_', containing at least one digit (so a bare name such as "Alice" is refused).
+/// True when `code` is a pseudonymous participant code (core/participant_code.hpp: 1-32
+/// letters, digits, '-' or '_' with a digit, no name-, date-, phone- or e-mail-like shape).
 bool IsPseudonymousCode(const std::string& code);
 
 /// Options for opening a database.
@@ -258,6 +258,10 @@ class Database {
   void Exec(const std::string& sql) const;
 
  private:
+  /// Every table and column of the current schema is present (extra ones are allowed).
+  /// @throws InputError naming the file and the first one missing.
+  void CheckShape() const;
+
   std::string path_;
   sqlite3* db_ = nullptr;
 };

@@ -28,6 +28,12 @@ struct Light {
   std::string source;  ///< the lights file it came from (empty for presets)
 };
 
+/// Input bounds (docs/formats.md, "Photometric stereo input"): lights in a lights file, and
+/// the bytes an image stack (lights x width x height floats) may take; larger inputs are refused
+/// with an InputError before they are allocated.
+inline constexpr std::size_t kMaxLights = 1024;
+inline constexpr std::size_t kMaxImageStackBytes = std::size_t{4} << 30;
+
 /// The dissertation's dome: 30 lights at elevations 40°, 55°, 70°, every 36° of azimuth
 /// (azimuth from +x towards +y).
 std::vector<Light> DomePreset();

@@ -83,8 +83,9 @@ struct Protocol {
   double break_duration_s = 60;
   bool masking_noise = false;
   double masking_level_dB = 70;
-  /// Participant codes must match this ECMAScript regular expression (`[study]
-  /// participant_code`); the default allows 1-3 capital letters and 2-4 digits (P07, AB123).
+  /// Participant codes must match this regular expression (`[study] participant_code`, RE2
+  /// syntax, matched whole in linear time); the default allows 1-3 capital letters and 2-4 digits
+  /// (P07, AB123).
   std::string participant_code = "^[A-Z]{1,3}[0-9]{2,4}$";
   /// `[consent] document, version`: the consent document participants sign and its version
   /// (a session with a person records the consent confirmed against them; empty: none given,
@@ -105,8 +106,19 @@ struct Protocol {
   const Method* FindMethod(const std::string& name) const;
 };
 
+/// Sizes a protocol may have (docs/formats.md, "Bounds"): larger ones are refused while
+/// parsing, before they are planned. A plan is built in O(n log^2 n) for n trials.
+inline constexpr std::size_t kMaxMaterials = 1000;
+inline constexpr std::size_t kMaxMethods = 100;
+inline constexpr std::size_t kMaxPhases = 100;
+inline constexpr std::size_t kMaxPlannedTrials = 20000;  ///< per participant, all phases
+
+/// Longest participant-code pattern accepted.
+inline constexpr std::size_t kMaxCodePatternBytes = 128;
+
 /// True when `pattern` is usable as a participant code pattern (1..128 characters, a valid
-/// ECMAScript regular expression); else `why` says what is wrong.
+/// RE2 regular expression: ECMAScript's common syntax without back-references or
+/// look-arounds); else `why` says what is wrong.
 bool ValidCodePattern(const std::string& pattern, std::string* why);
 /// Refuses (InputError naming the protocol and --participant) a code that is not 1-32 letters,
 /// digits, '-' or '_' matching the protocol's participant_code pattern.

@@ -13,7 +13,7 @@ struct ShapiroResult {
   double p = 0;
 };
 
-/// @throws std::invalid_argument for n < 3, n > 5000, non-finite values or zero range.
+/// @throws InputError (field "values") for n < 3, n > 5000, non-finite values or zero range.
 ShapiroResult ShapiroWilk(std::vector<double> x);
 
 }  // namespace hapticlab::stats
