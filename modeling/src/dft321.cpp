@@ -75,8 +75,7 @@ class RealDft {
 std::vector<double> Dft321(const std::vector<std::vector<double>>& axes) {
   HL_REQUIRE(!axes.empty(), "DFT321 needs at least one axis");
   const std::size_t n = axes[0].size();
-  for (const auto& a : axes)
-    HL_REQUIRE(a.size() == n, "DFT321: the axes differ in length");
+  for (const auto& a : axes) HL_REQUIRE(a.size() == n, "DFT321: the axes differ in length");
   if (n < 2) return n == 1 ? std::vector<double>{axes[0][0]} : std::vector<double>{};
   RealDft dft(n);
   std::vector<std::complex<double>> sum(dft.bins());

@@ -306,14 +306,13 @@ RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
         trial_under_way = t.id;
         const auto how = opt.ui->ConfirmPlacement(screen);
         if (!how) return abort({.detail = "the experimenter aborted while placing the samples"});
-        database.LogEvent({.session_id = session,
-                           .trial_id = t.id,
-                           .kind = "samples-placed",
-                           .detail = fmt::format("trial {}: {}; {}", screen.plan_number,
-                                                 screen.placement, *how),
-                           .established_by = how->starts_with("not confirmed")
-                                                 ? source::kRunner
-                                                 : source::kConsole});
+        database.LogEvent(
+            {.session_id = session,
+             .trial_id = t.id,
+             .kind = "samples-placed",
+             .detail = fmt::format("trial {}: {}; {}", screen.plan_number, screen.placement, *how),
+             .established_by =
+                 how->starts_with("not confirmed") ? source::kRunner : source::kConsole});
       }
       database.StartTrial(t.id);
       ++t.attempts;
