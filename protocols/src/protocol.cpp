@@ -316,7 +316,7 @@ Protocol ParseProtocol(const std::string& text, const std::string& file) {
   // [[phase]]
   bool has_main = false, has_adaptive = false;
   if (const toml::array* ps = doc["phase"].as_array()) {
-    for (std::size_t i = 0, n = Bounded(r, *ps, "phase", kMaxPhases); i < n; ++i) {
+    for (std::size_t i = 0, n_phases = Bounded(r, *ps, "phase", kMaxPhases); i < n_phases; ++i) {
       const std::string pre = fmt::format("phase[{}]", i);
       const toml::table* t = (*ps)[i].as_table();
       if (!t) {
