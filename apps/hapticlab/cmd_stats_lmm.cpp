@@ -126,7 +126,8 @@ void AddLmm(CLI::App& s) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--formula", *formula,
                   "lme4 formula, e.g. 'score ~ method * texture + (1 + method | participant) + (1 "
-                  "| material)'")
+                  "| material)'; also (x || g), (1 | a/b), (1 | a:b), 0 + x, x - 1, and log, exp, "
+                  "sqrt, scale, I() of the response and numeric columns (docs/analysis.md)")
       ->required();
   cmd->add_option("--where", c->where,
                   "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");
