@@ -20,6 +20,7 @@ namespace {
 struct Column {
   bool numeric = false;
   std::vector<double> value;
+  std::vector<Eigen::VectorXd> basis;  ///< several numeric columns (poly): named v1, v2, ...
   std::vector<std::string> levels;
   std::vector<int> level;
 };
@@ -63,7 +64,12 @@ void TermColumns(const std::vector<std::string>& term, std::map<std::string, Col
     const bool full = !c.numeric && full_of(v);
     std::vector<Eigen::VectorXd> code;
     std::vector<std::string> code_names;
-    if (c.numeric) {
+    if (c.numeric && !c.basis.empty()) {
+      for (std::size_t j = 0; j < c.basis.size(); ++j) {
+        code.push_back(c.basis[j]);
+        code_names.push_back(v + std::to_string(j + 1));
+      }
+    } else if (c.numeric) {
       code.emplace_back(
           Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
       code_names.push_back(v);
@@ -124,6 +130,29 @@ Column GroupColumn(const LongTable& data, const LmmFormula::Random& r,
   return c;
 }
 
+// R's poly(x, degree): the centred powers 1, x, ..., x^degree made orthonormal in order
+// (Gram-Schmidt, each column's leading coefficient positive, as R's QR-based poly() gives),
+// without the constant column.
+std::vector<Eigen::VectorXd> OrthogonalPolynomials(const Eigen::VectorXd& x, int degree,
+                                                   const std::string& source,
+                                                   const std::string& label) {
+  const Eigen::VectorXd xc = x.array() - x.mean();
+  std::vector<Eigen::VectorXd> q;
+  Eigen::VectorXd power = Eigen::VectorXd::Ones(x.size());
+  for (int k = 0; k <= degree; ++k) {
+    Eigen::VectorXd v = power;
+    for (int pass = 0; pass < 2; ++pass)  // reorthogonalised once, for accuracy
+      for (const auto& u : q) v -= u.dot(v) * u;
+    const double norm = v.norm();
+    if (!(norm > 1e-10 * power.norm()))
+      throw InputError(source, 0, label, "needs more distinct values than its degree");
+    q.push_back(v / norm);
+    power = power.cwiseProduct(xc);
+  }
+  q.erase(q.begin());
+  return q;
+}
+
 // The formula's variables by label ("x", "log(x)"): columns, and functions of numeric columns
 // evaluated (finite or refused, naming the row). The response column is data.y.
 class Variables {
@@ -145,8 +174,14 @@ class Variables {
     }
     Column c;
     c.numeric = true;
-    const Eigen::VectorXd v = Evaluate(label);
-    c.value.assign(v.data(), v.data() + v.size());
+    std::string inner;
+    int degree = 0;
+    if (detail::PolyLabel(label, inner, degree)) {
+      c.basis = OrthogonalPolynomials(Evaluate(inner), degree, data_.source, label);
+    } else {
+      const Eigen::VectorXd v = Evaluate(label);
+      c.value.assign(v.data(), v.data() + v.size());
+    }
     cols_.emplace(label, c);
   }
   Eigen::VectorXd Evaluate(const std::string& label) const {

@@ -35,7 +35,9 @@ using ColumnLookup = std::function<Eigen::VectorXd(const std::string&)>;
 bool IsColumnName(const std::string& label);
 /// The columns a formula variable ("x", "log(x + 1)", "I(a*b)") reads.
 std::vector<std::string> ExprColumns(const std::string& label);
-/// The values of a formula variable.
+/// "poly(x, 2)": the expression inside and the degree.
+bool PolyLabel(const std::string& label, std::string& inner, int& degree);
+/// The values of a formula variable (not poly).
 Eigen::VectorXd EvalExpr(const std::string& label, const ColumnLookup& column);
 
 /// @throws hapticlab::InputError (data.source, column) for a missing column, a factor with one

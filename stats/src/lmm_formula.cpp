@@ -220,6 +220,15 @@ std::unique_ptr<Node> ParseExpr(const std::string& text, const std::string& sour
 // R prints it. Arithmetic outside a function is formula syntax, not arithmetic: refused.
 std::string Variable(const std::string& v, const std::string& piece, const std::string& source) {
   if (ValidName(v)) return v;
+  if (v.rfind("poly(", 0) == 0 && v.back() == ')') {  // poly(x, k): orthogonal polynomials
+    const auto args = SplitTop(v.substr(5, v.size() - 6), ",");
+    char* end = nullptr;
+    const long k = args.size() == 2 ? std::strtol(args[1].c_str(), &end, 10) : 0;
+    if (args.size() != 2 || args[1].empty() || *end != '\0' || k < 1 || k > 10)
+      throw InputError(source, 0, "formula",
+                       "expected poly(x, degree) with degree 1 to 10, got '" + v + "'");
+    return "poly(" + Deparse(*ParseExpr(args[0], source)) + ", " + std::to_string(k) + ")";
+  }
   const auto n = ParseExpr(v, source);
   if (n->op != 'f')
     throw InputError(source, 0, "formula",
@@ -333,10 +342,20 @@ namespace detail {
 
 bool IsColumnName(const std::string& label) { return ValidName(label); }
 
+bool PolyLabel(const std::string& label, std::string& inner, int& degree) {
+  if (label.rfind("poly(", 0) != 0) return false;
+  const auto comma = label.rfind(", ");
+  inner = label.substr(5, comma - 5);
+  degree = std::atoi(label.c_str() + comma + 2);
+  return true;
+}
+
 std::vector<std::string> ExprColumns(const std::string& label) {
   std::vector<std::string> out;
   if (ValidName(label)) return {label};
-  Leaves(*ParseExpr(label, ""), out);
+  std::string inner;
+  int degree = 0;
+  Leaves(*ParseExpr(PolyLabel(label, inner, degree) ? inner : label, ""), out);
   return out;
 }
 
@@ -375,6 +394,8 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
     throw InputError(source, 0, "formula",
                      "the response '" + f.response_term + "' must use exactly one column");
   f.response = cols[0];
+  if (f.response_term.rfind("poly(", 0) == 0)
+    throw InputError(source, 0, "formula", "poly() is for predictors, not the response");
   const auto pieces = SplitTop(s.substr(tilde + 1), "+-", true);
   for (std::size_t i = 0; i < pieces.size(); ++i) {
     const std::string& signed_piece = pieces[i];

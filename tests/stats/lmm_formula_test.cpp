@@ -2,7 +2,7 @@
 // that ship with lme4 (sleepstudy, Pastes, cake, Penicillin): tests/data/stats/
 // lmm_formula_reference.json, made by lmm_formula_reference.R beside it. Each feature - ||,
 // nesting a/b, interaction grouping a:b, functions of the response and of predictors, I()
-// arithmetic, 0 + and - 1 - is one REML fit; fixed effects, SE, Satterthwaite df, t, θ,
+// arithmetic, 0 + and - 1, poly - is one REML fit; fixed effects, SE, Satterthwaite df, t, θ,
 // variance components, σ and logLik agree to 1e-5 relative.
 
 #include <gtest/gtest.h>
@@ -103,6 +103,8 @@ TEST(LmmFormula, LogResponseCrossedPenicillin) { Compare("log_crossed"); }
 TEST(LmmFormula, ArithmeticInsideISleepstudy) { Compare("i_arithmetic"); }
 TEST(LmmFormula, NoInterceptCake) { Compare("no_intercept"); }
 TEST(LmmFormula, MinusOneSleepstudy) { Compare("minus_one"); }
+TEST(LmmFormula, OrthogonalPolynomialSleepstudy) { Compare("poly"); }
+TEST(LmmFormula, FactorByPolynomialCake) { Compare("poly_interaction"); }
 
 // A function of a factor, or a value out of a function's domain, is refused naming the column.
 TEST(LmmFormula, RefusalsNameTheColumn) {

@@ -44,7 +44,9 @@ fits <- list(
   log_crossed = list(data = "penicillin", formula = "log(diameter) ~ 1 + (1 | plate) + (1 | sample)"),
   i_arithmetic = list(data = "sleepstudy", formula = "I(Reaction/1000) ~ I((Days - 4.5)*2) + I(-Days^2/10 + 1) + (1 | Subject)"),
   no_intercept = list(data = "cake", formula = "angle ~ 0 + recipe + temp + (1 | replicate)"),
-  minus_one = list(data = "sleepstudy", formula = "Reaction ~ Days - 1 + (Days | Subject)"))
+  minus_one = list(data = "sleepstudy", formula = "Reaction ~ Days - 1 + (Days | Subject)"),
+  poly = list(data = "sleepstudy", formula = "Reaction ~ poly(Days, 3) + (Days | Subject)"),
+  poly_interaction = list(data = "cake", formula = "angle ~ recipe * poly(temp, 2) + (1 | recipe:replicate)"))
 out <- list()
 for (nm in names(fits)) {
   csv <- sprintf("lmm_%s.csv", fits[[nm]]$data)
