@@ -107,7 +107,6 @@ std::string Join(const std::vector<std::string>& t) {
   return s;
 }
 
-
 // The grouping factor of a random term: its column, or the interaction of its columns (levels
 // are the combined keys "b:a", sorted; only combinations that occur, as lme4's factor()).
 Column GroupColumn(const LongTable& data, const LmmFormula::Random& r,
@@ -125,8 +124,8 @@ Column GroupColumn(const LongTable& data, const LmmFormula::Random& r,
   if (c.levels.size() < 2)
     throw InputError(data.source, 0, r.group, "a grouping factor needs at least 2 levels");
   for (const auto& s : key)
-    c.level.push_back(static_cast<int>(std::lower_bound(c.levels.begin(), c.levels.end(), s) -
-                                       c.levels.begin()));
+    c.level.push_back(
+        static_cast<int>(std::lower_bound(c.levels.begin(), c.levels.end(), s) - c.levels.begin()));
   return c;
 }
 
@@ -188,7 +187,8 @@ class Variables {
     const auto n = static_cast<Eigen::Index>(data_.rows());
     const Eigen::VectorXd v = detail::EvalExpr(label, [&](const std::string& name) {
       if (name.empty()) return Eigen::VectorXd(Eigen::VectorXd::Zero(n));
-      if (name == f_.response) return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(data_.y.data(), n));
+      if (name == f_.response)
+        return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(data_.y.data(), n));
       const Column& c = raw_.at(name);
       if (!c.numeric)
         throw InputError(data_.source, 0, name,
@@ -218,10 +218,9 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
   Variables vars(data, f);
   auto& cols = vars.cols();
   LmmDesign d;
-  d.y = detail::IsColumnName(f.response_term)
-            ? Eigen::VectorXd(
-                  Eigen::Map<const Eigen::VectorXd>(data.y.data(), static_cast<Eigen::Index>(n)))
-            : vars.Evaluate(f.response_term);
+  d.y = detail::IsColumnName(f.response_term) ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
+                                                    data.y.data(), static_cast<Eigen::Index>(n)))
+                                              : vars.Evaluate(f.response_term);
   // R's coding: factor v of term T gets contrasts when T without v is in the model.
   std::set<std::set<std::string>> model;
   if (f.intercept) model.insert(std::set<std::string>{});

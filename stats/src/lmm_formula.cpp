@@ -88,17 +88,23 @@ class ExprParser {
   std::unique_ptr<Node> Sum() {
     auto a = Product();
     for (;;) {
-      if (Eat('+')) a = Binary('+', std::move(a), Product());
-      else if (Eat('-')) a = Binary('-', std::move(a), Product());
-      else return a;
+      if (Eat('+'))
+        a = Binary('+', std::move(a), Product());
+      else if (Eat('-'))
+        a = Binary('-', std::move(a), Product());
+      else
+        return a;
     }
   }
   std::unique_ptr<Node> Product() {
     auto a = Unary();
     for (;;) {
-      if (Eat('*')) a = Binary('*', std::move(a), Unary());
-      else if (Eat('/')) a = Binary('/', std::move(a), Unary());
-      else return a;
+      if (Eat('*'))
+        a = Binary('*', std::move(a), Unary());
+      else if (Eat('/'))
+        a = Binary('/', std::move(a), Unary());
+      else
+        return a;
     }
   }
   std::unique_ptr<Node> Unary() {  // as R: -x^2 is -(x^2)
@@ -121,7 +127,8 @@ class ExprParser {
       return n;
     }
     const std::size_t start = pos_;
-    if (pos_ < s_.size() && (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.')) {
+    if (pos_ < s_.size() &&
+        (std::isdigit(static_cast<unsigned char>(s_[pos_])) || s_[pos_] == '.')) {
       const char* b = s_.c_str() + pos_;
       char* end = nullptr;
       std::strtod(b, &end);
@@ -156,13 +163,19 @@ class ExprParser {
 // As R's deparse: spaces around + - *, none around / ^.
 std::string Deparse(const Node& n) {
   switch (n.op) {
-    case 0: return n.text;
-    case 'u': return "-" + Deparse(*n.kids[0]);
-    case '(': return "(" + Deparse(*n.kids[0]) + ")";
-    case 'f': return n.text + "(" + Deparse(*n.kids[0]) + ")";
+    case 0:
+      return n.text;
+    case 'u':
+      return "-" + Deparse(*n.kids[0]);
+    case '(':
+      return "(" + Deparse(*n.kids[0]) + ")";
+    case 'f':
+      return n.text + "(" + Deparse(*n.kids[0]) + ")";
     case '/':
-    case '^': return Deparse(*n.kids[0]) + n.op + Deparse(*n.kids[1]);
-    default: return Deparse(*n.kids[0]) + " " + n.op + " " + Deparse(*n.kids[1]);
+    case '^':
+      return Deparse(*n.kids[0]) + n.op + Deparse(*n.kids[1]);
+    default:
+      return Deparse(*n.kids[0]) + " " + n.op + " " + Deparse(*n.kids[1]);
   }
 }
 
@@ -180,8 +193,10 @@ Eigen::VectorXd Eval(const Node& n, const detail::ColumnLookup& column) {
   }
   Eigen::VectorXd a = Eval(*n.kids[0], column);
   switch (n.op) {
-    case 'u': return -a;
-    case '(': return a;
+    case 'u':
+      return -a;
+    case '(':
+      return a;
     case 'f':
       if (n.text == "log") return a.array().log();
       if (n.text == "log10") return a.array().log10();
@@ -196,15 +211,21 @@ Eigen::VectorXd Eval(const Node& n, const detail::ColumnLookup& column) {
         return (a.array() - mean) / sd;
       }
       return a;  // I()
-    default: break;
+    default:
+      break;
   }
   const Eigen::VectorXd b = Eval(*n.kids[1], column);
   switch (n.op) {
-    case '+': return a + b;
-    case '-': return a - b;
-    case '*': return a.cwiseProduct(b);
-    case '/': return a.cwiseQuotient(b);
-    default: return a.array().pow(b.array());
+    case '+':
+      return a + b;
+    case '-':
+      return a - b;
+    case '*':
+      return a.cwiseProduct(b);
+    case '/':
+      return a.cwiseQuotient(b);
+    default:
+      return a.array().pow(b.array());
   }
 }
 

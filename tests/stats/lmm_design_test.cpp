@@ -22,7 +22,7 @@ TEST(Lmm, FormulaParsing) {
   EXPECT_FALSE(f.random[1].intercept);
   EXPECT_EQ(f.random[1].group, "h");
   EXPECT_THROW(ParseLmmFormula("score ~ a + (1 | )", "f.csv"), InputError);
-  EXPECT_THROW(ParseLmmFormula("score ~ a", "f.csv"), InputError);  // no random term
+  EXPECT_THROW(ParseLmmFormula("score ~ a", "f.csv"), InputError);                // no random term
   EXPECT_THROW(ParseLmmFormula("score ~ a - b + (1 | g)", "f.csv"), InputError);  // only - 1
   EXPECT_THROW(ParseLmmFormula("score ~ a^2 + (1 | g)", "f.csv"), InputError);    // not in I()
   EXPECT_THROW(ParseLmmFormula("score ~ foo(a) + (1 | g)", "f.csv"), InputError);
