@@ -185,7 +185,7 @@ class Variables {
   }
   Eigen::VectorXd Evaluate(const std::string& label) const {
     const auto n = static_cast<Eigen::Index>(data_.rows());
-    const Eigen::VectorXd v = detail::EvalExpr(label, [&](const std::string& name) {
+    Eigen::VectorXd v = detail::EvalExpr(label, [&](const std::string& name) {
       if (name.empty()) return Eigen::VectorXd(Eigen::VectorXd::Zero(n));
       if (name == f_.response)
         return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(data_.y.data(), n));
@@ -197,9 +197,12 @@ class Variables {
     });
     for (Eigen::Index i = 0; i < n; ++i)
       if (!std::isfinite(v[i]))
-        throw InputError(data_.source, 0, label,
-                         "is not finite in data row " + std::to_string(i + 1) +
-                             " (log or sqrt of a value out of range, a division by zero?)");
+        throw InputError(
+            data_.source,
+            data_.lines.empty() ? 0 : static_cast<int>(data_.lines[static_cast<std::size_t>(i)]),
+            label,
+            "is not finite in data row " + std::to_string(i + 1) +
+                " (log or sqrt of a value out of range, a division by zero?)");
     return v;
   }
 

@@ -63,7 +63,7 @@ struct Node {
 
 class ExprParser {
  public:
-  explicit ExprParser(std::string s) : s_(Strip(s)) {}
+  explicit ExprParser(const std::string& s) : s_(Strip(s)) {}
   std::unique_ptr<Node> Parse() {
     auto n = Sum();
     if (pos_ != s_.size()) throw std::invalid_argument("unexpected '" + s_.substr(pos_) + "'");
