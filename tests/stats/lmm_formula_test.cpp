@@ -3,7 +3,7 @@
 // lmm_formula_reference.json, made by lmm_formula_reference.R beside it. Each feature - ||,
 // nesting a/b, interaction grouping a:b, functions of the response and of predictors, I()
 // arithmetic, 0 + and - 1, poly - is one REML fit; fixed effects, SE, Satterthwaite df, t, θ,
-// variance components, σ and logLik agree to 1e-5 relative.
+// type 3 F tests, variance components, σ and logLik agree to 1e-5 relative.
 
 #include <gtest/gtest.h>
 
@@ -69,6 +69,16 @@ void Compare(const std::string& fit) {
     ExpectClose(c.se, e["se"], name + " se");
     ExpectClose(c.df, e["df"], name + " df");
     ExpectClose(c.t, e["t"], name + " t", 1.0);
+  }
+  ASSERT_EQ(r.anova.size(), w["anova"].size()) << tag;
+  for (std::size_t i = 0; i < r.anova.size(); ++i) {
+    const auto& t = r.anova[i];
+    const auto& e = w["anova"][i];
+    const std::string name = tag + e["term"].get<std::string>();
+    EXPECT_EQ(t.term, e["term"].get<std::string>()) << tag;
+    EXPECT_EQ(t.num_df, e["num_df"].get<double>()) << name;
+    ExpectClose(t.den_df, e["den_df"], name + " den df");
+    ExpectClose(t.F, e["F"], name + " F");
   }
   // as.data.frame(VarCorr): per term the variances, then the correlations; last the residual.
   std::size_t row = 0;

@@ -1,6 +1,6 @@
 # Reference values for lme4's formula language in hapticlab stats lmm (issue #32 item 4): each
 # feature fitted by lme4::lmer (REML) on a real data set that ships with lme4, with lmerTest's
-# Satterthwaite df: fixed effects, SE, df, t, p, lme4's theta, the variance components
+# Satterthwaite df: fixed effects, SE, df, t, p, type 3 F tests, lme4's theta, the variance components
 # (as.data.frame(VarCorr)), sigma and the REML logLik.
 # R 4.2.2, lme4 1.1.31, lmerTest 3.1.3, jsonlite 1.8.4 (Debian 12: apt-get install r-base-core
 # r-cran-lme4 r-cran-lmertest r-cran-jsonlite).
@@ -20,11 +20,14 @@ summarise <- function(m) {
   co <- summary(m)$coefficients
   fixed <- lapply(seq_len(nrow(co)), function(i) list(name = rownames(co)[i], estimate = co[i, "Estimate"],
     se = co[i, "Std. Error"], df = co[i, "df"], t = co[i, "t value"], p = co[i, "Pr(>|t|)"]))
+  a <- anova(m, type = 3, ddf = "Satterthwaite")
+  ftests <- lapply(seq_len(nrow(a)), function(i) list(term = rownames(a)[i], num_df = a[i, "NumDF"],
+    den_df = a[i, "DenDF"], F = a[i, "F value"], p = a[i, "Pr(>F)"]))
   vc <- as.data.frame(VarCorr(m))
   random <- lapply(seq_len(nrow(vc)), function(i) list(group = vc$grp[i], var1 = if (is.na(vc$var1[i])) "" else vc$var1[i],
     var2 = if (is.na(vc$var2[i])) "" else vc$var2[i], vcov = vc$vcov[i], sdcor = vc$sdcor[i]))
   list(theta = I(unname(getME(m, "theta"))), sigma = sigma(m), logLik = as.numeric(logLik(m)),
-       REMLcrit = REMLcrit(m), singular = isSingular(m), fixed = fixed, random = random)
+       REMLcrit = REMLcrit(m), singular = isSingular(m), fixed = fixed, anova = ftests, random = random)
 }
 
 data_sets <- list(sleepstudy = sleepstudy[, c("Subject", "Days", "Reaction")],
