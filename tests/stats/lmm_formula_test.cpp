@@ -35,14 +35,16 @@ json Ref(const std::string& fit) {
   return json::parse(f)[fit];
 }
 
-LmmResult Fit(const json& ref) {
+LmmResult Fit(const json& ref, bool kenward_roger = false) {
   const auto formula = ref["formula"].get<std::string>();
   const auto f = ParseLmmFormula(formula);
   auto cols = f.Columns();
   cols.erase(cols.begin());
   const auto data =
       ReadLongCsv(test::DataPath("stats/" + ref["csv"].get<std::string>()), f.response, cols);
-  return FitLmm(data, formula);
+  LmmOptions o;
+  o.kenward_roger = kenward_roger;
+  return FitLmm(data, formula, o);
 }
 
 void Compare(const std::string& fit) {
@@ -101,6 +103,27 @@ void Compare(const std::string& fit) {
   }
   ASSERT_EQ(row + 1, w["random"].size()) << tag;
   EXPECT_EQ(w["random"][row]["group"].get<std::string>(), "Residual") << tag;
+}
+
+// Kenward-Roger (pbkrtest's adjusted SEs and df) on the same fits: every random-effects
+// structure above (uncorrelated terms of one grouping factor, nested, interaction grouping).
+void CompareKenwardRoger(const std::string& fit) {
+  const json ref = Ref(fit);
+  const json& w = ref["reml"]["kr"];
+  const auto r = Fit(ref, true);
+  ASSERT_EQ(r.fixed.size(), w.size()) << fit;
+  for (std::size_t i = 0; i < r.fixed.size(); ++i) {
+    const std::string name = fit + " KR " + w[i]["name"].get<std::string>();
+    ExpectClose(r.fixed[i].se, w[i]["se"], name + " se");
+    ExpectClose(r.fixed[i].df, w[i]["df"], name + " df");
+  }
+}
+
+TEST(LmmFormula, KenwardRogerOnEveryStructure) {
+  for (const char* fit : {"uncorrelated", "uncorrelated_two", "nested", "interaction_group",
+                          "log_response", "functions", "log_crossed", "i_arithmetic",
+                          "no_intercept", "minus_one", "poly", "poly_interaction"})
+    CompareKenwardRoger(fit);
 }
 
 TEST(LmmFormula, UncorrelatedSlopeSleepstudy) { Compare("uncorrelated"); }

@@ -2,8 +2,9 @@
 # feature fitted by lme4::lmer (REML) on a real data set that ships with lme4, with lmerTest's
 # Satterthwaite df: fixed effects, SE, df, t, p, type 3 F tests, lme4's theta, the variance components
 # (as.data.frame(VarCorr)), sigma and the REML logLik.
-# R 4.2.2, lme4 1.1.31, lmerTest 3.1.3, jsonlite 1.8.4 (Debian 12: apt-get install r-base-core
-# r-cran-lme4 r-cran-lmertest r-cran-jsonlite).
+# Kenward-Roger SEs and df of the coefficients (pbkrtest 0.5.2) too.
+# R 4.2.2, lme4 1.1.31, lmerTest 3.1.3, pbkrtest 0.5.2, jsonlite 1.8.4 (Debian 12: apt-get install r-base-core
+# r-cran-lme4 r-cran-lmertest r-cran-pbkrtest r-cran-jsonlite).
 # Run from this directory: Rscript lmm_formula_reference.R
 #   (writes lmm_sleepstudy.csv, lmm_pastes.csv, lmm_cake.csv, lmm_penicillin.csv and
 #   lmm_formula_reference.json)
@@ -26,7 +27,10 @@ summarise <- function(m) {
   vc <- as.data.frame(VarCorr(m))
   random <- lapply(seq_len(nrow(vc)), function(i) list(group = vc$grp[i], var1 = if (is.na(vc$var1[i])) "" else vc$var1[i],
     var2 = if (is.na(vc$var2[i])) "" else vc$var2[i], vcov = vc$vcov[i], sdcor = vc$sdcor[i]))
-  list(theta = I(unname(getME(m, "theta"))), sigma = sigma(m), logLik = as.numeric(logLik(m)),
+  ck <- summary(m, ddf = "Kenward-Roger")$coefficients  # pbkrtest through lmerTest
+  kr <- lapply(seq_len(nrow(ck)), function(i) list(name = rownames(ck)[i], se = ck[i, "Std. Error"],
+    df = ck[i, "df"]))
+  list(theta = I(unname(getME(m, "theta"))), kr = kr, sigma = sigma(m), logLik = as.numeric(logLik(m)),
        REMLcrit = REMLcrit(m), singular = isSingular(m), fixed = fixed, anova = ftests, random = random)
 }
 
