@@ -84,7 +84,8 @@ void PrintLmm(const stats::LmmResult& r) {
     }
   fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}\n\n", "Residual", "", r.sigma * r.sigma, r.sigma);
   fmt::print(
-      "Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n",
+      "Fixed effects (factors coded as R does with contr.sum; {} df):\n{:<28} {:>12} {:>10} {:>9} "
+      "{:>9} {:>11}\n",
       r.ddf, "name", "estimate", "SE", "df", "t", "p");
   for (const auto& c : r.fixed)
     fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se,
