@@ -1,5 +1,5 @@
-// Linear mixed models: formula parsing and the fixed (X) and random (Z) design matrices, with
-// R's conventions (terms ordered by degree, sum-to-zero contrasts, lme4's term order).
+// Linear mixed models: the fixed (X) and random (Z) design matrices (the formula is parsed in
+// lmm_formula.cpp), with R's conventions (R's factor coding with contr.sum, lme4's term order).
 
 #include "lmm_design.hpp"
 

@@ -1,4 +1,4 @@
-// The mixed-model formula parser (lmm_design.cpp): R's term order and its refusals.
+// The mixed-model formula parser (lmm_formula.cpp): R's term order and its refusals.
 
 #include <gtest/gtest.h>
 
