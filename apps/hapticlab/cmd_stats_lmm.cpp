@@ -84,7 +84,8 @@ void PrintLmm(const stats::LmmResult& r) {
     }
   fmt::print("{:<16} {:<22} {:>12.5g} {:>10.5g}\n\n", "Residual", "", r.sigma * r.sigma, r.sigma);
   fmt::print(
-      "Fixed effects (sum-to-zero contrasts; {} df):\n{:<28} {:>12} {:>10} {:>9} {:>9} {:>11}\n",
+      "Fixed effects (factors coded as R does with contr.sum; {} df):\n{:<28} {:>12} {:>10} {:>9} "
+      "{:>9} {:>11}\n",
       r.ddf, "name", "estimate", "SE", "df", "t", "p");
   for (const auto& c : r.fixed)
     fmt::print("{:<28} {:>12.5g} {:>10.4g} {:>9.2f} {:>9.3f} {:>11.4g}\n", c.name, c.estimate, c.se,
@@ -126,7 +127,8 @@ void AddLmm(CLI::App& s) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--formula", *formula,
                   "lme4 formula, e.g. 'score ~ method * texture + (1 + method | participant) + (1 "
-                  "| material)'")
+                  "| material)'; also (x || g), (1 | a/b), (1 | a:b), 0 + x, x - 1, and log, exp, "
+                  "sqrt, scale, I() of the response and numeric columns (docs/analysis.md)")
       ->required();
   cmd->add_option("--where", c->where,
                   "Keep rows with COL=VALUE (repeatable), e.g. --where criterion=roughness");

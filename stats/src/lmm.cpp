@@ -301,6 +301,10 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     const MatrixXd S = r.sigma * r.sigma * T * T.transpose();
     LmmRandomTerm rt;
     rt.group = b.group;
+    // A grouping factor named again is "g.1", "g.2" (as lme4's VarCorr names it).
+    const auto again = std::count_if(d.blocks.begin(), d.blocks.begin() + static_cast<long>(k),
+                                     [&](const auto& o) { return o.group == b.group; });
+    if (again > 0) rt.group += "." + std::to_string(again);
     rt.levels = b.levels;
     rt.names = b.names;
     for (int i = 0; i < b.p; ++i) {

@@ -1,5 +1,5 @@
-// Linear mixed models: formula parsing and the fixed (X) and random (Z) design matrices, with
-// R's conventions (terms ordered by degree, sum-to-zero contrasts, lme4's term order).
+// Linear mixed models: the fixed (X) and random (Z) design matrices (the formula is parsed in
+// lmm_formula.cpp), with R's conventions (R's factor coding with contr.sum, lme4's term order).
 
 #include "lmm_design.hpp"
 
@@ -7,6 +7,7 @@
 #include <cctype>
 #include <cmath>
 #include <cstdlib>
+#include <functional>
 #include <map>
 #include <set>
 
@@ -15,78 +16,11 @@
 namespace hapticlab::stats {
 namespace {
 
-std::string Strip(const std::string& s) {
-  std::string o;
-  for (char c : s)
-    if (!std::isspace(static_cast<unsigned char>(c))) o += c;
-  return o;
-}
-
-// Splits at `sep` outside parentheses.
-std::vector<std::string> SplitTop(const std::string& s, char sep) {
-  std::vector<std::string> out;
-  int depth = 0;
-  std::string cur;
-  for (char c : s) {
-    if (c == '(') ++depth;
-    if (c == ')') --depth;
-    if (c == sep && depth == 0) {
-      out.push_back(cur);
-      cur.clear();
-    } else {
-      cur += c;
-    }
-  }
-  out.push_back(cur);
-  return out;
-}
-
-bool ValidName(const std::string& s) {
-  if (s.empty()) return false;
-  for (char c : s)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '.')) return false;
-  return true;
-}
-
-// "a*b:c" -> terms a, b:c, a:b:c ("*" expands to all interactions of its operands).
-void AddTerms(const std::string& piece, std::vector<std::vector<std::string>>& terms,
-              const std::string& source) {
-  const auto factors = SplitTop(piece, '*');
-  std::vector<std::vector<std::string>> ops;
-  for (const auto& f : factors) {
-    auto vars = SplitTop(f, ':');
-    for (const auto& v : vars)
-      if (!ValidName(v))
-        throw InputError(source, 0, "formula",
-                         "expected a column name, got '" + v + "' in '" + piece + "'");
-    ops.push_back(vars);
-  }
-  const std::size_t m = ops.size();
-  for (std::size_t mask = 1; mask < (std::size_t{1} << m); ++mask) {
-    std::vector<std::string> t;
-    for (std::size_t i = 0; i < m; ++i)
-      if (mask & (std::size_t{1} << i)) t.insert(t.end(), ops[i].begin(), ops[i].end());
-    terms.push_back(t);
-  }
-}
-
-// Drops repeated terms (a:b equals b:a) and orders by degree, stably (as R's terms()).
-void Canonical(std::vector<std::vector<std::string>>& terms) {
-  std::vector<std::vector<std::string>> out;
-  std::set<std::set<std::string>> seen;
-  for (const auto& t : terms) {
-    std::set<std::string> k(t.begin(), t.end());
-    if (seen.insert(k).second) out.push_back(t);
-  }
-  std::stable_sort(out.begin(), out.end(),
-                   [](const auto& a, const auto& b) { return a.size() < b.size(); });
-  terms = out;
-}
-
 // One column of the data: a factor (sorted levels, level index per row) or numeric.
 struct Column {
   bool numeric = false;
   std::vector<double> value;
+  std::vector<Eigen::VectorXd> basis;  ///< several numeric columns (poly): named v1, v2, ...
   std::vector<std::string> levels;
   std::vector<int> level;
 };
@@ -119,17 +53,23 @@ Column ReadColumn(const LongTable& data, const std::string& name, bool force_fac
 }
 
 // Columns of a term (product of its variables' codings, first variable fastest) in `out`.
-// `full`: a lone factor without an intercept gets one indicator per level (as R).
+// `full(v)`: factor v gets one indicator per level instead of sum-to-zero contrasts (as R).
 void TermColumns(const std::vector<std::string>& term, std::map<std::string, Column>& cols,
-                 std::size_t n, bool full, std::vector<Eigen::VectorXd>& out,
-                 std::vector<std::string>& names) {
+                 std::size_t n, const std::function<bool(const std::string&)>& full_of,
+                 std::vector<Eigen::VectorXd>& out, std::vector<std::string>& names) {
   std::vector<Eigen::VectorXd> cur{Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n))};
   std::vector<std::string> cur_names{""};
   for (const auto& v : term) {
     const Column& c = cols.at(v);
+    const bool full = !c.numeric && full_of(v);
     std::vector<Eigen::VectorXd> code;
     std::vector<std::string> code_names;
-    if (c.numeric) {
+    if (c.numeric && !c.basis.empty()) {
+      for (std::size_t j = 0; j < c.basis.size(); ++j) {
+        code.push_back(c.basis[j]);
+        code_names.push_back(v + std::to_string(j + 1));
+      }
+    } else if (c.numeric) {
       code.emplace_back(
           Eigen::Map<const Eigen::VectorXd>(c.value.data(), static_cast<Eigen::Index>(n)));
       code_names.push_back(v);
@@ -167,115 +107,157 @@ std::string Join(const std::vector<std::string>& t) {
   return s;
 }
 
-}  // namespace
-
-std::vector<std::string> LmmFormula::Columns() const {
-  std::vector<std::string> c{response};
-  auto add = [&](const std::string& v) {
-    if (std::find(c.begin(), c.end(), v) == c.end()) c.push_back(v);
-  };
-  for (const auto& t : fixed)
-    for (const auto& v : t) add(v);
-  for (const auto& r : random) {
-    for (const auto& t : r.terms)
-      for (const auto& v : t) add(v);
-    add(r.group);
+// The grouping factor of a random term: its column, or the interaction of its columns (levels
+// are the combined keys "b:a", sorted; only combinations that occur, as lme4's factor()).
+Column GroupColumn(const LongTable& data, const LmmFormula::Random& r,
+                   const std::map<std::string, Column>& raw) {
+  if (r.group_factors.size() == 1) return raw.at(r.group_factors[0]);
+  std::vector<std::string> key(data.rows());
+  for (const auto& g : r.group_factors) {
+    const auto& k = data.keys[data.Key(g)];
+    for (std::size_t i = 0; i < key.size(); ++i) key[i] += (key[i].empty() ? "" : ":") + k[i];
   }
+  Column c;
+  c.levels = key;
+  std::sort(c.levels.begin(), c.levels.end());
+  c.levels.erase(std::unique(c.levels.begin(), c.levels.end()), c.levels.end());
+  if (c.levels.size() < 2)
+    throw InputError(data.source, 0, r.group, "a grouping factor needs at least 2 levels");
+  for (const auto& s : key)
+    c.level.push_back(
+        static_cast<int>(std::lower_bound(c.levels.begin(), c.levels.end(), s) - c.levels.begin()));
   return c;
 }
 
-LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source) {
-  const std::string s = Strip(formula);
-  const auto tilde = s.find('~');
-  if (tilde == std::string::npos || s.find('~', tilde + 1) != std::string::npos)
-    throw InputError(source, 0, "formula", "expected 'response ~ terms', got '" + formula + "'");
-  LmmFormula f;
-  f.response = s.substr(0, tilde);
-  if (!ValidName(f.response))
-    throw InputError(source, 0, "formula", "expected a response column before '~'");
-  if (s.find('-') != std::string::npos)
-    throw InputError(source, 0, "formula",
-                     "'-' is not supported (the fixed part always has an intercept)");
-  for (const auto& piece : SplitTop(s.substr(tilde + 1), '+')) {
-    if (piece.empty()) throw InputError(source, 0, "formula", "empty term in '" + formula + "'");
-    if (piece.front() == '(') {
-      if (piece.back() != ')')
-        throw InputError(source, 0, "formula", "unbalanced parentheses in '" + piece + "'");
-      const std::string in = piece.substr(1, piece.size() - 2);
-      const auto bar = in.find('|');
-      if (bar == std::string::npos || in.find('|', bar + 1) != std::string::npos)
-        throw InputError(source, 0, "formula",
-                         "expected '(terms | group)', got '" + piece + "' ('||' is not supported)");
-      LmmFormula::Random r;
-      r.group = in.substr(bar + 1);
-      if (!ValidName(r.group))
-        throw InputError(source, 0, "formula",
-                         "expected a grouping column after '|' in '" + piece + "'");
-      bool saw_zero = false;
-      for (const auto& t : SplitTop(in.substr(0, bar), '+')) {
-        if (t == "1") continue;
-        if (t == "0") {
-          saw_zero = true;
-          continue;
-        }
-        AddTerms(t, r.terms, source);
-      }
-      r.intercept = !saw_zero;
-      Canonical(r.terms);
-      if (!r.intercept && r.terms.empty())
-        throw InputError(source, 0, "formula", "random term '" + piece + "' is empty");
-      f.random.push_back(r);
-    } else if (piece == "1") {
-      continue;
-    } else if (piece == "0") {
-      throw InputError(source, 0, "formula",
-                       "a fixed part without intercept ('0') is not supported");
-    } else {
-      AddTerms(piece, f.fixed, source);
-    }
+// R's poly(x, degree): the centred powers 1, x, ..., x^degree made orthonormal in order
+// (Gram-Schmidt, each column's leading coefficient positive, as R's QR-based poly() gives),
+// without the constant column.
+std::vector<Eigen::VectorXd> OrthogonalPolynomials(const Eigen::VectorXd& x, int degree,
+                                                   const std::string& source,
+                                                   const std::string& label) {
+  const Eigen::VectorXd xc = x.array() - x.mean();
+  std::vector<Eigen::VectorXd> q;
+  Eigen::VectorXd power = Eigen::VectorXd::Ones(x.size());
+  for (int k = 0; k <= degree; ++k) {
+    Eigen::VectorXd v = power;
+    for (int pass = 0; pass < 2; ++pass)  // reorthogonalised once, for accuracy
+      for (const auto& u : q) v -= u.dot(v) * u;
+    const double norm = v.norm();
+    if (!(norm > 1e-10 * power.norm()))
+      throw InputError(source, 0, label, "needs more distinct values than its degree");
+    q.push_back(v / norm);
+    power = power.cwiseProduct(xc);
   }
-  if (f.random.empty())
-    throw InputError(
-        source, 0, "formula",
-        "no random term such as '(1 | participant)': use rm-anova for a fixed-effects model");
-  Canonical(f.fixed);
-  return f;
+  q.erase(q.begin());
+  return q;
 }
+
+// The formula's variables by label ("x", "log(x)"): columns, and functions of numeric columns
+// evaluated (finite or refused, naming the row). The response column is data.y.
+class Variables {
+ public:
+  Variables(const LongTable& data, const LmmFormula& f) : data_(data), f_(f) {
+    std::set<std::string> groups;
+    for (const auto& r : f.random) groups.insert(r.group_factors.begin(), r.group_factors.end());
+    for (const auto& name : f.Columns())
+      if (name != f.response && !raw_.count(name))
+        raw_.emplace(name, ReadColumn(data, name, groups.count(name) > 0));
+  }
+  const std::map<std::string, Column>& raw() const { return raw_; }
+  std::map<std::string, Column>& cols() { return cols_; }
+  void Add(const std::string& label) {
+    if (cols_.count(label)) return;
+    if (detail::IsColumnName(label)) {
+      cols_.emplace(label, raw_.at(label));
+      return;
+    }
+    Column c;
+    c.numeric = true;
+    std::string inner;
+    int degree = 0;
+    if (detail::PolyLabel(label, inner, degree)) {
+      c.basis = OrthogonalPolynomials(Evaluate(inner), degree, data_.source, label);
+    } else {
+      const Eigen::VectorXd v = Evaluate(label);
+      c.value.assign(v.data(), v.data() + v.size());
+    }
+    cols_.emplace(label, c);
+  }
+  Eigen::VectorXd Evaluate(const std::string& label) const {
+    const auto n = static_cast<Eigen::Index>(data_.rows());
+    Eigen::VectorXd v = detail::EvalExpr(label, [&](const std::string& name) {
+      if (name.empty()) return Eigen::VectorXd(Eigen::VectorXd::Zero(n));
+      if (name == f_.response)
+        return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(data_.y.data(), n));
+      const Column& c = raw_.at(name);
+      if (!c.numeric)
+        throw InputError(data_.source, 0, name,
+                         "'" + label + "' needs numbers, but '" + name + "' is a factor");
+      return Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(c.value.data(), n));
+    });
+    for (Eigen::Index i = 0; i < n; ++i)
+      if (!std::isfinite(v[i]))
+        throw InputError(
+            data_.source,
+            data_.lines.empty() ? 0 : static_cast<int>(data_.lines[static_cast<std::size_t>(i)]),
+            label,
+            "is not finite in data row " + std::to_string(i + 1) +
+                " (log or sqrt of a value out of range, a division by zero?)");
+    return v;
+  }
+
+ private:
+  const LongTable& data_;
+  const LmmFormula& f_;
+  std::map<std::string, Column> raw_, cols_;
+};
+
+}  // namespace
 
 namespace detail {
 
 LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
   const std::size_t n = data.rows();
-  std::map<std::string, Column> cols;
-  std::set<std::string> groups;
-  for (const auto& r : f.random) groups.insert(r.group);
-  for (const auto& name : f.Columns())
-    if (name != f.response && !cols.count(name))
-      cols.emplace(name, ReadColumn(data, name, groups.count(name) > 0));
-  for (const auto& g : groups)
-    if (cols.at(g).numeric) throw InputError(data.source, 0, g, "grouping column must be a factor");
+  Variables vars(data, f);
+  auto& cols = vars.cols();
   LmmDesign d;
-  d.y = Eigen::Map<const Eigen::VectorXd>(data.y.data(), static_cast<Eigen::Index>(n));
-  std::vector<Eigen::VectorXd> xc{Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n))};
-  d.x_names = {"(Intercept)"};
+  d.y = detail::IsColumnName(f.response_term) ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
+                                                    data.y.data(), static_cast<Eigen::Index>(n)))
+                                              : vars.Evaluate(f.response_term);
+  // R's coding: factor v of term T gets contrasts when T without v is in the model.
+  std::set<std::set<std::string>> model;
+  if (f.intercept) model.insert(std::set<std::string>{});
+  for (const auto& t : f.fixed) model.insert(std::set<std::string>(t.begin(), t.end()));
+  std::vector<Eigen::VectorXd> xc;
+  if (f.intercept) {
+    xc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
+    d.x_names = {"(Intercept)"};
+  }
   for (const auto& t : f.fixed) {
-    for (const auto& v : t)
-      if (groups.count(v) && cols.at(v).numeric)
-        throw InputError(data.source, 0, v, "grouping column used as a number");
+    for (const auto& v : t) vars.Add(v);
     LmmDesign::Term term{Join(t), {}};
     const auto before = xc.size();
-    TermColumns(t, cols, n, false, xc, d.x_names);
+    auto full = [&](const std::string& v) {
+      std::set<std::string> rest(t.begin(), t.end());
+      rest.erase(v);
+      return model.count(rest) == 0;
+    };
+    TermColumns(t, cols, n, full, xc, d.x_names);
     for (auto j = before; j < xc.size(); ++j) term.columns.push_back(static_cast<int>(j));
     d.x_terms.push_back(term);
   }
   d.X.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(xc.size()));
   for (std::size_t j = 0; j < xc.size(); ++j) d.X.col(static_cast<Eigen::Index>(j)) = xc[j];
 
+  std::map<std::string, Column> group_cols;
+  for (const auto& r : f.random)
+    if (!group_cols.count(r.group)) group_cols.emplace(r.group, GroupColumn(data, r, vars.raw()));
   // Random terms in lme4's order: decreasing number of grouping levels (stable).
   std::vector<std::size_t> order(f.random.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    return cols.at(f.random[a].group).levels.size() > cols.at(f.random[b].group).levels.size();
+    return group_cols.at(f.random[a].group).levels.size() >
+           group_cols.at(f.random[b].group).levels.size();
   });
   std::vector<Eigen::Triplet<double>> trip;
   int offset = 0;
@@ -288,6 +270,8 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
       zc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
       b.names.emplace_back("(Intercept)");
     }
+    for (const auto& t : r.terms)
+      for (const auto& v : t) vars.Add(v);
     const bool full = !r.intercept && r.terms.size() == 1 && r.terms[0].size() == 1 &&
                       !cols.at(r.terms[0][0]).numeric;
     for (const auto& t : r.terms) {
@@ -297,9 +281,10 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
         throw InputError(
             data.source, 0, "formula",
             "a random term without intercept may hold numeric columns or one factor only");
-      TermColumns(t, cols, n, full, zc, b.names);
+      TermColumns(
+          t, cols, n, [full](const std::string&) { return full; }, zc, b.names);
     }
-    const Column& g = cols.at(r.group);
+    const Column& g = group_cols.at(r.group);
     b.levels = static_cast<int>(g.levels.size());
     b.p = static_cast<int>(zc.size());
     b.offset = offset;

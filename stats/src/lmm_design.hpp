@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,17 @@ struct LmmDesign {
   };
   std::vector<Block> blocks;  ///< lme4's order: most levels first
 };
+
+/// The values of a numeric column by name (n values; "" asks for any column of length n).
+using ColumnLookup = std::function<Eigen::VectorXd(const std::string&)>;
+/// A formula variable that is a plain column name (not a function of columns).
+bool IsColumnName(const std::string& label);
+/// The columns a formula variable ("x", "log(x + 1)", "I(a*b)") reads.
+std::vector<std::string> ExprColumns(const std::string& label);
+/// "poly(x, 2)": the expression inside and the degree.
+bool PolyLabel(const std::string& label, std::string& inner, int& degree);
+/// The values of a formula variable (not poly).
+Eigen::VectorXd EvalExpr(const std::string& label, const ColumnLookup& column);
 
 /// @throws hapticlab::InputError (data.source, column) for a missing column, a factor with one
 ///         level, or an unsupported random term

@@ -65,5 +65,29 @@ TEST(StatsCli, LmmBadFormulaExitsWithTwoAndNamesFileAndField) {
   EXPECT_NE(out.find("--ddf"), std::string::npos) << out;  // Kenward-Roger needs REML, as lmerTest
 }
 
+// lme4's formula language through the CLI: uncorrelated terms and a function of the response
+// fit (exit 0, R's names in the JSON); a function outside its domain is exit 2 naming the file
+// and the expression.
+TEST(StatsCli, LmmFormulaLanguage) {
+  const std::string csv = test::DataPath("stats/lmm_sleepstudy.csv");
+  std::string out;
+  ASSERT_EQ(test::RunCommand(std::string(HL_STATS_CLI_PATH) + " lmm --csv " + csv +
+                                 " --formula 'log(Reaction) ~ 0 + I(Days^2) + (Days || Subject)'"
+                                 " --json",
+                             &out),
+            0)
+      << out;
+  const auto j = nlohmann::json::parse(out);
+  ASSERT_EQ(j["fixed"].size(), 1u) << out;
+  EXPECT_EQ(j["fixed"][0]["name"].get<std::string>(), "I(Days^2)");
+  EXPECT_EQ(j["random"].size(), 2u) << out;  // (1 | Subject) and (0 + Days | Subject)
+  EXPECT_EQ(test::RunCommand(Cli() + " stats lmm --csv " + csv +
+                                 " --formula 'Reaction ~ log(Days) + (1 | Subject)'",
+                             &out),
+            2);
+  EXPECT_NE(out.find("lmm_sleepstudy.csv"), std::string::npos) << out;
+  EXPECT_NE(out.find("log(Days)"), std::string::npos) << out;
+}
+
 }  // namespace
 }  // namespace hapticlab

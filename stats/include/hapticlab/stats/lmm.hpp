@@ -15,11 +15,19 @@
 /// (options.kenward_roger, REML only) follows pbkrtest 0.5 (lmm_kr.cpp).
 ///
 /// Formula syntax (a subset of lme4's): `y ~ a * b + c + a:c + (1 + a | g) + (1 | h)` with
-/// `*` (all interactions), `:`, `+`; random terms `(1 | g)`, `(1 + x + ... | g)`, `(x | g)`
-/// (intercept implied) and `(0 + x | g)`; several terms may share or cross grouping factors.
+/// `*` (all interactions), `:`, `+`; `0 +` or `- 1` for no intercept; random terms `(1 | g)`,
+/// `(1 + x + ... | g)`, `(x | g)` (intercept implied), `(0 + x | g)`, uncorrelated terms
+/// `(x || g)` (lme4's expansion: `(1 | g) + (0 + x | g)`), interaction grouping `(1 | a:b)` and
+/// nesting `(1 | a/b)` (= `(1 | b:a) + (1 | a)`); several terms may share or cross grouping
+/// factors. The response and numeric predictors may be functions of a numeric column: `log`,
+/// `log10`, `log2`, `exp`, `sqrt`, `abs`, `scale` (centred, divided by the SD) and `I()` with
+/// + - * / ^ arithmetic; they are named as R names them (`I(Days^2)`, `log(Days + 1)`).
 /// A column is numeric when every value parses as a number (as read.csv decides), otherwise a
-/// factor (levels sorted; sum-to-zero contrasts named `method1`, `method2`, as R's). Grouping
-/// columns are always factors. The fixed part always has an intercept.
+/// factor (levels sorted). Factors are coded as R codes them with contrasts = contr.sum: in a
+/// term, a factor gets sum-to-zero contrasts (`method1`, `method2`) when the term without it is
+/// in the model (the intercept counts as the empty term), else one indicator per level
+/// (`methodaudio`), so `0 + method` gives one mean per level. Grouping columns are always
+/// factors; R names a grouping factor that appears twice `g.1` (VarCorr), and so do we.
 
 #include <string>
 #include <vector>
@@ -31,12 +39,17 @@ namespace hapticlab::stats {
 
 /// A parsed model formula: terms are lists of column names (an interaction has several).
 struct LmmFormula {
-  std::string response;
-  std::vector<std::vector<std::string>> fixed;  ///< without the intercept, in R's order (by degree)
+  std::string response;       ///< the response column
+  std::string response_term;  ///< as R prints it: "Reaction" or "log(Reaction)"
+  bool intercept = true;      ///< of the fixed part
+  /// Without the intercept, in R's order (by degree); a variable is a column or a function of
+  /// one as R prints it ("I(Days^2)").
+  std::vector<std::vector<std::string>> fixed;
   struct Random {
     bool intercept = true;
     std::vector<std::vector<std::string>> terms;  ///< slope terms (no intercept)
-    std::string group;
+    std::string group;                            ///< "g" or "b:a"
+    std::vector<std::string> group_factors;       ///< the columns whose interaction groups
   };
   std::vector<Random> random;
   /// Every column the formula names (response first).
