@@ -15,6 +15,12 @@
 namespace hapticlab::stats {
 namespace {
 
+// A malformed expression inside the parser; ParseExpr turns it into an InputError naming the
+// formula's source.
+struct ExprError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
 std::string Strip(const std::string& s) {
   std::string o;
   for (char c : s)
@@ -66,7 +72,7 @@ class ExprParser {
   explicit ExprParser(const std::string& s) : s_(Strip(s)) {}
   std::unique_ptr<Node> Parse() {
     auto n = Sum();
-    if (pos_ != s_.size()) throw std::invalid_argument("unexpected '" + s_.substr(pos_) + "'");
+    if (pos_ != s_.size()) throw ExprError("unexpected '" + s_.substr(pos_) + "'");
     return n;
   }
 
@@ -123,7 +129,7 @@ class ExprParser {
     if (Eat('(')) {
       n->op = '(';
       n->kids.push_back(Sum());
-      if (!Eat(')')) throw std::invalid_argument("missing ')'");
+      if (!Eat(')')) throw ExprError("missing ')'");
       return n;
     }
     const std::size_t start = pos_;
@@ -132,7 +138,7 @@ class ExprParser {
       const char* b = s_.c_str() + pos_;
       char* end = nullptr;
       std::strtod(b, &end);
-      if (end == b) throw std::invalid_argument("expected a number");
+      if (end == b) throw ExprError("expected a number");
       pos_ += static_cast<std::size_t>(end - b);
       n->text = s_.substr(start, pos_ - start);
       n->number = true;
@@ -143,16 +149,16 @@ class ExprParser {
       ++pos_;
     n->text = s_.substr(start, pos_ - start);
     if (!ValidName(n->text))
-      throw std::invalid_argument(pos_ < s_.size() ? "unexpected '" + s_.substr(pos_) + "'"
-                                                   : "expression ends early");
+      throw ExprError(pos_ < s_.size() ? "unexpected '" + s_.substr(pos_) + "'"
+                                       : "expression ends early");
     if (Eat('(')) {
       if (!kFunctions.count(n->text))
-        throw std::invalid_argument("function '" + n->text +
-                                    "' is not supported (log, exp, sqrt, scale, I, abs, log10, "
-                                    "log2 are)");
+        throw ExprError("function '" + n->text +
+                        "' is not supported (log, exp, sqrt, scale, I, abs, log10, "
+                        "log2 are)");
       n->op = 'f';
       n->kids.push_back(Sum());
-      if (!Eat(')')) throw std::invalid_argument("missing ')' after " + n->text + "(");
+      if (!Eat(')')) throw ExprError("missing ')' after " + n->text + "(");
     }
     return n;
   }
@@ -232,7 +238,7 @@ Eigen::VectorXd Eval(const Node& n, const detail::ColumnLookup& column) {
 std::unique_ptr<Node> ParseExpr(const std::string& text, const std::string& source) {
   try {
     return ExprParser(text).Parse();
-  } catch (const std::invalid_argument& e) {
+  } catch (const ExprError& e) {
     throw InputError(source, 0, "formula", "cannot read '" + text + "': " + e.what());
   }
 }
