@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <memory>
 #include <set>
+#include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "lmm_design.hpp"
