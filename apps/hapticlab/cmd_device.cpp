@@ -9,6 +9,7 @@
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/devices/audio.hpp"
+#include "hapticlab/devices/factory.hpp"
 #include "hapticlab/devices/falcon.hpp"
 
 namespace hapticlab::cli {
@@ -66,14 +67,14 @@ void RegisterDevice(CLI::App& app) {
     cmd->callback([fw] {
       RunGuarded({{"firmware", "--firmware"}}, [&] {
         const auto bytes = devices::falcon::ReadFirmwareFile(*fw);
-        auto usb = devices::falcon::OpenLibusb(0);
+        auto usb = devices::OpenFalconLink();
         const auto r = devices::falcon::LoadFirmware(*usb, bytes);
         std::string trace;
         for (const auto s : r.trace)
           trace +=
               fmt::format("{}{}", trace.empty() ? "" : " -> ", devices::falcon::LoadStateName(s));
         fmt::print("{} after {} attempt(s): {}\n", r.ok ? "loaded" : "FAILED", r.attempts, trace);
-        if (!r.ok) fmt::print("{}\n", r.error);
+        if (!r.ok) fmt::print("{}\n", devices::DeviceErrorMessage("falcon", r.error));
         return r.ok ? kExitOk : kExitFailure;
       });
     });

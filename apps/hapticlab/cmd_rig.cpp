@@ -15,6 +15,7 @@
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/devices/factory.hpp"
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/sim_rigs.hpp"
@@ -33,9 +34,16 @@ runner::RigFile LoadOrDefault(const std::string& path, const std::string& device
   return path.empty() ? runner::DefaultRig(device) : runner::LoadRig(path);
 }
 
+// Where each back-end's grip rests before a participant takes it [m, device frame].
+Eigen::Vector3d HomePosition(const std::string& device) {
+  return device == "falcon-twin" ? sim::FalconHomePosition() : Eigen::Vector3d(0, 0, 0.05);
+}
+
+}  // namespace
+
 // Touch points [m, device frame]: a CSV file (x_m,y_m,z_m per line, an optional header) or
 // "x,y,z;x,y,z;...".
-std::vector<Eigen::Vector3d> ParsePoints(const std::string& arg) {
+std::vector<Eigen::Vector3d> ParseTouchPoints(const std::string& arg) {
   std::vector<Eigen::Vector3d> pts;
   const bool inline_list = arg.find(';') != std::string::npos || !std::ifstream(arg);
   const std::string src = inline_list ? "--points" : arg;
@@ -64,13 +72,6 @@ std::vector<Eigen::Vector3d> ParsePoints(const std::string& arg) {
   return pts;
 }
 
-// Where each back-end's grip rests before a participant takes it [m, device frame].
-Eigen::Vector3d HomePosition(const std::string& device) {
-  return device == "falcon-twin" ? sim::FalconHomePosition() : Eigen::Vector3d(0, 0, 0.05);
-}
-
-}  // namespace
-
 void RegisterRig(CLI::App& app) {
   auto* rig = app.add_subcommand(
       "rig",
@@ -86,7 +87,7 @@ void RegisterRig(CLI::App& app) {
         "show", "Print a rig file's frames: each sample's pose in the world and device frames");
     cmd->add_option("RIG", o->path, "Rig file (.toml); none: the built-in rig of --device");
     cmd->add_option("--device", o->device, "Built-in rig to show when no file is given")
-        ->check(CLI::IsMember({"sim", "falcon", "falcon-twin"}))
+        ->check(CLI::IsMember({"sim", "falcon", "falcon-twin", "dhd", "openhaptics"}))
         ->capture_default_str();
     cmd->add_flag("--json", o->json, "Print as JSON");
     cmd->callback([o] {
@@ -133,7 +134,7 @@ void RegisterRig(CLI::App& app) {
   }
   {
     struct O {
-      std::string path, device = "falcon-twin", clock = "virtual";
+      std::string path, device = "falcon-twin", clock, firmware;
       double seconds = 2, empty = 0, split = 0;
       bool json = false, no_vibration = false;
       TimingCheckArgs timing;
@@ -141,23 +142,29 @@ void RegisterRig(CLI::App& app) {
     auto o = std::make_shared<O>();
     auto* cmd = rig->add_subcommand(
         "check",
-        "--clock virtual (default): run a simulated rig through the real-time engine on a virtual\n"
+        "--clock virtual (the default for sim and falcon-twin): run a simulated rig through the "
+        "real-time engine on a virtual\n"
         "clock: the simulated hand strokes a virtual sample on the left pose of the rig file;\n"
         "reports the ticks, the link's empty and lost reads, contact, and whether the grip's rest\n"
         "pose is already in contact with a sample (a wrong rig file).\n"
-        "--clock real: run the force loop (at --rate) and the 10 kHz vibration loop on the real\n"
+        "--clock real (the only clock for falcon, dhd, openhaptics; zero force on hardware):\n"
+        "run the force loop (at --rate) and the 10 kHz vibration loop on the real\n"
         "clock with a resting simulated grip (zero force; --render MODEL: a simulated hand "
         "strokes\n"
         "the rendered model) and the chosen actuator, and print a\n"
         "histogram of wake-up lateness like cyclictest, what the threads got (priority, memory\n"
         "lock, timer slack) and the verdict for the rate (exit 1: a missed deadline or a rate\n"
         "off by more than 1 %).");
-    cmd->add_option("--device", o->device, "Simulated rig")
-        ->check(CLI::IsMember({"sim", "falcon-twin"}))
+    cmd->add_option("--device", o->device,
+                    "Simulated rig (sim, falcon-twin) or hardware (falcon; dhd, openhaptics where "
+                    "built)")
+        ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
         ->capture_default_str();
-    cmd->add_option("--clock", o->clock, "virtual: the stroke check; real: the timing check")
-        ->check(CLI::IsMember({"virtual", "real"}))
-        ->capture_default_str();
+    cmd->add_option("--clock", o->clock,
+                    "virtual: the stroke check (simulated rigs; their default); real: the timing "
+                    "check (hardware's default)")
+        ->check(CLI::IsMember({"virtual", "real"}));
+    cmd->add_option("--firmware", o->firmware, "falcon: the firmware file (docs/hardware.md)");
     cmd->add_option("--rate", o->timing.rate_hz, "--clock real: force loop rate [Hz]")
         ->check(CLI::Range(100.0, 20000.0))
         ->capture_default_str();
@@ -188,9 +195,22 @@ void RegisterRig(CLI::App& app) {
         "Print {\"device\", \"ticks\", \"empty_reads\", \"lost\", \"home_in_contact\", ...}");
     cmd->callback([o] {
       RunGuarded([&] {
+        const bool hardware = devices::IsRealDevice(o->device);
+        if (o->clock.empty()) o->clock = hardware ? "real" : "virtual";
+        if (hardware && o->clock == "virtual")
+          throw InputError(kCommandLine, 0, "--clock",
+                           "'" + o->device +
+                               "' is hardware: it runs on the real clock (--clock real); the "
+                               "virtual-clock check strokes a simulated rig (sim, falcon-twin)");
         if (o->clock == "real") {
           TimingCheckArgs a = o->timing;
           a.device = o->device;
+          a.firmware = o->firmware;
+          if (!o->path.empty()) {
+            const auto rf = runner::LoadRig(o->path);
+            a.motor_units_per_Nm = rf.motor_units_per_Nm;
+            a.max_force_N = rf.max_force_N;
+          }
           a.seconds = o->seconds;
           a.json = o->json;
           a.vibration = !o->no_vibration;
@@ -294,7 +314,7 @@ void RegisterRig(CLI::App& app) {
       RunGuarded([&] {
         auto r = runner::LoadRig(o->path);
         const int side = o->side == "left" ? 0 : 1;
-        auto pts = ParsePoints(o->points);
+        auto pts = ParseTouchPoints(o->points);
         for (auto& p : pts) p += r.tip_offset_m;  // the tip, not the reported point
         Eigen::Vector3d up =
             (r.world_from_device.inverse() * r.world_from_sample[static_cast<std::size_t>(side)])
@@ -326,6 +346,7 @@ void RegisterRig(CLI::App& app) {
       });
     });
   }
+  RegisterRigSetup(*rig);
 }
 
 }  // namespace hapticlab::cli

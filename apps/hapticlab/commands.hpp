@@ -22,6 +22,8 @@ void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);
 void RegisterParticipant(CLI::App& app);
 void RegisterRig(CLI::App& app);
+/// `rig init` and `rig touch` (cmd_rig_setup.cpp), registered under the rig group.
+void RegisterRigSetup(CLI::App& rig);
 void RegisterDb(CLI::App& app);
 
 }  // namespace hapticlab::cli

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -11,8 +12,12 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/devices/audio.hpp"
+#include "hapticlab/devices/factory.hpp"
+#include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
+#include "hapticlab/sim/falcon_twin.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
@@ -43,6 +48,83 @@ class RestingDevice final : public devices::HapticDevice {
  private:
   std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
 };
+
+// The hardware at zero force: reads pass through, every force command is zero (a timing check
+// must not push on the hand holding the grip).
+class ZeroForceDevice final : public devices::HapticDevice {
+ public:
+  explicit ZeroForceDevice(devices::HapticDevice& d) : d_(d) {}
+  devices::DeviceCapabilities Capabilities() const override { return d_.Capabilities(); }
+  devices::ReadResult Read(renderer::DeviceSample* out) noexcept override { return d_.Read(out); }
+  void WriteForce(const Eigen::Vector3d&) noexcept override {
+    d_.WriteForce(Eigen::Vector3d::Zero());
+  }
+  void SetTimeBase(std::chrono::steady_clock::time_point t0) noexcept override {
+    d_.SetTimeBase(t0);
+  }
+
+ private:
+  devices::HapticDevice& d_;
+};
+
+// Seconds since construction on the steady clock (the Falcon twin's hand on the real clock).
+class SteadyClock final : public devices::Clock {
+ public:
+  double Now() const noexcept override {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+};
+
+// The device the loops drive, and what it needs kept alive.
+struct TimingDevice {
+  sim::Hand hand;
+  SteadyClock clock;
+  RestingDevice resting;
+  std::unique_ptr<sim::SimDevice> stroking;
+  std::unique_ptr<devices::HapticDevice> owned;  // the twin's Falcon back-end, or hardware
+  std::unique_ptr<ZeroForceDevice> zero;
+  sim::FalconTwinTransport* twin = nullptr;
+  devices::HapticDevice* dev = nullptr;
+  Eigen::Isometry3d device_from_sample = Eigen::Isometry3d::Identity();
+};
+
+void OpenTimingDevice(const TimingCheckArgs& a, TimingDevice& t) {
+  if (a.device == "sim") {
+    t.stroking = std::make_unique<sim::SimDevice>(sim::SimDeviceModel{}, t.hand, nullptr);
+    t.dev = a.render.empty() ? static_cast<devices::HapticDevice*>(&t.resting) : t.stroking.get();
+    return;
+  }
+  if (a.device == "falcon-twin") {
+    auto link = std::make_unique<sim::FalconTwinTransport>(t.hand, t.clock);
+    t.twin = link.get();
+    const auto r = devices::falcon::LoadFirmware(*link, sim::FalconTwinFirmware());
+    if (!r.ok) throw std::runtime_error("falcon-twin: " + r.error);
+    devices::falcon::FalconOptions fo;
+    if (a.motor_units_per_Nm > 0) fo.motor_units_per_Nm = a.motor_units_per_Nm;
+    if (a.max_force_N > 0) fo.max_force_N = a.max_force_N;
+    t.owned = std::make_unique<devices::falcon::FalconDevice>(std::move(link),
+                                                              std::function<double()>{}, fo);
+    t.dev = t.owned.get();
+    // Where the twin's left sample truly lies (the hand strokes it with --render).
+    t.device_from_sample = runner::DefaultRig("falcon-twin").DeviceFromSample(0);
+    return;
+  }
+  if (!a.render.empty())
+    throw InputError(kCommandLine, 0, "--render",
+                     "--render strokes a simulated hand; on hardware the check runs at zero force");
+  auto opened =
+      devices::OpenRealDevice({.device = a.device,
+                               .firmware = a.firmware,
+                               .motor_units_per_Nm = a.motor_units_per_Nm,
+                               .max_force_N = a.max_force_N},
+                              [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
+  t.owned = std::move(opened.device);
+  t.zero = std::make_unique<ZeroForceDevice>(*t.owned);
+  t.dev = t.zero.get();
+}
 
 json Percentiles(const LatencySummary& s) {
   return {{"p50", s.Quantile(0.5) * 1e6},
@@ -86,31 +168,31 @@ void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
 }
 
 int RunTimingCheck(const TimingCheckArgs& a) {
-  if (a.device != "sim")
-    throw InputError(kCommandLine, 0, "--device",
-                     "with --clock real only --device sim (a resting simulated grip) is supported");
+  TimingDevice td;
+  OpenTimingDevice(a, td);
+  devices::HapticDevice& dev = *td.dev;
   const auto model = a.render.empty() ? sim::PlaceholderModel(sim::MaterialProfile{.id = "check"})
                                       : renderer::LoadMaterial(a.render);
   renderer::RenderOptions ro;
   ro.force_rate_hz = a.rate_hz;
   ro.vibration = a.vibration;
+  if (a.device != "sim") {  // the twin's and the hardware's own limits
+    ro.device_max_stiffness_N_per_m = dev.Capabilities().max_stiffness_N_per_m;
+    ro.max_force_N = std::min(ro.max_force_N, dev.Capabilities().max_force_N);
+  }
   renderer::HybridRenderer r(model, ro);
   // Without a model: a grip resting out of contact. With one: the simulated hand strokes the
-  // virtual sample (device frame = sample frame) back and forth on the real clock.
-  RestingDevice resting;
-  sim::Hand hand;
-  sim::SimDevice stroking(sim::SimDeviceModel{}, hand, nullptr);  // null clock: the real one
+  // virtual sample (sim: device frame = sample frame) back and forth on the real clock.
   if (!a.render.empty()) {
     Rng rng(1);
     sim::Stroke stroke = sim::DrawStroke(rng);
     const double relief_m =
         model.geometry ? model.geometry->max_m() - model.geometry->min_m() : 0.0;
-    hand.Begin(stroke, Eigen::Isometry3d::Identity(), model.contact.layer_thickness_m + relief_m,
-               model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
-               ro.force_rate_hz, ro.vibration_rate_hz);
+    td.hand.Begin(stroke, td.device_from_sample, model.contact.layer_thickness_m + relief_m,
+                  model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+                  ro.force_rate_hz, ro.vibration_rate_hz);
+    if (td.twin) td.twin->BeginRun();
   }
-  devices::HapticDevice& dev =
-      a.render.empty() ? static_cast<devices::HapticDevice&>(resting) : stroking;
   std::unique_ptr<devices::AudioOutput> audio;
   if (a.actuator == "audio") {
     devices::AudioConfig c;
@@ -121,6 +203,7 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   }
   runner::EngineOptions eo;
   eo.rt = a.rt;
+  eo.sample_from_device = td.device_from_sample.inverse();
   runner::RtEngine engine(r, dev, audio.get(), eo);
   engine.RunFor(std::chrono::duration<double>(a.seconds));
   if (audio) audio->Stop();

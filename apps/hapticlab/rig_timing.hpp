@@ -3,18 +3,29 @@
 // force) or, with --render MODEL, a simulated hand stroking the rendered model.
 
 #include <CLI/CLI.hpp>
+#include <Eigen/Core>
 #include <string>
+#include <vector>
 
 #include "hapticlab/runner/rt_thread.hpp"
 
 namespace hapticlab::cli {
+
+/// Touch points [m]: a CSV file (x_m,y_m,z_m per line, an optional header) or
+/// "x,y,z;x,y,z;...". @throws InputError naming the file (or --points) and line.
+std::vector<Eigen::Vector3d> ParseTouchPoints(const std::string& arg);
 
 /// Adds the real-time loop options (--rt-priority, --spin-us, --lock-memory, --cpu) to a
 /// command that runs the loops on the real clock.
 void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt);
 
 struct TimingCheckArgs {
-  std::string device = "sim";     ///< only "sim": a simulated grip resting out of contact
+  /// sim: a simulated grip resting out of contact; falcon-twin: the Falcon back-end over the
+  /// twin, its grip at rest; falcon, dhd, openhaptics: the hardware at zero force.
+  std::string device = "sim";
+  std::string firmware;           ///< falcon: the firmware file
+  double motor_units_per_Nm = 0;  ///< falcon: from the rig file (0: the back-end's default)
+  double max_force_N = 0;         ///< falcon: from the rig file (0: the back-end's default)
   std::string actuator = "none";  ///< "none" or "audio" (PortAudio, --audio-device)
   std::string audio_device;
   /// Material model (.toml) to render while a simulated hand strokes the virtual sample on

@@ -21,15 +21,11 @@ std::unique_ptr<HapticDevice> OpenFalcon(const DeviceRequest& r,
     throw InputError(kCommandLine, 0, "firmware",
                      "the Falcon needs its firmware file (docs/hardware.md)");
   const auto fw = falcon::ReadFirmwareFile(r.firmware);
-  if (falcon::CountDevices() == 0)
-    throw std::runtime_error(
-        "no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48); check the cable, "
-        "power and the udev rule in docs/hardware.md");
-  auto usb = falcon::OpenLibusb(0);
+  auto usb = OpenFalconLink();
   if (progress)
     progress(fmt::format("falcon: loading firmware {} ({} bytes)...", r.firmware, fw.size()));
   const auto loaded = falcon::LoadFirmware(*usb, fw);
-  if (!loaded.ok) throw std::runtime_error("falcon: " + loaded.error);
+  if (!loaded.ok) throw std::runtime_error(DeviceErrorMessage("falcon", loaded.error));
   if (progress) progress(fmt::format("falcon: firmware running (attempt {})", loaded.attempts));
   falcon::FalconOptions fo;
   if (r.motor_units_per_Nm > 0) fo.motor_units_per_Nm = r.motor_units_per_Nm;
@@ -38,6 +34,26 @@ std::unique_ptr<HapticDevice> OpenFalcon(const DeviceRequest& r,
 }
 
 }  // namespace
+
+std::string DeviceErrorMessage(const std::string& device, const std::string& what) {
+  const bool named = what.rfind(device + ":", 0) == 0;
+  const std::string checks =
+      device == "falcon" ? "the cable, the power supply, the udev rule and the firmware file"
+                         : "the cable, the power supply, the udev rule and the vendor's "
+                           "driver";
+  return fmt::format("{}{}; check {} (docs/hardware.md)", named ? "" : device + ": ", what, checks);
+}
+
+std::unique_ptr<falcon::UsbTransport> OpenFalconLink() {
+  if (falcon::CountDevices() == 0)
+    throw std::runtime_error(DeviceErrorMessage(
+        "falcon", "no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48)"));
+  try {
+    return falcon::OpenLibusb(0);
+  } catch (const std::runtime_error& e) {
+    throw std::runtime_error(DeviceErrorMessage("falcon", e.what()));
+  }
+}
 
 bool IsRealDevice(const std::string& device) {
   return device == "falcon" || device == "dhd" || device == "openhaptics";
@@ -59,7 +75,11 @@ OpenedDevice OpenRealDevice(const DeviceRequest& r,
     out.device = OpenFalcon(r, progress);
     out.description = "falcon, firmware " + r.firmware;
   } else {
-    out.device = r.device == "dhd" ? OpenDhd() : OpenOpenHaptics();
+    try {
+      out.device = r.device == "dhd" ? OpenDhd() : OpenOpenHaptics();
+    } catch (const std::runtime_error& e) {
+      throw std::runtime_error(DeviceErrorMessage(r.device, e.what()));
+    }
     out.description = out.device->Capabilities().name;
   }
   return out;

@@ -84,7 +84,7 @@ void Hand::Begin(const Stroke& s, const Eigen::Isometry3d& device_from_sample, d
   t_s_ = 0;
   fn_felt_N_ = 0;
   z_contact_m_ = 0;
-  touched_ = pending_ = interval_open_ = false;
+  touched_ = pending_ = interval_open_ = holding_ = false;
   fr_ = fr;
   vr_ = vr;
   vib_per_tick_ = std::max(1, static_cast<int>(std::lround(vr / fr)));
@@ -114,7 +114,24 @@ void Hand::FlushInterval() noexcept {
     acc_.AddVibration(shake_last_ + (truth_ ? truth_->Vibration(contact_) : 0.0));
 }
 
+void Hand::Hold(const Eigen::Isometry3d& device_from_sample, const Eigen::Vector3d& p_sample_m) {
+  device_from_sample_ = device_from_sample;
+  p_ = p_sample_m;
+  v_.setZero();
+  truth_ = nullptr;
+  holding_ = true;
+  pending_ = interval_open_ = false;
+}
+
 ToolState Hand::Step(double t_s) noexcept {
+  if (holding_) {  // still: no stroke, no features (Push sees no pending step)
+    t_s_ = t_s;
+    ++ticks_;
+    ToolState out;
+    out.p_m = device_from_sample_ * p_;
+    out.v_mps.setZero();
+    return out;
+  }
   FlushInterval();
   const double dt = t_s > t_s_ ? t_s - t_s_ : 1.0 / fr_;
   t_s_ = t_s;

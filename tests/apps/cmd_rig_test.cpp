@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -150,6 +151,76 @@ TEST(RigCli, CalibrateFitsATiltedPlaneThroughTheTipsAndKeepsTheDevicePose) {
           Cli() + " rig calibrate " + dir.File("rig.toml") + " --points '0,0,0;0.01,0,0'", &out),
       2);
   EXPECT_NE(out.find("points"), std::string::npos) << out;
+}
+
+// `rig init` writes a template `rig show` reads back, for every device the rig file supports.
+TEST(RigCli, InitWritesATemplateThatShowReads) {
+  test::TempDir dir;
+  std::string out;
+  for (const char* device : {"falcon", "sim", "falcon-twin"}) {
+    const std::string file = dir.File(std::string(device) + ".toml");
+    ASSERT_EQ(test::RunCommand(RigCli() + " rig init --device " + device + " -o " + file, &out), 0)
+        << out;
+    EXPECT_EQ(test::ReadFile(file).rfind("# Rig-file template", 0), 0u) << "commented";
+    ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + file + " --json", &out), 0) << out;
+    const auto j = nlohmann::json::parse(out.substr(out.find('{')));
+    EXPECT_EQ(j["device"], device);
+  }
+  EXPECT_EQ(test::RunCommand(RigCli() + " rig init --device nosuch", &out), 2) << out;
+}
+
+// Set a rig up by touching it: a rig file whose left sample is 2 cm off and tilted; the
+// simulated hand on the Falcon twin touches four points of the left sample where it truly lies
+// (the built-in Falcon rig: origin [-0.025, -0.04, 0.125] m, x along device x, normal along
+// device y); `rig touch` records them through the Falcon back-end (encoders, kinematics) and
+// `rig calibrate` recovers the true pose.
+TEST(RigCli, TouchOnTheFalconTwinRecordsPointsCalibrateTurnsIntoTheTruePose) {
+  test::TempDir dir;
+  std::string out;
+  test::WriteFile(
+      dir.File("rig.toml"),
+      "device = \"falcon\"\n[sample.left]\norigin_m = [-0.005, -0.03, 0.11]\nx_axis = [1, 0, "
+      "0.2]\nz_axis = [0.1, 1, 0]\n"
+      "[sample.right]\norigin_m = [0.025, -0.04, 0.125]\nx_axis = [1, 0, 0]\nz_axis = [0, 1, 0]\n");
+  // Sample-frame targets: the first two along +x, centred on the sample's origin.
+  ASSERT_EQ(
+      test::RunCommand(RigCli() + " rig touch --device falcon-twin --rig " + dir.File("rig.toml") +
+                           " --script '-0.012,-0.01,0;0.012,-0.01,0;0.012,0.01,0;-0.012,0.01,0'"
+                           " -o " +
+                           dir.File("touch.csv"),
+                       &out),
+      0)
+      << out;
+  EXPECT_NE(out.find("point 4:"), std::string::npos) << out;
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig calibrate " + dir.File("rig.toml") +
+                                 " --side left --points " + dir.File("touch.csv") + " --out " +
+                                 dir.File("new.toml"),
+                             &out),
+            0)
+      << out;
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + dir.File("new.toml") + " --json", &out), 0)
+      << out;
+  const auto left = nlohmann::json::parse(out.substr(out.find('{')))["samples"]["left"]["device"];
+  const double truth_origin[3] = {-0.025, -0.04, 0.125};
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NEAR(left["origin_m"][k].get<double>(), truth_origin[k], 0.5e-3) << k;
+  auto angle_deg = [](const nlohmann::json& a, double x, double y, double z) {
+    const double ax = a[0], ay = a[1], az = a[2];
+    const double c = (ax * x + ay * y + az * z) / std::sqrt(ax * ax + ay * ay + az * az);
+    return std::acos(std::min(1.0, c)) * 180 / 3.14159265358979;
+  };
+  EXPECT_LT(angle_deg(left["z_axis"], 0, 1, 0), 1.0) << left.dump();
+  EXPECT_LT(angle_deg(left["x_axis"], 1, 0, 0), 1.0) << left.dump();
+  // Before calibration the file was off by far more than that (the test could fail).
+  ASSERT_EQ(test::RunCommand(RigCli() + " rig show " + dir.File("rig.toml") + " --json", &out), 0);
+  const auto before = nlohmann::json::parse(out.substr(out.find('{')))["samples"]["left"]["device"];
+  EXPECT_GT(std::abs(before["origin_m"][0].get<double>() - truth_origin[0]), 0.01);
+  EXPECT_GT(angle_deg(before["z_axis"], 0, 1, 0), 5.0);
+  // Scripted touches drive a simulated hand only.
+  EXPECT_EQ(
+      test::RunCommand(RigCli() + " rig touch --device falcon --script '0,0,0;1,0,0;0,1,0'", &out),
+      2)
+      << out;
 }
 
 }  // namespace

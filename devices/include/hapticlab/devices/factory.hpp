@@ -13,6 +13,9 @@
 #include "hapticlab/devices/device.hpp"
 
 namespace hapticlab::devices {
+namespace falcon {
+class UsbTransport;
+}
 
 /// What a session asks of the real hardware.
 struct DeviceRequest {
@@ -21,6 +24,16 @@ struct DeviceRequest {
   double motor_units_per_Nm = 0;  ///< falcon: from the rig file (0: the back-end's default)
   double max_force_N = 0;         ///< falcon: from the rig file (0: the back-end's default)
 };
+
+/// The one message every command gives when a device cannot be reached or started: what
+/// failed (`what`, prefixed with the device's name unless it already is), then what to check
+/// on the day (the cable, the power supply, the udev rule, and for the Falcon its firmware
+/// file; docs/hardware.md).
+std::string DeviceErrorMessage(const std::string& device, const std::string& what);
+
+/// The Falcon's USB link (the first Falcon on the bus), with DeviceErrorMessage's sentence
+/// when it is absent or cannot be claimed. @throws std::runtime_error
+std::unique_ptr<falcon::UsbTransport> OpenFalconLink();
 
 /// True for the names of the real back-ends ("falcon", "dhd", "openhaptics").
 bool IsRealDevice(const std::string& device);

@@ -89,6 +89,11 @@ class Hand {
              double vibration_rate_hz);
   /// The features of what the hand felt since Begin (call after the run stopped).
   Features Finish() noexcept;
+  /// A person touching a point and holding still (setting up a rig by touch): from now to
+  /// the next Begin or Hold, the stylus tip rests at `p_sample_m` [sample frame] of a sample
+  /// placed at `device_from_sample` (the truth), whatever force the device pushes with. Not
+  /// real-time; call between reads.
+  void Hold(const Eigen::Isometry3d& device_from_sample, const Eigen::Vector3d& p_sample_m);
 
   // --- called by the simulated devices on the loops ---
   /// Moves to time `t_s` (seconds since the stimulus began) with the force felt since the
@@ -119,7 +124,7 @@ class Hand {
   double z_contact_m_ = 0, fr_ = 1000, vr_ = 10000;
   int vib_per_tick_ = 10;
   double shake_last_ = 0;
-  bool touched_ = false, pending_ = false, interval_open_ = false;
+  bool touched_ = false, pending_ = false, interval_open_ = false, holding_ = false;
   Eigen::Vector3d p_ = Eigen::Vector3d::Zero(), v_ = Eigen::Vector3d::Zero();
   std::uint64_t contact_ticks_ = 0, ticks_ = 0;
 };
