@@ -121,8 +121,9 @@ TEST(WorkbenchFitCli, StribeckStrokesFitWithMuBAtItsBoundAndDiagnoseRanksStribec
   EXPECT_EQ(j["params"]["viscous"]["mu_b"].get<double>(), 0.0);
   for (const auto& p : j["friction_bootstrap"]["params"]) {
     EXPECT_GE(p["corrected"].get<double>(), 0.0) << p.dump();  // every friction parameter >= 0
-    if (p["name"] == "mu_b" && p["fit"].get<double>() - p["bias"].get<double>() < 0)
+    if (p["name"] == "mu_b" && p["fit"].get<double>() - p["bias"].get<double>() < 0) {
       EXPECT_TRUE(p["at_bound"].get<bool>()) << p.dump();
+    }
   }
   EXPECT_EQ(test::RunCommand(Cli() + " model check " + model, &out), 0) << out;
   ASSERT_EQ(
