@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <string>
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -45,10 +48,16 @@ TEST(PsychophysicsCli, ExampleJndStudyRunsAndReportsTheJnd) {
   EXPECT_GT(t.Number(0, t.Require("staircase_estimate")), 0);
   // A bad adaptive phase: exit 2, file, line and key.
   std::string bad = test::ReadFile(Example());
-  bad.replace(bad.find("down = 2"), 8, "down = 0");
+  const auto at = bad.find("down = 2");
+  bad.replace(at, 8, "down = 0");
   test::WriteFile(dir.File("bad.toml"), bad);
+  // The line of the changed key in the example (1-based).
+  const auto line =
+      1 + std::count(bad.begin(), bad.begin() + static_cast<std::ptrdiff_t>(at), '\n');
   EXPECT_EQ(test::RunCommand(Cli() + " study validate " + dir.File("bad.toml"), &out), 2);
-  EXPECT_NE(out.find("bad.toml:45: phase[1].down: expected an integer 1..5"), std::string::npos)
+  EXPECT_NE(
+      out.find("bad.toml:" + std::to_string(line) + ": phase[1].down: expected an integer 1..5"),
+      std::string::npos)
       << out;
 }
 
