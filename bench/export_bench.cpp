@@ -29,16 +29,16 @@ using namespace hapticlab;
 namespace fs = std::filesystem;
 
 const fs::path& Dir() {
-  static const fs::path dir =
+  static const fs::path kDir =
       fs::temp_directory_path() / ("hl_export_bench_" + std::to_string(getpid()));
-  return dir;
+  return kDir;
 }
 
 // The demo's database, made on first use.
 const std::string& DemoDb() {
-  static const std::string path = [] {
+  static const std::string kPath = [] {
     fs::create_directories(Dir());
-    const std::string db = (Dir() / "study.db").string();
+    std::string db = (Dir() / "study.db").string();
     const char* env = std::getenv("HL_EXPORT_BENCH_RECORD");
     const bool all = env && std::string(env) == "all";
     const auto p = protocols::LoadProtocol(std::string(HL_SOURCE_DIR) +
@@ -52,7 +52,7 @@ const std::string& DemoDb() {
     }
     return db;
   }();
-  return path;
+  return kPath;
 }
 
 void Export(benchmark::State& state, const char* format) {
