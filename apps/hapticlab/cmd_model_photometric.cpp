@@ -273,14 +273,17 @@ void AddPhotometric(CLI::App& model) {
       fmt::print("{}x{} height map, range {:.3g} m -> {} (+ {}.toml)\n", r.width, r.height,
                  static_cast<double>(hi - lo), o->out, o->out);
       fmt::print(
-          "{} pixels solved{}{}; residual SD {:.3g} of the brightness facing a light; readings "
-          "dropped: "
-          "{:.1f} % bright (highlights), {:.1f} % dark (shadows)\n",
+          "{} pixels solved{}{}; {}readings dropped: {:.1f} % bright (highlights), {:.1f} % dark "
+          "(shadows)\n",
           inside - r.unsolved_pixels, o->mask.empty() ? "" : " inside the mask",
           r.unsolved_pixels
               ? fmt::format(" ({} more with fewer than 3 usable lights)", r.unsolved_pixels)
               : "",
-          r.residual_sd, 100 * r.dropped_bright, 100 * r.dropped_dark);
+          // Only the residual rule estimates the residuals' SD (the brightest rule never does).
+          po.rejection == modeling::Rejection::kResidual
+              ? fmt::format("residual SD {:.3g} of the brightness facing a light; ", r.residual_sd)
+              : "",
+          100 * r.dropped_bright, 100 * r.dropped_dark);
       if (r.axis_flip_suspected)
         fmt::print(stderr,
                    "warning: the normals are {:.1f}x less integrable than with one image axis "
