@@ -1,6 +1,6 @@
 // hapticlab study calibrate: fits the simulated observer's parameters (sim::ObserverParams)
 // to published summary statistics (docs/studies.md "Calibrating the observer"). The physics
-// of each protocol is recorded once through the runner (runner::RecordFeltPool); every
+// of each protocol is recorded once through the runner (design::RecordFeltPool); every
 // evaluation re-rates it with the candidate observer for a fixed set of simulated studies
 // (common random numbers: the same seeds for every candidate, so the loss is a smooth
 // function of the parameters) and compares the statistics with their targets.
@@ -20,9 +20,9 @@
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/design/calibration.hpp"
+#include "hapticlab/design/power_pool.hpp"
 #include "hapticlab/protocols/protocol.hpp"
-#include "hapticlab/runner/calibration.hpp"
-#include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/stats/power.hpp"
 
 namespace hapticlab::cli {
@@ -102,14 +102,14 @@ void RegisterCalibrate(CLI::App& study) {
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");
   cmd->callback([a] {
     RunGuarded([&] {
-      const auto spec = runner::LoadCalibration(a->targets);
+      const auto spec = design::LoadCalibration(a->targets);
       const auto log = StderrLog(a->quiet);
-      runner::CalibrationState st = runner::PrepareCalibration(spec, log);
+      design::CalibrationState st = design::PrepareCalibration(spec, log);
       sim::ObserverParams best = st.start;
       std::vector<Param> params;
       for (const auto& p : spec.params) params.push_back({p.name, p.lo, p.hi, p.step});
       for (const auto& p : params) Ref(best, p.name) = std::clamp(Ref(best, p.name), p.lo, p.hi);
-      double best_loss = runner::EvaluateCalibration(st, spec, best, nullptr);
+      double best_loss = design::EvaluateCalibration(st, spec, best, nullptr);
       log(fmt::format("start: loss {:.4f}", best_loss));
       for (int sweep = 0; sweep < spec.sweeps; ++sweep) {
         bool improved = false;
@@ -120,7 +120,7 @@ void RegisterCalibrate(CLI::App& study) {
             const double nv = std::clamp(v + dir * p.step, p.lo, p.hi);
             if (nv == v) continue;
             v = nv;
-            const double l = runner::EvaluateCalibration(st, spec, cand, nullptr);
+            const double l = design::EvaluateCalibration(st, spec, cand, nullptr);
             if (l < best_loss) {
               best_loss = l;
               best = cand;
@@ -134,8 +134,8 @@ void RegisterCalibrate(CLI::App& study) {
         log(fmt::format("sweep {}: loss {:.4f}{}", sweep + 1, best_loss,
                         improved ? "" : " (steps halved)"));
       }
-      std::vector<runner::CalibrationRow> rows;
-      const double final_loss = runner::EvaluateCalibration(st, spec, best, &rows);
+      std::vector<design::CalibrationRow> rows;
+      const double final_loss = design::EvaluateCalibration(st, spec, best, &rows);
       const std::string header = fmt::format(
           "# The simulated observer of the dissertation's studies (sim::Observer; docs/studies.md\n"
           "# \"The simulated observer\"). WRITTEN BY `hapticlab study calibrate {}`\n"

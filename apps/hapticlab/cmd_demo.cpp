@@ -18,8 +18,8 @@
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/export.hpp"
+#include "hapticlab/design/power_pool.hpp"
 #include "hapticlab/protocols/protocol.hpp"
-#include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/sim/sim_device.hpp"
@@ -104,12 +104,12 @@ std::string RealTimeCheck(const std::string& profiles_path) {
 // demo's own participants' interactions re-rated by fresh simulated observers of the
 // protocol's observer model (the calibrated studies/shin2019/observer.toml for the default
 // protocol; the built-in uncalibrated one for a protocol that names none), named in the line.
-void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
+void PowerLine(const protocols::Protocol& p, const design::FeltPool& pool) {
   bool has_main = false;
   for (const auto& v : pool.participants)
     for (const auto& t : v) has_main |= t.phase == "main";
   if (!has_main || p.methods.size() < 2) return;
-  const auto model = runner::ChooseObserver(p, p.observer.empty() ? "builtin" : "");
+  const auto model = design::ChooseObserver(p, p.observer.empty() ? "builtin" : "");
   stats::PowerOptions po;
   // A quick estimate (a few seconds): 40 studies per count; `study power` for more.
   po.participants = {4, 6, 8, 12, 16, 24};
@@ -120,7 +120,7 @@ void PowerLine(const protocols::Protocol& p, const runner::FeltPool& pool) {
   const auto r = stats::SimulatePower(
       p.name,
       [&pool, &model](int n, Rng& rng) {
-        return runner::SimulateRatings(pool, model.params, n, rng, true);
+        return design::SimulateRatings(pool, model.params, n, rng, true);
       },
       po);
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -181,12 +181,12 @@ void RegisterDemo(CLI::App& app) {
                  kVersion, kGitSha, p.name, o->participants, dir.string());
       double stimulus_s = 0;
       // What the simulated participants felt: the physics pool of the power line at the end.
-      runner::FeltPool pool;
+      design::FeltPool pool;
       pool.protocol = p.name;
       pool.criteria = p.criteria;
       pool.scale_min = p.scale_min;
       pool.scale_max = p.scale_max;
-      pool.observer = runner::ProtocolObserver(p);
+      pool.observer = design::ProtocolObserver(p);
       pool.participants.resize(static_cast<std::size_t>(o->participants));
       for (int i = 0; i < o->participants; ++i) {
         runner::RunOptions ro;

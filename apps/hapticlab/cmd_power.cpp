@@ -14,8 +14,8 @@
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
+#include "hapticlab/design/power_pool.hpp"
 #include "hapticlab/protocols/protocol.hpp"
-#include "hapticlab/runner/power_pool.hpp"
 #include "hapticlab/stats/power.hpp"
 
 namespace hapticlab::cli {
@@ -147,10 +147,10 @@ void RegisterPower(CLI::App& study) {
         o.effects = {a->effect};
       }
       const auto p = protocols::LoadProtocol(a->protocol);
-      const auto model = runner::ChooseObserver(p, a->observer);  // before the physics
+      const auto model = design::ChooseObserver(p, a->observer);  // before the physics
       const auto t0 = std::chrono::steady_clock::now();
       const auto log = StderrLog(a->quiet);
-      const auto pool = runner::RecordFeltPool(p, a->pool, a->threads, log);
+      const auto pool = design::RecordFeltPool(p, a->pool, a->threads, log);
       const double t_pool =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       int last = -1;
@@ -167,7 +167,7 @@ void RegisterPower(CLI::App& study) {
       auto r = stats::SimulatePower(
           p.name,
           [&pool, &obs](int n, Rng& rng) {
-            return runner::SimulateRatings(pool, obs, n, rng, true);
+            return design::SimulateRatings(pool, obs, n, rng, true);
           },
           o);
       r.observer_file = model.file;

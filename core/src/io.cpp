@@ -188,10 +188,4 @@ void CheckTomlLimits(std::string_view text, const std::string& file) {
   TomlLimitLexer(text, file).Run();
 }
 
-std::string ReadTomlFile(const std::string& path, const std::string& what) {
-  std::string text = ReadTextFile(path, what, kTomlMaxBytes);
-  CheckTomlLimits(text, path);
-  return text;
-}
-
 }  // namespace hapticlab

@@ -61,17 +61,6 @@ std::int64_t Database::SaveMaterialModel(const std::string& name, const std::str
   return sqlite3_last_insert_rowid(db_);
 }
 
-std::int64_t Database::SaveMeasurement(const std::string& material, const std::string& csv_text,
-                                       const std::string& metadata_json) {
-  Stmt s(db_, "INSERT INTO measurement(material, hash, csv, metadata_json) VALUES (?,?,?,?)");
-  s.Bind(1, material)
-      .Bind(2, HashText(csv_text))
-      .Bind(3, csv_text)
-      .Bind(4, metadata_json.empty() ? std::string("{}") : metadata_json)
-      .Run();
-  return sqlite3_last_insert_rowid(db_);
-}
-
 void Database::InsertTrajectoryChunk(const TrajectoryChunk& c) {
   HL_REQUIRE(c.attempt >= 0, "trajectory chunk attempt must not be negative");
   HL_REQUIRE(!c.channels.empty(), "trajectory chunk needs at least one channel");

@@ -110,21 +110,6 @@ std::int64_t Database::AddTrial(const Trial& t) {
   return sqlite3_last_insert_rowid(db_);
 }
 
-std::vector<std::int64_t> Database::AddTrials(const std::vector<Trial>& trials) {
-  Transaction tx(db_);
-  Stmt s(db_, kInsertTrial);
-  std::vector<std::int64_t> ids;
-  ids.reserve(trials.size());
-  for (const auto& t : trials) {
-    BindTrial(s, t);
-    s.Run();
-    s.Reset();
-    ids.push_back(sqlite3_last_insert_rowid(db_));
-  }
-  tx.Commit();
-  return ids;
-}
-
 int Database::StartTrial(std::int64_t trial_id) {
   UpdateOpenTrial(db_, path_, trial_id,
                   "status='running', attempts=attempts+1, "

@@ -236,6 +236,10 @@ INSERT INTO event(session_id, kind, detail, established_by)
     R"sql(
 ALTER TABLE study ADD COLUMN protocol_canonical_sha256 TEXT NOT NULL DEFAULT '';
 )sql",
+    // v9: the measurement table (v3) goes: nothing but a test ever wrote it (issue #34).
+    R"sql(
+DROP TABLE IF EXISTS measurement;
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

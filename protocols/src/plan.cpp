@@ -193,6 +193,134 @@ double PlannedTrials(const Protocol& p) {
   return planned;
 }
 
+// Each virtual sample in turn (ch. V.2.1), on the left square; nothing on the right; shuffled.
+std::vector<Item> TrainingItems(const Protocol& p, const Phase& ph, Rng& rng) {
+  std::vector<Item> items;
+  for (const auto& m : p.materials)
+    items.push_back({{.phase = ph.kind,
+                      .material = m.id,
+                      .method = ph.method,
+                      .left = "virtual:" + m.id,
+                      .rated = false},
+                     m.id});
+  rng.Shuffle(items);
+  return items;
+}
+
+// The reference phase's real-real pairs: same-material pairs, then the explicit pairs or
+// `different_pairs` drawn once per study from `study_rng`.
+std::vector<std::pair<std::string, std::string>> ReferencePairs(const Protocol& p, const Phase& ph,
+                                                                Rng& study_rng) {
+  std::vector<std::pair<std::string, std::string>> pairs;
+  if (ph.same_pairs)
+    for (const auto& m : p.materials) pairs.emplace_back(m.id, m.id);
+  if (!ph.explicit_pairs.empty()) {
+    pairs.insert(pairs.end(), ph.explicit_pairs.begin(), ph.explicit_pairs.end());
+  } else if (ph.different_pairs > 0) {
+    // Indices, not names, are shuffled (the same draws): m (m - 1) / 2 pairs for m <=
+    // kMaxMaterials.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
+    all.reserve(p.materials.size() * (p.materials.size() - 1) / 2);
+    for (std::uint32_t i = 0; i < p.materials.size(); ++i)
+      for (std::uint32_t j = i + 1; j < p.materials.size(); ++j) all.emplace_back(i, j);
+    study_rng.Shuffle(all);
+    for (int k = 0; k < ph.different_pairs; ++k) {
+      const auto [i, j] = all[static_cast<std::size_t>(k)];
+      pairs.emplace_back(p.materials[i].id, p.materials[j].id);
+    }
+  }
+  return pairs;
+}
+
+std::vector<Item> ReferenceItems(const Phase& ph,
+                                 const std::vector<std::pair<std::string, std::string>>& pairs) {
+  std::vector<Item> items;
+  for (int rep = 0; rep < ph.repetitions; ++rep)
+    for (const auto& [a, b] : pairs)
+      items.push_back({{.phase = ph.kind,
+                        .material = a,
+                        .comparison = b,
+                        .repetition = rep,
+                        .left = "real:" + a,
+                        .right = "real:" + b},
+                       a});
+  return items;
+}
+
+// Every material x method x repetition of a main phase, in that nesting.
+std::vector<Item> MainItems(const Protocol& p, const Phase& ph) {
+  std::vector<Item> all;
+  for (int rep = 0; rep < ph.repetitions; ++rep)
+    for (const auto& m : p.materials)
+      for (const auto& me : p.methods)
+        all.push_back({{.phase = ph.kind,
+                        .material = m.id,
+                        .comparison = "virtual",
+                        .method = me.name,
+                        .repetition = rep,
+                        .left = "real:" + m.id,
+                        .right = "virtual:" + m.id},
+                       m.id});
+  return all;
+}
+
+// Blocks of the block_by factor; block order shuffled (blocked) or a Williams row. `starts`
+// gets the positions in the result where a block begins.
+std::vector<Item> BlockedOrder(const Protocol& p, const Phase& ph, std::vector<Item> all,
+                               const std::string& prev0, int participant_index, Rng& rng,
+                               std::vector<std::size_t>& starts) {
+  const bool constrained = p.randomization.no_immediate_repeat;
+  const bool by_method = p.randomization.block_by == "method";
+  std::vector<std::string> blocks;
+  if (by_method)
+    for (const auto& me : p.methods) blocks.push_back(me.name);
+  else
+    for (const auto& m : p.materials) blocks.push_back(m.id);
+  std::vector<int> order(blocks.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  if (p.randomization.scheme == Scheme::kBlocked)
+    rng.Shuffle(order);
+  else
+    order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
+  std::string prev = prev0;
+  // Each block's items in their order, grouped in one pass (names are unique).
+  std::unordered_map<std::string, std::size_t> block_of;
+  for (std::size_t i = 0; i < blocks.size(); ++i) block_of.emplace(blocks[i], i);
+  std::vector<std::vector<Item>> grouped(blocks.size());
+  for (auto& it : all)
+    grouped[block_of.at(by_method ? it.trial.method : it.trial.material)].push_back(std::move(it));
+  std::vector<Item> items;
+  for (int b : order) {
+    auto& block = grouped[static_cast<std::size_t>(b)];
+    auto ordered = NoRepeatOrder(std::move(block), prev, constrained, rng, p, ph);
+    if (!ordered.empty()) {
+      prev = ordered.back().key;
+      starts.push_back(items.size());
+    }
+    items.insert(items.end(), ordered.begin(), ordered.end());
+  }
+  return items;
+}
+
+// A break before every `every_trials`-th rated trial; in a blocked phase it waits for the
+// next block boundary (the count restarts at each break). Without blocks this is a break
+// before rated trial every_trials, 2 every_trials, ... as always. Also numbers the plan.
+void MarkBreaks(const Protocol& p, std::vector<PlannedTrial>& plan,
+                const std::vector<bool>& in_blocks, const std::vector<bool>& block_start) {
+  int rated = 0, since_break = 0;
+  for (std::size_t i = 0; i < plan.size(); ++i) {
+    plan[i].index = static_cast<int>(i);
+    if (!plan[i].rated) continue;
+    const bool may_break = !in_blocks[i] || block_start[i];
+    if (p.break_every_trials > 0 && rated > 0 && since_break >= p.break_every_trials && may_break) {
+      plan[i].break_before = true;
+      since_break = 0;
+    }
+    ++rated;
+    ++since_break;
+  }
+}
+
 }  // namespace
 
 std::uint64_t ParticipantSeed(const Protocol& p, int participant_index) {
@@ -216,125 +344,32 @@ std::vector<PlannedTrial> Plan(const Protocol& p, int participant_index) {
   const bool constrained = p.randomization.no_immediate_repeat;
   for (const auto& ph : p.phases) {
     if (ph.adaptive) continue;  // adaptive trials are chosen at run time from the answers
-    std::vector<Item> items;
     if (ph.kind == PhaseKind::kTraining) {
-      for (const auto& m : p.materials)
-        // Each virtual sample in turn (ch. V.2.1), on the left square; nothing on the right.
-        items.push_back({{.phase = ph.kind,
-                          .material = m.id,
-                          .method = ph.method,
-                          .left = "virtual:" + m.id,
-                          .rated = false},
-                         m.id});
-      rng.Shuffle(items);
-      for (auto& it : items) plan.push_back(it.trial);
+      for (auto& it : TrainingItems(p, ph, rng)) plan.push_back(it.trial);
       continue;
     }
+    const std::string prev0 = plan.empty() ? "" : plan.back().material;
+    std::vector<Item> items;
     if (ph.kind == PhaseKind::kReference) {
-      std::vector<std::pair<std::string, std::string>> pairs;
-      if (ph.same_pairs)
-        for (const auto& m : p.materials) pairs.emplace_back(m.id, m.id);
-      if (!ph.explicit_pairs.empty()) {
-        pairs.insert(pairs.end(), ph.explicit_pairs.begin(), ph.explicit_pairs.end());
-      } else if (ph.different_pairs > 0) {
-        // Indices, not names, are shuffled (the same draws): m (m - 1) / 2 pairs for m <=
-        // kMaxMaterials.
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
-        all.reserve(p.materials.size() * (p.materials.size() - 1) / 2);
-        for (std::uint32_t i = 0; i < p.materials.size(); ++i)
-          for (std::uint32_t j = i + 1; j < p.materials.size(); ++j) all.emplace_back(i, j);
-        study_rng.Shuffle(all);
-        for (int k = 0; k < ph.different_pairs; ++k) {
-          const auto [i, j] = all[static_cast<std::size_t>(k)];
-          pairs.emplace_back(p.materials[i].id, p.materials[j].id);
-        }
-      }
-      for (int rep = 0; rep < ph.repetitions; ++rep)
-        for (const auto& [a, b] : pairs)
-          items.push_back({{.phase = ph.kind,
-                            .material = a,
-                            .comparison = b,
-                            .repetition = rep,
-                            .left = "real:" + a,
-                            .right = "real:" + b},
-                           a});
-      items = NoRepeatOrder(std::move(items), plan.empty() ? "" : plan.back().material, constrained,
-                            rng, p, ph);
+      items = NoRepeatOrder(ReferenceItems(ph, ReferencePairs(p, ph, study_rng)), prev0,
+                            constrained, rng, p, ph);
+    } else if (p.randomization.scheme == Scheme::kFull) {
+      items = NoRepeatOrder(MainItems(p, ph), prev0, constrained, rng, p, ph);
     } else {
-      std::vector<Item> all;
-      for (int rep = 0; rep < ph.repetitions; ++rep)
-        for (const auto& m : p.materials)
-          for (const auto& me : p.methods)
-            all.push_back({{.phase = ph.kind,
-                            .material = m.id,
-                            .comparison = "virtual",
-                            .method = me.name,
-                            .repetition = rep,
-                            .left = "real:" + m.id,
-                            .right = "virtual:" + m.id},
-                           m.id});
-      const std::string prev0 = plan.empty() ? "" : plan.back().material;
-      if (p.randomization.scheme == Scheme::kFull) {
-        items = NoRepeatOrder(std::move(all), prev0, constrained, rng, p, ph);
-      } else {
-        // Blocks of the block_by factor; block order shuffled (blocked) or a Williams row.
-        const bool by_method = p.randomization.block_by == "method";
-        std::vector<std::string> blocks;
-        if (by_method)
-          for (const auto& me : p.methods) blocks.push_back(me.name);
-        else
-          for (const auto& m : p.materials) blocks.push_back(m.id);
-        std::vector<int> order(blocks.size());
-        for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-        if (p.randomization.scheme == Scheme::kBlocked)
-          rng.Shuffle(order);
-        else
-          order = WilliamsRow(static_cast<int>(blocks.size()), participant_index);
-        std::string prev = prev0;
-        std::vector<std::size_t> starts;  // positions in `items` where a block begins
-        // Each block's items in their order, grouped in one pass (names are unique).
-        std::unordered_map<std::string, std::size_t> block_of;
-        for (std::size_t i = 0; i < blocks.size(); ++i) block_of.emplace(blocks[i], i);
-        std::vector<std::vector<Item>> grouped(blocks.size());
-        for (auto& it : all)
-          grouped[block_of.at(by_method ? it.trial.method : it.trial.material)].push_back(
-              std::move(it));
-        for (int b : order) {
-          auto& block = grouped[static_cast<std::size_t>(b)];
-          auto ordered = NoRepeatOrder(std::move(block), prev, constrained, rng, p, ph);
-          if (!ordered.empty()) {
-            prev = ordered.back().key;
-            starts.push_back(items.size());
-          }
-          items.insert(items.end(), ordered.begin(), ordered.end());
-        }
-        in_blocks.resize(plan.size(), false);
-        block_start.resize(plan.size(), false);
-        in_blocks.resize(plan.size() + items.size(), true);
-        block_start.resize(plan.size() + items.size(), false);
-        for (auto s : starts) block_start[plan.size() + s] = true;
-      }
+      std::vector<std::size_t> starts;
+      items = BlockedOrder(p, ph, MainItems(p, ph), prev0, participant_index, rng, starts);
+      in_blocks.resize(plan.size(), false);
+      block_start.resize(plan.size(), false);
+      in_blocks.resize(plan.size() + items.size(), true);
+      block_start.resize(plan.size() + items.size(), false);
+      for (auto s : starts) block_start[plan.size() + s] = true;
     }
     BalanceSides(items, p.randomization.balance_sides, rng);
     for (auto& it : items) plan.push_back(it.trial);
   }
   in_blocks.resize(plan.size(), false);
   block_start.resize(plan.size(), false);
-  // A break before every `every_trials`-th rated trial; in a blocked phase it waits for the
-  // next block boundary (the count restarts at each break). Without blocks this is a break
-  // before rated trial every_trials, 2 every_trials, ... as always.
-  int rated = 0, since_break = 0;
-  for (std::size_t i = 0; i < plan.size(); ++i) {
-    plan[i].index = static_cast<int>(i);
-    if (!plan[i].rated) continue;
-    const bool may_break = !in_blocks[i] || block_start[i];
-    if (p.break_every_trials > 0 && rated > 0 && since_break >= p.break_every_trials && may_break) {
-      plan[i].break_before = true;
-      since_break = 0;
-    }
-    ++rated;
-    ++since_break;
-  }
+  MarkBreaks(p, plan, in_blocks, block_start);
   return plan;
 }
 

@@ -10,9 +10,9 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/psychophysics/quest_plus.hpp"
-#include "hapticlab/psychophysics/simulated_observer.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
 #include "hapticlab/runner/audit.hpp"
+#include "hapticlab/sim/psychophysical_observer.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 #include "stimulus_side.hpp"
 
@@ -315,7 +315,7 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
       }
       // The answer: the participant at the window when there is one (it showed the engine's
       // stylus frames of every interval), else the simulated observer.
-      psychophysics::ObserverAnswer ans;
+      sim::ObserverAnswer ans;
       double response_time_s = 0;
       if (opt.ui) {
         const auto asked = std::chrono::steady_clock::now();
@@ -329,7 +329,7 @@ AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
         ans.positive = m == 1 ? *choice == 0 : *choice == comparison;
         ans.response = m == 1 ? (*choice == 0 ? 1 : 0) : *choice;
       } else {
-        ans = psychophysics::SimulatedAnswer(*a.simulated_observer, a.task, x, comparison, rng);
+        ans = sim::SimulatedAnswer(*a.simulated_observer, a.task, x, comparison, rng);
         response_time_s = sim::Observer::ResponseTime(rng);
       }
       database.CompleteTrial(

@@ -3,7 +3,7 @@
 // evaluation, 2 sweeps) whose printed loss is the weighted squared miss of its printed table,
 // whose search never worsens the loss, and whose observer file lands next to the targets file
 // and loads in a protocol. (The shipped calibration against the dissertation's tables:
-// CalibratedObserver in tests/runner/calibration_test.cpp.)
+// CalibratedObserver in tests/design/calibration_test.cpp.)
 
 #include <gtest/gtest.h>
 

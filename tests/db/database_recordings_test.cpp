@@ -7,13 +7,12 @@
 namespace hapticlab::db {
 namespace {
 
-TEST(Database, StoresModelsMeasurementsEventsAndChunks) {
+TEST(Database, StoresModelsEventsAndChunks) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
   const auto a = db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 1\n");
   EXPECT_EQ(db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 1\n"), a);  // same hash
   EXPECT_NE(db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 2\n"), a);
-  EXPECT_GT(db.SaveMeasurement("Cork", "t_s\n0\n", "{}"), 0);
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});

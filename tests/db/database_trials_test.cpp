@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
@@ -14,8 +15,8 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
   const auto ids =
-      db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
-                    {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
+      AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
+                     {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);

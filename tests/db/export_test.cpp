@@ -5,6 +5,7 @@
 #include <cmath>
 #include <map>
 
+#include "add_trials.hpp"
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
@@ -20,19 +21,19 @@ TEST(Export, TablesRoundTripThroughCsv) {
   const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
   const auto se = db.StartSession({.participant_id = p});
   // Plan indices 4 and 7 (plan numbers 5 and 8), unlike the rows' ids 1 and 2.
-  const auto ids = db.AddTrials({{.session_id = se,
-                                  .plan_index = 4,
-                                  .phase = "main",
-                                  .material = "Denim",
-                                  .comparison = "virtual",
-                                  .method = "hybrid",
-                                  .left = "real",
-                                  .right = "virtual"},
-                                 {.session_id = se,
-                                  .plan_index = 7,
-                                  .phase = "reference",
-                                  .material = "Cork",
-                                  .comparison = "Velvet"}});
+  const auto ids = AddTrials(db, {{.session_id = se,
+                                   .plan_index = 4,
+                                   .phase = "main",
+                                   .material = "Denim",
+                                   .comparison = "virtual",
+                                   .method = "hybrid",
+                                   .left = "real",
+                                   .right = "virtual"},
+                                  {.session_id = se,
+                                   .plan_index = 7,
+                                   .phase = "reference",
+                                   .material = "Cork",
+                                   .comparison = "Velvet"}});
   db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
   db.LogEvent(
       {.session_id = se, .trial_id = ids[1], .kind = "break", .detail = "after \"block\" 1"});
@@ -91,8 +92,8 @@ TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
   const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
   const auto se = db.StartSession({.participant_id = p});
   const auto ids =
-      db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
-                    {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
+      AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
+                     {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
   db.StartTrial(ids[0]);  // attempt 1: interrupted after one chunk
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",

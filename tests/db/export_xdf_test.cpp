@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
@@ -148,7 +149,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                        .left = (k == 1 ? "virtual:" : "real:") + m,
                        .right = (k == 1 ? "real:" : "virtual:") + m});
   }
-  const auto ids = d.AddTrials(planned);
+  const auto ids = AddTrials(d, planned);
   auto ramp = [](std::size_t n, float base) {
     std::vector<float> v;
     for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);

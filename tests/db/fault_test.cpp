@@ -17,6 +17,7 @@
 #include <random>
 #include <thread>
 
+#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
@@ -98,7 +99,7 @@ std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n, int fi
   std::vector<Trial> t;
   for (int i = first_index; i < first_index + n; ++i)
     t.push_back({.session_id = session, .plan_index = i, .phase = "main", .material = "m"});
-  return db.AddTrials(t);
+  return AddTrials(db, t);
 }
 
 // Runs every trial not yet completed, in plan order, until all are (the resume).

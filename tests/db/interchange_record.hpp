@@ -20,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "add_trials.hpp"
 #include "hapticlab/db/database.hpp"
 
 namespace hapticlab::db::test_record {
@@ -36,28 +37,28 @@ inline Ids Fill(Database& d) {
   const auto st = d.CreateStudy({.name = "Two Words", .protocol_toml = "# p", .seed = 1});
   const auto p = d.AddParticipant({.study_id = st, .code = "P-01"});
   const auto se = d.StartSession({.participant_id = p});
-  const auto ids = d.AddTrials({{.session_id = se,
-                                 .plan_index = 0,
-                                 .phase = "main",
-                                 .material = "Cork",
-                                 .comparison = "virtual",
-                                 .method = "FF",
-                                 .left = "real:Cork",
-                                 .right = "virtual:Cork"},
-                                {.session_id = se,
-                                 .plan_index = 1,
-                                 .phase = "main",
-                                 .material = "Denim",
-                                 .comparison = "virtual",
-                                 .method = "FF",
-                                 .left = "virtual:Denim",
-                                 .right = "real:Denim"},
-                                {.session_id = se,
-                                 .plan_index = 2,
-                                 .phase = "main",
-                                 .material = "Towel",
-                                 .comparison = "virtual",
-                                 .method = "FF"}});
+  const auto ids = AddTrials(d, {{.session_id = se,
+                                  .plan_index = 0,
+                                  .phase = "main",
+                                  .material = "Cork",
+                                  .comparison = "virtual",
+                                  .method = "FF",
+                                  .left = "real:Cork",
+                                  .right = "virtual:Cork"},
+                                 {.session_id = se,
+                                  .plan_index = 1,
+                                  .phase = "main",
+                                  .material = "Denim",
+                                  .comparison = "virtual",
+                                  .method = "FF",
+                                  .left = "virtual:Denim",
+                                  .right = "real:Denim"},
+                                 {.session_id = se,
+                                  .plan_index = 2,
+                                  .phase = "main",
+                                  .material = "Towel",
+                                  .comparison = "virtual",
+                                  .method = "FF"}});
   Ids out{ids[0], ids[1], ids[2]};
   d.StartTrial(out.a);
   d.InsertTrajectoryChunk({.trial_id = out.a,

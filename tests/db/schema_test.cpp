@@ -77,6 +77,22 @@ TEST(Schema, EveryForeignKeyReferencesAPrimaryOrUniqueKey) {
   EXPECT_GE(keys, 5);  // trial -> session -> participant -> study, rating -> trial, ...
 }
 
+// Migration 9 removes the measurement table (no production writer): a version-8 file has it,
+// the migrated file does not, and a fresh file never gets it.
+TEST(Schema, TheMeasurementTableIsGoneAfterMigration9) {
+  test::TempDir dir;
+  const auto path = dir.File("old.db");
+  const std::string kTables =
+      "SELECT name FROM sqlite_master WHERE type='table' AND name='measurement'";
+  { Database old(path, {.migrate_to = 8}); }
+  EXPECT_EQ(Query(path, kTables), std::vector<std::string>{"measurement"});
+  { Database db(path); }
+  EXPECT_EQ(Query(path, kTables), std::vector<std::string>{});
+  const auto fresh = dir.File("new.db");
+  { Database db(fresh); }
+  EXPECT_EQ(Query(fresh, kTables), std::vector<std::string>{});
+}
+
 // Migrations rewrite rows (attempt numbers, rating sources, events): after each one, SQLite's
 // own checks find no dangling foreign key and an intact file.
 TEST(Schema, MigratedFilesPassSqlitesForeignKeyAndIntegrityChecks) {

@@ -20,10 +20,10 @@
 #include <vector>
 
 #include "cli_child.hpp"
-#include "cli_fuzz_seeds.hpp"
 #include "cli_pool.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "mutate.hpp"
+#include "seeds.hpp"
 
 namespace hapticlab::fuzz {
 namespace {

@@ -10,32 +10,19 @@
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <filesystem>
 #include <random>
 #include <string>
 #include <vector>
 
-#include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "mutate.hpp"
+#include "seeds.hpp"
 #include "targets.hpp"
 
 namespace hapticlab::fuzz {
 namespace {
 
-namespace fs = std::filesystem;
-
 using Target = int (*)(std::string_view, const std::string&);
-
-std::vector<std::string> Corpus(const std::string& reader) {
-  std::vector<std::string> out;
-  const fs::path dir = fs::path(HL_SOURCE_DIR) / "tests/fuzz/corpus" / reader;
-  std::vector<fs::path> files;
-  for (const auto& e : fs::directory_iterator(dir)) files.push_back(e.path());
-  std::sort(files.begin(), files.end());  // a fixed order: the same mutants every run
-  for (const auto& f : files) out.push_back(test::ReadFile(f.string()));
-  return out;
-}
 
 int Runs(int fallback) {
   const char* env = std::getenv("HL_FUZZ_RUNS");
@@ -60,40 +47,16 @@ void Fuzz(Target target, const std::vector<std::string>& corpus, int runs, std::
 }
 
 // Budgets (mutants per reader) keep the whole suite to about 20-40 s under ASan at -O0.
-TEST(Fuzz, Protocol) { Fuzz(&Protocol, Corpus("protocol"), Runs(1500), 1); }
-TEST(Fuzz, Material) { Fuzz(&Material, Corpus("material"), Runs(1500), 2); }
-TEST(Fuzz, Csv) { Fuzz(&Csv, Corpus("csv"), Runs(3000), 3); }
-TEST(Fuzz, MeasurementCsv) { Fuzz(&MeasurementCsv, Corpus("measurement"), Runs(3000), 4); }
-TEST(Fuzz, PennXml) { Fuzz(&PennXml, Corpus("penn"), Runs(1500), 5); }
+TEST(Fuzz, Protocol) { Fuzz(&Protocol, CorpusFiles("protocol"), Runs(1500), 1); }
+TEST(Fuzz, Material) { Fuzz(&Material, CorpusFiles("material"), Runs(1500), 2); }
+TEST(Fuzz, Csv) { Fuzz(&Csv, CorpusFiles("csv"), Runs(3000), 3); }
+TEST(Fuzz, MeasurementCsv) { Fuzz(&MeasurementCsv, CorpusFiles("measurement"), Runs(3000), 4); }
+TEST(Fuzz, PennXml) { Fuzz(&PennXml, CorpusFiles("penn"), Runs(1500), 5); }
 
 TEST(Fuzz, StudyDatabase) {
   // The seed is a small study record built here (a binary file is not kept in the corpus).
   test::TempDir dir;
-  const std::string path = dir.File("seed.db");
-  {
-    db::Database d(path);
-    const auto st =
-        d.CreateStudy({.name = "f", .protocol_toml = "[study]\nname = \"f\"\n", .seed = 1});
-    const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
-    const auto se = d.StartSession({.participant_id = p});
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
-    d.StartTrial(t);
-    d.InsertTrajectoryChunk({.trial_id = t,
-                             .stream = "force",
-                             .rate_hz = 1000,
-                             .channels = {"a", "b"},
-                             .samples = {1, 2, 3, 4},
-                             .attempt = 1});
-    d.CompleteTrial(t, {{"overall", 50, 1}},
-                    {{.trial_id = t,
-                      .attempt = 1,
-                      .stream = "force",
-                      .rate_hz = 1000,
-                      .samples_offered = 2,
-                      .samples_written = 2}});
-    d.Exec("PRAGMA journal_mode = DELETE");  // one self-contained file
-  }
-  Fuzz(&StudyDatabase, {test::ReadFile(path)}, Runs(300), 6);
+  Fuzz(&StudyDatabase, {StudyDatabaseSeed(dir.path())}, Runs(300), 6);
 }
 
 }  // namespace

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/sim/psychophysical_observer.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {
@@ -81,7 +81,7 @@ TEST(QuestPlus, ReplayReproducesTheIncrementalState) {
       .shape = Shape::kWeibull, .threshold = 0.2, .slope = 3, .lapse = 0.02};
   for (int i = 0; i < 20; ++i) {
     const double x = q.NextStimulus();
-    const bool r = SimulatedAnswer(o, Task::k2Afc, x, 0, rng).positive;
+    const bool r = sim::SimulatedAnswer(o, Task::k2Afc, x, 0, rng).positive;
     q.Update(q.StimulusIndex(x), r);
     h.emplace_back(x, r);
   }
@@ -112,7 +112,7 @@ TEST(QuestPlus, PosteriorConcentratesOnTheTrueParameters) {
     Rng rng(DeriveSeed(11, static_cast<std::uint64_t>(s)));
     for (int i = 0; i < kTrials; ++i) {
       const std::size_t j = q.NextStimulusIndex();
-      q.Update(j, SimulatedAnswer(o, Task::k2Afc, c.stimuli[j], 0, rng).positive);
+      q.Update(j, sim::SimulatedAnswer(o, Task::k2Afc, c.stimuli[j], 0, rng).positive);
     }
     const auto m = q.ThresholdMarginal();
     double below = 0;  // posterior mass strictly below the true grid value

@@ -6,7 +6,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
-#include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/sim/psychophysical_observer.hpp"
 
 namespace hapticlab::psychophysics {
 namespace {
@@ -89,7 +89,8 @@ TEST(Staircase, InterleavedTracksAreChosenReproduciblyAndRunIndependently) {
     for (;;) {
       const auto n = NextTrial(c, h, seed);
       if (n.done) break;
-      h.push_back({n.track, n.level, SimulatedAnswer(o, Task::k2Afc, n.level, 0, rng).positive});
+      h.push_back(
+          {n.track, n.level, sim::SimulatedAnswer(o, Task::k2Afc, n.level, 0, rng).positive});
     }
     return h;
   };
@@ -145,7 +146,8 @@ TEST(Staircase, OneUpTwoDownConvergesOnThe707PercentPoint) {
     for (;;) {
       const auto n = NextTrial(c, h, 0);
       if (n.done) break;
-      h.push_back({n.track, n.level, SimulatedAnswer(o, Task::k2Afc, n.level, 0, rng).positive});
+      h.push_back(
+          {n.track, n.level, sim::SimulatedAnswer(o, Task::k2Afc, n.level, 0, rng).positive});
     }
     const double e = TrackEstimate(c, ReplayStaircase(c, h)[0]);
     sum += e;

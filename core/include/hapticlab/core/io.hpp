@@ -32,7 +32,4 @@ inline constexpr int kTomlMaxNesting = 32;             ///< nested arrays and in
 /// when a limit is exceeded. Text that is not valid TOML is left for toml++ to report.
 void CheckTomlLimits(std::string_view text, const std::string& file);
 
-/// ReadTextFile, then CheckTomlLimits: the text of a TOML file safe to hand to toml++.
-std::string ReadTomlFile(const std::string& path, const std::string& what = "file");
-
 }  // namespace hapticlab

@@ -12,7 +12,7 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 8;
+inline constexpr int kSchemaVersion = 9;
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -207,8 +207,6 @@ class Database {
 
   // Trials and ratings.
   std::int64_t AddTrial(const Trial& t);
-  /// Adds many trials in one transaction (a session's plan). Returns their ids.
-  std::vector<std::int64_t> AddTrials(const std::vector<Trial>& trials);
   /// Marks a trial running and counts the attempt. Returns the attempt number (1-based);
   /// trajectory streams opened for the trial from now on are tagged with it.
   int StartTrial(std::int64_t trial_id);
@@ -232,12 +230,10 @@ class Database {
   /// Rated trials of a session in the order their ratings were committed.
   std::vector<std::int64_t> RatedTrialsInCompletionOrder(std::int64_t session_id) const;
 
-  // Events, models, measurements, trajectories.
+  // Events, models, trajectories.
   std::int64_t LogEvent(const Event& e);
   std::vector<Event> Events(std::int64_t session_id) const;
   std::int64_t SaveMaterialModel(const std::string& name, const std::string& toml_text);
-  std::int64_t SaveMeasurement(const std::string& material, const std::string& csv_text,
-                               const std::string& metadata_json);
   void InsertTrajectoryChunk(const TrajectoryChunk& c);
   /// Chunks of the trial's completing attempt when it is completed, else of its current
   /// attempt (possibly partial). Chunks of other attempts are never mixed in.

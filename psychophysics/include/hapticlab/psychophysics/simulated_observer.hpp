@@ -1,13 +1,10 @@
 #pragma once
-/// @file A simulated observer with a known psychometric function on the varied parameter:
-/// the ground truth that makes the adaptive path (staircase, QUEST+, fit, report) testable.
-/// In an m-AFC trial it picks the comparison's interval with probability
-/// psi(x) = 1/m + (1 - 1/m - lapse) F(x; threshold, slope), otherwise one of the other
-/// intervals at random; in yes/no it says "yes" with psi(x) = fa + (1 - fa - lapse) F(x).
-/// x is the stimulus variable of the phase (comparison - reference, or the level itself in
-/// detection; docs/psychophysics.md).
+/// @file The parameters of a simulated observer with a known psychometric function on the
+/// varied parameter, as a protocol's adaptive phase declares them. The observer that answers
+/// with them is sim::SimulatedAnswer (sim/psychophysical_observer.hpp): simulation lives in
+/// sim/, above the rig's ground truth; the parameters stay here because protocols (below sim)
+/// hold them.
 
-#include "hapticlab/core/rng.hpp"
 #include "hapticlab/psychophysics/psychometric.hpp"
 
 namespace hapticlab::psychophysics {
@@ -19,17 +16,5 @@ struct SimulatedObserverParams {
   double lapse = 0;        ///< lambda (dimensionless)
   double false_alarm = 0;  ///< yes/no guess rate (dimensionless)
 };
-
-struct ObserverAnswer {
-  int response = 0;       ///< m-AFC: chosen interval (0-based); yes/no: 1 yes, 0 no
-  bool positive = false;  ///< correct (m-AFC) or yes (yes/no)
-};
-
-/// The probability of a positive answer at x.
-double PositiveProbability(const SimulatedObserverParams& o, Task task, double x);
-
-/// One answer. `comparison_interval` is where the comparison was (m-AFC; ignored in yes/no).
-ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x,
-                               int comparison_interval, Rng& rng);
 
 }  // namespace hapticlab::psychophysics

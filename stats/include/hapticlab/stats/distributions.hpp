@@ -29,8 +29,8 @@ double PnormUpper(double z);
 /// doi:10.1080/00949658808811068 use Gauss-Legendre too]. The outer integrand has two
 /// scales (the chi density's, ~1/sqrt(2ν), and the range distribution's, ~1/q); its
 /// panels are centred on its peak and sized by its curvature there, so large q with small
-/// ν (issue #24: k = 10, ν = 7, q = 27.7407) keeps full accuracy. The smaller of the two
-/// tails is integrated directly and the other is its complement. Checked against
+/// ν (k = 10, ν = 7, q = 27.7407, tests/stats/distributions_test.cpp) keeps full accuracy. The
+/// smaller of the two tails is integrated directly and the other is its complement. Checked against
 /// extended- and 113-bit-precision quadrature (tests/data/stats/tukey_reference.csv): 1e-8
 /// relative or better on both tails over k = 2..20, ν = 2..1000 and ∞, upper tails down to
 /// 1e-15 (R's ptukey is off by up to 3e-4 at ν = 2 and floors near 1e-12 in upper tails).

@@ -1,4 +1,4 @@
-#include "hapticlab/runner/power_pool.hpp"
+#include "hapticlab/design/power_pool.hpp"
 
 #include <fmt/format.h>
 #include <unistd.h>
@@ -15,7 +15,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/participant_code.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 
 namespace fs = std::filesystem;
 
@@ -81,13 +81,13 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
   auto work = [&] {
     for (int i; (i = next.fetch_add(1)) < pool_size;) {
       try {
-        RunOptions o;
+        runner::RunOptions o;
         o.db_path = (tmp / fmt::format("pool{}.db", i)).string();
         o.participant = protocols::FormatCode(codes, first_index + i + 1);
         o.participant_index = first_index + i;
-        o.record = RecordMode::kNone;
+        o.record = runner::RecordMode::kNone;
         auto& out = pool.participants[static_cast<std::size_t>(i)];
-        o.on_felt = [&out](const FeltTrial& t) {
+        o.on_felt = [&out](const runner::FeltTrial& t) {
           // A re-run trial (fault) replaces its earlier attempt.
           for (auto& x : out)
             if (x.plan_index == t.plan_index) {
@@ -96,7 +96,7 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
             }
           out.push_back(t);
         };
-        const auto s = RunStudy(p, o);
+        const auto s = runner::RunStudy(p, o);
         if (s.status != "completed")
           throw std::runtime_error(fmt::format("pool participant {} did not complete", i));
         if (log) {
@@ -160,4 +160,4 @@ stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams
   return t;
 }
 
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design

@@ -25,10 +25,10 @@
 #include <string>
 #include <vector>
 
-#include "hapticlab/runner/power_pool.hpp"
+#include "hapticlab/design/power_pool.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 
 struct CalibrationTarget {
   std::string protocol, statistic, criterion, effect, method;
@@ -76,4 +76,4 @@ double EvaluateCalibration(const CalibrationState& state, const CalibrationSpec&
                            const sim::ObserverParams& observer, std::vector<CalibrationRow>* rows,
                            int threads = 2);
 
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design

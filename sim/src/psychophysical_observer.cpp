@@ -1,12 +1,15 @@
-#include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/sim/psychophysical_observer.hpp"
 
-namespace hapticlab::psychophysics {
+namespace hapticlab::sim {
 
-double PositiveProbability(const SimulatedObserverParams& o, Task task, double x) {
-  return Psi(o.shape, x, {o.threshold, o.slope, GuessRate(task, o.false_alarm), o.lapse});
+using psychophysics::Task;
+
+double PositiveProbability(const psychophysics::SimulatedObserverParams& o, Task task, double x) {
+  return psychophysics::Psi(
+      o.shape, x, {o.threshold, o.slope, psychophysics::GuessRate(task, o.false_alarm), o.lapse});
 }
 
-ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, double x,
+ObserverAnswer SimulatedAnswer(const psychophysics::SimulatedObserverParams& o, Task task, double x,
                                int comparison_interval, Rng& rng) {
   ObserverAnswer a;
   a.positive = rng.Uniform() < PositiveProbability(o, task, x);
@@ -14,7 +17,7 @@ ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, doub
     a.response = a.positive ? 1 : 0;
     return a;
   }
-  const int m = Intervals(task);
+  const int m = psychophysics::Intervals(task);
   if (a.positive) {
     a.response = comparison_interval;
   } else {
@@ -25,4 +28,4 @@ ObserverAnswer SimulatedAnswer(const SimulatedObserverParams& o, Task task, doub
   return a;
 }
 
-}  // namespace hapticlab::psychophysics
+}  // namespace hapticlab::sim

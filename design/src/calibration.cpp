@@ -1,4 +1,4 @@
-#include "hapticlab/runner/calibration.hpp"
+#include "hapticlab/design/calibration.hpp"
 
 #include <fmt/format.h>
 #include <toml++/toml.h>
@@ -16,7 +16,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/stats/power.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 namespace {
 
 namespace fs = std::filesystem;
@@ -115,14 +115,15 @@ bool IsScaleParam(const std::string& name) {
          name == "scale_stiffness" || name == "scale_pattern";
 }
 
-CalibrationSpec LoadCalibration(const std::string& path) {
-  const toml::table doc = ParseTomlFile(path, "calibration targets file");
-  Diagnostics d;
-  CalibrationSpec s;
-  s.path = path;
-  const fs::path dir = fs::path(path).parent_path();
-  auto str = [&](const toml::table& t, const std::string& pre, const char* key,
-                 bool required) -> std::string {
+namespace {
+
+// Typed reads of the targets file that record every problem (file, line, key) in `d`.
+struct SpecReader {
+  const std::string& path;
+  Diagnostics& d;
+
+  std::string Str(const toml::table& t, const std::string& pre, const char* key,
+                  bool required) const {
     const toml::node* n = t.get(key);
     if (!n) {
       if (required) d.Add(path, Line(&t), pre + "." + key, "missing; expected a string");
@@ -131,9 +132,9 @@ CalibrationSpec LoadCalibration(const std::string& path) {
     if (auto v = n->value<std::string>()) return *v;
     d.Add(path, Line(n), pre + "." + key, "expected a string");
     return "";
-  };
-  auto num = [&](const toml::table& t, const std::string& pre, const char* key, double lo,
-                 double hi, bool required, double def) -> double {
+  }
+  double Num(const toml::table& t, const std::string& pre, const char* key, double lo, double hi,
+             bool required, double def) const {
     const toml::node* n = t.get(key);
     if (!n) {
       if (required)
@@ -147,99 +148,124 @@ CalibrationSpec LoadCalibration(const std::string& path) {
       return def;
     }
     return *v;
-  };
-  auto known = [&](const toml::table& t, const std::string& pre,
-                   std::initializer_list<const char*> keys) {
+  }
+  void Known(const toml::table& t, const std::string& pre,
+             std::initializer_list<const char*> keys) const {
     for (const auto& [k, v] : t)
       if (std::find(keys.begin(), keys.end(), k.str()) == keys.end())
         d.Add(path, Line(&v), pre + "." + std::string(k.str()), "unknown key (a typo?)");
-  };
-  known(doc, "", {"fit", "protocol", "param", "target"});
-  if (const toml::table* f = doc["fit"].as_table()) {
-    known(*f, "fit", {"seed", "simulations", "pool", "sweeps", "observer", "start"});
-    s.seed = static_cast<std::uint64_t>(num(*f, "fit", "seed", 0, 9.0e15, false, 1));
-    s.simulations = static_cast<int>(num(*f, "fit", "simulations", 1, 100000, false, 16));
-    s.pool = static_cast<int>(num(*f, "fit", "pool", 1, 200, false, 6));
-    s.sweeps = static_cast<int>(num(*f, "fit", "sweeps", 0, 1000, false, 10));
-    s.observer_out = (dir / str(*f, "fit", "observer", true)).string();
-    const std::string start = str(*f, "fit", "start", false);
-    s.start = start.empty() ? "" : (dir / start).string();
-  } else {
-    d.Add(path, 1, "fit", "missing [fit] table");
   }
-  auto tables = [&](const char* name) {
-    std::vector<std::pair<const toml::table*, std::string>> out;
-    if (const toml::array* a = doc[name].as_array())
-      for (std::size_t i = 0; i < a->size(); ++i)
-        if (const toml::table* t = (*a)[i].as_table())
-          out.emplace_back(t, fmt::format("{}[{}]", name, i));
-    return out;
-  };
-  for (const auto& [t, pre] : tables("protocol")) {
-    known(*t, pre, {"id", "file", "participants"});
-    CalibrationProtocol p;
-    p.id = str(*t, pre, "id", true);
-    p.file = (dir / str(*t, pre, "file", true)).string();
-    p.participants = static_cast<int>(num(*t, pre, "participants", 2, 1000, true, 15));
-    s.protocols.push_back(p);
+};
+
+// The tables of array `name` with their key prefixes ("param[2]").
+std::vector<std::pair<const toml::table*, std::string>> Tables(const toml::table& doc,
+                                                               const char* name) {
+  std::vector<std::pair<const toml::table*, std::string>> out;
+  if (const toml::array* a = doc[name].as_array())
+    for (std::size_t i = 0; i < a->size(); ++i)
+      if (const toml::table* t = (*a)[i].as_table())
+        out.emplace_back(t, fmt::format("{}[{}]", name, i));
+  return out;
+}
+
+void ReadFit(const SpecReader& r, const toml::table& doc, const fs::path& dir, CalibrationSpec& s) {
+  const toml::table* f = doc["fit"].as_table();
+  if (!f) {
+    r.d.Add(r.path, 1, "fit", "missing [fit] table");
+    return;
   }
-  if (s.protocols.empty()) d.Add(path, 1, "protocol", "no [[protocol]] tables");
+  r.Known(*f, "fit", {"seed", "simulations", "pool", "sweeps", "observer", "start"});
+  s.seed = static_cast<std::uint64_t>(r.Num(*f, "fit", "seed", 0, 9.0e15, false, 1));
+  s.simulations = static_cast<int>(r.Num(*f, "fit", "simulations", 1, 100000, false, 16));
+  s.pool = static_cast<int>(r.Num(*f, "fit", "pool", 1, 200, false, 6));
+  s.sweeps = static_cast<int>(r.Num(*f, "fit", "sweeps", 0, 1000, false, 10));
+  s.observer_out = (dir / r.Str(*f, "fit", "observer", true)).string();
+  const std::string start = r.Str(*f, "fit", "start", false);
+  s.start = start.empty() ? "" : (dir / start).string();
+}
+
+CalibrationParam ReadParam(const SpecReader& r, const toml::table& t, const std::string& pre) {
   static const char* const kFields[] = {"sensitivity", "offset_sd", "material_sd", "method_sd",
                                         "noise_sd"};
-  for (const auto& [t, pre] : tables("param")) {
-    known(*t, pre, {"name", "lo", "hi", "step"});
-    CalibrationParam p;
-    p.name = str(*t, pre, "name", true);
-    const auto dot = p.name.find('.');
-    const bool scale = IsScaleParam(p.name);
-    const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" ||
-                    p.name == "lapse_rate" || scale ||
-                    (dot != std::string::npos && dot > 0 &&
-                     std::any_of(std::begin(kFields), std::end(kFields),
-                                 [&](const char* f) { return p.name.substr(dot + 1) == f; }));
-    if (!p.name.empty() && !ok)
-      d.Add(path, Line(t->get("name")), pre + ".name",
+  r.Known(t, pre, {"name", "lo", "hi", "step"});
+  CalibrationParam p;
+  p.name = r.Str(t, pre, "name", true);
+  const auto dot = p.name.find('.');
+  const bool scale = IsScaleParam(p.name);
+  const bool ok = p.name == "upper" || p.name == "lower" || p.name == "range_sd" ||
+                  p.name == "lapse_rate" || scale ||
+                  (dot != std::string::npos && dot > 0 &&
+                   std::any_of(std::begin(kFields), std::end(kFields),
+                               [&](const char* f) { return p.name.substr(dot + 1) == f; }));
+  if (!p.name.empty() && !ok)
+    r.d.Add(r.path, Line(t.get("name")), pre + ".name",
             "expected upper, lower, range_sd, lapse_rate, "
             "scale_(vibration|fluctuation|friction|stiffness|pattern) or "
             "CRITERION.(sensitivity|offset_sd|material_sd|method_sd|noise_sd)");
-    // A perceptual scale divides a feature difference: the observer file accepts [0.001, 10].
-    const double lim_lo = scale ? 1e-3 : -1e6, lim_hi = scale ? 10 : 1e6;
-    p.lo = num(*t, pre, "lo", lim_lo, lim_hi, true, 0);
-    p.hi = num(*t, pre, "hi", lim_lo, lim_hi, true, 1);
-    p.step = num(*t, pre, "step", 1e-9, 1e6, true, 0.1);
-    if (!(p.lo < p.hi)) d.Add(path, Line(t), pre + ".hi", "expected hi > lo");
-    s.params.push_back(p);
-  }
-  for (const auto& [t, pre] : tables("target")) {
-    known(*t, pre,
+  // A perceptual scale divides a feature difference: the observer file accepts [0.001, 10].
+  const double lim_lo = scale ? 1e-3 : -1e6, lim_hi = scale ? 10 : 1e6;
+  p.lo = r.Num(t, pre, "lo", lim_lo, lim_hi, true, 0);
+  p.hi = r.Num(t, pre, "hi", lim_lo, lim_hi, true, 1);
+  p.step = r.Num(t, pre, "step", 1e-9, 1e6, true, 0.1);
+  if (!(p.lo < p.hi)) r.d.Add(r.path, Line(&t), pre + ".hi", "expected hi > lo");
+  return p;
+}
+
+CalibrationTarget ReadTarget(const SpecReader& r, const toml::table& t, const std::string& pre,
+                             const std::vector<CalibrationProtocol>& protocols) {
+  r.Known(t, pre,
           {"protocol", "statistic", "criterion", "effect", "method", "value", "weight", "source"});
-    CalibrationTarget g;
-    g.line = Line(t);
-    g.protocol = str(*t, pre, "protocol", true);
-    if (!g.protocol.empty() &&
-        std::none_of(s.protocols.begin(), s.protocols.end(),
-                     [&](const CalibrationProtocol& p) { return p.id == g.protocol; }))
-      d.Add(path, Line(t->get("protocol")), pre + ".protocol",
+  CalibrationTarget g;
+  g.line = Line(&t);
+  g.protocol = r.Str(t, pre, "protocol", true);
+  if (!g.protocol.empty() &&
+      std::none_of(protocols.begin(), protocols.end(),
+                   [&](const CalibrationProtocol& p) { return p.id == g.protocol; }))
+    r.d.Add(r.path, Line(t.get("protocol")), pre + ".protocol",
             "no [[protocol]] with id '" + g.protocol + "'");
-    g.statistic = str(*t, pre, "statistic", true);
-    g.criterion = str(*t, pre, "criterion", true);
-    if (g.statistic == "pes") {
-      g.effect = str(*t, pre, "effect", true);
-      if (!g.effect.empty() && g.effect != "method" && g.effect != "material" &&
-          g.effect != "method:material")
-        d.Add(path, Line(t->get("effect")), pre + ".effect",
+  g.statistic = r.Str(t, pre, "statistic", true);
+  g.criterion = r.Str(t, pre, "criterion", true);
+  if (g.statistic == "pes") {
+    g.effect = r.Str(t, pre, "effect", true);
+    if (!g.effect.empty() && g.effect != "method" && g.effect != "material" &&
+        g.effect != "method:material")
+      r.d.Add(r.path, Line(t.get("effect")), pre + ".effect",
               "expected method, material or method:material");
-    } else if (g.statistic == "method_mean") {
-      g.method = str(*t, pre, "method", true);
-    } else if (!g.statistic.empty() && g.statistic != "sd" && g.statistic != "upper_limit" &&
-               g.statistic != "lower_limit") {
-      d.Add(path, Line(t->get("statistic")), pre + ".statistic",
+  } else if (g.statistic == "method_mean") {
+    g.method = r.Str(t, pre, "method", true);
+  } else if (!g.statistic.empty() && g.statistic != "sd" && g.statistic != "upper_limit" &&
+             g.statistic != "lower_limit") {
+    r.d.Add(r.path, Line(t.get("statistic")), pre + ".statistic",
             "expected pes, method_mean, sd, upper_limit or lower_limit");
-    }
-    g.value = num(*t, pre, "value", -1e6, 1e6, true, 0);
-    g.weight = num(*t, pre, "weight", 0, 1e9, true, 1);
-    s.targets.push_back(g);
   }
+  g.value = r.Num(t, pre, "value", -1e6, 1e6, true, 0);
+  g.weight = r.Num(t, pre, "weight", 0, 1e9, true, 1);
+  return g;
+}
+
+}  // namespace
+
+CalibrationSpec LoadCalibration(const std::string& path) {
+  const toml::table doc = ParseTomlFile(path, "calibration targets file");
+  Diagnostics d;
+  const SpecReader r{path, d};
+  CalibrationSpec s;
+  s.path = path;
+  const fs::path dir = fs::path(path).parent_path();
+  r.Known(doc, "", {"fit", "protocol", "param", "target"});
+  ReadFit(r, doc, dir, s);
+  for (const auto& [t, pre] : Tables(doc, "protocol")) {
+    r.Known(*t, pre, {"id", "file", "participants"});
+    CalibrationProtocol p;
+    p.id = r.Str(*t, pre, "id", true);
+    p.file = (dir / r.Str(*t, pre, "file", true)).string();
+    p.participants = static_cast<int>(r.Num(*t, pre, "participants", 2, 1000, true, 15));
+    s.protocols.push_back(p);
+  }
+  if (s.protocols.empty()) d.Add(path, 1, "protocol", "no [[protocol]] tables");
+  for (const auto& [t, pre] : Tables(doc, "param")) s.params.push_back(ReadParam(r, *t, pre));
+  for (const auto& [t, pre] : Tables(doc, "target"))
+    s.targets.push_back(ReadTarget(r, *t, pre, s.protocols));
   if (s.targets.empty()) d.Add(path, 1, "target", "no [[target]] tables");
   d.ThrowIfAny();
   return s;
@@ -310,4 +336,4 @@ double EvaluateCalibration(const CalibrationState& st, const CalibrationSpec& sp
   return loss;
 }
 
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design

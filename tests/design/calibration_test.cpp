@@ -8,7 +8,7 @@
 // name. CalibrationSpec.* (the targets file's perceptual-scale parameters) is cheap and runs
 // everywhere.
 
-#include "hapticlab/runner/calibration.hpp"
+#include "hapticlab/design/calibration.hpp"
 
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 namespace {
 
 // A targets file with the given [[param]] tables (one protocol, one target).
@@ -101,4 +101,4 @@ TEST(CalibratedObserver, ReproducesTables53To55And41) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design

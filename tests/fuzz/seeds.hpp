@@ -1,7 +1,8 @@
 #pragma once
-// Seeds and fixtures of the command-line fuzz test (cli_fuzz_test.cpp): corpus files, a small
-// study database, photometric images, vibration recordings, and the generated inputs of the
-// findings too large to keep as files (tests/fuzz/README.md).
+// Seeds and fixtures of both fuzz tests (the readers in fuzz_test.cpp, the command line in
+// cli_fuzz_test.cpp): corpus files, a small study database, photometric images, vibration
+// recordings, and the generated inputs of the findings too large to keep as files
+// (tests/fuzz/README.md).
 
 #include <string>
 #include <vector>

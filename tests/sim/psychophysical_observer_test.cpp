@@ -1,4 +1,4 @@
-#include "hapticlab/psychophysics/simulated_observer.hpp"
+#include "hapticlab/sim/psychophysical_observer.hpp"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,12 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/psychophysics/psychometric.hpp"
 
-namespace hapticlab::psychophysics {
+namespace hapticlab::sim {
 namespace {
+
+using psychophysics::Shape;
+using psychophysics::SimulatedObserverParams;
+using psychophysics::Task;
 
 TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
   // 3AFC at the threshold of a Weibull: P(correct) = 1/3 + (2/3 - 0.02)(1 - 1/e); wrong
@@ -31,4 +35,4 @@ TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
 }
 
 }  // namespace
-}  // namespace hapticlab::psychophysics
+}  // namespace hapticlab::sim

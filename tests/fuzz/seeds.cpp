@@ -1,4 +1,4 @@
-#include "cli_fuzz_seeds.hpp"
+#include "seeds.hpp"
 
 #include <algorithm>
 #include <filesystem>

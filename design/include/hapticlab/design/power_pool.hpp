@@ -3,12 +3,12 @@
 ///
 /// Two stages. (1) Physics, through the runner: `RecordFeltPool` runs the protocol's
 /// simulated sessions for a pool of participants (plan indices 0..K-1, each through
-/// RunStudy on the simulated rig: every trial side in RtEngine on a virtual clock) and keeps,
-/// per rated trial, the observer's feature distance per criterion (RunOptions::on_felt).
-/// (2) Ratings: `SimulateRatings` builds a study of any size by drawing each simulated
-/// participant's interactions from the pool (with replacement) and rating them with a fresh
-/// sim::Observer (new offsets, scale range, participant x material and x method effects,
-/// trial noise and lapses) through Observer::RateDistance — the code the runner's observer
+/// runner::RunStudy on the simulated rig: every trial side in RtEngine on a virtual clock) and
+/// keeps, per rated trial, the observer's feature distance per criterion
+/// (runner::RunOptions::on_felt). (2) Ratings: `SimulateRatings` builds a study of any size by
+/// drawing each simulated participant's interactions from the pool (with replacement) and rating
+/// them with a fresh sim::Observer (new offsets, scale range, participant x material and x method
+/// effects, trial noise and lapses) through Observer::RateDistance — the code the runner's observer
 /// uses. The physics is the expensive part (seconds per participant); re-rating costs
 /// microseconds, which is what makes hundreds of simulated studies per second possible.
 
@@ -23,21 +23,21 @@
 #include "hapticlab/sim/sim_lab.hpp"
 #include "hapticlab/stats/long_table.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 
 struct FeltPool {
   std::string protocol;  ///< study name
   std::vector<std::string> criteria;
   double scale_min = 0, scale_max = 100;
   sim::ObserverParams observer;  ///< the protocol's observer (its file or the profiles')
-  std::vector<std::vector<FeltTrial>>
+  std::vector<std::vector<runner::FeltTrial>>
       participants;  ///< rated trials of each pool participant, plan order
 };
 
 /// Runs `pool_size` simulated participants (plan indices first_index..first_index+pool_size-1)
 /// through the runner, each in its own temporary database (removed afterwards), `threads` at a
 /// time.
-/// @throws InputError as RunStudy does
+/// @throws InputError as runner::RunStudy does
 FeltPool RecordFeltPool(const protocols::Protocol& protocol, int pool_size, int threads = 2,
                         const std::function<void(const std::string&)>& log = {},
                         int first_index = 0);
@@ -70,4 +70,4 @@ ObserverModel ChooseObserver(const protocols::Protocol& protocol, const std::str
 stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams& observer,
                                  int participants, Rng& rng, bool main_only);
 
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design

@@ -1,10 +1,10 @@
-// Simulated studies for `study power` (runner/src/power_pool.cpp): the felt pool recorded
+// Simulated studies for `study power` (design/src/power_pool.cpp): the felt pool recorded
 // through the runner (one temporary database per participant, removed afterwards), the
 // protocol's observer, and re-rating the pool into studies of any size: one row per
 // participant, main trial and criterion, ratings on the scale that follow the recorded
 // feature distances, reproducible from the seed.
 
-#include "hapticlab/runner/power_pool.hpp"
+#include "hapticlab/design/power_pool.hpp"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -18,7 +18,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::design {
 namespace {
 
 namespace fs = std::filesystem;
@@ -143,4 +143,4 @@ repetitions = 1
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::design
