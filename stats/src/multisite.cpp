@@ -226,7 +226,7 @@ double PairedTPower(double dz, int n) {
   const auto phi = [](double x) { return 0.5 * std::erfc(-x / std::sqrt(2.0)); };
   // Simpson's rule over v ~ chi-square(df): P(|T| > c | v) with T = (Z + delta) / sqrt(v/df).
   const double hi = df + 14 * std::sqrt(2 * df) + 30;
-  constexpr int kSteps = 4000;
+  constexpr int kSteps = 1000;
   const double h = hi / kSteps;
   double sum = 0;
   for (int i = 0; i <= kSteps; ++i) {
@@ -240,7 +240,7 @@ double PairedTPower(double dz, int n) {
 
 double SmallTelescopeD33(int n) {
   double lo = 0, hi = 5;
-  for (int i = 0; i < 60; ++i) {
+  for (int i = 0; i < 34; ++i) {  // to 3e-10
     const double mid = 0.5 * (lo + hi);
     (PairedTPower(mid, n) < 1.0 / 3 ? lo : hi) = mid;
   }

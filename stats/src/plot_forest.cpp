@@ -30,7 +30,7 @@ void DrawForest(const ForestPlot& f) {
   hi += pad;
   plcol0(15);
   plschr(0, 0.8);
-  plvpor(0.22, 0.95, 0.16, 0.88);
+  plvpor(0.22, 0.95, 0.2, 0.88);
   plwind(lo, hi, 0.4, n + 0.6);
   plbox("bcnst", 0, 0, "bc", 0, 0);
   pllab(f.x_label.c_str(), "", f.title.c_str());
@@ -63,7 +63,7 @@ void DrawForest(const ForestPlot& f) {
   if (!f.note.empty()) {
     plcol0(15);
     plschr(0, 0.65);
-    plmtex("b", 4.6, 1.0, 1.0, f.note.c_str());
+    plmtex("b", 5.6, 1.0, 1.0, f.note.c_str());
     plschr(0, 0.8);
   }
 }

@@ -81,7 +81,9 @@ TEST(MultiSite, LmmWithASiteTermEqualsLme4OnMergedRatings) {
   ExpectRel(fit.pooled.p, c["p"], 1e-3, "contrast p", 1e-6);
   // The site SD is the model's (1 | site) term.
   for (const auto& w : r["random"])
-    if (w["group"] == "site") EXPECT_NEAR(fit.site_sd, w["sdcor"].get<double>(), 1e-3);
+    if (w["group"] == "site") {
+      EXPECT_NEAR(fit.site_sd, w["sdcor"].get<double>(), 1e-3);
+    }
 }
 
 // Per-site effects are the participants' mean differences; the pooled raw means are the means
