@@ -121,5 +121,22 @@ TEST(ReplicationCli, TwoSitesMergeAndTheSiteModelRecoversTheInjectedSiteSd) {
   EXPECT_LT(without.sd, with.sd);
 }
 
+// study power --sites: K x n participants per simulated study, the site offsets named.
+TEST(ReplicationCli, PowerForSitesTimesParticipants) {
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study power " + Small() +
+                                 " --observer builtin --sites 2 --participants-per-site 3"
+                                 " --site-sd 5 --simulations 4 --pool 1 --effect method --quiet",
+                             &out),
+            0)
+      << out;
+  EXPECT_NE(out.find("2 sites x n participants per site"), std::string::npos) << out;
+  EXPECT_NE(out.find("SD 5 rating points"), std::string::npos) << out;
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " study power " + Small() + " --observer builtin --sites 0 --quiet", &out),
+            2)
+      << out;
+}
+
 }  // namespace
 }  // namespace hapticlab
