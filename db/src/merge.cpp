@@ -133,6 +133,8 @@ void CheckPaths(const std::vector<std::string>& inputs, const std::string& outpu
   if (inputs.size() < 2)
     throw InputError("<command line>", 0, "INPUTS", "db merge needs two or more databases");
   std::error_code ec;
+  const fs::path folder = fs::absolute(output).parent_path();
+  if (!fs::is_directory(folder, ec)) throw InputError(output, 0, "-o", "its folder does not exist");
   if (fs::exists(output, ec) || fs::is_symlink(output, ec))
     throw InputError(output, 0, "-o", "already exists; a merge never overwrites a file");
   for (const auto& in : inputs)

@@ -210,6 +210,9 @@ TEST(Merge, ConflictsAreRefusedNamingBothInputsUnlessAllowed) {
   EXPECT_NE(Refusal({a, b}, out, {.allow_different_plans = true}).find("already exists"),
             std::string::npos);
   EXPECT_TRUE(before == Bytes(out));
+  EXPECT_NE(Refusal({a, b}, dir.File("none/o.db"), {.allow_different_plans = true})
+                .find("folder does not exist"),
+            std::string::npos);
 }
 
 // A file of schema v8 (before sites) is migrated forward: its sessions are the local site's.
