@@ -1,20 +1,67 @@
 // hapticlab db: copies of a study database that are safe while a session writes to it.
 
 #include <fmt/core.h>
+#include <fmt/ranges.h>
 
 #include <filesystem>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/db/merge.hpp"
 
 namespace hapticlab::cli {
 
+namespace {
+
+void RegisterDbMerge(CLI::App& group) {
+  struct O {
+    std::vector<std::string> inputs;
+    std::string out;
+    db::MergeOptions options;
+  };
+  auto o = std::make_shared<O>();
+  auto* cmd = group.add_subcommand(
+      "merge",
+      "Combine the study databases of several rigs or sites into a new file: participants get\n"
+      "site-qualified codes (S02:P07), every session keeps its provenance (site, rig hash, plan\n"
+      "hash, software version). Refused (exit 2, naming both inputs): the same file twice, a\n"
+      "participant in two inputs, a code used at two sites, different plans or protocols,\n"
+      "unless the flags below allow them. Older inputs are migrated forward first. Atomic and\n"
+      "deterministic: a killed merge leaves no OUTPUT; the same inputs give the same bytes\n"
+      "(docs/replication.md, \"Combining sites\").");
+  cmd->add_option("INPUTS", o->inputs, "Study databases (two or more)")->required();
+  cmd->add_option("-o,--output", o->out, "New file for the merged database (never overwritten)")
+      ->required();
+  cmd->add_flag("--allow-shared-codes", o->options.allow_shared_codes,
+                "Merge although one participant code is used at two sites");
+  cmd->add_flag("--allow-different-plans", o->options.allow_different_plans,
+                "Merge sessions recorded under different plans (provenance plan_sha256)");
+  cmd->add_flag("--allow-different-protocols", o->options.allow_different_protocols,
+                "Merge a study whose protocol differs between inputs");
+  cmd->callback([o] {
+    RunGuarded([&] {
+      const auto s = db::MergeDatabases(o->inputs, o->out, o->options);
+      fmt::print("{} databases -> {}: sites {}, {} participants, {} sessions, {} ratings\n",
+                 o->inputs.size(), o->out, fmt::join(s.sites, ", "), s.participants, s.sessions,
+                 s.ratings);
+      if (s.reserved_left_out)
+        fmt::print("{} reserved participant codes without a session were not carried over\n",
+                   s.reserved_left_out);
+      return kExitOk;
+    });
+  });
+}
+
+}  // namespace
+
 void RegisterDb(CLI::App& app) {
-  auto* group =
-      app.add_subcommand("db", "Study database files: an online backup (docs/studies.md)");
+  auto* group = app.add_subcommand(
+      "db", "Study database files: an online backup, merging sites (docs/studies.md)");
   group->require_subcommand(1);
   struct O {
     std::string src, dest;
@@ -46,6 +93,7 @@ void RegisterDb(CLI::App& app) {
       return kExitOk;
     });
   });
+  RegisterDbMerge(*group);
 }
 
 }  // namespace hapticlab::cli

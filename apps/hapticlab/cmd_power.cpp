@@ -16,6 +16,7 @@
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/design/power_pool.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/sim/sim_lab.hpp"
 #include "hapticlab/stats/power.hpp"
 
 namespace hapticlab::cli {
@@ -26,7 +27,8 @@ struct PowerArgs {
   std::vector<std::string> merge;
   long simulations = 200;
   std::uint64_t seed = 1;
-  int pool = 6, threads = 2;
+  int pool = 6, threads = 2, sites = 1;
+  double site_sd = 0;
   bool json = false, quiet = false;
 };
 
@@ -66,13 +68,41 @@ void ParseShard(const std::string& s, int* i, int* n) {
     throw InputError(kCommandLine, 0, "--shard", "expected 0 <= i < N in i/N, got '" + s + "'");
 }
 
+// A replication of `sites` sites with `per_site` participants each: every site's ratings come
+// from the observer with the site's offset (drawn N(0, site_sd^2)) added to every rating;
+// participants are site-qualified ("K2:S003") as `db merge` writes them.
+stats::LongTable SiteStudy(const design::FeltPool& pool, const sim::ObserverParams& obs, int sites,
+                           double site_sd, int per_site, Rng& rng) {
+  stats::LongTable all;
+  for (int k = 0; k < sites; ++k) {
+    sim::ObserverParams site = obs;
+    site.site_offset = rng.Normal(0, site_sd);
+    auto t = design::SimulateRatings(pool, site, per_site, rng, true);
+    for (auto& code : t.keys[t.Key("participant")]) code = fmt::format("K{}:{}", k + 1, code);
+    if (k == 0) {
+      all = std::move(t);
+      continue;
+    }
+    for (std::size_t c = 0; c < all.keys.size(); ++c)
+      all.keys[c].insert(all.keys[c].end(), t.keys[c].begin(), t.keys[c].end());
+    all.y.insert(all.y.end(), t.y.begin(), t.y.end());
+  }
+  return all;
+}
+
 void Emit(const stats::PowerResult& r, const PowerArgs& a) {
   const std::string js = stats::PowerToJson(r);
   if (!a.out.empty()) WriteTextFile(a.out, js);
-  if (a.json)
+  if (a.json) {
     fmt::print("{}", js);
-  else
+  } else {
+    if (a.sites > 1 || a.site_sd > 0)
+      fmt::print(
+          "replication: {} sites x n participants per site (the counts below are n), site "
+          "offsets drawn with SD {} rating points\n",
+          a.sites, a.site_sd);
     fmt::print("{}", stats::PowerTable(r));
+  }
   if (!a.plot.empty() && r.shards == 1) {
     const auto files = stats::DrawPowerCurves(r, a.plot);
     if (!a.json) fmt::print("power curves: {}\n", fmt::join(files, ", "));
@@ -94,7 +124,17 @@ void RegisterPower(CLI::App& study) {
       "SHA-256, or \"built-in uncalibrated\"), and without one the command refuses (exit 2).\n"
       "Reproducible from --seed whatever the thread count or sharding.");
   cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml); not with --merge");
-  cmd->add_option("--participants", a->participants, "Participant counts, increasing")
+  cmd->add_option("--participants,--participants-per-site", a->participants,
+                  "Participant counts, increasing (per site with --sites)")
+      ->capture_default_str();
+  cmd->add_option("--sites", a->sites,
+                  "A replication at K sites: each simulated study has K x n participants, each\n"
+                  "site's ratings shifted by its own offset (docs/replication.md)")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  cmd->add_option("--site-sd", a->site_sd,
+                  "SD of the site offsets [rating points] added to the observer's ratings")
+      ->check(CLI::Range(0.0, 50.0))
       ->capture_default_str();
   cmd->add_option("--simulations", a->simulations, "Simulated studies per participant count")
       ->check(CLI::Range(1L, 10000000L))
@@ -164,12 +204,16 @@ void RegisterPower(CLI::App& study) {
           }
         };
       const auto& obs = model.params;
+      const int sites = a->sites;
+      const double site_sd = a->site_sd;
       auto r = stats::SimulatePower(
           p.name,
-          [&pool, &obs](int n, Rng& rng) {
-            return design::SimulateRatings(pool, obs, n, rng, true);
+          [&pool, &obs, sites, site_sd](int n, Rng& rng) {
+            return sites == 1 && site_sd == 0 ? design::SimulateRatings(pool, obs, n, rng, true)
+                                              : SiteStudy(pool, obs, sites, site_sd, n, rng);
           },
           o);
+
       r.observer_file = model.file;
       r.observer_sha256 = model.sha256;
       const double t_all =

@@ -36,7 +36,9 @@ struct RunArgs {
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
   runner::RtThreadOptions rt;
-  std::string consent_by;  ///< --consent-confirmed-by: the experimenter's code
+  std::string consent_by;   ///< --consent-confirmed-by: the experimenter's code
+  std::string site = "L0";  ///< --site (study run)
+  double site_offset = 0;   ///< --site-offset (study run, simulated observer)
   /// study resume: the recorded mode (SessionMode::Describe), for a mode that cannot start
   std::string recorded_mode;
 };
@@ -407,12 +409,23 @@ void RegisterStudy(CLI::App& app) {
     cmd->add_option("--inject-faults", a->fault_rate,
                     "Sim: probability of a device fault per trial")
         ->check(CLI::Range(0.0, 0.9));
+    cmd->add_option("--site", a->site,
+                    "Site code recorded with the session: a short pseudonymous code (up to 8\n"
+                    "characters, e.g. S02; never a lab's name). 'db merge' keeps sites apart\n"
+                    "(docs/replication.md, \"Combining sites\")")
+        ->capture_default_str();
+    cmd->add_option("--site-offset", a->site_offset,
+                    "Simulated observer: add this many rating points to every rating (a site\n"
+                    "effect, for replication examples and tests)")
+        ->check(CLI::Range(-50.0, 50.0));
     cmd->callback([a] {
       RunStudyGuarded([&] {
         const auto p = protocols::LoadProtocol(a->protocol);
         runner::RunOptions o;
         o.participant_index = a->index;
         o.fault_rate = a->fault_rate;
+        o.site = a->site;
+        o.site_offset = a->site_offset;
         return RunSession(*a, p.name, o,
                           [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
       });

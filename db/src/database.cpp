@@ -36,6 +36,11 @@ using internal::Transaction;
 
 bool IsPseudonymousCode(const std::string& code) { return PseudonymousCodeProblem(code).empty(); }
 
+std::string SiteCodeProblem(const std::string& code) {
+  if (code.size() > 8) return "a site code has at most 8 characters";
+  return PseudonymousCodeProblem(code);
+}
+
 Database OpenForReading(const std::string& path) {
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))

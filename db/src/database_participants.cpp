@@ -110,9 +110,15 @@ std::vector<Participant> Database::Participants(std::int64_t study_id) const {
 }
 
 std::int64_t Database::StartSession(const Session& se) {
+  if (const std::string why = SiteCodeProblem(se.site_code); !why.empty())
+    throw InputError("<command line>", 0, "site",
+                     "'" + se.site_code + "' is not a site code (" + why +
+                         "): use up to 8 letters, digits, '-' or '_' with a digit and no more "
+                         "than 3 letters in a row (e.g. S02); never a lab's or a town's name");
   Stmt s(db_,
          "INSERT INTO session(participant_id, status, software_version, device, calibration, "
-         "provenance_json, plan_json, actuator, screens, rater) VALUES (?,?,?,?,?,?,?,?,?,?)");
+         "provenance_json, plan_json, actuator, screens, rater, site_code) "
+         "VALUES (?,?,?,?,?,?,?,?,?,?,?)");
   s.Bind(1, se.participant_id)
       .Bind(2, se.status)
       .Bind(3, se.software_version)
@@ -123,6 +129,7 @@ std::int64_t Database::StartSession(const Session& se) {
       .Bind(8, se.actuator)
       .Bind(9, static_cast<std::int64_t>(se.screens))
       .Bind(10, se.rater)
+      .Bind(11, se.site_code)
       .Run();
   return sqlite3_last_insert_rowid(db_);
 }
@@ -147,7 +154,8 @@ void Database::EndSession(std::int64_t session_id, const std::string& status) {
 std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
   Stmt s(db_,
          "SELECT id, participant_id, started_at, coalesce(ended_at,''), status, software_version, "
-         "device, calibration, provenance_json, plan_json, actuator, screens, rater FROM session "
+         "device, calibration, provenance_json, plan_json, actuator, screens, rater, site_code "
+         "FROM session "
          "WHERE participant_id=? "
          "ORDER BY id");
   s.Bind(1, participant_id);
@@ -167,6 +175,7 @@ std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
     x.actuator = s.Text(10);
     x.screens = s.Int(11) != 0;
     x.rater = s.Text(12);
+    x.site_code = s.Text(13);
     out.push_back(std::move(x));
   }
   return out;

@@ -240,6 +240,12 @@ ALTER TABLE study ADD COLUMN protocol_canonical_sha256 TEXT NOT NULL DEFAULT '';
     R"sql(
 DROP TABLE IF EXISTS measurement;
 )sql",
+    // v10: the site that recorded each session (a short pseudonymous code, checked like a
+    // participant code; docs/replication.md "Combining sites"). Older sessions were recorded
+    // at the local site: they get the default code 'L0' (kDefaultSiteCode).
+    R"sql(
+ALTER TABLE session ADD COLUMN site_code TEXT NOT NULL DEFAULT 'L0';
+)sql",
 };
 
 static_assert(sizeof(kMigrations) / sizeof(kMigrations[0]) == kSchemaVersion,

@@ -168,7 +168,16 @@ int StopRequested() noexcept { return g_stop_signal.load(); }
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
   internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
-  const Lab lab = LoadLab(p, opt.device);
+  if (const std::string why = db::SiteCodeProblem(opt.site); !why.empty())
+    throw InputError("<command line>", 0, "--site",
+                     "'" + opt.site + "' is not a site code (" + why +
+                         "): up to 8 letters, digits, '-' or '_' with a digit, e.g. S02");
+  if (opt.site_offset != 0 && PersonTakesPart(opt))
+    throw InputError("<command line>", 0, "--site-offset",
+                     "a site offset is added to the simulated observer's ratings; a person rates "
+                     "this session");
+  Lab lab = LoadLab(p, opt.device);
+  lab.profiles.observer.site_offset = opt.site_offset;
   // Consent as it happened: "not applicable" when no person takes part, else confirmed by an
   // experimenter on the command line (checked here, before anything is written) or in the
   // console, which asks below once the database accepts this participant.
@@ -205,7 +214,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   json models = json::object();
   for (const auto& [id, h] : lab.model_hashes) models[id] = h;
   const json plan_json = PlanToJson(plan);
-  const json prov = {
+  json prov = {
       {"protocol_hash", hash},
       {"protocol_canonical_sha256", ProtocolIdentity(p)},
       // Relative to the database's folder (an absolute path would carry a user name).
@@ -224,6 +233,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       : json{{"description", "generic simulated rig"}}},
       {"model_hashes", models},
       {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
+  if (opt.site_offset != 0) prov["observer_site_offset"] = opt.site_offset;
   if (ask_console) consent = ObtainConsent(p, opt, opt.participant);
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
   database.Exec("BEGIN IMMEDIATE");
@@ -241,7 +251,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
          .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
          .actuator = mode.actuator,
          .screens = mode.screens,
-         .rater = mode.rater});
+         .rater = mode.rater,
+         .site_code = opt.site});
     std::vector<db::Trial> rows;
     for (const auto& t : plan)
       rows.push_back({.session_id = session,
@@ -309,7 +320,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     const SessionMode now = ModeOf(opt);
     const bool differs =
         CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
-    const Lab lab = LoadLab(p, opt.device);
+    Lab lab = LoadLab(p, opt.device);
+    lab.profiles.observer.site_offset = prov.value("observer_site_offset", 0.0);
     // A person takes part now but no experimenter confirmed consent yet (a simulated session
     // resumed with screens, or one recorded before schema v7), or a code is given again:
     // confirmed (or refused) before anything of this resume is written.

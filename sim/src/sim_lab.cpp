@@ -340,7 +340,7 @@ double Observer::RateDistance(const std::string& c, const std::string& material,
   // Both draws always happen, so a lapse does not shift the rest of the trial's stream.
   const double lapse = noise.Uniform(), e = noise.Normal(0, co.noise_sd), any = noise.Uniform();
   if (lapse < p_.lapse_rate) return lo + (hi - lo) * any;
-  const double s = mid + range_ * (latent - mid) + offset +
+  const double s = mid + range_ * (latent - mid) + offset + p_.site_offset +
                    Effect("material", c, material, co.material_sd) +
                    Effect("method", c, method, co.method_sd) + e;
   return std::clamp(s, lo, hi);

@@ -349,6 +349,25 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     c.p = PtTwoSided(c.t, c.df);
     r.fixed.push_back(c);
   }
+  for (const auto& con : options.contrasts) {
+    VectorXd l = VectorXd::Zero(p);
+    for (const auto& [name, w] : con.weights) {
+      const auto at = std::find(d.x_names.begin(), d.x_names.end(), name);
+      if (at == d.x_names.end())
+        throw InputError(data.source, 0, "formula",
+                         "contrast '" + con.name + "' names no coefficient '" + name + "'");
+      l[at - d.x_names.begin()] += w;
+    }
+    LmmCoefficient c;
+    c.name = con.name;
+    c.estimate = l.dot(sol.beta);
+    const double var = l.dot(C * l);
+    c.se = std::sqrt(var);
+    c.t = c.estimate / c.se;
+    c.df = df_of(l, var);
+    c.p = PtTwoSided(c.t, c.df);
+    r.contrasts.push_back(c);
+  }
   // Type 3 F tests: with sum-to-zero contrasts and every cell observed, the hypothesis of a
   // term is that its coefficients are zero (L selects them), as lmerTest's type 3 contrasts.
   for (const auto& term : d.x_terms) {

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <stdexcept>
 #include <tuple>
@@ -385,6 +386,10 @@ std::vector<std::string> DrawLinePlot(const LinePlot& l, const std::string& base
 std::vector<std::string> DrawBoxPlot(const BoxPlot& b, const std::string& base) {
   HL_REQUIRE(b.groups.size() == b.samples.size() && !b.groups.empty(), "box plot without data");
   return Both(base, [&](double) { DrawBoxes(b); });
+}
+
+std::vector<std::string> DrawFigure(const std::string& base, const std::function<void()>& draw) {
+  return Both(base, [&](double) { draw(); });
 }
 
 std::vector<std::string> DrawQqPlot(const QqPlot& q, const std::string& base) {

@@ -90,6 +90,7 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
     md << "\n" << TimingMethodsSentence(d, st.id);
     // Adaptive phases (staircase, QUEST+): psychometric fits, JND and Weber fraction.
     md << AdaptiveReport(db_path, st.name, st.protocol_toml, o.out_dir, o.figures, &w.files_);
+    md << MultiSiteSection(d, st.id, proto, study, w, o.figures);  // docs/replication.md
     if (study.Where({{"phase", "main"}}).rows() + study.Where({{"phase", "reference"}}).rows() == 0)
       continue;
     const auto main = study.Where({{"phase", "main"}});

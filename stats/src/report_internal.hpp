@@ -15,6 +15,10 @@
 #include "hapticlab/stats/long_table.hpp"
 #include "hapticlab/stats/plot.hpp"
 
+namespace hapticlab::db {
+class Database;
+}
+
 namespace hapticlab::stats::report_internal {
 
 namespace fs = std::filesystem;
@@ -76,5 +80,11 @@ inline constexpr double kStakeLow = 0.01, kStakeHigh = 0.10;
 void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
                        const RmAnovaResult& a, Correction correction, bool figures,
                        const std::string& title);
+
+/// The "Sites" section of a study (multisite_report.cpp): "" unless its sessions come from two
+/// or more sites.
+std::string MultiSiteSection(const db::Database& d, std::int64_t study_id,
+                             const protocols::Protocol& proto, const LongTable& study, Writer& w,
+                             bool figures);
 
 }  // namespace hapticlab::stats::report_internal

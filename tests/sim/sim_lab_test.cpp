@@ -50,6 +50,25 @@ TEST(Observer, RandomEffectsHaveTheirSds) {
   EXPECT_NEAR(SdOfDifference(p, "Denim", "Cork", "LPC", "LPC"), 0, 1e-12);
 }
 
+// A site offset (study run --site-offset, study power --site-sd) moves every rating of the
+// observer by exactly that many points, the same draws otherwise; clamped at the scale's ends.
+TEST(Observer, SiteOffsetShiftsEveryRating) {
+  auto p = ObserverParams{};
+  auto shifted = p;
+  shifted.site_offset = 6.5;
+  const Observer a(p, 77, {"roughness"}), b(shifted, 77, {"roughness"});
+  for (double d : {0.0, 0.7, 2.0}) {
+    Rng r1(9), r2(9);
+    EXPECT_NEAR(b.RateDistance("roughness", "Denim", "FF", d, -1e6, 1e6, r2) -
+                    a.RateDistance("roughness", "Denim", "FF", d, -1e6, 1e6, r1),
+                6.5, 1e-9);
+  }
+  shifted.site_offset = 500;
+  const Observer c(shifted, 77, {"roughness"});
+  Rng r3(9);
+  EXPECT_EQ(c.RateDistance("roughness", "Denim", "FF", 0.5, 0, 100, r3), 100);
+}
+
 TEST(Observer, ScaleRangeOffsetNoiseAndLapses) {
   auto p = Quiet();
   p.range_sd = 0.3;

@@ -12,7 +12,10 @@ struct sqlite3;
 namespace hapticlab::db {
 
 /// Latest schema version this build writes. Older files are migrated forward on open.
-inline constexpr int kSchemaVersion = 9;
+inline constexpr int kSchemaVersion = 10;
+
+/// Site code of a session recorded without `--site` (and of every session before schema v10).
+inline constexpr const char* kDefaultSiteCode = "L0";
 
 /// A study: one protocol, its text and hash, and the study seed.
 struct Study {
@@ -55,6 +58,8 @@ struct Session {
   bool screens = false;  ///< participant window and console (--ui)
   std::string rater = kRaterSimulated;  ///< who rates: "simulated" or the participant's input
                                         ///< device ("window", "rating-box:VID:PID")
+  /// The site that recorded it (schema v9): a short pseudonymous code (IsSiteCode).
+  std::string site_code = kDefaultSiteCode;
 };
 
 /// Trial status values.
@@ -146,6 +151,10 @@ class TrajectoryIncomplete : public std::runtime_error {
 /// True when `code` is a pseudonymous participant code (core/participant_code.hpp: 1-32
 /// letters, digits, '-' or '_' with a digit, no name-, date-, phone- or e-mail-like shape).
 bool IsPseudonymousCode(const std::string& code);
+
+/// Empty when `code` is a site code: a pseudonymous code (IsPseudonymousCode) of at most 8
+/// characters (e.g. "L0", "S02"; never a lab's or a town's name); else why it is not.
+std::string SiteCodeProblem(const std::string& code);
 
 /// Options for opening a database.
 struct OpenOptions {

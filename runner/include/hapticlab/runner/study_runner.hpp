@@ -233,6 +233,13 @@ struct RunOptions {
   /// Needed when a person takes part (PersonTakesPart) unless the UI asks
   /// (SessionUi::ConfirmConsent); refused for a simulated session. runner/audit.hpp.
   std::string consent_confirmed_by;
+  /// The site recording the session (`--site`; schema v9): a short pseudonymous code
+  /// (db::SiteCodeProblem); "L0" is the local default.
+  std::string site = "L0";
+  /// Simulated observer: rating points added to every rating of the session, a site effect
+  /// (`--site-offset`, tests and replication examples; recorded in the provenance and kept by
+  /// `study resume`). Refused with a person rating.
+  double site_offset = 0;
 };
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.

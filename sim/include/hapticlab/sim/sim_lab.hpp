@@ -69,7 +69,10 @@ struct ObserverParams {
   double upper = 78, lower = 35;  ///< dissertation's real-real limits
   double range_sd =
       0;  ///< log-SD of a participant's scale range (x exp(N(0, sd)) about the midpoint)
-  double lapse_rate = 0;       ///< probability that a rating is uniform on the scale
+  double lapse_rate = 0;  ///< probability that a rating is uniform on the scale
+  /// Rating points added to every rating: the recording site's effect (`study run
+  /// --site-offset`, `study power --site-sd`; never read from an observer file).
+  double site_offset = 0;
   CriterionObserver defaults;  ///< every criterion not in `criteria`
   std::map<std::string, CriterionObserver> criteria;
   // Perceptual scales: a feature difference of one scale is one unit of distance d.
@@ -151,10 +154,11 @@ class FeatureAccumulator {
 
 /// A simulated participant. Rating on criterion c of a trial (material m, method k):
 ///   s0 = L + (U - L) exp(-(g_c d_c)^2 / 2)                 latent similarity
-///   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e       mid = scale midpoint
+///   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + a + e   mid = scale midpoint
 /// with r = exp(N(0, range_sd)) the participant's scale range, o_c, u_cm, v_ck the
 /// participant's offset, participant x material and participant x method effects (drawn
-/// from the participant's seed, reproducibly per name) and e the trial noise; with
+/// from the participant's seed, reproducibly per name), a the site's offset
+/// (ObserverParams::site_offset) and e the trial noise; with
 /// probability lapse_rate the rating is uniform on the scale instead. Clamped to the scale.
 /// The per-rating draws come from the caller's generator (seeded per trial and attempt, so a
 /// re-run trial after a crash is rated reproducibly).

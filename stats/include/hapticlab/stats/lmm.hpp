@@ -30,6 +30,7 @@
 /// factors; R names a grouping factor that appears twice `g.1` (VarCorr), and so do we.
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hapticlab/core/solver_summary.hpp"
@@ -62,12 +63,21 @@ LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source
 /// Kenward-Roger works on dense n x n matrices: larger data sets are refused.
 constexpr long kKenwardRogerMaxRows = 3000;
 
+/// A linear combination of the fixed-effect coefficients (by name), tested as lmerTest's
+/// contest1D: estimate l'β, its SE and Satterthwaite df.
+struct LmmContrast {
+  std::string name;
+  std::vector<std::pair<std::string, double>> weights;  ///< coefficient name, weight
+};
+
 struct LmmOptions {
   bool reml = true;
   int max_evaluations = 20000;  ///< of the profiled deviance, by the optimizer
   /// Kenward-Roger instead of Satterthwaite df (pbkrtest's adjusted cov(β̂) for the SEs and
   /// the scaled F, as lmerTest's ddf = "Kenward-Roger"); REML fits only, n ≤ kKenwardRogerMaxRows.
   bool kenward_roger = false;
+  /// Contrasts to estimate (Satterthwaite fits only; results in LmmResult::contrasts).
+  std::vector<LmmContrast> contrasts;
 };
 
 struct LmmCoefficient {
@@ -96,14 +106,15 @@ struct LmmRandomTerm {
 struct LmmResult : SolverSummary {
   std::string formula;
   bool reml = true;
-  int n = 0;                          ///< observations
-  std::string ddf;                    ///< "Satterthwaite" or "Kenward-Roger"
-  std::vector<LmmCoefficient> fixed;  ///< t tests with `ddf` df (KR: adjusted SEs)
-  std::vector<LmmFTest> anova;        ///< type 3, `ddf` df (KR: scaled F)
-  std::vector<LmmRandomTerm> random;  ///< in lme4's order (most levels first)
-  std::vector<double> theta;          ///< lme4's θ (lower triangles, column-major)
-  double sigma = 0;                   ///< residual SD
-  double deviance = 0;                ///< the optimised criterion: REML criterion or ML deviance
+  int n = 0;                              ///< observations
+  std::string ddf;                        ///< "Satterthwaite" or "Kenward-Roger"
+  std::vector<LmmCoefficient> fixed;      ///< t tests with `ddf` df (KR: adjusted SEs)
+  std::vector<LmmFTest> anova;            ///< type 3, `ddf` df (KR: scaled F)
+  std::vector<LmmCoefficient> contrasts;  ///< LmmOptions::contrasts, in their order
+  std::vector<LmmRandomTerm> random;      ///< in lme4's order (most levels first)
+  std::vector<double> theta;              ///< lme4's θ (lower triangles, column-major)
+  double sigma = 0;                       ///< residual SD
+  double deviance = 0;  ///< the optimised criterion: REML criterion or ML deviance
   double logLik = 0, AIC = 0, BIC = 0;
   int n_parameters = 0;  ///< β, θ and σ (lme4's df of logLik)
   // Convergence diagnostics.

@@ -6,6 +6,7 @@
 /// line art with shading. Legends sit outside the data area, to the right.
 
 #include <cmath>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -75,5 +76,25 @@ struct QqPlot {
 };
 /// `<base>.svg` and `<base>.png`. @throws PreconditionError with fewer than 3 values.
 std::vector<std::string> DrawQqPlot(const QqPlot& plot, const std::string& base);
+
+/// A figure drawn by `draw` with PLplot calls (the palette's colours 1-8, black 15) on the
+/// house page: `<base>.svg` and `<base>.png` (300 dpi), as the figures above.
+std::vector<std::string> DrawFigure(const std::string& base, const std::function<void()>& draw);
+
+/// A forest plot (plot_forest.cpp): one row per estimate with its interval, top to bottom;
+/// pooled rows as diamonds (colour 2), the others as squares (colour 1); vertical reference
+/// lines (e.g. no effect, the original study's effect).
+struct ForestPlot {
+  std::string title, x_label, note;
+  struct Row {
+    std::string label;
+    double estimate = 0, low = 0, high = 0;  ///< NaN interval: the point only
+    bool pooled = false;
+  };
+  std::vector<Row> rows;
+  std::vector<std::pair<double, std::string>> vlines;  ///< x value, label
+};
+/// `<base>.svg` and `<base>.png`. @throws PreconditionError without rows.
+std::vector<std::string> DrawForestPlot(const ForestPlot& plot, const std::string& base);
 
 }  // namespace hapticlab::stats
