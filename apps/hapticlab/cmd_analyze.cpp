@@ -55,8 +55,8 @@ void RegisterAnalyze(CLI::App& app) {
                               .include_simulated = o->include_simulated,
                               .correction = o->correction};
       if (!o->plan.empty()) {  // verified before anything is written
-        auto plan = std::make_shared<replication::Plan>(
-            replication::OpenPlanForRun(o->plan, "").plan);
+        auto plan =
+            std::make_shared<replication::Plan>(replication::OpenPlanForRun(o->plan, "").plan);
         const replication::AnalyzeSettings settings{o->correction, o->include_simulated};
         ro.study_section = [plan, settings](const db::Database& d, const db::Study& st) {
           return replication::DeviationsSection(*plan, d, st, settings);

@@ -396,7 +396,8 @@ void RegisterStudy(CLI::App& app) {
         "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
         "with\n"
         "'study resume'; 2 bad input; 1 any other failure.");
-    cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml); with --plan: instead of the plan's");
+    cmd->add_option("PROTOCOL", a->protocol,
+                    "Study protocol (.toml); with --plan: instead of the plan's");
     cmd->add_option("--plan", a->plan,
                     "Preregistered plan (study freeze) or imported site directory (study import):\n"
                     "verified, its protocol run, its hash recorded (docs/replication.md)");

@@ -4,6 +4,7 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -70,8 +71,10 @@ void RegisterFreeze(CLI::App& study) {
   cmd->add_flag("--no-power", a->no_power, "Write the plan without a power analysis");
   cmd->add_option("--observer", a->o.observer,
                   "Observer model of the power analysis, as 'study power --observer'");
-  cmd->add_option("--power-participants", a->participants, "Participant counts of the power "
-                  "analysis")->capture_default_str();
+  cmd->add_option("--power-participants", a->participants,
+                  "Participant counts of the power "
+                  "analysis")
+      ->capture_default_str();
   cmd->add_option("--power-simulations", a->o.power_simulations, "Simulated studies per count")
       ->check(CLI::Range(1L, 1000000L))
       ->capture_default_str();
@@ -93,8 +96,7 @@ void RegisterFreeze(CLI::App& study) {
                  a->o.power_participants = Counts(a->participants);
                  a->o.exclusions.clear();
                  if (a->exclusions != "none") a->o.exclusions = stats::SplitList(a->exclusions);
-                 const auto hash =
-                     replication::FreezePlan(a->protocol, a->o, StderrLog(a->quiet));
+                 const auto hash = replication::FreezePlan(a->protocol, a->o, StderrLog(a->quiet));
                  fmt::print("plan {} written to {}\n", hash, a->o.out_dir);
                  return kExitOk;
                });
@@ -124,8 +126,8 @@ void RegisterVerify(CLI::App& study) {
       } else if (v.ok()) {
         fmt::print("{}: ok — plan {}, {} files\n", a->dir, v.plan_hash, v.files);
       } else {
-        fmt::print(stderr, "{}: the plan does not verify ({} problems)\n{}", a->dir,
-                   v.problems.size(), v.Describe());
+        fmt::print(stderr, "{}: the plan does not verify ({} problem{})\n{}", a->dir,
+                   v.problems.size(), v.problems.size() == 1 ? "" : "s", v.Describe());
       }
       return v.ok() ? kExitOk : kExitBadInput;
     });
@@ -184,13 +186,14 @@ void RegisterImport(CLI::App& study) {
         a->o.substitutes[s.substr(0, eq)] = s.substr(eq + 1);
       }
       const auto r = replication::ImportBundle(a->bundle, a->o);
-      fmt::print("site {}: plan {} ({} files) imported into {}; substituted: {}\n"
-                 "next: fill in {}/rig.toml (hapticlab rig init / rig touch / rig calibrate), "
-                 "then hapticlab study run --plan {} ...\n",
-                 a->o.site, r.plan_hash, r.files, a->o.out_dir,
-                 r.substituted.empty() ? std::string("none")
-                                       : fmt::format("{}", fmt::join(r.substituted, ", ")),
-                 a->o.out_dir, a->o.out_dir);
+      fmt::print(
+          "site {}: plan {} ({} files) imported into {}; substituted: {}\n"
+          "next: fill in {} (hapticlab rig init / rig touch / rig calibrate), "
+          "then hapticlab study run --plan {} ...\n",
+          a->o.site, r.plan_hash, r.files, a->o.out_dir,
+          r.substituted.empty() ? std::string("none")
+                                : fmt::format("{}", fmt::join(r.substituted, ", ")),
+          (std::filesystem::path(a->o.out_dir) / "rig.toml").string(), a->o.out_dir);
       return kExitOk;
     });
   });

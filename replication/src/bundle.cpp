@@ -1,6 +1,8 @@
 // Replication bundles: a plan as one reproducible tar.gz, written and read with libarchive
 // (replication/bundle.hpp).
 
+#include "hapticlab/replication/bundle.hpp"
+
 #include <archive.h>
 #include <archive_entry.h>
 #include <fmt/format.h>
@@ -9,7 +11,6 @@
 #include <memory>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/replication/bundle.hpp"
 #include "plan_internal.hpp"
 
 namespace hapticlab::replication {
@@ -56,8 +57,8 @@ void WriteArchive(const std::map<std::string, std::string>& files, const std::st
       archive_entry_set_uid(e.get(), 0);
       archive_entry_set_gid(e.get(), 0);
       check(archive_write_header(a.get(), e.get()));
-      if (!bytes.empty() &&
-          archive_write_data(a.get(), bytes.data(), bytes.size()) != static_cast<la_ssize_t>(bytes.size()))
+      if (!bytes.empty() && archive_write_data(a.get(), bytes.data(), bytes.size()) !=
+                                static_cast<la_ssize_t>(bytes.size()))
         check(ARCHIVE_FATAL);
     }
     check(archive_write_close(a.get()));
@@ -89,8 +90,9 @@ std::map<std::string, std::string> ReadArchive(const std::string& path) {
     const std::string entry = name ? name : "";
     if (archive_entry_filetype(e) == AE_IFDIR) continue;
     if (archive_entry_filetype(e) != AE_IFREG)
-      throw InputError(path, 0, entry, "a bundle holds regular files only (this is a link or "
-                                       "a device)");
+      throw InputError(path, 0, entry,
+                       "a bundle holds regular files only (this is a link or "
+                       "a device)");
     if (!SafeRelativePath(entry))
       throw InputError(path, 0, entry,
                        "unsafe path (absolute, '..', or empty part): a bundle's files stay "
@@ -111,7 +113,8 @@ std::map<std::string, std::string> ReadArchive(const std::string& path) {
     total += bytes.size();
     files.emplace(entry, std::move(bytes));
   }
-  if (r != ARCHIVE_EOF) throw not_bundle("damaged after " + std::to_string(files.size()) + " files");
+  if (r != ARCHIVE_EOF)
+    throw not_bundle("damaged after " + std::to_string(files.size()) + " files");
   return files;
 }
 

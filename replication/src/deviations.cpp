@@ -38,9 +38,9 @@ std::vector<std::pair<std::string, json>> SessionsOf(const db::Database& d, cons
 // Sessions without the plan or under another one; models that differ or were substituted.
 void SessionDeviations(const Plan& plan, const db::Database& d, const db::Study& st,
                        std::vector<Deviation>* out) {
-  std::map<std::string, std::vector<std::string>> other_plan;        // hash -> participants
-  std::map<std::string, std::vector<std::string>> substituted;       // text -> participants
-  std::map<std::string, std::vector<std::string>> changed_model;     // text -> participants
+  std::map<std::string, std::vector<std::string>> other_plan;     // hash -> participants
+  std::map<std::string, std::vector<std::string>> substituted;    // text -> participants
+  std::map<std::string, std::vector<std::string>> changed_model;  // text -> participants
   std::map<std::string, std::string> planned;
   for (const auto& m : plan.analysis.models) planned[m.material] = m.sha256;
   for (const auto& [code, prov] : SessionsOf(d, st)) {
@@ -69,10 +69,10 @@ void SessionDeviations(const Plan& plan, const db::Database& d, const db::Study&
     return fmt::format("{} session(s): {}", codes.size(), fmt::join(codes, ", "));
   };
   for (const auto& [h, codes] : other_plan)
-    out->push_back({"session not under the plan",
-                    (h.empty() ? std::string("recorded without a plan")
-                               : "recorded under plan " + Short(h)) +
-                        " — " + who(codes)});
+    out->push_back(
+        {"session not under the plan",
+         (h.empty() ? std::string("recorded without a plan") : "recorded under plan " + Short(h)) +
+             " — " + who(codes)});
   for (const auto& [text, codes] : substituted)
     out->push_back({"material substituted", text + " — " + who(codes)});
   for (const auto& [text, codes] : changed_model)
@@ -105,9 +105,9 @@ void ExclusionDeviations(const Plan& plan, const db::Database& d, const db::Stud
     out->push_back(
         {"exclusion not in the plan",
          fmt::format("rule {} left out {} simulated ratings{}", kRuleSimulatedRatings, simulated,
-                     whole.empty() ? std::string()
-                                   : fmt::format("; participants excluded: {}",
-                                                 fmt::join(whole, ", ")))});
+                     whole.empty()
+                         ? std::string()
+                         : fmt::format("; participants excluded: {}", fmt::join(whole, ", ")))});
   if (s.include_simulated && planned)
     out->push_back({"exclusion rule not applied",
                     fmt::format("the plan's rule {} was not applied (--include-simulated): {} "
@@ -157,10 +157,10 @@ std::string DeviationsSection(const Plan& plan, const db::Database& d, const db:
           : "");
   md += fmt::format("- Preregistered analyses (in the plan): {}\n",
                     pre.empty() ? std::string("none") : fmt::format("{}", fmt::join(pre, ", ")));
-  md += fmt::format("- Exploratory analyses (not in the plan; read their results as "
-                    "exploratory): {}\n",
-                    exploratory.empty() ? std::string("none")
-                                        : fmt::format("{}", fmt::join(exploratory, ", ")));
+  md += fmt::format(
+      "- Exploratory analyses (not in the plan; read their results as "
+      "exploratory): {}\n",
+      exploratory.empty() ? std::string("none") : fmt::format("{}", fmt::join(exploratory, ", ")));
   std::size_t sessions = 0, under = 0;
   for (const auto& [code, prov] : SessionsOf(d, st)) {
     ++sessions;

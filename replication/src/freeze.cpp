@@ -55,7 +55,6 @@ std::string QuoteList(const std::vector<std::string>& v) {
   return "[" + fmt::format("{}", fmt::join(q, ", ")) + "]";
 }
 
-
 namespace fs = std::filesystem;
 using Files = std::map<std::string, std::string>;
 
@@ -86,11 +85,10 @@ PowerSummary RunPower(const protocols::Protocol& p, const FreezeOptions& o,
   PowerSummary s;
   // Named by its path inside the plan (a path outside it would carry a user's folder).
   std::error_code ec;
-  s.observer = model.file.empty()
-                   ? std::string("built-in uncalibrated")
-                   : fs::weakly_canonical(model.file, ec)
-                         .lexically_relative(fs::weakly_canonical(plan_dir, ec))
-                         .generic_string();
+  s.observer = model.file.empty() ? std::string("built-in uncalibrated")
+                                  : fs::weakly_canonical(model.file, ec)
+                                        .lexically_relative(fs::weakly_canonical(plan_dir, ec))
+                                        .generic_string();
   s.observer_sha256 = model.sha256;
   r.observer_file = model.file.empty() ? "" : s.observer;
   r.observer_sha256 = model.sha256;
@@ -144,8 +142,8 @@ void CheckOptions(const protocols::Protocol& p, const FreezeOptions& o, std::str
   *criterion = o.primary_criterion;
   if (criterion->empty())
     *criterion = std::count(p.criteria.begin(), p.criteria.end(), "overall") ? "overall"
-                 : p.criteria.empty()                                       ? ""
-                                                                            : p.criteria.front();
+                 : p.criteria.empty()                                        ? ""
+                                                                             : p.criteria.front();
   if (std::find(p.criteria.begin(), p.criteria.end(), *criterion) == p.criteria.end())
     d.Add(kCommandLine, 0, "primary_criterion",
           fmt::format("expected one of the protocol's criteria ({}), got '{}'",
@@ -180,6 +178,14 @@ std::string FreezePlan(const std::string& protocol_path, const FreezeOptions& o,
   const fs::path tmp = out.parent_path() / (out.filename().string() + ".freezing");
   std::error_code ec;
   fs::remove_all(tmp, ec);
+  struct RemoveUnlessKept {  // however the freeze fails, no partial plan stays behind
+    fs::path dir;
+    bool keep = false;
+    ~RemoveUnlessKept() {
+      std::error_code e;
+      if (!keep) fs::remove_all(dir, e);
+    }
+  } guard{tmp};
   internal::WriteTree(tmp.string(), files);
   // The copy must load and give every model the same hash: it is what sites will run.
   const auto copy = protocols::LoadProtocol((tmp / protocol_file).string());
@@ -214,6 +220,7 @@ std::string FreezePlan(const std::string& protocol_path, const FreezeOptions& o,
   internal::WriteTree(tmp.string(), files);
   fs::remove(out, ec);  // an empty directory, checked above
   fs::rename(tmp, out);
+  guard.keep = true;
   return plan_hash;
 }
 

@@ -17,8 +17,7 @@ namespace internal {
 namespace fs = std::filesystem;
 
 bool SafeRelativePath(const std::string& path) {
-  if (path.empty() || path.size() > 4096 || path.front() == '/' || path.back() == '/')
-    return false;
+  if (path.empty() || path.size() > 4096 || path.front() == '/' || path.back() == '/') return false;
   for (const char c : path)
     if (static_cast<unsigned char>(c) < 0x20 || c == '\\' || c == 0x7f) return false;
   std::size_t start = 0;
@@ -59,7 +58,8 @@ std::map<std::string, std::string> ReadTree(const std::string& dir,
     auto text = ReadTextFile(it->path().string(), "plan file", kMaxPlanBytes);
     bytes += text.size();
     if (bytes > kMaxPlanBytes)
-      throw InputError(dir, 0, "", fmt::format("more than {} MiB: not a plan", kMaxPlanBytes >> 20));
+      throw InputError(dir, 0, "",
+                       fmt::format("more than {} MiB: not a plan", kMaxPlanBytes >> 20));
     files.emplace(rel, std::move(text));
   }
   if (ec) throw std::runtime_error(dir + ": cannot list the plan directory (" + ec.message() + ")");

@@ -111,9 +111,9 @@ std::vector<ModelText> ModelsOf(const protocols::Protocol& p) {
       if (!profiles) profiles = sim::LoadProfiles((dir / p.profiles).string());
       const auto it = profiles->profiles.find(m.profile);
       if (it == profiles->profiles.end())
-        throw InputError(p.file, m.line, "material.profile",
-                         "material '" + m.id + "': no profile '" + m.profile + "' in " +
-                             p.profiles);
+        throw InputError(
+            p.file, m.line, "material.profile",
+            "material '" + m.id + "': no profile '" + m.profile + "' in " + p.profiles);
       t.text = renderer::MaterialToToml(sim::PlaceholderModel(it->second));
       t.source = "placeholder built from profile '" + m.profile + "' of protocol/" +
                  Inside(".", p.profiles);

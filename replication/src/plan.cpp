@@ -1,5 +1,7 @@
 // Reading a plan back: verified files, then the analysis plan.
 
+#include "hapticlab/replication/plan.hpp"
+
 #include <fmt/format.h>
 
 #include <filesystem>
@@ -7,7 +9,6 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/toml_util.hpp"
-#include "hapticlab/replication/plan.hpp"
 #include "plan_internal.hpp"
 
 namespace hapticlab::replication {
@@ -107,8 +108,7 @@ Plan ReadPlan(const std::string& dir) {
   const auto v = VerifyPlan(dir);
   if (!v.ok()) {
     Diagnostics d;
-    for (const auto& p : v.problems)
-      d.Add((fs::path(dir) / p.path).string(), 0, p.kind, p.detail);
+    for (const auto& p : v.problems) d.Add((fs::path(dir) / p.path).string(), 0, p.kind, p.detail);
     d.ThrowIfAny();
   }
   Plan p;

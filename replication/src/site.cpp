@@ -39,8 +39,8 @@ std::map<std::string, std::pair<std::string, std::string>> Substitutes(const Ana
     try {
       const auto model = renderer::LoadMaterial(path);
       const auto doc = ParseTomlFile(path, "model");
-      const bool self_contained = model.neural_file.empty() && !doc["geometry"]["file"] &&
-                                  !doc["vibration"]["file"];
+      const bool self_contained =
+          model.neural_file.empty() && !doc["geometry"]["file"] && !doc["vibration"]["file"];
       if (!self_contained)
         d.Add(path, 0, "substitute",
               "a substituted model is copied into the site directory alone: give a model whose "
@@ -55,8 +55,7 @@ std::map<std::string, std::pair<std::string, std::string>> Substitutes(const Ana
   return out;
 }
 
-std::string SiteText(const ImportOptions& o, const std::string& plan_hash,
-                     const AnalysisPlan& plan,
+std::string SiteText(const ImportOptions& o, const std::string& plan_hash, const AnalysisPlan& plan,
                      const std::map<std::string, std::pair<std::string, std::string>>& subs) {
   using internal::Quote;
   std::string t =
@@ -71,8 +70,8 @@ std::string SiteText(const ImportOptions& o, const std::string& plan_hash,
       if (m.material == material) planned = m.sha256;
     t += "\n# The site's own model of " + material + " replaces the plan's (a deviation).\n";
     t += "[[substitution]]\nmaterial = " + Quote(material) + "\nfile = " + Quote(fb.first) +
-         "\nsha256 = " + Quote(db::HashText(fb.second)) + "\nplan_model_sha256 = " +
-         Quote(planned) + "\n";
+         "\nsha256 = " + Quote(db::HashText(fb.second)) +
+         "\nplan_model_sha256 = " + Quote(planned) + "\n";
   }
   return t;
 }
@@ -80,10 +79,10 @@ std::string SiteText(const ImportOptions& o, const std::string& plan_hash,
 }  // namespace
 
 void CheckSiteCode(const std::string& site, const std::string& field) {
-  const bool ok = !site.empty() && site.size() <= 16 &&
-                  std::all_of(site.begin(), site.end(), [](char c) {
-                    return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
-                  });
+  const bool ok =
+      !site.empty() && site.size() <= 16 && std::all_of(site.begin(), site.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+      });
   if (!ok)
     throw InputError(kCommandLine, 0, field,
                      "expected a pseudonymous site code of 1-16 letters, digits, '-' or '_' (e.g. "
@@ -102,8 +101,8 @@ ImportResult ImportBundle(const std::string& bundle_path, const ImportOptions& o
       d.Add(bundle_path, 0, p.path, p.kind + " (" + p.detail + "): the bundle is refused");
     d.ThrowIfAny();
   }
-  const auto plan = ParseAnalysisPlan(files.at(kAnalysisPlanFile),
-                                      bundle_path + ":" + kAnalysisPlanFile);
+  const auto plan =
+      ParseAnalysisPlan(files.at(kAnalysisPlanFile), bundle_path + ":" + kAnalysisPlanFile);
   const auto subs = Substitutes(plan, o);
   std::map<std::string, std::string> site;
   for (const auto& [path, bytes] : files) site["plan/" + path] = bytes;
@@ -152,8 +151,8 @@ PlanRun OpenPlanForRun(const std::string& dir, const std::string& protocol_path)
   } else {
     run.plan = ReadPlan(plan_dir);
   }
-  run.protocol = protocols::LoadProtocol(protocol_path.empty() ? run.plan.protocol_path
-                                                               : protocol_path);
+  run.protocol =
+      protocols::LoadProtocol(protocol_path.empty() ? run.plan.protocol_path : protocol_path);
   if (!protocol_path.empty())
     for (const auto& c : protocols::CanonicalDifferences(run.plan.protocol_text, run.protocol.text))
       run.changed_keys.push_back(c.Describe());

@@ -68,8 +68,8 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device,
     const auto substitute = model_files.find(m.id);
     const bool placeholder = m.model == "placeholder" && substitute == model_files.end();
     if (!placeholder) {
-      const fs::path file = substitute != model_files.end() ? fs::path(substitute->second)
-                                                            : dir / m.model;
+      const fs::path file =
+          substitute != model_files.end() ? fs::path(substitute->second) : dir / m.model;
       if (!fs::is_regular_file(file, ec)) {
         d.Add(p.file, m.line, "material.model",
               "material '" + m.id + "': no model file " + where(m.model));

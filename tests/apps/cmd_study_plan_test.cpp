@@ -49,10 +49,11 @@ TEST(StudyPlanCli, FreezeWritesAPlanThatSha256sumChecks) {
     EXPECT_TRUE(std::count(files.begin(), files.end(), f)) << f;
   // coreutils: every file against the manifest, and the plan hash of the manifest.
   std::string out;
-  EXPECT_EQ(test::RunCommand("cd " + dir.File("plan") + " && sha256sum --quiet -c MANIFEST.sha256 " +
-                                 "&& sha256sum --quiet -c PLAN.sha256",
-                             &out),
-            0)
+  EXPECT_EQ(
+      test::RunCommand("cd " + dir.File("plan") + " && sha256sum --quiet -c MANIFEST.sha256 " +
+                           "&& sha256sum --quiet -c PLAN.sha256",
+                       &out),
+      0)
       << out;
   EXPECT_EQ(test::RunCommand("sha256sum " + dir.File("plan/MANIFEST.sha256"), &out), 0);
   EXPECT_EQ(out.substr(0, 64), hash);
@@ -68,6 +69,47 @@ TEST(StudyPlanCli, FreezeWritesAPlanThatSha256sumChecks) {
   // The rig template reads as a rig file.
   EXPECT_EQ(test::RunCommand(Cli() + " rig show " + dir.File("plan/rig-template.toml"), &out), 0)
       << out;
+}
+
+// The power analysis runs on the plan's copy of the protocol and names its observer by the
+// plan's copy of the observer file (tiny sizes: one pool participant, four simulations).
+TEST(StudyPlanCli, FreezeRunsThePowerAnalysisWithItsObserver) {
+  test::TempDir dir;
+  fs::create_directories(dir.File("p"));
+  fs::copy_file(test::DataPath("protocols/profiles.toml"), dir.File("p/profiles.toml"));
+  fs::copy_file(std::string(HL_SOURCE_DIR) + "/studies/shin2019/observer.toml",
+                dir.File("p/observer.toml"));
+  std::string proto = test::ReadFile(Small());
+  proto.replace(proto.find("profiles = "), 0, "observer = \"observer.toml\"\n");
+  test::WriteFile(dir.File("p/small.toml"), proto);
+  std::string out;
+  ASSERT_EQ(test::RunCommand(Cli() + " study freeze " + dir.File("p/small.toml") + " -o " +
+                                 dir.File("plan/") + " --power-pool 1 --power-simulations 4 " +
+                                 "--power-participants 2,3 --quiet",
+                             &out),
+            0)
+      << out;
+  const auto power = json::parse(test::ReadFile(dir.File("plan/power.json")));
+  EXPECT_EQ(power["observer"]["file"], "protocol/observer.toml") << power.dump();
+  const std::string observer_sha = db::HashText(test::ReadFile(dir.File("p/observer.toml")));
+  EXPECT_EQ(power["observer"]["sha256"], observer_sha);
+  const std::string plan = test::ReadFile(dir.File("plan/analysis-plan.toml"));
+  EXPECT_NE(plan.find("observer = \"protocol/observer.toml\""), std::string::npos) << plan;
+  EXPECT_NE(plan.find("observer_sha256 = \"" + observer_sha + "\""), std::string::npos) << plan;
+  EXPECT_NE(plan.find("primary_criterion = \"overall\""), std::string::npos) << plan;
+  EXPECT_EQ(test::RunCommand(Cli() + " study verify " + dir.File("plan"), &out), 0) << out;
+  // A protocol naming a file outside its folder cannot be frozen into a self-contained plan.
+  std::string outside = test::ReadFile(Small());
+  outside.replace(outside.find("profiles.toml"), 13, "../p/profiles.toml");
+  fs::create_directories(dir.File("q"));
+  test::WriteFile(dir.File("q/small.toml"), outside);
+  EXPECT_EQ(test::RunCommand(Cli() + " study freeze " + dir.File("q/small.toml") + " -o " +
+                                 dir.File("plan2") + " --no-power",
+                             &out),
+            2)
+      << out;
+  EXPECT_NE(out.find("study.profiles"), std::string::npos) << out;
+  EXPECT_FALSE(fs::exists(dir.File("plan2")));
 }
 
 TEST(StudyPlanCli, VerifyNamesAOneByteChangeInEveryFile) {
@@ -98,8 +140,8 @@ TEST(StudyPlanCli, VerifyNamesAOneByteChangeInEveryFile) {
   test::WriteFile(plan + "/notes.txt", "x");
   std::string out;
   EXPECT_EQ(test::RunCommand(Cli() + " study verify " + plan, &out), 2) << out;
-  for (const char* s : {"changed: protocol/small.toml", "missing: models/Cork.toml",
-                        "extra: notes.txt"})
+  for (const char* s :
+       {"changed: protocol/small.toml", "missing: models/Cork.toml", "extra: notes.txt"})
     EXPECT_NE(out.find(s), std::string::npos) << s << "\n" << out;
 }
 
@@ -107,15 +149,15 @@ TEST(StudyPlanCli, BundleRoundTripAndTamperedBundleRefused) {
   test::TempDir dir;
   const std::string hash = Freeze(dir);
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study bundle " + dir.File("plan") + " -o " +
-                                 dir.File("a.hlbundle"),
-                             &out),
-            0)
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " study bundle " + dir.File("plan") + " -o " + dir.File("a.hlbundle"), &out),
+      0)
       << out;
-  ASSERT_EQ(test::RunCommand(Cli() + " study bundle " + dir.File("plan") + " -o " +
-                                 dir.File("b.hlbundle"),
-                             &out),
-            0);
+  ASSERT_EQ(
+      test::RunCommand(
+          Cli() + " study bundle " + dir.File("plan") + " -o " + dir.File("b.hlbundle"), &out),
+      0);
   EXPECT_EQ(test::ReadFile(dir.File("a.hlbundle")), test::ReadFile(dir.File("b.hlbundle")));
   // GNU tar reads it: every plan file, nothing else.
   ASSERT_EQ(test::RunCommand("tar -tzf " + dir.File("a.hlbundle") + " | sort", &out), 0) << out;
@@ -201,9 +243,10 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
     EXPECT_EQ(models, 4u);
     // The table read by the sqlite3 shell: one row per material, its text hashing to its hash.
     std::string rows;
-    ASSERT_EQ(test::RunCommand("sqlite3 " + a_db + " \"SELECT name, hash FROM material_model ORDER BY name\"",
-                               &rows),
-              0)
+    ASSERT_EQ(
+        test::RunCommand(
+            "sqlite3 " + a_db + " \"SELECT name, hash FROM material_model ORDER BY name\"", &rows),
+        0)
         << rows;
     std::string expected;
     for (const char* id : {"Acryl", "Cork", "Denim", "Towel"})
@@ -233,6 +276,10 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
   const std::string from = "repetitions = 2";
   ASSERT_NE(proto.find(from), std::string::npos);
   proto.replace(proto.find(from), from.size(), "repetitions = 1");
+  // ... and adds an analysis the plan does not name (the default list plus lmm).
+  proto +=
+      "\n[analysis]\ntests = [\"rm-anova\", \"tukey\", \"kruskal\", \"grouping\", "
+      "\"aggregate\", \"correlation\", \"shapiro\", \"lmm\"]\n";
   test::WriteFile(dir.File("changed/small.toml"), proto);
   const std::string b_db = dir.File("b.db");
   ASSERT_EQ(test::RunCommand(Cli() + " study run " + dir.File("changed/small.toml") + " --plan " +
@@ -244,7 +291,7 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
             std::string::npos)
       << out;
   ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + b_db + " --out " + dir.File("rb") +
-                                 " --no-figures --plan " + dir.File("b"),
+                                 " --no-figures --correction HF --plan " + dir.File("b"),
                              &out),
             0)
       << out;
@@ -254,6 +301,11 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
   EXPECT_NE(rb.find("| material substituted | Denim: the site's own model"), std::string::npos)
       << rb;
   EXPECT_NE(rb.find("at site LabB"), std::string::npos) << rb;
+  EXPECT_NE(rb.find("| analysis not in the plan | lmm (exploratory) |"), std::string::npos) << rb;
+  EXPECT_NE(rb.find("read their results as exploratory): lmm\n"), std::string::npos) << rb;
+  EXPECT_NE(rb.find("| correction changed | sphericity correction HF, the plan's GG |"),
+            std::string::npos)
+      << rb;
   // A site model changed after the import is refused before anything runs.
   test::WriteFile(dir.File("b/site-models/Denim.toml"),
                   test::ReadFile(dir.File("b/site-models/Denim.toml")) + "\n");

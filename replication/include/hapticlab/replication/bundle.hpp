@@ -28,8 +28,8 @@ namespace hapticlab::replication {
 std::string WriteBundle(const std::string& plan_dir, const std::string& out_path);
 
 struct ImportOptions {
-  std::string site;                ///< pseudonymous site code, e.g. "LabB"
-  std::string out_dir;             ///< the site directory (created; must not exist or be empty)
+  std::string site;                   ///< pseudonymous site code, e.g. "LabB"
+  std::string out_dir;                ///< the site directory (created; must not exist or be empty)
   std::string rig_device = "falcon";  ///< the device of the site's rig-file template
   /// material id -> the site's own model file replacing the plan's
   std::map<std::string, std::string> substitutes;
