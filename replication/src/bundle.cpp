@@ -87,7 +87,8 @@ std::map<std::string, std::string> ReadArchive(const std::string& path) {
   int r;
   while ((r = archive_read_next_header(a.get(), &e)) == ARCHIVE_OK) {
     const char* name = archive_entry_pathname(e);
-    const std::string entry = name ? name : "";
+    std::string entry = name ? name : "";
+    while (entry.rfind("./", 0) == 0) entry.erase(0, 2);  // tar -C DIR . writes "./path"
     if (archive_entry_filetype(e) == AE_IFDIR) continue;
     if (archive_entry_filetype(e) != AE_IFREG)
       throw InputError(path, 0, entry,
