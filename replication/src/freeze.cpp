@@ -214,7 +214,7 @@ std::string FreezePlan(const std::string& protocol_path, const FreezeOptions& o,
   files[kAnalysisPlanFile] =
       AnalysisPlanText(p, protocol_file, o, criterion, models, o.power ? &power : nullptr);
   const std::string manifest = internal::ManifestText(files);
-  const std::string plan_hash = db::HashText(manifest);
+  std::string plan_hash = db::HashText(manifest);
   files[kManifestFile] = manifest;
   files[kPlanHashFile] = plan_hash + "  " + kManifestFile + "\n";
   internal::WriteTree(tmp.string(), files);
