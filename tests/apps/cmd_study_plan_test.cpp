@@ -271,7 +271,12 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
             0)
       << out;
   fs::create_directories(dir.File("changed"));
-  fs::copy_file(dir.File("b/plan/protocol/profiles.toml"), dir.File("changed/profiles.toml"));
+  // Lab B's Towel sample has more friction: its placeholder model (built from the profile)
+  // differs from the plan's although no protocol key changed.
+  std::string profiles = test::ReadFile(dir.File("b/plan/protocol/profiles.toml"));
+  ASSERT_NE(profiles.find("mu_k = 0.7\n"), std::string::npos);
+  profiles.replace(profiles.find("mu_k = 0.7\n"), 10, "mu_k = 0.8");
+  test::WriteFile(dir.File("changed/profiles.toml"), profiles);
   std::string proto = test::ReadFile(dir.File("b/plan/protocol/small.toml"));
   const std::string from = "repetitions = 2";
   ASSERT_NE(proto.find(from), std::string::npos);
@@ -301,6 +306,8 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
   EXPECT_NE(rb.find("| material substituted | Denim: the site's own model"), std::string::npos)
       << rb;
   EXPECT_NE(rb.find("at site LabB"), std::string::npos) << rb;
+  EXPECT_NE(rb.find("| model hash differs | Towel: model sha256 "), std::string::npos) << rb;
+  EXPECT_EQ(rb.find("| model hash differs | Denim"), std::string::npos) << rb;  // substituted
   EXPECT_NE(rb.find("| analysis not in the plan | lmm (exploratory) |"), std::string::npos) << rb;
   EXPECT_NE(rb.find("read their results as exploratory): lmm\n"), std::string::npos) << rb;
   EXPECT_NE(rb.find("| correction changed | sphericity correction HF, the plan's GG |"),
