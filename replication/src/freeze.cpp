@@ -202,7 +202,7 @@ std::string FreezePlan(const std::string& protocol_path, const FreezeOptions& o,
   PowerSummary power;
   if (o.power) {
     if (!o.observer.empty() && o.observer != "builtin") {
-      files["power-observer.toml"] = ReadTomlFile(o.observer, "observer file");
+      files["power-observer.toml"] = ReadTextFile(o.observer, "observer file");
       WriteTextFile((tmp / "power-observer.toml").string(), files["power-observer.toml"]);
     }
     FreezeOptions po = o;
