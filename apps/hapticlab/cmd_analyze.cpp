@@ -8,13 +8,16 @@
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "hapticlab/db/database.hpp"
+#include "hapticlab/replication/bundle.hpp"
+#include "hapticlab/replication/deviations.hpp"
 #include "hapticlab/stats/report.hpp"
 
 namespace hapticlab::cli {
 
 void RegisterAnalyze(CLI::App& app) {
   struct O {
-    std::string db, out, correction;
+    std::string db, out, correction, plan;
     bool no_figures = false, json = false, include_simulated = false;
   };
   auto o = std::make_shared<O>();
@@ -41,12 +44,25 @@ void RegisterAnalyze(CLI::App& app) {
                   "afex's names: GG (Greenhouse-Geisser), HF (Huynh-Feldt) or none; overrides\n"
                   "each protocol's [analysis] correction (default there: GG, as afex)")
       ->check(CLI::IsMember({"GG", "HF", "none"}));
+  cmd->add_option("--plan", o->plan,
+                  "Preregistered plan (study freeze) or imported site directory: the report\n"
+                  "separates preregistered from exploratory analyses and lists every deviation\n"
+                  "from the plan (docs/replication.md)");
   cmd->callback([o] {
     RunGuarded({{"db", "--db"}, {"out", "--out"}}, [&] {
-      const auto r = stats::Analyze(o->db, {.out_dir = o->out,
-                                            .figures = !o->no_figures,
-                                            .include_simulated = o->include_simulated,
-                                            .correction = o->correction});
+      stats::ReportOptions ro{.out_dir = o->out,
+                              .figures = !o->no_figures,
+                              .include_simulated = o->include_simulated,
+                              .correction = o->correction};
+      if (!o->plan.empty()) {  // verified before anything is written
+        auto plan =
+            std::make_shared<replication::Plan>(replication::OpenPlanForRun(o->plan, "").plan);
+        const replication::AnalyzeSettings settings{o->correction, o->include_simulated};
+        ro.study_section = [plan, settings](const db::Database& d, const db::Study& st) {
+          return replication::DeviationsSection(*plan, d, st, settings);
+        };
+      }
+      const auto r = stats::Analyze(o->db, ro);
       if (o->json) {
         fmt::print(
             "{}\n",

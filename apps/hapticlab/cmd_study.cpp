@@ -20,6 +20,7 @@
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/runner_ui/session_ui.hpp"
 #include "rig_timing.hpp"
+#include "study_plan.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -41,6 +42,7 @@ struct RunArgs {
   double site_offset = 0;   ///< --site-offset (study run, simulated observer)
   /// study resume: the recorded mode (SessionMode::Describe), for a mode that cannot start
   std::string recorded_mode;
+  std::string plan;  ///< study run --plan: a plan or imported site directory
 };
 
 // Opens the hardware and the windows a run asks for and keeps them alive for the session.
@@ -231,6 +233,7 @@ void RegisterStudy(CLI::App& app) {
   study->require_subcommand(1);
   RegisterPower(*study);
   RegisterCalibrate(*study);
+  RegisterStudyPlan(*study);
 
   {
     auto path = std::make_shared<std::string>();
@@ -395,7 +398,11 @@ void RegisterStudy(CLI::App& app) {
         "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
         "with\n"
         "'study resume'; 2 bad input; 1 any other failure.");
-    cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
+    cmd->add_option("PROTOCOL", a->protocol,
+                    "Study protocol (.toml); with --plan: instead of the plan's");
+    cmd->add_option("--plan", a->plan,
+                    "Preregistered plan (study freeze) or imported site directory (study import):\n"
+                    "verified, its protocol run, its hash recorded (docs/replication.md)");
     cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
     cmd->add_option("--participant", a->participant,
                     "Pseudonymous participant code, e.g. P07: a new one, or one reserved by\n"
@@ -420,8 +427,8 @@ void RegisterStudy(CLI::App& app) {
         ->check(CLI::Range(-50.0, 50.0));
     cmd->callback([a] {
       RunStudyGuarded([&] {
-        const auto p = protocols::LoadProtocol(a->protocol);
         runner::RunOptions o;
+        const auto p = LoadRunProtocol(a->protocol, a->plan, &o, a->quiet || a->json);
         o.participant_index = a->index;
         o.fault_rate = a->fault_rate;
         o.site = a->site;

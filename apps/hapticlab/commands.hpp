@@ -17,6 +17,8 @@ void RegisterStudy(CLI::App& app);
 void RegisterPower(CLI::App& study);
 /// `study calibrate` (cmd_calibrate.cpp), registered under the study group.
 void RegisterCalibrate(CLI::App& study);
+/// `study freeze`, `verify`, `bundle`, `import` (cmd_study_plan.cpp), under the study group.
+void RegisterStudyPlan(CLI::App& study);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);

@@ -17,7 +17,8 @@ namespace fs = std::filesystem;
 
 bool IsSimulated(const std::string& device) { return sim::IsSimulatedDevice(device); }
 
-Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
+Lab LoadLab(const protocols::Protocol& p, const std::string& device,
+            const std::map<std::string, std::string>& model_files) {
   const bool sim = IsSimulated(device);
   Lab lab;
   lab.protocol = &p;
@@ -60,20 +61,24 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       attempt(0, "study.observer",
               [&] { lab.profiles.observer = sim::LoadObserver((dir / p.observer).string()); });
   }
-  // One placeholder model (and hash) per profile, however many materials share it: building
+  // One placeholder model (and its text) per profile, however many materials share it: building
   // one takes milliseconds, and a protocol may name up to 1000 materials.
   std::map<std::string, std::pair<renderer::MaterialModel, std::string>> built;
   for (const auto& m : p.materials) {
-    const bool placeholder = m.model == "placeholder";
+    const auto substitute = model_files.find(m.id);
+    const bool placeholder = m.model == "placeholder" && substitute == model_files.end();
     if (!placeholder) {
-      if (!fs::is_regular_file(dir / m.model, ec)) {
+      const fs::path file =
+          substitute != model_files.end() ? fs::path(substitute->second) : dir / m.model;
+      if (!fs::is_regular_file(file, ec)) {
         d.Add(p.file, m.line, "material.model",
               "material '" + m.id + "': no model file " + where(m.model));
       } else {
-        const std::string path = (dir / m.model).string();
+        const std::string path = file.string();
         attempt(m.line, "material.model", [&] {
           auto model = renderer::LoadMaterial(path);
-          lab.model_hashes[m.id] = db::HashText(ReadTextFile(path));
+          lab.model_texts[m.id] = ReadTextFile(path);
+          lab.model_hashes[m.id] = db::HashText(lab.model_texts[m.id]);
           lab.models.emplace(m.id, std::move(model));
         });
       }
@@ -108,10 +113,11 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device) {
       auto it = built.find(m.profile);
       if (it == built.end()) {
         auto model = sim::PlaceholderModel(prof->second);
-        auto hash = db::HashText(renderer::MaterialToToml(model));
-        it = built.emplace(m.profile, std::pair{std::move(model), std::move(hash)}).first;
+        auto text = renderer::MaterialToToml(model);
+        it = built.emplace(m.profile, std::pair{std::move(model), std::move(text)}).first;
       }
-      lab.model_hashes[m.id] = it->second.second;
+      lab.model_texts[m.id] = it->second.second;
+      lab.model_hashes[m.id] = db::HashText(it->second.second);
       lab.models.emplace(m.id, it->second.first);
     }
   }

@@ -20,13 +20,16 @@ struct Lab {
   sim::ProfileSet profiles;
   std::map<std::string, renderer::MaterialModel> models;  // by material id
   std::map<std::string, std::string> model_hashes;  // by material id: SHA-256 of the model text
+  std::map<std::string, std::string> model_texts;   // by material id: the text hashed
 };
 
 // Loads the profiles (ground truth of each sample) and every material's model. Files are
 // looked up relative to the protocol file's folder. Every problem is collected (file, line,
 // key, and the path looked up), then thrown together as one InputError: `study validate`
-// reports the same.
-Lab LoadLab(const protocols::Protocol& p, const std::string& device);
+// reports the same. `model_files` (material id -> model file) replace the protocol's models
+// (RunOptions::model_files).
+Lab LoadLab(const protocols::Protocol& p, const std::string& device,
+            const std::map<std::string, std::string>& model_files = {});
 
 // One stimulus of a plan ("real:Denim", "virtual:Denim"): which kind, which material id.
 struct Stimulus {

@@ -87,6 +87,30 @@ struct CheckpointAtEnd {
   }
 };
 
+// The plan a session runs under and the models a site substituted (RunOptions): provenance
+// keys "plan_sha256", "plan_site" and "substituted_models" (file relative to the database's
+// folder, as protocol_path, and SHA-256).
+void AddPlanProvenance(const RunOptions& o, const Lab& lab, json* prov) {
+  if (!o.plan_sha256.empty()) (*prov)["plan_sha256"] = o.plan_sha256;
+  if (!o.plan_site.empty()) (*prov)["plan_site"] = o.plan_site;
+  const fs::path db_dir = fs::weakly_canonical(fs::absolute(o.db_path)).parent_path();
+  for (const auto& [id, file] : o.model_files)
+    (*prov)["substituted_models"][id] = {
+        {"file", fs::weakly_canonical(fs::absolute(file)).lexically_relative(db_dir).string()},
+        {"sha256", lab.model_hashes.count(id) ? lab.model_hashes.at(id) : ""}};
+}
+
+// The substituted models of a recorded session (AddPlanProvenance), as paths to load.
+std::map<std::string, std::string> SubstitutedModels(const json& prov, const std::string& db) {
+  std::map<std::string, std::string> out;
+  if (!prov.contains("substituted_models") || !prov["substituted_models"].is_object()) return out;
+  const fs::path db_dir = fs::weakly_canonical(fs::absolute(db)).parent_path();
+  for (const auto& [id, m] : prov["substituted_models"].items())
+    if (m.is_object() && m.contains("file") && m["file"].is_string())
+      out[id] = (db_dir / m["file"].get<std::string>()).lexically_normal().string();
+  return out;
+}
+
 }  // namespace
 
 std::string SessionMode::Describe() const {
@@ -176,7 +200,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
     throw InputError("<command line>", 0, "--site-offset",
                      "a site offset is added to the simulated observer's ratings; a person rates "
                      "this session");
-  Lab lab = LoadLab(p, opt.device);
+  Lab lab = LoadLab(p, opt.device, opt.model_files);
   lab.profiles.observer.site_offset = opt.site_offset;
   // Consent as it happened: "not applicable" when no person takes part, else confirmed by an
   // experimenter on the command line (checked here, before anything is written) or in the
@@ -234,6 +258,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
       {"model_hashes", models},
       {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
   if (opt.site_offset != 0) prov["observer_site_offset"] = opt.site_offset;
+  AddPlanProvenance(opt, lab, &prov);
   if (ask_console) consent = ObtainConsent(p, opt, opt.participant);
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
   database.Exec("BEGIN IMMEDIATE");
@@ -265,6 +290,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                       .left = t.left,
                       .right = t.right});
     for (const auto& r : rows) ids.push_back(database.AddTrial(r));
+    for (const auto& [id, text] : lab.model_texts) database.SaveMaterialModel(id, text);
     if (consent)
       RecordConsent(database, session, *consent);
     else
@@ -320,7 +346,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     const SessionMode now = ModeOf(opt);
     const bool differs =
         CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
-    Lab lab = LoadLab(p, opt.device);
+    Lab lab = LoadLab(p, opt.device, SubstitutedModels(prov, opt.db_path));
     lab.profiles.observer.site_offset = prov.value("observer_site_offset", 0.0);
     // A person takes part now but no experimenter confirmed consent yet (a simulated session
     // resumed with screens, or one recorded before schema v7), or a code is given again:

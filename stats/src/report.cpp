@@ -88,6 +88,7 @@ ReportResult Analyze(const std::string& db_path, const ReportOptions& o) {
         md << "\nAll ratings come from the simulated observer (a simulated study).\n";
     }
     md << "\n" << TimingMethodsSentence(d, st.id);
+    if (o.study_section) md << o.study_section(d, st);  // analyze --plan: deviations
     // Adaptive phases (staircase, QUEST+): psychometric fits, JND and Weber fraction.
     md << AdaptiveReport(db_path, st.name, st.protocol_toml, o.out_dir, o.figures, &w.files_);
     md << MultiSiteSection(d, st.id, proto, study, w, o.figures);  // docs/replication.md

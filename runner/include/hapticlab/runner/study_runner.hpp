@@ -20,6 +20,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <string>
 #include <vector>
@@ -233,13 +234,22 @@ struct RunOptions {
   /// Needed when a person takes part (PersonTakesPart) unless the UI asks
   /// (SessionUi::ConfirmConsent); refused for a simulated session. runner/audit.hpp.
   std::string consent_confirmed_by;
-  /// The site recording the session (`--site`; schema v9): a short pseudonymous code
+  /// The site recording the session (`--site`; schema v10): a short pseudonymous code
   /// (db::SiteCodeProblem); "L0" is the local default.
   std::string site = "L0";
   /// Simulated observer: rating points added to every rating of the session, a site effect
   /// (`--site-offset`, tests and replication examples; recorded in the provenance and kept by
   /// `study resume`). Refused with a person rating.
   double site_offset = 0;
+  /// The preregistered plan the session runs under (`study run --plan`; replication/plan.hpp):
+  /// its hash and the site that imported it, recorded in the provenance as "plan_sha256" and
+  /// "plan_site"; empty: none.
+  std::string plan_sha256, plan_site;
+  /// Material models replacing the protocol's (a replicating site's own models, `study import
+  /// --substitute`): material id -> model file. Recorded in the provenance
+  /// ("substituted_models": file relative to the database's folder, SHA-256); `study resume`
+  /// loads them again from there.
+  std::map<std::string, std::string> model_files;
 };
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.

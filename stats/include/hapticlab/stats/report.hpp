@@ -3,6 +3,7 @@
 /// record, written as a report (Markdown, CSV tables, SVG and PNG figures) that mirrors the
 /// dissertation's tables and figures (Tables 4.1, 4.2, 5.2-5.5; Figs. 4.5, 4.8, 5.7, 5.8).
 
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,7 +12,8 @@
 
 namespace hapticlab::db {
 class Database;
-}
+struct Study;
+}  // namespace hapticlab::db
 
 namespace hapticlab::stats {
 
@@ -24,6 +26,9 @@ struct ReportOptions {
   /// The sphericity correction of within effects ("GG", "HF", "none"; afex's names),
   /// overriding each protocol's `[analysis] correction`; empty: the protocol's.
   std::string correction;
+  /// A section written after each study's opening lines (`analyze --plan`: preregistration
+  /// and deviations from the plan, replication/deviations.hpp); empty: none.
+  std::function<std::string(const db::Database&, const db::Study&)> study_section;
 };
 
 struct ReportResult {
