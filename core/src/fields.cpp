@@ -54,8 +54,10 @@ std::string JoinChoices(std::string_view choices) {
 
 namespace {
 
-// "an integer 1..100", "an integer >= 0", "an integer".
+// "an integer 1..100", "a non-negative integer", "an integer >= 1", "an integer".
 std::string IntegerText(const Range& r) {
+  if (r.lo == 0 && !r.lo_open && r.hi == std::numeric_limits<double>::infinity())
+    return "a non-negative integer";
   if (std::isfinite(r.lo) && std::isfinite(r.hi) && !r.lo_open && !r.hi_open)
     return "an integer " + FormatNumber(r.lo) + ".." + FormatNumber(r.hi);
   const std::string range = r.ToString();

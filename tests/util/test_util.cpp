@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hapticlab/test/doc_block.hpp"
+
 namespace hapticlab::test {
 
 std::string DataPath(const std::string& relative) {

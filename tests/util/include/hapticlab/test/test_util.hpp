@@ -41,11 +41,4 @@ int RunCommand(const std::string& command, std::string* output = nullptr);
 void WriteFile(const std::string& path, const std::string& text);
 std::string ReadFile(const std::string& path);
 
-/// Compares the generated block `name` of a document under the source tree (the text between
-/// `<!-- generated: NAME -->` and `<!-- end generated: NAME -->`) with `expected`; "" when
-/// equal, else what differs. With HL_UPDATE_DOCS=1 in the environment it rewrites the block
-/// instead (the generator: `HL_UPDATE_DOCS=1 ./protocols_tests --gtest_filter=*Docs*`).
-std::string CheckGeneratedDocBlock(const std::string& doc_relative, const std::string& name,
-                                   const std::string& expected);
-
 }  // namespace hapticlab::test
