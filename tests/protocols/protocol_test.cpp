@@ -3,6 +3,7 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
@@ -236,6 +237,20 @@ TEST(Protocol, TitleAndSphericityCorrectionHaveDefaultsAndAfexsNames) {
 TEST(ProtocolDocs, FormatsKeyTablesAreTheParsersTables) {
   EXPECT_EQ(test::CheckGeneratedDocBlock("docs/formats.md", "protocol keys", ProtocolKeyTables()),
             "");
+}
+
+// The shipped protocols (studies/) parse as they did before the field tables.
+TEST(ProtocolDocs, EveryShippedProtocolParses) {
+  int parsed = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(
+           std::filesystem::path(HL_SOURCE_DIR) / "studies")) {
+    if (e.path().extension() != ".toml") continue;
+    const std::string text = test::ReadFile(e.path().string());
+    if (text.find("[study]") == std::string::npos) continue;  // profiles, models
+    EXPECT_NO_THROW((void)ParseProtocol(text, e.path().string())) << e.path();
+    ++parsed;
+  }
+  EXPECT_GE(parsed, 5);
 }
 
 // Every number is checked finite and within its range when read (issue #34's inputs).
