@@ -28,7 +28,6 @@ namespace internal {
 namespace {
 
 using psychophysics::Shape;
-using psychophysics::StepType;
 using psychophysics::Task;
 
 class Keys {

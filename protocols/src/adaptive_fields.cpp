@@ -19,7 +19,7 @@ constexpr std::string_view kShapes = "logistic|weibull|normal";  // psychophysic
 
 Fields<AdaptiveSpec> AdaptiveFields() {
   static constexpr Task kTasks[] = {Task::k2Afc, Task::k3Afc, Task::kYesNo};
-  static const Field<AdaptiveSpec> k[] = {
+  static const Field<AdaptiveSpec> kFields[] = {
       {.key = "kind",
        .type = Type::kCustom,
        .required = true,
@@ -85,11 +85,11 @@ Fields<AdaptiveSpec> AdaptiveFields() {
        .default_text = "none",
        .expected = "a table (below)"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<AdaptiveSpec> StaircaseFields() {
-  static const Field<AdaptiveSpec> k[] = {
+  static const Field<AdaptiveSpec> kFields[] = {
       {.key = "up",
        .type = Type::kInteger,
        .ref = HL_FIELD_REF(AdaptiveSpec, staircase.up),
@@ -144,11 +144,11 @@ Fields<AdaptiveSpec> StaircaseFields() {
        .range = {0, 1000},
        .doc = "reversals left out of the estimate (fewer than reversals)"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<AdaptiveSpec> QuestPlusFields() {
-  static const Field<AdaptiveSpec> k[] = {
+  static const Field<AdaptiveSpec> kFields[] = {
       {.key = "stimuli",
        .type = Type::kCustom,
        .required = true,
@@ -175,12 +175,12 @@ Fields<AdaptiveSpec> QuestPlusFields() {
        .range = {1, 10000},
        .doc = "trials to run"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<psychophysics::SimulatedObserverParams> ObserverFields() {
   using O = psychophysics::SimulatedObserverParams;
-  static const Field<O> k[] = {
+  static const Field<O> kFields[] = {
       {.key = "function",
        .type = Type::kChoice,
        .ref = +[](O& o, std::size_t i) { o.shape = static_cast<Shape>(i); },
@@ -204,7 +204,7 @@ Fields<psychophysics::SimulatedObserverParams> ObserverFields() {
        .range = fields::ClosedOpen(0, 0.2),
        .doc = "lapse rate"},
   };
-  return k;
+  return kFields;
 }
 
 }  // namespace hapticlab::protocols::internal

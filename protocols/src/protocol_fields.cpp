@@ -21,15 +21,15 @@ using Fields = std::span<const Field<S>>;
 }  // namespace
 
 Fields<Protocol> TopLevelFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "study"},         {.key = "material"},      {.key = "method"},
       {.key = "phase"},         {.key = "randomization"}, {.key = "breaks"},
       {.key = "masking_noise"}, {.key = "consent"},       {.key = "analysis"}};
-  return k;
+  return kFields;
 }
 
 Fields<Protocol> StudyFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "name",
        .type = Type::kString,
        .ref = HL_FIELD_REF(Protocol, name),
@@ -80,7 +80,7 @@ Fields<Protocol> StudyFields() {
        .default_text = "\"^[A-Z]{1,3}[0-9]{2,4}$\"",
        .expected = "an RE2 regular expression of 1..128 characters"},
   };
-  return k;
+  return kFields;
 }
 
 Material MaterialDefaults() {
@@ -90,7 +90,7 @@ Material MaterialDefaults() {
 }
 
 Fields<Material> MaterialFields() {
-  static const Field<Material> k[] = {
+  static const Field<Material> kFields[] = {
       {.key = "id",
        .type = Type::kString,
        .ref = HL_FIELD_REF(Material, id),
@@ -115,12 +115,12 @@ Fields<Material> MaterialFields() {
        .ref = HL_FIELD_REF(Material, group),
        .doc = "report grouping of the aggregate tables (\"\": none)"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Method> MethodFields() {
   static constexpr std::string_view kAlgorithms = "wall|norm|fric1|fric2|none";
-  static const Field<Method> k[] = {
+  static const Field<Method> kFields[] = {
       {.key = "name",
        .type = Type::kString,
        .ref = HL_FIELD_REF(Method, name),
@@ -144,11 +144,11 @@ Fields<Method> MethodFields() {
        .ref = HL_FIELD_REF(Method, hybrid_filter),
        .doc = "split force and vibration at the model's cutoff"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Phase> PhaseFields() {
-  static const Field<Phase> k[] = {
+  static const Field<Phase> kFields[] = {
       {.key = "kind",
        .type = Type::kChoice,
        .ref = +[](Phase& p, std::size_t i) { p.kind = static_cast<PhaseKind>(i); },
@@ -181,13 +181,13 @@ Fields<Phase> PhaseFields() {
        .default_text = "0",
        .expected = "a count 0..n(n-1)/2, or a list of [\"A\", \"B\"] pairs"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Randomization> RandomizationFields() {
   static constexpr std::string_view kSchemes = "full|blocked|latin-square";
   static constexpr std::string_view kBlockBy = "method|material";
-  static const Field<Randomization> k[] = {
+  static const Field<Randomization> kFields[] = {
       {.key = "scheme",
        .type = Type::kChoice,
        .ref = +[](Randomization& r, std::size_t i) { r.scheme = static_cast<Scheme>(i); },
@@ -210,11 +210,11 @@ Fields<Randomization> RandomizationFields() {
        .ref = HL_FIELD_REF(Randomization, balance_sides),
        .doc = "the real sample on the left in half of the trials"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Protocol> BreakFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "every_trials",
        .type = Type::kInteger,
        .ref = HL_FIELD_REF(Protocol, break_every_trials),
@@ -227,11 +227,11 @@ Fields<Protocol> BreakFields() {
        .unit = "s",
        .doc = "length of each break"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Protocol> MaskingFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "enabled",
        .type = Type::kBool,
        .ref = HL_FIELD_REF(Protocol, masking_noise),
@@ -245,11 +245,11 @@ Fields<Protocol> MaskingFields() {
        .unit = "dB",
        .doc = "noise level"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Protocol> ConsentFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "document",
        .type = Type::kCustom,
        .required = true,
@@ -261,11 +261,11 @@ Fields<Protocol> ConsentFields() {
        .doc = "its version",
        .expected = "one line of 1..64 characters"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<Protocol> AnalysisFields() {
-  static const Field<Protocol> k[] = {
+  static const Field<Protocol> kFields[] = {
       {.key = "tests",
        .type = Type::kStrings,
        .ref = HL_FIELD_REF(Protocol, analyses),
@@ -280,7 +280,7 @@ Fields<Protocol> AnalysisFields() {
        .ref = HL_FIELD_REF(Protocol, correction),
        .doc = "sphericity correction: \"GG\", \"HF\" or \"none\""},
   };
-  return k;
+  return kFields;
 }
 
 }  // namespace internal

@@ -26,7 +26,7 @@ constexpr fields::Range kForce{0, 1e3};
 }  // namespace
 
 Fields<MaterialModel> TopLevelFields() {
-  static const Field<MaterialModel> k[] = {
+  static const Field<MaterialModel> kFields[] = {
       {.key = "name",
        .type = Type::kString,
        .ref = HL_FIELD_REF(MaterialModel, name),
@@ -70,11 +70,11 @@ Fields<MaterialModel> TopLevelFields() {
       {.key = "notes", .type = Type::kCustom, .doc = "free, not read", .expected = "anything"},
       {.key = "workbench", .type = Type::kCustom, .doc = "free, not read", .expected = "anything"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<ContactParams> ContactFields() {
-  static const Field<ContactParams> k[] = {
+  static const Field<ContactParams> kFields[] = {
       {.key = "texture_K",
        .type = Type::kNumber,
        .ref = HL_FIELD_REF(ContactParams, texture.K),
@@ -123,11 +123,11 @@ Fields<ContactParams> ContactFields() {
        .unit = "m",
        .doc = "uniform layer under the height map's lowest point"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<FrictionParams> FrictionFields() {
-  static const Field<FrictionParams> k[] = {
+  static const Field<FrictionParams> kFields[] = {
       {.key = "kappa_N_per_m",
        .type = Type::kNumber,
        .ref = HL_FIELD_REF(FrictionParams, kappa_N_per_m),
@@ -148,11 +148,11 @@ Fields<FrictionParams> FrictionFields() {
        .unit = "N s/m",
        .doc = "viscous coefficient"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<MaterialModel> GeometryFields() {
-  static const Field<MaterialModel> k[] = {
+  static const Field<MaterialModel> kFields[] = {
       {.key = "kind",
        .type = Type::kCustom,
        .doc = "the height map's source",
@@ -188,11 +188,11 @@ Fields<MaterialModel> GeometryFields() {
        .doc = "kind = sine: wavelength",
        .expected = "a number in (0, 1]"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<MaterialModel> HybridFields() {
-  static const Field<MaterialModel> k[] = {
+  static const Field<MaterialModel> kFields[] = {
       {.key = "cutoff_hz",
        .type = Type::kNumber,
        .ref = HL_FIELD_REF(MaterialModel, hybrid_cutoff_hz),
@@ -201,22 +201,22 @@ Fields<MaterialModel> HybridFields() {
        .required = true,
        .doc = "hybrid filter's f_c (0: no split)"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<MaterialModel> NeuralFields() {
-  static const Field<MaterialModel> k[] = {
+  static const Field<MaterialModel> kFields[] = {
       {.key = "file",
        .type = Type::kString,
        .ref = HL_FIELD_REF(MaterialModel, neural_file),
        .required = true,
        .doc = "neural vibration model, relative to the model file"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<VibrationBank> VibrationFields() {
-  static const Field<VibrationBank> k[] = {
+  static const Field<VibrationBank> kFields[] = {
       {.key = "file",
        .type = Type::kCustom,
        .doc = "a bank file holding this table (then no other key)",
@@ -278,11 +278,11 @@ Fields<VibrationBank> VibrationFields() {
        .default_text = "Delaunay",
        .expected = "an array of [i, j, k] cell indices"},
   };
-  return k;
+  return kFields;
 }
 
 Fields<ArCell> CellFields() {
-  static const Field<ArCell> k[] = {
+  static const Field<ArCell> kFields[] = {
       {.key = "speed_mps",
        .type = Type::kNumber,
        .ref = HL_FIELD_REF(ArCell, speed_mps),
@@ -325,7 +325,7 @@ Fields<ArCell> CellFields() {
        .ref = HL_FIELD_REF(ArCell, gain),
        .doc = "excitation gain"},
   };
-  return k;
+  return kFields;
 }
 
 }  // namespace internal

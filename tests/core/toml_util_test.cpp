@@ -82,7 +82,7 @@ struct Toy {
 
 std::span<const fields::Field<Toy>> ToyFields() {
   using fields::Type;
-  static const fields::Field<Toy> k[] = {
+  static const fields::Field<Toy> kFields[] = {
       {.key = "name",
        .type = Type::kString,
        .ref = HL_FIELD_REF(Toy, name),
@@ -112,7 +112,7 @@ std::span<const fields::Field<Toy>> ToyFields() {
        .choices = "fast|slow",
        .chosen = +[](const Toy& t) { return static_cast<std::size_t>(t.mode); }},
   };
-  return k;
+  return kFields;
 }
 
 // Reads `text`'s [toy] table; the problems, one per line ("" when none).

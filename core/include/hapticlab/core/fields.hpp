@@ -14,11 +14,11 @@
 /// Declaring a table (a free function returning a static array keeps it in one place):
 /// @code
 ///   std::span<const fields::Field<Breaks>> BreakFields() {
-///     static const fields::Field<Breaks> k[] = {
+///     static const fields::Field<Breaks> kFields[] = {
 ///         {.key = "duration_s", .type = fields::Type::kNumber,
 ///          .ref = HL_FIELD_REF(Breaks, duration_s), .range = {0, 3600}, .unit = "s",
 ///          .doc = "length of each break"}};
-///     return k;
+///     return kFields;
 ///   }
 ///   fields::FieldReader(table, "breaks", file, &diag).Read(BreakFields(), &breaks);
 /// @endcode
@@ -92,6 +92,7 @@ struct Field {
 };
 
 /// `+[](S& s) -> T& { return s.member; }` for a member path of S (`texture.K` works too).
+// NOLINTNEXTLINE(bugprone-macro-parentheses): S is a type and member a member path
 #define HL_FIELD_REF(S, member) (+[](S & s_) -> auto& { return s_.member; })
 
 /// What a value must be, for docs: "a number in (0, 600]", "an integer 1..100".
