@@ -13,7 +13,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/export.hpp"
-#include "hapticlab/db/interchange.hpp"
+#include "hapticlab/db/export_formats.hpp"
 
 namespace hapticlab::cli {
 namespace {
@@ -33,60 +33,55 @@ std::uintmax_t FileBytes(const std::string& path) {
   return ec ? 0 : n;
 }
 
-// The summary line: what was written, where, how large, how long it took.
-std::string Summary(const ExportOpts& o, const std::vector<db::ExportedFile>& files,
-                    std::uintmax_t bytes, double seconds) {
-  std::size_t rows = 0, streams = 0, samples = 0, tables = 0, physio = 0, physio_samples = 0;
-  std::size_t beh = 0, beh_rows = 0;
-  for (const auto& f : files) {
-    rows += f.rows, streams += f.streams, samples += f.samples;
-    if (f.path.ends_with(".csv") || f.path.ends_with(".tsv")) ++tables;
-    if (f.path.ends_with("_beh.tsv")) ++beh, beh_rows += f.rows;
-    if (f.path.ends_with("_physio.tsv.gz")) ++physio, physio_samples += f.rows;
-  }
-  std::string what;
-  if (o.format == "xdf")
-    what = fmt::format("{} XDF file{}, {} streams, {} samples", files.size(),
-                       files.size() == 1 ? "" : "s", streams, samples);
-  else if (o.format == "bids")
-    what = fmt::format("{} files: {} rating tables ({} ratings), {} physio recordings ({} samples)",
-                       files.size(), beh, beh_rows, physio, physio_samples);
-  else
-    what = fmt::format("{} tables, {} rows", tables, rows);
-  return fmt::format("{} export of {}: {} -> {} ({}, {:.1f} s)", o.format, o.db, what, o.out,
-                     Megabytes(bytes), seconds);
+// The formats' names, e.g. "csv, bids or xdf" (only those with `pred` true).
+template <class Pred>
+std::string FormatNames(Pred pred, const char* last = " or ") {
+  std::vector<std::string> names;
+  for (const auto& f : db::ExportFormats())
+    if (pred(f)) names.push_back(f.name);
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    s += (i == 0 ? "" : i + 1 == names.size() ? last : ", ") + names[i];
+  return s;
+}
+
+// The options a format does not take are refused, naming the formats that take them.
+void CheckOptions(const ExportOpts& o, const db::ExportFormat& f) {
+  if (!o.participant.empty() && !f.selects_participants)
+    throw InputError(kCommandLine, 0, "--participant",
+                     "only --format " + FormatNames([](const auto& x) {
+                       return x.selects_participants;
+                     }) + " selects participants");
+  if ((o.trajectories || o.no_trajectories) && !f.chooses_trajectories)
+    throw InputError(
+        kCommandLine, 0, o.trajectories ? "--trajectories" : "--no-trajectories",
+        "only --format " + FormatNames([](const auto& x) { return x.chooses_trajectories; }) +
+            " chooses whether trajectories are written (" +
+            FormatNames([](const auto& x) { return !x.chooses_trajectories; }, " and ") +
+            " always hold them)");
+  if (o.trajectories && o.no_trajectories)
+    throw InputError(kCommandLine, 0, "--trajectories", "contradicts --no-trajectories");
+  for (const auto& other : db::ExportFormats())
+    if (&other != &f && !other.file_extension.empty() && o.out.ends_with(other.file_extension))
+      throw InputError(
+          o.out, 0, "--out",
+          fmt::format("a {} file name needs --format {}", other.file_extension, other.name));
 }
 
 int RunExport(const ExportOpts& o) {
-  if (!o.participant.empty() && o.format != "xdf")
-    throw InputError(kCommandLine, 0, "--participant", "only --format xdf selects participants");
-  if ((o.trajectories || o.no_trajectories) && o.format != "csv")
-    throw InputError(kCommandLine, 0, o.trajectories ? "--trajectories" : "--no-trajectories",
-                     "only --format csv chooses whether trajectories are written (BIDS and XDF "
-                     "always hold them)");
-  if (o.trajectories && o.no_trajectories)
-    throw InputError(kCommandLine, 0, "--trajectories", "contradicts --no-trajectories");
-  if (o.format != "xdf" && o.out.ends_with(".xdf"))
-    throw InputError(o.out, 0, "--out", "a .xdf file name needs --format xdf");
+  const db::ExportFormat* format = db::FindExportFormat(o.format);
+  if (!format)  // CLI11 checks the choices; kept for a format removed between the two
+    throw InputError(kCommandLine, 0, "--format",
+                     "expected " + FormatNames([](auto&) { return true; }));
+  CheckOptions(o, *format);
   const auto start = std::chrono::steady_clock::now();
-  const auto log = StderrLog(o.quiet || o.json);
   // quick_check first: a damaged record is refused, never exported.
   const db::Database database = db::OpenForReading(o.db);
-  std::vector<db::ExportedFile> files;
-  if (o.format == "bids") {
-    files = db::ExportBids(database, o.out, log);
-  } else if (o.format == "xdf") {
-    files = db::ExportXdf(database, o.out, o.participant, log);
-  } else {
-    // The trajectory tables can be hundreds of MB: their size is said before either choice.
-    const auto size = db::CountTrajectories(database);
-    const std::string what = fmt::format("{} samples of {} streams, about {} as CSV", size.samples,
-                                         size.streams, Megabytes(size.estimated_bytes));
-    if (size.samples > 0)
-      log(o.trajectories ? "writing trajectories: " + what
-                         : "trajectories left out (" + what + "): --trajectories writes them");
-    files = db::ExportCsv(database, o.out, o.trajectories, log);
-  }
+  const std::vector<db::ExportedFile> files =
+      format->write(database, {.out = o.out,
+                               .participant = o.participant,
+                               .trajectories = o.trajectories,
+                               .progress = StderrLog(o.quiet || o.json)});
   std::uintmax_t bytes = 0;
   for (const auto& f : files) bytes += FileBytes(f.path);
   const double seconds =
@@ -95,7 +90,7 @@ int RunExport(const ExportOpts& o) {
     nlohmann::json j = nlohmann::json::array();
     for (const auto& f : files) {
       nlohmann::json e{{"path", f.path}, {"bytes", FileBytes(f.path)}};
-      if (o.format == "xdf")
+      if (format->counts_streams)
         e.update({{"streams", f.streams}, {"samples", f.samples}});
       else
         e["rows"] = f.rows;
@@ -103,9 +98,21 @@ int RunExport(const ExportOpts& o) {
     }
     PrintJson(nlohmann::json{{"files", j}, {"bytes", bytes}, {"seconds", seconds}});
   } else {
-    fmt::print("{}\n", Summary(o, files, bytes, seconds));
+    fmt::print("{} export of {}: {} -> {} ({}, {:.1f} s)\n", o.format, o.db,
+               format->describe(files), o.out, Megabytes(bytes), seconds);
   }
   return kExitOk;
+}
+
+// The help of --format's choices: each format's name and its lines, indented.
+std::string FormatsHelp() {
+  std::string s;
+  for (const auto& f : db::ExportFormats()) {
+    s += fmt::format("  {:<6}", f.name);
+    for (char c : f.help) s += c == '\n' ? std::string("\n        ") : std::string(1, c);
+    s += "\n";
+  }
+  return s;
 }
 
 }  // namespace
@@ -114,24 +121,19 @@ void RegisterExport(CLI::App& app) {
   auto o = std::make_shared<ExportOpts>();
   auto* cmd = app.add_subcommand(
       "export",
-      "Write a study database for other tools (docs/analysis.md shows how to load each):\n"
-      "  csv   tidy long-format CSV tables (ratings, trials, events; with --trajectories one\n"
-      "        file per trajectory stream) that R's read.csv and pandas.read_csv read\n"
-      "        directly; --out DIR\n"
-      "  bids  a BIDS dataset (ratings as beh/*_beh.tsv, force and vibration trajectories as\n"
-      "        physio recordings with unit sidecars, protocol and models under code/) that the\n"
-      "        official bids-validator accepts; --out DIR\n"
-      "  xdf   XDF (Lab Streaming Layer) files, one per session: a stream per trajectory\n"
-      "        stream plus event and rating marker streams on one clock; --out FILE.xdf (one\n"
-      "        session: pick it with --participant) or --out DIR (one file per session)\n"
-      "Prints one progress line per participant (stderr) and a summary of what was written.\n"
-      "Only pseudonymous participant codes are written; no names or local paths.\n"
-      "A damaged database (SQLite quick_check) is refused; trajectories are those of each\n"
-      "completed trial's completing attempt, checked against the sample counts stored at\n"
-      "completion (a mismatch refuses the export, exit 2).");
+      "Write a study database for other tools (docs/analysis.md shows how to load each):\n" +
+          FormatsHelp() +
+          "Prints one progress line per participant (stderr) and a summary of what was written.\n"
+          "Only pseudonymous participant codes are written; no names or local paths.\n"
+          "A damaged database (SQLite quick_check) is refused; trajectories are those of each\n"
+          "completed trial's completing attempt, checked against the sample counts stored at\n"
+          "completion (a mismatch refuses the export, exit 2).");
   cmd->add_option("--db", o->db, "Study database (SQLite) to read")->required();
-  cmd->add_option("--format", o->format, "Output format: csv, bids or xdf")
-      ->check(CLI::IsMember({"csv", "bids", "xdf"}))
+  std::vector<std::string> names;
+  for (const auto& f : db::ExportFormats()) names.push_back(f.name);
+  cmd->add_option("--format", o->format,
+                  "Output format: " + FormatNames([](auto&) { return true; }))
+      ->check(CLI::IsMember(names))
       ->capture_default_str();
   cmd->add_option("--out", o->out,
                   "Directory to write (created when missing), or FILE.xdf for --format xdf")

@@ -225,6 +225,292 @@ void RunStudyGuarded(const std::function<int()>& body) {
              body);
 }
 
+// One registration per subcommand of 'study'.
+
+void RegisterStudyValidate(CLI::App* study) {
+  auto path = std::make_shared<std::string>();
+  auto device = std::make_shared<std::string>("sim");
+  auto ui = std::make_shared<bool>(false);
+  auto* cmd = study->add_subcommand(
+      "validate",
+      "Check a protocol as 'study run' would before it starts: the protocol itself (planned and\n"
+      "adaptive phases), the profiles file and every model file (looked up relative to the\n"
+      "protocol file's folder), every material's profile. Every problem is listed with file,\n"
+      "line and key.");
+  cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
+  cmd->add_option("--device", *device, "Check for this back-end (as 'study run --device')")
+      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+      ->capture_default_str();
+  cmd->add_flag("--ui", *ui,
+                "Check for a session rated in the participant window (as 'study run --ui')");
+  cmd->callback([=] {
+    RunGuarded([&] {
+      const auto p = protocols::LoadProtocol(*path);
+      runner::CheckRunnable(p, *device, *ui);
+      int rated = 0;
+      for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
+      int adaptive = 0;  // staircase / quest-plus phases: trials chosen at run time
+      for (const auto& ph : p.phases) adaptive += ph.adaptive.has_value();
+      fmt::print(
+          "{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per "
+          "participant{}\n",
+          *path, p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated,
+          adaptive ? fmt::format(", {} adaptive phase(s) (staircase/quest-plus)", adaptive) : "");
+      return kExitOk;
+    });
+  });
+}
+
+void RegisterStudyPlan(CLI::App* study) {
+  auto path = std::make_shared<std::string>();
+  auto index = std::make_shared<int>(0);
+  auto code = std::make_shared<std::string>();
+  auto db = std::make_shared<std::string>();
+  auto as_json = std::make_shared<bool>(false);
+  auto* cmd = study->add_subcommand(
+      "plan",
+      "Print a participant's exact trial list (deterministic from protocol, seed and plan "
+      "index).\n"
+      "Trials are numbered from 1, as the log, the console, events.csv and every export number\n"
+      "them; plan_index in the JSON counts from 0.");
+  cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
+  auto* idx = cmd->add_option(
+                     "--index", *index,
+                     "Plan index of the participant (0-based; 'study run' gives the next free one)")
+                  ->capture_default_str()
+                  ->check(CLI::NonNegativeNumber);
+  auto* part =
+      cmd->add_option("--participant", *code,
+                      "Participant code (e.g. P07) of a participant in --db: their plan index");
+  cmd->add_option("--db", *db, "Study database, to look up --participant's plan index");
+  part->excludes(idx);
+  cmd->add_flag("--json", *as_json, "Print the plan as JSON");
+  cmd->callback([=] {
+    RunStudyGuarded([&] {
+      const auto p = protocols::LoadProtocol(*path);
+      if (!code->empty()) {
+        if (db->empty())
+          throw InputError(kCommandLine, 0, "--participant",
+                           "a participant code is looked up in a study database: add --db (or "
+                           "give --index N)");
+        *index = runner::ParticipantIndex(*db, p.name, *code);
+      }
+      const auto plan = protocols::Plan(p, *index);
+      if (*as_json) {
+        PrintJson(json{{"study", p.name},
+                       {"participant_index", *index},
+                       {"participant_seed", protocols::ParticipantSeed(p, *index)},
+                       {"trials", runner::PlanToJson(plan)}});
+        return kExitOk;
+      }
+      fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n",
+                 p.name, code->empty() ? "" : *code + ", ", *index,
+                 protocols::ParticipantSeed(p, *index));
+      fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", "#", "phase",
+                 "material", "comparison", "method", "rep", "left", "right");
+      for (const auto& t : plan) {
+        if (t.break_before) fmt::print("      --- break ---\n");
+        fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index + 1,
+                   protocols::ToString(t.phase), t.material, t.comparison, t.method, t.repetition,
+                   t.left, t.right);
+      }
+      return kExitOk;
+    });
+  });
+}
+
+// Adds the device/actuator/screen options shared by run and resume.
+void AddHardwareOptions(CLI::App* cmd, RunArgs& a) {
+  cmd->add_option(
+         "--device", a.device,
+         "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by "
+         "the\n"
+         "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
+         "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
+         "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
+      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+      ->capture_default_str();
+  cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
+  cmd->add_option("--actuator", a.actuator,
+                  "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
+      ->check(CLI::IsMember({"audio", "none"}))
+      ->capture_default_str();
+  cmd->add_option("--audio-device", a.audio_device,
+                  "PortAudio output device (name substring; default: the default output)");
+  cmd->add_option("--full-scale", a.full_scale_mps2,
+                  "Acceleration at the sound card's full scale [m/s^2] (calibration)")
+      ->capture_default_str();
+  cmd->add_option("--noise-rms", a.noise_rms,
+                  "Masking noise level (RMS, full-scale units) when the protocol asks for it")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 0.5));
+  cmd->add_option(
+      "--rig", a.rig_file,
+      "Rig file (TOML): device and sample frames, stylus tip offset, force calibration\n"
+      "(docs/hardware.md; 'hapticlab rig show'). Default: the back-end's built-in rig");
+  cmd->add_option("--rating-box", a.rating_box,
+                  "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
+  cmd->add_option("--rating-layout", a.rating_layout,
+                  "TOML layout of the box's reports (docs/hardware.md)");
+  cmd->add_flag("--ui", a.ui,
+                "Participant window and experimenter console (GLFW; needs a display)");
+  cmd->add_flag("--fullscreen", a.fullscreen, "Participant window full screen on the last monitor");
+  cmd->add_option("--ui-speed", a.ui_speed,
+                  "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
+      ->capture_default_str()
+      ->check(CLI::Range(0.1, 1000.0));
+  AddRtOptions(cmd, a.rt);
+}
+
+// What study run and resume record and print.
+void AddSessionOptions(CLI::App* cmd, RunArgs& a) {
+  cmd->add_option("--record", a.record, "What to record per trial")
+      ->check(CLI::IsMember({"all", "force", "none"}))
+      ->capture_default_str();
+  cmd->add_flag("--json", a.json, "Print the summary as JSON");
+  cmd->add_flag("--quiet", a.quiet,
+                "No per-trial progress (faulted attempts are still printed, on stderr)");
+  cmd->add_option(
+      "--consent-confirmed-by", a.consent_by,
+      "Code of the experimenter who confirmed the participant's consent to the protocol's\n"
+      "[consent] document and version (e.g. E01; a pseudonymous code, never a name).\n"
+      "Needed when a person takes part (--ui, or a hardware device); recorded as the\n"
+      "'consent' event. A simulated session records consent as not applicable.");
+}
+
+void RegisterStudyRun(CLI::App* study) {
+  auto a = std::make_shared<RunArgs>();
+  auto* cmd = study->add_subcommand(
+      "run",
+      "Run a new participant through the protocol and record everything to the database.\n"
+      "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
+      "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
+      "participant answers with --ui, else the phase's simulated observer; "
+      "docs/psychophysics.md).\n"
+      "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
+      "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
+      "with\n"
+      "'study resume'; 2 bad input; 1 any other failure.");
+  cmd->add_option("PROTOCOL", a->protocol,
+                  "Study protocol (.toml); with --plan: instead of the plan's");
+  cmd->add_option("--plan", a->plan,
+                  "Preregistered plan (study freeze) or imported site directory (study import):\n"
+                  "verified, its protocol run, its hash recorded (docs/replication.md)");
+  cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
+  cmd->add_option("--participant", a->participant,
+                  "Pseudonymous participant code, e.g. P07: a new one, or one reserved by\n"
+                  "'participant new' (it runs with its reserved plan index)")
+      ->required();
+  cmd->add_option("--index", a->index,
+                  "Plan index of the participant (default: the reserved or the next free one)");
+  AddHardwareOptions(cmd, *a);
+  AddSessionOptions(cmd, *a);
+  cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
+  cmd->add_option("--inject-faults", a->fault_rate, "Sim: probability of a device fault per trial")
+      ->check(CLI::Range(0.0, 0.9));
+  cmd->add_option("--site", a->site,
+                  "Site code recorded with the session: a short pseudonymous code (up to 8\n"
+                  "characters, e.g. S02; never a lab's name). 'db merge' keeps sites apart\n"
+                  "(docs/replication.md, \"Combining sites\")")
+      ->capture_default_str();
+  cmd->add_option("--site-offset", a->site_offset,
+                  "Simulated observer: add this many rating points to every rating (a site\n"
+                  "effect, for replication examples and tests)")
+      ->check(CLI::Range(-50.0, 50.0));
+  cmd->callback([a] {
+    RunStudyGuarded([&] {
+      runner::RunOptions o;
+      const auto p = LoadRunProtocol(a->protocol, a->plan, &o, a->quiet || a->json);
+      o.participant_index = a->index;
+      o.fault_rate = a->fault_rate;
+      o.site = a->site;
+      o.site_offset = a->site_offset;
+      return RunSession(*a, p.name, o,
+                        [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
+    });
+  });
+}
+
+void RegisterStudyResume(CLI::App* study) {
+  auto a = std::make_shared<RunArgs>();
+  auto* cmd = study->add_subcommand(
+      "resume",
+      "Continue a participant's session where a crash, abort or signal left it, in the mode it "
+      "was\n"
+      "recorded in (device, actuator, --ui, rating box): those options default to the recorded\n"
+      "ones, and a different mode is refused unless --change-mode is given (then it is logged).\n"
+      "Exit status as for 'study run': 0 completed, 3 stopped again.");
+  cmd->add_option("--db", a->db, "Study database")->required();
+  cmd->add_option("--participant", a->participant, "Participant code")->required();
+  cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
+  AddHardwareOptions(cmd, *a);
+  AddSessionOptions(cmd, *a);
+  cmd->add_flag(
+      "--change-mode", a->change_mode,
+      "Continue in the mode these options give although it differs from the recorded one\n"
+      "(logged as a 'mode-change' event; every rating records its source)");
+  cmd->callback([a, cmd] {
+    RunStudyGuarded([&] {
+      // Options not given take the recorded mode's values.
+      const auto rec = runner::RecordedMode(a->db, a->participant);
+      if (cmd->count("--device") == 0) a->device = rec.device;
+      if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded") a->actuator = rec.actuator;
+      if (cmd->count("--ui") == 0) a->ui = rec.screens;
+      if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
+        a->rating_box = rec.rater.substr(std::string("rating-box:").size());
+      a->recorded_mode = rec.Describe();
+      // Refused before any device or window is opened.
+      runner::CheckResumeMode(
+          rec,
+          {a->device, a->actuator, a->ui,
+           a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
+                 : std::string("simulated")},
+          a->change_mode, a->db, a->participant);
+      runner::RunOptions o;
+      o.change_mode = a->change_mode;
+      return RunSession(*a, "resume", o,
+                        [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
+    });
+  });
+}
+
+void RegisterStudyStatus(CLI::App* study) {
+  auto a = std::make_shared<RunArgs>();
+  auto* cmd = study->add_subcommand(
+      "status",
+      "Progress of each participant: planned, completed, faulted (attempts, each re-queued),\n"
+      "duplicates, session status (running, completed, aborted, failed)");
+  cmd->add_option("--db", a->db, "Study database")->required();
+  cmd->add_option("--participant", a->participant, "Only this participant");
+  cmd->add_flag(
+      "--json", a->json,
+      "Print "
+      "{\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
+  cmd->callback([a] {
+    RunStudyGuarded([&] {
+      const auto st = runner::StudyStatus(a->db, a->participant);
+      if (a->json) {
+        json ps = json::array();
+        for (const auto& s : st)
+          ps.push_back({{"code", s.code},
+                        {"planned", s.planned},
+                        {"completed", s.completed},
+                        {"faulted", s.faulted},
+                        {"duplicates", s.duplicates},
+                        {"session_status", s.session_status}});
+        PrintJson(json{{"participants", ps}});
+      } else {
+        fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned", "completed",
+                   "faulted", "duplicates", "session");
+        for (const auto& s : st)
+          fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", s.code, s.planned, s.completed,
+                     s.faulted, s.duplicates, s.session_status);
+      }
+      return kExitOk;
+    });
+  });
+}
+
 }  // namespace
 
 void RegisterStudy(CLI::App& app) {
@@ -233,290 +519,12 @@ void RegisterStudy(CLI::App& app) {
   study->require_subcommand(1);
   RegisterPower(*study);
   RegisterCalibrate(*study);
-  RegisterStudyPlan(*study);
-
-  {
-    auto path = std::make_shared<std::string>();
-    auto device = std::make_shared<std::string>("sim");
-    auto ui = std::make_shared<bool>(false);
-    auto* cmd = study->add_subcommand(
-        "validate",
-        "Check a protocol as 'study run' would before it starts: the protocol itself (planned and\n"
-        "adaptive phases), the profiles file and every model file (looked up relative to the\n"
-        "protocol file's folder), every material's profile. Every problem is listed with file,\n"
-        "line and key.");
-    cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
-    cmd->add_option("--device", *device, "Check for this back-end (as 'study run --device')")
-        ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
-        ->capture_default_str();
-    cmd->add_flag("--ui", *ui,
-                  "Check for a session rated in the participant window (as 'study run --ui')");
-    cmd->callback([=] {
-      RunGuarded([&] {
-        const auto p = protocols::LoadProtocol(*path);
-        runner::CheckRunnable(p, *device, *ui);
-        int rated = 0;
-        for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
-        int adaptive = 0;  // staircase / quest-plus phases: trials chosen at run time
-        for (const auto& ph : p.phases) adaptive += ph.adaptive.has_value();
-        fmt::print(
-            "{}: ok — study '{}', {} materials, {} methods, {} criteria, {} rated trials per "
-            "participant{}\n",
-            *path, p.name, p.materials.size(), p.methods.size(), p.criteria.size(), rated,
-            adaptive ? fmt::format(", {} adaptive phase(s) (staircase/quest-plus)", adaptive) : "");
-        return kExitOk;
-      });
-    });
-  }
-  {
-    auto path = std::make_shared<std::string>();
-    auto index = std::make_shared<int>(0);
-    auto code = std::make_shared<std::string>();
-    auto db = std::make_shared<std::string>();
-    auto as_json = std::make_shared<bool>(false);
-    auto* cmd = study->add_subcommand(
-        "plan",
-        "Print a participant's exact trial list (deterministic from protocol, seed and plan "
-        "index).\n"
-        "Trials are numbered from 1, as the log, the console, events.csv and every export number\n"
-        "them; plan_index in the JSON counts from 0.");
-    cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
-    auto* idx =
-        cmd->add_option(
-               "--index", *index,
-               "Plan index of the participant (0-based; 'study run' gives the next free one)")
-            ->capture_default_str()
-            ->check(CLI::NonNegativeNumber);
-    auto* part =
-        cmd->add_option("--participant", *code,
-                        "Participant code (e.g. P07) of a participant in --db: their plan index");
-    cmd->add_option("--db", *db, "Study database, to look up --participant's plan index");
-    part->excludes(idx);
-    cmd->add_flag("--json", *as_json, "Print the plan as JSON");
-    cmd->callback([=] {
-      RunStudyGuarded([&] {
-        const auto p = protocols::LoadProtocol(*path);
-        if (!code->empty()) {
-          if (db->empty())
-            throw InputError(kCommandLine, 0, "--participant",
-                             "a participant code is looked up in a study database: add --db (or "
-                             "give --index N)");
-          *index = runner::ParticipantIndex(*db, p.name, *code);
-        }
-        const auto plan = protocols::Plan(p, *index);
-        if (*as_json) {
-          PrintJson(json{{"study", p.name},
-                         {"participant_index", *index},
-                         {"participant_seed", protocols::ParticipantSeed(p, *index)},
-                         {"trials", runner::PlanToJson(plan)}});
-          return kExitOk;
-        }
-        fmt::print("study {} — participant {}plan index {} (seed {}); trials numbered from 1\n",
-                   p.name, code->empty() ? "" : *code + ", ", *index,
-                   protocols::ParticipantSeed(p, *index));
-        fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", "#", "phase",
-                   "material", "comparison", "method", "rep", "left", "right");
-        for (const auto& t : plan) {
-          if (t.break_before) fmt::print("      --- break ---\n");
-          fmt::print("{:>4}  {:<9} {:<16} {:<16} {:<10} {:>3}  {:<24} {:<24}\n", t.index + 1,
-                     protocols::ToString(t.phase), t.material, t.comparison, t.method, t.repetition,
-                     t.left, t.right);
-        }
-        return kExitOk;
-      });
-    });
-  }
-
-  // Adds the device/actuator/screen options shared by run and resume.
-  auto hardware_options = [](CLI::App* cmd, RunArgs& a) {
-    cmd->add_option(
-           "--device", a.device,
-           "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by "
-           "the\n"
-           "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
-           "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
-           "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
-        ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
-        ->capture_default_str();
-    cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
-    cmd->add_option("--actuator", a.actuator,
-                    "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
-        ->check(CLI::IsMember({"audio", "none"}))
-        ->capture_default_str();
-    cmd->add_option("--audio-device", a.audio_device,
-                    "PortAudio output device (name substring; default: the default output)");
-    cmd->add_option("--full-scale", a.full_scale_mps2,
-                    "Acceleration at the sound card's full scale [m/s^2] (calibration)")
-        ->capture_default_str();
-    cmd->add_option("--noise-rms", a.noise_rms,
-                    "Masking noise level (RMS, full-scale units) when the protocol asks for it")
-        ->capture_default_str()
-        ->check(CLI::Range(0.0, 0.5));
-    cmd->add_option(
-        "--rig", a.rig_file,
-        "Rig file (TOML): device and sample frames, stylus tip offset, force calibration\n"
-        "(docs/hardware.md; 'hapticlab rig show'). Default: the back-end's built-in rig");
-    cmd->add_option("--rating-box", a.rating_box,
-                    "USB HID rating box as VID:PID in hex (e.g. 16c0:05df); needs --rating-layout");
-    cmd->add_option("--rating-layout", a.rating_layout,
-                    "TOML layout of the box's reports (docs/hardware.md)");
-    cmd->add_flag("--ui", a.ui,
-                  "Participant window and experimenter console (GLFW; needs a display)");
-    cmd->add_flag("--fullscreen", a.fullscreen,
-                  "Participant window full screen on the last monitor");
-    cmd->add_option("--ui-speed", a.ui_speed,
-                    "Sim with --ui: play the simulated strokes (and the breaks) this much faster")
-        ->capture_default_str()
-        ->check(CLI::Range(0.1, 1000.0));
-    AddRtOptions(cmd, a.rt);
-  };
-  // What study run and resume record and print.
-  auto session_options = [](CLI::App* cmd, RunArgs& a) {
-    cmd->add_option("--record", a.record, "What to record per trial")
-        ->check(CLI::IsMember({"all", "force", "none"}))
-        ->capture_default_str();
-    cmd->add_flag("--json", a.json, "Print the summary as JSON");
-    cmd->add_flag("--quiet", a.quiet,
-                  "No per-trial progress (faulted attempts are still printed, on stderr)");
-    cmd->add_option(
-        "--consent-confirmed-by", a.consent_by,
-        "Code of the experimenter who confirmed the participant's consent to the protocol's\n"
-        "[consent] document and version (e.g. E01; a pseudonymous code, never a name).\n"
-        "Needed when a person takes part (--ui, or a hardware device); recorded as the\n"
-        "'consent' event. A simulated session records consent as not applicable.");
-  };
-  {
-    auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand(
-        "run",
-        "Run a new participant through the protocol and record everything to the database.\n"
-        "Each trial's ratings commit in one transaction; after a crash use 'study resume'.\n"
-        "Staircase / QUEST+ phases run after the planned ones (--device sim or falcon-twin; the\n"
-        "participant answers with --ui, else the phase's simulated observer; "
-        "docs/psychophysics.md).\n"
-        "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
-        "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
-        "with\n"
-        "'study resume'; 2 bad input; 1 any other failure.");
-    cmd->add_option("PROTOCOL", a->protocol,
-                    "Study protocol (.toml); with --plan: instead of the plan's");
-    cmd->add_option("--plan", a->plan,
-                    "Preregistered plan (study freeze) or imported site directory (study import):\n"
-                    "verified, its protocol run, its hash recorded (docs/replication.md)");
-    cmd->add_option("--db", a->db, "Study database (created when missing)")->required();
-    cmd->add_option("--participant", a->participant,
-                    "Pseudonymous participant code, e.g. P07: a new one, or one reserved by\n"
-                    "'participant new' (it runs with its reserved plan index)")
-        ->required();
-    cmd->add_option("--index", a->index,
-                    "Plan index of the participant (default: the reserved or the next free one)");
-    hardware_options(cmd, *a);
-    session_options(cmd, *a);
-    cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
-    cmd->add_option("--inject-faults", a->fault_rate,
-                    "Sim: probability of a device fault per trial")
-        ->check(CLI::Range(0.0, 0.9));
-    cmd->add_option("--site", a->site,
-                    "Site code recorded with the session: a short pseudonymous code (up to 8\n"
-                    "characters, e.g. S02; never a lab's name). 'db merge' keeps sites apart\n"
-                    "(docs/replication.md, \"Combining sites\")")
-        ->capture_default_str();
-    cmd->add_option("--site-offset", a->site_offset,
-                    "Simulated observer: add this many rating points to every rating (a site\n"
-                    "effect, for replication examples and tests)")
-        ->check(CLI::Range(-50.0, 50.0));
-    cmd->callback([a] {
-      RunStudyGuarded([&] {
-        runner::RunOptions o;
-        const auto p = LoadRunProtocol(a->protocol, a->plan, &o, a->quiet || a->json);
-        o.participant_index = a->index;
-        o.fault_rate = a->fault_rate;
-        o.site = a->site;
-        o.site_offset = a->site_offset;
-        return RunSession(*a, p.name, o,
-                          [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
-      });
-    });
-  }
-  {
-    auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand(
-        "resume",
-        "Continue a participant's session where a crash, abort or signal left it, in the mode it "
-        "was\n"
-        "recorded in (device, actuator, --ui, rating box): those options default to the recorded\n"
-        "ones, and a different mode is refused unless --change-mode is given (then it is logged).\n"
-        "Exit status as for 'study run': 0 completed, 3 stopped again.");
-    cmd->add_option("--db", a->db, "Study database")->required();
-    cmd->add_option("--participant", a->participant, "Participant code")->required();
-    cmd->add_option("--stop-after", a->stop_after, "Abort again after this many trials (tests)");
-    hardware_options(cmd, *a);
-    session_options(cmd, *a);
-    cmd->add_flag(
-        "--change-mode", a->change_mode,
-        "Continue in the mode these options give although it differs from the recorded one\n"
-        "(logged as a 'mode-change' event; every rating records its source)");
-    cmd->callback([a, cmd] {
-      RunStudyGuarded([&] {
-        // Options not given take the recorded mode's values.
-        const auto rec = runner::RecordedMode(a->db, a->participant);
-        if (cmd->count("--device") == 0) a->device = rec.device;
-        if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded")
-          a->actuator = rec.actuator;
-        if (cmd->count("--ui") == 0) a->ui = rec.screens;
-        if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
-          a->rating_box = rec.rater.substr(std::string("rating-box:").size());
-        a->recorded_mode = rec.Describe();
-        // Refused before any device or window is opened.
-        runner::CheckResumeMode(
-            rec,
-            {a->device, a->actuator, a->ui,
-             a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
-                   : std::string("simulated")},
-            a->change_mode, a->db, a->participant);
-        runner::RunOptions o;
-        o.change_mode = a->change_mode;
-        return RunSession(*a, "resume", o,
-                          [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
-      });
-    });
-  }
-  {
-    auto a = std::make_shared<RunArgs>();
-    auto* cmd = study->add_subcommand(
-        "status",
-        "Progress of each participant: planned, completed, faulted (attempts, each re-queued),\n"
-        "duplicates, session status (running, completed, aborted, failed)");
-    cmd->add_option("--db", a->db, "Study database")->required();
-    cmd->add_option("--participant", a->participant, "Only this participant");
-    cmd->add_flag(
-        "--json", a->json,
-        "Print "
-        "{\"participants\":[{\"code\",\"planned\",\"completed\",\"faulted\",\"duplicates\"}]}");
-    cmd->callback([a] {
-      RunStudyGuarded([&] {
-        const auto st = runner::StudyStatus(a->db, a->participant);
-        if (a->json) {
-          json ps = json::array();
-          for (const auto& s : st)
-            ps.push_back({{"code", s.code},
-                          {"planned", s.planned},
-                          {"completed", s.completed},
-                          {"faulted", s.faulted},
-                          {"duplicates", s.duplicates},
-                          {"session_status", s.session_status}});
-          PrintJson(json{{"participants", ps}});
-        } else {
-          fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned",
-                     "completed", "faulted", "duplicates", "session");
-          for (const auto& s : st)
-            fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", s.code, s.planned, s.completed,
-                       s.faulted, s.duplicates, s.session_status);
-        }
-        return kExitOk;
-      });
-    });
-  }
+  RegisterStudyPreregistration(*study);
+  RegisterStudyValidate(study);
+  RegisterStudyPlan(study);
+  RegisterStudyRun(study);
+  RegisterStudyResume(study);
+  RegisterStudyStatus(study);
 }
 
 }  // namespace hapticlab::cli

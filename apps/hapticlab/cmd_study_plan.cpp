@@ -225,7 +225,7 @@ protocols::Protocol LoadRunProtocol(const std::string& protocol, const std::stri
   return std::move(run.protocol);
 }
 
-void RegisterStudyPlan(CLI::App& study) {
+void RegisterStudyPreregistration(CLI::App& study) {
   RegisterFreeze(study);
   RegisterVerify(study);
   RegisterBundle(study);

@@ -18,7 +18,7 @@ void RegisterPower(CLI::App& study);
 /// `study calibrate` (cmd_calibrate.cpp), registered under the study group.
 void RegisterCalibrate(CLI::App& study);
 /// `study freeze`, `verify`, `bundle`, `import` (cmd_study_plan.cpp), under the study group.
-void RegisterStudyPlan(CLI::App& study);
+void RegisterStudyPreregistration(CLI::App& study);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);

@@ -13,6 +13,7 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/export_formats.hpp"
 #include "sqlite_util.hpp"
 
 namespace hapticlab::db {
@@ -265,6 +266,34 @@ TrajectorySize CountTrajectories(const Database& db) {
                                                  static_cast<double>(q.Int(3)));
   }
   return z;
+}
+
+ExportFormat CsvExportFormat() {
+  ExportFormat f;
+  f.name = "csv";
+  f.help =
+      "tidy long-format CSV tables (ratings, trials, events; with --trajectories one\n"
+      "file per trajectory stream) that R's read.csv and pandas.read_csv read\n"
+      "directly; --out DIR";
+  f.chooses_trajectories = true;
+  f.write = [](const Database& db, const ExportRequest& r) {
+    // The trajectory tables can be hundreds of MB: their size is said before either choice.
+    const auto size = CountTrajectories(db);
+    const std::string what =
+        fmt::format("{} samples of {} streams, about {:.1f} MB as CSV", size.samples, size.streams,
+                    static_cast<double>(size.estimated_bytes) / 1e6);
+    if (size.samples > 0 && r.progress)
+      r.progress(r.trajectories
+                     ? "writing trajectories: " + what
+                     : "trajectories left out (" + what + "): --trajectories writes them");
+    return ExportCsv(db, r.out, r.trajectories, r.progress);
+  };
+  f.describe = [](const std::vector<ExportedFile>& files) {
+    std::size_t rows = 0;
+    for (const auto& x : files) rows += x.rows;
+    return fmt::format("{} tables, {} rows", files.size(), rows);
+  };
+  return f;
 }
 
 }  // namespace hapticlab::db

@@ -16,6 +16,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/version.hpp"
+#include "hapticlab/db/export_formats.hpp"
 #include "hapticlab/db/interchange.hpp"
 #include "interchange_internal.hpp"
 #include "sqlite_util.hpp"
@@ -332,6 +333,28 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
     if (last) trials = recordings = samples = ratings = 0;
   }
   return files;
+}
+
+ExportFormat BidsExportFormat() {
+  ExportFormat f;
+  f.name = "bids";
+  f.help =
+      "a BIDS dataset (ratings as beh/*_beh.tsv, force and vibration trajectories as\n"
+      "physio recordings with unit sidecars, protocol and models under code/) that the\n"
+      "official bids-validator accepts; --out DIR";
+  f.write = [](const Database& db, const ExportRequest& r) {
+    return ExportBids(db, r.out, r.progress);
+  };
+  f.describe = [](const std::vector<ExportedFile>& files) {
+    std::size_t beh = 0, beh_rows = 0, physio = 0, physio_samples = 0;
+    for (const auto& x : files) {
+      if (x.path.ends_with("_beh.tsv")) ++beh, beh_rows += x.rows;
+      if (x.path.ends_with("_physio.tsv.gz")) ++physio, physio_samples += x.rows;
+    }
+    return fmt::format("{} files: {} rating tables ({} ratings), {} physio recordings ({} samples)",
+                       files.size(), beh, beh_rows, physio, physio_samples);
+  };
+  return f;
 }
 
 }  // namespace hapticlab::db

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/db/export_formats.hpp"
 #include "hapticlab/db/interchange.hpp"
 #include "interchange_internal.hpp"
 #include "xdf_writer.hpp"
@@ -240,6 +241,28 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
     }
   }
   return files;
+}
+
+ExportFormat XdfExportFormat() {
+  ExportFormat f;
+  f.name = "xdf";
+  f.help =
+      "XDF (Lab Streaming Layer) files, one per session: a stream per trajectory\n"
+      "stream plus event and rating marker streams on one clock; --out FILE.xdf (one\n"
+      "session: pick it with --participant) or --out DIR (one file per session)";
+  f.selects_participants = true;
+  f.counts_streams = true;
+  f.file_extension = ".xdf";
+  f.write = [](const Database& db, const ExportRequest& r) {
+    return ExportXdf(db, r.out, r.participant, r.progress);
+  };
+  f.describe = [](const std::vector<ExportedFile>& files) {
+    std::size_t streams = 0, samples = 0;
+    for (const auto& x : files) streams += x.streams, samples += x.samples;
+    return fmt::format("{} XDF file{}, {} streams, {} samples", files.size(),
+                       files.size() == 1 ? "" : "s", streams, samples);
+  };
+  return f;
 }
 
 }  // namespace hapticlab::db

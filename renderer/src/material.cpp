@@ -9,10 +9,12 @@
 #include <optional>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/fields.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/delaunay.hpp"
+#include "material_fields.hpp"
 
 namespace hapticlab::renderer {
 namespace {
@@ -92,25 +94,6 @@ class Reader {
   Diagnostics* d_;
 };
 
-void CheckKnownKeys(Reader& r, const toml::table& t, const std::string& prefix,
-                    std::initializer_list<const char*> known) {
-  for (const auto& [k, v] : t) {
-    const std::string_view key = k.str();  // (clang 14 cannot capture a structured binding)
-    if (std::none_of(known.begin(), known.end(), [&](const char* name) { return key == name; }))
-      r.Error(&v, prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str()),
-              "unknown key (a typo?)");
-  }
-}
-
-HuntCrossleyParams ReadHc(Reader& r, const toml::table& t, const std::string& prefix,
-                          HuntCrossleyParams def, bool k_required) {
-  HuntCrossleyParams p = def;
-  if (auto v = r.Number(t, "contact", prefix + "_K", k_required)) p.K = *v;
-  if (auto v = r.Number(t, "contact", prefix + "_B", false)) p.B = *v;
-  if (auto v = r.Number(t, "contact", prefix + "_n", false)) p.n = *v;
-  return p;
-}
-
 void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
                    VibrationBank* bank, int depth);
 
@@ -139,20 +122,20 @@ void ReadVibrationFile(Reader& r, const toml::node* at, const std::filesystem::p
 
 void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
                    VibrationBank* bank, int depth) {
-  CheckKnownKeys(r, t, "vibration",
-                 {"file", "sample_rate_hz", "min_speed_mps", "max_speed_mps", "max_force_N",
-                  "light_force_N", "speeds_mps", "forces_N", "cells", "triangles"});
-  if (auto f = r.String(t, "vibration", "file", false)) {
-    ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
+  fields::FieldReader fr(t, "vibration", r.file(), &r.diag());
+  if (t.contains("file")) {  // the bank lives in a file of its own
+    fr.CheckKnown(internal::VibrationFields());
+    if (auto f = r.String(t, "vibration", "file", false))
+      ReadVibrationFile(r, t.get("file"), base / *f, bank, depth);
     return;
   }
-  if (auto v = r.Number(t, "vibration", "sample_rate_hz", true)) bank->sample_rate_hz = *v;
-  if (auto v = r.Number(t, "vibration", "min_speed_mps", false)) bank->min_speed_mps = *v;
-  if (auto v = r.Number(t, "vibration", "max_speed_mps", false)) bank->max_speed_mps = *v;
-  if (auto v = r.Number(t, "vibration", "max_force_N", false)) bank->max_force_N = *v;
-  if (auto v = r.Number(t, "vibration", "light_force_N", false)) bank->light_force_N = *v;
-  bank->grid_speeds_mps = r.Numbers(t, "vibration", "speeds_mps", false);
-  bank->grid_forces_N = r.Numbers(t, "vibration", "forces_N", false);
+  fr.Read(internal::VibrationFields(), bank);
+  if (!(bank->max_speed_mps == 0 || bank->max_speed_mps > kSaturationMarginSpeed_mps))
+    fr.Error("max_speed_mps",
+             fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));
+  if (!(bank->max_force_N == 0 || bank->max_force_N > kSaturationMarginForce_N))
+    fr.Error("max_force_N",
+             fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginForce_N));
   const toml::node* cells_node = t.get("cells");
   const toml::array* cells = cells_node ? cells_node->as_array() : nullptr;
   if (!cells) {
@@ -166,14 +149,9 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       r.Error(&(*cells)[i], prefix, "expected a table");
       continue;
     }
-    CheckKnownKeys(r, *c, prefix, {"speed_mps", "force_N", "ar", "lsf", "variance", "ma", "gain"});
     ArCell cell;
-    cell.speed_mps = r.Number(*c, prefix, "speed_mps", true).value_or(0);
-    cell.force_N = r.Number(*c, prefix, "force_N", true).value_or(0);
-    cell.coeffs = r.Numbers(*c, prefix, "ar", true);
-    cell.variance = r.Number(*c, prefix, "variance", true).value_or(0);
+    fields::FieldReader(*c, prefix, r.file(), &r.diag()).Read(internal::CellFields(), &cell);
     const int line = r.Line(c);
-    if (cell.variance < 0) r.diag().Add(r.file(), line, prefix + ".variance", "must be >= 0");
     if (cell.coeffs.empty() || cell.coeffs.size() > static_cast<std::size_t>(kMaxArOrder)) {
       r.diag().Add(r.file(), line, prefix + ".ar", fmt::format("order must be 1..{}", kMaxArOrder));
     } else if (!IsStableAr(cell.coeffs)) {
@@ -192,8 +170,6 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
                        "does not match the AR coefficients of the cell");
       }
     }
-    cell.ma = r.Numbers(*c, prefix, "ma", false);
-    cell.gain = r.Number(*c, prefix, "gain", false).value_or(1.0);
     if (!cell.ma.empty()) {
       std::vector<double> neg(cell.ma.size());
       for (std::size_t k = 0; k < neg.size(); ++k) neg[k] = -cell.ma[k];
@@ -227,106 +203,57 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
   }
 }
 
-}  // namespace
-
-MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
-  const toml::table doc = ParseTomlText(text, name);
-  Diagnostics diag;
-  Reader r(name, &diag);
-  const auto base = std::filesystem::path(name).parent_path();
-  MaterialModel m;
-  m.source_path = name;
-  CheckKnownKeys(r, doc, "",
-                 {"name", "effects", "contact", "friction", "geometry", "vibration", "hybrid",
-                  "notes", "workbench", "neural"});
-  m.name = r.String(doc, "", "name", true).value_or("");
-  if (const toml::node* e = doc.get("effects")) {
-    if (const toml::array* arr = e->as_array()) {
-      for (const auto& x : *arr) {
-        if (auto s = x.value<std::string>())
-          m.effects.push_back(*s);
-        else
-          r.Error(&x, "effects", "expected strings");
+// [geometry]: a height-map file, a sine or flat (keys declared in material_fields.cpp).
+void ReadGeometry(Reader& r, const toml::table& t, const std::filesystem::path& base,
+                  MaterialModel* m) {
+  const toml::table* g = &t;
+  const std::string& name = r.file();
+  Diagnostics& diag = r.diag();
+  fields::FieldReader(*g, "geometry", name, &diag).CheckKnown(internal::GeometryFields());
+  const std::string kind =
+      r.String(*g, "geometry", "kind", false).value_or(g->contains("file") ? "file" : "flat");
+  if (kind == "file") {
+    const auto file = r.String(*g, "geometry", "file", true);
+    const auto w = r.Number(*g, "geometry", "width", true);
+    const auto h = r.Number(*g, "geometry", "height", true);
+    const auto p = r.Number(*g, "geometry", "pitch_m", true);
+    if (p && !(*p > 0 && *p <= 0.01))
+      r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be in (0, 0.01] m");
+    // Range-checked before the narrowing cast; the file's size is checked by LoadRawF32.
+    constexpr double kMaxSide = 1 << 20;  // samples along one side
+    bool sides_ok = true;
+    for (const auto& [key, v] : {std::pair{"width", w}, std::pair{"height", h}})
+      if (v && !(*v >= 1 && *v <= kMaxSide && *v == std::floor(*v))) {
+        r.Error(g->get(key), std::string("geometry.") + key,
+                "must be a whole number of samples in 1..1048576");
+        sides_ok = false;
       }
-    } else {
-      r.Error(e, "effects", "expected an array of effect names");
+    if (file && w && h && p && *p > 0 && sides_ok) {
+      try {
+        m->geometry = std::make_shared<HeightMap>(HeightMap::LoadRawF32(
+            (base / *file).string(), static_cast<int>(*w), static_cast<int>(*h), *p));
+      } catch (const InputError& e) {
+        for (const auto& d : e.diagnostics()) diag.Add(d.file, d.line, d.field, d.message);
+        diag.Add(name, r.Line(g->get("file")), "geometry.file", "height map could not be loaded");
+      }
     }
-  }
-  if (const toml::table* c = doc["contact"].as_table()) {
-    CheckKnownKeys(r, *c, "contact",
-                   {"texture_K", "texture_B", "texture_n", "base_model", "base_K", "base_B",
-                    "base_n", "layer_thickness_m"});
-    m.contact.texture = ReadHc(r, *c, "texture", m.contact.texture, true);
-    if (auto bm = r.String(*c, "contact", "base_model", false)) {
-      if (*bm == "linear")
-        m.contact.base_model = BaseModel::kLinear;
-      else if (*bm == "hunt-crossley")
-        m.contact.base_model = BaseModel::kHuntCrossley;
+  } else if (kind == "sine") {
+    const auto a = r.Number(*g, "geometry", "amplitude_m", true);
+    const auto l = r.Number(*g, "geometry", "wavelength_m", true);
+    if (a && l) {
+      if (!(*a >= 0 && *a <= 0.01 && *l > 0 && *l <= 1))
+        r.Error(g, "geometry", "amplitude_m must be in [0, 0.01] m and wavelength_m in (0, 1] m");
       else
-        r.Error(c->get("base_model"), "contact.base_model",
-                "expected \"linear\" or \"hunt-crossley\"");
+        m->geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
     }
-    m.contact.base = ReadHc(r, *c, "base", m.contact.base, false);
-    if (auto v = r.Number(*c, "contact", "layer_thickness_m", false))
-      m.contact.layer_thickness_m = *v;
-  } else {
-    diag.Add(name, 0, "contact", "missing [contact] table");
+  } else if (kind != "flat") {
+    r.Error(g->get("kind"), "geometry.kind", "expected \"file\", \"sine\" or \"flat\"");
   }
-  if (const toml::table* f = doc["friction"].as_table()) {
-    CheckKnownKeys(r, *f, "friction", {"kappa_N_per_m", "mu_k", "mu_b_Ns_per_m"});
-    m.friction.kappa_N_per_m = r.Number(*f, "friction", "kappa_N_per_m", true).value_or(1);
-    m.friction.mu_k = r.Number(*f, "friction", "mu_k", true).value_or(0);
-    m.friction.mu_b_Ns_per_m = r.Number(*f, "friction", "mu_b_Ns_per_m", false).value_or(0);
-  } else {
-    diag.Add(name, 0, "friction", "missing [friction] table");
-  }
-  if (const toml::table* g = doc["geometry"].as_table()) {
-    CheckKnownKeys(r, *g, "geometry",
-                   {"kind", "file", "width", "height", "pitch_m", "amplitude_m", "wavelength_m"});
-    const std::string kind =
-        r.String(*g, "geometry", "kind", false).value_or(g->contains("file") ? "file" : "flat");
-    if (kind == "file") {
-      const auto file = r.String(*g, "geometry", "file", true);
-      const auto w = r.Number(*g, "geometry", "width", true);
-      const auto h = r.Number(*g, "geometry", "height", true);
-      const auto p = r.Number(*g, "geometry", "pitch_m", true);
-      if (p && !(*p > 0 && *p <= 0.01))
-        r.Error(g->get("pitch_m"), "geometry.pitch_m", "must be in (0, 0.01] m");
-      // Range-checked before the narrowing cast; the file's size is checked by LoadRawF32.
-      constexpr double kMaxSide = 1 << 20;  // samples along one side
-      bool sides_ok = true;
-      for (const auto& [key, v] : {std::pair{"width", w}, std::pair{"height", h}})
-        if (v && !(*v >= 1 && *v <= kMaxSide && *v == std::floor(*v))) {
-          r.Error(g->get(key), std::string("geometry.") + key,
-                  "must be a whole number of samples in 1..1048576");
-          sides_ok = false;
-        }
-      if (file && w && h && p && *p > 0 && sides_ok) {
-        try {
-          m.geometry = std::make_shared<HeightMap>(HeightMap::LoadRawF32(
-              (base / *file).string(), static_cast<int>(*w), static_cast<int>(*h), *p));
-        } catch (const InputError& e) {
-          for (const auto& d : e.diagnostics()) diag.Add(d.file, d.line, d.field, d.message);
-          diag.Add(name, r.Line(g->get("file")), "geometry.file", "height map could not be loaded");
-        }
-      }
-    } else if (kind == "sine") {
-      const auto a = r.Number(*g, "geometry", "amplitude_m", true);
-      const auto l = r.Number(*g, "geometry", "wavelength_m", true);
-      if (a && l) {
-        if (!(*a >= 0 && *a <= 0.01 && *l > 0 && *l <= 1))
-          r.Error(g, "geometry", "amplitude_m must be in [0, 0.01] m and wavelength_m in (0, 1] m");
-        else
-          m.geometry = std::make_shared<HeightMap>(HeightMap::Sine(*a, *l, *a));
-      }
-    } else if (kind != "flat") {
-      r.Error(g->get("kind"), "geometry.kind", "expected \"file\", \"sine\" or \"flat\"");
-    }
-  }
-  if (const toml::table* v = doc["vibration"].as_table())
-    ReadVibration(r, *v, base, &m.vibration, 0);
-  // Scattered cells without a triangulation: compute the Delaunay triangulation.
-  auto& vb = m.vibration;
+}
+
+// Scattered cells without a triangulation: compute the Delaunay triangulation.
+void TriangulateScattered(const std::string& name, Diagnostics* diag, VibrationBank* bank) {
+  auto& vb = *bank;
   if (vb.cells.size() >= 3 && vb.grid_speeds_mps.empty() && vb.grid_forces_N.empty() &&
       vb.triangles.empty()) {
     std::vector<double> xs, ys;
@@ -337,22 +264,45 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
     const auto [x0, x1] = std::minmax_element(xs.begin(), xs.end());
     const auto [y0, y1] = std::minmax_element(ys.begin(), ys.end());
     if (!(*x1 > *x0) || !(*y1 > *y0)) {
-      diag.Add(name, 0, "vibration.cells",
-               "cells spread over both speed and force (a triangulation needs them)");
+      diag->Add(name, 0, "vibration.cells",
+                "cells spread over both speed and force (a triangulation needs them)");
     } else {
       try {
         vb.triangles = DelaunayTriangulate(xs, ys);
       } catch (const std::runtime_error& e) {
-        diag.Add(name, 0, "vibration.cells", e.what());
+        diag->Add(name, 0, "vibration.cells", e.what());
       }
     }
   }
+}
+
+}  // namespace
+
+MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
+  const toml::table doc = ParseTomlText(text, name);
+  Diagnostics diag;
+  Reader r(name, &diag);
+  const auto base = std::filesystem::path(name).parent_path();
+  MaterialModel m;
+  m.source_path = name;
+  fields::FieldReader(doc, "", name, &diag).Read(internal::TopLevelFields(), &m);
+  if (const toml::table* c = doc["contact"].as_table())
+    fields::FieldReader(*c, "contact", name, &diag).Read(internal::ContactFields(), &m.contact);
+  else
+    diag.Add(name, 0, "contact", "missing [contact] table");
+  if (const toml::table* f = doc["friction"].as_table())
+    fields::FieldReader(*f, "friction", name, &diag).Read(internal::FrictionFields(), &m.friction);
+  else
+    diag.Add(name, 0, "friction", "missing [friction] table");
+  if (const toml::table* g = doc["geometry"].as_table()) ReadGeometry(r, *g, base, &m);
+  if (const toml::table* v = doc["vibration"].as_table())
+    ReadVibration(r, *v, base, &m.vibration, 0);
+  TriangulateScattered(name, &diag, &m.vibration);
   if (const toml::table* nt = doc["neural"].as_table()) {
-    CheckKnownKeys(r, *nt, "neural", {"file"});
-    if (const auto file = r.String(*nt, "neural", "file", true)) {
-      m.neural_file = *file;
+    fields::FieldReader(*nt, "neural", name, &diag).Read(internal::NeuralFields(), &m);
+    if (const std::string& file = m.neural_file; !file.empty()) {
       const auto p =
-          std::filesystem::path(*file).is_absolute() ? std::filesystem::path(*file) : base / *file;
+          std::filesystem::path(file).is_absolute() ? std::filesystem::path(file) : base / file;
       try {
         m.neural = std::make_shared<NeuralModel>(LoadNeuralModel(p.string()));
       } catch (const InputError& e) {
@@ -363,8 +313,7 @@ MaterialModel ParseMaterial(const std::string& text, const std::string& name) {
     }
   }
   if (const toml::table* h = doc["hybrid"].as_table()) {
-    CheckKnownKeys(r, *h, "hybrid", {"cutoff_hz"});
-    if (auto v = r.Number(*h, "hybrid", "cutoff_hz", true)) m.hybrid_cutoff_hz = *v;
+    fields::FieldReader(*h, "hybrid", name, &diag).Read(internal::HybridFields(), &m);
   }
   diag.ThrowIfAny();
   ValidateMaterial(m);

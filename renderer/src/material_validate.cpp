@@ -4,55 +4,27 @@
 #include <fmt/format.h>
 
 #include <string>
-#include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/fields.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "material_fields.hpp"
 
 namespace hapticlab::renderer {
 
 void ValidateMaterial(const MaterialModel& m) {
   Diagnostics d;
   const std::string& f = m.source_path;
-  auto hc = [&](const HuntCrossleyParams& p, const std::string& prefix, bool allow_zero_k) {
-    if (!(p.K > 0) && !(allow_zero_k && p.K == 0))
-      d.Add(f, 0, prefix + "_K", "stiffness must be > 0");
-    if (p.B < 0) d.Add(f, 0, prefix + "_B", "damping must be >= 0");
-    if (!(p.n >= 1 && p.n <= 2)) d.Add(f, 0, prefix + "_n", "exponent must be in [1, 2]");
-  };
-  hc(m.contact.texture, "contact.texture", false);
-  hc(m.contact.base, "contact.base", true);
-  if (m.contact.layer_thickness_m < 0) d.Add(f, 0, "contact.layer_thickness_m", "must be >= 0");
-  if (!(m.friction.kappa_N_per_m > 0)) d.Add(f, 0, "friction.kappa_N_per_m", "must be > 0");
-  if (!(m.friction.mu_k >= 0)) d.Add(f, 0, "friction.mu_k", "must be >= 0");
-  if (!(m.friction.mu_b_Ns_per_m >= 0)) d.Add(f, 0, "friction.mu_b_Ns_per_m", "must be >= 0");
-  if (!(m.hybrid_cutoff_hz >= 0))
-    d.Add(f, 0, "hybrid.cutoff_hz", "must be >= 0 (0: no hybrid split)");
-  // Physical ranges (docs/formats.md, "Bounds"): generous for any real sample, but a typo of
-  // 1e100 would otherwise reach the force loop.
-  auto at_most = [&](double v, double max, const std::string& field, const char* unit) {
-    if (v > max) d.Add(f, 0, field, fmt::format("{:g} is above the {:g} {} allowed", v, max, unit));
-  };
-  for (const auto& [p, prefix] : {std::pair{&m.contact.texture, "contact.texture"},
-                                  std::pair{&m.contact.base, "contact.base"}}) {
-    at_most(p->K, 1e12, std::string(prefix) + "_K", "N/m^n");
-    at_most(p->B, 1e12, std::string(prefix) + "_B", "N s/m^(n+1)");
-  }
-  at_most(m.contact.layer_thickness_m, 0.1, "contact.layer_thickness_m", "m");
-  at_most(m.friction.kappa_N_per_m, 1e9, "friction.kappa_N_per_m", "N/m");
-  at_most(m.friction.mu_k, 10, "friction.mu_k", "");
-  at_most(m.friction.mu_b_Ns_per_m, 1e4, "friction.mu_b_Ns_per_m", "Ns/m");
-  at_most(m.hybrid_cutoff_hz, 1e5, "hybrid.cutoff_hz", "Hz");
+  // Every number within the range the file's field tables declare (docs/formats.md).
+  fields::CheckFields(internal::ContactFields(), m.contact, "contact", f, &d);
+  fields::CheckFields(internal::FrictionFields(), m.friction, "friction", f, &d);
+  fields::CheckFields(internal::HybridFields(), m, "hybrid", f, &d);
   const auto& b = m.vibration;
   if (!b.empty()) {
-    if (!(b.sample_rate_hz > 0 && b.sample_rate_hz <= 1e6))
-      d.Add(f, 0, "vibration.sample_rate_hz", "must be in (0, 1e6]");
-    if (!(b.min_speed_mps >= 0 && b.min_speed_mps <= 100))
-      d.Add(f, 0, "vibration.min_speed_mps", "must be in [0, 100]");
-    if (!(b.light_force_N >= 0 && b.light_force_N <= 1e3))
-      d.Add(f, 0, "vibration.light_force_N", "must be in [0, 1000] N (0: off)");
-    at_most(b.max_speed_mps, 100, "vibration.max_speed_mps", "m/s");
-    at_most(b.max_force_N, 1e3, "vibration.max_force_N", "N");
+    fields::CheckFields(internal::VibrationFields(), b, "vibration", f, &d);
+    for (std::size_t i = 0; i < b.cells.size(); ++i)
+      fields::CheckFields(internal::CellFields(), b.cells[i], fmt::format("vibration.cells[{}]", i),
+                          f, &d);
     if (!(b.max_speed_mps == 0 || b.max_speed_mps > kSaturationMarginSpeed_mps))
       d.Add(f, 0, "vibration.max_speed_mps",
             fmt::format("must be 0 (no limit) or > {:g}", kSaturationMarginSpeed_mps));

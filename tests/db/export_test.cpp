@@ -9,6 +9,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/db/export_formats.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db {
@@ -135,6 +136,76 @@ TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("e.db"), std::string::npos) << e.what();
   }
+}
+
+// The export registry: the built-in formats by name, and a format registered here (one
+// function, one registration line) is found and exports through the same entry the CLI uses.
+TEST(ExportFormats, BuiltInsAndAToyFormatRegisteredInTheTest) {
+  std::vector<std::string> names;
+  for (const auto& f : ExportFormats()) names.push_back(f.name);
+  ASSERT_GE(names.size(), 3u);
+  EXPECT_EQ(std::vector<std::string>(names.begin(), names.begin() + 3),
+            (std::vector<std::string>{"csv", "bids", "xdf"}));
+  EXPECT_TRUE(FindExportFormat("xdf")->selects_participants);
+  EXPECT_EQ(FindExportFormat("xdf")->file_extension, ".xdf");
+  EXPECT_TRUE(FindExportFormat("csv")->chooses_trajectories);
+  EXPECT_EQ(FindExportFormat("toy"), nullptr);
+
+  // The toy format: one line per participant of every study.
+  RegisterExportFormat({.name = "toy",
+                        .help = "participant codes, one per line",
+                        .write =
+                            [](const Database& db, const ExportRequest& r) {
+                              std::string text;
+                              std::size_t rows = 0;
+                              for (const auto& st : db.Studies())
+                                for (const auto& p : db.Participants(st.id))
+                                  text += st.name + "," + p.code + "\n", ++rows;
+                              test::WriteFile(r.out + "/codes.txt", text);
+                              return std::vector<ExportedFile>{{r.out + "/codes.txt", rows}};
+                            },
+                        .describe =
+                            [](const std::vector<ExportedFile>& f) {
+                              return std::to_string(f.at(0).rows) + " codes";
+                            }});
+  EXPECT_THROW(RegisterExportFormat({.name = "toy"}), std::logic_error);
+  const ExportFormat* toy = FindExportFormat("toy");
+  ASSERT_NE(toy, nullptr);
+  EXPECT_EQ(ExportFormats().back().name, "toy");
+
+  test::TempDir dir;
+  Database db(dir.File("t.db"));
+  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
+  db.AddParticipant({.study_id = st, .code = "P01"});
+  db.AddParticipant({.study_id = st, .code = "P02"});
+  const auto files = toy->write(db, {.out = dir.path()});
+  EXPECT_EQ(toy->describe(files), "2 codes");
+  EXPECT_EQ(test::ReadFile(dir.File("codes.txt")), "s,P01\ns,P02\n");
+}
+
+// The CSV format through the registry writes what ExportCsv writes, and says what it left out.
+TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
+  test::TempDir dir;
+  Database db(dir.File("c.db"));
+  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
+  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
+  const auto se = db.StartSession({.participant_id = p});
+  const auto ids = db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main"}});
+  db.InsertTrajectoryChunk({.trial_id = ids[0],
+                            .stream = "force",
+                            .start_time_s = 0,
+                            .rate_hz = 1000,
+                            .channels = {"x_m"},
+                            .samples = {1, 2, 3}});
+  db.CompleteTrial(ids[0], {{"roughness", 50, 1}});
+  std::vector<std::string> lines;
+  const auto files = FindExportFormat("csv")->write(
+      db, {.out = dir.File("out"), .progress = [&](const std::string& l) { lines.push_back(l); }});
+  EXPECT_EQ(files.size(), 3u);  // ratings, trials, events: trajectories left out
+  ASSERT_FALSE(lines.empty());
+  EXPECT_NE(lines[0].find("trajectories left out (3 samples of 1 streams"), std::string::npos)
+      << lines[0];
+  EXPECT_EQ(FindExportFormat("csv")->describe(files).find("3 tables"), 0u);
 }
 
 }  // namespace

@@ -124,7 +124,7 @@ TEST(AdaptiveProtocol, EveryProblemNamesFileLineAndKey) {
       {"max_trials = 50", "max_trials = 50\nrepetitions = 2",
        ":34: phase[1].repetitions: unknown key (a typo?)"},
       {"slope = 3.0", "slope = -3.0",
-       "phase[1].simulated_observer.slope: expected the observer's true slope > 0"},
+       "phase[1].simulated_observer.slope: expected a number > 0, got -3"},
       {"slope = 3.0", "slope = 3.0\nthreshhold = 1",
        "phase[1].simulated_observer.threshhold: unknown key"},
       {"task = \"2afc\"", "task = \"2afc\"\nfalse_alarm = 0.1",

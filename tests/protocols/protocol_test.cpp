@@ -3,12 +3,15 @@
 #include <fmt/format.h>
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/protocols/protocol_keys.hpp"
+#include "hapticlab/test/doc_block.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::protocols {
@@ -227,6 +230,56 @@ TEST(Protocol, TitleAndSphericityCorrectionHaveDefaultsAndAfexsNames) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("analysis.correction"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("\"GG\""), std::string::npos) << e.what();
+  }
+}
+
+// docs/formats.md's key tables are printed from the field tables the parser reads through.
+TEST(ProtocolDocs, FormatsKeyTablesAreTheParsersTables) {
+  EXPECT_EQ(test::CheckGeneratedDocBlock("docs/formats.md", "protocol keys", ProtocolKeyTables()),
+            "");
+}
+
+// The shipped protocols (studies/) parse as they did before the field tables.
+TEST(ProtocolDocs, EveryShippedProtocolParses) {
+  int parsed = 0;
+  for (const auto& e : std::filesystem::recursive_directory_iterator(
+           std::filesystem::path(HL_SOURCE_DIR) / "studies")) {
+    if (e.path().extension() != ".toml") continue;
+    const std::string text = test::ReadFile(e.path().string());
+    if (text.find("[study]") == std::string::npos) continue;  // profiles, models
+    EXPECT_NO_THROW((void)ParseProtocol(text, e.path().string())) << e.path();
+    ++parsed;
+  }
+  EXPECT_GE(parsed, 5);
+}
+
+// Every number is checked finite and within its range when read (issue #34's inputs).
+TEST(Protocol, RefusesNonFiniteAndOutOfRangeNumbersNamingLineAndField) {
+  const std::string small = Small();
+  struct Case {
+    std::string from, to, want;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"[breaks]", "[masking_noise]\nlevel_dB = inf\n\n[breaks]",
+            "masking_noise.level_dB: expected a number in [0, 100] dB, got inf"},
+           {"duration_s = 30", "duration_s = 1e300",
+            "breaks.duration_s: expected a number in [0, 3600] s, got 1e+300"},
+           {"stimulus_duration_s = 0.5", "stimulus_duration_s = nan",
+            "study.stimulus_duration_s: expected a number in (0, 600] s, got nan"},
+           {"stimulus_duration_s = 0.5", "stimulus_duration_s = \"2\"",
+            "study.stimulus_duration_s: expected a number in (0, 600] s"},
+       }) {
+    std::string text = small;
+    ASSERT_NE(text.find(c.from), std::string::npos) << c.from;
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    try {
+      (void)ParseProtocol(text, "bad.toml");
+      ADD_FAILURE() << c.to << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.want), std::string::npos) << e.what();
+      // Every problem names the file and a line.
+      EXPECT_NE(std::string(e.what()).find("bad.toml:"), std::string::npos) << e.what();
+    }
   }
 }
 

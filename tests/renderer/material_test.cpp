@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/renderer/material_keys.hpp"
+#include "hapticlab/test/doc_block.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::renderer {
@@ -97,8 +99,10 @@ TEST(Material, ReportsEveryProblemWithLineAndKey) {
     ParseMaterial(range, "range.toml");
     FAIL();
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("contact.texture_n: exponent must be in [1, 2]"),
-              std::string::npos)
+    EXPECT_NE(
+        std::string(e.what()).find("range.toml:7: contact.texture_n: expected a number in [1, "
+                                   "2], got 2.5"),
+        std::string::npos)
         << e.what();
   }
 }
@@ -167,7 +171,9 @@ TEST(Material, ModelledRangeAndNoSplitRoundTripAndAreRangeChecked) {
     EXPECT_NE(std::string(e.what()).find("vibration.max_force_N: must be 0 (no limit) or > 0.01"),
               std::string::npos)
         << e.what();
-    EXPECT_NE(std::string(e.what()).find("hybrid.cutoff_hz: must be >= 0"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("hybrid.cutoff_hz: expected a number in [0, 100000] Hz, "
+                                         "got -1"),
+              std::string::npos)
         << e.what();
   }
 }
@@ -192,6 +198,51 @@ pitch_m = 1e-5
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("nope.f32"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("m.toml:8: geometry.file"), std::string::npos) << e.what();
+  }
+}
+
+// docs/formats.md's key tables are printed from the field tables the reader reads through.
+TEST(MaterialDocs, FormatsKeyTablesAreTheReadersTables) {
+  EXPECT_EQ(test::CheckGeneratedDocBlock("docs/formats.md", "material keys", MaterialKeyTables()),
+            "");
+}
+
+// Every number is checked finite and within its physical range when read, naming the line.
+TEST(Material, RefusesNonFiniteAndOutOfRangeNumbersAtTheirLine) {
+  struct Case {
+    std::string from, to, want;
+  };
+  for (const Case& c : std::vector<Case>{
+           {"mu_b_Ns_per_m = 0.4", "mu_b_Ns_per_m = 1e100",
+            "m.toml:14: friction.mu_b_Ns_per_m: expected a number in [0, 10000] N s/m, got 1e+100"},
+           {"texture_K = 800.0", "texture_K = inf",
+            "m.toml:5: contact.texture_K: expected a number in (0, 1e+12] N/m^n, got inf"},
+           {"sample_rate_hz = 2000", "sample_rate_hz = nan",
+            "vibration.sample_rate_hz: expected a number in (0, 1e+06] Hz, got nan"},
+           {"speeds_mps = [0.04, 0.08]", "speeds_mps = [0.04, 1e18]",
+            "vibration.speeds_mps[1]: expected a number in [0, 100], got 1e+18"},
+       }) {
+    std::string text = kGood;
+    ASSERT_NE(text.find(c.from), std::string::npos) << c.from;
+    text.replace(text.find(c.from), c.from.size(), c.to);
+    try {
+      (void)ParseMaterial(text, "m.toml");
+      ADD_FAILURE() << c.to << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.want), std::string::npos) << e.what();
+    }
+  }
+  // A model built in code is checked against the same ranges.
+  auto m = ParseMaterial(kGood, "fit");
+  m.friction.mu_b_Ns_per_m = 1e100;
+  try {
+    ValidateMaterial(m);
+    ADD_FAILURE() << "mu_b 1e100 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fit: friction.mu_b_Ns_per_m: expected a number in [0, "
+                                         "10000] N s/m, got 1e+100"),
+              std::string::npos)
+        << e.what();
   }
 }
 

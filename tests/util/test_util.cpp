@@ -10,6 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hapticlab/test/doc_block.hpp"
+
 namespace hapticlab::test {
 
 std::string DataPath(const std::string& relative) {
@@ -50,6 +52,32 @@ std::string ReadFile(const std::string& path) {
   std::ostringstream ss;
   ss << f.rdbuf();
   return ss.str();
+}
+
+std::string CheckGeneratedDocBlock(const std::string& doc_relative, const std::string& name,
+                                   const std::string& expected) {
+  const std::string path = std::string(HL_SOURCE_DIR) + "/" + doc_relative;
+  const std::string doc = ReadFile(path);
+  const std::string begin = "<!-- generated: " + name + " -->\n";
+  const std::string end = "<!-- end generated: " + name + " -->";
+  const auto b = doc.find(begin);
+  const auto e = b == std::string::npos ? b : doc.find(end, b);
+  if (e == std::string::npos) return doc_relative + " has no block '" + name + "'";
+  const std::string have = doc.substr(b + begin.size(), e - b - begin.size());
+  if (have == expected + "\n") return "";
+  const char* update = std::getenv("HL_UPDATE_DOCS");
+  if (update && std::string(update) == "1") {
+    WriteFile(path, doc.substr(0, b + begin.size()) + expected + "\n" + doc.substr(e));
+    return "";
+  }
+  std::size_t i = 0;
+  while (i < have.size() && i < expected.size() && have[i] == expected[i]) ++i;
+  const auto line_start = expected.rfind('\n', i == 0 ? 0 : i - 1);
+  const auto from = line_start == std::string::npos ? 0 : line_start + 1;
+  return doc_relative + " block '" + name + "' differs from the code's tables at:\n  doc:  " +
+         have.substr(from, have.find('\n', from) - from) +
+         "\n  code: " + expected.substr(from, expected.find('\n', from) - from) +
+         "\n(regenerate with HL_UPDATE_DOCS=1 and the test's --gtest_filter)";
 }
 
 }  // namespace hapticlab::test
