@@ -20,7 +20,6 @@
 #include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/vibration.hpp"
-#include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling {
 namespace {
@@ -145,7 +144,7 @@ inline Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64
 }
 
 // A small trained model (fast): the training grid of the thesis, short recordings. `cell_ar`:
-// Γ_U with per-cell AR fits as its linear part (UnifiedLinearPart::kCellAr).
+// Γ_U with per-cell AR fits as its linear part (its fallback, forced by a radius limit of 0).
 inline const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool cell_ar = false) {
   static const auto make = [](renderer::NeuralTopology topo, bool per_cell) {
     const auto recs = CornerGrid(50);
@@ -154,7 +153,7 @@ inline const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool 
     o.hidden_large = {8, 4};
     o.hidden_small = {6};
     for (auto& b : o.bands) b.history = 12;
-    if (per_cell) o.unified_linear = UnifiedLinearPart::kCellAr;
+    if (per_cell) o.max_condition_basis_radius = 0;
     return FitNeural(recs, o);
   };
   static const auto u = make(renderer::NeuralTopology::kUnified, false),
