@@ -131,7 +131,7 @@ Prediction Predict(const Model& m, const Replay& r) {
       p.band_power.push_back(std::move(bp));
     }
   } else if (m.vibration_model && r.has_vibration) {
-    p.band_power = PredictModelBands(*m.vibration_model, r);
+    p.band_power = PredictModelBands(*m.vibration_model, r, m.vibration_spectra.get());
   }
   return p;
 }

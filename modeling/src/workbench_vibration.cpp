@@ -116,13 +116,14 @@ std::string AttachVibrationModel(Model* m, const std::string& path) {
     return "";
   }
   m->vibration_model = std::move(mat);
+  m->vibration_spectra = std::make_shared<VibrationSpectra>();
   return what;
 }
 
 double VibrationModelTopHz(const renderer::MaterialModel& vm) { return 0.45 * ModelRate(vm); }
 
 std::vector<std::vector<double>> PredictModelBands(const renderer::MaterialModel& vm,
-                                                   const Replay& r) {
+                                                   const Replay& r, VibrationSpectra* cache) {
   std::vector<std::vector<double>> out;
   if (r.windows.empty()) return out;
   const double fs_model = ModelRate(vm), fs_meas = r.acc_rate_hz;
@@ -144,22 +145,27 @@ std::vector<std::vector<double>> PredictModelBands(const renderer::MaterialModel
     renderer::VibrationInterpolator interp(vm.vibration);
     renderer::ArFilter flt;
     for (const auto& w : r.windows) {
-      interp.Interpolate(w.speed_mps, w.force_N, true, &flt);
+      // A window slower than the bank's switch-off speed is scored at that speed.
+      interp.Interpolate(std::max(w.speed_mps, vm.vibration.min_speed_mps), w.force_N, true, &flt);
       out.push_back(bands_of([&](double f) { return FilterSpectrum(flt, f, fs_model); }));
     }
     return out;
   }
   // Neural: one synthesis per condition rounded to 5 % steps (windows of a steady scan share it).
-  std::map<std::pair<long, long>, std::vector<double>> cache;
+  VibrationSpectra local;
+  VibrationSpectra& spectra = cache ? *cache : local;
+  const std::lock_guard<std::mutex> lock(spectra.mu);
   const double step = std::log(1.05);
   for (const auto& w : r.windows) {
     const std::pair<long, long> key{std::lround(std::log(w.speed_mps) / step),
                                     std::lround(std::log(std::max(w.force_N, 1e-3)) / step)};
-    auto it = cache.find(key);
-    if (it == cache.end()) {
-      const double v = std::exp(static_cast<double>(key.first) * step),
+    auto it = spectra.by_condition.find(key);
+    if (it == spectra.by_condition.end()) {
+      const double v = std::max(std::exp(static_cast<double>(key.first) * step),
+                                vm.neural->min_speed_mps),
                    f = std::exp(static_cast<double>(key.second) * step);
-      it = cache.emplace(key, Welch(SynthesizeNeural(*vm.neural, v, f, 16384, 1))).first;
+      it = spectra.by_condition.emplace(key, Welch(SynthesizeNeural(*vm.neural, v, f, 16384, 1)))
+               .first;
     }
     const auto& psd = it->second;
     out.push_back(bands_of([&](double f) { return AtFrequency(psd, f, fs_model); }));

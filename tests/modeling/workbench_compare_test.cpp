@@ -118,8 +118,11 @@ TEST(WorkbenchCompare, ArBankIsScoredBySpectrumAndConditionShowsWhereItFails) {
   ASSERT_EQ(cells.size(), 2u);
   EXPECT_EQ(cells[0].label, "30-60 mm/s, 1-1.5 N");
   EXPECT_EQ(cells[1].label, "100-150 mm/s, 1-1.5 N");
-  EXPECT_LT(cells[0].es, 0.3) << "matched level: only the periodogram's own scatter";
-  EXPECT_NEAR(cells[1].es, 0.5, 0.08) << "twice the amplitude";
+  // Matched level: only the periodograms' own scatter, which the noise floor estimates from the
+  // measurement alone (about 0.26 here: two or three FFT bins in the lowest bands).
+  const double floor = EstimateNoiseFloor(r, Split::kAll).at("vibration");
+  EXPECT_LT(cells[0].es, 1.25 * floor) << "floor " << floor;
+  EXPECT_NEAR(cells[1].es, 0.5, 0.1) << "twice the amplitude";
   EXPECT_GT(cells[1].es, cells[0].es + 0.2);
   // The same numbers through Compare, beside the force channels.
   const auto c = Compare(m, r);

@@ -26,6 +26,8 @@ struct MaterialModel;
 
 namespace hapticlab::modeling::wb {
 
+struct VibrationSpectra;  // workbench_vibration.hpp
+
 enum class Channel { kNormal, kFriction, kVibration };
 const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration"
 
@@ -118,6 +120,9 @@ struct Model {
   /// material's AR bank or neural model. Used by Predict when the model has no band model; Fit
   /// leaves it as it is. Set by AttachVibrationModel.
   std::shared_ptr<const renderer::MaterialModel> vibration_model;
+  /// Its spectra by condition, computed once and shared by the copies of the model (a neural
+  /// model's synthesis is costly; diagnose predicts with many copies). Set with vibration_model.
+  std::shared_ptr<VibrationSpectra> vibration_spectra;
   bool HasVibration() const { return coef.count(std::string(effect::kCore)) > 0; }
   bool Has(std::string_view e) const;
   /// The value of parameter `k`, or `fallback` when the model holds none (whether or not the

@@ -6,10 +6,14 @@
 /// units [(m/s^2)^2 per FFT bin of the measurement]: S(f) fs_meas / fs_model, with S the model's
 /// per-sample power spectrum at its own rate fs_model. For a bank S is exact (the interpolated
 /// filter's gain^2 sigma^2 |B|^2 / |A|^2); for a neural model it is a Welch estimate of its
-/// synthesis at the window's condition rounded to 5 % steps of speed and force.
+/// synthesis at the window's condition rounded to 5 % steps of speed and force. A window slower
+/// than the model's switch-off speed is scored at that speed.
 
+#include <map>
 #include <memory>
+#include <mutex>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hapticlab/modeling/workbench_predict.hpp"
@@ -26,9 +30,17 @@ std::string AttachVibrationModel(Model* m, const std::string& path);
 /// (ReplayOptions::max_band_hz).
 double VibrationModelTopHz(const renderer::MaterialModel& vm);
 
-/// Band powers per window (Prediction::band_power) of a fixed vibration model.
+/// A neural model's Welch spectra by rounded condition, filled by PredictModelBands (thread-safe).
+struct VibrationSpectra {
+  std::mutex mu;
+  std::map<std::pair<long, long>, std::vector<double>> by_condition;
+};
+
+/// Band powers per window (Prediction::band_power) of a fixed vibration model; `cache` (may be
+/// null) keeps a neural model's spectra between calls.
 std::vector<std::vector<double>> PredictModelBands(const renderer::MaterialModel& vm,
-                                                   const Replay& r);
+                                                   const Replay& r,
+                                                   VibrationSpectra* cache = nullptr);
 
 /// Mean per-window E_s (as Errors::vibration) in one speed x force cell of the windows of a
 /// split: where in the condition space the vibration model fails.
