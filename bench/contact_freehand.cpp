@@ -94,7 +94,7 @@ void BiasExperiment(const std::map<std::string, Option>& opt, const wb::ReplayOp
 
 int main(int argc, char** argv) {
   auto opt = Options();
-  for (int i = 1; i < argc; ++i) {
+  for (int i = 1; i < argc; i += 2) {
     const std::string a = argv[i];
     if (a == "--help" || a == "-h") {
       fmt::print("contact_freehand [--NAME VALUE]...\n");
@@ -111,7 +111,6 @@ int main(int argc, char** argv) {
       return 2;
     }
     it->second.value = v;
-    ++i;
   }
   auto at = [&](const char* k) { return opt.at(k).value; };
   g_pnoise = at("pnoise");

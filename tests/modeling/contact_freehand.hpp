@@ -20,10 +20,12 @@
 namespace hapticlab::modeling {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr int kSubsteps = 400;
-double g_pnoise = 1e-7,
-       g_vnoise = 1e-4;  // position and velocity noise (bench/contact_freehand sets them)
+// Internal linkage (an unnamed namespace): one copy per test file or program that includes this.
+constexpr double kPi = std::numbers::pi;  // NOLINT(misc-definitions-in-headers)
+constexpr int kSubsteps = 400;            // NOLINT(misc-definitions-in-headers)
+// Position and velocity noise (bench/contact_freehand sets them).
+double g_pnoise = 1e-7;  // NOLINT(misc-definitions-in-headers)
+double g_vnoise = 1e-4;  // NOLINT(misc-definitions-in-headers)
 
 // The truth of the free-hand sample (workbench units: the normal law is
 // f = (d / 1 mm)^n (K1mm + B1mm d_dot)).

@@ -129,12 +129,14 @@ TEST(NeuralStability, GammaUIsStableOverTheHullAndHoldsOutWholeSpeedRows) {
 // with no condition-basis weights; the hull's largest radius is below 1; each band's progress
 // names the fallback; and the model plays the training conditions within 0.1 E_s of the LPC
 // bank (its linear part is the bank's interpolation). With the default limit the same data keep
-// the condition basis, so the fallback above was forced, not taken anyway.
+// the condition basis, so the fallback above was forced, not taken anyway. The recordings are
+// uncalibrated, and the model says so.
 TEST(NeuralStability, PerCellFallbackTakesOverWhereTheConditionBasisMissesItsLimit) {
   std::vector<Recording> recs;
   std::uint64_t seed = 80;
   for (const double v : {0.04, 0.12})
     for (const double f : {0.54, 1.91}) recs.push_back(ArGridRecording(v, f, false, seed++, 1.5));
+  for (auto& r : recs) r.calibrated = false;  // in the sensor's units: the model file says so
   NeuralFitOptions o = Quick(renderer::NeuralTopology::kUnified);
   o.train.max_epochs = 5;
   o.hidden_large = {8, 4};
@@ -148,6 +150,7 @@ TEST(NeuralStability, PerCellFallbackTakesOverWhereTheConditionBasisMissesItsLim
   };
   const auto m = FitNeural(recs, o);
   EXPECT_EQ(fallbacks, static_cast<int>(m.bands.size()));
+  EXPECT_FALSE(m.calibrated);
   for (std::size_t b = 0; b < m.bands.size(); ++b) {
     ASSERT_EQ(m.bands[b].cell_ar.size(), 4u) << "band " << b + 1;
     for (const auto& a : m.bands[b].cell_ar) EXPECT_TRUE(renderer::IsStableAr(a)) << b + 1;
