@@ -43,13 +43,22 @@ nlohmann::json ScoreJson(const std::string& model, const modeling::VibrationScor
           {"condition_from_model", s.condition_from_model},
           {"es", s.es},
           {"level_ratio", s.level_ratio},
-          {"model_rate_hz", s.model_rate_hz}};
+          {"model_rate_hz", s.model_rate_hz},
+          {"model_calibrated", s.model_calibrated}};
 }
 
 std::string CalibrationWords(const modeling::Recording& r, bool normalised) {
   if (r.calibrated || normalised) return "";
   return " (the recording is uncalibrated: the level ratio is in its units and E_s depends on "
          "it; --level-normalised compares shapes)";
+}
+
+// A model trained on uncalibrated recordings plays in their units.
+std::string ModelCalibrationWords(const modeling::VibrationScore& s, bool normalised) {
+  if (s.model_calibrated) return "";
+  return normalised ? " (the model is uncalibrated)"
+                    : " (the model is uncalibrated: its level is in its training recordings' "
+                      "units; --level-normalised compares shapes)";
 }
 
 }  // namespace
@@ -78,11 +87,12 @@ void AddScore(CLI::App& model) {
         PrintJson(j);
         return kExitOk;
       }
-      fmt::print("{} ({}) on {} at {:.4g} m/s, {:.4g} N{}: E_s {:.3f}{}, level ratio {:.3f}{}\n",
+      fmt::print("{} ({}) on {} at {:.4g} m/s, {:.4g} N{}: E_s {:.3f}{}, level ratio {:.3f}{}{}\n",
                  *m, s.kind, a->recording, s.speed_mps, s.force_N,
                  s.condition_from_model ? " (the model's only cell)" : "", s.es,
                  a->level_normalised ? " (level-normalised)" : "", s.level_ratio,
-                 CalibrationWords(rec, a->level_normalised));
+                 CalibrationWords(rec, a->level_normalised),
+                 ModelCalibrationWords(s, a->level_normalised));
       return kExitOk;
     });
   });
@@ -125,8 +135,9 @@ void AddIdentify(CLI::App& model) {
       }
       fmt::print("{:>4} {:>7} {:>7}  {}\n", "rank", "E_s", "level", "model");
       for (std::size_t i = 0; i < ranked.size(); ++i)
-        fmt::print("{:>4} {:>7.3f} {:>7.3f}  {}\n", i + 1, ranked[i].second.es,
-                   ranked[i].second.level_ratio, ranked[i].first);
+        fmt::print("{:>4} {:>7.3f} {:>7.3f}  {}{}\n", i + 1, ranked[i].second.es,
+                   ranked[i].second.level_ratio, ranked[i].first,
+                   ranked[i].second.model_calibrated ? "" : " (uncalibrated model)");
       fmt::print("{} most resembles {}{}\n", a->recording, ranked.front().first,
                  CalibrationWords(rec, a->level_normalised));
       return kExitOk;

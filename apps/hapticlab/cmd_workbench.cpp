@@ -6,6 +6,7 @@
 #include <fmt/ranges.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <memory>
 #include <mutex>
@@ -19,6 +20,7 @@
 #include "hapticlab/modeling/sound_recording.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/renderer/neural.hpp"
 #include "hapticlab/stats/plot.hpp"
 #include "sound_flags.hpp"
 #include "workbench_cli.hpp"
@@ -38,18 +40,40 @@ nlohmann::json ErrorsJson(const Errors& e) {
   return j;
 }
 
-std::string VibrationNotScored(const std::string& path, const Model& model, const Replay& r) {
-  if (model.HasVibration() || !r.has_vibration) return "";
-  const auto mat = renderer::LoadMaterial(path);
-  const char* kind = mat.neural ? "a neural model ([neural])"
-                     : !mat.vibration.empty()
-                         ? "an AR bank ([vibration] cells, e.g. from `model fit-vibration`)"
-                         : nullptr;
-  if (kind == nullptr) return "";
+std::string AttachVibration(const std::string& path, Model* model) {
+  const std::string what = AttachVibrationModel(model, path);
+  if (what.empty()) return "";
+  const bool uncalibrated =
+      model->vibration_model->neural && !model->vibration_model->neural->calibrated;
   return fmt::format(
-      "vibration not scored: {}'s vibration is {}, and this command scores the workbench's "
-      "band model only; E_s by speed and force: `hapticlab model cv-vibration`",
-      path, kind);
+      "vibration: {}'s vibration is {}, scored by E_s of its spectrum at each window's speed and "
+      "force in the measurement's bands up to {:.0f} Hz{}",
+      path, what, VibrationModelTopHz(*model->vibration_model),
+      uncalibrated ? " (the model is uncalibrated: its level is in its training recordings' "
+                     "units, so E_s mixes level and shape)"
+                   : "");
+}
+
+nlohmann::json EsCellsJson(const std::vector<EsCell>& cells) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const auto& c : cells)
+    j.push_back({{"condition", c.label},
+                 {"speed_lo_mps", c.speed_lo_mps},
+                 {"speed_hi_mps", std::isfinite(c.speed_hi_mps) ? nlohmann::json(c.speed_hi_mps)
+                                                                : nlohmann::json()},
+                 {"force_lo_N", c.force_lo_N},
+                 {"force_hi_N",
+                  std::isfinite(c.force_hi_N) ? nlohmann::json(c.force_hi_N) : nlohmann::json()},
+                 {"windows", c.n},
+                 {"es", c.es}});
+  return j;
+}
+
+void PrintEsCells(const std::string& title, const std::vector<EsCell>& cells) {
+  if (cells.empty()) return;
+  fmt::print("\n{}:\n", title);
+  for (const auto& c : cells)
+    fmt::print("  {:28s} windows {:5d}  E_s {:.4f}\n", c.label, c.n, c.es);
 }
 
 std::string ErrorsLine(const Errors& e) {
@@ -75,6 +99,7 @@ Replay Load(const std::string& measurement, const Model* model, Measurement* kee
                      std::string("the file (t_s, acc_mps2, no x_m, y_m, z_m) ") + kNeeds);
   ReplayOptions o;
   if (model && model->HasVibration()) o.band_edges_hz = model->band_edges_hz;
+  if (model && model->vibration_model) o.max_band_hz = VibrationModelTopHz(*model->vibration_model);
   auto r = PrepareReplay(m, o);
   if (keep) *keep = std::move(m);
   if (options) *options = o;

@@ -160,7 +160,9 @@ void AddCompare(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "compare",
       "Replay a measurement's kinematics through a model and report its errors. It opens with a\n"
-      "summary: the error per channel (normal force, tangential force, vibration E_s), where the\n"
+      "summary: the error per channel (normal force, tangential force, vibration E_s; a\n"
+      "material's AR bank or neural model is scored by its spectrum, with E_s by speed and\n"
+      "force), where the\n"
       "residual lives (share of each channel's residual variance along time, speed, load,\n"
       "direction, position, regime and band, with the shape in words) and the largest systematic\n"
       "residuals; the breakdown bin by bin follows. --plots draws the residual against each\n"
@@ -176,16 +178,18 @@ void AddCompare(CLI::App& app) {
                   "An earlier model whose residuals the plots show on the same axes");
   cmd->callback([o] {
     RunGuarded([&] {
-      const auto m = LoadModel(o->model);
+      auto m = LoadModel(o->model);
+      const std::string vib_note = AttachVibration(o->model, &m);
       const auto r = Load(o->measurement, &m);
       const auto c = Compare(m, r);
-      const std::string vib_note = VibrationNotScored(o->model, m, r);
+      const auto es_cells = VibrationEsByCondition(r, Predict(m, r), Split::kAll);
       const auto axes = RankResidualAxes(m, r, Predict(m, r));
       const auto largest = LargestFailures(c, 5);
       std::vector<std::string> files;
       if (!o->plots.empty()) {
         if (!o->before.empty()) {
-          const auto mb = LoadModel(o->before);
+          auto mb = LoadModel(o->before);
+          AttachVibration(o->before, &mb);
           const auto cb = Compare(mb, r);
           files = Plots(c, m, r, o->plots, &cb, &mb);
         } else {
@@ -218,11 +222,13 @@ void AddCompare(CLI::App& app) {
                                  {"summary", {{"axes", ax}, {"largest", lg}}},
                                  {"breakdown", b},
                                  {"plots", files},
-                                 {"vibration_not_scored", vib_note}});
+                                 {"vibration_model", vib_note},
+                                 {"vibration_by_condition", EsCellsJson(es_cells)}});
         return kExitOk;
       }
       fmt::print("{} on {}: {}\n", o->model, o->measurement, ErrorsLine(c.errors));
       if (!vib_note.empty()) fmt::print("{}\n", vib_note);
+      PrintEsCells("vibration E_s by speed and force", es_cells);
       fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
       for (std::size_t k = 0; k < axes.size() && k < 5; ++k)
         fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, axes[k].channel,

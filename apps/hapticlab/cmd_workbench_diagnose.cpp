@@ -54,7 +54,8 @@ void AddDiagnose(CLI::App& app) {
       ->capture_default_str();
   cmd->callback([o] {
     RunGuarded([&] {
-      const auto m = LoadModel(o->model);
+      auto m = LoadModel(o->model);
+      const std::string vib_note = AttachVibration(o->model, &m);
       const auto r = Load(o->measurement, &m);
       std::mutex mu;
       DiagnoseOptions opt;
@@ -76,7 +77,6 @@ void AddDiagnose(CLI::App& app) {
         };
       }
       const auto dx = Diagnose(m, r, opt);
-      const std::string vib_note = VibrationNotScored(o->model, m, r);
       const auto& u = dx.unexplained;
       if (o->json) {
         nlohmann::json c = nlohmann::json::array();
@@ -110,7 +110,8 @@ void AddDiagnose(CLI::App& app) {
             {"candidates", c},
             {"unexplained",
              {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}},
-            {"vibration_not_scored", vib_note}});
+            {"vibration_model", vib_note},
+            {"vibration_by_condition", EsCellsJson(dx.vibration_by_condition)}});
         return kExitOk;
       }
       if (u.flagged) fmt::print("{}\n\n", u.summary);
@@ -118,7 +119,9 @@ void AddDiagnose(CLI::App& app) {
       fmt::print("held-out error of {} (refitted on the training blocks): {:.4f}", o->model,
                  dx.baseline_error);
       for (const auto& [k, v] : dx.baseline_channel) fmt::print(", {} {:.4f}", k, v);
-      fmt::print("\n\n");
+      fmt::print("\n");
+      PrintEsCells("held-out vibration E_s by speed and force", dx.vibration_by_condition);
+      fmt::print("\n");
       int rank = 0;
       for (const auto& x : dx.candidates) {
         fmt::print(

@@ -35,12 +35,15 @@ struct Progress {
 
 nlohmann::json FitReportJson(const modeling::wb::FitReport& rep);
 
-/// Why the vibration channel of `model` (read from `path`) is not scored on `r`, or "" when it
-/// is (or the measurement has no acceleration): compare and diagnose score the workbench's band
-/// model only, and a renderer AR bank (`model fit-vibration`) or neural model is refused
-/// explicitly instead of being dropped without a word (issue #33).
-std::string VibrationNotScored(const std::string& path, const modeling::wb::Model& model,
-                               const modeling::wb::Replay& r);
+/// When the model read from `path` has no band model and its material's vibration is an AR
+/// bank (`model fit-vibration`, an imported Penn model) or a neural model, attaches it to
+/// `model` (modeling/workbench_vibration.hpp) so that compare and diagnose score it by E_s, and
+/// returns a line saying what is scored (issue #33); else "".
+std::string AttachVibration(const std::string& path, modeling::wb::Model* model);
+/// The per-condition E_s table (speed x force) as JSON rows.
+nlohmann::json EsCellsJson(const std::vector<modeling::wb::EsCell>& cells);
+/// ... and as text lines (none when `cells` is empty).
+void PrintEsCells(const std::string& title, const std::vector<modeling::wb::EsCell>& cells);
 
 void AddFit(CLI::App& app);
 void AddCompare(CLI::App& app);

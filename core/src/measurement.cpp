@@ -66,7 +66,7 @@ double Finite(const std::string& s, const std::string& name, int line, const std
 
 struct Columns {
   std::size_t t = 0, x = 0, y = 0, z = 0;
-  std::optional<std::size_t> vx, vy, vz, fx, fy, fz, acc;
+  std::optional<std::size_t> vx, vy, vz, fx, fy, fz, acc, recording;
   bool has_v = false;
   bool vibration_only = false;  ///< t_s and acc_mps2 only (MeasurementReadOptions)
 };
@@ -93,6 +93,7 @@ Columns FindColumns(const CsvTable& t, const MeasurementReadOptions& o, Measurem
   if (!m->has_forces && !o.kinematics_only) t.Require(!c.fx ? "fx_N" : !c.fy ? "fy_N" : "fz_N");
   c.acc = t.Find("acc_mps2");
   m->has_acceleration = c.acc.has_value();
+  c.recording = t.Find("recording");
   return c;
 }
 
@@ -142,6 +143,13 @@ Measurement ParseStream(std::istream& in, const std::string& name,
     if (c.has_v) row.v_mps = {num(*c.vx), num(*c.vy), num(*c.vz)};
     if (m.has_forces) row.f_N = {num(*c.fx), num(*c.fy), num(*c.fz)};
     if (c.acc) row.acc_mps2 = num(*c.acc);
+    if (c.recording) {
+      const double id = num(*c.recording);
+      if (!(id >= 0 && id <= 1e6 && id == std::floor(id)))
+        throw InputError(name, lineno, "recording",
+                         "expected a recording id (an integer from 0 to 1000000)");
+      m.recording_ids.push_back(static_cast<int>(id));
+    }
     if (!m.rows.empty() && !(row.t_s > m.rows.back().t_s))
       throw InputError(
           name, lineno, "t_s",
@@ -187,19 +195,23 @@ void WriteMeasurementCsv(const std::string& path, const Measurement& m) {
   for (const auto& [k, v] : m.metadata)
     if (k != "material" && k != "hapticlab-measurement v1") text += "# " + k + ": " + v + "\n";
   text += "t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N";
-  text += m.has_acceleration ? ",acc_mps2\n" : "\n";
+  const bool ids = m.recording_ids.size() == m.rows.size() && !m.rows.empty();
+  text += m.has_acceleration ? ",acc_mps2" : "";
+  text += ids ? ",recording\n" : "\n";
   auto num = [&text](double v, char sep) {
     char buf[32];
     const int n = std::snprintf(buf, sizeof buf, "%.17g", v);
     text.append(buf, static_cast<std::size_t>(n));
     text += sep;
   };
-  for (const auto& r : m.rows) {
+  for (std::size_t i = 0; i < m.rows.size(); ++i) {
+    const auto& r = m.rows[i];
     for (const double v : {r.t_s, r.p_m.x(), r.p_m.y(), r.p_m.z(), r.v_mps.x(), r.v_mps.y(),
                            r.v_mps.z(), r.f_N.x(), r.f_N.y()})
       num(v, ',');
-    num(r.f_N.z(), m.has_acceleration ? ',' : '\n');
-    if (m.has_acceleration) num(r.acc_mps2, '\n');
+    num(r.f_N.z(), m.has_acceleration || ids ? ',' : '\n');
+    if (m.has_acceleration) num(r.acc_mps2, ids ? ',' : '\n');
+    if (ids) text += std::to_string(m.recording_ids[i]) + "\n";
   }
   WriteTextFile(path, text);
 }

@@ -30,9 +30,9 @@ int Index(const std::vector<double>& g, double x);
 /// hi <= rate / (2 γ) does not alias (a Butterworth band-pass's skirts would fold back).
 std::vector<double> BandSplit(const std::vector<double>& x, double fs, double lo, double hi);
 
-/// The per-cell AR order of Γ_U's UnifiedLinearPart::kCellAr: chosen as the LPC bank chooses
-/// its order (the criterion summed over the band's training signals, one order for all cells:
-/// LSF interpolation needs equal orders), at most M and preprocess.max_order (or
+/// The per-cell AR order of Γ_U's per-cell fallback (max_condition_basis_radius): chosen as the LPC
+/// bank chooses its order (the criterion summed over the band's training signals, one order for all
+/// cells: LSF interpolation needs equal orders), at most M and preprocess.max_order (or
 /// preprocess.order when fixed).
 int PerCellArOrder(const std::vector<std::vector<double>>& train, int M,
                    const VibrationFitOptions& preprocess);

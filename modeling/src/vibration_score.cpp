@@ -71,6 +71,7 @@ VibrationScore ScoreVibration(const renderer::MaterialModel& m, const Recording&
     s.kind = m.neural->topology == renderer::NeuralTopology::kUnified ? "neural unified"
                                                                       : "neural decomposed";
     s.model_rate_hz = m.neural->sample_rate_hz;
+    s.model_calibrated = m.neural->calibrated;
   } else {
     s.kind = bank.cells.front().ma.empty() ? "ar bank" : "arma bank";
     s.model_rate_hz = bank.sample_rate_hz;

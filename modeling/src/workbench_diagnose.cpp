@@ -29,6 +29,7 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
   const auto res = ComputeResiduals(base, r, pbase);
   dx.baseline_error = ebase.overall;
   dx.baseline_channel = ebase.Normalized();
+  dx.vibration_by_condition = VibrationEsByCondition(r, pbase, Split::kHeldOut);
 
   // Candidates: effects the model lacks whose prerequisites it has, on channels with data.
   std::vector<const Effect*> cands;
@@ -36,7 +37,11 @@ Diagnosis Diagnose(const Model& m0, const Replay& r, const DiagnoseOptions& o) {
     if (base.Has(e->name())) continue;
     bool ok = true;
     for (const auto dep : e->requires_effects()) ok = ok && base.Has(dep);
-    if (e->channel() == Channel::kVibration && (!r.has_vibration || r.windows.empty())) ok = false;
+    // A fixed vibration model (an AR bank, a neural model) is scored, not refitted: the
+    // catalogue's vibration effects extend the band model only.
+    if (e->channel() == Channel::kVibration &&
+        (!r.has_vibration || r.windows.empty() || base.vibration_model))
+      ok = false;
     if (ok) cands.push_back(e.get());
   }
   std::vector<Candidate> out(cands.size());

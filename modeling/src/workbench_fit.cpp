@@ -355,7 +355,8 @@ FitReport Fit(Model* m, const Replay& r, const FitOptions& o) {
     for (const auto& s : CoreEffect().Params(r)) m->params[core][s.name] = s.init;
   if (o.normal) rep.channels.push_back(FitForceChannel(m, r, Channel::kNormal, o));
   if (o.friction) rep.channels.push_back(FitForceChannel(m, r, Channel::kFriction, o));
-  if (o.vibration && r.has_vibration) rep.channels.push_back(FitVibration(m, r, o.split));
+  if (o.vibration && r.has_vibration && !m->vibration_model)
+    rep.channels.push_back(FitVibration(m, r, o.split));
   return rep;
 }
 

@@ -37,6 +37,16 @@ void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* f
 std::vector<double> VibrationRow(const std::vector<Resolved>& eff, const Replay::Window& w);
 /// Whether a block belongs to the split (even blocks train, odd are held out).
 bool InSplit(int block, Split s);
+/// E_s of one window (eq. 3.1 over band magnitudes): measured and predicted band powers.
+inline double WindowEs(const std::vector<double>& measured, const std::vector<double>& predicted) {
+  double num = 0, den = 0;
+  for (std::size_t b = 0; b < predicted.size() && b < measured.size(); ++b) {
+    const double a = std::sqrt(measured[b]), q = std::sqrt(predicted[b]);
+    num += (a - q) * (a - q);
+    den += a * a;
+  }
+  return den > 0 ? std::sqrt(num / den) : 0;
+}
 
 /// Robust SD of white noise on a smooth signal from its second differences over three samples:
 /// they have variance 6 sigma^2, and their median absolute value is 0.6745 of their SD (the

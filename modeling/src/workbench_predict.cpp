@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/modeling/workbench_vibration.hpp"
 #include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
@@ -33,6 +34,8 @@ void FrictionForces(const std::vector<Resolved>& eff, const Replay& r, double* f
       prev_contact = false;
       continue;
     }
+    // A new recording (concatenated files) starts its bristle afresh, as after lifting off.
+    if (i > 0 && r.samples()[i - 1].recording != s.recording) prev_contact = false;
     FrictionTerms t;
     for (const auto& x : eff) x.e->Friction(x.p.data(), s, t);
     const double fc = std::max(0.0, s.fload_N * (t.mu_k * t.mu_scale + t.mu_add));
@@ -127,6 +130,8 @@ Prediction Predict(const Model& m, const Replay& r) {
       }
       p.band_power.push_back(std::move(bp));
     }
+  } else if (m.vibration_model && r.has_vibration) {
+    p.band_power = PredictModelBands(*m.vibration_model, r, m.vibration_spectra.get());
   }
   return p;
 }
@@ -218,13 +223,7 @@ Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
     int nw = 0;
     for (std::size_t w = 0; w < r.windows.size(); ++w) {
       if (!InSplit(r.windows[w].block, split)) continue;
-      double num = 0, den = 0;
-      for (std::size_t b = 0; b < p.band_power[w].size(); ++b) {
-        const double a = std::sqrt(r.windows[w].band_power[b]), q = std::sqrt(p.band_power[w][b]);
-        num += (a - q) * (a - q);
-        den += a * a;
-      }
-      const double es = std::sqrt(num / den);
+      const double es = WindowEs(r.windows[w].band_power, p.band_power[w]);
       se += es, ++nw;
       e.vibration.block_sse[r.windows[w].block] += es;
     }

@@ -191,6 +191,7 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     s.contact = s.fn_N > o.contact_force_N;
     s.block = static_cast<int>(std::floor((row.t_s - t0) / o.block_s));
     s.row = static_cast<int>(i);
+    s.recording = m.recording_ids.empty() ? 0 : m.recording_ids[i];
     if (s.contact) {
       if (!any) r.x_min = r.x_max = s.x_m, r.y_min = r.y_max = s.y_m;
       any = true;
@@ -208,7 +209,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
   r.acc_rate_hz = rate;
   int n = 64;
   while (n * 2 <= o.window_s * rate * 1.5) n *= 2;
-  const double fmax = std::min(1000.0, 0.45 * rate);
+  double fmax = std::min(1000.0, 0.45 * rate);
+  if (o.max_band_hz > 0) fmax = std::min(fmax, o.max_band_hz);
   if (!o.band_edges_hz.empty()) {
     if (o.band_edges_hz.back() > 0.5 * rate)
       throw InputError(
@@ -272,6 +274,8 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     }
     sp /= n, f /= n, mean /= n;
     if (!contact || sp < o.min_speed_mps) continue;
+    // A window across two concatenated recordings is no one condition.
+    if (!m.recording_ids.empty() && m.recording_ids[w0] != m.recording_ids[w0 + n - 1]) continue;
     // Only steady windows: a spectrum is a property of a condition, not of a transition.
     const double sv = std::sqrt(std::max(0.0, sp2 / n - sp * sp)),
                  sf = std::sqrt(std::max(0.0, f2 / n - f * f));
@@ -285,6 +289,7 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
     w.force_N = f;
     w.dir = d;
     w.block = static_cast<int>(std::floor((m.rows[w0 + n / 2].t_s - t0) / o.block_s));
+    w.recording = m.recording_ids.empty() ? 0 : m.recording_ids[w0];
     w.row0 = static_cast<int>(w0);
     w.rows = n;
     for (int b = 0; b < nb; ++b) {

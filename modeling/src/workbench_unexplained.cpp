@@ -9,6 +9,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <numeric>
 #include <set>
@@ -144,7 +145,25 @@ ResidualAxis Analyze(const Quantity& q, const AxisBins& a, const std::vector<dou
   return out;
 }
 
+// `value` less the mean of its recording's used entries: what a time axis reads when recordings
+// are concatenated (a level that differs between recordings is not a drift within one).
+std::vector<double> WithinRecording(const std::vector<double>& value, const std::vector<char>& use,
+                                    const std::vector<double>& recording) {
+  std::map<double, std::pair<double, int>> mean;
+  for (std::size_t i = 0; i < value.size(); ++i)
+    if (use[i] && std::isfinite(value[i]))
+      mean[recording[i]].first += value[i], ++mean[recording[i]].second;
+  std::vector<double> out(value);
+  for (std::size_t i = 0; i < value.size(); ++i)
+    if (const auto it = mean.find(recording[i]); it != mean.end() && it->second.second > 0)
+      out[i] -= it->second.first / it->second.second;
+  return out;
+}
+
 std::string Hint(const std::string& axis) {
+  if (axis == "recording")
+    return "that differs between the concatenated recordings (a per-recording level: another "
+           "sample, tool, grip, session or calibration)";
   if (axis == "time")
     return "that changes over the recording (a drifting coefficient: warming, wear, creep, "
            "humidity)";
@@ -227,40 +246,75 @@ std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, c
   return floor;
 }
 
-std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p) {
-  std::vector<ResidualAxis> out;
-  const auto res = ComputeResiduals(m, r, p);
-  const std::size_t n = r.samples().size();
-  const double pi = std::numbers::pi, T0 = r.samples().front().t_s, T1 = r.samples().back().t_s;
+namespace {
+
+// The axes the residual is ranked along, and the recordings of a replay (concatenated
+// recordings, Measurement::recording_ids: time runs within each recording, and a recording
+// axis shows differences between them).
+struct Axes {
+  std::map<int, std::pair<double, double>> span;  // recording -> first, last sample time
+  std::map<int, double> rec_index;                // recording -> its bin on the recording axis
+  bool multi = false;                             // more than one recording
+  AxisBins recording, time, speed, load, dir, pos, regime;
+  double StartOf(int rec) const {
+    const auto it = span.find(rec);
+    return it != span.end() ? it->second.first : span.begin()->second.first;
+  }
+  double IndexOf(int rec) const { return rec_index.count(rec) ? rec_index.at(rec) : 0; }
+};
+
+Axes MakeAxes(const Replay& r) {
+  Axes a;
+  const double pi = std::numbers::pi;
+  for (const auto& s : r.samples()) {
+    auto [it, fresh] = a.span.try_emplace(s.recording, s.t_s, s.t_s);
+    if (!fresh) it->second.second = s.t_s;
+  }
+  a.multi = a.span.size() > 1;
+  double longest = 0;
+  std::vector<std::string> rec_labels;
+  for (const auto& [id, se] : a.span) {
+    longest = std::max(longest, se.second - se.first);
+    a.rec_index[id] = static_cast<double>(rec_labels.size());
+    rec_labels.push_back(fmt::format("recording {}", id));
+  }
+  a.recording = Categorical("recording", rec_labels);
   std::vector<double> tedges;
-  for (int k = 0; k <= 10; ++k) tedges.push_back((T1 - T0) * k / 10 + (k == 10 ? 1e-9 : 0));
-  const AxisBins time = MakeAxis("time", "s", tedges, false);
-  const AxisBins speed =
-      MakeAxis("speed", "mm/s", {0, 0.5, 1, 2, 3, 5, 10, 20, 50, 100, 200, 1e9}, true);
-  const AxisBins load = MakeAxis("load", "N", {0, 0.25, 0.5, 0.75, 1, 1.5, 2, 3, 1e9}, false);
-  const AxisBins dir = [&] {
-    AxisBins a = Categorical("direction", {});
-    a.edges.clear();
-    for (int k = 0; k <= 8; ++k) a.edges.push_back(-pi - pi / 8 + k * pi / 4);
-    for (int k = 0; k < 8; ++k) a.labels.push_back(fmt::format("{:.0f} deg", -180 + 45.0 * k));
-    a.centers.assign(8, 0);
-    return a;
-  }();
-  const AxisBins pos =
+  for (int k = 0; k <= 10; ++k) tedges.push_back(longest * k / 10 + (k == 10 ? 1e-9 : 0));
+  a.time = MakeAxis("time", "s", tedges, false);
+  a.speed = MakeAxis("speed", "mm/s", {0, 0.5, 1, 2, 3, 5, 10, 20, 50, 100, 200, 1e9}, true);
+  a.load = MakeAxis("load", "N", {0, 0.25, 0.5, 0.75, 1, 1.5, 2, 3, 1e9}, false);
+  a.dir = Categorical("direction", {});
+  a.dir.edges.clear();
+  for (int k = 0; k <= 8; ++k) a.dir.edges.push_back(-pi - pi / 8 + k * pi / 4);
+  for (int k = 0; k < 8; ++k) a.dir.labels.push_back(fmt::format("{:.0f} deg", -180 + 45.0 * k));
+  a.dir.centers.assign(8, 0);
+  a.pos =
       Categorical("position", {"front-left", "front-centre", "front-right", "middle-left", "centre",
                                "middle-right", "back-left", "back-centre", "back-right"});
-  const AxisBins regime = Categorical(
+  a.regime = Categorical(
       "regime", {"pre-sliding (<= 0.5 mm/s)", "transition (0.5-3 mm/s)", "sliding (>= 3 mm/s)"});
-  auto wrap = [&](double d) { return d >= pi - pi / 8 ? d - 2 * pi : d; };
+  return a;
+}
 
-  // Keys of the force samples.
-  std::vector<double> kt(n), ks(n), kl(n), kd(n), kp(n), kr(n);
+// A direction in (-pi, pi] in the direction axis's bins (near +180 belongs to -180).
+double WrapDirection(double d) {
+  const double pi = std::numbers::pi;
+  return d >= pi - pi / 8 ? d - 2 * pi : d;
+}
+
+// The force-sample channels (normal force; the friction ratio along the motion) over every axis.
+void RankForceAxes(const Axes& ax, const Replay& r, const Residuals& res,
+                   std::vector<ResidualAxis>* out) {
+  const std::size_t n = r.samples().size();
+  std::vector<double> kt(n), ks(n), kl(n), kd(n), kp(n), kr(n), krec(n);
   for (std::size_t i = 0; i < n; ++i) {
     const auto& s = r.samples()[i];
-    kt[i] = s.t_s - T0;
+    kt[i] = s.t_s - ax.StartOf(s.recording);
+    krec[i] = ax.IndexOf(s.recording);
     ks[i] = s.speed_mps * 1e3;
     kl[i] = s.fn_N;
-    kd[i] = wrap(s.dir_rad);
+    kd[i] = WrapDirection(s.dir_rad);
     const int tx = std::clamp(
         static_cast<int>(3 * (s.x_m - r.x_min) / std::max(r.x_max - r.x_min, 1e-9)), 0, 2);
     const int ty = std::clamp(
@@ -268,66 +322,80 @@ std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, cons
     kp[i] = 3 * ty + tx;
     kr[i] = s.speed_mps <= kPreslidingSpeed_mps ? 0 : (s.speed_mps < kSlidingSpeed_mps ? 1 : 2);
   }
-  // A force-sample quantity over every axis, each with its keys.
-  const std::pair<const AxisBins*, const std::vector<double>*> force_axes[] = {
-      {&time, &kt}, {&speed, &ks}, {&load, &kl}, {&dir, &kd}, {&pos, &kp}, {&regime, &kr}};
-  auto analyze_force = [&](const Quantity& q, const std::vector<double>& v,
-                           const std::vector<char>& use) {
-    for (const auto& [axis, keys] : force_axes) out.push_back(Analyze(q, *axis, *keys, v, use));
+  const std::pair<const AxisBins*, const std::vector<double>*> axes[] = {
+      {&ax.time, &kt}, {&ax.speed, &ks}, {&ax.load, &kl},
+      {&ax.dir, &kd},  {&ax.pos, &kp},   {&ax.regime, &kr}};
+  auto analyze = [&](const Quantity& q, const std::vector<double>& v,
+                     const std::vector<char>& use) {
+    for (const auto& [axis, keys] : axes)
+      out->push_back(Analyze(
+          q, *axis, *keys, ax.multi && axis == &ax.time ? WithinRecording(v, use, krec) : v, use));
+    if (ax.multi) out->push_back(Analyze(q, ax.recording, krec, v, use));
   };
   // Normal force: every sample in contact.
-  {
-    const Quantity q{"normal_force", "normal-force residual",
-                     [](double v) { return fmt::format("{:+.4f} N", v); }};
-    std::vector<char> use(n);
-    for (std::size_t i = 0; i < n; ++i) use[i] = r.samples()[i].contact;
-    analyze_force(q, res.normal_N, use);
-  }
+  std::vector<char> use(n);
+  for (std::size_t i = 0; i < n; ++i) use[i] = r.samples()[i].contact;
+  analyze({"normal_force", "normal-force residual",
+           [](double v) { return fmt::format("{:+.4f} N", v); }},
+          res.normal_N, use);
   // Friction: the friction ratio along the motion (friction / measured load) where the motion
   // has a direction.
-  {
-    const Quantity q{"friction", "friction-ratio residual",
-                     [](double v) { return fmt::format("{:+.3f}", v); }};
-    std::vector<char> use(n);
-    std::vector<double> v(n, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& s = r.samples()[i];
-      use[i] = s.contact && s.speed_mps >= kPreslidingSpeed_mps && s.fn_N > 0.05;
-      if (use[i]) v[i] = res.friction_N[i] / s.fn_N;
-    }
-    analyze_force(q, v, use);
+  std::vector<double> v(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& s = r.samples()[i];
+    use[i] = s.contact && s.speed_mps >= kPreslidingSpeed_mps && s.fn_N > 0.05;
+    if (use[i]) v[i] = res.friction_N[i] / s.fn_N;
   }
-  // Vibration: the window's mean band-power residual over time, speed, load and direction; each
-  // band's residual over the bands.
-  if (!res.log_band.empty()) {
-    const Quantity q{"vibration", "band-power residual",
-                     [](double v) { return fmt::format("{:+.1f} dB", v); }};
-    const std::size_t nw = r.windows.size(), nb = r.band_lo_hz.size();
-    const double db = 10 / std::log(10.0);
-    std::vector<double> wt(nw), wsp(nw), wl(nw), wd(nw), wv(nw);
-    std::vector<char> all(nw, 1);
-    for (std::size_t w = 0; w < nw; ++w) {
-      const auto& x = r.windows[w];
-      wt[w] = x.t_s - T0, wsp[w] = x.speed_mps * 1e3, wl[w] = x.force_N,
-      wd[w] = wrap(std::atan2(x.dir[1], x.dir[0]));
-      double s = 0;
-      for (const double e : res.log_band[w]) s += e;
-      wv[w] = s / static_cast<double>(nb) * db;
-    }
-    out.push_back(Analyze(q, time, wt, wv, all));
-    out.push_back(Analyze(q, speed, wsp, wv, all));
-    out.push_back(Analyze(q, load, wl, wv, all));
-    out.push_back(Analyze(q, dir, wd, wv, all));
-    std::vector<std::string> labels;
+  analyze(
+      {"friction", "friction-ratio residual", [](double x) { return fmt::format("{:+.3f}", x); }},
+      v, use);
+}
+
+// Vibration: the window's mean band-power residual over time, speed, load and direction (and
+// recording); each band's residual over the bands.
+void RankVibrationAxes(const Axes& ax, const Replay& r, const Residuals& res,
+                       std::vector<ResidualAxis>* out) {
+  if (res.log_band.empty()) return;
+  const Quantity q{"vibration", "band-power residual",
+                   [](double v) { return fmt::format("{:+.1f} dB", v); }};
+  const std::size_t nw = r.windows.size(), nb = r.band_lo_hz.size();
+  const double db = 10 / std::log(10.0);
+  std::vector<double> wt(nw), wsp(nw), wl(nw), wd(nw), wv(nw), wrec(nw);
+  std::vector<char> all(nw, 1);
+  for (std::size_t w = 0; w < nw; ++w) {
+    const auto& x = r.windows[w];
+    wt[w] = x.t_s - ax.StartOf(x.recording);
+    wrec[w] = ax.IndexOf(x.recording);
+    wsp[w] = x.speed_mps * 1e3, wl[w] = x.force_N;
+    wd[w] = WrapDirection(std::atan2(x.dir[1], x.dir[0]));
+    double s = 0;
+    for (const double e : res.log_band[w]) s += e;
+    wv[w] = s / static_cast<double>(nb) * db;
+  }
+  out->push_back(Analyze(q, ax.time, wt, ax.multi ? WithinRecording(wv, all, wrec) : wv, all));
+  out->push_back(Analyze(q, ax.speed, wsp, wv, all));
+  out->push_back(Analyze(q, ax.load, wl, wv, all));
+  out->push_back(Analyze(q, ax.dir, wd, wv, all));
+  if (ax.multi) out->push_back(Analyze(q, ax.recording, wrec, wv, all));
+  std::vector<std::string> labels;
+  for (std::size_t b = 0; b < nb; ++b)
+    labels.push_back(fmt::format("{:.0f}-{:.0f} Hz", r.band_lo_hz[b], r.band_hi_hz[b]));
+  const AxisBins band = Categorical("band", labels);
+  std::vector<double> bk, bv;
+  for (std::size_t w = 0; w < nw; ++w)
     for (std::size_t b = 0; b < nb; ++b)
-      labels.push_back(fmt::format("{:.0f}-{:.0f} Hz", r.band_lo_hz[b], r.band_hi_hz[b]));
-    const AxisBins band = Categorical("band", labels);
-    std::vector<double> bk, bv;
-    for (std::size_t w = 0; w < nw; ++w)
-      for (std::size_t b = 0; b < nb; ++b)
-        bk.push_back(static_cast<double>(b)), bv.push_back(res.log_band[w][b] * db);
-    out.push_back(Analyze(q, band, bk, bv, std::vector<char>(bk.size(), 1)));
-  }
+      bk.push_back(static_cast<double>(b)), bv.push_back(res.log_band[w][b] * db);
+  out->push_back(Analyze(q, band, bk, bv, std::vector<char>(bk.size(), 1)));
+}
+
+}  // namespace
+
+std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p) {
+  std::vector<ResidualAxis> out;
+  const auto res = ComputeResiduals(m, r, p);
+  const Axes ax = MakeAxes(r);
+  RankForceAxes(ax, r, res, &out);
+  RankVibrationAxes(ax, r, res, &out);
   std::stable_sort(out.begin(), out.end(),
                    [](const ResidualAxis& a, const ResidualAxis& b) { return a.share > b.share; });
   return out;

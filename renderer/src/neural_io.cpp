@@ -134,6 +134,7 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
   s += fmt::format("topology = \"{}\"\nsample_rate_hz = {:.17g}\nmin_speed_mps = {:.17g}\n",
                    m.topology == NeuralTopology::kUnified ? "unified" : "decomposed",
                    m.sample_rate_hz, m.min_speed_mps);
+  s += fmt::format("calibration = \"{}\"\n", m.calibrated ? "calibrated" : "uncalibrated");
   s += "speeds_mps = " + list(m.speeds_mps) + "\nforces_N = " + list(m.forces_N) + "\n";
   for (const auto& b : m.bands) {
     s += fmt::format(
@@ -195,6 +196,12 @@ NeuralModel LoadNeuralModel(const std::string& path) {
     d.Add(path, line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
   m.sample_rate_hz = doc["sample_rate_hz"].value_or(0.0);
   m.min_speed_mps = doc["min_speed_mps"].value_or(0.01);
+  if (const auto* c = doc.get("calibration")) {
+    const auto word = c->value<std::string>();
+    if (word != "calibrated" && word != "uncalibrated")
+      d.Add(path, line(c), "calibration", "expected \"calibrated\" or \"uncalibrated\"");
+    m.calibrated = word != "uncalibrated";
+  }
   numbers(doc.get("speeds_mps"), "speeds_mps", &m.speeds_mps);
   numbers(doc.get("forces_N"), "forces_N", &m.forces_N);
   const auto* bands = doc["band"].as_array();

@@ -55,6 +55,30 @@ TEST(Measurement, ReadsLineByLineWithinItsBounds) {
   }
 }
 
+// Concatenated recordings carry a `recording` column: read, written back, and a bad id is
+// refused naming its line and column.
+TEST(Measurement, RecordingColumnKeepsConcatenatedRecordingsApart) {
+  const std::string head =
+      "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N,recording\n";
+  const auto m = ParseMeasurementCsv(
+      head + "0,0,0,0,0,0,0,0,0,1,0\n0.1,0,0,0,0,0,0,0,0,1,0\n0.2,0,0,0,0,0,0,0,0,1,3\n", "c.csv");
+  EXPECT_EQ(m.recording_ids, (std::vector<int>{0, 0, 3}));
+  test::TempDir dir;
+  WriteMeasurementCsv(dir.File("c.csv"), m);
+  EXPECT_EQ(ReadMeasurementCsv(dir.File("c.csv")).recording_ids, m.recording_ids);
+  EXPECT_TRUE(
+      ParseMeasurementCsv(head.substr(0, head.size() - 11) + "\n0,0,0,0,0,0,0,0,0,1\n", "n.csv")
+          .recording_ids.empty());
+  for (const char* bad : {"1.5", "-1"}) {
+    try {
+      ParseMeasurementCsv(head + "0,0,0,0,0,0,0,0,0,1," + bad + "\n", "b.csv");
+      FAIL() << bad;
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("b.csv:3: recording"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Measurement, KinematicsOnlyDifferentiatesPositions) {
   const auto m = ParseMeasurementCsv(
       "# hapticlab-measurement v1\nt_s,x_m,y_m,z_m\n0,0,0,0\n0.5,1,0,0\n1,3,0,0\n", "k.csv",

@@ -1,14 +1,18 @@
 #pragma once
 // Shared by the contact tests (tests/modeling/contact_test.cpp,
-// tests/apps/cmd_model_contact_test.cpp): free-hand measurements generated here with a known
-// truth. Written for these tests; shares nothing with modeling/src/workbench_sim.cpp or the
-// workbench's replay.
+// tests/apps/cmd_model_contact_test.cpp) and the experiment program bench/contact_freehand.cpp:
+// free-hand measurements generated here with a known truth, and the coverage experiment. Written
+// for these tests; shares nothing with modeling/src/workbench_sim.cpp or the workbench's replay.
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
 #include <numbers>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "hapticlab/modeling/contact.hpp"
@@ -16,10 +20,12 @@
 namespace hapticlab::modeling {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-constexpr int kSubsteps = 400;
-double g_pnoise = 1e-7,
-       g_vnoise = 1e-4;  // position and velocity noise (DISABLED_Experiment sets them)
+// Internal linkage (an unnamed namespace): one copy per test file or program that includes this.
+constexpr double kPi = std::numbers::pi;  // NOLINT(misc-definitions-in-headers)
+constexpr int kSubsteps = 400;            // NOLINT(misc-definitions-in-headers)
+// Position and velocity noise (bench/contact_freehand sets them).
+double g_pnoise = 1e-7;  // NOLINT(misc-definitions-in-headers)
+double g_vnoise = 1e-4;  // NOLINT(misc-definitions-in-headers)
 
 // The truth of the free-hand sample (workbench units: the normal law is
 // f = (d / 1 mm)^n (K1mm + B1mm d_dot)).
@@ -122,6 +128,65 @@ inline Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration
     m.row_lines.push_back(static_cast<int>(k) + 4);
   }
   return m;
+}
+
+// Every parameter of the fit against the truth, in the workbench's units.
+struct Compared {
+  const char* name;
+  Estimate est;
+  double truth, tolerance;
+};
+inline std::vector<Compared> Parameters(const ContactFit& f, const Truth& t) {
+  // Tolerances of the issue: 10 %, the weakly identified mu_b and B 25 %.
+  return {{"K1mm_N", f.K1mm_N, t.K1mm_N, 0.10},
+          {"n", f.n, t.n, 0.10},
+          {"B1mm", f.B1mm_Ns_per_m, t.B1mm_Ns_per_m, 0.25},
+          {"kappa", f.kappa_N_per_m, t.kappa_N_per_m, 0.10},
+          {"mu_k", f.mu_k, t.mu_k, 0.10},
+          {"mu_b", f.mu_b_Ns_per_m, t.mu_b_Ns_per_m, 0.25}};
+}
+
+// The coverage experiment over the 20 seeds (100-119, noise from 4-12 mN), printed per seed and
+// summarised: per parameter, how many intervals covered the truth and how many estimates were
+// within tolerance; for mu_b also the mean and SD of the relative error and the median reported SE.
+struct Coverage {
+  std::map<std::string, int> covered, within;
+  int usable = 0;  // fits usable
+  double mu_b_mean = 0, mu_b_sd = 0, mu_b_median_se = 0;
+};
+inline Coverage RunCoverage(const ContactFitOptions& o, std::uint64_t first_seed = 100) {
+  const Truth t;
+  constexpr int kSeeds = 20;
+  Coverage out;
+  std::vector<double> err, se;
+  std::mt19937_64 noise_rng(2024);
+  for (int s = 0; s < kSeeds; ++s) {
+    const double noise = std::uniform_real_distribution<double>(0.004, 0.012)(noise_rng);
+    const auto f = FitContact(
+        FreeHand(t, first_seed + static_cast<std::uint64_t>(s), 30, noise, true), nullptr, o);
+    out.usable += f.IsUsable();
+    std::string line = fmt::format("[coverage] seed {:2d} noise {:.1f} mN:", s, noise * 1e3);
+    for (const auto& p : Parameters(f, t)) {
+      const bool c = p.est.lo95 <= p.truth && p.truth <= p.est.hi95;
+      out.covered[p.name] += c;
+      out.within[p.name] += std::abs(p.est.value - p.truth) <= p.tolerance * p.truth;
+      line += fmt::format(" {} {:.4g} [{:.4g}, {:.4g}]{}", p.name, p.est.value, p.est.lo95,
+                          p.est.hi95, c ? "" : " MISS");
+    }
+    err.push_back(f.mu_b_Ns_per_m.value / t.mu_b_Ns_per_m - 1);
+    se.push_back(f.mu_b_Ns_per_m.sd / t.mu_b_Ns_per_m);
+    fmt::print("{}\n", line);
+  }
+  for (double e : err) out.mu_b_mean += e / kSeeds;
+  for (double e : err) out.mu_b_sd += std::pow(e - out.mu_b_mean, 2) / (kSeeds - 1);
+  out.mu_b_sd = std::sqrt(out.mu_b_sd);
+  std::nth_element(se.begin(), se.begin() + kSeeds / 2, se.end());
+  out.mu_b_median_se = se[kSeeds / 2];
+  std::string summary = "[coverage] covered:";
+  for (const auto& [name, c] : out.covered) summary += fmt::format(" {} {}/{}", name, c, kSeeds);
+  fmt::print("{}\n[coverage] mu_b error mean {:+.2f} %, SD {:.2f} %, median reported SE {:.2f} %\n",
+             summary, 100 * out.mu_b_mean, 100 * out.mu_b_sd, 100 * out.mu_b_median_se);
+  return out;
 }
 
 }  // namespace

@@ -20,12 +20,11 @@
 #include "hapticlab/renderer/hybrid.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/vibration.hpp"
-#include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
+constexpr double kPi = std::numbers::pi;  // NOLINT(misc-definitions-in-headers): internal
 
 // A synthetic texture recording: a stylus dragged at v over a random surface whose profile
 // has a dominant spatial period (a spatial AR(2) resonance at `period_m`), pressed with f.
@@ -145,25 +144,25 @@ inline Recording ArGridRecording(double v, double f, bool nonlinear, std::uint64
 }
 
 // A small trained model (fast): the training grid of the thesis, short recordings. `cell_ar`:
-// Γ_U with per-cell AR fits as its linear part (UnifiedLinearPart::kCellAr).
+// Γ_U with per-cell AR fits as its linear part (its fallback, forced by a radius limit of 0).
 inline const renderer::NeuralModel& SmallModel(renderer::NeuralTopology t, bool cell_ar = false) {
-  static const auto make = [](renderer::NeuralTopology topo, bool per_cell) {
+  static const auto kMake = [](renderer::NeuralTopology topo, bool per_cell) {
     const auto recs = CornerGrid(50);
     NeuralFitOptions o = Quick(topo);
     o.train.max_epochs = 5;
     o.hidden_large = {8, 4};
     o.hidden_small = {6};
     for (auto& b : o.bands) b.history = 12;
-    if (per_cell) o.unified_linear = UnifiedLinearPart::kCellAr;
+    if (per_cell) o.max_condition_basis_radius = 0;
     return FitNeural(recs, o);
   };
-  static const auto u = make(renderer::NeuralTopology::kUnified, false),
-                    d = make(renderer::NeuralTopology::kDecomposed, false);
+  static const auto kUnified = kMake(renderer::NeuralTopology::kUnified, false),
+                    kDecomposed = kMake(renderer::NeuralTopology::kDecomposed, false);
   if (cell_ar) {
-    static const auto uc = make(renderer::NeuralTopology::kUnified, true);
-    return uc;
+    static const auto kUnifiedPerCell = kMake(renderer::NeuralTopology::kUnified, true);
+    return kUnifiedPerCell;
   }
-  return t == renderer::NeuralTopology::kUnified ? u : d;
+  return t == renderer::NeuralTopology::kUnified ? kUnified : kDecomposed;
 }
 }  // namespace
 }  // namespace hapticlab::modeling

@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -66,6 +67,51 @@ TEST(WorkbenchUnexplained, ResidualAxesRankTheAxisThatCarriesTheResidual) {
   EXPECT_GT(axes.front().share, 0.3);
   EXPECT_NE(axes.front().description.find("right"), std::string::npos) << axes.front().description;
   for (std::size_t k = 1; k < axes.size(); ++k) EXPECT_LE(axes[k].share, axes[k - 1].share);
+}
+
+// Issue #33: two recordings of different friction level concatenated into one file. With the
+// `recording` column the difference lives on the recording axis and the time axis (read within
+// each recording) shows none of it, so the report does not call it drift; without the column,
+// the same rows put it on the time axis.
+TEST(WorkbenchUnexplained, ConcatenatedRecordingsAreNotDiagnosedAsDrift) {
+  TruthParams ta;
+  ta.duration_s = 20;
+  ta.seed = 3;
+  TruthParams tb = ta;
+  tb.seed = 4;
+  tb.mu_k = 0.42;
+  const auto sa = Simulate(ta);
+  Measurement both = sa.m;
+  const Measurement mb = Simulate(tb).m;
+  const double offset = both.rows.back().t_s + 1 / ta.rate_hz;
+  both.recording_ids.assign(both.rows.size(), 0);
+  for (auto row : mb.rows) {
+    row.t_s += offset;
+    both.rows.push_back(row);
+    both.recording_ids.push_back(7);
+    both.row_lines.push_back(static_cast<int>(both.rows.size()) + 3);
+  }
+  auto axes_of = [&](const Measurement& m) {
+    const auto r = PrepareReplay(m);
+    const auto model = TruthModel(sa, r);  // recording 0's truth: recording 7 is off in level
+    const auto p = Predict(model, r);
+    std::map<std::string, double> share;
+    for (const auto& a : RankResidualAxes(model, r, p))
+      if (a.channel == "friction") share[a.axis] = a.share;
+    const auto u = ExplainResidual(model, r, p, ComputeErrors(r, p, Split::kHeldOut), false, 1.5);
+    return std::pair{share, u.summary};
+  };
+  const auto [with_ids, summary] = axes_of(both);
+  ASSERT_TRUE(with_ids.count("recording"));
+  EXPECT_GT(with_ids.at("recording"), 0.3);
+  EXPECT_LT(with_ids.at("time"), 0.2 * with_ids.at("recording"));
+  EXPECT_EQ(summary.find("drifting"), std::string::npos) << summary;
+  EXPECT_NE(summary.find("recording"), std::string::npos) << summary;
+  Measurement no_ids = both;
+  no_ids.recording_ids.clear();
+  const auto [without, summary0] = axes_of(no_ids);
+  EXPECT_FALSE(without.count("recording"));
+  EXPECT_GT(without.at("time"), 0.3) << "one recording: the level step is change over time";
 }
 
 // Out-of-catalogue truths: the baseline plus a mechanism no effect of the catalogue models.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "../modeling/neural_fixture.hpp"
+#include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling {
 namespace {
@@ -139,6 +140,21 @@ TEST(Neural, UnifiedModelFilesRoundTripAndOlderVersionsLoad) {
   std::string v1_cells = text;
   v1_cells.erase(v1_cells.find("format_version = 2\n"), 19);
   expect_error("v1cells.toml", v1_cells, {"cell_ar", "format_version = 2"});
+  // The calibration state (issue #33): written and read back; absent (older files) means
+  // calibrated; another word is refused naming the key.
+  ASSERT_NE(text.find("calibration = \"calibrated\"\n"), std::string::npos);
+  EXPECT_TRUE(back.calibrated);
+  renderer::NeuralModel unc = m;
+  unc.calibrated = false;
+  renderer::SaveNeuralModel(unc, dir.File("unc.toml"));
+  EXPECT_FALSE(renderer::LoadNeuralModel(dir.File("unc.toml")).calibrated);
+  std::string none = text;
+  none.erase(none.find("calibration = \"calibrated\"\n"), 27);
+  test::WriteFile(dir.File("none.toml"), none);
+  EXPECT_TRUE(renderer::LoadNeuralModel(dir.File("none.toml")).calibrated);
+  std::string bad = text;
+  bad.replace(bad.find("\"calibrated\""), 12, "\"maybe\"");
+  expect_error("badcal.toml", bad, {"calibration", "\"uncalibrated\""});
   std::string unstable = text;  // first coefficient of the first cell's AR: 5 (a pole outside)
   const auto at = unstable.find("cell_ar = [\n  [") + 15;
   unstable.replace(at, unstable.find(',', at) - at, "5");

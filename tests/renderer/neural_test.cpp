@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include "../modeling/neural_fixture.hpp"
+#include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling {
 namespace {

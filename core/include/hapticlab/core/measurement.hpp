@@ -5,7 +5,11 @@
 ///   # hapticlab-measurement v1
 ///   # material: NAME
 ///   # key: value            (free metadata: speed_mps, force_N, rate_hz, ...)
-///   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N[,acc_mps2]
+///   t_s,x_m,y_m,z_m,vx_mps,vy_mps,vz_mps,fx_N,fy_N,fz_N[,acc_mps2][,recording]
+///
+/// The optional `recording` column (an integer >= 0) says which recording a row came from when
+/// several are concatenated into one file: analyses that look for change over time compare
+/// rows within a recording, not across recordings.
 ///
 /// or, vibration only (the readers that accept it say so):
 ///
@@ -39,6 +43,8 @@ struct Measurement {
   bool has_kinematics = true;
   std::vector<MeasurementRow> rows;
   std::vector<int> row_lines;  ///< 1-based source line of each row (for messages)
+  /// The `recording` column, one id per row; empty when the file has none (one recording).
+  std::vector<int> recording_ids;
 };
 
 /// Options for reading a measurement.

@@ -15,18 +15,6 @@
 
 namespace hapticlab::modeling {
 
-/// How Γ_U's linear part follows speed and force (NeuralFitOptions::unified_linear).
-enum class UnifiedLinearPart {
-  /// One AR(p) per training cell (p chosen as the LPC bank chooses its order, at most M),
-  /// least squares on that cell's recording, mixed at synthesis
-  /// as the LPC bank mixes its fits (LSFs, bilinear grid weights; NeuralBand::cell_ar, file
-  /// format 2). Γ_U = LPC's interpolation of per-band AR fits + the validated MLP correction.
-  kCellAr,
-  /// AR coefficients biquadratic in the scaled (v', f') (NeuralNet::linear, 9 M weights; the
-  /// form before format 2): the exact interpolant of a 3 x 3 grid, quadratic between nodes.
-  kConditionBasis,
-};
-
 struct NeuralFitOptions {
   renderer::NeuralTopology topology = renderer::NeuralTopology::kUnified;
   std::vector<renderer::NeuralBand> bands = renderer::DefaultNeuralBands();  ///< layout only
@@ -43,18 +31,19 @@ struct NeuralFitOptions {
   double input_noise = 0.3;
   /// SD of white noise added to each band's training signal before the pairs are cut (units
   /// of the band's RMS): histories and targets alike. Default 0: the training signals cover
-  /// their whole decimated range and need no conditioning; the dither (0.2 before issue #19)
-  /// put a white floor into every band (docs/modeling-neural.md).
+  /// their whole decimated range and need no conditioning; a dither puts a white floor
+  /// into every band (docs/modeling-neural.md).
   double signal_noise = 0.0;
   /// Give every network a linear autoregressive part fitted by least squares on the clean
   /// histories (Γ_U: see unified_linear); the MLP learns what it leaves.
   bool linear_part = true;
-  /// Γ_U's linear part: the biquadratic condition basis (default) or per-cell AR fits
-  /// interpolated as LPC's. The per-cell form was built for issue #19 and measured worse held
-  /// out on the AR grids (with order M its LSF mixing splits resonances, with LPC's order it
-  /// also fits the training cells worse; docs/modeling-neural.md has the numbers), so it is
-  /// not the default.
-  UnifiedLinearPart unified_linear = UnifiedLinearPart::kConditionBasis;
+  /// Γ_U's linear part: AR coefficients biquadratic in the scaled (v', f') (NeuralNet::linear;
+  /// no more terms than the grid has nodes), kept when its filter's largest pole radius over a
+  /// 41 x 41 grid of the hull is below this. Otherwise that band falls back to one AR fit per
+  /// training cell (order as the LPC bank chooses it) mixed in LSF form with the grid's bilinear
+  /// weights, as the LPC bank mixes its fits (NeuralBand::cell_ar, file format 2): stable by
+  /// construction. Below 1 asks for a stability margin; 0 always takes the per-cell form.
+  double max_condition_basis_radius = 1.0;
   /// Ridge of the linear part's least squares, relative to the mean diagonal of its normal
   /// matrix (keeps the coefficients, and their condition dependence, small where the data
   /// do not determine them).

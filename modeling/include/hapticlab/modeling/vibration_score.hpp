@@ -32,6 +32,9 @@ struct VibrationScore {
   double es = 0;                      ///< E_s (after level normalisation when asked)
   double level_ratio = 0;             ///< RMS(synthesis) / RMS(recording), before any scaling
   double model_rate_hz = 0;
+  /// false: a neural model trained on uncalibrated recordings (its file says
+  /// `calibration = "uncalibrated"`): its level is in those recordings' units.
+  bool model_calibrated = true;
 };
 
 /// Scores `m` on `r` (condition from the recording; an unlabelled one takes the condition of

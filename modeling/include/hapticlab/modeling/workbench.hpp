@@ -20,3 +20,4 @@
 #include "hapticlab/modeling/workbench_predict.hpp"
 #include "hapticlab/modeling/workbench_replay.hpp"
 #include "hapticlab/modeling/workbench_sim.hpp"
+#include "hapticlab/modeling/workbench_vibration.hpp"

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "hapticlab/modeling/workbench_fit.hpp"
+#include "hapticlab/modeling/workbench_vibration.hpp"
 
 namespace hapticlab::modeling::wb {
 
@@ -63,6 +64,8 @@ struct Diagnosis {
   std::map<std::string, double> baseline_channel;
   std::vector<Candidate> candidates;  ///< sorted by error_reduction, descending
   Unexplained unexplained;
+  /// The baseline's held-out vibration E_s by speed and force (empty without vibration).
+  std::vector<EsCell> vibration_by_condition;
 };
 struct DiagnoseOptions {
   double min_relative_reduction = 0.02;  ///< of the channel's held-out error

@@ -20,7 +20,13 @@
 #include "hapticlab/modeling/workbench_params.hpp"
 #include "hapticlab/modeling/workbench_replay.hpp"
 
+namespace hapticlab::renderer {
+struct MaterialModel;
+}  // namespace hapticlab::renderer
+
 namespace hapticlab::modeling::wb {
+
+struct VibrationSpectra;  // workbench_vibration.hpp
 
 enum class Channel { kNormal, kFriction, kVibration };
 const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration"
@@ -110,6 +116,13 @@ struct Model {
   std::map<std::string, std::map<std::string, double>> params;  ///< effect -> name -> value
   std::map<std::string, std::vector<double>> coef;              ///< vibration coefficients
   std::vector<double> band_edges_hz;  ///< bands the vibration coefficients refer to
+  /// A vibration model the workbench scores but does not fit (workbench_vibration.hpp): a
+  /// material's AR bank or neural model. Used by Predict when the model has no band model; Fit
+  /// leaves it as it is. Set by AttachVibrationModel.
+  std::shared_ptr<const renderer::MaterialModel> vibration_model;
+  /// Its spectra by condition, computed once and shared by the copies of the model (a neural
+  /// model's synthesis is costly; diagnose predicts with many copies). Set with vibration_model.
+  std::shared_ptr<VibrationSpectra> vibration_spectra;
   bool HasVibration() const { return coef.count(std::string(effect::kCore)) > 0; }
   bool Has(std::string_view e) const;
   /// The value of parameter `k`, or `fallback` when the model holds none (whether or not the

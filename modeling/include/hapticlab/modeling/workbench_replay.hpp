@@ -35,7 +35,8 @@ class Replay {
     double fload_N;
     bool contact;
     int block;
-    int row;  ///< index of the measurement row
+    int row;        ///< index of the measurement row
+    int recording;  ///< the row's recording id (Measurement::recording_ids; 0 without)
   };
   /// The force samples in time order (read-only; built by PrepareReplay).
   const std::vector<Sample>& samples() const { return samples_; }
@@ -55,6 +56,7 @@ class Replay {
     std::vector<double> band_power;  ///< mean periodogram power per band [(m/s^2)^2 per bin]
     int block;
     int row0, rows;  ///< measurement rows of the window
+    int recording;   ///< recording id of its first row
   };
   std::vector<Window> windows;  ///< steady windows in contact with mean speed >= 1 cm/s
 
@@ -88,6 +90,9 @@ struct ReplayOptions {
   /// the tool moves fast or turns); false: position_smoothing_s everywhere.
   bool position_adaptive = true;
   std::vector<double> band_edges_hz;  ///< explicit band edges (a model's); empty: log-spaced
+  /// Log-spaced bands end at or below this [Hz] (0: no limit): a fixed vibration model's own
+  /// band (workbench_vibration.hpp, VibrationModelTopHz).
+  double max_band_hz = 0;
 };
 
 /// Prepares a measurement (vibration windows hop by a quarter window). @throws InputError when it

@@ -90,6 +90,9 @@ struct NeuralModel {
   double min_speed_mps = 0.01;               ///< off below this speed (as the AR bank)
   std::vector<double> speeds_mps, forces_N;  ///< the training grid (ascending)
   std::vector<NeuralBand> bands;
+  /// false: trained on recordings in their own units (`calibration = "uncalibrated"` in the
+  /// file), so sigma and the output are in those units, not m/s^2. Absent in a file: calibrated.
+  bool calibrated = true;
   /// Γ_U condition inputs: v and f mapped linearly from [lo, hi] of the grid to [-1, 1],
   /// clamped there (outside the grid the model plays its edge).
   double NormSpeed(double v) const;
