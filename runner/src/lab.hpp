@@ -11,9 +11,6 @@
 
 namespace hapticlab::runner::internal {
 
-// Back-ends whose sessions are simulated (a simulated hand, the simulated observer).
-bool IsSimulated(const std::string& device);
-
 // Everything a session needs besides the database: models, profiles, observer.
 struct Lab {
   const protocols::Protocol* protocol = nullptr;  // borrowed

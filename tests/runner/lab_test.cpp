@@ -30,13 +30,6 @@ TEST(Lab, ParseStimulusSplitsKindAndId) {
   EXPECT_EQ(ParseStimulus("Denim").id, "Denim");
 }
 
-TEST(Lab, SimulatedDevicesAreTheSimulatedBackEnds) {
-  EXPECT_TRUE(IsSimulated("sim"));
-  EXPECT_TRUE(IsSimulated("falcon-twin"));
-  EXPECT_FALSE(IsSimulated("falcon"));
-  EXPECT_FALSE(IsSimulated("dhd"));
-}
-
 TEST(Lab, LoadsEveryPlaceholderModelFromItsProfile) {
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   const Lab lab = LoadLab(p, "sim");
