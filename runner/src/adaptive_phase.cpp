@@ -48,7 +48,7 @@ void History(db::Database& database, std::int64_t session, std::size_t phase_ind
              std::vector<Answered>* done, std::optional<db::Trial>* pending, int* max_plan_index) {
   for (const auto& t : database.Trials(session)) {
     *max_plan_index = std::max(*max_plan_index, t.plan_index);
-    if (t.phase != protocols::ToString(kind)) continue;
+    if (PhaseOf(t.phase) != kind) continue;
     // The phase index is part of the row's comparison text ("phase <i>: <parameter>").
     if (t.comparison.rfind(fmt::format("phase {}:", phase_index), 0) != 0) continue;
     if (t.status != db::kTrialCompleted) {

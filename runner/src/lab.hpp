@@ -3,8 +3,10 @@
 // each sample, loaded from the files a protocol names.
 
 #include <map>
+#include <optional>
 #include <string>
 
+#include "hapticlab/core/enum_names.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
@@ -24,6 +26,20 @@ struct Lab {
 // key, and the path looked up), then thrown together as one InputError: `study validate`
 // reports the same.
 Lab LoadLab(const protocols::Protocol& p, const std::string& device);
+
+// The phases' names as protocols::ToString gives them and the database records them.
+inline constexpr EnumTable<protocols::PhaseKind, 5> kPhaseKindNames{
+    {{protocols::PhaseKind::kTraining, "training"},
+     {protocols::PhaseKind::kReference, "reference"},
+     {protocols::PhaseKind::kMain, "main"},
+     {protocols::PhaseKind::kStaircase, "staircase"},
+     {protocols::PhaseKind::kQuestPlus, "quest-plus"}}};
+
+// The phase a trial row records (kPhaseKindNames); nullopt for a name no phase has.
+std::optional<protocols::PhaseKind> PhaseOf(const std::string& recorded);
+inline bool IsTraining(const std::string& recorded) {
+  return PhaseOf(recorded) == protocols::PhaseKind::kTraining;
+}
 
 // One stimulus of a plan ("real:Denim", "virtual:Denim"): which kind, which material id.
 struct Stimulus {

@@ -98,8 +98,8 @@ class SessionQueue {
   RunSummary Finish(const char* status);
   RunSummary Abort(db::Event why);
   void CountTrials();
-  std::optional<RunSummary> RunPlannedPhase(const std::string& phase);
-  std::size_t Pick(const std::vector<db::Trial>& queue, const std::string& phase);
+  std::optional<RunSummary> RunPlannedPhase(protocols::PhaseKind phase);
+  std::size_t Pick(const std::vector<db::Trial>& queue, protocols::PhaseKind phase);
   std::optional<RunSummary> StopRequestedBefore(const db::Trial& t);
   TrialScreen Screen(const db::Trial& t, const TrialStimuli& stimuli) const;
   std::optional<RunSummary> BreakAndPlacement(const db::Trial& t, const TrialScreen& screen);
@@ -142,8 +142,6 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
 }
 
 namespace {
-
-bool IsTraining(const std::string& phase) { return phase == "training"; }
 
 // Every way a session ends goes through Finish; every abort through Abort (the reason logged
 // as an event of the session, the session closed as aborted).
@@ -214,7 +212,8 @@ RunSummary SessionQueue::Run() {
                           .detail = detail,
                           .established_by = source::kConsole});
     };
-  for (const char* phase : {"training", "reference", "main"})
+  using protocols::PhaseKind;
+  for (const PhaseKind phase : {PhaseKind::kTraining, PhaseKind::kReference, PhaseKind::kMain})
     if (auto stopped = RunPlannedPhase(phase)) return *stopped;
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
   const TrialContext c{rig_, *participant_, opt_, &writer_, database_, session_};
@@ -228,13 +227,14 @@ RunSummary SessionQueue::Run() {
   return Finish("completed");
 }
 
-std::optional<RunSummary> SessionQueue::RunPlannedPhase(const std::string& phase) {
+std::optional<RunSummary> SessionQueue::RunPlannedPhase(protocols::PhaseKind phase) {
   std::vector<db::Trial> queue;
   for (const auto& t : trials_)
-    if (t.phase == phase && t.status != db::kTrialCompleted && t.status != db::kTrialFaulted)
+    if (PhaseOf(t.phase) == phase && t.status != db::kTrialCompleted &&
+        t.status != db::kTrialFaulted)
       queue.push_back(t);
   for (const auto& t : trials_)  // faulted before a crash: retried at the phase's end
-    if (t.phase == phase && t.status == db::kTrialFaulted) queue.push_back(t);
+    if (PhaseOf(t.phase) == phase && t.status == db::kTrialFaulted) queue.push_back(t);
   while (!queue.empty()) {
     const std::size_t pick = Pick(queue, phase);
     db::Trial t = queue[pick];
@@ -259,9 +259,9 @@ std::optional<RunSummary> SessionQueue::RunPlannedPhase(const std::string& phase
 
 // The next trial of the queue: its head, or with the no-immediate-repeat constraint the
 // first trial of another material than the last one (re-queued trials), when one remains.
-std::size_t SessionQueue::Pick(const std::vector<db::Trial>& queue, const std::string& phase) {
+std::size_t SessionQueue::Pick(const std::vector<db::Trial>& queue, protocols::PhaseKind phase) {
   if (!p_.randomization.no_immediate_repeat || queue[0].material != last_material_ ||
-      IsTraining(phase))
+      phase == protocols::PhaseKind::kTraining)
     return 0;
   for (std::size_t i = 1; i < queue.size(); ++i)
     if (queue[i].material != last_material_) return i;

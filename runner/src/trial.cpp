@@ -69,7 +69,7 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, const Tri
   s.sides = stimuli.right ? 2 : 1;
   s.stimulus_s = p.stimulus_duration_s;
   for (const auto& ph : p.phases)
-    if (t.phase == "training" && ph.kind == PhaseKind::kTraining) s.stimulus_s = ph.duration_s;
+    if (IsTraining(t.phase) && ph.kind == PhaseKind::kTraining) s.stimulus_s = ph.duration_s;
   s.break_s = p.break_duration_s;
   s.criteria = p.criteria;
   s.scale_min = p.scale_min;
@@ -130,7 +130,7 @@ Outcome ExecuteTrial(const Lab& lab, const db::Trial& t, const TrialStimuli& sti
   const std::uint64_t trial_seed =
       DeriveSeed(participant_seed, static_cast<std::uint64_t>(t.plan_index) * 64 +
                                        static_cast<std::uint64_t>(t.attempts));
-  if (t.phase == "training") return ExecuteTraining(lab, t, stimuli, trial_seed, c, screen);
+  if (IsTraining(t.phase)) return ExecuteTraining(lab, t, stimuli, trial_seed, c, screen);
   Outcome out;
   Rng rng(trial_seed);
   const double dur = p.stimulus_duration_s;

@@ -30,6 +30,18 @@ TEST(Lab, ParseStimulusSplitsKindAndId) {
   EXPECT_EQ(ParseStimulus("Denim").id, "Denim");
 }
 
+TEST(Lab, EveryPhaseHasItsRecordedName) {
+  using protocols::PhaseKind;
+  for (const PhaseKind k : {PhaseKind::kTraining, PhaseKind::kReference, PhaseKind::kMain,
+                            PhaseKind::kStaircase, PhaseKind::kQuestPlus}) {
+    EXPECT_EQ(NameOf(kPhaseKindNames, k), protocols::ToString(k));
+    EXPECT_EQ(PhaseOf(protocols::ToString(k)), k);
+  }
+  EXPECT_TRUE(IsTraining("training"));
+  EXPECT_FALSE(IsTraining("main"));
+  EXPECT_EQ(PhaseOf("Training"), std::nullopt);  // a name no phase has
+}
+
 TEST(Lab, LoadsEveryPlaceholderModelFromItsProfile) {
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   const Lab lab = LoadLab(p, "sim");
