@@ -15,7 +15,7 @@ namespace hapticlab::runner::backends {
 
 inline RigBackend VendorBackend(
     const std::string& name, const std::string& help, bool (*built)(),
-    std::function<std::unique_ptr<devices::HapticDevice>()> open_device) {
+    const std::function<std::unique_ptr<devices::HapticDevice>()>& open_device) {
   RigBackend b;
   b.name = name;
   b.kind = DeviceKind::kHardware;
