@@ -74,7 +74,9 @@ void RegisterDevice(CLI::App& app) {
           trace +=
               fmt::format("{}{}", trace.empty() ? "" : " -> ", devices::falcon::LoadStateName(s));
         fmt::print("{} after {} attempt(s): {}\n", r.ok ? "loaded" : "FAILED", r.attempts, trace);
-        if (!r.ok) fmt::print("{}\n", devices::DeviceErrorMessage("falcon", r.error));
+        if (!r.ok)
+          fmt::print("{}\n",
+                     devices::DeviceErrorMessage(devices::falcon::kDeviceName, r.error, true));
         return r.ok ? kExitOk : kExitFailure;
       });
     });

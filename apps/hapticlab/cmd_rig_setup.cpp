@@ -16,39 +16,22 @@
 #include "commands.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
-#include "hapticlab/devices/factory.hpp"
 #include "hapticlab/devices/falcon.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner/sim_rigs.hpp"
-#include "hapticlab/sim/simulated_device.hpp"
 #include "rig_timing.hpp"
 
 namespace hapticlab::cli {
 namespace {
 
-const char* const kRigDevices[] = {"sim", "falcon-twin", "falcon", "dhd", "openhaptics"};
-
 std::string Mm(const Eigen::Vector3d& p) {
   return fmt::format("[{:8.2f}, {:8.2f}, {:8.2f}]", p.x() * 1e3, p.y() * 1e3, p.z() * 1e3);
 }
 
-// What to check on the day for each device, as the template's opening comment.
-std::string DeviceNotes(const std::string& device) {
-  if (device == "falcon" || device == "falcon-twin")
-    return "# Novint Falcon: device frame at the workspace centre, z away from the base, y up.\n"
-           "# The grip rests near [0, 0, 0.125]; each sample must lie below it (y < 0).\n"
-           "# force.motor_units_per_Nm: measure with a force gauge (docs/hardware.md).\n";
-  if (device == "dhd" || device == "openhaptics")
-    return "# " + device +
-           ": the vendor SDK's device frame (docs/hardware.md); force.motor_units_per_Nm is\n"
-           "# not used by this back-end.\n";
-  return "# sim: the generic simulated device, z up; samples flat at x = -3 cm and +3 cm.\n";
-}
-
 std::string RigTemplate(const std::string& device) {
   return "# Rig-file template for device '" + device + "' (hapticlab rig init).\n" +
-         DeviceNotes(device) + "# Steps: 1. place the samples; 2. `hapticlab rig touch --device " +
-         device +
+         runner::GetBackend(device).rig_notes +
+         "# Steps: 1. place the samples; 2. `hapticlab rig touch --device " + device +
          " -o left.csv`\n"
          "# (touch four spread points on the left sample, the first two along its x axis);\n"
          "# 3. `hapticlab rig calibrate THIS_FILE --side left --points left.csv --out "
@@ -75,23 +58,22 @@ bool EnterPressed(bool* closed) {
 }
 
 struct TouchArgs {
-  std::string device = "falcon", rig, side = "left", firmware, script, out;
+  std::string device, rig, side = "left", firmware, script, out;
   int points = 4;
 };
 
 // The device a touch session reads: a simulated rig (virtual clock stepped here) or hardware.
 struct TouchDevice {
-  std::unique_ptr<runner::SimulatedRig> sim;
-  devices::OpenedDevice real;
+  std::unique_ptr<runner::Rig> rig;
   devices::HapticDevice* dev = nullptr;
   const devices::falcon::FalconDevice* falcon = nullptr;  // the grip's buttons
   double t_s = 0;
   // One read [device frame]; false when the read carried no new sample.
   bool Read(Eigen::Vector3d* p) {
     renderer::DeviceSample s;
-    if (sim) {
+    if (rig->sim) {
       t_s += 1e-3;
-      sim->sim->clock.Set(t_s);
+      rig->sim->clock.Set(t_s);
     } else {
       std::this_thread::sleep_for(std::chrono::milliseconds(1));
     }
@@ -104,31 +86,25 @@ struct TouchDevice {
 
 TouchDevice OpenTouchDevice(const TouchArgs& a, const runner::RigFile& rf) {
   TouchDevice d;
-  if (sim::IsSimulatedDevice(a.device)) {
-    d.sim = runner::OpenSimulatedRig(a.device, rf);
-    d.dev = d.sim->rig.device;
-    if (d.sim->sim->twin) d.sim->sim->twin->BeginRun();
-    d.falcon = d.sim->falcon.get();
-  } else {
-    if (!a.script.empty())
-      throw InputError(kCommandLine, 0, "--script",
-                       "scripted touches drive a simulated hand: --device sim or falcon-twin");
-    d.real = devices::OpenRealDevice({.device = a.device,
-                                      .firmware = a.firmware,
-                                      .motor_units_per_Nm = rf.motor_units_per_Nm,
-                                      .max_force_N = rf.max_force_N},
-                                     [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
-    d.dev = d.real.device.get();
-    d.dev->SetTimeBase(std::chrono::steady_clock::now());
-    d.falcon = dynamic_cast<const devices::falcon::FalconDevice*>(d.dev);
-  }
+  if (!runner::GetBackend(a.device).simulated() && !a.script.empty())
+    throw InputError(
+        kCommandLine, 0, "--script",
+        "scripted touches drive a simulated hand: --device " + runner::SimulatedBackendList());
+  runner::RigRequest q{.device = a.device, .rig_file = rf, .firmware = a.firmware};
+  q.progress = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+  WithFlags({{"device", "--device"}, {"firmware", "--firmware"}},
+            [&] { d.rig = runner::OpenRig(q); });
+  d.dev = d.rig->device;
+  if (d.rig->sim && d.rig->sim->twin) d.rig->sim->twin->BeginRun();
+  if (!d.rig->sim) d.dev->SetTimeBase(std::chrono::steady_clock::now());
+  d.falcon = dynamic_cast<const devices::falcon::FalconDevice*>(d.dev);
   return d;
 }
 
 int RunTouch(const TouchArgs& a) {
   const bool have_rig = !a.rig.empty();
   const auto rf = have_rig ? runner::LoadRig(a.rig)
-                           : runner::DefaultRig(a.device == "falcon-twin" ? "falcon" : a.device);
+                           : runner::DefaultRig(runner::GetBackend(a.device).RigDevice());
   const int side = a.side == "left" ? 0 : 1;
   std::vector<Eigen::Vector3d> script;
   if (!a.script.empty()) script = ParseTouchPoints(a.script);
@@ -147,7 +123,7 @@ int RunTouch(const TouchArgs& a) {
   bool stdin_closed = false;
   std::vector<Eigen::Vector3d> pts;
   std::size_t reads_held = 0;
-  if (!script.empty()) d.sim->sim->hand.Hold(d.sim->sim->true_device_from_sample[side], script[0]);
+  if (!script.empty()) d.rig->sim->hand.Hold(d.rig->sim->true_device_from_sample[side], script[0]);
   while (static_cast<int>(pts.size()) < wanted) {
     Eigen::Vector3d p;
     if (!d.Read(&p)) continue;
@@ -182,7 +158,7 @@ int RunTouch(const TouchArgs& a) {
     filled = 0;
     reads_held = 0;
     if (!script.empty() && pts.size() < script.size())
-      d.sim->sim->hand.Hold(d.sim->sim->true_device_from_sample[side], script[pts.size()]);
+      d.rig->sim->hand.Hold(d.rig->sim->true_device_from_sample[side], script[pts.size()]);
   }
   std::string csv = "x_m,y_m,z_m\n";
   for (const auto& q : pts) csv += fmt::format("{:.9g},{:.9g},{:.9g}\n", q.x(), q.y(), q.z());
@@ -203,26 +179,20 @@ int RunTouch(const TouchArgs& a) {
 void RegisterRigSetup(CLI::App& rig) {
   {
     struct O {
-      std::string device = "falcon", out;
+      std::string device, out;
     };
     auto o = std::make_shared<O>();
     auto* cmd = rig.add_subcommand(
         "init", "Write a commented rig-file template for a device (read back by `rig show`)");
     cmd->add_option("--device", o->device, "The device the rig uses")
-        ->check(
-            CLI::IsMember(std::vector<std::string>(std::begin(kRigDevices), std::end(kRigDevices))))
+        ->check(CLI::IsMember(runner::BackendNames()))
         ->required();
     cmd->add_option("-o,--out", o->out, "Where to write it (default: print it)");
     cmd->callback([o] {
       RunGuarded([&] {
         const std::string text = RigTemplate(o->device);
         runner::ParseRig(text, "<template>");  // what `rig show` will read
-        if (o->out.empty()) {
-          fmt::print("{}", text);
-        } else {
-          WriteTextFile(o->out, text);
-          fmt::print(stderr, "wrote {}\n", o->out);
-        }
+        PrintOrWrite(text, o->out);
         return kExitOk;
       });
     });
@@ -235,8 +205,7 @@ void RegisterRigSetup(CLI::App& rig) {
       "frame) that `rig calibrate --points` reads. Touch at least three spread points on one\n"
       "sample, the first two along its x axis.");
   cmd->add_option("--device", o->device, "The device")
-      ->check(
-          CLI::IsMember(std::vector<std::string>(std::begin(kRigDevices), std::end(kRigDevices))))
+      ->check(CLI::IsMember(runner::BackendNames()))
       ->required();
   cmd->add_option("--rig", o->rig, "Rig file: also show the tip in the sample's frame");
   cmd->add_option("--side", o->side, "Which sample (for the sample frame and --script)")

@@ -14,9 +14,9 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/devices/factory.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/plan_json.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/runner_ui/session_ui.hpp"
 #include "rig_timing.hpp"
@@ -28,7 +28,7 @@ namespace {
 using nlohmann::json;
 
 struct RunArgs {
-  std::string protocol, db, participant, device = "sim", record = "all";
+  std::string protocol, db, participant, device = runner::DefaultBackendName(), record = "all";
   int index = -1, stop_after = -1;
   double fault_rate = 0;
   bool ui = false, json = false, quiet = false, change_mode = false;
@@ -52,6 +52,7 @@ class Rig {
       runner::RunOptions* o) {
     WithFlags({{"device", "--device"},
                {"firmware", "--firmware"},
+               {"actuator", "--actuator"},
                {"rating_box", "--rating-box"},
                {"rating_layout", "--rating-layout"}},
               [&] { Open(a, study, participant, o); });
@@ -63,15 +64,8 @@ class Rig {
     o->device = a.device;
     o->actuator = a.actuator;
     o->rating_input = a.rating_box.empty() ? "window" : "rating-box:" + a.rating_box;
-    // Frames and calibration: the rig file, or the back-end's built-in rig.
-    const runner::RigFile rf =
-        a.rig_file.empty() ? runner::DefaultRig(a.device) : runner::LoadRig(a.rig_file);
-    rig_.device_from_sample = {rf.DeviceFromSample(0), rf.DeviceFromSample(1)};
-    rig_.calibration = rf.text;
-    rig_.rig_file_hash = rf.sha256;
-    std::string status = "sim (generic simulated device, simulated hand)";
-    const bool hardware = a.device != "sim" && a.device != "falcon-twin";
-    if (hardware && !a.ui) {  // before any device is opened
+    const runner::RigBackend& backend = runner::GetBackend(a.device);
+    if (!backend.simulated() && !a.ui) {  // before any device is opened
       Diagnostics d;
       d.Add(kCommandLine, 0, "--ui",
             "a hardware session takes its ratings from the participant window: add --ui");
@@ -81,49 +75,31 @@ class Rig {
               "confirmed their consent (e.g. E01), never a name");
       d.ThrowIfAny();
     }
-    if (a.device == "sim" || a.device == "falcon-twin") {
-      simulated_ = runner::OpenSimulatedRig(a.device, rf);
-      rig_ = simulated_->rig;
-      status = rig_.description;
-      if (a.actuator != "none")
-        throw InputError(
-            kCommandLine, 0, "--actuator",
-            "a simulated rig plays vibration to the simulated hand; use --actuator none");
-    } else {
-      auto opened =
-          devices::OpenRealDevice({.device = a.device,
-                                   .firmware = a.firmware,
-                                   .motor_units_per_Nm = rf.motor_units_per_Nm,
-                                   .max_force_N = rf.max_force_N},
-                                  [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
-      device_ = std::move(opened.device);
-      rig_.device = device_.get();
-      status = opened.description;
-    }
-    if (a.actuator == "audio") {
-      audio_ = devices::OpenAudioActuator(a.audio_device, a.full_scale_mps2);
-      rig_.actuator = audio_.get();
-      rig_.noise = audio_.get();
-      rig_.noise_rms_fs = a.noise_rms;
-      status += "; audio actuator and masking noise";
-    }
-    if (!rig_.sim)
-      rig_.description = status + "; rig " + (a.rig_file.empty() ? "built-in" : a.rig_file) +
-                         " (sha256 " + rf.sha256.substr(0, 16) + ")";
-    o->rig = &rig_;
-    if (!a.rating_box.empty()) {
-      if (!a.ui)
-        throw InputError(kCommandLine, 0, "--rating-box",
-                         "the rating box feeds the participant window: add --ui");
-      box_ = devices::OpenRatingBox(a.rating_box, a.rating_layout);
-      status += "; rating box " + a.rating_box;
-    }
+    if (!a.rating_box.empty() && !a.ui)
+      throw InputError(kCommandLine, 0, "--rating-box",
+                       "the rating box feeds the participant window: add --ui");
+    // Frames and calibration: the rig file, or the back-end's built-in rig.
+    runner::RigRequest q{.device = a.device,
+                         .rig_file = a.rig_file.empty() ? std::optional<runner::RigFile>()
+                                                        : runner::LoadRig(a.rig_file),
+                         .firmware = a.firmware,
+                         .actuator = a.actuator,
+                         .audio_device = a.audio_device,
+                         .full_scale_mps2 = a.full_scale_mps2,
+                         .noise_rms_fs = a.noise_rms,
+                         .rating_box = a.rating_box,
+                         .rating_layout = a.rating_layout};
+    q.progress = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+    rig_ = runner::OpenRig(q);
+    o->rig = rig_.get();
+    std::string status = rig_->description;
+    if (!a.rating_box.empty()) status += "; rating box " + a.rating_box;
     if (a.ui) {
       runner::ui::WindowOptions wo;
       wo.participant_fullscreen = a.fullscreen;
       try {
         ui_ = std::make_unique<runner::ui::WindowSessionUi>(study, participant, status, wo,
-                                                            box_.get());
+                                                            rig_->rating_input);
       } catch (const std::runtime_error& e) {
         if (a.recorded_mode.empty()) throw;  // study run: the environment (exit 1)
         // study resume in the recorded mode, which cannot start here.
@@ -140,11 +116,7 @@ class Rig {
     }
   }
 
-  runner::HardwareRig rig_;
-  std::unique_ptr<runner::SimulatedRig> simulated_;
-  std::unique_ptr<devices::HapticDevice> device_;
-  std::unique_ptr<devices::AudioOutput> audio_;
-  std::unique_ptr<devices::RatingInput> box_;
+  std::unique_ptr<runner::Rig> rig_;
   std::unique_ptr<runner::ui::WindowSessionUi> ui_;
 };
 
@@ -229,7 +201,7 @@ void RunStudyGuarded(const std::function<int()>& body) {
 
 void RegisterStudyValidate(CLI::App* study) {
   auto path = std::make_shared<std::string>();
-  auto device = std::make_shared<std::string>("sim");
+  auto device = std::make_shared<std::string>(runner::DefaultBackendName());
   auto ui = std::make_shared<bool>(false);
   auto* cmd = study->add_subcommand(
       "validate",
@@ -239,7 +211,7 @@ void RegisterStudyValidate(CLI::App* study) {
       "line and key.");
   cmd->add_option("PROTOCOL", *path, "Study protocol (.toml)")->required();
   cmd->add_option("--device", *device, "Check for this back-end (as 'study run --device')")
-      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+      ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
   cmd->add_flag("--ui", *ui,
                 "Check for a session rated in the participant window (as 'study run --ui')");
@@ -321,14 +293,8 @@ void RegisterStudyPlan(CLI::App* study) {
 
 // Adds the device/actuator/screen options shared by run and resume.
 void AddHardwareOptions(CLI::App* cmd, RunArgs& a) {
-  cmd->add_option(
-         "--device", a.device,
-         "Haptic device back-end: sim (a simulated hand on a generic simulated device, rated by "
-         "the\n"
-         "simulated observer), falcon-twin (the real Falcon back-end over an emulated Falcon,\n"
-         "simulated hand and observer), falcon (Novint Falcon over libusb; needs "
-         "--firmware), dhd, openhaptics (only in builds made with their SDKs)")
-      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+  cmd->add_option("--device", a.device, DeviceHelp("Haptic device back-end"))
+      ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
   cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
   cmd->add_option("--actuator", a.actuator,

@@ -10,11 +10,13 @@
 
 #include "cli_common.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/io.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/devices/audio.hpp"
 #include "hapticlab/devices/factory.hpp"
 #include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/renderer/material.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
@@ -67,62 +69,34 @@ class ZeroForceDevice final : public devices::HapticDevice {
   devices::HapticDevice& d_;
 };
 
-// Seconds since construction on the steady clock (the Falcon twin's hand on the real clock).
-class SteadyClock final : public devices::Clock {
- public:
-  double Now() const noexcept override {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
-  }
-
- private:
-  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
-};
-
 // The device the loops drive, and what it needs kept alive.
 struct TimingDevice {
-  sim::Hand hand;
-  SteadyClock clock;
+  std::unique_ptr<runner::Rig> rig;
   RestingDevice resting;
-  std::unique_ptr<sim::SimDevice> stroking;
-  std::unique_ptr<devices::HapticDevice> owned;  // the twin's Falcon back-end, or hardware
   std::unique_ptr<ZeroForceDevice> zero;
-  sim::FalconTwinTransport* twin = nullptr;
   devices::HapticDevice* dev = nullptr;
-  Eigen::Isometry3d device_from_sample = Eigen::Isometry3d::Identity();
 };
 
+// A simulated back-end on the steady clock: without --render a grip at rest (the twin's own
+// rest pose; the generic device's grip held out of contact); with --render the simulated hand
+// strokes the left sample where it truly lies. Hardware: the device at zero force.
 void OpenTimingDevice(const TimingCheckArgs& a, TimingDevice& t) {
-  if (a.device == "sim") {
-    t.stroking = std::make_unique<sim::SimDevice>(sim::SimDeviceModel{}, t.hand, nullptr);
-    t.dev = a.render.empty() ? static_cast<devices::HapticDevice*>(&t.resting) : t.stroking.get();
-    return;
-  }
-  if (a.device == "falcon-twin") {
-    auto link = std::make_unique<sim::FalconTwinTransport>(t.hand, t.clock);
-    t.twin = link.get();
-    const auto r = devices::falcon::LoadFirmware(*link, sim::FalconTwinFirmware());
-    if (!r.ok) throw std::runtime_error("falcon-twin: " + r.error);
-    devices::falcon::FalconOptions fo;
-    if (a.motor_units_per_Nm > 0) fo.motor_units_per_Nm = a.motor_units_per_Nm;
-    if (a.max_force_N > 0) fo.max_force_N = a.max_force_N;
-    t.owned = std::make_unique<devices::falcon::FalconDevice>(std::move(link),
-                                                              std::function<double()>{}, fo);
-    t.dev = t.owned.get();
-    // Where the twin's left sample truly lies (the hand strokes it with --render).
-    t.device_from_sample = runner::DefaultRig("falcon-twin").DeviceFromSample(0);
-    return;
-  }
-  if (!a.render.empty())
+  const runner::RigBackend& backend = runner::GetBackend(a.device);
+  if (!backend.simulated() && !a.render.empty())
     throw InputError(kCommandLine, 0, "--render",
                      "--render strokes a simulated hand; on hardware the check runs at zero force");
-  auto opened =
-      devices::OpenRealDevice({.device = a.device,
-                               .firmware = a.firmware,
-                               .motor_units_per_Nm = a.motor_units_per_Nm,
-                               .max_force_N = a.max_force_N},
-                              [](const std::string& s) { fmt::print(stderr, "{}\n", s); });
-  t.owned = std::move(opened.device);
-  t.zero = std::make_unique<ZeroForceDevice>(*t.owned);
+  runner::RigRequest q{.device = a.device, .rig_file = a.rig_file, .firmware = a.firmware};
+  q.real_clock = true;
+  q.progress = [](const std::string& s) { fmt::print(stderr, "{}\n", s); };
+  WithFlags({{"device", "--device"}, {"firmware", "--firmware"}},
+            [&] { t.rig = runner::OpenRig(q); });
+  if (t.rig->sim) {
+    const bool generic = t.rig->sim->generic != nullptr;
+    t.dev = generic && a.render.empty() ? static_cast<devices::HapticDevice*>(&t.resting)
+                                        : t.rig->device;
+    return;
+  }
+  t.zero = std::make_unique<ZeroForceDevice>(*t.rig->device);
   t.dev = t.zero.get();
 }
 
@@ -145,6 +119,29 @@ void PrintHistogram(const LatencySummary& s) {
 }
 
 }  // namespace
+
+void PrintOrWrite(const std::string& text, const std::string& out) {
+  if (out.empty()) {
+    fmt::print("{}", text);
+    return;
+  }
+  WriteTextFile(out, text);
+  fmt::print(stderr, "wrote {}\n", out);
+}
+
+std::string DeviceHelp(const std::string& what) {
+  std::string s = what + ":";
+  const auto backends = runner::Backends();
+  for (std::size_t i = 0; i < backends.size(); ++i)
+    s += fmt::format("{}\n  {} ({})", i == 0 ? "" : ",", backends[i]->name, backends[i]->help);
+  return s;
+}
+
+std::string DefaultCheckDevice() {
+  for (const auto* b : runner::Backends())
+    if (b->simulated() && !b->rig_device.empty()) return b->name;
+  return runner::DefaultBackendName();
+}
 
 void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt) {
   cmd->add_option(
@@ -176,22 +173,25 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   renderer::RenderOptions ro;
   ro.force_rate_hz = a.rate_hz;
   ro.vibration = a.vibration;
-  if (a.device != "sim") {  // the twin's and the hardware's own limits
+  if (td.dev != &td.resting) {  // the device's own limits (the resting grip has none)
     ro.device_max_stiffness_N_per_m = dev.Capabilities().max_stiffness_N_per_m;
     ro.max_force_N = std::min(ro.max_force_N, dev.Capabilities().max_force_N);
   }
   renderer::HybridRenderer r(model, ro);
   // Without a model: a grip resting out of contact. With one: the simulated hand strokes the
-  // virtual sample (sim: device frame = sample frame) back and forth on the real clock.
+  // virtual left sample where it truly lies, back and forth on the real clock.
+  sim::SimRig* simulation = td.rig->sim;
+  const Eigen::Isometry3d device_from_sample =
+      simulation ? simulation->true_device_from_sample[0] : Eigen::Isometry3d::Identity();
   if (!a.render.empty()) {
     Rng rng(1);
     sim::Stroke stroke = sim::DrawStroke(rng);
     const double relief_m =
         model.geometry ? model.geometry->max_m() - model.geometry->min_m() : 0.0;
-    td.hand.Begin(stroke, td.device_from_sample, model.contact.layer_thickness_m + relief_m,
-                  model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
-                  ro.force_rate_hz, ro.vibration_rate_hz);
-    if (td.twin) td.twin->BeginRun();
+    simulation->hand.Begin(stroke, device_from_sample, model.contact.layer_thickness_m + relief_m,
+                           model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m, nullptr,
+                           ro.force_rate_hz, ro.vibration_rate_hz);
+    if (simulation->twin) simulation->twin->BeginRun();
   }
   std::unique_ptr<devices::AudioOutput> audio;
   if (a.actuator == "audio") {
@@ -203,7 +203,7 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   }
   runner::EngineOptions eo;
   eo.rt = a.rt;
-  eo.sample_from_device = td.device_from_sample.inverse();
+  eo.sample_from_device = device_from_sample.inverse();
   runner::RtEngine engine(r, dev, audio.get(), eo);
   engine.RunFor(std::chrono::duration<double>(a.seconds));
   if (audio) audio->Stop();

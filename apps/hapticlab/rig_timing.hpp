@@ -4,9 +4,11 @@
 
 #include <CLI/CLI.hpp>
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rt_thread.hpp"
 
 namespace hapticlab::cli {
@@ -15,18 +17,26 @@ namespace hapticlab::cli {
 /// "x,y,z;x,y,z;...". @throws InputError naming the file (or --points) and line.
 std::vector<Eigen::Vector3d> ParseTouchPoints(const std::string& arg);
 
+/// Prints `text` (a rig file), or with `out` writes it there and says so on stderr.
+void PrintOrWrite(const std::string& text, const std::string& out);
+
+/// --device's help: `what`, then each registered back-end with its help phrase.
+std::string DeviceHelp(const std::string& what);
+/// The device `rig check` checks by default: the first simulated back-end that emulates a
+/// hardware back-end (its code runs over an emulated device), else the default back-end.
+std::string DefaultCheckDevice();
+
 /// Adds the real-time loop options (--rt-priority, --spin-us, --lock-memory, --cpu) to a
 /// command that runs the loops on the real clock.
 void AddRtOptions(CLI::App* cmd, runner::RtThreadOptions& rt);
 
 struct TimingCheckArgs {
-  /// sim: a simulated grip resting out of contact; falcon-twin: the Falcon back-end over the
-  /// twin, its grip at rest; falcon, dhd, openhaptics: the hardware at zero force.
-  std::string device = "sim";
-  std::string firmware;           ///< falcon: the firmware file
-  double motor_units_per_Nm = 0;  ///< falcon: from the rig file (0: the back-end's default)
-  double max_force_N = 0;         ///< falcon: from the rig file (0: the back-end's default)
-  std::string actuator = "none";  ///< "none" or "audio" (PortAudio, --audio-device)
+  /// A simulated back-end on the steady clock (the generic device: a grip resting out of
+  /// contact; a twin: its grip at rest), or hardware at zero force.
+  std::string device = runner::DefaultBackendName();
+  std::string firmware;                     ///< a back-end that needs firmware: the file
+  std::optional<runner::RigFile> rig_file;  ///< --rig (force calibration); none: built-in
+  std::string actuator = "none";            ///< "none" or "audio" (PortAudio, --audio-device)
   std::string audio_device;
   /// Material model (.toml) to render while a simulated hand strokes the virtual sample on
   /// the real clock (the tick durations of that model); empty: a resting grip out of contact,

@@ -8,81 +8,34 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/devices/hid_rating.hpp"
-#include "hapticlab/devices/vendor.hpp"
 
 namespace hapticlab::devices {
 namespace {
 
 constexpr const char* kCommandLine = "<command line>";
-
-std::unique_ptr<HapticDevice> OpenFalcon(const DeviceRequest& r,
-                                         const std::function<void(const std::string&)>& progress) {
-  if (r.firmware.empty())
-    throw InputError(kCommandLine, 0, "firmware",
-                     "the Falcon needs its firmware file (docs/hardware.md)");
-  const auto fw = falcon::ReadFirmwareFile(r.firmware);
-  auto usb = OpenFalconLink();
-  if (progress)
-    progress(fmt::format("falcon: loading firmware {} ({} bytes)...", r.firmware, fw.size()));
-  const auto loaded = falcon::LoadFirmware(*usb, fw);
-  if (!loaded.ok) throw std::runtime_error(DeviceErrorMessage("falcon", loaded.error));
-  if (progress) progress(fmt::format("falcon: firmware running (attempt {})", loaded.attempts));
-  falcon::FalconOptions fo;
-  if (r.motor_units_per_Nm > 0) fo.motor_units_per_Nm = r.motor_units_per_Nm;
-  if (r.max_force_N > 0) fo.max_force_N = r.max_force_N;
-  return std::make_unique<falcon::FalconDevice>(std::move(usb), std::function<double()>{}, fo);
-}
+constexpr const char* kFalcon = falcon::kDeviceName;
 
 }  // namespace
 
-std::string DeviceErrorMessage(const std::string& device, const std::string& what) {
+std::string DeviceErrorMessage(const std::string& device, const std::string& what,
+                               bool loads_firmware) {
   const bool named = what.rfind(device + ":", 0) == 0;
   const std::string checks =
-      device == "falcon" ? "the cable, the power supply, the udev rule and the firmware file"
-                         : "the cable, the power supply, the udev rule and the vendor's "
-                           "driver";
+      loads_firmware ? "the cable, the power supply, the udev rule and the firmware file"
+                     : "the cable, the power supply, the udev rule and the vendor's "
+                       "driver";
   return fmt::format("{}{}; check {} (docs/hardware.md)", named ? "" : device + ": ", what, checks);
 }
 
 std::unique_ptr<falcon::UsbTransport> OpenFalconLink() {
   if (falcon::CountDevices() == 0)
     throw std::runtime_error(DeviceErrorMessage(
-        "falcon", "no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48)"));
+        kFalcon, "no Novint Falcon on the USB bus (vendor 0x0403, product 0xcb48)", true));
   try {
     return falcon::OpenLibusb(0);
   } catch (const std::runtime_error& e) {
-    throw std::runtime_error(DeviceErrorMessage("falcon", e.what()));
+    throw std::runtime_error(DeviceErrorMessage(kFalcon, e.what(), true));
   }
-}
-
-bool IsRealDevice(const std::string& device) {
-  return device == "falcon" || device == "dhd" || device == "openhaptics";
-}
-
-OpenedDevice OpenRealDevice(const DeviceRequest& r,
-                            const std::function<void(const std::string&)>& progress) {
-  if (!IsRealDevice(r.device))
-    throw InputError(kCommandLine, 0, "device",
-                     "no real device '" + r.device +
-                         "' (falcon, dhd, openhaptics; sim and falcon-twin are simulated)");
-  if ((r.device == "dhd" && !HaveDhd()) || (r.device == "openhaptics" && !HaveOpenHaptics()))
-    throw InputError(kCommandLine, 0, "device",
-                     "'" + r.device +
-                         "' is compiled only when its vendor SDK is found at build time, and this "
-                         "build has none (docs/hardware.md)");
-  OpenedDevice out;
-  if (r.device == "falcon") {
-    out.device = OpenFalcon(r, progress);
-    out.description = "falcon, firmware " + r.firmware;
-  } else {
-    try {
-      out.device = r.device == "dhd" ? OpenDhd() : OpenOpenHaptics();
-    } catch (const std::runtime_error& e) {
-      throw std::runtime_error(DeviceErrorMessage(r.device, e.what()));
-    }
-    out.description = out.device->Capabilities().name;
-  }
-  return out;
 }
 
 std::unique_ptr<AudioOutput> OpenAudioActuator(const std::string& audio_device,

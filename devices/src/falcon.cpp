@@ -247,7 +247,7 @@ FalconDevice::FalconDevice(std::unique_ptr<UsbTransport> usb, std::function<doub
 
 DeviceCapabilities FalconDevice::Capabilities() const {
   DeviceCapabilities c;
-  c.name = "falcon";
+  c.name = kDeviceName;
   c.max_force_N = o_.max_force_N;
   c.max_stiffness_N_per_m = 2000;  // stable on the Falcon at 1 kHz (order of the vendor's figure)
   c.max_rate_hz = 1000;

@@ -11,6 +11,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/study_runner.hpp"
+#include "stimulus_side.hpp"
 
 namespace hapticlab::runner::internal {
 
@@ -24,22 +25,15 @@ struct AdaptiveOutcome {
 // Runs every adaptive phase of the protocol, in protocol order, continuing each from its
 // recorded trials. `executed` counts trials run in this call of the session (for
 // stop_after_trials) and is advanced. Every interval is presented through the one trial
-// path (RunStimulusSide, stimulus_side.hpp) on `rig`: the method's renderer in the real-time
-// engine over the rig's device, the simulated hand stroking it, streams i<k>_force and
-// i<k>_vibration. With opt.ui the engine's stylus frames go to the participant window and
-// the participant answers (SessionUi::Choose); else the phase's simulated observer answers.
+// path (RunStimulusSide, stimulus_side.hpp) on the context's rig: the method's renderer in
+// the real-time engine over the rig's device, the participant holding the stylus, streams
+// i<k>_force and i<k>_vibration; the participant answers (Participant::Answer).
 // @throws hapticlab::InputError for a hardware device (not supported yet) or a simulated
 // session without a UI whose phase has no [phase.simulated_observer].
-AdaptiveOutcome RunAdaptivePhases(db::Database& database, std::int64_t session,
-                                  const protocols::Protocol& p,
+AdaptiveOutcome RunAdaptivePhases(const protocols::Protocol& p,
                                   const std::map<std::string, renderer::MaterialModel>& models,
-                                  std::uint64_t participant_seed, const RunOptions& opt,
-                                  HardwareRig& rig, db::TrajectoryWriter* writer, int* executed);
-
-// Checks before a session starts that its adaptive phases can run on `device`: a simulated
-// rig ("sim" or "falcon-twin"; hardware devices are refused); with a participant window the
-// participant answers, without one the phase's simulated observer must exist.
-void CheckAdaptivePhases(const protocols::Protocol& p, const std::string& device, bool with_ui);
+                                  std::uint64_t participant_seed, const TrialContext& c,
+                                  int* executed);
 
 // The model with one parameter set to `value`; `parameter` is one of
 // protocols::AdaptiveParameters() (PreconditionError otherwise).

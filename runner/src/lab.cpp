@@ -9,17 +9,15 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/db/database.hpp"
-#include "hapticlab/sim/simulated_device.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 
 namespace hapticlab::runner::internal {
 
 namespace fs = std::filesystem;
 
-bool IsSimulated(const std::string& device) { return sim::IsSimulatedDevice(device); }
-
 Lab LoadLab(const protocols::Protocol& p, const std::string& device,
             const std::map<std::string, std::string>& model_files) {
-  const bool sim = IsSimulated(device);
+  const bool sim = IsSimulatedBackend(device);
   Lab lab;
   lab.protocol = &p;
   const fs::path dir = fs::path(p.file).parent_path();
@@ -123,6 +121,10 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device,
   }
   d.ThrowIfAny();
   return lab;
+}
+
+std::optional<protocols::PhaseKind> PhaseOf(const std::string& recorded) {
+  return FromName(kPhaseKindNames, recorded);
 }
 
 Stimulus ParseStimulus(const std::string& stimulus) {

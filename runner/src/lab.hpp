@@ -3,16 +3,15 @@
 // each sample, loaded from the files a protocol names.
 
 #include <map>
+#include <optional>
 #include <string>
 
+#include "hapticlab/core/enum_names.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
 namespace hapticlab::runner::internal {
-
-// Back-ends whose sessions are simulated (a simulated hand, the simulated observer).
-bool IsSimulated(const std::string& device);
 
 // Everything a session needs besides the database: models, profiles, observer.
 struct Lab {
@@ -30,6 +29,20 @@ struct Lab {
 // (RunOptions::model_files).
 Lab LoadLab(const protocols::Protocol& p, const std::string& device,
             const std::map<std::string, std::string>& model_files = {});
+
+// The phases' names as protocols::ToString gives them and the database records them.
+inline constexpr EnumTable<protocols::PhaseKind, 5> kPhaseKindNames{
+    {{protocols::PhaseKind::kTraining, "training"},
+     {protocols::PhaseKind::kReference, "reference"},
+     {protocols::PhaseKind::kMain, "main"},
+     {protocols::PhaseKind::kStaircase, "staircase"},
+     {protocols::PhaseKind::kQuestPlus, "quest-plus"}}};
+
+// The phase a trial row records (kPhaseKindNames); nullopt for a name no phase has.
+std::optional<protocols::PhaseKind> PhaseOf(const std::string& recorded);
+inline bool IsTraining(const std::string& recorded) {
+  return PhaseOf(recorded) == protocols::PhaseKind::kTraining;
+}
 
 // One stimulus of a plan ("real:Denim", "virtual:Denim"): which kind, which material id.
 struct Stimulus {

@@ -12,6 +12,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/core/toml_util.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 
 namespace hapticlab::runner {
 namespace {
@@ -124,7 +125,7 @@ Eigen::Isometry3d RigFile::DeviceFromSample(int side) const {
 RigFile ParseRig(const std::string& text, const std::string& path) {
   const toml::table doc = ParseTomlText(text, path);
   Diagnostics d;
-  RigFile r = DefaultRig("sim");
+  RigFile r = DefaultRig(DefaultBackendName());
   r.path = path;
   r.text = text;
   r.sha256 = db::HashText(text);
@@ -196,7 +197,8 @@ std::string RigToToml(const RigFile& r) {
 RigFile DefaultRig(const std::string& device) {
   RigFile r;
   r.device = device;
-  if (device == "falcon" || device == "falcon-twin") {
+  const RigBackend* backend = FindBackend(device);
+  if (backend && backend->falcon_frame) {
     const Eigen::Vector3d up(0, 1, 0), right(1, 0, 0);
     r.world_from_sample[0] = PoseFromAxes({-0.025, -0.04, 0.125}, right, up);
     r.world_from_sample[1] = PoseFromAxes({0.025, -0.04, 0.125}, right, up);

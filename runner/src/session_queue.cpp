@@ -15,13 +15,11 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/runner/audit.hpp"
-#include "hapticlab/sim/sim_device.hpp"
+#include "participant.hpp"
 #include "trial.hpp"
 
 namespace hapticlab::runner::internal {
 namespace {
-
-using sim::Observer;
 
 void Log(const RunOptions& o, const std::string& s) {
   if (o.log) o.log(s);
@@ -80,15 +78,63 @@ void MarkFailed(db::Database& database, std::int64_t session, const std::string&
                         session));
 }
 
-RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
-                   const db::Participant& part, const RunOptions& opt);
+// The session's remaining planned trials in plan order, phase by phase, faulted ones
+// re-queued at their phase's end; breaks, stops and aborts; then the adaptive phases.
+class SessionQueue {
+ public:
+  SessionQueue(db::Database& database, const Lab& lab, std::int64_t session,
+               const db::Participant& part, const RunOptions& opt, Rig& rig)
+      : database_(database),
+        lab_(lab),
+        p_(*lab.protocol),
+        session_(session),
+        part_(part),
+        opt_(opt),
+        rig_(rig),
+        writer_(database.path()) {}
+  RunSummary Run();
+
+ private:
+  RunSummary Finish(const char* status);
+  RunSummary Abort(db::Event why);
+  void CountTrials();
+  std::optional<RunSummary> RunPlannedPhase(protocols::PhaseKind phase);
+  std::size_t Pick(const std::vector<db::Trial>& queue, protocols::PhaseKind phase);
+  std::optional<RunSummary> StopRequestedBefore(const db::Trial& t);
+  TrialScreen Screen(const db::Trial& t, const TrialStimuli& stimuli) const;
+  std::optional<RunSummary> BreakAndPlacement(const db::Trial& t, const TrialScreen& screen);
+  void Requeue(db::Trial& t, const char* kind, const std::string& cause, const std::string& by);
+  std::optional<RunSummary> AfterTrial(db::Trial& t, const Outcome& o, const TrialScreen& screen,
+                                       std::vector<db::Trial>* queue);
+
+  static constexpr int kMaxTrajectoryFaults = 3;  // in a row: the disk or the database
+  db::Database& database_;
+  const Lab& lab_;
+  const protocols::Protocol& p_;
+  std::int64_t session_;
+  const db::Participant& part_;
+  const RunOptions& opt_;
+  Rig& rig_;
+  std::unique_ptr<Participant> participant_;
+  db::TrajectoryWriter writer_;
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
+  RunSummary sum_;
+  std::vector<db::Trial> trials_;
+  std::string last_material_;
+  // The screens count rated trials of the planned phases (training apart), 1-based.
+  int rated_total_ = 0, rated_done_ = 0, training_total_ = 0, training_done_ = 0;
+  int trajectory_faults_ = 0, untouched_in_a_row_ = 0;
+  std::set<std::int64_t> break_before_;  // trials the plan puts a break before
+  std::set<std::int64_t> done_;          // trials completed (before a resume or now)
+  std::optional<std::int64_t> trial_under_way_;
+};
 
 }  // namespace
 
 RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t session,
-                          const db::Participant& part, const RunOptions& opt) {
+                          const db::Participant& part, const RunOptions& opt, Rig& rig) {
   try {
-    return Execute(database, lab, session, part, opt);
+    return SessionQueue(database, lab, session, part, opt, rig).Run();
   } catch (const std::exception& e) {
     MarkFailed(database, session, e.what(), opt);
     throw;
@@ -97,292 +143,293 @@ RunSummary ExecuteSession(db::Database& database, const Lab& lab, std::int64_t s
 
 namespace {
 
-RunSummary Execute(db::Database& database, const Lab& lab, std::int64_t session,
-                   const db::Participant& part, const RunOptions& opt) {
-  const auto& p = *lab.protocol;
-  const auto t0 = std::chrono::steady_clock::now();
-  RunSummary sum;
-  sum.session_id = session;
-  sum.participant = part.code;
-  // Every way a session ends goes through `finish`; every abort through `abort` (the reason
-  // logged as an event of the session, the session closed as aborted).
-  const auto finish = [&](const char* status) {
-    sum.status = status;
-    sum.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    return sum;
-  };
-  const auto abort = [&](db::Event why) {
-    why.session_id = session;
-    if (why.kind.empty()) why.kind = "abort";
-    database.LogEvent(why);
-    database.EndSession(session, "aborted");
-    return finish("aborted");
-  };
-  const Observer observer(lab.profiles.observer, DeriveSeed(part.seed, 0xABCDEF), p.criteria);
-  // Without a rig, a simulated session builds the generic simulated rig.
-  std::unique_ptr<sim::SimRig> own_sim;
-  HardwareRig own_rig;
-  HardwareRig* rig = opt.rig;
-  if (!rig) {
-    HL_REQUIRE(opt.device == "sim", "a session on device '" + opt.device +
-                                        "' needs RunOptions::rig (the opened device)");
-    own_sim = std::make_unique<sim::SimRig>(
-        sim::SimDeviceModel{.seed = DeriveSeed(part.seed, 0x51D)}, sim::DefaultSamplePoses());
-    own_rig.device = own_sim->device;
-    own_rig.actuator = &own_sim->actuator;
-    own_rig.device_from_sample = own_sim->true_device_from_sample;
-    own_rig.sim = own_sim.get();
-    own_rig.description = "sim (generic simulated device, simulated hand)";
-    rig = &own_rig;
+// Every way a session ends goes through Finish; every abort through Abort (the reason logged
+// as an event of the session, the session closed as aborted).
+RunSummary SessionQueue::Finish(const char* status) {
+  sum_.status = status;
+  sum_.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  return sum_;
+}
+
+RunSummary SessionQueue::Abort(db::Event why) {
+  why.session_id = session_;
+  if (why.kind.empty()) why.kind = "abort";
+  database_.LogEvent(why);
+  database_.EndSession(session_, "aborted");
+  return Finish("aborted");
+}
+
+void SessionQueue::CountTrials() {
+  trials_ = database_.Trials(session_);
+  sum_.planned = static_cast<int>(trials_.size());
+  for (const auto& t : trials_) {
+    const bool completed = t.status == db::kTrialCompleted;
+    if (completed) {
+      ++sum_.completed;
+      last_material_ = t.material;  // plan order: the last completed trial precedes the next
+      done_.insert(t.id);
+    }
+    (IsTraining(t.phase) ? training_total_ : rated_total_) += 1;
+    if (completed) (IsTraining(t.phase) ? training_done_ : rated_done_) += 1;
   }
-  HL_REQUIRE(rig->device != nullptr, "RunOptions::rig has no device");
-  HL_REQUIRE(rig->sim != nullptr || opt.ui != nullptr,
-             "a hardware session needs RunOptions::ui (the participant window gives the ratings)");
-  if (opt.device != "sim" || opt.rig)
-    database.LogEvent({.session_id = session,
-                       .kind = "device",
-                       .detail = rig->description,
-                       .established_by = source::Device(opt.device)});
+  for (const auto& e : database_.Events(session_))
+    if (e.kind == "break-planned" && e.trial_id) break_before_.insert(*e.trial_id);
+}
+
+RunSummary SessionQueue::Run() {
+  sum_.session_id = session_;
+  sum_.participant = part_.code;
+  HL_REQUIRE(rig_.device != nullptr, "RunOptions::rig has no device");
+  // Who holds the stylus and answers: the one seam to simulation (participant.hpp).
+  participant_ = MakeParticipant(rig_, lab_, opt_, part_.seed);
+  if (opt_.rig)  // a rig the caller opened (the one a simulated session opens is not logged)
+    database_.LogEvent({.session_id = session_,
+                        .kind = "device",
+                        .detail = rig_.description,
+                        .established_by = source::Device(opt_.device)});
   // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
   struct Noise {
     devices::MaskingNoise* n;
     ~Noise() {
       if (n) n->SetNoiseLevel(0);
     }
-  } noise{p.masking_noise ? rig->noise : nullptr};
-  if (noise.n) noise.n->SetNoiseLevel(rig->noise_rms_fs);
-  db::TrajectoryWriter writer(database.path());
-  constexpr int kMaxTrajectoryFaults = 3;  // in a row: the disk or the database is the problem
-  int trajectory_faults = 0;
-  auto trials = database.Trials(session);
-  sum.planned = static_cast<int>(trials.size());
-  std::string last_material;
-  for (const auto& t : trials)
-    if (t.status == db::kTrialCompleted) {
-      ++sum.completed;
-      last_material = t.material;  // plan order: the last completed trial precedes the next
-    }
-  // The screens count rated trials of the planned phases (training apart), 1-based.
-  int rated_total = 0, rated_done = 0, training_total = 0, training_done = 0;
-  for (const auto& t : trials) {
-    const bool training = t.phase == std::string("training");
-    (training ? training_total : rated_total) += 1;
-    if (t.status == db::kTrialCompleted) (training ? training_done : rated_done) += 1;
-  }
+  } noise{p_.masking_noise ? rig_.noise : nullptr};
+  if (noise.n) noise.n->SetNoiseLevel(rig_.noise_rms_fs);
+  CountTrials();
   // The experimenter's actions in the console (pause, resume, abort asked / cancelled, a
   // break ended early) become session events, tied to the trial under way.
-  std::optional<std::int64_t> trial_under_way;
   struct UiEvents {
     SessionUi* ui;
     ~UiEvents() {
       if (ui) ui->log_event = nullptr;
     }
-  } ui_events{opt.ui};
-  if (opt.ui)
-    opt.ui->log_event = [&](const std::string& kind, const std::string& detail) {
-      database.LogEvent({.session_id = session,
-                         .trial_id = trial_under_way,
-                         .kind = kind,
-                         .detail = detail,
-                         .established_by = source::kConsole});
+  } ui_events{opt_.ui};
+  if (opt_.ui)
+    opt_.ui->log_event = [this](const std::string& kind, const std::string& detail) {
+      database_.LogEvent({.session_id = session_,
+                          .trial_id = trial_under_way_,
+                          .kind = kind,
+                          .detail = detail,
+                          .established_by = source::kConsole});
     };
-  // A faulted attempt of trial `t`: its cause as an event (established by `by`), then the
-  // runner's re-queue as an 'attempt-faulted' event (counted by 'study status') and a line on
-  // the log even without progress lines. The caller re-queues `t`.
-  const auto requeue = [&](db::Trial& t, const char* kind, const std::string& cause,
-                           const std::string& by) {
-    ++sum.faults;
-    database.SetTrialStatus(t.id, db::kTrialFaulted);
-    database.LogEvent({.session_id = session,
-                       .trial_id = t.id,
-                       .kind = kind,
-                       .detail = cause,
-                       .established_by = by});
-    std::string why = cause;  // the watchdog's text may end by saying it already
-    for (const char* tail : {", trial re-queued", "; trial re-queued"})
-      if (why.size() > std::strlen(tail) && why.ends_with(tail))
-        why.resize(why.size() - std::strlen(tail));
-    const std::string line =
-        fmt::format("trial {} ({}, attempt {}) faulted: {}; re-queued at the end of the {} phase",
-                    t.plan_index + 1, t.phase, t.attempts, why, t.phase);
-    database.LogEvent({.session_id = session,
-                       .trial_id = t.id,
-                       .kind = "attempt-faulted",
-                       .detail = line,
-                       .established_by = source::kRunner});
-    Warn(opt, part.code + ": " + line);
-    t.status = db::kTrialFaulted;
-  };
-  const bool constrained = p.randomization.no_immediate_repeat;
-  int untouched_in_a_row = 0;
-  std::set<std::int64_t> break_before;  // trials the plan puts a break before
-  std::set<std::int64_t> done;          // trials completed (before a resume or now)
-  for (const auto& t : trials)
-    if (t.status == db::kTrialCompleted) done.insert(t.id);
-  for (const auto& e : database.Events(session))
-    if (e.kind == "break-planned" && e.trial_id) break_before.insert(*e.trial_id);
-  for (const char* phase : {"training", "reference", "main"}) {
-    std::vector<db::Trial> queue;
-    for (const auto& t : trials)
-      if (t.phase == phase && t.status != db::kTrialCompleted && t.status != db::kTrialFaulted)
-        queue.push_back(t);
-    for (const auto& t : trials)  // faulted before a crash: retried at the phase's end
-      if (t.phase == phase && t.status == db::kTrialFaulted) queue.push_back(t);
-    while (!queue.empty()) {
-      // Keep the no-immediate-repeat constraint for re-queued trials when possible.
-      std::size_t pick = 0;
-      if (constrained && queue[0].material == last_material && std::string(phase) != "training") {
-        for (std::size_t i = 1; i < queue.size(); ++i)
-          if (queue[i].material != last_material) {
-            pick = i;
-            break;
-          }
-        if (pick == 0 && queue.size() > 1)
-          database.LogEvent({.session_id = session,
-                             .trial_id = queue[0].id,
-                             .kind = "constraint-relaxed",
-                             .detail = "only trials of the same material remain in the phase",
-                             .established_by = source::kRunner});
-      }
-      db::Trial t = queue[pick];
-      queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
-      if (const int sig = StopRequested()) {
-        return abort(
-            {.trial_id = t.id,
-             .kind = "interrupted",
-             .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study resume' "
-                                   "continues with it",
-                                   sig,
-                                   sig == SIGINT    ? "SIGINT"
-                                   : sig == SIGTERM ? "SIGTERM"
-                                                    : "signal"),
-             .established_by = source::kSignal});
-      }
-      if (opt.stop_after_trials >= 0 && sum.executed >= opt.stop_after_trials) {
-        return abort({.detail = "stopped after the requested number of trials",
-                      .established_by = source::CommandLine("--stop-after")});
-      }
-      // The console shows this trial as the next one from now on: through a break and while
-      // its samples are placed.
-      const bool training = t.phase == std::string("training");
-      auto screen = ScreenOf(p, t, training ? training_done + 1 : rated_done + 1,
-                             training ? training_total : rated_total);
-      screen.training = training;
-      screen.rated_done = rated_done;
-      screen.rated_total = rated_total;
-      screen.training_done = training_done;
-      screen.training_total = training_total;
-      screen.plan_total = sum.planned;
-      screen.break_before = break_before.count(t.id) && !training;
-      screen.breaks_left = 0;
-      for (const auto& b : trials)
-        if (break_before.count(b.id) && b.phase != std::string("training") && !done.count(b.id) &&
-            b.id != t.id)
-          ++screen.breaks_left;
-      if (opt.ui) opt.ui->Upcoming(screen);
-      const bool requested = opt.ui && opt.ui->TakeBreakNow();
-      if (opt.ui &&
-          (requested || (break_before.count(t.id) && t.phase != std::string("training")))) {
-        // A simulated session played faster (--ui-speed) shortens its breaks alike.
-        const double speed = rig->sim ? opt.ui_playback_speed : 1.0;
-        const double break_s = p.break_duration_s / speed;
-        database.LogEvent(
-            {.session_id = session,
-             .trial_id = t.id,
-             .kind = "break",
-             .detail =
-                 fmt::format("{:.0f} s break ({}{})", break_s,
-                             requested ? "requested by the experimenter" : "planned",
-                             speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
-             .established_by = requested ? source::kConsole : source::kPlan});
-        trial_under_way = t.id;
-        if (!opt.ui->Break(break_s)) {
-          return abort({.detail = "the experimenter aborted during a break",
-                        .established_by = source::kConsole});
-        }
-      }
-      if (opt.ui && screen.real_sample) {
-        // No trial with a real sample starts before the experimenter confirms its samples.
-        trial_under_way = t.id;
-        const auto how = opt.ui->ConfirmPlacement(screen);
-        if (!how) return abort({.detail = "the experimenter aborted while placing the samples"});
-        database.LogEvent(
-            {.session_id = session,
-             .trial_id = t.id,
-             .kind = "samples-placed",
-             .detail = fmt::format("trial {}: {}; {}", screen.plan_number, screen.placement, *how),
-             .established_by =
-                 how->starts_with("not confirmed") ? source::kRunner : source::kConsole});
-      }
-      database.StartTrial(t.id);
-      ++t.attempts;
-      ++sum.executed;
-      trial_under_way = t.id;
-      const Outcome o =
-          ExecuteTrial(lab, observer, t, part.seed, opt, *rig, &writer, screen, database, session);
-      sum.simulated_s += o.stimulus_s;
-      untouched_in_a_row = o.untouched ? untouched_in_a_row + 1 : 0;
-      if (o.aborted) {
-        return abort({.trial_id = t.id,
-                      .detail = "the experimenter aborted in the console; 'study resume' continues "
-                                "with this trial",
-                      .established_by = source::kConsole});
-      }
-      if (o.fault) {
-        requeue(
-            t, "device-fault", o.fault_detail,
-            o.untouched ? std::string(source::kRunner) : source::Watchdog(opt.device, o.injected));
-        if (opt.ui)
-          opt.ui->Event(fmt::format("{} {}: {} (re-queued)", training ? "training trial" : "trial",
-                                    screen.index, o.fault_detail));
-        queue.push_back(t);
-        if (untouched_in_a_row >= opt.max_untouched_trials) {
-          return abort({.detail = fmt::format(
-                            "{} trials in a row touched nothing: the rig's sample poses are "
-                            "probably wrong (hapticlab rig show / rig calibrate)",
-                            untouched_in_a_row),
-                        .established_by = source::kRunner});
-        }
-        continue;
-      }
-      // The ratings commit only with every trajectory stream of this attempt whole.
-      try {
-        database.CompleteTrial(t.id, o.ratings, writer.TakeReports(t.id));
-        trajectory_faults = 0;
-      } catch (const db::TrajectoryIncomplete& e) {
-        requeue(t, "trajectory-fault", WithoutFolder(database, e.what()), source::kDatabase);
-        if (opt.ui)
-          opt.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)",
-                                    training ? "training trial" : "trial", screen.index));
-        if (++trajectory_faults >= kMaxTrajectoryFaults)
-          throw std::runtime_error(
-              fmt::format("{} trials in a row could not store their trajectories (a full disk "
-                          "or a database that cannot be written); last: {}",
-                          trajectory_faults, e.what()));
-        queue.push_back(t);
-        continue;
-      }
-      ++sum.completed;
-      done.insert(t.id);
-      (training ? training_done : rated_done) += 1;
-      last_material = t.material;
-      // The plan's 1-based number, as `study plan`, events.csv and the exports number it.
-      Log(opt, fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part.code,
-                           t.plan_index + 1, sum.planned, t.phase, t.material,
-                           t.method.empty() ? t.comparison : t.method, sum.completed, sum.planned));
-    }
-  }
+  using protocols::PhaseKind;
+  for (const PhaseKind phase : {PhaseKind::kTraining, PhaseKind::kReference, PhaseKind::kMain})
+    if (auto stopped = RunPlannedPhase(phase)) return *stopped;
   // Adaptive phases (staircase, QUEST+): trials chosen one by one from the answers so far.
-  const auto adaptive = internal::RunAdaptivePhases(database, session, p, lab.models, part.seed,
-                                                    opt, *rig, &writer, &sum.executed);
-  sum.planned += adaptive.added;
-  sum.completed += adaptive.completed;
-  sum.faults += adaptive.faults;
-  sum.simulated_s += adaptive.stimulus_s;
-  if (adaptive.aborted)
-    return finish("aborted");  // RunAdaptivePhases logged it and ended the session
-  database.EndSession(session, "completed");
-  return finish("completed");
+  const TrialContext c{rig_, *participant_, opt_, &writer_, database_, session_};
+  const auto adaptive = internal::RunAdaptivePhases(p_, lab_.models, part_.seed, c, &sum_.executed);
+  sum_.planned += adaptive.added;
+  sum_.completed += adaptive.completed;
+  sum_.faults += adaptive.faults;
+  sum_.simulated_s += adaptive.stimulus_s;
+  if (adaptive.aborted) return Finish("aborted");  // RunAdaptivePhases ended the session
+  database_.EndSession(session_, "completed");
+  return Finish("completed");
+}
+
+std::optional<RunSummary> SessionQueue::RunPlannedPhase(protocols::PhaseKind phase) {
+  std::vector<db::Trial> queue;
+  for (const auto& t : trials_)
+    if (PhaseOf(t.phase) == phase && t.status != db::kTrialCompleted &&
+        t.status != db::kTrialFaulted)
+      queue.push_back(t);
+  for (const auto& t : trials_)  // faulted before a crash: retried at the phase's end
+    if (PhaseOf(t.phase) == phase && t.status == db::kTrialFaulted) queue.push_back(t);
+  while (!queue.empty()) {
+    const std::size_t pick = Pick(queue, phase);
+    db::Trial t = queue[pick];
+    queue.erase(queue.begin() + static_cast<std::ptrdiff_t>(pick));
+    if (auto stopped = StopRequestedBefore(t)) return stopped;
+    // The console shows this trial as the next one from now on: through a break and while
+    // its samples are placed.
+    const TrialStimuli stimuli = ParseStimuli(t);
+    const TrialScreen screen = Screen(t, stimuli);
+    if (opt_.ui) opt_.ui->Upcoming(screen);
+    if (auto stopped = BreakAndPlacement(t, screen)) return stopped;
+    database_.StartTrial(t.id);
+    ++t.attempts;
+    ++sum_.executed;
+    trial_under_way_ = t.id;
+    const TrialContext c{rig_, *participant_, opt_, &writer_, database_, session_};
+    const Outcome o = ExecuteTrial(lab_, t, stimuli, part_.seed, c, screen);
+    if (auto stopped = AfterTrial(t, o, screen, &queue)) return stopped;
+  }
+  return std::nullopt;
+}
+
+// The next trial of the queue: its head, or with the no-immediate-repeat constraint the
+// first trial of another material than the last one (re-queued trials), when one remains.
+std::size_t SessionQueue::Pick(const std::vector<db::Trial>& queue, protocols::PhaseKind phase) {
+  if (!p_.randomization.no_immediate_repeat || queue[0].material != last_material_ ||
+      phase == protocols::PhaseKind::kTraining)
+    return 0;
+  for (std::size_t i = 1; i < queue.size(); ++i)
+    if (queue[i].material != last_material_) return i;
+  if (queue.size() > 1)
+    database_.LogEvent({.session_id = session_,
+                        .trial_id = queue[0].id,
+                        .kind = "constraint-relaxed",
+                        .detail = "only trials of the same material remain in the phase",
+                        .established_by = source::kRunner});
+  return 0;
+}
+
+// A stop asked for before trial `t` (a signal, --stop-after): the session ends aborted.
+std::optional<RunSummary> SessionQueue::StopRequestedBefore(const db::Trial& t) {
+  if (const int sig = StopRequested()) {
+    return Abort({.trial_id = t.id,
+                  .kind = "interrupted",
+                  .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study "
+                                        "resume' continues with it",
+                                        sig,
+                                        sig == SIGINT    ? "SIGINT"
+                                        : sig == SIGTERM ? "SIGTERM"
+                                                         : "signal"),
+                  .established_by = source::kSignal});
+  }
+  if (opt_.stop_after_trials >= 0 && sum_.executed >= opt_.stop_after_trials)
+    return Abort({.detail = "stopped after the requested number of trials",
+                  .established_by = source::CommandLine("--stop-after")});
+  return std::nullopt;
+}
+
+TrialScreen SessionQueue::Screen(const db::Trial& t, const TrialStimuli& stimuli) const {
+  const bool training = IsTraining(t.phase);
+  auto screen = ScreenOf(p_, t, stimuli, training ? training_done_ + 1 : rated_done_ + 1,
+                         training ? training_total_ : rated_total_);
+  screen.training = training;
+  screen.rated_done = rated_done_;
+  screen.rated_total = rated_total_;
+  screen.training_done = training_done_;
+  screen.training_total = training_total_;
+  screen.plan_total = sum_.planned;
+  screen.break_before = break_before_.count(t.id) && !training;
+  screen.breaks_left = 0;
+  for (const auto& b : trials_)
+    if (break_before_.count(b.id) && !IsTraining(b.phase) && !done_.count(b.id) && b.id != t.id)
+      ++screen.breaks_left;
+  return screen;
+}
+
+// With screens: the planned (or requested) break before trial `t`, then the experimenter's
+// confirmation that its real samples are in place. An abort there ends the session.
+std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
+                                                          const TrialScreen& screen) {
+  if (!opt_.ui) return std::nullopt;
+  const bool requested = opt_.ui->TakeBreakNow();
+  if (requested || (break_before_.count(t.id) && !IsTraining(t.phase))) {
+    // A simulated session played faster (--ui-speed) shortens its breaks alike.
+    const double speed = participant_->PlaybackSpeed();
+    const double break_s = p_.break_duration_s / speed;
+    database_.LogEvent({.session_id = session_,
+                        .trial_id = t.id,
+                        .kind = "break",
+                        .detail = fmt::format(
+                            "{:.0f} s break ({}{})", break_s,
+                            requested ? "requested by the experimenter" : "planned",
+                            speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
+                        .established_by = requested ? source::kConsole : source::kPlan});
+    trial_under_way_ = t.id;
+    if (!opt_.ui->Break(break_s))
+      return Abort({.detail = "the experimenter aborted during a break",
+                    .established_by = source::kConsole});
+  }
+  if (screen.real_sample) {
+    // No trial with a real sample starts before the experimenter confirms its samples.
+    trial_under_way_ = t.id;
+    const auto how = opt_.ui->ConfirmPlacement(screen);
+    if (!how) return Abort({.detail = "the experimenter aborted while placing the samples"});
+    database_.LogEvent(
+        {.session_id = session_,
+         .trial_id = t.id,
+         .kind = "samples-placed",
+         .detail = fmt::format("trial {}: {}; {}", screen.plan_number, screen.placement, *how),
+         .established_by = how->starts_with("not confirmed") ? source::kRunner : source::kConsole});
+  }
+  return std::nullopt;
+}
+
+// A faulted attempt of trial `t`: its cause as an event (established by `by`), then the
+// runner's re-queue as an 'attempt-faulted' event (counted by 'study status') and a line on
+// the log even without progress lines. The caller re-queues `t`.
+void SessionQueue::Requeue(db::Trial& t, const char* kind, const std::string& cause,
+                           const std::string& by) {
+  ++sum_.faults;
+  database_.SetTrialStatus(t.id, db::kTrialFaulted);
+  database_.LogEvent({.session_id = session_,
+                      .trial_id = t.id,
+                      .kind = kind,
+                      .detail = cause,
+                      .established_by = by});
+  std::string why = cause;  // the watchdog's text may end by saying it already
+  for (const char* tail : {", trial re-queued", "; trial re-queued"})
+    if (why.size() > std::strlen(tail) && why.ends_with(tail))
+      why.resize(why.size() - std::strlen(tail));
+  const std::string line =
+      fmt::format("trial {} ({}, attempt {}) faulted: {}; re-queued at the end of the {} phase",
+                  t.plan_index + 1, t.phase, t.attempts, why, t.phase);
+  database_.LogEvent({.session_id = session_,
+                      .trial_id = t.id,
+                      .kind = "attempt-faulted",
+                      .detail = line,
+                      .established_by = source::kRunner});
+  Warn(opt_, part_.code + ": " + line);
+  t.status = db::kTrialFaulted;
+}
+
+// What trial `t`'s outcome does to the session: an abort ends it; a fault re-queues the
+// trial (too many untouched in a row abort); otherwise the ratings commit with every
+// trajectory stream of the attempt whole (else the trial is re-queued).
+std::optional<RunSummary> SessionQueue::AfterTrial(db::Trial& t, const Outcome& o,
+                                                   const TrialScreen& screen,
+                                                   std::vector<db::Trial>* queue) {
+  const bool training = IsTraining(t.phase);
+  const char* what = training ? "training trial" : "trial";
+  sum_.simulated_s += o.stimulus_s;
+  untouched_in_a_row_ = o.untouched ? untouched_in_a_row_ + 1 : 0;
+  if (o.aborted)
+    return Abort({.trial_id = t.id,
+                  .detail = "the experimenter aborted in the console; 'study resume' continues "
+                            "with this trial",
+                  .established_by = source::kConsole});
+  if (o.fault) {
+    Requeue(t, "device-fault", o.fault_detail,
+            o.untouched ? std::string(source::kRunner) : source::Watchdog(opt_.device, o.injected));
+    if (opt_.ui)
+      opt_.ui->Event(fmt::format("{} {}: {} (re-queued)", what, screen.index, o.fault_detail));
+    queue->push_back(t);
+    if (untouched_in_a_row_ >= opt_.max_untouched_trials)
+      return Abort({.detail = fmt::format(
+                        "{} trials in a row touched nothing: the rig's sample poses are probably "
+                        "wrong (hapticlab rig show / rig calibrate)",
+                        untouched_in_a_row_),
+                    .established_by = source::kRunner});
+    return std::nullopt;
+  }
+  try {
+    database_.CompleteTrial(t.id, o.ratings, writer_.TakeReports(t.id));
+    trajectory_faults_ = 0;
+  } catch (const db::TrajectoryIncomplete& e) {
+    Requeue(t, "trajectory-fault", WithoutFolder(database_, e.what()), source::kDatabase);
+    if (opt_.ui)
+      opt_.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)", what, screen.index));
+    if (++trajectory_faults_ >= kMaxTrajectoryFaults)
+      throw std::runtime_error(
+          fmt::format("{} trials in a row could not store their trajectories (a full disk "
+                      "or a database that cannot be written); last: {}",
+                      trajectory_faults_, e.what()));
+    queue->push_back(t);
+    return std::nullopt;
+  }
+  ++sum_.completed;
+  done_.insert(t.id);
+  (training ? training_done_ : rated_done_) += 1;
+  last_material_ = t.material;
+  // The plan's 1-based number, as `study plan`, events.csv and the exports number it.
+  Log(opt_, fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part_.code,
+                        t.plan_index + 1, sum_.planned, t.phase, t.material,
+                        t.method.empty() ? t.comparison : t.method, sum_.completed, sum_.planned));
+  return std::nullopt;
 }
 
 }  // namespace

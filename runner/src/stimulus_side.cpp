@@ -9,7 +9,6 @@
 
 #include "hapticlab/db/timing.hpp"
 #include "hapticlab/runner/audit.hpp"
-#include "hapticlab/sim/falcon_twin.hpp"
 
 namespace hapticlab::runner::internal {
 
@@ -89,14 +88,16 @@ LiveFrame LiveOf(const RtEngine& engine, db::TrajectoryStream* fs, db::Trajector
 
 }  // namespace
 
-SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s,
-                            const RunOptions& opt, db::TrajectoryWriter* writer,
-                            db::Database& database, std::int64_t session, const db::Trial& t,
-                            const TrialScreen& screen, int screen_side) {
+SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng& rng,
+                            double duration_s, const db::Trial& t, const TrialScreen& screen,
+                            int screen_side) {
   SideOutcome out;
   const double dur = duration_s;
   const auto sample = static_cast<std::size_t>(side.sample);
-  sim::SimRig* simrig = rig.sim;
+  Rig& rig = c.rig;
+  const RunOptions& opt = c.opt;
+  db::TrajectoryWriter* writer = c.writer;
+  db::Database& database = c.database;
   const renderer::MaterialModel& model = *side.model;
   renderer::RenderOptions ro;
   if (side.real) {
@@ -111,31 +112,15 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
         caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
   }
   renderer::HybridRenderer r(model, ro);
-  // The simulated hand: strokes the sample where it truly is; on a real side it touches the
-  // ground truth.
-  std::unique_ptr<sim::TruthSample> truth;
-  if (simrig) {
-    double top_m, stiffness;
-    if (side.real) {
-      truth =
-          std::make_unique<sim::TruthSample>(*side.truth, side.truth_seed, ro.vibration_rate_hz);
-      top_m = truth->top_m();
-      stiffness = truth->profile().stiffness_N_per_m;
-    } else {
-      top_m = model.contact.layer_thickness_m + (model.geometry->max_m() - model.geometry->min_m());
-      stiffness = model.contact.texture.K + 0.5 * ro.device_max_stiffness_N_per_m;
-    }
-    simrig->hand.Begin(side.stroke, simrig->true_device_from_sample[sample], top_m, stiffness,
-                       truth.get(), ro.force_rate_hz, ro.vibration_rate_hz);
-    if (simrig->generic) {
-      simrig->generic->Reset();
-      if (side.dropout_at_s >= 0) simrig->generic->InjectDropout(side.dropout_at_s, 0.05);
-    }
-    if (simrig->twin) {
-      simrig->twin->BeginRun();
-      simrig->twin->InjectDropout(side.dropout_at_s, 0.05);
-    }
-  }
+  // The participant takes the stylus: the simulated hand strokes the sample where it truly
+  // is (on a real side its ground truth); a person at the rig explores by themselves.
+  const bool injected = c.participant.BeginSide(side.report_side,
+                                                {.sample = side.sample,
+                                                 .real = side.real,
+                                                 .material = side.material,
+                                                 .model = &model,
+                                                 .options = &ro},
+                                                rng);
   db::TrajectoryStream *fs = nullptr, *vs = nullptr;
   if (writer && opt.record != RecordMode::kNone)
     fs = writer->OpenStream(t.id, side.stream + "_force", ro.force_rate_hz, ForceStreamChannels());
@@ -143,7 +128,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     vs = writer->OpenStream(t.id, side.stream + "_vibration", ro.vibration_rate_hz,
                             VibrationStreamChannels());
   EngineOptions eo;
-  eo.virtual_clock = simrig ? &simrig->clock : nullptr;
+  eo.virtual_clock = c.participant.Clock();
   eo.rt = opt.rt;
   eo.sample_from_device = rig.device_from_sample[sample].inverse();
   RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs, vs);
@@ -155,7 +140,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     // Stimulus frames for the screens: on a virtual clock, time runs ui_playback_speed times
     // faster than the wall clock.
     const auto t0 = std::chrono::steady_clock::now();
-    const double speed = engine.is_virtual() ? opt.ui_playback_speed : 1.0;
+    const double speed = c.participant.PlaybackSpeed();
     for (;;) {
       const double el = std::min(
           dur,
@@ -177,12 +162,12 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
   if (vs) writer->CloseStream(vs);
   FaultEvent e;
   while (engine.watchdog().PopEvent(&e))
-    database.LogEvent({.session_id = session,
+    database.LogEvent({.session_id = c.session,
                        .trial_id = t.id,
                        .kind = "device-fault",
                        .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
                                              e.t_s, side.label, e.tick),
-                       .established_by = source::Watchdog(opt.device, side.dropout_at_s >= 0)});
+                       .established_by = source::Watchdog(opt.device, injected)});
   const auto st = engine.Stats();
   out.stats = st;
   SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
@@ -199,15 +184,16 @@ SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double d
     out.detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks",
                              side.label, side.stimulus, st.contact_ticks, st.force_ticks);
   }
+  const SideFelt felt = c.participant.EndSide();
   if (opt.on_side)
     opt.on_side({.plan_index = t.plan_index,
                  .side = side.report_side,
                  .attempt = t.attempts,
                  .stimulus = side.stimulus,
                  .engine = st,
-                 .hand_ticks = simrig ? simrig->hand.ticks() : 0,
+                 .hand_ticks = felt.hand_ticks,
                  .contact_ticks = st.contact_ticks});
-  if (simrig) out.felt = simrig->hand.Finish();
+  out.felt = felt.felt;
   out.aborted = !go_on;
   return out;
 }

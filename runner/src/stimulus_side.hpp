@@ -1,7 +1,8 @@
 #pragma once
 // One stimulus side through the one trial path (private to runner): the renderer for a model
 // and render options inside RtEngine over the rig's device and actuator, with the watchdog
-// and the trajectory writer; on a simulated rig the simulated hand strokes it. Used by the
+// and the trajectory writer; the session's Participant (participant.hpp) holds the stylus.
+// Used by the
 // planned trials (study_runner.cpp, each of a trial's two sides) and by the adaptive phases
 // (adaptive_phase.cpp, each interval of a trial).
 
@@ -15,8 +16,8 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/study_runner.hpp"
-#include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
+#include "participant.hpp"
 
 namespace hapticlab::runner::internal {
 
@@ -35,18 +36,24 @@ struct StimulusSide {
   // measures: force held at zero, no vibration).
   renderer::RenderOptions options;
   bool real = false;
-  int sample = 0;  // which sample pose of the rig the side is on (0 left, 1 right)
-  // Simulated rig only: the stroke the hand makes, the ground truth under the stylus on a
-  // real side (borrowed; null on a virtual side) and its seed, and where the link drops out
-  // for 50 ms (seconds into the side; < 0: no dropout).
-  sim::Stroke stroke;
-  const sim::MaterialProfile* truth = nullptr;
-  std::uint64_t truth_seed = 0;
-  double dropout_at_s = -1;
+  std::string material;  // the material's id (a real side: the sample under the stylus)
+  int sample = 0;        // which sample pose of the rig the side is on (0 left, 1 right)
   std::string stream;    // the recorded streams are <stream>_force and <stream>_vibration
   std::string label;     // how events and messages name it ("left side", "interval 2")
   std::string stimulus;  // what it is, for messages and SideReport ("virtual:Denim")
-  int report_side = 0;   // SideReport::side (the trial side, or the interval index)
+  int report_side = 0;   // SideReport::side and the side's index in its trial (the trial
+                         // side, or the interval index)
+};
+
+// Where a trial's sides run: the session's rig and participant, its options, the trajectory
+// writer (may be null) and the database.
+struct TrialContext {
+  Rig& rig;
+  Participant& participant;
+  const RunOptions& opt;
+  db::TrajectoryWriter* writer;
+  db::Database& database;
+  std::int64_t session;
 };
 
 // What one side did.
@@ -56,22 +63,22 @@ struct SideOutcome {
   bool untouched = false;  // the stylus was inside the surface on < kMinContactFraction of ticks
   std::string detail;      // for a fault or an untouched side: what happened
   EngineStats stats;
-  sim::Features felt;  // simulated rig: what the hand felt
+  sim::Features felt;  // what the hand felt (Participant::EndSide)
 };
 
 // Stores the engine's timing of one side (db::SideTiming rows: force, and vibration when it ran).
 void SaveTiming(db::Database& database, std::int64_t trial_id, int attempt, const std::string& side,
                 const renderer::RenderOptions& ro, const RtEngine& engine);
 
-// Runs one side for `duration_s` on `rig`: streams opened on `writer` per opt.record (the
-// vibration stream only when the side vibrates and the rig has an actuator), watchdog events
-// logged as "device-fault" events of trial `t`, opt.on_side called. With opt.ui the stimulus
-// frames (the engine's last sample) go to SessionUi::Stimulus with `screen` and
-// `screen_side`, in real time (a virtual clock runs opt.ui_playback_speed times faster);
-// at least one frame is shown.
-SideOutcome RunStimulusSide(const StimulusSide& side, HardwareRig& rig, double duration_s,
-                            const RunOptions& opt, db::TrajectoryWriter* writer,
-                            db::Database& database, std::int64_t session, const db::Trial& t,
-                            const TrialScreen& screen, int screen_side);
+// Runs one side for `duration_s` on the context's rig, the participant holding the stylus
+// (Participant::BeginSide, with the trial's generator `rng`, and EndSide): streams opened on
+// the writer per opt.record (the vibration stream only when the side vibrates and the rig has
+// an actuator), watchdog events logged as "device-fault" events of trial `t`, opt.on_side
+// called. With opt.ui the stimulus frames (the engine's last sample) go to
+// SessionUi::Stimulus with `screen` and `screen_side`, in real time (a virtual clock runs
+// Participant::PlaybackSpeed times faster); at least one frame is shown.
+SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng& rng,
+                            double duration_s, const db::Trial& t, const TrialScreen& screen,
+                            int screen_side);
 
 }  // namespace hapticlab::runner::internal

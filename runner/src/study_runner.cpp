@@ -13,6 +13,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/rng.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/core/version.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
@@ -23,6 +24,7 @@
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/runner/study_record.hpp"
 #include "lab.hpp"
+#include "participant.hpp"
 #include "session_queue.hpp"
 
 namespace hapticlab::runner {
@@ -111,6 +113,24 @@ std::map<std::string, std::string> SubstitutedModels(const json& prov, const std
   return out;
 }
 
+// The rig a session runs on: the caller's (RunOptions::rig), or for a simulated back-end
+// without one its built-in rig opened here, the generic device's link noise seeded from the
+// participant.
+struct SessionRig {
+  std::unique_ptr<Rig> own;
+  Rig* rig = nullptr;
+};
+SessionRig RigOf(const RunOptions& opt, std::uint64_t participant_seed) {
+  if (opt.rig) return {nullptr, opt.rig};
+  HL_REQUIRE(IsSimulatedBackend(opt.device),
+             "a session on device '" + opt.device + "' needs RunOptions::rig (the opened device)");
+  RigRequest q{.device = opt.device};
+  q.generic.seed = DeriveSeed(participant_seed, 0x51D);
+  SessionRig r{OpenRig(q), nullptr};
+  r.rig = r.own.get();
+  return r;
+}
+
 }  // namespace
 
 std::string SessionMode::Describe() const {
@@ -162,7 +182,7 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
 void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool ui) {
   internal::CheckAdaptivePhases(p, device, ui);
   (void)LoadLab(p, device);
-  const bool person = ui || (device != "sim" && device != "falcon-twin");
+  const bool person = ui || !IsSimulatedBackend(device);
   if (person && p.consent_document.empty())
     throw InputError(p.file, 0, "consent",
                      "a session with a person (screens or a hardware device) records the consent "
@@ -305,7 +325,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
                        plan.size(), mode.Describe()));
   db::Participant stored = *database.FindParticipant(study_id, opt.participant);
   const CheckpointAtEnd checkpoint{&database};
-  return internal::ExecuteSession(database, lab, session, stored, opt);
+  const SessionRig rig = RigOf(opt, stored.seed);
+  return internal::ExecuteSession(database, lab, session, stored, opt, *rig.rig);
 }
 
 RunSummary ResumeStudy(const RunOptions& opt) {
@@ -385,7 +406,8 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant,
                          se.id, done, now.Describe()));
     const CheckpointAtEnd checkpoint{&database};
-    return internal::ExecuteSession(database, lab, se.id, *part, o);
+    const SessionRig rig = RigOf(o, part->seed);
+    return internal::ExecuteSession(database, lab, se.id, *part, o, *rig.rig);
   }
   throw InputError(opt.db_path, 0, "participant",
                    "no participant " + opt.participant + " in this database");

@@ -1,17 +1,17 @@
 #pragma once
 // One planned trial through the one trial path (private to runner): both sides (or the
-// training sample) through RunStimulusSide, then the ratings from the participant window or
-// the simulated observer.
+// training sample) through RunStimulusSide, then the participant's ratings.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/runner/study_runner.hpp"
-#include "hapticlab/sim/sim_lab.hpp"
 #include "lab.hpp"
+#include "stimulus_side.hpp"
 
 namespace hapticlab::runner::internal {
 
@@ -25,19 +25,26 @@ struct Outcome {
   double stimulus_s = 0;
 };
 
+// A planned trial's stimuli, parsed once ("real:Denim": a real sample of material Denim);
+// no right one for a training trial.
+struct TrialStimuli {
+  Stimulus left;
+  std::optional<Stimulus> right;
+};
+TrialStimuli ParseStimuli(const db::Trial& t);
+
 // The screen of planned trial `t`, the `index`-th (1-based) of `total`.
-TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, int index, int total);
+TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, const TrialStimuli& stimuli,
+                     int index, int total);
 
 // Runs one trial, simulated or on hardware, through the one trial path: each side for the
-// stimulus duration through internal::RunStimulusSide (the method's renderer, or for a real
-// sample zero force: the device only measures, inside the real-time engine over the rig's
-// device and actuator, with the watchdog and the trajectory writer). A watchdog fault in
-// either side faults the trial; a side that touched nothing is reported. Ratings come from
-// the participant window, or on a simulated rig without one from the simulated observer
-// rating what the hand felt.
-Outcome ExecuteTrial(const Lab& lab, const sim::Observer& observer, const db::Trial& t,
-                     std::uint64_t participant_seed, const RunOptions& opt, HardwareRig& rig,
-                     db::TrajectoryWriter* writer, const TrialScreen& screen,
-                     db::Database& database, std::int64_t session);
+// stimulus duration through RunStimulusSide (the method's renderer, or for a real sample
+// zero force: the device only measures, inside the real-time engine over the rig's device
+// and actuator, with the watchdog and the trajectory writer), the context's participant
+// holding the stylus. A watchdog fault in either side faults the trial; a side that touched
+// nothing is reported. Then the participant rates (Participant::Rate).
+Outcome ExecuteTrial(const Lab& lab, const db::Trial& t, const TrialStimuli& stimuli,
+                     std::uint64_t participant_seed, const TrialContext& c,
+                     const TrialScreen& screen);
 
 }  // namespace hapticlab::runner::internal

@@ -1,5 +1,7 @@
-// The device factory (devices/src/factory.cpp): requests that cannot name a usable device are
-// InputErrors on "<command line>" naming the request's field, before any hardware is touched.
+// What the device back-ends share (devices/src/factory.cpp): the one device error message, and
+// rating-box requests that cannot name a usable box are InputErrors on "<command line>" naming
+// the request's field, before any hardware is touched. Opening back-ends by name:
+// tests/runner/open_rig_test.cpp.
 
 #include "hapticlab/devices/factory.hpp"
 
@@ -8,7 +10,6 @@
 #include <string>
 
 #include "hapticlab/core/diagnostics.hpp"
-#include "hapticlab/devices/vendor.hpp"
 
 namespace hapticlab::devices {
 namespace {
@@ -26,34 +27,13 @@ Diagnostic ErrorOf(F f) {
   return {};
 }
 
-TEST(DeviceFactory, KnowsTheRealBackEnds) {
-  EXPECT_TRUE(IsRealDevice("falcon"));
-  EXPECT_TRUE(IsRealDevice("dhd"));
-  EXPECT_TRUE(IsRealDevice("openhaptics"));
-  EXPECT_FALSE(IsRealDevice("sim"));
-  EXPECT_FALSE(IsRealDevice("falcon-twin"));
-}
-
-TEST(DeviceFactory, RefusesASimulatedOrUnknownName) {
-  for (const char* name : {"sim", "falcon-twin", "phantom"}) {
-    const auto d = ErrorOf([&] { (void)OpenRealDevice({.device = name}); });
-    EXPECT_EQ(d.file, "<command line>") << name;
-    EXPECT_EQ(d.field, "device") << name;
-    EXPECT_NE(d.message.find(name), std::string::npos) << d.message;
-  }
-}
-
-TEST(DeviceFactory, AFalconWithoutFirmwareNamesTheFirmwareField) {
-  const auto d = ErrorOf([] { (void)OpenRealDevice({.device = "falcon"}); });
-  EXPECT_EQ(d.field, "firmware");
-  EXPECT_NE(d.message.find("firmware"), std::string::npos) << d.message;
-}
-
-TEST(DeviceFactory, AVendorBackEndThisBuildLacksIsNamed) {
-  if (HaveDhd()) GTEST_SKIP() << "this build has the Force Dimension SDK";
-  const auto d = ErrorOf([] { (void)OpenRealDevice({.device = "dhd"}); });
-  EXPECT_EQ(d.field, "device");
-  EXPECT_NE(d.message.find("SDK"), std::string::npos) << d.message;
+TEST(DeviceFactory, TheDeviceErrorSaysWhatToCheck) {
+  const std::string fw = DeviceErrorMessage("falcon", "no device", true);
+  EXPECT_EQ(fw.rfind("falcon: no device; check ", 0), 0u) << fw;
+  EXPECT_NE(fw.find("firmware file"), std::string::npos) << fw;
+  const std::string vendor = DeviceErrorMessage("dhd", "dhd: gone", false);
+  EXPECT_EQ(vendor.rfind("dhd: gone; check ", 0), 0u) << vendor;  // not named twice
+  EXPECT_NE(vendor.find("vendor's driver"), std::string::npos) << vendor;
 }
 
 TEST(DeviceFactory, ARatingBoxIdIsHexVidColonPid) {

@@ -1,16 +1,20 @@
-// The replay device (replay.cpp): the latest sample at or before the clock, stamped with the
-// clock on the replay's own time base, the link lost after the last sample, and commanded
-// forces kept without growing the buffer (WriteForce runs on the real-time tick).
-
-#include "hapticlab/devices/replay.hpp"
+// The replay test double (tests/util/include/hapticlab/test/replay_device.hpp): the latest sample
+// at or before the clock, stamped with the clock on the replay's own time base, the link lost after
+// the last sample, and commanded forces kept without growing the buffer (WriteForce runs on the
+// real-time tick).
 
 #include <gtest/gtest.h>
 
 #include <stdexcept>
 #include <vector>
 
+#include "hapticlab/test/replay_device.hpp"
+
 namespace hapticlab::devices {
 namespace {
+
+using test::ReplayDevice;
+using test::TrajectorySample;
 
 // Three samples of a stroke along x recorded from t = 10 s (not 0: the replay's clock counts
 // from the first sample).

@@ -14,10 +14,11 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/psychophysics/quest_plus.hpp"
 #include "hapticlab/psychophysics/staircase.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/test/test_util.hpp"
 
@@ -166,12 +167,12 @@ TEST(AdaptivePhase, TheFalconTwinRecordsWhatTheGenericSimulatedRigDoes) {
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   RunOptions o{.db_path = dir.File("sim.db"), .participant = "P01", .record = RecordMode::kNone};
   ASSERT_EQ(RunStudy(p, o).status, "completed");
-  auto sr = OpenSimulatedRig("falcon-twin", DefaultRig("falcon"));
+  auto sr = OpenRig({.device = "falcon-twin", .rig_file = DefaultRig("falcon")});
   std::uint64_t ticks = 0, contact = 0;
   RunOptions t = o;
   t.db_path = dir.File("twin.db");
   t.device = "falcon-twin";
-  t.rig = &sr->rig;
+  t.rig = sr.get();
   t.on_side = [&](const SideReport& r) {
     ticks += r.engine.force_ticks;
     contact += r.contact_ticks;
@@ -180,7 +181,8 @@ TEST(AdaptivePhase, TheFalconTwinRecordsWhatTheGenericSimulatedRigDoes) {
   ASSERT_EQ(s.status, "completed");
   EXPECT_EQ(s.faults, 0);
   EXPECT_GT(ticks, 0u);
-  EXPECT_GE(sr->falcon->packets(), ticks) << "one status packet per tick";
+  EXPECT_GE(dynamic_cast<devices::falcon::FalconDevice&>(*sr->device).packets(), ticks)
+      << "one status packet per tick";
   EXPECT_GT(contact, ticks / 2);
   EXPECT_EQ(Records(t.db_path), Records(o.db_path));
 }

@@ -13,10 +13,11 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/force_record.hpp"
 #include "hapticlab/db/timing.hpp"
-#include "hapticlab/devices/replay.hpp"
+#include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/protocols/protocol.hpp"
-#include "hapticlab/runner/sim_rigs.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/test/replay_device.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner {
@@ -67,18 +68,36 @@ class Rater : public SessionUi {
   bool Break(double) override { return true; }
 };
 
+// A toy device back-end, registered in this test binary as a lab would add one (one file and
+// one registration line in runner/src/backends/; here at run time): its factory keeps a
+// circling device and a buffer actuator in the rig.
+void RegisterCircling() {
+  if (FindBackend("circling")) return;
+  RigBackend b;
+  b.name = "circling";
+  b.kind = DeviceKind::kHardware;
+  b.help = "a test device stroking in circles";
+  b.open = [](const RigRequest&, const RigFile&, Rig* rig) {
+    rig->device = rig->parts.Keep(std::make_unique<CirclingDevice>());
+    rig->actuator = rig->parts.Keep(std::make_unique<test::BufferActuator>(10000, 200000));
+    return std::string("circling test device");
+  };
+  RegisterBackend(std::move(b));
+}
+
 TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
-  CirclingDevice dev;
-  devices::BufferActuator act(10000, 200000);
-  HardwareRig rig{.device = &dev, .actuator = &act, .description = "circling test device"};
+  RegisterCircling();
+  const auto rig = OpenRig({.device = "circling"});
+  EXPECT_FALSE(GetBackend("circling").simulated());
+  const auto& dev = dynamic_cast<const CirclingDevice&>(*rig->device);
   Rater ui;
   RunOptions o;
   o.db_path = dir.File("hw.db");
   o.participant = "P09";
   o.device = "circling";
-  o.rig = &rig;
+  o.rig = rig.get();
   o.ui = &ui;
   o.consent_confirmed_by = "E01";  // a person takes part
   o.stop_after_trials = 7;         // the training trials and three rated ones (0.5 s per side)
@@ -126,8 +145,10 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
     if (e.kind == "device-fault") std::printf("%s\n", e.detail.c_str());
   bool device_logged = false;
   for (const auto& e : d.Events(se.id))
-    device_logged |= e.kind == "device" && e.detail == "circling test device";
+    device_logged |=
+        e.kind == "device" && e.detail.starts_with("circling test device; rig built-in");
   EXPECT_TRUE(device_logged);
+  EXPECT_EQ(se.device, "circling");
 }
 
 TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
@@ -138,7 +159,7 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   // per material at 1 kHz (a fault there is logged, not re-queued), then the rated trials.
   dev.nan_from = static_cast<long>(p.materials.size()) * 500 + 200;
   dev.nan_count = 5;
-  HardwareRig rig{.device = &dev, .description = "glitching"};
+  Rig rig{.device = &dev, .description = "glitching"};
   Rater ui;
   RunOptions o;
   o.db_path = dir.File("f.db");
@@ -173,14 +194,14 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
 TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
-  auto sr = OpenSimulatedRig("falcon-twin", DefaultRig("falcon"));
+  auto sr = OpenRig({.device = "falcon-twin", .rig_file = DefaultRig("falcon")});
   ASSERT_TRUE(sr->sim->twin->firmware_loaded());
   std::uint64_t virtual_sides = 0, contact = 0, ticks = 0;
   RunOptions o;
   o.db_path = dir.File("twin.db");
   o.participant = "T01";
   o.device = "falcon-twin";
-  o.rig = &sr->rig;
+  o.rig = sr.get();
   o.record = RecordMode::kForce;
   o.on_side = [&](const SideReport& r) {
     ticks += r.engine.force_ticks;
@@ -193,7 +214,8 @@ TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
   EXPECT_EQ(s.faults, 0);
   EXPECT_GT(virtual_sides, 0u);
   EXPECT_GT(contact, ticks * 8 / 10) << "the hand pressed on the samples through the Falcon";
-  EXPECT_GE(sr->falcon->packets(), ticks) << "one status packet per tick";
+  EXPECT_GE(dynamic_cast<devices::falcon::FalconDevice&>(*sr->device).packets(), ticks)
+      << "one status packet per tick";
   // The recorded force streams: sample-frame positions near the surface, and on virtual
   // sides a normal force above 0.3 N in most samples.
   db::Database d(o.db_path);
@@ -226,12 +248,12 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
   RigFile wrong = DefaultRig("falcon");
   for (auto& w : wrong.world_from_sample)
     w.translation() -= w.linear().col(2) * 0.05;  // 5 cm below the truth
-  auto sr = OpenSimulatedRig("falcon-twin", wrong);
+  auto sr = OpenRig({.device = "falcon-twin", .rig_file = wrong});
   RunOptions o;
   o.db_path = dir.File("wrong.db");
   o.participant = "T02";
   o.device = "falcon-twin";
-  o.rig = &sr->rig;
+  o.rig = sr.get();
   o.record = RecordMode::kNone;
   const auto s = RunStudy(p, o);
   EXPECT_EQ(s.status, "aborted");

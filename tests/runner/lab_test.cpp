@@ -30,11 +30,16 @@ TEST(Lab, ParseStimulusSplitsKindAndId) {
   EXPECT_EQ(ParseStimulus("Denim").id, "Denim");
 }
 
-TEST(Lab, SimulatedDevicesAreTheSimulatedBackEnds) {
-  EXPECT_TRUE(IsSimulated("sim"));
-  EXPECT_TRUE(IsSimulated("falcon-twin"));
-  EXPECT_FALSE(IsSimulated("falcon"));
-  EXPECT_FALSE(IsSimulated("dhd"));
+TEST(Lab, EveryPhaseHasItsRecordedName) {
+  using protocols::PhaseKind;
+  for (const PhaseKind k : {PhaseKind::kTraining, PhaseKind::kReference, PhaseKind::kMain,
+                            PhaseKind::kStaircase, PhaseKind::kQuestPlus}) {
+    EXPECT_EQ(NameOf(kPhaseKindNames, k), protocols::ToString(k));
+    EXPECT_EQ(PhaseOf(protocols::ToString(k)), k);
+  }
+  EXPECT_TRUE(IsTraining("training"));
+  EXPECT_FALSE(IsTraining("main"));
+  EXPECT_EQ(PhaseOf("Training"), std::nullopt);  // a name no phase has
 }
 
 TEST(Lab, LoadsEveryPlaceholderModelFromItsProfile) {

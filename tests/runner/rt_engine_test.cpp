@@ -6,17 +6,17 @@
 
 #include "../renderer/test_materials.hpp"
 #include "hapticlab/db/database.hpp"
-#include "hapticlab/devices/replay.hpp"
+#include "hapticlab/test/replay_device.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner {
 namespace {
 
 // A 0.4 s stroke at 5 cm/s, 0.2 mm below the base top, sampled at 4 kHz.
-std::vector<devices::TrajectorySample> Stroke(double seconds = 0.4) {
-  std::vector<devices::TrajectorySample> s;
+std::vector<test::TrajectorySample> Stroke(double seconds = 0.4) {
+  std::vector<test::TrajectorySample> s;
   for (int k = 0; k <= static_cast<int>(seconds * 4000); ++k) {
-    devices::TrajectorySample x;
+    test::TrajectorySample x;
     x.t_s = k / 4000.0;
     x.p_m = {0.05 * x.t_s, 0, -0.2e-3};
     x.v_mps = {0.05, 0, 0};
@@ -44,8 +44,8 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   ro.max_force_N = 3.0;
   renderer::HybridRenderer r(m, ro);
   RtEngine* engine_ptr = nullptr;
-  devices::ReplayDevice dev(Stroke(), [&] { return engine_ptr->Now(); });
-  devices::BufferActuator act(10000, 20000);
+  test::ReplayDevice dev(Stroke(), [&] { return engine_ptr->Now(); });
+  test::BufferActuator act(10000, 20000);
   std::atomic<std::uint64_t> allocations{0};
   std::atomic<int> threads_checked{0};
   EngineOptions eo;

@@ -36,12 +36,17 @@ TEST(StimulusSide, MethodOptionsAreTheMethodsAtTheStudyRates) {
   EXPECT_EQ(o.seed, 77u);
 }
 
-// Runs `side` for 0.5 s (the small protocol's stimulus) recording every stream.
-SideOutcome RunSide(Session& s, StimulusSide side, const db::Trial& t) {
+// Runs `side` for 0.5 s (the small protocol's stimulus) recording every stream, the simulated
+// participant's hand exploring it (with a link dropout 30 % into the side when `dropout`).
+SideOutcome RunSide(Session& s, StimulusSide side, const db::Trial& t, bool dropout = false) {
   db::TrajectoryWriter writer(s.db_path);
   RunOptions opt{.db_path = s.db_path, .participant = "P01"};
-  const auto out = RunStimulusSide(side, s.rig->rig, 0.5, opt, &writer, s.database, s.session, t,
-                                   TrialScreen{}, side.sample);
+  const auto participant = MakeParticipant(*s.rig, s.lab, opt, 5);
+  Rng rng(5);
+  participant->DrawExploration(rng, 1, nullptr);
+  participant->DrawDropout(rng, dropout ? 1.0 : 0.0, 0.5);
+  const TrialContext c{*s.rig, *participant, opt, &writer, s.database, s.session};
+  const auto out = RunStimulusSide(side, c, rng, 0.5, t, TrialScreen{}, side.sample);
   writer.Flush();
   return out;
 }
@@ -50,12 +55,8 @@ StimulusSide Side(Session& s, bool real, const std::string& stream) {
   StimulusSide side;
   side.model = &s.lab.models.at("Denim");
   side.real = real;
-  if (real) {
-    side.truth = &s.lab.profiles.profiles.at(s.protocol.FindMaterial("Denim")->profile);
-    side.truth_seed = 5;
-  } else {
-    side.options = MethodOptions(*s.protocol.FindMethod("Hybrid"), 3);
-  }
+  side.material = "Denim";
+  if (!real) side.options = MethodOptions(*s.protocol.FindMethod("Hybrid"), 3);
   side.sample = real ? 0 : 1;
   side.stream = stream;
   side.label = stream + " side";
@@ -123,9 +124,7 @@ TEST(StimulusSide, ARealSideOnlyMeasuresAndAVirtualSidePushes) {
 TEST(StimulusSide, ALinkDropoutFaultsTheSideAndIsLogged) {
   Session s;
   const auto t = s.Trial("main", "virtual:Denim", "real:Denim", "Hybrid");
-  auto side = Side(s, false, "left");
-  side.dropout_at_s = 0.05;
-  const auto out = RunSide(s, side, t);
+  const auto out = RunSide(s, Side(s, false, "left"), t, true);
   EXPECT_TRUE(out.fault);
   EXPECT_EQ(out.detail.rfind("left side: ", 0), 0u) << out.detail;
   EXPECT_GT(out.stats.disconnects + out.stats.stale_faults, 0u) << out.detail;

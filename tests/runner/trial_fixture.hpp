@@ -12,8 +12,8 @@
 #include "../../runner/src/lab.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rig.hpp"
-#include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner::test_trial {
@@ -22,7 +22,7 @@ struct Session {
   test::TempDir dir;
   protocols::Protocol protocol = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   internal::Lab lab = internal::LoadLab(protocol, "sim");
-  std::unique_ptr<SimulatedRig> rig = OpenSimulatedRig("sim", DefaultRig("sim"));
+  std::unique_ptr<Rig> rig = OpenRig({.device = "sim"});
   std::string db_path = dir.File("s.db");
   db::Database database{db_path};
   std::int64_t session = 0;

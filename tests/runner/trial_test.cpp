@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "../../runner/src/participant.hpp"
 #include "trial_fixture.hpp"
 
 namespace hapticlab::runner::internal {
@@ -21,7 +22,7 @@ using test_trial::Session;
 TEST(Trial, TheScreenSaysWhatLiesWhere) {
   Session s;
   const auto t = s.Trial("main", "real:Cork", "virtual:Cork", "Hybrid");
-  const auto screen = ScreenOf(s.protocol, t, 3, 12);
+  const auto screen = ScreenOf(s.protocol, t, ParseStimuli(t), 3, 12);
   EXPECT_EQ(screen.index, 3);
   EXPECT_EQ(screen.total, 12);
   EXPECT_EQ(screen.placement, "left = real Cork, right = virtual");
@@ -32,7 +33,7 @@ TEST(Trial, TheScreenSaysWhatLiesWhere) {
   EXPECT_EQ(screen.criteria, s.protocol.criteria);
   EXPECT_EQ(screen.scale_max, s.protocol.scale_max);
   const auto training = s.Trial("training", "virtual:Denim", "", "FF", 1);
-  const auto ts = ScreenOf(s.protocol, training, 1, 4);
+  const auto ts = ScreenOf(s.protocol, training, ParseStimuli(training), 1, 4);
   EXPECT_EQ(ts.placement, "left = virtual, right = nothing");
   EXPECT_FALSE(ts.real_sample) << "nothing real to place for a virtual training sample";
   EXPECT_EQ(ts.sides, 1);
@@ -46,13 +47,14 @@ struct Ran {
 
 Ran Execute(Session& s, const db::Trial& t, std::uint64_t seed, double fault_rate = 0) {
   Ran r;
-  const sim::Observer observer(s.lab.profiles.observer, 11, s.protocol.criteria);
   RunOptions opt{.db_path = s.db_path, .participant = "P01", .record = RecordMode::kNone};
   opt.fault_rate = fault_rate;
   opt.on_felt = [&](const FeltTrial& f) { r.felt.push_back(f); };
   opt.on_side = [&](const SideReport&) { ++r.sides; };
-  r.outcome = ExecuteTrial(s.lab, observer, t, seed, opt, s.rig->rig, nullptr,
-                           ScreenOf(s.protocol, t, 1, 1), s.database, s.session);
+  const auto participant = MakeParticipant(*s.rig, s.lab, opt, 11);
+  const TrialContext c{*s.rig, *participant, opt, nullptr, s.database, s.session};
+  const TrialStimuli stimuli = ParseStimuli(t);
+  r.outcome = ExecuteTrial(s.lab, t, stimuli, seed, c, ScreenOf(s.protocol, t, stimuli, 1, 1));
   return r;
 }
 

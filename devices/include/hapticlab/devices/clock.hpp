@@ -5,6 +5,7 @@
 /// simulated devices) read the same clock, so a virtual run is deterministic.
 
 #include <atomic>
+#include <chrono>
 
 namespace hapticlab::devices {
 
@@ -13,6 +14,17 @@ class Clock {
  public:
   virtual ~Clock() = default;
   virtual double Now() const noexcept = 0;
+};
+
+/// Seconds since construction on the steady clock (a simulated device on the real clock).
+class SteadyClock final : public Clock {
+ public:
+  double Now() const noexcept override {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+  }
+
+ private:
+  std::chrono::steady_clock::time_point t0_ = std::chrono::steady_clock::now();
 };
 
 /// A clock that only moves when told to (the engine sets it before every tick in a virtual run).

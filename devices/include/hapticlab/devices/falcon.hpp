@@ -144,6 +144,9 @@ std::vector<std::uint8_t> ReadFirmwareFile(const std::string& path);
 // ---------------------------------------------------------------------------------------------
 // The device.
 
+/// The driver's name for itself (Capabilities().name, its messages).
+inline constexpr const char* kDeviceName = "falcon";
+
 struct FalconOptions {
   double motor_units_per_Nm =
       10000;                   ///< command scale (calibrate with a force gauge; docs/hardware.md)

@@ -16,10 +16,11 @@
 namespace hapticlab::runner {
 
 struct RigFile {
-  std::string path;            ///< where it was read from (empty: built in)
-  std::string text;            ///< the file's content, as recorded with a session
-  std::string sha256;          ///< of `text`
-  std::string device = "sim";  ///< the back-end it describes (informational)
+  std::string path;    ///< where it was read from (empty: built in)
+  std::string text;    ///< the file's content, as recorded with a session
+  std::string sha256;  ///< of `text`
+  std::string device;  ///< the back-end it describes (informational; a file without one: the
+                       ///< default back-end, runner::DefaultBackendName)
   Eigen::Isometry3d world_from_device = Eigen::Isometry3d::Identity();
   std::array<Eigen::Isometry3d, 2> world_from_sample{Eigen::Isometry3d::Identity(),
                                                      Eigen::Isometry3d::Identity()};
@@ -45,9 +46,10 @@ std::string RigToToml(const RigFile& r);
 Eigen::Isometry3d PoseFromAxes(const Eigen::Vector3d& origin, const Eigen::Vector3d& x_axis,
                                const Eigen::Vector3d& z_axis);
 
-/// The built-in rigs: "sim" (device frame = world, z up, samples flat at x = -+3 cm) and
-/// "falcon" (the Falcon's frame: y up, z towards the user; samples 4 cm below the workspace
-/// centre at (0, 0, 0.125 m), at x = -+2.5 cm).
+/// The built-in rig of back-end `device` (runner/open_rig.hpp): a table (device frame = world,
+/// z up, samples flat at x = -+3 cm), or for a back-end in the Falcon's frame (y up, z towards
+/// the user) samples 4 cm below the workspace centre at (0, 0, 0.125 m), at x = -+2.5 cm. An
+/// unregistered name gets the table.
 RigFile DefaultRig(const std::string& device);
 
 /// A sample plane from touches on its surface (points in the device frame, >= 3, not on one

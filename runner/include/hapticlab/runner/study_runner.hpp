@@ -27,6 +27,7 @@
 
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/sim/sim_device.hpp"
 
@@ -155,25 +156,6 @@ class SessionUi {
   std::function<void(const std::string& kind, const std::string& detail)> log_event;
 };
 
-/// The rig a session runs on: borrowed, opened by the caller (hapticlab study run --device
-/// falcon ...). Without one, a "sim" session builds the generic simulated rig itself.
-/// Ratings come from the SessionUi, or from the simulated observer on a simulated rig.
-struct HardwareRig {
-  devices::HapticDevice* device = nullptr;  ///< required
-  devices::Actuator* actuator = nullptr;  ///< the vibrotactile actuator (may be null: no vibration)
-  devices::MaskingNoise* noise = nullptr;  ///< headphones (may be null)
-  double noise_rms_fs = 0.1;               ///< masking level when the protocol asks for noise
-  /// Pose of each sample (0 left, 1 right) in the device frame: origin on the sample's base
-  /// plane, +z out of the sample (the rig file's; docs/hardware.md).
-  std::array<Eigen::Isometry3d, 2> device_from_sample{sim::DefaultSamplePoses()};
-  std::string description;    ///< recorded in the session's provenance
-  std::string calibration;    ///< recorded with the session (rig file content)
-  std::string rig_file_hash;  ///< SHA-256 of the rig file (provenance), empty: none
-  /// A simulated rig (borrowed): its virtual clock runs the engine, its hand explores, the
-  /// observer rates. Null on hardware.
-  sim::SimRig* sim = nullptr;
-};
-
 /// What one trial side did in the engine (RunOptions::on_side; tests and diagnostics).
 struct SideReport {
   int plan_index = 0, side = 0, attempt = 0;
@@ -199,8 +181,9 @@ struct RunOptions {
   std::string db_path;
   std::string participant;     ///< pseudonymous code, e.g. "P07"
   int participant_index = -1;  ///< plan index; -1: the next free index in the study
-  std::string device =
-      "sim";  ///< device back-end name (recorded; "sim": the generic simulated rig)
+  /// The device back-end's name (runner/open_rig.hpp; recorded). Without `rig`, a simulated
+  /// back-end's rig is opened for the session (its generic device seeded from the participant).
+  std::string device = DefaultBackendName();
   RecordMode record = RecordMode::kAll;
   int stop_after_trials = -1;  ///< abort the session after this many trials (tests; -1: run all)
   double fault_rate = 0;       ///< sim: probability that a trial's link drops out for 50 ms (tests)
@@ -209,7 +192,7 @@ struct RunOptions {
   /// shown (sim: the simulated strokes, played in real time). Borrowed; may be null.
   SessionUi* ui = nullptr;
   double ui_playback_speed = 1.0;  ///< simulated rig with a UI: virtual time runs this much faster
-  HardwareRig* rig = nullptr;      ///< required when device != "sim"
+  Rig* rig = nullptr;              ///< the opened rig (borrowed); required for a hardware back-end
   std::function<void(const SideReport&)> on_side;  ///< after every trial side (may be empty)
   std::function<void(const FeltTrial&)>
       on_felt;  ///< simulated rig: before every rating (may be empty)
@@ -254,10 +237,10 @@ struct RunOptions {
 
 /// A session's mode: what `study run` recorded and `study resume` continues in.
 struct SessionMode {
-  std::string device = "sim";       ///< back-end
-  std::string actuator = "none";    ///< "unrecorded" for sessions before schema v5
-  bool screens = false;             ///< --ui
-  std::string rater = "simulated";  ///< "simulated" or the participant's input device
+  std::string device = DefaultBackendName();  ///< back-end
+  std::string actuator = "none";              ///< "unrecorded" for sessions before schema v5
+  bool screens = false;                       ///< --ui
+  std::string rater = "simulated";            ///< "simulated" or the participant's input device
   std::string Describe()
       const;  ///< e.g. "device sim, actuator none, screens off, ratings simulated"
 };
@@ -280,8 +263,8 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
 /// file's folder) present and naming every material's profile, every model file present and
 /// loadable, and for a session with a person (`ui`, or a hardware device) the protocol's
 /// `[consent]` document. @throws InputError listing every problem (file, line, key, path)
-void CheckRunnable(const protocols::Protocol& protocol, const std::string& device = "sim",
-                   bool ui = false);
+void CheckRunnable(const protocols::Protocol& protocol,
+                   const std::string& device = DefaultBackendName(), bool ui = false);
 
 /// The plan index of participant `code` of study `study` in the database (`study plan
 /// --participant CODE --db DB`). @throws InputError when there is no such participant
