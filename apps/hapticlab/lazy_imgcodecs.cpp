@@ -1,7 +1,7 @@
 // OpenCV's image reading and writing, loaded on first use (the hapticlab binary only).
 //
 // libopencv_imgcodecs depends on GDAL, Poppler, HDF5, libheif, MariaDB's client and about
-// 150 other shared libraries; loading and relocating them took 0.06 s of the 0.08 s of CPU
+// 150 other shared libraries; loading and relocating them took 0.06 s of the 0.087 s of CPU
 // that `hapticlab --help` spent before this file (docs/performance.md, "Start-up"). Only
 // a few commands read or write images (model photometric, the screenshots of the participant
 // window). This file defines the functions of imgcodecs that the project calls, cv::imread,
