@@ -130,5 +130,19 @@ TEST(Cli, ExportWritesTables) {
   EXPECT_NE(csv.find("P01"), std::string::npos);
 }
 
+// Start-up (docs/performance.md, "Start-up"): OpenCV's image codecs and the ~150 libraries
+// they need (GDAL, Poppler, HDF5, ...) are not loaded when the binary starts
+// (apps/hapticlab/lazy_imgcodecs.cpp loads them at the first image read or write; the
+// photometric command-line tests read and write images through it). The check is on the
+// binary's NEEDED entries, not on a time.
+TEST(Cli, ImageCodecsAreNotLoadedAtStartUp) {
+  std::string needed;
+  ASSERT_EQ(test::RunCommand("readelf -d " + Cli() + " | grep NEEDED", &needed), 0) << needed;
+  EXPECT_EQ(needed.find("opencv_imgcodecs"), std::string::npos) << needed;
+  EXPECT_EQ(needed.find("gdal"), std::string::npos) << needed;
+  // The check would notice: the binary does link OpenCV's core (cv::Mat).
+  EXPECT_NE(needed.find("opencv_core"), std::string::npos) << needed;
+}
+
 }  // namespace
 }  // namespace hapticlab
