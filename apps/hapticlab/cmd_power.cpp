@@ -109,6 +109,74 @@ void Emit(const stats::PowerResult& r, const PowerArgs& a) {
   }
 }
 
+// study power's work: a merge of shard results, or the simulated studies of a protocol.
+int RunPower(PowerArgs* a) {
+  if (!a->merge.empty()) {
+    if (!a->protocol.empty())
+      throw InputError(kCommandLine, 0, "PROTOCOL", "give either a protocol or --merge FILES");
+    std::vector<stats::PowerResult> parts;
+    for (const auto& f : a->merge) parts.push_back(stats::PowerFromJson(ReadTextFile(f), f));
+    Emit(stats::MergePower(parts, a->merge), *a);
+    return kExitOk;
+  }
+  if (a->protocol.empty())
+    throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
+  stats::PowerOptions o;
+  o.participants = ParseCounts(a->participants);
+  o.simulations = a->simulations;
+  o.seed = a->seed;
+  o.threads = a->threads;
+  if (!a->shard.empty()) ParseShard(a->shard, &o.shard, &o.shards);
+  if (!a->effect.empty()) {
+    if (a->effect != "method" && a->effect != "material" && a->effect != "method:material")
+      throw InputError(kCommandLine, 0, "--effect",
+                       "expected method, material or method:material, got '" + a->effect + "'");
+    o.effects = {a->effect};
+  }
+  const auto p = protocols::LoadProtocol(a->protocol);
+  const auto model = design::ChooseObserver(p, a->observer);  // before the physics
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto log = StderrLog(a->quiet);
+  const auto pool = design::RecordFeltPool(p, a->pool, a->threads, log);
+  const double t_pool =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  int last = -1;
+  if (!a->quiet)
+    o.progress = [&last](long done, long total) {
+      const int pct = static_cast<int>(100 * done / std::max(total, 1L));
+      if (pct / 5 != last / 5) {
+        fmt::print(stderr, "\rsimulated studies: {}/{} ({}%)", done, total, pct);
+        if (done == total) fmt::print(stderr, "\n");
+        last = pct;
+      }
+    };
+  const auto& obs = model.params;
+  const int sites = a->sites;
+  const double site_sd = a->site_sd;
+  auto r = stats::SimulatePower(
+      p.name,
+      [&pool, &obs, sites, site_sd](int n, Rng& rng) {
+        return sites == 1 && site_sd == 0 ? design::SimulateRatings(pool, obs, n, rng, true)
+                                          : SiteStudy(pool, obs, sites, site_sd, n, rng);
+      },
+      o);
+
+  r.observer_file = model.file;
+  r.observer_sha256 = model.sha256;
+  const double t_all = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  long studies = 0;
+  for (long s = o.shard; s < o.simulations; s += o.shards) ++studies;
+  studies *= static_cast<long>(o.participants.size());
+  log("observer: " + model.Describe());
+  log(
+      fmt::format("pool of {} participants through the runner: {:.1f} s; {} simulated studies: "
+                  "{:.1f} s ({:.0f} studies/s)",
+                  a->pool, t_pool, studies, t_all - t_pool,
+                  static_cast<double>(studies) / std::max(t_all - t_pool, 1e-9)));
+  Emit(r, *a);
+  return kExitOk;
+}
+
 }  // namespace
 
 void RegisterPower(CLI::App& study) {
@@ -162,75 +230,7 @@ void RegisterPower(CLI::App& study) {
   cmd->add_option("--merge", a->merge, "Combine the JSON results of all shards of one run")
       ->expected(1, -1);
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");
-  cmd->callback([a] {
-    RunGuarded([&] {
-      if (!a->merge.empty()) {
-        if (!a->protocol.empty())
-          throw InputError(kCommandLine, 0, "PROTOCOL", "give either a protocol or --merge FILES");
-        std::vector<stats::PowerResult> parts;
-        for (const auto& f : a->merge) parts.push_back(stats::PowerFromJson(ReadTextFile(f), f));
-        Emit(stats::MergePower(parts, a->merge), *a);
-        return kExitOk;
-      }
-      if (a->protocol.empty())
-        throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
-      stats::PowerOptions o;
-      o.participants = ParseCounts(a->participants);
-      o.simulations = a->simulations;
-      o.seed = a->seed;
-      o.threads = a->threads;
-      if (!a->shard.empty()) ParseShard(a->shard, &o.shard, &o.shards);
-      if (!a->effect.empty()) {
-        if (a->effect != "method" && a->effect != "material" && a->effect != "method:material")
-          throw InputError(kCommandLine, 0, "--effect",
-                           "expected method, material or method:material, got '" + a->effect + "'");
-        o.effects = {a->effect};
-      }
-      const auto p = protocols::LoadProtocol(a->protocol);
-      const auto model = design::ChooseObserver(p, a->observer);  // before the physics
-      const auto t0 = std::chrono::steady_clock::now();
-      const auto log = StderrLog(a->quiet);
-      const auto pool = design::RecordFeltPool(p, a->pool, a->threads, log);
-      const double t_pool =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      int last = -1;
-      if (!a->quiet)
-        o.progress = [&last](long done, long total) {
-          const int pct = static_cast<int>(100 * done / std::max(total, 1L));
-          if (pct / 5 != last / 5) {
-            fmt::print(stderr, "\rsimulated studies: {}/{} ({}%)", done, total, pct);
-            if (done == total) fmt::print(stderr, "\n");
-            last = pct;
-          }
-        };
-      const auto& obs = model.params;
-      const int sites = a->sites;
-      const double site_sd = a->site_sd;
-      auto r = stats::SimulatePower(
-          p.name,
-          [&pool, &obs, sites, site_sd](int n, Rng& rng) {
-            return sites == 1 && site_sd == 0 ? design::SimulateRatings(pool, obs, n, rng, true)
-                                              : SiteStudy(pool, obs, sites, site_sd, n, rng);
-          },
-          o);
-
-      r.observer_file = model.file;
-      r.observer_sha256 = model.sha256;
-      const double t_all =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      long studies = 0;
-      for (long s = o.shard; s < o.simulations; s += o.shards) ++studies;
-      studies *= static_cast<long>(o.participants.size());
-      log("observer: " + model.Describe());
-      log(
-          fmt::format("pool of {} participants through the runner: {:.1f} s; {} simulated studies: "
-                      "{:.1f} s ({:.0f} studies/s)",
-                      a->pool, t_pool, studies, t_all - t_pool,
-                      static_cast<double>(studies) / std::max(t_all - t_pool, 1e-9)));
-      Emit(r, *a);
-      return kExitOk;
-    });
-  });
+  cmd->callback([a] { RunGuarded([&] { return RunPower(a.get()); }); });
 }
 
 }  // namespace hapticlab::cli
