@@ -172,6 +172,7 @@ void RegisterPower(CLI::App& study) {
           o);
       r.observer_file = model.file;
       r.observer_sha256 = model.sha256;
+      r.title = p.title;
       const double t_all =
           std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       long studies = 0;

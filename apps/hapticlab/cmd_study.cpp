@@ -19,6 +19,7 @@
 #include "hapticlab/runner/sim_rigs.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/runner_ui/session_ui.hpp"
+#include "hapticlab/stats/analysis.hpp"
 #include "rig_timing.hpp"
 
 namespace hapticlab::cli {
@@ -249,6 +250,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->callback([=] {
       RunGuarded([&] {
         const auto p = protocols::LoadProtocol(*path);
+        stats::CheckAnalyses(p);  // the keywords of [analysis] tests: the stats registry's
         runner::CheckRunnable(p, *device, *ui);
         int rated = 0;
         for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
@@ -410,6 +412,7 @@ void RegisterStudy(CLI::App& app) {
     cmd->callback([a] {
       RunStudyGuarded([&] {
         const auto p = protocols::LoadProtocol(a->protocol);
+        stats::CheckAnalyses(p);
         runner::RunOptions o;
         o.participant_index = a->index;
         o.fault_rate = a->fault_rate;
