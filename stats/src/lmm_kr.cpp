@@ -36,7 +36,7 @@ struct WoodburyProducts {
   double trace_V2 = 0;
 };
 
-WoodburyProducts Products(const LmmDesign& d, const SpMat& root_D, double sigma2) {
+WoodburyProducts Products(const LmmDesign& d, const SpMat& root_d, double sigma2) {
   const Index n = d.X.rows(), p = d.X.cols(), q = d.Z.cols();
   const MatrixXd ZtZ(SpMat(d.Z.transpose() * d.Z));
   MatrixXd gram(q + p, q + p);  // B'B
@@ -45,12 +45,12 @@ WoodburyProducts Products(const LmmDesign& d, const SpMat& root_D, double sigma2
   gram.bottomLeftCorner(p, q) = gram.topRightCorner(q, p).transpose();
   gram.bottomRightCorner(p, p) = d.X.transpose() * d.X;
   // Woodbury: V⁻¹ = σ⁻² (I - U C⁻¹ U'), C = σ² I + U'U, U = Z D^½ (D^½ symmetric).
-  const MatrixXd A = root_D * (ZtZ * root_D);  // U'U
+  const MatrixXd A = root_d * (ZtZ * root_d);  // U'U
   MatrixXd C = A;
   C.diagonal().array() += sigma2;
   const Eigen::LLT<MatrixXd> llt(C);
   const MatrixXd CiA = llt.solve(A);
-  const MatrixXd M = root_D * llt.solve(MatrixXd(root_D));  // D^½ C⁻¹ D^½
+  const MatrixXd M = root_d * llt.solve(MatrixXd(root_d));  // D^½ C⁻¹ D^½
   // V⁻¹ B = B T: T = σ⁻² (I - [M Z'B; 0]).
   MatrixXd T = MatrixXd::Identity(q + p, q + p);
   T.topRows(q) -= M * gram.topRows(q);
@@ -91,7 +91,7 @@ double TraceSK(const SpMat& Sr, const MatrixXd& K) {
 // The selectors S_r (G_r = Z S_r Z') of each term's covariance elements (i, j): ones at (i, j)
 // and (j, i) of every level's block; and D^½, the symmetric square root of D = cov(b).
 void Selectors(const LmmDesign& d, const std::vector<double>& gamma, std::vector<SpMat>& S,
-               SpMat& root_D) {
+               SpMat& root_d) {
   const Index q = d.Z.cols();
   std::vector<Triplet> root;
   std::size_t r = 0;
@@ -120,8 +120,8 @@ void Selectors(const LmmDesign& d, const std::vector<double>& gamma, std::vector
           if (half(i, j) != 0.0)
             root.emplace_back(b.offset + l * b.p + i, b.offset + l * b.p + j, half(i, j));
   }
-  root_D.resize(q, q);
-  root_D.setFromTriplets(root.begin(), root.end());
+  root_d.resize(q, q);
+  root_d.setFromTriplets(root.begin(), root.end());
 }
 
 }  // namespace
@@ -129,9 +129,9 @@ void Selectors(const LmmDesign& d, const std::vector<double>& gamma, std::vector
 KrAdjusted KenwardRogerVcov(const LmmDesign& d, const std::vector<double>& gamma,
                             const MatrixXd& Phi) {
   std::vector<SpMat> S;
-  SpMat root_D;
-  Selectors(d, gamma, S, root_D);
-  const auto w = Products(d, root_D, gamma.back());
+  SpMat root_d;
+  Selectors(d, gamma, S, root_d);
+  const auto w = Products(d, root_d, gamma.back());
   const std::size_t m = S.size() + 1;  // the last G is I (the σ² element)
   std::vector<MatrixXd> SR;            // S_r Z'V⁻¹X
   for (const auto& s : S) SR.push_back(s * w.R);
