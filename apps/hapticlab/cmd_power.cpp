@@ -163,6 +163,7 @@ int RunPower(PowerArgs* a) {
 
   r.observer_file = model.file;
   r.observer_sha256 = model.sha256;
+  r.title = p.title;
   const double t_all = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   long studies = 0;
   for (long s = o.shard; s < o.simulations; s += o.shards) ++studies;

@@ -19,6 +19,7 @@
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/runner_ui/session_ui.hpp"
+#include "hapticlab/stats/analysis.hpp"
 #include "rig_timing.hpp"
 #include "study_plan.hpp"
 
@@ -218,6 +219,7 @@ void RegisterStudyValidate(CLI::App* study) {
   cmd->callback([=] {
     RunGuarded([&] {
       const auto p = protocols::LoadProtocol(*path);
+      stats::CheckAnalyses(p);  // the keywords of [analysis] tests: the stats registry's
       runner::CheckRunnable(p, *device, *ui);
       int rated = 0;
       for (const auto& t : protocols::Plan(p, 0)) rated += t.rated;
@@ -387,6 +389,7 @@ void RegisterStudyRun(CLI::App* study) {
     RunStudyGuarded([&] {
       runner::RunOptions o;
       const auto p = LoadRunProtocol(a->protocol, a->plan, &o, a->quiet || a->json);
+      stats::CheckAnalyses(p);
       o.participant_index = a->index;
       o.fault_rate = a->fault_rate;
       o.site = a->site;

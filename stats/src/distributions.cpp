@@ -222,6 +222,7 @@ double Qf(double p, double df1, double df2) {
 }
 double PchisqUpper(double x, double df) {
   if (!(x > 0)) return 1.0;
+  if (std::isinf(x)) return 0.0;  // as R's pchisq(Inf, df, lower.tail = FALSE)
   return bm::cdf(bm::complement(bm::chi_squared_distribution<double>(df), x));
 }
 double PtTwoSided(double t, double df) {

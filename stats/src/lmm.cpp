@@ -55,7 +55,8 @@ class Pls {
     bool ok = false;
     double ldL2 = 0, ldRX2 = 0, r2 = 0;
     VectorXd beta;
-    MatrixXd XtVX;  // R_X'R_X = X'X - X'ZΛ (Λ'Z'ZΛ + I)⁻¹ Λ'Z'X
+    VectorXd resid;  // conditional residuals y - Xβ - ZΛu
+    MatrixXd XtVX;   // R_X'R_X = X'X - X'ZΛ (Λ'Z'ZΛ + I)⁻¹ Λ'Z'X
   };
 
   Solution Solve(const VectorXd& theta) {
@@ -74,8 +75,8 @@ class Pls {
     if (rx.info() != Eigen::Success) return s;
     s.beta = rx.solve(Xty_ - LZX.transpose() * sv);
     const VectorXd u = sv - S * s.beta;
-    const VectorXd resid = d_.y - d_.X * s.beta - d_.Z * (L * u);
-    s.r2 = resid.squaredNorm() + u.squaredNorm();
+    s.resid = d_.y - d_.X * s.beta - d_.Z * (L * u);
+    s.r2 = s.resid.squaredNorm() + u.squaredNorm();
     s.ldL2 = chol_.vectorD().array().log().sum();
     s.ldRX2 = 2.0 * rx.matrixLLT().diagonal().array().log().sum();
     s.ok = std::isfinite(s.ldL2) && std::isfinite(s.ldRX2);
@@ -243,11 +244,13 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     throw InputError(
         data.source, 0, "ddf",
         "Kenward-Roger needs a REML fit (as lmerTest and pbkrtest), not a maximum-likelihood one");
-  if (options.kenward_roger && d.X.rows() > kKenwardRogerMaxRows)
-    throw InputError(data.source, 0, "ddf",
-                     "Kenward-Roger uses dense n x n matrices; " + std::to_string(d.X.rows()) +
-                         " observations exceed " + std::to_string(kKenwardRogerMaxRows) +
-                         " (use satterthwaite)");
+  if (options.kenward_roger && d.Z.cols() > kKenwardRogerMaxRandomEffects)
+    throw InputError(
+        data.source, 0, "ddf",
+        "Kenward-Roger works on dense matrices of the random effects; this model has " +
+            std::to_string(d.Z.cols()) + " (more than " +
+            std::to_string(kKenwardRogerMaxRandomEffects) +
+            "): use Satterthwaite df (--ddf satterthwaite)");
 
   Pls pls(d, options.reml);
   LmmResult r;
@@ -290,6 +293,7 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   const auto sol = pls.Solve(theta);
   const double n = pls.n();
   r.sigma = std::sqrt(sol.r2 / (options.reml ? n - static_cast<double>(p) : n));
+  r.residuals.assign(sol.resid.data(), sol.resid.data() + sol.resid.size());
   r.logLik = -0.5 * r.deviance;
   r.n_parameters = static_cast<int>(p) + pls.ntheta() + 1;
   r.AIC = -2.0 * r.logLik + 2.0 * r.n_parameters;

@@ -25,7 +25,7 @@ constexpr int kPalette[][3] = {{0, 114, 178},  {230, 159, 0}, {0, 158, 115},  {2
                                {86, 180, 233}, {213, 94, 0},  {240, 228, 66}, {120, 120, 120}};
 
 // Opens one PLplot stream on a cairo device; plend() closes it. `dpi`: pixels (PNG) or
-// points (SVG) per inch.
+// points (SVG, PDF) per inch.
 void Begin(const char* device, const std::string& file, double dpi) {
   plsdev(device);
   plsfnam(file.c_str());
@@ -357,9 +357,11 @@ void SetPngDpi(const std::string& file, double dpi) {
 template <class F>
 std::vector<std::string> Both(const std::string& base, F draw) {
   std::vector<std::string> files;
-  // SVG in points (72 per inch), PNG at 300 dpi: the same figure, the same size in inches.
+  // SVG and PDF in points (72 per inch), PNG at 300 dpi: the same figure, the same size in
+  // inches.
   for (const auto& [dev, ext, dpi] :
-       {std::tuple{"svgcairo", ".svg", 72.0}, std::tuple{"pngcairo", ".png", kPngDpi}}) {
+       {std::tuple{"svgcairo", ".svg", 72.0}, std::tuple{"pngcairo", ".png", kPngDpi},
+        std::tuple{"pdfcairo", ".pdf", 72.0}}) {
     Begin(dev, base + ext, dpi);
     draw(dpi);
     plend();

@@ -157,11 +157,8 @@ std::string PowerToJson(const PowerResult& r) {
       {"model", r.ObserverDescription()},
       {"file", r.observer_file.empty() ? json(nullptr) : json(r.observer_file)},
       {"sha256", r.observer_sha256.empty() ? json(nullptr) : json(r.observer_sha256)}};
-  json j = {{"protocol", r.protocol},
-            {"observer", observer},
-            {"simulations", r.simulations},
-            {"seed", r.seed},
-            {"rows", rows}};
+  json j = {{"protocol", r.protocol},       {"title", r.title}, {"observer", observer},
+            {"simulations", r.simulations}, {"seed", r.seed},   {"rows", rows}};
   if (r.shards > 1) {
     j["shard"] = r.shard;
     j["shards"] = r.shards;
@@ -174,6 +171,7 @@ PowerResult PowerFromJson(const std::string& text, const std::string& file) {
   try {
     const json j = json::parse(text);
     r.protocol = j.at("protocol").get<std::string>();
+    r.title = j.value("title", std::string());
     r.simulations = j.at("simulations").get<long>();
     r.seed = j.at("seed").get<std::uint64_t>();
     r.shard = j.value("shard", 0);
@@ -261,7 +259,8 @@ constexpr double kTargetPower = 0.8;
 
 std::vector<std::string> DrawPowerCurves(const PowerResult& r, const std::string& base) {
   LinePlot l;
-  l.title = fmt::format("{}: power (p < 0.05), {} simulations each", r.protocol, r.simulations);
+  l.title = fmt::format("{}: power (p < 0.05), {} simulations each",
+                        r.title.empty() ? r.protocol : r.title, r.simulations);
   l.note = "observer: " + r.ObserverDescription();
   l.x_label = "participants";
   l.y_label = "power";

@@ -44,13 +44,10 @@ void MaterialSeries(BarChart& chart, const LongTable& cm, const std::vector<std:
 }
 
 void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
-                       const RmAnovaResult& a, Correction correction, bool figures,
-                       const std::string& title) {
-  const std::vector<double> e = AnovaResiduals(a);
-  md << fmt::format(
-      "\nNormality of the ANOVA's residuals (as afex's `residuals()`: each participant's cell "
-      "mean minus the cell's mean, {} residuals): ",
-      e.size());
+                       const std::vector<double>& e, const std::string& what,
+                       const std::vector<Conclusion>& conclusions, const std::string& advice,
+                       bool figures, const std::string& title) {
+  md << fmt::format("\nNormality of {}, {} residuals): ", what, e.size());
   ShapiroResult s;
   try {
     s = ShapiroWilk(e);
@@ -72,11 +69,9 @@ void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name
   if (s.p >= 0.05) return;
   // A conclusion is at stake where a moderate departure could move its p across 0.05.
   std::vector<std::string> at_stake;
-  for (const auto& ef : a.effects) {
-    const double p = UsedP(ef, correction);
-    if (p >= kStakeLow && p < kStakeHigh)
-      at_stake.push_back(fmt::format("{} ({})", ef.effect, PEq(p)));
-  }
+  for (const auto& c : conclusions)
+    if (c.p >= kStakeLow && c.p < kStakeHigh)
+      at_stake.push_back(fmt::format("{} ({})", c.effect, PEq(c.p)));
   if (at_stake.empty()) {
     md << fmt::format(
         "\nThe residuals depart from normality, but no effect's p lies between {} and {}, where "
@@ -87,9 +82,21 @@ void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name
   std::string list;
   for (std::size_t i = 0; i < at_stake.size(); ++i) list += (i ? ", " : "") + at_stake[i];
   md << "\nAdvice: the residuals depart from normality and the conclusion on " << list
-     << " lies near the 0.05 threshold; confirm it with a model that does not rest on normal "
-        "cell means (the linear mixed model `lmm` on every rating, or a rank-based test) before "
-        "relying on it.\n";
+     << " lies near the 0.05 threshold; confirm it with " << advice << " before relying on it.\n";
+}
+
+void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
+                       const RmAnovaResult& a, Correction correction, bool figures,
+                       const std::string& title) {
+  std::vector<Conclusion> conclusions;
+  for (const auto& ef : a.effects) conclusions.push_back({ef.effect, UsedP(ef, correction)});
+  ResidualNormality(md, w, base_name, AnovaResiduals(a),
+                    "the ANOVA's residuals (as afex's `residuals()`: each participant's cell mean "
+                    "minus the cell's mean",
+                    conclusions,
+                    "a model that does not rest on normal cell means (the linear mixed model "
+                    "`lmm` on every rating, or a rank-based test)",
+                    figures, title);
 }
 
 }  // namespace hapticlab::stats::report_internal

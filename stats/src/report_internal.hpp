@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/stats/analysis.hpp"
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/stats/long_table.hpp"
 #include "hapticlab/stats/plot.hpp"
@@ -31,31 +32,14 @@ std::string Stars(double p);
 /// A name safe in a file name (letters, digits, '-'; others become '_').
 std::string Safe(const std::string& s);
 
-class Writer {
- public:
-  explicit Writer(std::string dir) : dir_(std::move(dir)) {}
-  std::ofstream Open(const std::string& name) {
-    const std::string path = (fs::path(dir_) / name).string();
-    files_.push_back(path);
-    std::ofstream f(path);
-    if (!f) throw std::runtime_error(path + ": cannot write");
-    return f;
-  }
-  void Add(const std::vector<std::string>& f) { files_.insert(files_.end(), f.begin(), f.end()); }
-  const std::string& dir() const { return dir_; }
-  std::vector<std::string> files_;
-
- private:
-  std::string dir_;
-};
+/// The report's output folder (hapticlab/stats/analysis.hpp).
+using Writer = ReportWriter;
 
 /// Mean and 95 % CI half-width of participant means (the error bars of Figs. 5.7/5.8).
 std::pair<double, double> MeanCi(const LongTable& t);
 /// Levels of `present` in the protocol's order (`order`), then any others (sorted).
 std::vector<std::string> InProtocolOrder(const std::vector<std::string>& order,
                                          const std::vector<std::string>& present);
-/// A requested analysis that cannot run says why, in the report (never dropped silently).
-void NotRun(std::ostream& md, const std::string& test, const std::string& why);
 /// Aggregate tables in the layout of the dissertation's Tables 5.4/5.5.
 void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Protocol& proto,
                      const std::string& crit, const LongTable& cm,
@@ -75,8 +59,19 @@ void MaterialSeries(BarChart& chart, const LongTable& cm, const std::vector<std:
                     const std::vector<std::string>& materials);
 /// A departure from normality matters to a conclusion whose p lies in [kStakeLow, kStakeHigh).
 inline constexpr double kStakeLow = 0.01, kStakeHigh = 0.10;
-/// Shapiro-Wilk on the rmANOVA's residuals (AnovaResiduals), a Q-Q figure
-/// (`<base_name>_qq.svg/.png`), and advice only where an effect's p is in the stake band.
+/// A conclusion a model's normality check may put at stake: an effect and the p it is judged by.
+struct Conclusion {
+  std::string effect;
+  double p = 1;
+};
+/// Shapiro-Wilk on a model's residuals (`what`: "the ANOVA's residuals (as ..."; the count
+/// and ")" follow), a Q-Q figure (`<base_name>_qq.svg/.png/.pdf`), and advice (`advice`: what
+/// to confirm the conclusion with) only where a conclusion's p is in the stake band.
+void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
+                       const std::vector<double>& residuals, const std::string& what,
+                       const std::vector<Conclusion>& conclusions, const std::string& advice,
+                       bool figures, const std::string& title);
+/// The same on the rmANOVA's residuals (AnovaResiduals), its effects judged by `correction`.
 void ResidualNormality(std::ostream& md, Writer& w, const std::string& base_name,
                        const RmAnovaResult& a, Correction correction, bool figures,
                        const std::string& title);

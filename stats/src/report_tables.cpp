@@ -58,11 +58,6 @@ std::vector<std::string> InProtocolOrder(const std::vector<std::string>& order,
   return out;
 }
 
-// A requested analysis that cannot run says why, in the report (never dropped silently).
-void NotRun(std::ostream& md, const std::string& test, const std::string& why) {
-  md << "\n*`" << test << "` was requested but not run: " << why << "*\n";
-}
-
 // Aggregate tables in the layout of the dissertation's Tables 5.4/5.5: methods as rows in
 // protocol order, materials as columns in protocol order, one table per material group.
 void AggregateTables(std::ostream& md, std::ostream& agg, const protocols::Protocol& proto,

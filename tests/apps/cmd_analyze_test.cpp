@@ -42,7 +42,8 @@ TEST(AnalyzeCli, AggregateTableIsTheCellMeansOfTheExportedRatings) {
   for (const auto& f : j["files"]) {
     const std::string p = f;
     EXPECT_TRUE(std::filesystem::exists(p)) << p;
-    EXPECT_FALSE(p.ends_with(".png") || p.ends_with(".svg")) << "--no-figures drew " << p;
+    EXPECT_FALSE(p.ends_with(".png") || p.ends_with(".svg") || p.ends_with(".pdf"))
+        << "--no-figures drew " << p;
   }
   ASSERT_EQ(
       test::RunCommand(

@@ -87,17 +87,19 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
       << out;
   const auto r = json::parse(out);
   EXPECT_TRUE(std::filesystem::exists(r["report"].get<std::string>()));
-  int png = 0, svg = 0;
+  int png = 0, svg = 0, pdf = 0;
   for (const auto& f : r["files"]) {
     const std::string p = f;
-    if (p.ends_with(".png") || p.ends_with(".svg")) {
+    if (p.ends_with(".png") || p.ends_with(".svg") || p.ends_with(".pdf")) {
       ASSERT_GT(std::filesystem::file_size(p), 1000u) << p;
     }
     png += p.ends_with(".png");
     svg += p.ends_with(".svg");
+    pdf += p.ends_with(".pdf");
   }
   EXPECT_GT(png, 0);
   EXPECT_EQ(png, svg);
+  EXPECT_EQ(png, pdf);
   const auto md = test::ReadFile(r["report"].get<std::string>());
   EXPECT_NE(md.find("Repeated-measures ANOVA"), std::string::npos);
   EXPECT_NE(md.find("Tukey HSD on method"), std::string::npos);

@@ -89,5 +89,28 @@ TEST(Correction, UsedPFollowsAfexsNamesAndLeavesBetweenEffectsAlone) {
   EXPECT_STREQ(CorrectionName(Correction::kHF), "HF");
 }
 
+// Levels b and c a constant apart in every subject: one contrast has no error variance, so
+// the error covariance is singular with fewer contrasts than error df. Mauchly's W is 0 and
+// its p 0 (R's mauchly.test: chi2 = Inf), not a library error.
+TEST(RmAnova, AContrastWithoutErrorVarianceGivesMauchlysWZero) {
+  std::vector<std::tuple<std::string, std::string, double>> rows;
+  const double a[] = {1, 5, 2, 8, 3}, b[] = {4, 2, 6, 3, 7};
+  for (int s = 0; s < 5; ++s) {
+    const std::string subject = "S" + std::to_string(s + 1);
+    const auto i = static_cast<std::size_t>(s);
+    rows.push_back({subject, "a", a[i]});
+    rows.push_back({subject, "b", b[i]});
+    rows.push_back({subject, "c", b[i] + 1});
+  }
+  const auto r = RmAnova(Make(rows), "subject", {"cond"});
+  ASSERT_EQ(r.effects.size(), 1u);
+  const auto& e = r.effects[0];
+  EXPECT_TRUE(std::isfinite(e.F));
+  EXPECT_LT(e.mauchly_W, 1e-10);
+  EXPECT_LT(e.mauchly_p, 1e-10);
+  EXPECT_GT(e.gg_epsilon, 0.5 - 1e-12);  // the lower bound 1 / (k - 1)
+  EXPECT_LE(e.gg_epsilon, 1.0);
+}
+
 }  // namespace
 }  // namespace hapticlab::stats

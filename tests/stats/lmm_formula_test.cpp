@@ -16,6 +16,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/lmm.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "lmm_reference.hpp"
 
 namespace hapticlab::stats {
 namespace {
@@ -23,28 +24,18 @@ namespace {
 using nlohmann::json;
 constexpr double kRel = 1e-5;
 
-// Relative agreement, with an absolute floor `scale` * kRel for values near zero.
 void ExpectClose(double got, const json& want, const std::string& what, double scale = 0) {
-  ASSERT_FALSE(want.is_null()) << what;
-  const double w = want.get<double>();
-  EXPECT_NEAR(got, w, kRel * std::max(std::abs(w), scale)) << what;
+  lmm_reference::ExpectClose(got, want, what, scale, kRel);
 }
 
 json Ref(const std::string& fit) {
-  std::ifstream f(test::DataPath("stats/lmm_formula_reference.json"));
-  return json::parse(f)[fit];
+  return lmm_reference::Ref(fit, "stats/lmm_formula_reference.json");
 }
 
 LmmResult Fit(const json& ref, bool kenward_roger = false) {
-  const auto formula = ref["formula"].get<std::string>();
-  const auto f = ParseLmmFormula(formula);
-  auto cols = f.Columns();
-  cols.erase(cols.begin());
-  const auto data =
-      ReadLongCsv(test::DataPath("stats/" + ref["csv"].get<std::string>()), f.response, cols);
   LmmOptions o;
   o.kenward_roger = kenward_roger;
-  return FitLmm(data, formula, o);
+  return FitLmm(lmm_reference::Load(ref), ref["formula"].get<std::string>(), o);
 }
 
 void Compare(const std::string& fit) {
@@ -54,55 +45,8 @@ void Compare(const std::string& fit) {
   const auto r = Fit(ref);
   const std::string tag = fit + " ";
   EXPECT_TRUE(r.converged) << tag << r.BriefReport();
-  EXPECT_EQ(r.singular, w["singular"].get<bool>()) << tag;
-  ExpectClose(r.sigma, w["sigma"], tag + "sigma");
-  ExpectClose(r.logLik, w["logLik"], tag + "logLik");
   ExpectClose(r.deviance, w["REMLcrit"], tag + "REML criterion");
-  ASSERT_EQ(r.theta.size(), w["theta"].size()) << tag;
-  for (std::size_t i = 0; i < r.theta.size(); ++i)
-    ExpectClose(r.theta[i], w["theta"][i], tag + "theta", 1.0);
-  ASSERT_EQ(r.fixed.size(), w["fixed"].size()) << tag;
-  for (std::size_t i = 0; i < r.fixed.size(); ++i) {
-    const auto& c = r.fixed[i];
-    const auto& e = w["fixed"][i];
-    const std::string name = tag + e["name"].get<std::string>();
-    EXPECT_EQ(c.name, e["name"].get<std::string>()) << tag;
-    ExpectClose(c.estimate, e["estimate"], name + " estimate", e["se"].get<double>());
-    ExpectClose(c.se, e["se"], name + " se");
-    ExpectClose(c.df, e["df"], name + " df");
-    ExpectClose(c.t, e["t"], name + " t", 1.0);
-  }
-  ASSERT_EQ(r.anova.size(), w["anova"].size()) << tag;
-  for (std::size_t i = 0; i < r.anova.size(); ++i) {
-    const auto& t = r.anova[i];
-    const auto& e = w["anova"][i];
-    const std::string name = tag + e["term"].get<std::string>();
-    EXPECT_EQ(t.term, e["term"].get<std::string>()) << tag;
-    EXPECT_EQ(t.num_df, e["num_df"].get<double>()) << name;
-    ExpectClose(t.den_df, e["den_df"], name + " den df");
-    ExpectClose(t.F, e["F"], name + " F");
-  }
-  // as.data.frame(VarCorr): per term the variances, then the correlations; last the residual.
-  std::size_t row = 0;
-  for (const auto& term : r.random) {
-    const auto k = term.names.size();
-    for (std::size_t i = 0; i < k; ++i, ++row) {
-      ASSERT_LT(row, w["random"].size()) << tag;
-      const auto& e = w["random"][row];
-      EXPECT_EQ(term.group, e["group"].get<std::string>()) << tag;
-      EXPECT_EQ(term.names[i], e["var1"].get<std::string>()) << tag;
-      ExpectClose(term.variance[i], e["vcov"], tag + term.group + " var " + term.names[i],
-                  r.sigma * r.sigma);
-      ExpectClose(term.sd[i], e["sdcor"], tag + term.group + " sd " + term.names[i], r.sigma);
-    }
-    for (std::size_t j = 0; j < k; ++j)
-      for (std::size_t i = j + 1; i < k; ++i, ++row) {
-        ASSERT_LT(row, w["random"].size()) << tag;
-        ExpectClose(term.corr[i][j], w["random"][row]["sdcor"], tag + term.group + " corr", 1.0);
-      }
-  }
-  ASSERT_EQ(row + 1, w["random"].size()) << tag;
-  EXPECT_EQ(w["random"][row]["group"].get<std::string>(), "Residual") << tag;
+  lmm_reference::ExpectFitMatches(r, w, tag, kRel);
 }
 
 // Kenward-Roger (pbkrtest's adjusted SEs and df) on the same fits: every random-effects

@@ -18,8 +18,10 @@ using lmm_reference::Ref;
 using nlohmann::json;
 
 // Kenward-Roger (REML fits): adjusted SEs, df, t, p; scaled F, df, p (pbkrtest via lmerTest).
-void CompareKenwardRoger(const std::string& design) {
-  const json ref = Ref(design);
+void CompareKenwardRoger(const std::string& design,
+                         const std::string& file = "stats/lmm_reference.json") {
+  const json ref = Ref(design, file);
+  ASSERT_FALSE(ref.is_null()) << design;
   const json& w = ref["reml"]["kr"];
   LmmOptions o;
   o.kenward_roger = true;

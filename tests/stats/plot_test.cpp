@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <cstdio>
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <string>
@@ -86,6 +87,59 @@ int FrameRight(const cv::Mat& img) {
   return right;
 }
 
+// A PDF read from its bytes (ISO 32000-1): the header, the number of page objects (/Type /Page,
+// not /Pages), the first page's MediaBox [x0 y0 x1 y1] in points, and the end-of-file marker
+// in the last 1024 bytes.
+struct PdfFacts {
+  bool header = false, eof = false;
+  int pages = 0;
+  double width_pt = 0, height_pt = 0;
+};
+PdfFacts ReadPdf(const std::string& file) {
+  const std::string pdf = test::ReadFile(file);
+  PdfFacts f;
+  f.header = pdf.rfind("%PDF-1.", 0) == 0;
+  f.eof = pdf.find("%%EOF", pdf.size() > 1024 ? pdf.size() - 1024 : 0) != std::string::npos;
+  for (auto at = pdf.find("/Type /Page"); at != std::string::npos;
+       at = pdf.find("/Type /Page", at + 1))
+    f.pages += at + 11 < pdf.size() && pdf[at + 11] != 's';
+  const auto box = pdf.find("/MediaBox");
+  if (box != std::string::npos) {
+    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    if (std::sscanf(pdf.c_str() + box, "/MediaBox [ %lf %lf %lf %lf", &x0, &y0, &x1, &y1) == 4 ||
+        std::sscanf(pdf.c_str() + box, "/MediaBox [%lf %lf %lf %lf", &x0, &y0, &x1, &y1) == 4) {
+      f.width_pt = x1 - x0;
+      f.height_pt = y1 - y0;
+    }
+  }
+  return f;
+}
+
+TEST(Plot, EveryFigureIsAlsoAOnePagePdfOfTheFigureSize) {
+  test::TempDir dir;
+  BarChart c{.title = "t", .x_label = "x", .y_label = "score", .error_label = "95% CI"};
+  c.groups = {"A", "B"};
+  c.series = {{.name = "FF", .mean = {40, 60}, .err = {3, 3}}};
+  BoxPlot b{.title = "t", .x_label = "method", .y_label = "score"};
+  b.groups = {"FF"};
+  b.samples = {{40, 50, 55, 60, 90}};
+  LinePlot l{.title = "power", .x_label = "n", .y_label = "power", .x = {8, 12}};
+  l.series = {{"method", {0.4, 0.9}}};
+  QqPlot q{.title = "residuals", .y_label = "residual", .sample = {-1, 0, 0.5, 2}};
+  for (const auto& files : {DrawBarChart(c, dir.File("bar")), DrawBoxPlot(b, dir.File("box")),
+                            DrawLinePlot(l, dir.File("line")), DrawQqPlot(q, dir.File("qq"))}) {
+    ASSERT_EQ(files.size(), 3U);
+    ASSERT_EQ(files[2].substr(files[2].size() - 4), ".pdf") << files[2];
+    const auto f = ReadPdf(files[2]);
+    EXPECT_TRUE(f.header) << files[2];
+    EXPECT_TRUE(f.eof) << files[2];
+    EXPECT_EQ(f.pages, 1) << files[2];
+    // 6.5 x 3.8 inches at 72 points per inch (PLplot rounds the page to whole points).
+    EXPECT_NEAR(f.width_pt, kFigureWidthInches * 72, 1.0) << files[2];
+    EXPECT_NEAR(f.height_pt, kFigureHeightInches * 72, 1.0) << files[2];
+  }
+}
+
 TEST(Plot, BarHeightsAreProportionalToTheMeans) {
   test::TempDir dir;
   BarChart c{.title = "t", .x_label = "x", .y_label = "score", .error_label = "95% CI"};
@@ -93,7 +147,7 @@ TEST(Plot, BarHeightsAreProportionalToTheMeans) {
   c.series = {{.name = "FF", .mean = {80}, .err = {5}},
               {.name = "Hybrid", .mean = {40}, .err = {0}}};
   const auto files = DrawBarChart(c, dir.File("bars"));
-  ASSERT_EQ(files.size(), 2u);
+  ASSERT_EQ(files.size(), 3u);
   EXPECT_EQ(files[0], dir.File("bars.svg"));
   EXPECT_NE(test::ReadFile(files[0]).find("<svg"), std::string::npos);
   const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
@@ -137,7 +191,7 @@ TEST(Plot, LinePlotWritesBothFormatsAndEmptyChartsAreRefused) {
   l.series = {{"measured", {1, 10, 100}}, {"synthesized", {0, 0, 0}}};  // log of 0 is clamped
   l.log_y = true;
   const auto files = DrawLinePlot(l, dir.File("line"));
-  ASSERT_EQ(files.size(), 2u);
+  ASSERT_EQ(files.size(), 3u);
   const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty());
   EXPECT_GT(TallestColumn(img, kBlue).height(), 0);  // the first curve is drawn

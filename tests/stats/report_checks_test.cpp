@@ -56,7 +56,7 @@ TEST(ReportChecks, NormalityIsAdviceOnlyWhereAConclusionIsAtStake) {
   std::ostringstream fig;
   ResidualNormality(fig, w, "s", Skewed(0.5), Correction::kGG, true, "t");
   EXPECT_NE(fig.str().find("![Q-Q plot of the residuals](s_qq.png)"), std::string::npos);
-  EXPECT_EQ(w.files_.size(), 2u);  // s_qq.svg, s_qq.png
+  EXPECT_EQ(w.files().size(), 3u);  // s_qq.svg, s_qq.png, s_qq.pdf
 }
 
 }  // namespace

@@ -14,8 +14,10 @@
 #include <optional>
 #include <string>
 
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/protocols/protocol.hpp"
+#include "hapticlab/stats/analysis.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::stats {
@@ -273,6 +275,77 @@ TEST(Report, StarsTableAndTextFollowTheCorrectedPWhereMauchlyCannotBeComputed) {
     // The residuals' check: advice only if a p is near 0.05 (0.120 is not, 0.019 is).
     EXPECT_NE(md.find("Normality of the ANOVA's residuals"), std::string::npos) << md;
   }
+}
+
+// The analyses are registered by keyword: a toy analysis registered here, in the test binary,
+// is accepted in a protocol's [analysis] tests, runs once per criterion after the built-in
+// ones the protocol names, and writes its own section and file. The same study's `lmm` with
+// `shapiro` checks the mixed model's conditional residuals.
+TEST(Report, ARegisteredAnalysisRunsAndWritesItsOwnSection) {
+  if (!FindAnalysis("toy-count"))
+    RegisterAnalysis(
+        {"toy-count", "counts the ratings", Analysis::Scope::kCriterion, [](AnalysisContext& c) {
+           c.md << "\n#### toy-count of " << c.criterion << "\n\n"
+                << c.ratings.rows() << " ratings, " << c.materials.size() << " materials\n";
+           c.writer.Open(c.file_prefix + "_toy.csv") << "n\n" << c.ratings.rows() << "\n";
+         }});
+  std::string text = "[study]\nname = \"toy\"\nseed = 3\ncriteria = [\"roughness\", \"overall\"]\n";
+  for (const char* id : {"Bamboo", "Denim", "Tile", "Cork"})
+    text += std::string("[[material]]\nid = \"") + id + "\"\n";
+  text +=
+      "[[method]]\nname = \"FF\"\nalgorithm = \"fric2\"\n[[phase]]\nkind = \"main\"\n"
+      "repetitions = 2\n[analysis]\ntests = [\"toy-count\", \"lmm\", \"shapiro\"]\n"
+      "lmm_formula = \"score ~ material + (1 | participant)\"\n";
+  const auto proto = protocols::ParseProtocol(text, "toy.toml");
+  EXPECT_NO_THROW(CheckAnalyses(proto));
+  test::TempDir dir;
+  WriteStudy(dir.File("toy.db"), text, 5,
+             [](int p, const protocols::PlannedTrial& t, const std::string& c) {
+               return std::optional<double>(40.0 + 3 * p + static_cast<double>(t.material.size()) +
+                                            7 * t.repetition + (c == "overall" ? 5 : 0) +
+                                            (p * 7 + t.repetition) % 3);
+             });
+  const auto r = Analyze(dir.File("toy.db"), {.out_dir = dir.File("rep"), .figures = false});
+  const std::string md = test::ReadFile(r.markdown);
+  for (const std::string crit : {"roughness", "overall"}) {
+    const std::string section =
+        Section(md, "### " + crit, crit == "roughness" ? "### overall" : "\n## ");
+    // 5 participants x 4 materials x 2 repetitions.
+    EXPECT_NE(section.find("#### toy-count of " + crit + "\n\n40 ratings, 4 materials"),
+              std::string::npos)
+        << section;
+    EXPECT_EQ(test::ReadFile(dir.File("rep/toy_" + crit + "_toy.csv")), "n\n40\n");
+    EXPECT_NE(section.find("Normality of the mixed model's conditional residuals"),
+              std::string::npos)
+        << section;
+    EXPECT_NE(section.find("40 residuals): Shapiro-Wilk W = "), std::string::npos) << section;
+  }
+  // The report lists the toy's files with the others.
+  EXPECT_NE(std::find(r.files.begin(), r.files.end(), dir.File("rep/toy_overall_toy.csv")),
+            r.files.end());
+}
+
+// A keyword no analysis is registered under is refused naming the file, the line of `tests`
+// and every keyword there is; the built-in keywords are all registered.
+TEST(Report, UnknownAnalysisKeywordsAreRefusedWithTheRegisteredNames) {
+  const auto proto = protocols::ParseProtocol(
+      "[study]\nname = \"x\"\nseed = 1\ncriteria = [\"c\"]\n[[material]]\nid = \"A\"\n"
+      "[[method]]\nname = \"M\"\nalgorithm = \"fric2\"\n[[phase]]\nkind = \"main\"\n"
+      "[analysis]\n\ntests = [\"rm-anova\", \"anova-rm\"]\n",
+      "x.toml");
+  try {
+    CheckAnalyses(proto);
+    FAIL() << "expected InputError";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("x.toml"), std::string::npos) << what;
+    EXPECT_NE(what.find("x.toml:14"), std::string::npos) << what;
+    EXPECT_NE(what.find("'anova-rm'"), std::string::npos) << what;
+    EXPECT_NE(what.find("rm-anova, tukey"), std::string::npos) << what;
+  }
+  for (const char* name :
+       {"rm-anova", "tukey", "kruskal", "grouping", "aggregate", "correlation", "shapiro", "lmm"})
+    EXPECT_NE(FindAnalysis(name), nullptr) << name;
 }
 
 }  // namespace

@@ -92,8 +92,12 @@ struct Protocol {
   /// which only a simulated session accepts). `consent_line`: the table's line (messages).
   std::string consent_document, consent_version;
   int consent_line = 0;
-  std::vector<std::string>
-      analyses;  ///< rm-anova, tukey, kruskal, grouping, aggregate, correlation, shapiro, lmm
+  /// `[analysis] tests`: keywords of the statistical analyses (rm-anova, tukey, lmm, ...).
+  /// The stats module's registry decides which exist (stats::CheckAnalyses, run by `study
+  /// validate`, `study run` and `analyze`); this module only reads them. `analyses_line`: the
+  /// line of `tests` (messages).
+  std::vector<std::string> analyses;
+  int analyses_line = 0;
   /// `[analysis] lmm_formula`: the linear mixed model of the "lmm" analysis, fitted per
   /// criterion to the main phase's ratings (columns: score, participant, method, material,
   /// comparison, repetition).

@@ -60,8 +60,10 @@ struct LmmFormula {
 /// @throws hapticlab::InputError naming `source` and the field "formula" for bad syntax
 LmmFormula ParseLmmFormula(const std::string& formula, const std::string& source = "");
 
-/// Kenward-Roger works on dense n x n matrices: larger data sets are refused.
-constexpr long kKenwardRogerMaxRows = 3000;
+/// Kenward-Roger works on dense (q + p) x (q + p) matrices of the q random effects and p fixed
+/// effects, whatever the number of rows (lmm_kr.cpp): more random effects than this are
+/// refused (memory grows as q², time as q³; use Satterthwaite there).
+constexpr long kKenwardRogerMaxRandomEffects = 3000;
 
 /// A linear combination of the fixed-effect coefficients (by name), tested as lmerTest's
 /// contest1D: estimate l'β, its SE and Satterthwaite df.
@@ -74,7 +76,8 @@ struct LmmOptions {
   bool reml = true;
   int max_evaluations = 20000;  ///< of the profiled deviance, by the optimizer
   /// Kenward-Roger instead of Satterthwaite df (pbkrtest's adjusted cov(β̂) for the SEs and
-  /// the scaled F, as lmerTest's ddf = "Kenward-Roger"); REML fits only, n ≤ kKenwardRogerMaxRows.
+  /// the scaled F, as lmerTest's ddf = "Kenward-Roger"); REML fits only, at most
+  /// kKenwardRogerMaxRandomEffects random effects (Z's columns).
   bool kenward_roger = false;
   /// Contrasts to estimate (Satterthwaite fits only; results in LmmResult::contrasts).
   std::vector<LmmContrast> contrasts;
@@ -116,6 +119,8 @@ struct LmmResult : SolverSummary {
   double sigma = 0;                       ///< residual SD
   double deviance = 0;  ///< the optimised criterion: REML criterion or ML deviance
   double logLik = 0, AIC = 0, BIC = 0;
+  /// Conditional residuals y - Xβ̂ - Zb̂ in the data's row order (R's residuals(lmer)).
+  std::vector<double> residuals;
   int n_parameters = 0;  ///< β, θ and σ (lme4's df of logLik)
   // Convergence diagnostics.
   int evaluations = 0;          ///< deviance evaluations (= iterations)

@@ -1,8 +1,8 @@
 #pragma once
 /// @file Report figures through PLplot (cairo devices): bar charts with error bars and
 /// significance marks like the dissertation's Figs. 4.5, 5.7 and 5.8, box plots, line plots
-/// and normal Q-Q plots. Every figure is written as SVG (vector, sized in inches) and as PNG
-/// at 300 dpi (the resolution recorded in the file's pHYs chunk), the journals' minimum for
+/// and normal Q-Q plots. Every figure is written as SVG and PDF (vector, sized in inches) and
+/// as PNG at 300 dpi (the resolution recorded in the file's pHYs chunk), the journals' minimum for
 /// line art with shading. Legends sit outside the data area, to the right.
 
 #include <cmath>
@@ -40,7 +40,8 @@ struct BarChart {
   double y_min = 0, y_max = 100;
 };
 
-/// Writes `<base>.svg` and `<base>.png`. Returns the two paths.
+/// Writes `<base>.svg`, `<base>.png` and `<base>.pdf` (one page). Returns the three paths in
+/// that order; so do the other Draw functions.
 std::vector<std::string> DrawBarChart(const BarChart& chart, const std::string& base);
 
 struct BoxPlot {
@@ -49,7 +50,7 @@ struct BoxPlot {
   std::vector<std::vector<double>> samples;  ///< one sample per group
   double y_min = 0, y_max = 100;
 };
-/// Tukey box plots (hinges, 1.5 IQR whiskers, outliers as points); `<base>.svg/.png`.
+/// Tukey box plots (hinges, 1.5 IQR whiskers, outliers as points); `<base>.svg/.png/.pdf`.
 std::vector<std::string> DrawBoxPlot(const BoxPlot& plot, const std::string& base);
 
 /// Curves over a common x axis (e.g. measured and synthesized spectra, Figs. 3.5/3.6).
@@ -65,7 +66,7 @@ struct LinePlot {
   /// A smaller line under the title (e.g. the model the curves assume); also the SVG's <desc>.
   std::string note;
 };
-/// `<base>.svg` and `<base>.png`.
+/// `<base>.svg/.png/.pdf`.
 std::vector<std::string> DrawLinePlot(const LinePlot& plot, const std::string& base);
 
 /// Normal Q-Q plot: the sorted sample against standard normal quantiles at R's ppoints(n),
@@ -74,7 +75,7 @@ struct QqPlot {
   std::string title, y_label;
   std::vector<double> sample;
 };
-/// `<base>.svg` and `<base>.png`. @throws PreconditionError with fewer than 3 values.
+/// `<base>.svg/.png/.pdf`. @throws PreconditionError with fewer than 3 values.
 std::vector<std::string> DrawQqPlot(const QqPlot& plot, const std::string& base);
 
 /// A figure drawn by `draw` with PLplot calls (the palette's colours 1-8, black 15) on the

@@ -38,6 +38,8 @@ struct PowerRow {
 
 struct PowerResult {
   std::string protocol;
+  /// The protocol's title ([study] title), for the plot's title; empty: the protocol's name.
+  std::string title;
   /// The simulated observer model that rated the studies (power depends on it): its file and
   /// the SHA-256 of the file's bytes, both empty for the built-in uncalibrated defaults.
   std::string observer_file, observer_sha256;
