@@ -236,6 +236,7 @@ TEST(ReplicationCli, WorkedExampleFreezeBundleImportRunAtTwoSitesMergeAnalyze) {
   const double injected = 12 / std::sqrt(2.0);  // offsets +6 and -6, as a variance component
   EXPECT_LE(with.low, injected);
   EXPECT_GE(with.high, injected);
+  EXPECT_GT(with.sd, 0.5 * injected);
   // The same participants and rigs without a site effect: the same pooled method effect.
   const auto a0 = dir.File("a0.db"), b0 = dir.File("b0.db"), all0 = dir.File("all0.db");
   RunLab(a0, lab_a, 0, 0);
