@@ -426,7 +426,7 @@ void RegisterStudyRun(CLI::App* study) {
       o.fault_rate = a->fault_rate;
       // An imported site directory names its site; --site given wins (the provenance keeps
       // the directory's as plan_site).
-      o.site = cmd->count("--site") == 0 && !o.plan_site.empty() ? o.plan_site : a->site;
+      o.site = (cmd->count("--site") == 0 && !o.plan_site.empty()) ? o.plan_site : a->site;
       o.site_offset = a->site_offset;
       return RunSession(*a, p.name, o,
                         [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });
