@@ -378,21 +378,24 @@ void RegisterStudyRun(CLI::App* study) {
       ->check(CLI::Range(0.0, 0.9));
   cmd->add_option("--site", a->site,
                   "Site code recorded with the session: a short pseudonymous code (up to 8\n"
-                  "characters, e.g. S02; never a lab's name). 'db merge' keeps sites apart\n"
-                  "(docs/replication.md, \"Combining sites\")")
+                  "characters, e.g. S02; never a lab's name); default: the site code of a\n"
+                  "--plan site directory (study import --site), else L0. 'db merge' keeps sites\n"
+                  "apart (docs/replication.md, \"Combining sites\")")
       ->capture_default_str();
   cmd->add_option("--site-offset", a->site_offset,
                   "Simulated observer: add this many rating points to every rating (a site\n"
                   "effect, for replication examples and tests)")
       ->check(CLI::Range(-50.0, 50.0));
-  cmd->callback([a] {
+  cmd->callback([a, cmd] {
     RunStudyGuarded([&] {
       runner::RunOptions o;
       const auto p = LoadRunProtocol(a->protocol, a->plan, &o, a->quiet || a->json);
       stats::CheckAnalyses(p);
       o.participant_index = a->index;
       o.fault_rate = a->fault_rate;
-      o.site = a->site;
+      // An imported site directory names its site; --site given wins (the provenance keeps
+      // the directory's as plan_site).
+      o.site = (cmd->count("--site") == 0 && !o.plan_site.empty()) ? o.plan_site : a->site;
       o.site_offset = a->site_offset;
       return RunSession(*a, p.name, o,
                         [&](const runner::RunOptions& ro) { return runner::RunStudy(p, ro); });

@@ -168,7 +168,10 @@ void RegisterImport(CLI::App& study) {
       "(rig init / rig touch / rig calibrate) and site.toml with the site's own models. Then\n"
       "'study run --plan DIR'.");
   cmd->add_option("BUNDLE", a->bundle, "Bundle file")->required();
-  cmd->add_option("--site", a->o.site, "Pseudonymous site code, e.g. LabB")->required();
+  cmd->add_option("--site", a->o.site,
+                  "Pseudonymous site code recorded with every session run with --plan DIR\n"
+                  "(up to 8 characters with a digit, e.g. S02; never a lab's name)")
+      ->required();
   cmd->add_option("-o,--out", a->o.out_dir, "Site directory (new, or empty)")->required();
   cmd->add_option("--device", a->o.rig_device, "Device of the site's rig file")
       ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
@@ -211,6 +214,7 @@ protocols::Protocol LoadRunProtocol(const std::string& protocol, const std::stri
   auto run = replication::OpenPlanForRun(plan, protocol);
   o->plan_sha256 = run.plan.plan_hash;
   o->plan_site = run.site;
+  o->plan_protocol_changes = run.changed_keys;
   o->model_files = run.model_files;
   if (!quiet) {
     fmt::print(stderr, "plan {} verified{}\n", run.plan.plan_hash,

@@ -35,10 +35,14 @@ std::vector<std::pair<std::string, json>> SessionsOf(const db::Database& d, cons
   return out;
 }
 
-// Sessions without the plan or under another one; models that differ or were substituted.
+// Sessions without the plan or under another one; protocol keys a session under the plan
+// changed (recorded by `study run PROTOCOL --plan`; kept per session through `db merge`, which
+// keeps one protocol text per study) unless the study's protocol already shows them; models
+// that differ or were substituted.
 void SessionDeviations(const Plan& plan, const db::Database& d, const db::Study& st,
-                       std::vector<Deviation>* out) {
+                       const std::set<std::string>& study_changes, std::vector<Deviation>* out) {
   std::map<std::string, std::vector<std::string>> other_plan;     // hash -> participants
+  std::map<std::string, std::vector<std::string>> changed_key;    // change -> participants
   std::map<std::string, std::vector<std::string>> substituted;    // text -> participants
   std::map<std::string, std::vector<std::string>> changed_model;  // text -> participants
   std::map<std::string, std::string> planned;
@@ -46,6 +50,11 @@ void SessionDeviations(const Plan& plan, const db::Database& d, const db::Study&
   for (const auto& [code, prov] : SessionsOf(d, st)) {
     const std::string h = prov.value("plan_sha256", "");
     if (h != plan.plan_hash) other_plan[h].push_back(code);
+    const json changes = prov.value("plan_protocol_changes", json::array());
+    if (h == plan.plan_hash && changes.is_array())
+      for (const auto& c : changes)
+        if (c.is_string() && !study_changes.count(c.get<std::string>()))
+          changed_key[c.get<std::string>()].push_back(code);
     const json subs = prov.value("substituted_models", json::object());
     const json hashes = prov.value("model_hashes", json::object());
     for (const auto& [material, hash] : hashes.items()) {
@@ -68,6 +77,8 @@ void SessionDeviations(const Plan& plan, const db::Database& d, const db::Study&
   const auto who = [](const std::vector<std::string>& codes) {
     return fmt::format("{} session(s): {}", codes.size(), fmt::join(codes, ", "));
   };
+  for (const auto& [text, codes] : changed_key)
+    out->push_back({"protocol key changed", text + " — " + who(codes)});
   for (const auto& [h, codes] : other_plan)
     out->push_back(
         {"session not under the plan",
@@ -120,8 +131,11 @@ void ExclusionDeviations(const Plan& plan, const db::Database& d, const db::Stud
 std::vector<Deviation> FindDeviations(const Plan& plan, const db::Database& d, const db::Study& st,
                                       const AnalyzeSettings& s) {
   std::vector<Deviation> out;
-  for (const auto& c : protocols::CanonicalDifferences(plan.protocol_text, st.protocol_toml))
+  std::set<std::string> study_changes;
+  for (const auto& c : protocols::CanonicalDifferences(plan.protocol_text, st.protocol_toml)) {
     out.push_back({"protocol key changed", c.Describe()});
+    study_changes.insert(c.Describe());
+  }
   const auto proto = protocols::ParseProtocol(st.protocol_toml, "(protocol of " + st.name + ")");
   for (const auto& t : proto.analyses)
     if (!Has(plan.analysis.tests, t))
@@ -132,7 +146,7 @@ std::vector<Deviation> FindDeviations(const Plan& plan, const db::Database& d, c
   if (correction != plan.analysis.correction)
     out.push_back({"correction changed", fmt::format("sphericity correction {}, the plan's {}",
                                                      correction, plan.analysis.correction)});
-  SessionDeviations(plan, d, st, &out);
+  SessionDeviations(plan, d, st, study_changes, &out);
   ExclusionDeviations(plan, d, st, s, &out);
   return out;
 }

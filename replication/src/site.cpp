@@ -78,16 +78,11 @@ std::string SiteText(const ImportOptions& o, const std::string& plan_hash, const
 
 }  // namespace
 
-void CheckSiteCode(const std::string& site, const std::string& field) {
-  const bool ok =
-      !site.empty() && site.size() <= 16 && std::all_of(site.begin(), site.end(), [](char c) {
-        return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
-      });
-  if (!ok)
-    throw InputError(kCommandLine, 0, field,
-                     "expected a pseudonymous site code of 1-16 letters, digits, '-' or '_' (e.g. "
-                     "LabB), got '" +
-                         site + "'");
+void CheckSiteCode(const std::string& site, const std::string& field, const std::string& file) {
+  if (const std::string why = db::SiteCodeProblem(site); !why.empty())
+    throw InputError(file, 0, field,
+                     "'" + site + "' is not a site code (" + why +
+                         "): up to 8 letters, digits, '-' or '_' with a digit, e.g. S02");
 }
 
 ImportResult ImportBundle(const std::string& bundle_path, const ImportOptions& o) {
@@ -123,7 +118,7 @@ PlanRun OpenPlanForRun(const std::string& dir, const std::string& protocol_path)
   if (fs::is_regular_file(site_file, ec)) {
     const auto doc = ParseTomlFile(site_file.string(), "site file");
     run.site = doc["site"]["code"].value_or(std::string());
-    CheckSiteCode(run.site, "site.code");
+    CheckSiteCode(run.site, "site.code", site_file.string());
     plan_dir = (fs::path(dir) / doc["site"]["plan"].value_or(std::string("plan"))).string();
     run.plan = ReadPlan(plan_dir);
     if (doc["site"]["plan_sha256"].value_or(std::string()) != run.plan.plan_hash)

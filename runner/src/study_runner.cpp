@@ -90,11 +90,12 @@ struct CheckpointAtEnd {
 };
 
 // The plan a session runs under and the models a site substituted (RunOptions): provenance
-// keys "plan_sha256", "plan_site" and "substituted_models" (file relative to the database's
-// folder, as protocol_path, and SHA-256).
+// keys "plan_sha256", "plan_site", "plan_protocol_changes" and "substituted_models" (file
+// relative to the database's folder, as protocol_path, and SHA-256).
 void AddPlanProvenance(const RunOptions& o, const Lab& lab, json* prov) {
   if (!o.plan_sha256.empty()) (*prov)["plan_sha256"] = o.plan_sha256;
   if (!o.plan_site.empty()) (*prov)["plan_site"] = o.plan_site;
+  if (!o.plan_protocol_changes.empty()) (*prov)["plan_protocol_changes"] = o.plan_protocol_changes;
   const fs::path db_dir = fs::weakly_canonical(fs::absolute(o.db_path)).parent_path();
   for (const auto& [id, file] : o.model_files)
     (*prov)["substituted_models"][id] = {

@@ -165,14 +165,24 @@ TEST(StudyPlanCli, BundleRoundTripAndTamperedBundleRefused) {
   for (const auto& f : PlanFiles(dir.File("plan"))) listed += f + "\n";
   EXPECT_EQ(out, listed);
   ASSERT_EQ(test::RunCommand(Cli() + " study import " + dir.File("a.hlbundle") +
-                                 " --site LabB --device falcon -o " + dir.File("siteB"),
+                                 " --site S02 --device falcon -o " + dir.File("siteB"),
                              &out),
             0)
       << out;
   EXPECT_NE(out.find(hash), std::string::npos) << out;
+  // The site code is checked as study run's --site: a lab's name is refused, nothing written.
+  for (const char* name : {"LabB", "Berlin1"}) {
+    EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("a.hlbundle") + " --site " +
+                                   name + " -o " + dir.File("named"),
+                               &out),
+              2)
+        << out;
+    EXPECT_NE(out.find(std::string("'") + name + "' is not a site code"), std::string::npos) << out;
+    EXPECT_FALSE(fs::exists(dir.File("named")));
+  }
   EXPECT_EQ(test::RunCommand(Cli() + " study verify " + dir.File("siteB/plan"), &out), 0) << out;
   const std::string site = test::ReadFile(dir.File("siteB/site.toml"));
-  EXPECT_NE(site.find("code = \"LabB\""), std::string::npos) << site;
+  EXPECT_NE(site.find("code = \"S02\""), std::string::npos) << site;
   EXPECT_NE(site.find(hash), std::string::npos) << site;
   const std::string rig = test::ReadFile(dir.File("siteB/rig.toml"));
   EXPECT_NE(rig.find("rig calibrate"), std::string::npos);
@@ -186,8 +196,8 @@ TEST(StudyPlanCli, BundleRoundTripAndTamperedBundleRefused) {
                              &out),
             0)
       << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("t.hlbundle") +
-                                 " --site LabC -o " + dir.File("siteC"),
+  EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("t.hlbundle") + " --site S03 -o " +
+                                 dir.File("siteC"),
                              &out),
             2)
       << out;
@@ -196,7 +206,7 @@ TEST(StudyPlanCli, BundleRoundTripAndTamperedBundleRefused) {
   // Not a bundle at all; a bundle entry that leaves the directory.
   test::WriteFile(dir.File("junk.hlbundle"), "not a tar");
   EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("junk.hlbundle") +
-                                 " --site LabC -o " + dir.File("siteC"),
+                                 " --site S03 -o " + dir.File("siteC"),
                              &out),
             2)
       << out;
@@ -205,8 +215,8 @@ TEST(StudyPlanCli, BundleRoundTripAndTamperedBundleRefused) {
                              &out),
             0)
       << out;
-  EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("u.hlbundle") +
-                                 " --site LabC -o " + dir.File("siteC"),
+  EXPECT_EQ(test::RunCommand(Cli() + " study import " + dir.File("u.hlbundle") + " --site S03 -o " +
+                                 dir.File("siteC"),
                              &out),
             2)
       << out;
@@ -265,7 +275,7 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
   // Lab B.
   ASSERT_EQ(test::RunCommand(Cli() + " study bundle " + dir.File("plan") + " -o " +
                                  dir.File("s.hlbundle") + " && " + Cli() + " study import " +
-                                 dir.File("s.hlbundle") + " --site LabB -o " + dir.File("b") +
+                                 dir.File("s.hlbundle") + " --site S02 -o " + dir.File("b") +
                                  " --substitute Denim=" + dir.File("plan/models/Cork.toml"),
                              &out),
             0)
@@ -295,6 +305,21 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
   EXPECT_NE(out.find("deviation: protocol key changed from the plan: phase[2].repetitions: 2 -> 1"),
             std::string::npos)
       << out;
+  // The session is the imported site's (no --site given); --site given wins, the provenance
+  // keeps the site directory's code.
+  const auto site_of = [](const std::string& path) {
+    const db::Database d = db::OpenForReading(path);
+    const auto se = d.Sessions(d.Participants(d.Studies().at(0).id).at(0).id).at(0);
+    return std::make_pair(se.site_code, json::parse(se.provenance_json).value("plan_site", ""));
+  };
+  EXPECT_EQ(site_of(b_db), std::make_pair(std::string("S02"), std::string("S02")));
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " study run --plan " + dir.File("b") + " --db " + dir.File("b9.db") +
+                           " --participant P01 --site S09 --quiet " + "--stop-after 1",
+                       &out),
+      3)
+      << out;
+  EXPECT_EQ(site_of(dir.File("b9.db")), std::make_pair(std::string("S09"), std::string("S02")));
   ASSERT_EQ(test::RunCommand(Cli() + " analyze --db " + b_db + " --out " + dir.File("rb") +
                                  " --no-figures --correction HF --plan " + dir.File("b"),
                              &out),
@@ -305,7 +330,7 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
       << rb;
   EXPECT_NE(rb.find("| material substituted | Denim: the site's own model"), std::string::npos)
       << rb;
-  EXPECT_NE(rb.find("at site LabB"), std::string::npos) << rb;
+  EXPECT_NE(rb.find("at site S02"), std::string::npos) << rb;
   EXPECT_NE(rb.find("| model hash differs | Towel: model sha256 "), std::string::npos) << rb;
   EXPECT_EQ(rb.find("| model hash differs | Denim"), std::string::npos) << rb;  // substituted
   EXPECT_NE(rb.find("| analysis not in the plan | lmm (exploratory) |"), std::string::npos) << rb;

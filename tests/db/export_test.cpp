@@ -190,7 +190,7 @@ TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto ids = db.AddTrials({{.session_id = se, .plan_index = 0, .phase = "main"}});
+  const auto ids = AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main"}});
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
                             .start_time_s = 0,

@@ -28,7 +28,7 @@ namespace hapticlab::replication {
 std::string WriteBundle(const std::string& plan_dir, const std::string& out_path);
 
 struct ImportOptions {
-  std::string site;                   ///< pseudonymous site code, e.g. "LabB"
+  std::string site;                   ///< pseudonymous site code, e.g. "S02" (CheckSiteCode)
   std::string out_dir;                ///< the site directory (created; must not exist or be empty)
   std::string rig_device = "falcon";  ///< the device of the site's rig-file template
   /// material id -> the site's own model file replacing the plan's
@@ -46,9 +46,11 @@ struct ImportResult {
 /// which is missing, extra, or unsafe: an absolute path, '..', a link), or the option at fault
 ImportResult ImportBundle(const std::string& bundle_path, const ImportOptions& options);
 
-/// A site code: 1-16 letters, digits, '-' or '_' (pseudonymous, like participant codes).
-/// @throws InputError naming `field` otherwise
-void CheckSiteCode(const std::string& site, const std::string& field = "site");
+/// A site code as `study run --site` and the database check it (db::SiteCodeProblem): up to 8
+/// letters, digits, '-' or '_' with a digit, pseudonymous like participant codes (S02, never a
+/// lab's name). @throws InputError naming `file` and `field` otherwise
+void CheckSiteCode(const std::string& site, const std::string& field = "site",
+                   const std::string& file = "<command line>");
 
 /// What `study run --plan` runs: a plan directory or an imported site directory.
 struct PlanRun {

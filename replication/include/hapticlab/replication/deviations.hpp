@@ -2,7 +2,8 @@
 /// @file The "Preregistration and deviations from the plan" section of `hapticlab analyze
 /// --plan PLAN` (docs/replication.md): the preregistered analyses apart from the exploratory
 /// ones, the primary outcome, and every deviation of the recorded study from the plan:
-/// - a protocol key that differs from the plan's protocol (protocols::CanonicalDifferences);
+/// - a protocol key that differs from the plan's protocol (protocols::CanonicalDifferences),
+///   in the study's protocol or recorded by a session (provenance "plan_protocol_changes");
 /// - a session recorded without the plan, or under another plan (provenance "plan_sha256");
 /// - a material model whose hash differs from the plan's, and a material a site substituted
 ///   with its own model (provenance "model_hashes", "substituted_models");

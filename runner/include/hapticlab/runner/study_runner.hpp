@@ -228,6 +228,10 @@ struct RunOptions {
   /// its hash and the site that imported it, recorded in the provenance as "plan_sha256" and
   /// "plan_site"; empty: none.
   std::string plan_sha256, plan_site;
+  /// The protocol keys that differ from the plan's (a protocol given instead of the plan's,
+  /// protocols::CanonicalDifferences), recorded as "plan_protocol_changes": each session keeps
+  /// its own deviations through `db merge`, which keeps one protocol text per study.
+  std::vector<std::string> plan_protocol_changes;
   /// Material models replacing the protocol's (a replicating site's own models, `study import
   /// --substitute`): material id -> model file. Recorded in the provenance
   /// ("substituted_models": file relative to the database's folder, SHA-256); `study resume`
