@@ -72,7 +72,6 @@ std::size_t Bounded(const std::string& file, Diagnostics* d, const toml::array& 
   return max;
 }
 
-
 }  // namespace
 
 const char* ToString(PhaseKind k) {

@@ -115,8 +115,7 @@ class Simulated final : public Participant {
                                        Rng& rng) override {
     if (opt_.ui)
       return AnswerInWindow(*opt_.ui, screen, psychophysics::Intervals(spec.task), comparison);
-    const auto a =
-        sim::SimulatedAnswer(*spec.simulated_observer, spec.task, x, comparison, rng);
+    const auto a = sim::SimulatedAnswer(*spec.simulated_observer, spec.task, x, comparison, rng);
     return AdaptiveAnswer{.positive = a.positive,
                           .response = a.response,
                           .response_time_s = sim::Observer::ResponseTime(rng)};
