@@ -13,6 +13,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/replication/bundle.hpp"
 #include "hapticlab/replication/plan.hpp"
+#include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/stats/long_table.hpp"
 #include "study_plan.hpp"
 
@@ -57,7 +58,7 @@ void RegisterFreeze(CLI::App& study) {
   cmd->add_option("PROTOCOL", a->protocol, "Study protocol (.toml)")->required();
   cmd->add_option("-o,--out", a->o.out_dir, "Plan directory (new, or empty)")->required();
   cmd->add_option("--rig-device", a->o.rig_device, "Device of the rig-file template")
-      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+      ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
   cmd->add_option("--primary-criterion", a->o.primary_criterion,
                   "Criterion of the primary outcome (default: overall, else the first)");
@@ -174,7 +175,7 @@ void RegisterImport(CLI::App& study) {
       ->required();
   cmd->add_option("-o,--out", a->o.out_dir, "Site directory (new, or empty)")->required();
   cmd->add_option("--device", a->o.rig_device, "Device of the site's rig file")
-      ->check(CLI::IsMember({"sim", "falcon-twin", "falcon", "dhd", "openhaptics"}))
+      ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
   cmd->add_option("--substitute", a->substitutes,
                   "MATERIAL=MODEL.toml: the site's own model of a material (a deviation, "

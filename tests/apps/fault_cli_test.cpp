@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -100,12 +101,19 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
 TEST(FaultCli, SigkillDuringRunsThenResumeLeavesEveryTrialWholeAndUnmixed) {
   test::TempDir dir;
   const std::string db = dir.File("k.db");
-  std::mt19937_64 rng(20261122);  // fixed seed: the kill moments are reproducible
-  // A whole run of the small study takes ~0.3 s in release on the virtual clock (one trial
-  // path, #14): kill within that window so each kill lands mid-session.
-  std::uniform_int_distribution<int> delay_ms(30, 250);
-  int killed = 0;
   std::string out;
+  std::mt19937_64 rng(20261122);  // fixed seed: the kill moments, as fractions of a run, repeat
+  // A whole run of the small study takes ~0.2 s in release on the virtual clock (one trial
+  // path, #14), more under the sanitizers: time one whole run (in another database) and kill
+  // within the first 80 % of that window so each kill lands mid-session.
+  const auto t0 = std::chrono::steady_clock::now();
+  ASSERT_EQ(test::RunCommand(RunCmd(dir.File("timing.db"), "P01"), &out), 0) << out;
+  const int whole_ms = static_cast<int>(
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now() - t0)
+          .count());
+  std::uniform_int_distribution<int> delay_ms(std::max(1, whole_ms / 10),
+                                              std::max(2, whole_ms * 8 / 10));
+  int killed = 0;
   // Whether P01's session exists yet (a kill may come before the run created it).
   auto started = [&] {
     return test::RunCommand(Cli() + " study status --db " + db + " --participant P01 --json",

@@ -164,8 +164,9 @@ TEST(MultiSite, ForestPlotMarkersSitWhereTheEstimatesAre) {
   ForestPlot fp{.title = "t", .x_label = "effect"};
   fp.rows = {{"S1", -5, -8, -2, false}, {"S2", 10, 7, 13, false}, {"pooled", 2.5, 0, 5, true}};
   const auto files = DrawForestPlot(fp, dir.File("forest"));
-  ASSERT_EQ(files.size(), 2u);
+  ASSERT_EQ(files.size(), 3u);  // SVG, PNG and PDF
   EXPECT_NE(test::ReadFile(files[0]).find("<svg"), std::string::npos);
+  EXPECT_EQ(test::ReadFile(files[2]).rfind("%PDF-", 0), 0u);
   const cv::Mat img = cv::imread(files[1], cv::IMREAD_COLOR);
   ASSERT_FALSE(img.empty());
   const cv::Vec3b blue(178, 114, 0), orange(0, 159, 230);
