@@ -19,6 +19,8 @@ void RegisterPower(CLI::App& study);
 void RegisterCalibrate(CLI::App& study);
 /// `study freeze`, `verify`, `bundle`, `import` (cmd_study_plan.cpp), under the study group.
 void RegisterStudyPreregistration(CLI::App& study);
+// study status (cmd_study_status.cpp).
+void RegisterStudyStatus(CLI::App& study);
 void RegisterAnalyze(CLI::App& app);
 void RegisterWorkbench(CLI::App& app);
 void RegisterDevice(CLI::App& app);
