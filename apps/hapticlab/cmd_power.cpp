@@ -20,19 +20,10 @@
 #include "hapticlab/stats/power.hpp"
 
 namespace hapticlab::cli {
-namespace {
 
-struct PowerArgs {
-  std::string protocol, participants = "8,12,16,20,30", effect, plot, out, shard, observer;
-  std::vector<std::string> merge;
-  long simulations = 200;
-  std::uint64_t seed = 1;
-  int pool = 6, threads = 2, sites = 1;
-  double site_sd = 0;
-  bool json = false, quiet = false;
-};
-
-std::vector<int> ParseCounts(const std::string& s) {
+// Participant counts as 'study power --participants' and 'study freeze --power-participants'
+// take them: increasing, 2..10000.
+std::vector<int> ParseParticipantCounts(const std::string& s, const std::string& field) {
   std::vector<int> out;
   for (const auto& part : stats::SplitList(s)) {
     int n = 0;
@@ -44,16 +35,27 @@ std::vector<int> ParseCounts(const std::string& s) {
       n = 0;
     }
     if (n < 2 || n > 10000)
-      throw InputError(kCommandLine, 0, "--participants",
+      throw InputError(kCommandLine, 0, field,
                        "expected counts 2..10000 such as 8,12,16, got '" + part + "'");
     if (!out.empty() && n <= out.back())
-      throw InputError(kCommandLine, 0, "--participants", "expected increasing counts");
+      throw InputError(kCommandLine, 0, field, "expected increasing counts");
     out.push_back(n);
   }
-  if (out.empty())
-    throw InputError(kCommandLine, 0, "--participants", "expected at least one count");
+  if (out.empty()) throw InputError(kCommandLine, 0, field, "expected at least one count");
   return out;
 }
+
+namespace {
+
+struct PowerArgs {
+  std::string protocol, participants = "8,12,16,20,30", effect, plot, out, shard, observer;
+  std::vector<std::string> merge;
+  long simulations = 200;
+  std::uint64_t seed = 1;
+  int pool = 6, threads = 2, sites = 1;
+  double site_sd = 0;
+  bool json = false, quiet = false;
+};
 
 void ParseShard(const std::string& s, int* i, int* n) {
   const auto slash = s.find('/');
@@ -122,7 +124,7 @@ int RunPower(PowerArgs* a) {
   if (a->protocol.empty())
     throw InputError(kCommandLine, 0, "PROTOCOL", "missing (or give --merge FILES)");
   stats::PowerOptions o;
-  o.participants = ParseCounts(a->participants);
+  o.participants = ParseParticipantCounts(a->participants, "--participants");
   o.simulations = a->simulations;
   o.seed = a->seed;
   o.threads = a->threads;

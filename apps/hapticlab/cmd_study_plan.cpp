@@ -22,25 +22,6 @@ namespace {
 
 using nlohmann::json;
 
-std::vector<int> Counts(const std::string& s) {
-  std::vector<int> out;
-  for (const auto& part : stats::SplitList(s)) {
-    int n = 0;
-    try {
-      std::size_t used = 0;
-      n = std::stoi(part, &used);
-      if (used != part.size()) n = 0;
-    } catch (const std::exception&) {
-      n = 0;
-    }
-    if (n < 2 || n > 10000 || (!out.empty() && n <= out.back()))
-      throw InputError(kCommandLine, 0, "--power-participants",
-                       "expected increasing counts 2..10000 such as 8,12,16, got '" + s + "'");
-    out.push_back(n);
-  }
-  return out;
-}
-
 void RegisterFreeze(CLI::App& study) {
   struct A {
     std::string protocol, participants = "8,12,16,20", exclusions = "simulated-ratings";
@@ -94,7 +75,8 @@ void RegisterFreeze(CLI::App& study) {
                 {"alpha", "--alpha"}},
                [&] {
                  a->o.power = !a->no_power;
-                 a->o.power_participants = Counts(a->participants);
+                 a->o.power_participants =
+                     ParseParticipantCounts(a->participants, "--power-participants");
                  a->o.exclusions.clear();
                  if (a->exclusions != "none") a->o.exclusions = stats::SplitList(a->exclusions);
                  const auto hash = replication::FreezePlan(a->protocol, a->o, StderrLog(a->quiet));

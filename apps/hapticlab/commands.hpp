@@ -2,6 +2,8 @@
 // Registration functions of the command groups (one file each).
 
 #include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
 
 namespace hapticlab::cli {
 
@@ -15,6 +17,8 @@ void AddStatsCommands(CLI::App& group);
 void RegisterStudy(CLI::App& app);
 /// `study power` (cmd_power.cpp), registered under the study group.
 void RegisterPower(CLI::App& study);
+// "8,12,16": increasing participant counts 2..10000 (exit 2 naming `field` otherwise).
+std::vector<int> ParseParticipantCounts(const std::string& s, const std::string& field);
 /// `study calibrate` (cmd_calibrate.cpp), registered under the study group.
 void RegisterCalibrate(CLI::App& study);
 /// `study freeze`, `verify`, `bundle`, `import` (cmd_study_plan.cpp), under the study group.
