@@ -3,7 +3,6 @@
 
 #include "hapticlab/modeling/workbench_vibration.hpp"
 
-#include <fftw3.h>
 #include <fmt/format.h>
 
 #include <cmath>
@@ -14,6 +13,7 @@
 #include <utility>
 
 #include "hapticlab/modeling/neural.hpp"
+#include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/renderer/neural.hpp"
 #include "hapticlab/renderer/vibration.hpp"
@@ -50,36 +50,17 @@ double FilterSpectrum(const renderer::ArFilter& flt, double f, double rate) {
 }
 
 // Welch estimate (Hann, 512-sample segments, half overlap) of a signal's per-sample power
-// spectrum at bins 0..256 of the segment.
+// spectrum at bins 0..256 of the segment: the squared Welch magnitudes E_s compares
+// (WelchMagnitude, vibration.hpp) divided by the window's energy sum(w^2).
 std::vector<double> Welch(const std::vector<double>& x) {
   constexpr int kSeg = 512;
-  std::vector<double> win(kSeg), psd(kSeg / 2 + 1, 0);
   double wss = 0;
   for (int k = 0; k < kSeg; ++k) {
-    win[k] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * k / kSeg);
-    wss += win[k] * win[k];
+    const double w = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * k / kSeg);
+    wss += w * w;
   }
-  double* in = fftw_alloc_real(kSeg);
-  fftw_complex* out = fftw_alloc_complex(kSeg / 2 + 1);
-  static std::mutex plan_mutex;  // FFTW's planner is not thread-safe
-  fftw_plan plan;
-  {
-    const std::lock_guard<std::mutex> lock(plan_mutex);
-    plan = fftw_plan_dft_r2c_1d(kSeg, in, out, FFTW_ESTIMATE);
-  }
-  int segments = 0;
-  for (std::size_t s0 = 0; s0 + kSeg <= x.size(); s0 += kSeg / 2, ++segments) {
-    for (int k = 0; k < kSeg; ++k) in[k] = x[s0 + k] * win[k];
-    fftw_execute(plan);
-    for (int k = 0; k <= kSeg / 2; ++k) psd[k] += (out[k][0] * out[k][0] + out[k][1] * out[k][1]);
-  }
-  {
-    const std::lock_guard<std::mutex> lock(plan_mutex);
-    fftw_destroy_plan(plan);
-  }
-  fftw_free(in);
-  fftw_free(out);
-  for (auto& v : psd) v /= std::max(segments, 1) * wss;
+  std::vector<double> psd = WelchMagnitude(x, kSeg);
+  for (auto& v : psd) v = v * v / wss;
   return psd;
 }
 
