@@ -10,22 +10,12 @@
 #include <string>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/error_of.hpp"
 
 namespace hapticlab::devices {
 namespace {
 
-// The one diagnostic of an InputError thrown by `f`.
-template <typename F>
-Diagnostic ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.diagnostics().size(), 1u);
-    if (!e.diagnostics().empty()) return e.diagnostics()[0];
-  }
-  ADD_FAILURE() << "no InputError";
-  return {};
-}
+using test::ErrorOf;
 
 TEST(DeviceFactory, TheDeviceErrorSaysWhatToCheck) {
   const std::string fw = DeviceErrorMessage("falcon", "no device", true);

@@ -21,23 +21,13 @@
 #include "hapticlab/devices/vendor.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/study_runner.hpp"
+#include "hapticlab/test/error_of.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner {
 namespace {
 
-// The one diagnostic of an InputError thrown by `f`.
-template <typename F>
-Diagnostic ErrorOf(F f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    EXPECT_EQ(e.diagnostics().size(), 1u);
-    if (!e.diagnostics().empty()) return e.diagnostics()[0];
-  }
-  ADD_FAILURE() << "no InputError";
-  return {};
-}
+using test::ErrorOf;
 
 // A device that stands still.
 class ToyDevice final : public devices::HapticDevice {

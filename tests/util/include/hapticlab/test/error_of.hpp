@@ -1,0 +1,24 @@
+#pragma once
+// The one diagnostic of an InputError a call throws (shared by the tests that check messages).
+
+#include <gtest/gtest.h>
+
+#include "hapticlab/core/diagnostics.hpp"
+
+namespace hapticlab::test {
+
+/// Calls `f`, expects it to throw an InputError with exactly one diagnostic and returns it
+/// (a test failure and an empty diagnostic otherwise).
+template <typename F>
+Diagnostic ErrorOf(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.diagnostics().size(), 1u);
+    if (!e.diagnostics().empty()) return e.diagnostics()[0];
+  }
+  ADD_FAILURE() << "no InputError";
+  return {};
+}
+
+}  // namespace hapticlab::test
