@@ -100,7 +100,7 @@ void InsertRows(benchmark::State& state, int samples, int per_txn) {
   double t = 0;
   for (auto _ : state) {
     for (int b = 0; b < samples / per_txn; ++b) {
-      d.Exec("BEGIN");
+      db::WriteTransaction tx(d);
       for (int i = 0; i < per_txn; ++i) {
         sqlite3_bind_int64(st, 1, trial);
         sqlite3_bind_double(st, 2, t);
@@ -109,7 +109,7 @@ void InsertRows(benchmark::State& state, int samples, int per_txn) {
         sqlite3_reset(st);
         t += 1.0 / 4000;
       }
-      d.Exec("COMMIT");
+      tx.Commit();
       total += per_txn;
     }
   }

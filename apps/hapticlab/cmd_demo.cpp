@@ -205,7 +205,8 @@ void RegisterDemo(CLI::App& app) {
         };
         const auto s = runner::RunStudy(p, ro);
         stimulus_s += s.simulated_s;
-        fmt::print("  {}: {} trials, {}\n", s.participant, s.completed, s.status);
+        fmt::print("  {}: {} trials, {}\n", s.participant, s.completed,
+                   NameOf(db::kSessionStatusNames, s.status));
       }
       const auto report = stats::Analyze(db_path, {.out_dir = (dir / "report").string()});
       db::Database database(db_path, {.create = false, .read_only = true});

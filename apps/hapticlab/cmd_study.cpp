@@ -63,8 +63,8 @@ class Rig {
   void Open(const RunArgs& a, const std::string& study, const std::string& participant,
             runner::RunOptions* o) {
     o->device = a.device;
-    o->actuator = a.actuator;
-    o->rating_input = a.rating_box.empty() ? "window" : "rating-box:" + a.rating_box;
+    o->actuator = ParseName(runner::kActuatorNames, a.actuator, kCommandLine, 0, "actuator");
+    o->rating_box = a.rating_box;
     const runner::RigBackend& backend = runner::GetBackend(a.device);
     if (!backend.simulated() && !a.ui) {  // before any device is opened
       Diagnostics d;
@@ -84,7 +84,7 @@ class Rig {
                          .rig_file = a.rig_file.empty() ? std::optional<runner::RigFile>()
                                                         : runner::LoadRig(a.rig_file),
                          .firmware = a.firmware,
-                         .actuator = a.actuator,
+                         .actuator = o->actuator,
                          .audio_device = a.audio_device,
                          .full_scale_mps2 = a.full_scale_mps2,
                          .noise_rms_fs = a.noise_rms,
@@ -131,7 +131,7 @@ void PrintSummary(const runner::RunSummary& s, bool json_out) {
   if (json_out) {
     PrintJson(json{{"participant", s.participant},
                    {"session", s.session_id},
-                   {"status", s.status},
+                   {"status", std::string(NameOf(db::kSessionStatusNames, s.status))},
                    {"planned", s.planned},
                    {"completed", s.completed},
                    {"executed", s.executed},
@@ -142,8 +142,8 @@ void PrintSummary(const runner::RunSummary& s, bool json_out) {
     fmt::print(
         "{}: session {} {} — {}/{} trials completed, {} faults re-queued; {:.0f} s of stimuli in "
         "{:.1f} s\n",
-        s.participant, s.session_id, s.status, s.completed, s.planned, s.faults, s.simulated_s,
-        s.wall_s);
+        s.participant, s.session_id, NameOf(db::kSessionStatusNames, s.status), s.completed,
+        s.planned, s.faults, s.simulated_s, s.wall_s);
   }
 }
 
@@ -185,7 +185,7 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   InstallStopHandlers();
   const auto sum = session(o);
   PrintSummary(sum, a.json);
-  return sum.status == "aborted" ? kExitStopped : kExitOk;
+  return sum.status == db::SessionStatus::kAborted ? kExitStopped : kExitOk;
 }
 
 // RunGuarded, with the runner's names for what the user gave ("participant", "db", ...)
@@ -426,17 +426,17 @@ void RegisterStudyResume(CLI::App* study) {
       // Options not given take the recorded mode's values.
       const auto rec = runner::RecordedMode(a->db, a->participant);
       if (cmd->count("--device") == 0) a->device = rec.device;
-      if (cmd->count("--actuator") == 0 && rec.actuator != "unrecorded") a->actuator = rec.actuator;
+      if (cmd->count("--actuator") == 0 && rec.actuator)
+        a->actuator = NameOf(runner::kActuatorNames, *rec.actuator);
       if (cmd->count("--ui") == 0) a->ui = rec.screens;
-      if (cmd->count("--rating-box") == 0 && rec.rater.rfind("rating-box:", 0) == 0)
-        a->rating_box = rec.rater.substr(std::string("rating-box:").size());
+      if (cmd->count("--rating-box") == 0 && rec.rater.kind == runner::RaterKind::kRatingBox)
+        a->rating_box = rec.rater.box;
       a->recorded_mode = rec.Describe();
       // Refused before any device or window is opened.
       runner::CheckResumeMode(
           rec,
-          {a->device, a->actuator, a->ui,
-           a->ui ? (a->rating_box.empty() ? "window" : "rating-box:" + a->rating_box)
-                 : std::string("simulated")},
+          {a->device, ParseName(runner::kActuatorNames, a->actuator, kCommandLine, 0, "actuator"),
+           a->ui, runner::RaterOf(a->ui, a->rating_box)},
           a->change_mode, a->db, a->participant);
       runner::RunOptions o;
       o.change_mode = a->change_mode;

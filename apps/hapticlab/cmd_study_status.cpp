@@ -32,6 +32,11 @@ void RegisterStudyStatus(CLI::App& study) {
   cmd->callback([a] {
     RunGuarded({{"participant", "--participant"}, {"db", "--db"}}, [&] {
       const auto st = runner::StudyStatus(a->db, a->participant);
+      // A code reserved by `participant new` has no session yet.
+      const auto status = [](const runner::ParticipantStatus& s) {
+        return s.session_status ? std::string(NameOf(db::kSessionStatusNames, *s.session_status))
+                                : std::string("reserved");
+      };
       if (a->json) {
         json ps = json::array();
         for (const auto& s : st)
@@ -40,14 +45,14 @@ void RegisterStudyStatus(CLI::App& study) {
                         {"completed", s.completed},
                         {"faulted", s.faulted},
                         {"duplicates", s.duplicates},
-                        {"session_status", s.session_status}});
+                        {"session_status", status(s)}});
         PrintJson(json{{"participants", ps}});
       } else {
         fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", "participant", "planned", "completed",
                    "faulted", "duplicates", "session");
         for (const auto& s : st)
           fmt::print("{:<12} {:>8} {:>10} {:>8} {:>11}  {}\n", s.code, s.planned, s.completed,
-                     s.faulted, s.duplicates, s.session_status);
+                     s.faulted, s.duplicates, status(s));
       }
       return kExitOk;
     });

@@ -120,7 +120,7 @@ std::int64_t Database::StartSession(const Session& se) {
          "provenance_json, plan_json, actuator, screens, rater, site_code) "
          "VALUES (?,?,?,?,?,?,?,?,?,?,?)");
   s.Bind(1, se.participant_id)
-      .Bind(2, se.status)
+      .Bind(2, std::string(NameOf(kSessionStatusNames, se.status)))
       .Bind(3, se.software_version)
       .Bind(4, se.device)
       .Bind(5, se.calibration)
@@ -145,10 +145,17 @@ void Database::SetSessionMode(std::int64_t session_id, const std::string& device
       .Run();
 }
 
-void Database::EndSession(std::int64_t session_id, const std::string& status) {
+void Database::EndSession(std::int64_t session_id, SessionStatus status) {
   Stmt s(db_,
          "UPDATE session SET status=?, ended_at=strftime('%Y-%m-%dT%H:%M:%fZ','now') WHERE id=?");
-  s.Bind(1, status).Bind(2, session_id).Run();
+  s.Bind(1, std::string(NameOf(kSessionStatusNames, status))).Bind(2, session_id).Run();
+}
+
+void Database::ReopenSession(std::int64_t session_id) {
+  Stmt s(db_, "UPDATE session SET status=?, ended_at=NULL WHERE id=?");
+  s.Bind(1, std::string(NameOf(kSessionStatusNames, SessionStatus::kRunning)))
+      .Bind(2, session_id)
+      .Run();
 }
 
 std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
@@ -166,7 +173,7 @@ std::vector<Session> Database::Sessions(std::int64_t participant_id) const {
     x.participant_id = s.Int(1);
     x.started_at = s.Text(2);
     x.ended_at = s.Text(3);
-    x.status = s.Text(4);
+    x.status = ParseName(kSessionStatusNames, s.Text(4), path_, 0, "session.status");
     x.software_version = s.Text(5);
     x.device = s.Text(6);
     x.calibration = s.Text(7);

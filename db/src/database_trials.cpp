@@ -64,7 +64,8 @@ void UpdateOpenTrial(sqlite3* db, const std::string& path, std::int64_t trial_id
 
 namespace {
 
-Trial ReadTrial(const Stmt& s) {
+// A trial row; a status this build does not know is bad input naming the file.
+Trial ReadTrial(const Stmt& s, const std::string& path) {
   Trial t;
   t.id = s.Int(0);
   t.session_id = s.Int(1);
@@ -76,7 +77,7 @@ Trial ReadTrial(const Stmt& s) {
   t.repetition = static_cast<int>(s.Int(7));
   t.left = s.Text(8);
   t.right = s.Text(9);
-  t.status = s.Text(10);
+  t.status = ParseName(kTrialStatusNames, s.Text(10), path, 0, "trial.status");
   t.attempts = static_cast<int>(s.Int(11));
   t.completed_attempt = s.IsNull(12) ? 0 : static_cast<int>(s.Int(12));
   return t;
@@ -98,7 +99,7 @@ void BindTrial(Stmt& s, const Trial& t) {
       .Bind(7, t.repetition)
       .Bind(8, t.left)
       .Bind(9, t.right)
-      .Bind(10, t.status)
+      .Bind(10, std::string(NameOf(kTrialStatusNames, t.status)))
       .Bind(11, t.attempts);
 }
 }  // namespace
@@ -125,9 +126,9 @@ int Database::CurrentAttempt(std::int64_t trial_id) const {
   return static_cast<int>(s.Int(0));
 }
 
-void Database::SetTrialStatus(std::int64_t trial_id, const std::string& status) {
+void Database::SetTrialStatus(std::int64_t trial_id, TrialStatus status) {
   Stmt s(db_, "UPDATE trial SET status=? WHERE id=?");
-  s.Bind(1, status).Bind(2, trial_id).Run();
+  s.Bind(1, std::string(NameOf(kTrialStatusNames, status))).Bind(2, trial_id).Run();
   if (sqlite3_changes(db_) != 1)
     throw std::runtime_error(path_ + ": no trial " + std::to_string(trial_id));
 }
@@ -241,7 +242,7 @@ std::vector<Trial> Database::Trials(std::int64_t session_id) const {
          "ORDER BY plan_index, id");
   s.Bind(1, session_id);
   std::vector<Trial> out;
-  while (s.Step()) out.push_back(ReadTrial(s));
+  while (s.Step()) out.push_back(ReadTrial(s, path_));
   return out;
 }
 

@@ -121,7 +121,7 @@ ordered_json BehSidecar(const SessionRecord& s) {
                          "participant's input device ('window', 'rating-box:VID:PID')"}};
   j["HapticLab"] = {{"study", s.study.name},
                     {"protocol_sha256", s.study.protocol_hash},
-                    {"session_status", s.session.status},
+                    {"session_status", std::string(NameOf(kSessionStatusNames, s.session.status))},
                     {"device", s.session.device},
                     {"actuator", s.session.actuator},
                     {"screens", s.session.screens},

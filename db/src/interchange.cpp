@@ -167,7 +167,7 @@ std::vector<SessionRecord> LoadSessions(const Database& db, const std::string& p
         s.session = se;
         s.number = ++number;
         for (const auto& t : db.Trials(se.id)) {
-          if (t.status != kTrialCompleted) continue;
+          if (t.status != TrialStatus::kCompleted) continue;
           TrialRecord r;
           r.trial = t;
           r.ratings = db.Ratings(t.id);

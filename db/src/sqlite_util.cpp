@@ -87,15 +87,6 @@ std::string Stmt::Text(int col) const {
            : std::string();
 }
 
-Transaction::Transaction(sqlite3* db) : db_(db) { ExecSql(db_, "BEGIN IMMEDIATE"); }
-Transaction::~Transaction() {
-  if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
-}
-void Transaction::Commit() {
-  ExecSql(db_, "COMMIT");
-  done_ = true;
-}
-
 void ExecSql(sqlite3* db, const char* sql) {
   char* err = nullptr;
   if (const int rc = sqlite3_exec(db, sql, nullptr, nullptr, &err); rc != SQLITE_OK) {
@@ -109,3 +100,19 @@ void ExecSql(sqlite3* db, const char* sql) {
 }
 
 }  // namespace hapticlab::db::internal
+
+namespace hapticlab::db {
+
+WriteTransaction::WriteTransaction(sqlite3* db) : db_(db) {
+  internal::ExecSql(db_, "BEGIN IMMEDIATE");
+}
+WriteTransaction::WriteTransaction(Database& database) : WriteTransaction(database.handle()) {}
+WriteTransaction::~WriteTransaction() {
+  if (!done_) sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
+}
+void WriteTransaction::Commit() {
+  internal::ExecSql(db_, "COMMIT");
+  done_ = true;
+}
+
+}  // namespace hapticlab::db

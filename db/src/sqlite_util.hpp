@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <string>
 
+#include "hapticlab/db/database.hpp"
+
 namespace hapticlab::db::internal {
 
 // A plain-language explanation of an SQLite result code ("" when it has none).
@@ -48,16 +50,11 @@ class Stmt {
   sqlite3_stmt* s_ = nullptr;
 };
 
-// BEGIN IMMEDIATE ... COMMIT, rolled back when destroyed uncommitted.
-class Transaction {
+// db::WriteTransaction on a bare connection (BEGIN IMMEDIATE ... COMMIT, rolled back when
+// destroyed uncommitted).
+class Transaction : public WriteTransaction {
  public:
-  explicit Transaction(sqlite3* db);
-  ~Transaction();
-  void Commit();
-
- private:
-  sqlite3* db_;
-  bool done_ = false;
+  explicit Transaction(sqlite3* db) : WriteTransaction(db) {}
 };
 
 void ExecSql(sqlite3* db, const char* sql);

@@ -97,7 +97,7 @@ FeltPool RecordFeltPool(const protocols::Protocol& p, int pool_size, int threads
           out.push_back(t);
         };
         const auto s = runner::RunStudy(p, o);
-        if (s.status != "completed")
+        if (s.status != db::SessionStatus::kCompleted)
           throw std::runtime_error(fmt::format("pool participant {} did not complete", i));
         if (log) {
           const std::lock_guard lock(m);

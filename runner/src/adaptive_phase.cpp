@@ -50,7 +50,7 @@ void History(db::Database& database, std::int64_t session, std::size_t phase_ind
     if (PhaseOf(t.phase) != kind) continue;
     // The phase index is part of the row's comparison text ("phase <i>: <parameter>").
     if (t.comparison.rfind(fmt::format("phase {}:", phase_index), 0) != 0) continue;
-    if (t.status != db::kTrialCompleted) {
+    if (t.status != db::TrialStatus::kCompleted) {
       *pending = t;
       continue;
     }
@@ -197,14 +197,14 @@ void AbortSession(const TrialContext& c, std::optional<std::int64_t> trial_id,
                        .kind = "abort",
                        .detail = why,
                        .established_by = by});
-  c.database.EndSession(c.session, "aborted");
+  c.database.EndSession(c.session, db::SessionStatus::kAborted);
 }
 
 // A faulted attempt of adaptive trial `t`: its cause and the re-run as events, on the log
 // and the console.
 void RecordFault(const TrialContext& c, const protocols::Phase& ph, const db::Trial& t,
                  const Presented& shown, std::size_t number) {
-  c.database.SetTrialStatus(t.id, db::kTrialFaulted);
+  c.database.SetTrialStatus(t.id, db::TrialStatus::kFaulted);
   c.database.LogEvent({.session_id = c.session,
                        .trial_id = t.id,
                        .kind = "device-fault",

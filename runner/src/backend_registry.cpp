@@ -103,18 +103,15 @@ std::unique_ptr<Rig> OpenRig(const RigRequest& q) {
   rig->rig_file_hash = rf.sha256;
   std::string what = b.open(q, rf, rig.get());
   HL_REQUIRE(rig->device != nullptr, "back-end '" + b.name + "' opened no device");
-  if (b.simulated() && q.actuator != "none")
+  if (b.simulated() && q.actuator != ActuatorKind::kNone)
     throw InputError(kCommandLine, 0, "actuator",
                      "a simulated rig plays vibration to the simulated hand; use --actuator none");
-  if (q.actuator == "audio") {
+  if (q.actuator == ActuatorKind::kAudio) {
     auto* audio = rig->parts.Keep(devices::OpenAudioActuator(q.audio_device, q.full_scale_mps2));
     rig->actuator = audio;
     rig->noise = audio;
     rig->noise_rms_fs = q.noise_rms_fs;
     what += "; audio actuator and masking noise";
-  } else if (q.actuator != "none") {
-    throw InputError(kCommandLine, 0, "actuator",
-                     "expected audio or none, got '" + q.actuator + "'");
   }
   rig->description = what + "; rig " + (rf.path.empty() ? "built-in" : rf.path) + " (sha256 " +
                      rf.sha256.substr(0, 16) + ")";

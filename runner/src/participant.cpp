@@ -33,7 +33,7 @@ class Person final : public Participant {
   SideFelt EndSide() override { return {}; }
   std::optional<std::vector<db::Rating>> Rate(const db::Trial&, const TrialScreen& screen,
                                               const std::array<sim::Features, 2>&, Rng&) override {
-    return RateInWindow(*opt_.ui, screen, p_, opt_.rating_input);
+    return RateInWindow(*opt_.ui, screen, p_, ModeOf(opt_).rater.Name());
   }
   std::optional<AdaptiveAnswer> Answer(const protocols::AdaptiveSpec& spec, double, int comparison,
                                        const TrialScreen& screen, Rng&) override {

@@ -84,7 +84,7 @@ class Participant {
 };
 
 // The participant window: the person's ratings, clamped to the scale's step, with the
-// response time from the rating screen's appearance (source: RunOptions::rating_input), and
+// response time from the rating screen's appearance (source: the session's Rater::Name), and
 // an adaptive trial's answer; nullopt: the experimenter aborted.
 std::optional<std::vector<db::Rating>> RateInWindow(SessionUi& ui, const TrialScreen& screen,
                                                     const protocols::Protocol& p,

@@ -46,21 +46,16 @@ std::string WithoutFolder(const db::Database& database, std::string text) {
 void MarkFailed(db::Database& database, std::int64_t session, const std::string& why,
                 const RunOptions& opt) {
   const auto mark = [&] {
-    database.Exec("BEGIN IMMEDIATE");
-    try {
-      database.LogEvent(
-          {.session_id = session,
-           .kind = "stopped",
-           .detail = "the session stopped on an error: " + WithoutFolder(database, why) +
-                     "; completed trials are recorded; fix the cause, then "
-                     "'hapticlab study resume'",
-           .established_by = source::kRunner});
-      database.EndSession(session, kSessionFailed);
-      database.Exec("COMMIT");
-    } catch (...) {
-      database.Exec("ROLLBACK");
-      throw;
-    }
+    db::WriteTransaction tx(database);
+    database.LogEvent(
+        {.session_id = session,
+         .kind = "stopped",
+         .detail = "the session stopped on an error: " + WithoutFolder(database, why) +
+                   "; completed trials are recorded; fix the cause, then "
+                   "'hapticlab study resume'",
+         .established_by = source::kRunner});
+    database.EndSession(session, db::SessionStatus::kFailed);
+    tx.Commit();
   };
   for (int attempt = 0; attempt < 2; ++attempt) {
     try {
@@ -95,7 +90,7 @@ class SessionQueue {
   RunSummary Run();
 
  private:
-  RunSummary Finish(const char* status);
+  RunSummary Finish(db::SessionStatus status);
   RunSummary Abort(db::Event why);
   void CountTrials();
   std::optional<RunSummary> RunPlannedPhase(protocols::PhaseKind phase);
@@ -145,7 +140,7 @@ namespace {
 
 // Every way a session ends goes through Finish; every abort through Abort (the reason logged
 // as an event of the session, the session closed as aborted).
-RunSummary SessionQueue::Finish(const char* status) {
+RunSummary SessionQueue::Finish(db::SessionStatus status) {
   sum_.status = status;
   sum_.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
   return sum_;
@@ -155,15 +150,15 @@ RunSummary SessionQueue::Abort(db::Event why) {
   why.session_id = session_;
   if (why.kind.empty()) why.kind = "abort";
   database_.LogEvent(why);
-  database_.EndSession(session_, "aborted");
-  return Finish("aborted");
+  database_.EndSession(session_, db::SessionStatus::kAborted);
+  return Finish(db::SessionStatus::kAborted);
 }
 
 void SessionQueue::CountTrials() {
   trials_ = database_.Trials(session_);
   sum_.planned = static_cast<int>(trials_.size());
   for (const auto& t : trials_) {
-    const bool completed = t.status == db::kTrialCompleted;
+    const bool completed = t.status == db::TrialStatus::kCompleted;
     if (completed) {
       ++sum_.completed;
       last_material_ = t.material;  // plan order: the last completed trial precedes the next
@@ -222,19 +217,20 @@ RunSummary SessionQueue::Run() {
   sum_.completed += adaptive.completed;
   sum_.faults += adaptive.faults;
   sum_.simulated_s += adaptive.stimulus_s;
-  if (adaptive.aborted) return Finish("aborted");  // RunAdaptivePhases ended the session
-  database_.EndSession(session_, "completed");
-  return Finish("completed");
+  if (adaptive.aborted)
+    return Finish(db::SessionStatus::kAborted);  // RunAdaptivePhases ended the session
+  database_.EndSession(session_, db::SessionStatus::kCompleted);
+  return Finish(db::SessionStatus::kCompleted);
 }
 
 std::optional<RunSummary> SessionQueue::RunPlannedPhase(protocols::PhaseKind phase) {
   std::vector<db::Trial> queue;
   for (const auto& t : trials_)
-    if (PhaseOf(t.phase) == phase && t.status != db::kTrialCompleted &&
-        t.status != db::kTrialFaulted)
+    if (PhaseOf(t.phase) == phase && t.status != db::TrialStatus::kCompleted &&
+        t.status != db::TrialStatus::kFaulted)
       queue.push_back(t);
   for (const auto& t : trials_)  // faulted before a crash: retried at the phase's end
-    if (PhaseOf(t.phase) == phase && t.status == db::kTrialFaulted) queue.push_back(t);
+    if (PhaseOf(t.phase) == phase && t.status == db::TrialStatus::kFaulted) queue.push_back(t);
   while (!queue.empty()) {
     const std::size_t pick = Pick(queue, phase);
     db::Trial t = queue[pick];
@@ -355,7 +351,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
 void SessionQueue::Requeue(db::Trial& t, const char* kind, const std::string& cause,
                            const std::string& by) {
   ++sum_.faults;
-  database_.SetTrialStatus(t.id, db::kTrialFaulted);
+  database_.SetTrialStatus(t.id, db::TrialStatus::kFaulted);
   database_.LogEvent({.session_id = session_,
                       .trial_id = t.id,
                       .kind = kind,
@@ -374,7 +370,7 @@ void SessionQueue::Requeue(db::Trial& t, const char* kind, const std::string& ca
                       .detail = line,
                       .established_by = source::kRunner});
   Warn(opt_, part_.code + ": " + line);
-  t.status = db::kTrialFaulted;
+  t.status = db::TrialStatus::kFaulted;
 }
 
 // What trial `t`'s outcome does to the session: an abort ends it; a fault re-queues the

@@ -11,9 +11,6 @@
 
 namespace hapticlab::runner::internal {
 
-// Status of a session that stopped on an error (a full disk, ...): 'study resume' continues it.
-inline constexpr const char* kSessionFailed = "failed";
-
 // Executes the session's remaining trials on `rig` and ends the session ("completed" or
 // "aborted"). A rig the caller passed in RunOptions::rig is logged as the session's 'device'.
 // Faulted trials go to the end of their phase. An error (exception) marks the session

@@ -87,7 +87,7 @@ class Simulated final : public Participant {
   std::optional<std::vector<db::Rating>> Rate(const db::Trial& t, const TrialScreen& screen,
                                               const std::array<sim::Features, 2>& felt,
                                               Rng& rng) override {
-    if (opt_.ui) return RateInWindow(*opt_.ui, screen, p_, opt_.rating_input);
+    if (opt_.ui) return RateInWindow(*opt_.ui, screen, p_, ModeOf(opt_).rater.Name());
     if (opt_.on_felt) {
       FeltTrial ft{.plan_index = t.plan_index,
                    .phase = t.phase,

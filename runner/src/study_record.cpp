@@ -74,25 +74,20 @@ Reservation ReserveParticipant(const std::string& db_path, const protocols::Prot
   const protocols::CodeFormat format = protocols::InferCodeFormat(p, prefix);
   db::Database database(db_path);
   // One write transaction: a second caller waits for it (busy timeout), then sees the row.
-  database.Exec("BEGIN IMMEDIATE");
-  try {
-    const std::int64_t study = FindOrCreateStudy(database, p, db_path);
-    std::set<std::string> taken;
-    const auto participants = database.Participants(study);
-    for (const auto& x : participants) taken.insert(x.code);
-    Reservation r;
-    r.code = protocols::NextFreeCode(p, format, taken);
-    r.index = static_cast<int>(participants.size());  // as study run picks the next one
-    database.AddParticipant({.study_id = study,
-                             .code = r.code,
-                             .index = r.index,
-                             .seed = protocols::ParticipantSeed(p, r.index)});
-    database.Exec("COMMIT");
-    return r;
-  } catch (...) {
-    database.Exec("ROLLBACK");
-    throw;
-  }
+  db::WriteTransaction tx(database);
+  const std::int64_t study = FindOrCreateStudy(database, p, db_path);
+  std::set<std::string> taken;
+  const auto participants = database.Participants(study);
+  for (const auto& x : participants) taken.insert(x.code);
+  Reservation r;
+  r.code = protocols::NextFreeCode(p, format, taken);
+  r.index = static_cast<int>(participants.size());  // as study run picks the next one
+  database.AddParticipant({.study_id = study,
+                           .code = r.code,
+                           .index = r.index,
+                           .seed = protocols::ParticipantSeed(p, r.index)});
+  tx.Commit();
+  return r;
 }
 
 }  // namespace hapticlab::runner

@@ -132,19 +132,58 @@ SessionRig RigOf(const RunOptions& opt, std::uint64_t participant_seed) {
   return r;
 }
 
+// A session's recorded actuator: its name, or "unrecorded" (before schema v5).
+constexpr const char* kUnrecorded = "unrecorded";
+std::string ActuatorName(const std::optional<ActuatorKind>& a) {
+  return a ? std::string(NameOf(kActuatorNames, *a)) : kUnrecorded;
+}
+
+// The mode a session was recorded in, read from its row.
+SessionMode RecordedModeOf(const db::Session& se, const std::string& db_path) {
+  return {se.device,
+          se.actuator == kUnrecorded ? std::nullopt
+                                     : std::optional(ParseName(kActuatorNames, se.actuator, db_path,
+                                                               0, "session.actuator")),
+          se.screens, ParseRater(se.rater, db_path, "session.rater")};
+}
+
 }  // namespace
 
+std::string Rater::Name() const {
+  return kind == RaterKind::kRatingBox ? "rating-box:" + box
+         : kind == RaterKind::kWindow  ? "window"
+                                       : db::kRaterSimulated;
+}
+
+Rater ParseRater(const std::string& name, const std::string& file, const std::string& field) {
+  constexpr std::string_view kBox = "rating-box:";
+  if (name == db::kRaterSimulated) return {};
+  if (name == "window") return {RaterKind::kWindow, ""};
+  if (name.size() > kBox.size() && name.compare(0, kBox.size(), kBox) == 0)
+    return {RaterKind::kRatingBox, name.substr(kBox.size())};
+  throw InputError(file, 0, field,
+                   "expected simulated, window or rating-box:VID:PID, got '" + name + "'");
+}
+
+Rater RaterOf(bool ui, const std::string& rating_box) {
+  if (!ui) return {};
+  return rating_box.empty() ? Rater{RaterKind::kWindow, ""}
+                            : Rater{RaterKind::kRatingBox, rating_box};
+}
+
 std::string SessionMode::Describe() const {
-  return fmt::format(
-      "device {}, actuator {}, screens {}, ratings {}", device, actuator, screens ? "on" : "off",
-      rater == db::kRaterSimulated ? "simulated" : "by the participant (" + rater + ")");
+  return fmt::format("device {}, actuator {}, screens {}, ratings {}", device,
+                     ActuatorName(actuator), screens ? "on" : "off",
+                     rater.kind == RaterKind::kSimulated
+                         ? "simulated"
+                         : "by the participant (" + rater.Name() + ")");
 }
 
 bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool change_mode,
                      const std::string& db_path, const std::string& participant) {
   const bool differs = now.device != recorded.device || now.screens != recorded.screens ||
                        now.rater != recorded.rater ||
-                       (recorded.actuator != "unrecorded" && now.actuator != recorded.actuator);
+                       (recorded.actuator && now.actuator != recorded.actuator);
   if (differs && !change_mode)
     throw InputError(
         db_path, 0, "change_mode",
@@ -156,8 +195,7 @@ bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool c
 }
 
 SessionMode ModeOf(const RunOptions& o) {
-  return {o.device, o.actuator, o.ui != nullptr,
-          o.ui ? o.rating_input : std::string(db::kRaterSimulated)};
+  return {o.device, o.actuator, o.ui != nullptr, RaterOf(o.ui != nullptr, o.rating_box)};
 }
 
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant) {
@@ -173,8 +211,7 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
                              " is reserved and has no session yet; start it with 'hapticlab "
                              "study run PROTOCOL --participant " +
                              participant + "'");
-      const auto& se = sessions.back();
-      return {se.device, se.actuator, se.screens, se.rater};
+      return RecordedModeOf(sessions.back(), db_path);
     }
   throw InputError(db_path, 0, "participant",
                    "no participant " + participant + " with a session in this database");
@@ -282,10 +319,10 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   AddPlanProvenance(opt, lab, &prov);
   if (ask_console) consent = ObtainConsent(p, opt, opt.participant);
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
-  database.Exec("BEGIN IMMEDIATE");
   std::int64_t session;
   std::vector<std::int64_t> ids;
-  try {
+  {
+    db::WriteTransaction tx(database);
     const auto pid = reserved ? reserved->id : database.AddParticipant(part);
     session = database.StartSession(
         {.participant_id = pid,
@@ -295,9 +332,9 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
          // Paths in the provenance may hold bytes that are not UTF-8: replaced, not thrown.
          .provenance_json = prov.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
          .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-         .actuator = mode.actuator,
+         .actuator = ActuatorName(mode.actuator),
          .screens = mode.screens,
-         .rater = mode.rater,
+         .rater = mode.rater.Name(),
          .site_code = opt.site});
     std::vector<db::Trial> rows;
     for (const auto& t : plan)
@@ -317,10 +354,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
     else
       RecordConsentNotApplicable(database, session, mode.Describe());
     LogPlanEvents(database, session, plan, ids, p);
-    database.Exec("COMMIT");
-  } catch (...) {
-    database.Exec("ROLLBACK");
-    throw;
+    tx.Commit();
   }
   Log(opt, fmt::format("{}: session {} with {} planned trials ({})", opt.participant, session,
                        plan.size(), mode.Describe()));
@@ -346,7 +380,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
                            "run PROTOCOL --participant " +
                            opt.participant + "'");
     const auto& se = sessions.back();
-    if (se.status == "completed")
+    if (se.status == db::SessionStatus::kCompleted)
       throw InputError(opt.db_path, 0, "participant",
                        opt.participant + "'s session is already completed");
     const json prov = json::parse(se.provenance_json);
@@ -364,7 +398,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
                             db::HashText(ReadTextFile(path)) != st.protocol_hash)
       Log(opt, ProtocolOnDiskNote(st.protocol_toml, ReadTextFile(path)));
     // The recorded mode, or with --change-mode the new one (logged).
-    const SessionMode recorded{se.device, se.actuator, se.screens, se.rater};
+    const SessionMode recorded = RecordedModeOf(se, opt.db_path);
     const SessionMode now = ModeOf(opt);
     const bool differs =
         CheckResumeMode(recorded, now, opt.change_mode, opt.db_path, opt.participant);
@@ -383,22 +417,23 @@ RunSummary ResumeStudy(const RunOptions& opt) {
                          .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
                                                recorded.Describe(), now.Describe()),
                          .established_by = source::CommandLine("--change-mode")});
-      database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
+      database.SetSessionMode(se.id, now.device, ActuatorName(now.actuator), now.screens,
+                              now.rater.Name());
       Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant,
                            recorded.Describe(), now.Describe()));
-    } else if (recorded.actuator == "unrecorded") {
-      database.SetSessionMode(se.id, now.device, now.actuator, now.screens, now.rater);
+    } else if (!recorded.actuator) {
+      database.SetSessionMode(se.id, now.device, ActuatorName(now.actuator), now.screens,
+                              now.rater.Name());
     }
     const RunOptions& o = opt;
     const std::string unclosed =
-        se.status == "running"
+        se.status == db::SessionStatus::kRunning
             ? "; the previous run ended without closing the session (killed, crashed, or a "
               "full disk)"
             : "";
-    database.Exec(
-        fmt::format("UPDATE session SET status='running', ended_at=NULL WHERE id={}", se.id));
+    database.ReopenSession(se.id);
     int done = 0;
-    for (const auto& t : database.Trials(se.id)) done += t.status == db::kTrialCompleted;
+    for (const auto& t : database.Trials(se.id)) done += t.status == db::TrialStatus::kCompleted;
     database.LogEvent({.session_id = se.id,
                        .kind = "resume",
                        .detail = fmt::format("resumed with {} of {} trials completed{}", done,
@@ -435,16 +470,15 @@ std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
           attempts_faulted += e.kind == "attempt-faulted";
         for (const auto& t : database.Trials(se.id)) {
           ++s.planned;
-          if (t.status == db::kTrialCompleted) {
+          if (t.status == db::TrialStatus::kCompleted) {
             ++s.completed;
             ++completions[t.plan_index];
           }
-          waiting += t.status == db::kTrialFaulted;
+          waiting += t.status == db::TrialStatus::kFaulted;
         }
         s.faulted += std::max(attempts_faulted, waiting);
       }
       for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
-      if (s.session_status.empty()) s.session_status = "reserved";  // `participant new`
       out.push_back(s);
     }
   if (!participant.empty() && out.empty())

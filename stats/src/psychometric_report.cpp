@@ -87,7 +87,7 @@ std::vector<AdaptiveAnswer> AdaptiveAnswers(const std::string& db_path, const st
   for (const auto& p : d.Participants(st->id))
     for (const auto& se : d.Sessions(p.id))
       for (const auto& t : d.Trials(se.id)) {
-        if (t.status != db::kTrialCompleted || t.comparison.rfind(tag, 0) != 0) continue;
+        if (t.status != db::TrialStatus::kCompleted || t.comparison.rfind(tag, 0) != 0) continue;
         AdaptiveAnswer a{.participant = p.code, .track = t.repetition};
         bool has_level = false, has_correct = false;
         for (const auto& r : d.Ratings(t.id)) {

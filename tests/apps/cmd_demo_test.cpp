@@ -37,9 +37,9 @@ TEST(StudyCli, DemoRunsEndToEnd) {
     std::size_t rated = 0;
     for (const auto& p : ps)
       for (const auto& se : d.Sessions(p.id)) {
-        EXPECT_EQ(se.status, "completed") << p.code;
+        EXPECT_EQ(se.status, db::SessionStatus::kCompleted) << p.code;
         for (const auto& t : d.Trials(se.id)) {
-          EXPECT_EQ(t.status, db::kTrialCompleted) << p.code << " trial " << t.id;
+          EXPECT_EQ(t.status, db::TrialStatus::kCompleted) << p.code << " trial " << t.id;
           rated += d.Ratings(t.id).size();
         }
       }

@@ -75,7 +75,7 @@ class Interchange : public ::testing::Test {
     const auto se = d.Sessions(p.id).at(0);
     exp_ = new Expected;
     for (const auto& t : d.Trials(se.id)) {
-      if (t.status != db::kTrialCompleted) continue;
+      if (t.status != db::TrialStatus::kCompleted) continue;
       Expected::TrialData td{t, d.Ratings(t.id), {}};
       exp_->ratings += td.ratings.size();
       for (auto& c : d.TrajectoryChunks(t.id)) {

@@ -43,7 +43,7 @@ void ExpectEveryTrialWhole(const std::string& path, int sessions) {
       for (const auto& se : d.Sessions(p.id)) {
         ++seen;
         for (const auto& t : d.Trials(se.id)) {
-          ASSERT_EQ(t.status, db::kTrialCompleted) << "trial " << t.id;
+          ASSERT_EQ(t.status, db::TrialStatus::kCompleted) << "trial " << t.id;
           ASSERT_EQ(t.completed_attempt, t.attempts);
           std::map<std::string, std::uint64_t> n;
           for (const auto& c : d.TrajectoryChunks(t.id)) {
@@ -78,7 +78,7 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
     // The session is marked, and an event says why it stopped (naming no folder).
     db::Database d(db, {.create = false, .read_only = true});
     const auto se = d.Sessions(d.Participants(d.Studies().at(0).id).at(0).id).at(0);
-    EXPECT_EQ(se.status, "failed");
+    EXPECT_EQ(se.status, db::SessionStatus::kFailed);
     int stopped = 0;
     for (const auto& e : d.Events(se.id)) {
       stopped += e.kind == "stopped";

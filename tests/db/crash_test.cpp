@@ -65,7 +65,7 @@ TEST(Crash, SigkillMidCommitLeavesEachTrialWholeOrEmpty) {
   int completed = 0;
   for (const auto& t : trials) {
     const auto n = db.Ratings(t.id).size();
-    if (t.status == kTrialCompleted) {
+    if (t.status == TrialStatus::kCompleted) {
       EXPECT_EQ(n, static_cast<std::size_t>(kCriteria)) << "trial " << t.id;
       ++completed;
     } else {

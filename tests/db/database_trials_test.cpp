@@ -20,9 +20,9 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);
-  EXPECT_EQ(trials[0].status, kTrialCompleted);
+  EXPECT_EQ(trials[0].status, TrialStatus::kCompleted);
   EXPECT_EQ(trials[0].attempts, 1);
-  EXPECT_EQ(trials[1].status, kTrialPlanned);
+  EXPECT_EQ(trials[1].status, TrialStatus::kPlanned);
   EXPECT_EQ(db.Ratings(ids[0]).size(), 2u);
   // A second completion is refused and leaves the first intact.
   EXPECT_THROW(db.CompleteTrial(ids[0], {{"hardness", 10, 1}}), std::runtime_error);
@@ -31,7 +31,7 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   EXPECT_THROW(db.CompleteTrial(ids[1], {{"overall", 1, 1}, {"overall", 2, 1}}),
                std::runtime_error);
   EXPECT_TRUE(db.Ratings(ids[1]).empty());
-  EXPECT_EQ(db.Trials(se)[1].status, kTrialPlanned);
+  EXPECT_EQ(db.Trials(se)[1].status, TrialStatus::kPlanned);
 }
 
 TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
@@ -74,7 +74,7 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
                        .samples_written = 5};  // writer says 5, db has none
   EXPECT_THROW(db.CompleteTrial(t, {{"overall", 50, 1}}, {ok, missing}), TrajectoryIncomplete);
   EXPECT_TRUE(db.Ratings(t).empty());
-  EXPECT_NE(db.Trials(se)[0].status, kTrialCompleted);
+  EXPECT_NE(db.Trials(se)[0].status, TrialStatus::kCompleted);
   // A report of an earlier attempt is ignored; the unreported stream "force" then fails.
   StreamReport old = ok;
   old.attempt = 1;

@@ -192,7 +192,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                            .channels = {"fz_N"},
                            .samples = ramp(7, 50),
                            .attempt = 1});
-  d.SetTrialStatus(faulted, db::kTrialFaulted);
+  d.SetTrialStatus(faulted, db::TrialStatus::kFaulted);
   d.SaveMaterialModel("Cork v1", "[material]\nname = \"Cork\"\n");
   // Session at 10:00:00; trials 1 and 2 stamped 0.5 s apart (overlapping their 0.3 s of
   // stimuli + 1.5 s of rating), trial 3 a minute in; an event 2.0 s in.

@@ -60,7 +60,7 @@ bool RunAttempt(Database& db, TrajectoryWriter& w, std::int64_t trial) {
     db.CompleteTrial(trial, {{"roughness", 50, 1}}, w.TakeReports(trial));
     return true;
   } catch (const TrajectoryIncomplete&) {
-    db.SetTrialStatus(trial, kTrialFaulted);
+    db.SetTrialStatus(trial, TrialStatus::kFaulted);
     return false;
   }
 }
@@ -73,7 +73,7 @@ void ExpectWhole(const std::string& path, std::int64_t session, int planned) {
   const auto trials = db.Trials(session);
   ASSERT_EQ(static_cast<int>(trials.size()), planned);
   for (const auto& t : trials) {
-    ASSERT_EQ(t.status, kTrialCompleted) << "trial " << t.id;
+    ASSERT_EQ(t.status, TrialStatus::kCompleted) << "trial " << t.id;
     EXPECT_EQ(db.Ratings(t.id).size(), 1u) << "trial " << t.id;
     EXPECT_EQ(t.completed_attempt, t.attempts);
     std::map<std::string, std::uint64_t> n;
@@ -107,7 +107,7 @@ void Resume(const std::string& path, std::int64_t session) {
   Database db(path);
   TrajectoryWriter w(path);
   for (const auto& t : db.Trials(session))
-    if (t.status != kTrialCompleted) {
+    if (t.status != TrialStatus::kCompleted) {
       ASSERT_TRUE(RunAttempt(db, w, t.id)) << "trial " << t.id;
     }
 }
@@ -149,7 +149,7 @@ TEST(Fault, FullDiskFaultsTrialsAndResumeCompletesThemWhole) {
   {
     Database db(path);
     int completed = 0;
-    for (const auto& t : db.Trials(session)) completed += t.status == kTrialCompleted;
+    for (const auto& t : db.Trials(session)) completed += t.status == TrialStatus::kCompleted;
     EXPECT_LT(completed, 8);
     EXPECT_TRUE(db.VerifyTrajectories().empty());
   }
@@ -201,7 +201,7 @@ TEST(Fault, LockHeldByAnotherProcessFaultsTheAttemptNotTheData) {
     EXPECT_THROW(db.CompleteTrial(ids[0], {{"roughness", 50, 1}}, w.TakeReports(ids[0])),
                  TrajectoryIncomplete);
     EXPECT_TRUE(db.Ratings(ids[0]).empty());
-    db.SetTrialStatus(ids[0], kTrialFaulted);
+    db.SetTrialStatus(ids[0], TrialStatus::kFaulted);
   }
   Resume(path, session);
   ExpectWhole(path, session, 2);
@@ -213,7 +213,7 @@ TEST(Fault, LockHeldByAnotherProcessFaultsTheAttemptNotTheData) {
     Database db(path);
     TrajectoryWriter w(path, {.chunk_samples = 256});
     for (const auto& t : db.Trials(session))
-      if (t.status != kTrialCompleted) RunAttempt(db, w, t.id);
+      if (t.status != TrialStatus::kCompleted) RunAttempt(db, w, t.id);
   } catch (...) {
     _exit(3);
   }
@@ -248,8 +248,8 @@ TEST(Fault, SigkillWhileTrajectoriesAreWrittenNeverMixesAttempts) {
     bool all_completed = true;
     for (const auto& t : db.Trials(session)) {
       interrupted_rounds +=
-          t.status == kTrialRunning && !db.TrajectoryChunks(t.id, t.attempts).empty();
-      all_completed = all_completed && t.status == kTrialCompleted;
+          t.status == TrialStatus::kRunning && !db.TrajectoryChunks(t.id, t.attempts).empty();
+      all_completed = all_completed && t.status == TrialStatus::kCompleted;
     }
     if (all_completed && interrupted_rounds == 0) {
       Plan(db, session, 30, planned);
@@ -310,7 +310,7 @@ TEST(Fault, ReadOnlyWalIsRefusedAndNothingCommittedIsLost) {
     EXPECT_NE(std::string(e.what()).find(wal), std::string::npos) << e.what();
   }
   // Reading still works, and the completed trial is whole once the log is writable again.
-  EXPECT_EQ(OpenForReading(path).Trials(session)[0].status, kTrialCompleted);
+  EXPECT_EQ(OpenForReading(path).Trials(session)[0].status, TrialStatus::kCompleted);
   ASSERT_EQ(chmod(wal.c_str(), 0644), 0);
   Resume(path, session);
   ExpectWhole(path, session, 2);

@@ -96,7 +96,7 @@ inline Ids Fill(Database& d) {
                            .channels = {"fz_N", "vx_mps"},
                            .samples = {99, 99, 99, 99, 99, 99, 99, 99, 99, 99},
                            .attempt = 1});
-  d.SetTrialStatus(out.faulted, kTrialFaulted);
+  d.SetTrialStatus(out.faulted, TrialStatus::kFaulted);
   d.LogEvent({.session_id = se, .kind = "break", .detail = "pause"});
   d.Exec("UPDATE session SET started_at='2026-01-01T10:00:00.000Z'");
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", out.a));

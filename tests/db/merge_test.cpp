@@ -62,7 +62,7 @@ void MakeSite(const std::string& path, const SiteSpec& s) {
       db.CompleteTrial(id, {{"overall", 10.0 * static_cast<double>(i) + t, 1.5}});
       db.LogEvent({.session_id = se, .trial_id = id, .kind = "note", .detail = s.site});
     }
-    db.EndSession(se, "completed");
+    db.EndSession(se, SessionStatus::kCompleted);
   }
 }
 

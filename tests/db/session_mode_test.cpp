@@ -41,6 +41,59 @@ std::int64_t OneSession(Database& db, const Session& mode, int trials) {
   return session;
 }
 
+// The text of one cell, read by an independent SQLite connection.
+std::string Cell(const std::string& path, const std::string& sql) {
+  sqlite3* h = nullptr;
+  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
+  sqlite3_stmt* s = nullptr;
+  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
+  std::string out = "(no row)";
+  if (sqlite3_step(s) == SQLITE_ROW) out = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
+  sqlite3_finalize(s);
+  sqlite3_close(h);
+  return out;
+}
+
+// Statuses are enums in the program and their names in the file (the names the schema's CHECK
+// and every earlier file use); a status the program does not know is bad input naming the
+// file and the column, never a silent default.
+TEST(SessionMode, StatusesAreStoredByNameAndReadBackOnce) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  Database db(path);
+  const auto session = OneSession(db, {.device = "sim", .actuator = "none"}, 1);
+  const auto trial = db.Trials(session)[0].id;
+  EXPECT_EQ(Cell(path, "SELECT status FROM session"), "running");
+  EXPECT_EQ(Cell(path, "SELECT status FROM trial"), "planned");
+  for (const char* name : {"running", "completed", "aborted", "failed"}) {
+    const auto status = FromName(kSessionStatusNames, name);
+    ASSERT_TRUE(status.has_value()) << name;
+    db.EndSession(session, *status);
+    EXPECT_EQ(Cell(path, "SELECT status FROM session"), name);
+    EXPECT_EQ(db.Sessions(1)[0].status, *status) << name;
+  }
+  db.ReopenSession(session);
+  EXPECT_EQ(Cell(path, "SELECT status || '/' || coalesce(ended_at, 'open') FROM session"),
+            "running/open");
+  for (const char* name : {"planned", "running", "completed", "faulted", "aborted"}) {
+    const auto status = FromName(kTrialStatusNames, name);
+    ASSERT_TRUE(status.has_value()) << name;
+    db.SetTrialStatus(trial, *status);
+    EXPECT_EQ(Cell(path, "SELECT status FROM trial"), name);
+    EXPECT_EQ(db.Trials(session)[0].status, *status) << name;
+  }
+  db.Exec("UPDATE session SET status = 'paused'");
+  try {
+    (void)db.Sessions(1);
+    ADD_FAILURE() << "an unknown session status was read";
+  } catch (const InputError& e) {
+    ASSERT_EQ(e.diagnostics().size(), 1u);
+    EXPECT_EQ(e.diagnostics()[0].file, path);
+    EXPECT_EQ(e.diagnostics()[0].field, "session.status");
+    EXPECT_NE(e.diagnostics()[0].message.find("'paused'"), std::string::npos);
+  }
+}
+
 TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   test::TempDir dir;
   const std::string path = dir.File("v4.db");

@@ -79,7 +79,7 @@ std::vector<Record> Records(const std::string& db_path) {
     for (const auto& p : d.Participants(st.id))
       for (const auto& se : d.Sessions(p.id))
         for (const auto& t : d.Trials(se.id)) {
-          EXPECT_EQ(t.status, db::kTrialCompleted) << t.plan_index;
+          EXPECT_EQ(t.status, db::TrialStatus::kCompleted) << t.plan_index;
           Record r{.plan_index = t.plan_index, .track = t.repetition};
           for (const auto& x : d.Ratings(t.id)) {
             if (x.criterion == "level") r.level = x.score;
@@ -98,7 +98,7 @@ TEST(AdaptivePhase, StaircaseRecordsEveryTrialByItsRules) {
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   RunOptions o{.db_path = dir.File("s.db"), .participant = "P01", .record = RecordMode::kForce};
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.status, db::SessionStatus::kCompleted);
   const auto rec = Records(o.db_path);
   ASSERT_EQ(static_cast<int>(rec.size()), s.completed);
   ASSERT_GE(rec.size(), 16u);  // two tracks of at least 8 trials (8 reversals) each
@@ -134,7 +134,7 @@ TEST(AdaptivePhase, EveryIntervalRunsThroughTheEngineOnTheSimulatedRig) {
   RunOptions o{.db_path = dir.File("e.db"), .participant = "P01", .record = RecordMode::kForce};
   o.on_side = [&](const SideReport& r) { sides.push_back(r); };
   const auto s = RunStudy(p, o);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   EXPECT_EQ(s.faults, 0);
   ASSERT_EQ(static_cast<int>(sides.size()), 2 * s.completed);
   const auto force_ticks = static_cast<std::uint64_t>(std::lround(p.stimulus_duration_s * 1000));
@@ -166,7 +166,7 @@ TEST(AdaptivePhase, TheFalconTwinRecordsWhatTheGenericSimulatedRigDoes) {
   std::ofstream(dir.File("p.toml")) << Protocol(kStaircase);
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   RunOptions o{.db_path = dir.File("sim.db"), .participant = "P01", .record = RecordMode::kNone};
-  ASSERT_EQ(RunStudy(p, o).status, "completed");
+  ASSERT_EQ(RunStudy(p, o).status, db::SessionStatus::kCompleted);
   auto sr = OpenRig({.device = "falcon-twin", .rig_file = DefaultRig("falcon")});
   std::uint64_t ticks = 0, contact = 0;
   RunOptions t = o;
@@ -178,7 +178,7 @@ TEST(AdaptivePhase, TheFalconTwinRecordsWhatTheGenericSimulatedRigDoes) {
     contact += r.contact_ticks;
   };
   const auto s = RunStudy(p, t);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   EXPECT_EQ(s.faults, 0);
   EXPECT_GT(ticks, 0u);
   EXPECT_GE(dynamic_cast<devices::falcon::FalconDevice&>(*sr->device).packets(), ticks)
@@ -196,7 +196,7 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
                .record = RecordMode::kNone,
                .fault_rate = 0.3};
   const auto s = RunStudy(p, o);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   EXPECT_GT(s.faults, 0);
   db::Database d(o.db_path);
   int watchdog_events = 0, trial_faults = 0;
@@ -212,7 +212,7 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
   std::vector<psychophysics::StaircaseTrial> h;
   int repeated = 0;
   for (const auto& t : d.Trials(s.session_id)) {
-    EXPECT_EQ(t.status, db::kTrialCompleted);
+    EXPECT_EQ(t.status, db::TrialStatus::kCompleted);
     repeated += t.attempts > 1;
   }
   EXPECT_GT(repeated, 0);
@@ -234,8 +234,8 @@ TEST(AdaptivePhase, ResumeContinuesExactly) {
   r.stop_after_trials = 7;
   auto s = RunStudy(p, r);
   int resumes = 0;
-  while (s.status != "completed") {
-    ASSERT_EQ(s.status, "aborted");
+  while (s.status != db::SessionStatus::kCompleted) {
+    ASSERT_EQ(s.status, db::SessionStatus::kAborted);
     r.stop_after_trials = 5;
     s = ResumeStudy(r);
     ++resumes;
@@ -310,13 +310,13 @@ TEST(AdaptivePhase, TheParticipantAnswersAtTheWindow) {
                .ui_playback_speed = 1e6,
                .consent_confirmed_by = "E01"};  // a person answers
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(s.status, db::SessionStatus::kAborted);
   EXPECT_EQ(ui.intervals_seen,
             (std::set<std::string>{"staircase: interval 1 of 2", "staircase: interval 2 of 2"}));
   db::Database d(o.db_path);
   int completed = 0;
   for (const auto& t : d.Trials(s.session_id)) {
-    if (t.status != db::kTrialCompleted) continue;
+    if (t.status != db::TrialStatus::kCompleted) continue;
     ++completed;
     double response = 0, interval = 0, correct = 0;
     for (const auto& r : d.Ratings(t.id)) {
@@ -354,7 +354,7 @@ lapse = 0.0
   const auto p = protocols::LoadProtocol(dir.File("p.toml"));
   RunOptions o{.db_path = dir.File("q.db"), .participant = "P01", .record = RecordMode::kNone};
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.status, db::SessionStatus::kCompleted);
   const auto rec = Records(o.db_path);
   ASSERT_EQ(rec.size(), 80u);
   std::vector<std::pair<double, bool>> h;

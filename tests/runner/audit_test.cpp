@@ -71,7 +71,7 @@ TEST(Audit, ASimulatedSessionRecordsConsentAsNotApplicableAndNothingSigned) {
   o.db_path = dir.File("s.db");
   o.participant = "P01";
   o.record = RecordMode::kNone;
-  ASSERT_EQ(RunStudy(p, o).status, "completed");
+  ASSERT_EQ(RunStudy(p, o).status, db::SessionStatus::kCompleted);
   const auto events = EventsOf(o.db_path, "P01");
   int consent = 0;
   for (const auto& e : events) {
@@ -106,7 +106,7 @@ TEST(Audit, APersonSessionNeedsAnExperimenterCodeAndRecordsItWithTheDocumentVers
   EXPECT_EQ(ui.asked.size(), 1u) << "without a code the console is asked (and cannot)";
   ui.asked.clear();
   o.consent_confirmed_by = "E01";
-  EXPECT_EQ(RunStudy(p, o).status, "aborted");  // stopped after 6 trials
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);  // stopped after 6 trials
   int consent = 0;
   for (const auto& e : EventsOf(o.db_path, "P03")) {
     if (e.kind != "consent") continue;
@@ -194,7 +194,7 @@ TEST(Audit, EveryFaultedAttemptIsPrintedCountedAndNamesItsCause) {
   std::vector<std::string> warned;
   o.warn = [&](const std::string& s) { warned.push_back(s); };
   const auto s = RunStudy(p, o);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   ASSERT_GT(s.faults, 0) << "no fault injected: the test tests nothing";
   EXPECT_EQ(static_cast<int>(warned.size()), s.faults);
   for (const auto& w : warned) {

@@ -102,7 +102,7 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   o.consent_confirmed_by = "E01";  // a person takes part
   o.stop_after_trials = 7;         // the training trials and three rated ones (0.5 s per side)
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(s.status, db::SessionStatus::kAborted);
   EXPECT_GT(ui.frames, 10);
   EXPECT_GT(dev.reads.load(), 500) << "the force loop ran";
   EXPECT_LE(dev.max_seen, 4.0 + 1e-9) << "never above the device's limit";
@@ -121,7 +121,7 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   EXPECT_GE(ui.rated, 1);
   int rated_trials = 0, chunks = 0;
   for (const auto& t : d.Trials(se.id)) {
-    if (t.status != db::kTrialCompleted || t.phase == "training") continue;
+    if (t.status != db::TrialStatus::kCompleted || t.phase == "training") continue;
     ++rated_trials;
     EXPECT_EQ(d.Ratings(t.id).size(), 2u);
     chunks += static_cast<int>(d.TrajectoryChunks(t.id).size());
@@ -210,7 +210,7 @@ TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
     EXPECT_EQ(r.engine.lost_reads, 0u);
   };
   const auto s = RunStudy(p, o);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   EXPECT_EQ(s.faults, 0);
   EXPECT_GT(virtual_sides, 0u);
   EXPECT_GT(contact, ticks * 8 / 10) << "the hand pressed on the samples through the Falcon";
@@ -256,7 +256,7 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
   o.rig = sr.get();
   o.record = RecordMode::kNone;
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "aborted");
+  EXPECT_EQ(s.status, db::SessionStatus::kAborted);
   EXPECT_EQ(s.completed, 4) << "only the (unrendered) training trials";
   db::Database d(o.db_path);
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];

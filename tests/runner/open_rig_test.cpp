@@ -95,8 +95,9 @@ TEST(OpenRig, TheGenericSimulatedDeviceIsTheEnginesDevice) {
             0u)
       << rig->description;
   // A simulated rig plays vibration to the hand: a sound card is refused.
-  EXPECT_EQ(ErrorOf([] { (void)OpenRig({.device = "sim", .actuator = "audio"}); }).field,
-            "actuator");
+  EXPECT_EQ(
+      ErrorOf([] { (void)OpenRig({.device = "sim", .actuator = ActuatorKind::kAudio}); }).field,
+      "actuator");
 }
 
 TEST(OpenRig, TheTwinRunsTheRealFalconBackEndAfterItsFirmwareLoads) {
@@ -192,7 +193,7 @@ TEST(OpenRig, ASessionRunsOnAToyBackEndRegisteredHere) {
   int sides = 0;
   o.on_side = [&](const SideReport& r) { sides += r.hand_ticks > 0; };
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "aborted");  // stopped after 8 trials, as asked
+  EXPECT_EQ(s.status, db::SessionStatus::kAborted);  // stopped after 8 trials, as asked
   EXPECT_EQ(s.executed, 8);
   EXPECT_GT(sides, 0) << "the simulated hand explored the toy device's sides";
   db::Database d(o.db_path);
@@ -200,7 +201,7 @@ TEST(OpenRig, ASessionRunsOnAToyBackEndRegisteredHere) {
   EXPECT_EQ(se.device, "toy-sim");
   int rated = 0;
   for (const auto& t : d.Trials(se.id))
-    if (t.status == db::kTrialCompleted && t.phase != "training") {
+    if (t.status == db::TrialStatus::kCompleted && t.phase != "training") {
       ++rated;
       for (const auto& r : d.Ratings(t.id)) EXPECT_EQ(r.source, db::kRaterSimulated);
     }

@@ -27,11 +27,11 @@ TEST(SessionQueue, AbortThenResumeCompletesEveryTrialOnce) {
   o.participant = "P02";
   o.record = RecordMode::kNone;
   o.stop_after_trials = 7;
-  EXPECT_EQ(RunStudy(p, o).status, "aborted");
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
   o.stop_after_trials = 5;
-  EXPECT_EQ(ResumeStudy(o).status, "aborted");
+  EXPECT_EQ(ResumeStudy(o).status, db::SessionStatus::kAborted);
   o.stop_after_trials = -1;
-  EXPECT_EQ(ResumeStudy(o).status, "completed");
+  EXPECT_EQ(ResumeStudy(o).status, db::SessionStatus::kCompleted);
   ExpectCompleteAndWhole(o.db_path, 2);
   EXPECT_THROW(ResumeStudy(o), InputError);  // nothing left to resume
 }

@@ -20,11 +20,11 @@ inline void ExpectCompleteAndWhole(const std::string& db_path, int criteria) {
   for (const auto& st : d.Studies())
     for (const auto& p : d.Participants(st.id))
       for (const auto& se : d.Sessions(p.id)) {
-        EXPECT_EQ(se.status, "completed") << p.code;
+        EXPECT_EQ(se.status, db::SessionStatus::kCompleted) << p.code;
         std::map<int, int> seen;
         for (const auto& t : d.Trials(se.id)) {
           ++seen[t.plan_index];
-          EXPECT_EQ(t.status, db::kTrialCompleted) << p.code << " trial " << t.plan_index;
+          EXPECT_EQ(t.status, db::TrialStatus::kCompleted) << p.code << " trial " << t.plan_index;
           const auto r = d.Ratings(t.id);
           EXPECT_EQ(r.size(), t.phase == "training" ? 0u : static_cast<std::size_t>(criteria))
               << t.plan_index;

@@ -107,14 +107,14 @@ TEST(StudyRecord, ReservedCodesAreDistinctAndRunWithTheirPlanIndex) {
   EXPECT_EQ(b.index, 1);
   auto status = StudyStatus(db_path);
   ASSERT_EQ(status.size(), 2u);
-  EXPECT_EQ(status[1].session_status, "reserved");
+  EXPECT_FALSE(status[1].session_status.has_value());  // reserved: no session yet
   EXPECT_EQ(status[1].planned, 0);
   // Running the second reserved code uses its row and index; the first stays reserved.
   RunOptions o;
   o.db_path = db_path;
   o.participant = b.code;
   o.record = RecordMode::kNone;
-  EXPECT_EQ(RunStudy(p, o).status, "completed");
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kCompleted);
   {
     const db::Database d(db_path);
     const auto parts = d.Participants(d.Studies()[0].id);
@@ -124,8 +124,8 @@ TEST(StudyRecord, ReservedCodesAreDistinctAndRunWithTheirPlanIndex) {
     EXPECT_EQ(d.Sessions(parts[1].id).size(), 1u);
   }
   status = StudyStatus(db_path);
-  EXPECT_EQ(status[0].session_status, "reserved");
-  EXPECT_EQ(status[1].session_status, "completed");
+  EXPECT_FALSE(status[0].session_status.has_value());  // reserved: no session yet
+  EXPECT_EQ(status[1].session_status, db::SessionStatus::kCompleted);
   // A reserved code run with another plan index is refused; a new code takes the next index.
   o.participant = "P01";
   o.participant_index = 5;
@@ -149,6 +149,71 @@ TEST(StudyRecord, ConcurrentReservationsNeverShareACode) {
   const std::set<std::string> distinct(codes.begin(), codes.end());
   EXPECT_EQ(distinct.size(), codes.size());
   EXPECT_TRUE(distinct.count("NU001") && distinct.count("NU006")) << *distinct.begin();
+}
+
+// A session's mode is read from its row once, into enums (runner/study_runner.hpp): every
+// recorded name parses back to itself, "unrecorded" (before schema v5) is no actuator, and a
+// name this build does not know is bad input naming the database and the column.
+TEST(StudyRecord, RecordedModesParseOnceAndUnknownNamesAreBadInput) {
+  for (const ActuatorKind k : {ActuatorKind::kNone, ActuatorKind::kAudio})
+    EXPECT_EQ(FromName(kActuatorNames, NameOf(kActuatorNames, k)), k);
+  for (const Rater& r :
+       {Rater{}, Rater{RaterKind::kWindow, ""}, Rater{RaterKind::kRatingBox, "16c0:05df"}})
+    EXPECT_EQ(ParseRater(r.Name(), "s.db", "rater"), r) << r.Name();
+  EXPECT_EQ(Rater{}.Name(), "simulated");
+  EXPECT_EQ((Rater{RaterKind::kRatingBox, "16c0:05df"}.Name()), "rating-box:16c0:05df");
+  EXPECT_EQ(RaterOf(false, "16c0:05df"), Rater{});  // no screens: the simulated observer
+  EXPECT_EQ(RaterOf(true, "").kind, RaterKind::kWindow);
+  for (const char* bad : {"Window", "rating-box:", "rating-box", ""})
+    EXPECT_THROW(ParseRater(bad, "s.db", "rater"), InputError) << bad;
+
+  test::TempDir dir;
+  const std::string db_path = dir.File("s.db");
+  const auto record = [&](const std::string& code, const std::string& actuator,
+                          const std::string& rater) {
+    db::Database d(db_path);
+    const auto studies = d.Studies();
+    const auto st = studies.empty() ? d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1})
+                                    : studies[0].id;
+    const auto id = d.AddParticipant({.study_id = st, .code = code});
+    d.StartSession({.participant_id = id,
+                    .device = "sim",
+                    .actuator = actuator,
+                    .screens = true,
+                    .rater = rater});
+  };
+  record("P01", "audio", "rating-box:16c0:05df");
+  record("P02", "unrecorded", "window");
+  record("P03", "vibrator", "window");
+  record("P04", "none", "keyboard");
+  const SessionMode p1 = RecordedMode(db_path, "P01");
+  EXPECT_EQ(p1.actuator, ActuatorKind::kAudio);
+  EXPECT_EQ(p1.rater, (Rater{RaterKind::kRatingBox, "16c0:05df"}));
+  EXPECT_EQ(p1.Describe(),
+            "device sim, actuator audio, screens on, ratings by the participant "
+            "(rating-box:16c0:05df)");
+  const SessionMode p2 = RecordedMode(db_path, "P02");
+  EXPECT_FALSE(p2.actuator.has_value());
+  EXPECT_EQ(p2.Describe(),
+            "device sim, actuator unrecorded, screens on, ratings by the participant (window)");
+  // An unrecorded actuator matches any on resume; a recorded one does not.
+  SessionMode now = p2;
+  now.actuator = ActuatorKind::kAudio;
+  EXPECT_FALSE(CheckResumeMode(p2, now, false, db_path, "P02"));
+  const SessionMode no_actuator{.device = "sim", .screens = true, .rater = p1.rater};
+  EXPECT_THROW(CheckResumeMode(p1, no_actuator, false, db_path, "P01"), InputError);
+  EXPECT_TRUE(CheckResumeMode(p1, no_actuator, true, db_path, "P01"));  // allowed, and it differs
+  for (const auto& [code, field] :
+       {std::pair{"P03", "session.actuator"}, std::pair{"P04", "session.rater"}}) {
+    try {
+      (void)RecordedMode(db_path, code);
+      ADD_FAILURE() << code << ": an unknown name was accepted";
+    } catch (const InputError& e) {
+      ASSERT_FALSE(e.diagnostics().empty());
+      EXPECT_EQ(e.diagnostics()[0].file, db_path) << code;
+      EXPECT_EQ(e.diagnostics()[0].field, field) << code;
+    }
+  }
 }
 
 }  // namespace

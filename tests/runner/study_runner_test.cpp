@@ -36,7 +36,7 @@ TEST(StudyRunner, RunsTheSmallStudyAndReportsStatus) {
   o.participant = "P01";
   o.record = RecordMode::kForce;
   const auto s = RunStudy(p, o);
-  EXPECT_EQ(s.status, "completed");
+  EXPECT_EQ(s.status, db::SessionStatus::kCompleted);
   EXPECT_EQ(s.completed, s.planned);
   ExpectCompleteAndWhole(o.db_path, 2);
   const auto st = StudyStatus(o.db_path);
@@ -69,7 +69,7 @@ TEST(StudyRunner, EverySimulatedTrialSideRunsThroughTheEngine) {
   o.record = RecordMode::kForce;
   o.on_side = [&](const SideReport& r) { sides.push_back(r); };
   const auto s = RunStudy(p, o);
-  ASSERT_EQ(s.status, "completed");
+  ASSERT_EQ(s.status, db::SessionStatus::kCompleted);
   const int rated = s.planned - 4;  // 4 training trials
   ASSERT_EQ(static_cast<int>(sides.size()), 2 * rated);
   const auto force_ticks = static_cast<std::uint64_t>(std::lround(p.stimulus_duration_s * 1000));
@@ -153,7 +153,7 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   o.ui = &ui;
   o.consent_confirmed_by = "E01";  // a person rates
   o.ui_playback_speed = 200;       // the sim's strokes, played fast
-  EXPECT_EQ(RunStudy(p, o).status, "aborted");
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
   EXPECT_GT(ui.stimulus_frames, 0);
   EXPECT_GE(ui.breaks, 1) << "the experimenter's break request";
   ASSERT_GE(ui.sides_seen.size(), 2u);
@@ -184,13 +184,13 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   }
   // Ratings stored are the participant's, exactly.
   for (const auto& t : d.Trials(se.id)) {
-    if (t.status != db::kTrialCompleted || t.phase == "training") continue;
+    if (t.status != db::TrialStatus::kCompleted || t.phase == "training") continue;
     for (const auto& r : d.Ratings(t.id))
       EXPECT_EQ(std::fmod(r.score, 10.0), r.criterion == p.criteria[0] ? 0.0 : 1.0)
           << r.criterion << " " << r.score;
   }
   ui.abort_at_trial = -1;
-  EXPECT_EQ(ResumeStudy(o).status, "completed");
+  EXPECT_EQ(ResumeStudy(o).status, db::SessionStatus::kCompleted);
   ExpectCompleteAndWhole(o.db_path, 2);
 }
 
@@ -239,7 +239,7 @@ TEST(StudyRunner, SigkillAtRandomMomentsThenResumeLosesNothing) {
       int completed = 0;
       if (started) {
         const auto st = StudyStatus(db, "P09");
-        done = st[0].session_status == "completed";
+        done = st[0].session_status == db::SessionStatus::kCompleted;
         completed = st[0].completed;
       }
       if (completed <= last_completed && max_ms < 120000) max_ms *= 2;
@@ -268,7 +268,7 @@ std::map<std::string, double> SimulateAndAverage(
   o.record = RecordMode::kNone;
   for (int i = 1; i <= n; ++i) {
     o.participant = (i < 10 ? "S0" : "S") + std::to_string(i);  // the default code pattern: S01
-    EXPECT_EQ(RunStudy(p, o).status, "completed") << o.participant;
+    EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kCompleted) << o.participant;
   }
   db::Database d(db_path);
   std::map<std::string, std::pair<double, int>> sums;

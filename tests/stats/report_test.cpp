@@ -61,7 +61,7 @@ void WriteStudy(const std::string& db_path, const std::string& protocol_text, in
       d.StartTrial(tid);
       d.CompleteTrial(tid, ratings);
     }
-    d.EndSession(sid, "completed");
+    d.EndSession(sid, db::SessionStatus::kCompleted);
   }
 }
 

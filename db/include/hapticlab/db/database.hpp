@@ -7,6 +7,8 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/core/enum_names.hpp"
+
 struct sqlite3;
 
 namespace hapticlab::db {
@@ -41,18 +43,31 @@ struct Participant {
 /// Rating source of the simulated observer (anything else is a person's input device).
 inline constexpr const char* kRaterSimulated = "simulated";
 
+/// A session's status; the session table's `status` holds its name (kSessionStatusNames).
+enum class SessionStatus {
+  kRunning,    ///< started, not ended (or its process died: `study resume` continues it)
+  kCompleted,  ///< every planned trial completed
+  kAborted,    ///< stopped by the experimenter, a signal or --stop-after (resumable)
+  kFailed,     ///< stopped on an error (a 'stopped' event says why; resumable)
+};
+inline constexpr EnumTable<SessionStatus, 4> kSessionStatusNames{
+    {{SessionStatus::kRunning, "running"},
+     {SessionStatus::kCompleted, "completed"},
+     {SessionStatus::kAborted, "aborted"},
+     {SessionStatus::kFailed, "failed"}}};
+
 /// One sitting of a participant, with the provenance needed to reproduce it.
 struct Session {
   std::int64_t id = 0;
   std::int64_t participant_id = 0;
-  std::string started_at;          ///< ISO-8601 UTC, filled by the database when empty
-  std::string ended_at;            ///< empty while running
-  std::string status = "running";  ///< running | completed | aborted | failed (an error)
-  std::string software_version;    ///< "<version>+<git sha>"
-  std::string device;              ///< device back-end name and serial
-  std::string calibration;         ///< device calibration description or hash
-  std::string provenance_json;     ///< protocol hash, seeds, model hashes (JSON object)
-  std::string plan_json;           ///< the resolved trial plan (schema v3)
+  std::string started_at;  ///< ISO-8601 UTC, filled by the database when empty
+  std::string ended_at;    ///< empty while running
+  SessionStatus status = SessionStatus::kRunning;
+  std::string software_version;  ///< "<version>+<git sha>"
+  std::string device;            ///< device back-end name and serial
+  std::string calibration;       ///< device calibration description or hash
+  std::string provenance_json;   ///< protocol hash, seeds, model hashes (JSON object)
+  std::string plan_json;         ///< the resolved trial plan (schema v3)
   // The session's mode (schema v5); `study resume` continues in it.
   std::string actuator;  ///< vibrotactile actuator: "audio", "none" ("unrecorded": before v5)
   bool screens = false;  ///< participant window and console (--ui)
@@ -62,12 +77,20 @@ struct Session {
   std::string site_code = kDefaultSiteCode;
 };
 
-/// Trial status values.
-inline constexpr const char* kTrialPlanned = "planned";
-inline constexpr const char* kTrialRunning = "running";
-inline constexpr const char* kTrialCompleted = "completed";
-inline constexpr const char* kTrialFaulted = "faulted";
-inline constexpr const char* kTrialAborted = "aborted";
+/// A trial's status; the trial table's `status` holds its name (kTrialStatusNames).
+enum class TrialStatus {
+  kPlanned,    ///< not started
+  kRunning,    ///< an attempt started and did not end (a crash: run again on resume)
+  kCompleted,  ///< rated (its ratings and completion committed together)
+  kFaulted,    ///< an attempt faulted; re-queued at the end of its phase
+  kAborted,    ///< the session stopped during it
+};
+inline constexpr EnumTable<TrialStatus, 5> kTrialStatusNames{
+    {{TrialStatus::kPlanned, "planned"},
+     {TrialStatus::kRunning, "running"},
+     {TrialStatus::kCompleted, "completed"},
+     {TrialStatus::kFaulted, "faulted"},
+     {TrialStatus::kAborted, "aborted"}}};
 
 /// One trial of a session's plan.
 struct Trial {
@@ -81,7 +104,7 @@ struct Trial {
   int repetition = 0;      ///< 0-based repetition index
   std::string left;        ///< stimulus on the left square
   std::string right;       ///< stimulus on the right square
-  std::string status = kTrialPlanned;
+  TrialStatus status = TrialStatus::kPlanned;
   int attempts = 0;           ///< how many times the trial was started
   int completed_attempt = 0;  ///< the attempt whose data the trial holds (0 until completed)
 };
@@ -199,7 +222,9 @@ class Database {
 
   // Sessions.
   std::int64_t StartSession(const Session& s);
-  void EndSession(std::int64_t session_id, const std::string& status);
+  void EndSession(std::int64_t session_id, SessionStatus status);
+  /// Marks an ended (or killed) session running again for `study resume` (ended_at cleared).
+  void ReopenSession(std::int64_t session_id);
   /// Records a new mode for a session (resume with --change-mode); ratings stored from now
   /// on carry the new rater as their source.
   void SetSessionMode(std::int64_t session_id, const std::string& device,
@@ -221,7 +246,7 @@ class Database {
   int StartTrial(std::int64_t trial_id);
   /// The trial's current attempt (its attempts counter; 0 before it was started).
   int CurrentAttempt(std::int64_t trial_id) const;
-  void SetTrialStatus(std::int64_t trial_id, const std::string& status);
+  void SetTrialStatus(std::int64_t trial_id, TrialStatus status);
   /// Stores every rating of the trial and marks it completed, in one transaction: after a
   /// crash either all of them and the completion marker are present, or none.
   /// The trial's current attempt becomes its completing attempt. `streams` are the writer's
@@ -269,6 +294,36 @@ class Database {
 
   std::string path_;
   sqlite3* db_ = nullptr;
+};
+
+/// A write transaction on a Database (RAII): BEGIN IMMEDIATE when made, so the write lock is
+/// taken at once (another writer waits up to the busy timeout, then this throws
+/// std::runtime_error naming the file); what is written through the connection until Commit()
+/// is stored together. Destroyed without a successful Commit() (an exception on the way, a
+/// COMMIT that failed) it rolls back: after a crash or an error all of it or none is stored.
+/// Transactions do not nest: a Database method that keeps its own (CompleteTrial, Migrate)
+/// cannot run inside one.
+///
+///   db::WriteTransaction tx(database);
+///   database.LogEvent(...);
+///   database.EndSession(...);
+///   tx.Commit();
+class WriteTransaction {
+ public:
+  explicit WriteTransaction(Database& database);
+  ~WriteTransaction();
+  WriteTransaction(const WriteTransaction&) = delete;
+  WriteTransaction& operator=(const WriteTransaction&) = delete;
+  /// COMMIT. @throws std::runtime_error naming the file when it fails (then nothing is stored)
+  void Commit();
+
+ protected:
+  /// On a bare connection (the module's own connections without a Database).
+  explicit WriteTransaction(sqlite3* db);
+
+ private:
+  sqlite3* db_;
+  bool done_ = false;
 };
 
 /// The one-writer lease of a study database: an advisory lock (flock) on the database file,

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/core/enum_names.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/runner/rig.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
@@ -27,6 +28,12 @@ namespace hapticlab::runner {
 /// What a back-end's device is: simulated (a simulated hand holds it; the simulated observer
 /// rates unless a participant window does) or hardware (a person holds it and rates).
 enum class DeviceKind { kSimulated, kHardware };
+
+/// The vibrotactile actuator a rig plays the vibration on (`--actuator`; recorded as the
+/// session's `actuator`): none, or the sound card (PortAudio) with masking noise.
+enum class ActuatorKind { kNone, kAudio };
+inline constexpr EnumTable<ActuatorKind, 2> kActuatorNames{
+    {{ActuatorKind::kNone, "none"}, {ActuatorKind::kAudio, "audio"}}};
 
 /// The parts a rig owns, released in the reverse order they were kept (a device may borrow
 /// what was kept before it: the Falcon twin's link borrows the simulated hand).
@@ -82,14 +89,14 @@ struct RigRequest {
   std::string device;               ///< a registered back-end's name
   std::optional<RigFile> rig_file;  ///< frames and calibration; none: the back-end's built-in rig
   std::string firmware;             ///< a back-end that needs_firmware: its firmware file
-  std::string actuator = "none";    ///< "audio" (PortAudio, with masking noise) or "none"
-  std::string audio_device;         ///< PortAudio output device (name substring; empty: default)
-  double full_scale_mps2 = 50;      ///< acceleration at the sound card's full scale
-  double noise_rms_fs = 0.1;        ///< masking level when the protocol asks for noise
-  std::string rating_box;           ///< "VID:PID" of a HID rating box (empty: none)
-  std::string rating_layout;        ///< the box's report layout file
-  sim::SimDeviceModel generic;      ///< simulated back-ends: the generic device's model
-  sim::FalconTwinOptions twin;      ///< the Falcon twin's emulated link
+  ActuatorKind actuator = ActuatorKind::kNone;
+  std::string audio_device;     ///< PortAudio output device (name substring; empty: default)
+  double full_scale_mps2 = 50;  ///< acceleration at the sound card's full scale
+  double noise_rms_fs = 0.1;    ///< masking level when the protocol asks for noise
+  std::string rating_box;       ///< "VID:PID" of a HID rating box (empty: none)
+  std::string rating_layout;    ///< the box's report layout file
+  sim::SimDeviceModel generic;  ///< simulated back-ends: the generic device's model
+  sim::FalconTwinOptions twin;  ///< the Falcon twin's emulated link
   /// Simulated back-ends: the device and the hand on the steady clock (rig check --clock
   /// real), not on the engine's virtual clock (Rig::sim->clock then stands still).
   bool real_clock = false;
@@ -146,7 +153,8 @@ std::string SimulatedBackendList();
 
 /// Opens the rig a request names: the back-end's device, then the actuator and the rating
 /// box. Errors: InputError on "<command line>" with the RigRequest member at fault as field
-/// ("device", "firmware", "actuator", "rating_box", "rating_layout"); std::runtime_error when
+/// ("device", "firmware", "actuator": an actuator on a simulated rig, "rating_box",
+/// "rating_layout"); std::runtime_error when
 /// hardware is absent or fails (devices::DeviceErrorMessage's sentence).
 std::unique_ptr<Rig> OpenRig(const RigRequest& request);
 

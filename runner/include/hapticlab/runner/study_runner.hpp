@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/db/database.hpp"
 #include "hapticlab/devices/device.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/open_rig.hpp"
@@ -177,6 +178,24 @@ struct FeltTrial {
   std::array<sim::Features, 2> felt{};
 };
 
+/// Who rates a session's trials: the simulated observer, or a person in the participant
+/// window, by mouse or on a rating box. The database records it by name (the session's
+/// `rater`, each rating's `source`): "simulated", "window", "rating-box:VID:PID".
+enum class RaterKind { kSimulated, kWindow, kRatingBox };
+struct Rater {
+  RaterKind kind = RaterKind::kSimulated;
+  std::string box;  ///< kRatingBox: the box's "VID:PID" (hex)
+  /// The name the database records.
+  std::string Name() const;
+  bool operator==(const Rater&) const = default;
+};
+/// The rater a recorded name gives. @throws InputError at (file, 0, field) for a name that
+/// is none of the above
+Rater ParseRater(const std::string& name, const std::string& file, const std::string& field);
+/// Who rates a session run with screens (`ui`) or not, on the rating box "VID:PID" (empty: by
+/// mouse in the window): the simulated observer without screens.
+Rater RaterOf(bool ui, const std::string& rating_box);
+
 struct RunOptions {
   std::string db_path;
   std::string participant;     ///< pseudonymous code, e.g. "P07"
@@ -200,9 +219,9 @@ struct RunOptions {
   /// rig's sample pose is probably wrong).
   int max_untouched_trials = 3;
   // The session's mode besides `device` and `ui` (recorded; resume continues in it).
-  std::string actuator = "none";        ///< vibrotactile actuator back-end ("audio", "none")
-  std::string rating_input = "window";  ///< with a UI: the participant's input device
-                                        ///< ("window", "rating-box:VID:PID")
+  ActuatorKind actuator = ActuatorKind::kNone;  ///< the vibrotactile actuator
+  /// With a UI: the rating box ("VID:PID") the participant rates on; empty: the window.
+  std::string rating_box;
   /// Resume: continue in this mode although it differs from the recorded one (logged as a
   /// 'mode-change' event); without it a different mode is refused.
   bool change_mode = false;
@@ -242,9 +261,10 @@ struct RunOptions {
 /// A session's mode: what `study run` recorded and `study resume` continues in.
 struct SessionMode {
   std::string device = DefaultBackendName();  ///< back-end
-  std::string actuator = "none";              ///< "unrecorded" for sessions before schema v5
-  bool screens = false;                       ///< --ui
-  std::string rater = "simulated";            ///< "simulated" or the participant's input device
+  /// None: "unrecorded" (a session before schema v5; it matches any actuator on resume).
+  std::optional<ActuatorKind> actuator = ActuatorKind::kNone;
+  bool screens = false;  ///< --ui
+  Rater rater;           ///< the simulated observer, or the participant's input device
   std::string Describe()
       const;  ///< e.g. "device sim, actuator none, screens off, ratings simulated"
 };
@@ -259,7 +279,8 @@ bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool c
 SessionMode ModeOf(const RunOptions& options);
 
 /// The recorded mode of a participant's last session (for `study resume` to default to).
-/// @throws InputError when the database or the participant does not exist
+/// @throws InputError when the database or the participant does not exist, or the session
+/// records an actuator or rater this build does not know (field session.actuator/rater)
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant);
 
 /// Every check `RunStudy` makes before it writes anything, for `study validate`: adaptive
@@ -284,7 +305,7 @@ int StopRequested() noexcept;
 struct RunSummary {
   std::int64_t session_id = 0;
   std::string participant;
-  std::string status;  ///< completed | aborted
+  db::SessionStatus status = db::SessionStatus::kRunning;  ///< kCompleted or kAborted when returned
   int planned = 0, completed = 0, executed = 0, faults = 0;
   double simulated_s = 0;  ///< stimulus time rendered (sim)
   double wall_s = 0;
@@ -302,7 +323,8 @@ struct ParticipantStatus {
   int planned = 0, completed = 0;
   int faulted = 0;     ///< faulted attempts (each re-queued; 'attempt-faulted' events)
   int duplicates = 0;  ///< planned trials completed more than once (must be 0)
-  std::string session_status;
+  /// The last session's status; none: a code reserved by `participant new` (no session yet).
+  std::optional<db::SessionStatus> session_status;
 };
 /// Progress of every participant (or one) in the database.
 std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
