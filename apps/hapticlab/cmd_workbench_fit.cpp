@@ -22,13 +22,145 @@ namespace hapticlab::cli::workbench_cli {
 
 using namespace modeling::wb;
 
+namespace {
+
+struct FitArgs {
+  std::string measurement, model, out;
+  std::vector<std::string> add;
+  bool json = false, quiet = false;
+};
+
+// What the fit reports: the fit on all data, the friction bootstrap, and the errors before
+// and after, on all data and held out.
+struct FitOutcome {
+  FitReport rep;
+  BootstrapReport boot;
+  Errors e_before, e_after, h_before, h_after;
+};
+
+// "Before" is the given model as it is, or (no --model) the baseline fitted; without --add
+// and --model, before and after are the same fit and are reported once.
+Errors ErrorsBefore(const FitArgs& o, const Model& start, const Replay& r, const Errors& e_after,
+                    Progress& prog) {
+  const bool given = !o.model.empty();
+  if (!given && !o.add.empty()) {
+    Model before = start;
+    prog.Line("fit: fitting the baseline on all data");
+    Fit(&before, r);
+    return ComputeErrors(r, Predict(before, r), Split::kAll);
+  }
+  if (given) return ComputeErrors(r, Predict(start, r), Split::kAll);
+  return e_after;
+}
+
+// The held-out errors: fitted on the training blocks, scored on the held-out ones (before
+// --add only when there is an --add).
+void HeldOutErrors(const FitArgs& o, const Model& start, const Replay& r, Progress& prog,
+                   FitOutcome& x) {
+  prog.Line("fit: fitting on the training blocks for the held-out errors");
+  Model hb = start, ha = start;
+  AddEffects(&ha, o.add, r);
+  Fit(&ha, r, {.split = Split::kTrain});
+  x.h_after = ComputeErrors(r, Predict(ha, r), Split::kHeldOut);
+  x.h_before = x.h_after;
+  if (!o.add.empty()) {
+    Fit(&hb, r, {.split = Split::kTrain});
+    x.h_before = ComputeErrors(r, Predict(hb, r), Split::kHeldOut);
+  }
+}
+
+// Fits `after` (start plus --add) on all data with uncertainties, then the errors.
+FitOutcome FitAndScore(const FitArgs& o, const Model& start, Model* after, const Replay& r,
+                       const Measurement& measured, const ReplayOptions& replayed, Progress& prog) {
+  FitOutcome x;
+  prog.Line("fit: fitting on all data (with uncertainties)");
+  x.rep = Fit(after, r, {.uncertainty = true});
+  // The friction channel as `model fit-contact` reports it: bias-corrected, with standard
+  // errors through the preprocessing (workbench_bootstrap.hpp).
+  if (auto* cf = x.rep.Find(Channel::kFriction); cf && cf->summary.usable) {
+    prog.Line("fit: friction through the preprocessing (parametric bootstrap)");
+    x.boot = BootstrapFriction(after, measured, replayed, {.uncertainty = true}, cf);
+  }
+  x.e_after = ComputeErrors(r, Predict(*after, r), Split::kAll);
+  x.e_before = ErrorsBefore(o, start, r, x.e_after, prog);
+  HeldOutErrors(o, start, r, prog, x);
+  return x;
+}
+
+nlohmann::json FitJson(const std::string& out, const Model& after, const FitOutcome& x) {
+  nlohmann::json params;
+  for (const auto& [e, ps] : after.params)
+    for (const auto& [k, v] : ps) params[e][k] = v;
+  auto j = nlohmann::json{
+      {"before", ErrorsJson(x.e_before)},
+      {"after", ErrorsJson(x.e_after)},
+      {"held_out", {{"before", ErrorsJson(x.h_before)}, {"after", ErrorsJson(x.h_after)}}},
+      {"effects", after.effects},
+      {"params", params},
+      {"out", out}};
+  j.update(FitReportJson(x.rep));
+  if (x.rep.Find(Channel::kFriction)) j["friction_bootstrap"] = BootstrapJson(x.boot);
+  return j;
+}
+
+void PrintFit(const FitArgs& o, const Model& after, const FitOutcome& x) {
+  const bool given = !o.model.empty();
+  fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
+  if (given || !o.add.empty()) {
+    fmt::print("before ({}): {}\n", given ? "model as given" : "baseline, fitted",
+               ErrorsLine(x.e_before));
+    fmt::print("after  (fitted):          {}\n", ErrorsLine(x.e_after));
+    if (!o.add.empty()) fmt::print("held out, before: {}\n", ErrorsLine(x.h_before));
+    fmt::print("held out{}: {}\n", o.add.empty() ? "" : ", after ", ErrorsLine(x.h_after));
+  } else {
+    fmt::print("fitted:   {}\n", ErrorsLine(x.e_after));
+    fmt::print("held out: {}\n", ErrorsLine(x.h_after));
+  }
+  for (const auto& c : x.rep.channels) {
+    fmt::print("{}\n", FitSummaryLine(c.summary));
+    for (const auto& p : c.params)
+      fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name,
+                 p.value, p.sd, p.lo95, p.hi95, p.at_bound ? "  AT A BOUND" : "");
+  }
+  if (x.rep.Find(Channel::kFriction)) fmt::print("{}\n", BootstrapLine(x.boot));
+  fmt::print("wrote {}\n", o.out);
+}
+
+int RunFit(const FitArgs& o) {
+  RequireKnownEffects(o.add, "<command line>", "--add");
+  Progress prog;
+  prog.quiet = o.quiet;
+  Model start;
+  const bool given = !o.model.empty();
+  if (given) start = LoadModel(o.model);
+  prog.Line(fmt::format("fit: reading {}", o.measurement));
+  Measurement measured;
+  ReplayOptions replayed;
+  const auto r = Load(o.measurement, given ? &start : nullptr, &measured, &replayed);
+  if (!given) AddEffects(&start, BaselineEffects(), r);
+  Model after = start;
+  AddEffects(&after, o.add, r);
+  const FitOutcome x = FitAndScore(o, start, &after, r, measured, replayed, prog);
+  if (after.name.empty()) after.name = std::filesystem::path(o.out).stem().string();
+  SaveModel(after, o.out, &r);
+  if (o.json)
+    PrintJson(FitJson(o.out, after, x));
+  else
+    PrintFit(o, after, x);
+  if (!x.rep.IsUsable()) {
+    fmt::print(stderr,
+               "fit: a channel's fit is not usable (see the fit lines); {} was written for "
+               "inspection\n",
+               o.out);
+    return kExitFailure;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
 void AddFit(CLI::App& app) {
-  struct O {
-    std::string measurement, model, out;
-    std::vector<std::string> add;
-    bool json = false, quiet = false;
-  };
-  auto o = std::make_shared<O>();
+  auto o = std::make_shared<FitArgs>();
   auto* cmd = app.add_subcommand(
       "fit",
       "Fit a material model to a measurement: the thesis's baseline (coulomb, viscous, dahl,\n"
@@ -54,100 +186,7 @@ void AddFit(CLI::App& app) {
                 "Print {before, after, held_out:{before, after}, effects, params, estimates, fits, "
                 "usable} as JSON");
   cmd->add_flag("--quiet", o->quiet, "No progress lines on stderr");
-  cmd->callback([o] {
-    RunGuarded([&] {
-      RequireKnownEffects(o->add, "<command line>", "--add");
-      Progress prog;
-      prog.quiet = o->quiet;
-      Model start;
-      const bool given = !o->model.empty();
-      if (given) start = LoadModel(o->model);
-      prog.Line(fmt::format("fit: reading {}", o->measurement));
-      Measurement measured;
-      ReplayOptions replayed;
-      const auto r = Load(o->measurement, given ? &start : nullptr, &measured, &replayed);
-      if (!given) AddEffects(&start, BaselineEffects(), r);
-      Model after = start;
-      AddEffects(&after, o->add, r);
-      // "Before" is the given model as it is, or (no --model) the baseline fitted; without
-      // --add and --model, before and after are the same fit and are reported once.
-      const bool changes = given || !o->add.empty();
-      prog.Line("fit: fitting on all data (with uncertainties)");
-      auto rep = Fit(&after, r, {.uncertainty = true});
-      // The friction channel as `model fit-contact` reports it: bias-corrected, with standard
-      // errors through the preprocessing (workbench_bootstrap.hpp).
-      BootstrapReport boot;
-      if (auto* cf = rep.Find(Channel::kFriction); cf && cf->summary.usable) {
-        prog.Line("fit: friction through the preprocessing (parametric bootstrap)");
-        boot = BootstrapFriction(&after, measured, replayed, {.uncertainty = true}, cf);
-      }
-      const auto e_after = ComputeErrors(r, Predict(after, r), Split::kAll);
-      Errors e_before = e_after;
-      if (!given && !o->add.empty()) {
-        Model before = start;
-        prog.Line("fit: fitting the baseline on all data");
-        Fit(&before, r);
-        e_before = ComputeErrors(r, Predict(before, r), Split::kAll);
-      } else if (given) {
-        e_before = ComputeErrors(r, Predict(start, r), Split::kAll);
-      }
-      prog.Line("fit: fitting on the training blocks for the held-out errors");
-      Model hb = start, ha = start;
-      AddEffects(&ha, o->add, r);
-      Fit(&ha, r, {.split = Split::kTrain});
-      const auto h_after = ComputeErrors(r, Predict(ha, r), Split::kHeldOut);
-      Errors h_before = h_after;
-      if (!o->add.empty()) {
-        Fit(&hb, r, {.split = Split::kTrain});
-        h_before = ComputeErrors(r, Predict(hb, r), Split::kHeldOut);
-      }
-      if (after.name.empty()) after.name = std::filesystem::path(o->out).stem().string();
-      SaveModel(after, o->out, &r);
-      if (o->json) {
-        nlohmann::json params;
-        for (const auto& [e, ps] : after.params)
-          for (const auto& [k, v] : ps) params[e][k] = v;
-        auto j = nlohmann::json{
-            {"before", ErrorsJson(e_before)},
-            {"after", ErrorsJson(e_after)},
-            {"held_out", {{"before", ErrorsJson(h_before)}, {"after", ErrorsJson(h_after)}}},
-            {"effects", after.effects},
-            {"params", params},
-            {"out", o->out}};
-        j.update(FitReportJson(rep));
-        if (rep.Find(Channel::kFriction)) j["friction_bootstrap"] = BootstrapJson(boot);
-        PrintJson(j);
-      } else {
-        fmt::print("effects: {}\n", fmt::join(after.effects, ", "));
-        if (changes) {
-          fmt::print("before ({}): {}\n", given ? "model as given" : "baseline, fitted",
-                     ErrorsLine(e_before));
-          fmt::print("after  (fitted):          {}\n", ErrorsLine(e_after));
-          if (!o->add.empty()) fmt::print("held out, before: {}\n", ErrorsLine(h_before));
-          fmt::print("held out{}: {}\n", o->add.empty() ? "" : ", after ", ErrorsLine(h_after));
-        } else {
-          fmt::print("fitted:   {}\n", ErrorsLine(e_after));
-          fmt::print("held out: {}\n", ErrorsLine(h_after));
-        }
-        for (const auto& c : rep.channels) {
-          fmt::print("{}\n", FitSummaryLine(c.summary));
-          for (const auto& p : c.params)
-            fmt::print("  {}.{} = {:.6g} +- {:.2g} (95 %: {:.6g} .. {:.6g}){}\n", p.effect, p.name,
-                       p.value, p.sd, p.lo95, p.hi95, p.at_bound ? "  AT A BOUND" : "");
-        }
-        if (rep.Find(Channel::kFriction)) fmt::print("{}\n", BootstrapLine(boot));
-        fmt::print("wrote {}\n", o->out);
-      }
-      if (!rep.IsUsable()) {
-        fmt::print(stderr,
-                   "fit: a channel's fit is not usable (see the fit lines); {} was written for "
-                   "inspection\n",
-                   o->out);
-        return kExitFailure;
-      }
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded([&] { return RunFit(*o); }); });
 }
 
 }  // namespace hapticlab::cli::workbench_cli

@@ -180,6 +180,174 @@ std::size_t WritePhysio(const internal::StreamRecording& r, const fs::path& tsv_
   return rows;
 }
 
+// Participants: BIDS labels are letters and digits only; two codes that map to one label
+// are refused.
+struct BidsParticipants {
+  std::map<std::string, std::string> label_of;  // "<study>\n<code>" -> label
+  std::vector<std::vector<std::string>> rows;   // participants.tsv: id, code, study, index
+  std::set<std::string> studies;
+};
+
+BidsParticipants LabelParticipants(const Database& db) {
+  BidsParticipants out;
+  std::map<std::string, std::string> owner;  // label -> code
+  for (const auto& st : db.Studies()) {
+    out.studies.insert(st.name);
+    for (const auto& p : db.Participants(st.id)) {
+      if (db.IsReserved(p.id)) continue;  // a code reserved by `participant new`: no data
+      const std::string label = Alnum(p.code);
+      const auto [it, fresh] = owner.emplace(label, p.code);
+      if (!fresh)
+        throw InputError(db.path(), 0, "participant.code",
+                         "participants " + it->second + " and " + p.code + " (study " + st.name +
+                             ") map to one BIDS label sub-" + label +
+                             "; export the studies separately");
+      out.label_of[st.name + "\n" + p.code] = label;
+      out.rows.push_back({"sub-" + label, p.code, st.name, std::to_string(p.index)});
+    }
+  }
+  return out;
+}
+
+// dataset_description.json and README.
+void WriteDatasetDescription(const fs::path& root, const std::set<std::string>& studies,
+                             std::vector<ExportedFile>& files) {
+  std::string names;
+  for (const auto& n : studies) names += (names.empty() ? "" : ", ") + n;
+  ordered_json d;
+  d["Name"] = "HapticLab study export: " + (names.empty() ? std::string("(empty)") : names);
+  d["BIDSVersion"] = "1.9.0";
+  d["DatasetType"] = "raw";
+  d["GeneratedBy"] = {{{"Name", "HapticLab"},
+                       {"Version", std::string(kVersion) + "+" + kGitSha},
+                       {"Description", "hapticlab export --format bids"}}};
+  WriteJson(root / "dataset_description.json", d);
+  files.push_back({(root / "dataset_description.json").string(), 0});
+  WriteText(root / "README", kReadme);
+  files.push_back({(root / "README").string(), 0});
+}
+
+// participants.tsv and its sidecar.
+void WriteParticipants(const fs::path& root, const BidsParticipants& participants,
+                       std::vector<ExportedFile>& files) {
+  std::string t = "participant_id\tcode\tstudy\tplan_index\n";
+  for (const auto& r : participants.rows)
+    t += Cell(r[0]) + "\t" + Cell(r[1]) + "\t" + Cell(r[2]) + "\t" + r[3] + "\n";
+  WriteText(root / "participants.tsv", t);
+  files.push_back({(root / "participants.tsv").string(), participants.rows.size()});
+  ordered_json j;
+  j["code"] = {{"Description", "pseudonymous participant code as stored in the study database"}};
+  j["study"] = {{"Description", "study (protocol) name"}};
+  j["plan_index"] = {{"Description", "participant index used to plan the trial order (0-based)"}};
+  WriteJson(root / "participants.json", j);
+}
+
+// code/: the protocols and the stored material models; returns their hashes.tsv lines.
+std::string WriteProtocolsAndModels(const Database& db, const fs::path& root) {
+  std::string hashes;
+  for (const auto& st : db.Studies()) {
+    const std::string name =
+        "protocol-" + (Alnum(st.name).empty() ? std::to_string(st.id) : Alnum(st.name)) + ".toml";
+    WriteText(root / "code" / name, st.protocol_toml);
+    hashes += "code/" + name + "\t" + st.protocol_hash + "\tstudy protocol as run\n";
+  }
+  internal::Stmt q(db.handle(), "SELECT name, hash, toml FROM material_model ORDER BY id");
+  bool any_model = false;
+  while (q.Step()) {
+    if (!any_model) fs::create_directories(root / "code" / "models");
+    any_model = true;
+    const std::string name = Alnum(q.Text(0)) + "-" + q.Text(1).substr(0, 12) + ".toml";
+    WriteText(root / "code" / "models" / name, q.Text(2));
+    hashes +=
+        "code/models/" + name + "\t" + q.Text(1) + "\tmaterial model stored in the database\n";
+  }
+  return hashes;
+}
+
+// code/hashes.tsv: the files under code/, then the models a session used but whose text the
+// database does not hold (their hash only).
+void WriteCode(const Database& db, const std::vector<SessionRecord>& sessions, const fs::path& root,
+               std::vector<ExportedFile>& files) {
+  std::string hashes = "file\tsha256\tsource\n" + WriteProtocolsAndModels(db, root);
+  std::set<std::string> listed;
+  for (const auto& s : sessions) {
+    const auto prov = nlohmann::json::parse(s.session.provenance_json, nullptr, false);
+    if (prov.is_discarded() || !prov.contains("model_hashes") || !prov["model_hashes"].is_object())
+      continue;
+    for (const auto& [id, h] : prov["model_hashes"].items()) {
+      const std::string line = "n/a\t" + h.get<std::string>() + "\tmaterial model '" + id +
+                               "' (hash from the session provenance; text not stored)\n";
+      if (listed.insert(line).second && hashes.find(h.get<std::string>()) == std::string::npos)
+        hashes += line;
+    }
+  }
+  WriteText(root / "code" / "hashes.tsv", hashes);
+  files.push_back({(root / "code" / "hashes.tsv").string(), 0});
+}
+
+// A session's completed trials in plan order, as the CSV export.
+std::vector<const internal::TrialRecord*> InPlanOrder(const SessionRecord& s) {
+  std::vector<const internal::TrialRecord*> by_plan;
+  for (const auto& t : s.trials) by_plan.push_back(&t);
+  std::stable_sort(by_plan.begin(), by_plan.end(), [](const auto* a, const auto* b) {
+    return a->trial.plan_index < b->trial.plan_index;
+  });
+  return by_plan;
+}
+
+// The _beh.tsv text: one row per rating; *rows counts them.
+std::string BehTable(const std::vector<const internal::TrialRecord*>& by_plan, std::size_t* rows) {
+  std::string beh =
+      "trial\tphase\tmaterial\tcomparison\tmethod\trepetition\tleft\tright\tattempts\tcriterion\t"
+      "score\tresponse_time\trating_source\n";
+  for (const auto* t : by_plan) {
+    const auto& x = t->trial;
+    for (const auto& r : t->ratings) {
+      beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index + 1,
+                         Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
+                         x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
+                         Num(r.score), Num(r.response_time_s), Cell(r.source));
+      ++*rows;
+    }
+  }
+  return beh;
+}
+
+// What one participant's sessions exported (the progress line).
+struct BidsCounts {
+  std::size_t trials = 0, recordings = 0, samples = 0, ratings = 0;
+};
+
+// One session: sub-*/ses-*/beh/ with the ratings table, its sidecar and the physio recordings.
+void WriteBidsSession(const SessionRecord& s, const std::string& sub, const fs::path& root,
+                      std::vector<ExportedFile>& files, BidsCounts& n) {
+  const std::string ses = "ses-" + std::to_string(s.number);
+  const std::string task =
+      "task-" + (Alnum(s.study.name).empty() ? std::string("study") : Alnum(s.study.name));
+  const fs::path dir = root / sub / ses / "beh";
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
+  const std::string stem = sub + "_" + ses + "_" + task;
+  const auto by_plan = InPlanOrder(s);
+  std::size_t rows = 0;
+  const std::string beh = BehTable(by_plan, &rows);
+  WriteText(dir / (stem + "_beh.tsv"), beh);
+  WriteJson(dir / (stem + "_beh.json"), BehSidecar(s));
+  files.push_back({(dir / (stem + "_beh.tsv")).string(), rows});
+  n.ratings += rows;
+  n.trials += by_plan.size();
+  for (const auto* t : by_plan)
+    for (const auto& r : t->streams) {
+      const std::string name = stem + "_run-" + std::to_string(t->trial.plan_index + 1) +
+                               "_recording-" + Alnum(r.stream) + "_physio";
+      const fs::path gz = dir / (name + ".tsv.gz");
+      files.push_back({gz.string(), WritePhysio(r, gz, dir / (name + ".json"), s)});
+      n.samples += files.back().rows;
+      ++n.recordings;
+    }
+}
+
 }  // namespace
 
 std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_dir,
@@ -190,138 +358,16 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
   fs::create_directories(root / "code", ec);
   if (ec) throw std::runtime_error(out_dir + ": cannot create directory: " + ec.message());
   std::vector<ExportedFile> files;
-
-  // Participants: BIDS labels are letters and digits only.
-  std::map<std::string, std::string> label_of;  // "<study>\n<code>" -> label
-  std::map<std::string, std::string> owner;     // label -> code
-  std::vector<std::vector<std::string>> participant_rows;
-  std::set<std::string> studies;
-  for (const auto& st : db.Studies()) {
-    studies.insert(st.name);
-    for (const auto& p : db.Participants(st.id)) {
-      if (db.IsReserved(p.id)) continue;  // a code reserved by `participant new`: no data
-      const std::string label = Alnum(p.code);
-      const auto [it, fresh] = owner.emplace(label, p.code);
-      if (!fresh)
-        throw InputError(db.path(), 0, "participant.code",
-                         "participants " + it->second + " and " + p.code + " (study " + st.name +
-                             ") map to one BIDS label sub-" + label +
-                             "; export the studies separately");
-      label_of[st.name + "\n" + p.code] = label;
-      participant_rows.push_back({"sub-" + label, p.code, st.name, std::to_string(p.index)});
-    }
-  }
-
-  {
-    std::string names;
-    for (const auto& n : studies) names += (names.empty() ? "" : ", ") + n;
-    ordered_json d;
-    d["Name"] = "HapticLab study export: " + (names.empty() ? std::string("(empty)") : names);
-    d["BIDSVersion"] = "1.9.0";
-    d["DatasetType"] = "raw";
-    d["GeneratedBy"] = {{{"Name", "HapticLab"},
-                         {"Version", std::string(kVersion) + "+" + kGitSha},
-                         {"Description", "hapticlab export --format bids"}}};
-    WriteJson(root / "dataset_description.json", d);
-    files.push_back({(root / "dataset_description.json").string(), 0});
-    WriteText(root / "README", kReadme);
-    files.push_back({(root / "README").string(), 0});
-  }
-  {
-    std::string t = "participant_id\tcode\tstudy\tplan_index\n";
-    for (const auto& r : participant_rows)
-      t += Cell(r[0]) + "\t" + Cell(r[1]) + "\t" + Cell(r[2]) + "\t" + r[3] + "\n";
-    WriteText(root / "participants.tsv", t);
-    files.push_back({(root / "participants.tsv").string(), participant_rows.size()});
-    ordered_json j;
-    j["code"] = {{"Description", "pseudonymous participant code as stored in the study database"}};
-    j["study"] = {{"Description", "study (protocol) name"}};
-    j["plan_index"] = {{"Description", "participant index used to plan the trial order (0-based)"}};
-    WriteJson(root / "participants.json", j);
-  }
-
-  // Protocols and stored material models, with their hashes.
-  {
-    std::string hashes = "file\tsha256\tsource\n";
-    for (const auto& st : db.Studies()) {
-      const std::string name =
-          "protocol-" + (Alnum(st.name).empty() ? std::to_string(st.id) : Alnum(st.name)) + ".toml";
-      WriteText(root / "code" / name, st.protocol_toml);
-      hashes += "code/" + name + "\t" + st.protocol_hash + "\tstudy protocol as run\n";
-    }
-    internal::Stmt q(db.handle(), "SELECT name, hash, toml FROM material_model ORDER BY id");
-    bool any_model = false;
-    while (q.Step()) {
-      if (!any_model) fs::create_directories(root / "code" / "models");
-      any_model = true;
-      const std::string name = Alnum(q.Text(0)) + "-" + q.Text(1).substr(0, 12) + ".toml";
-      WriteText(root / "code" / "models" / name, q.Text(2));
-      hashes +=
-          "code/models/" + name + "\t" + q.Text(1) + "\tmaterial model stored in the database\n";
-    }
-    // Models a session used but whose text the database does not hold: their hash only.
-    std::set<std::string> listed;
-    for (const auto& s : sessions) {
-      const auto prov = nlohmann::json::parse(s.session.provenance_json, nullptr, false);
-      if (prov.is_discarded() || !prov.contains("model_hashes") ||
-          !prov["model_hashes"].is_object())
-        continue;
-      for (const auto& [id, h] : prov["model_hashes"].items()) {
-        const std::string line = "n/a\t" + h.get<std::string>() + "\tmaterial model '" + id +
-                                 "' (hash from the session provenance; text not stored)\n";
-        if (listed.insert(line).second && hashes.find(h.get<std::string>()) == std::string::npos)
-          hashes += line;
-      }
-    }
-    WriteText(root / "code" / "hashes.tsv", hashes);
-    files.push_back({(root / "code" / "hashes.tsv").string(), 0});
-  }
-
-  std::size_t trials = 0, recordings = 0, samples = 0, ratings = 0;
+  const BidsParticipants participants = LabelParticipants(db);
+  WriteDatasetDescription(root, participants.studies, files);
+  WriteParticipants(root, participants, files);
+  WriteCode(db, sessions, root, files);
+  BidsCounts n;
   for (std::size_t si = 0; si < sessions.size(); ++si) {
     const auto& s = sessions[si];
-    const std::string sub = "sub-" + label_of.at(s.study.name + "\n" + s.participant.code);
-    const std::string ses = "ses-" + std::to_string(s.number);
-    const std::string task =
-        "task-" + (Alnum(s.study.name).empty() ? std::string("study") : Alnum(s.study.name));
-    const fs::path dir = root / sub / ses / "beh";
-    fs::create_directories(dir, ec);
-    if (ec) throw std::runtime_error(dir.string() + ": cannot create directory: " + ec.message());
-    const std::string stem = sub + "_" + ses + "_" + task;
-    std::string beh =
-        "trial\tphase\tmaterial\tcomparison\tmethod\trepetition\tleft\tright\tattempts\tcriterion\t"
-        "score\tresponse_time\trating_source\n";
-    std::size_t rows = 0;
-    // Rows in plan order, as the CSV export.
-    std::vector<const internal::TrialRecord*> by_plan;
-    for (const auto& t : s.trials) by_plan.push_back(&t);
-    std::stable_sort(by_plan.begin(), by_plan.end(), [](const auto* a, const auto* b) {
-      return a->trial.plan_index < b->trial.plan_index;
-    });
-    for (const auto* t : by_plan) {
-      const auto& x = t->trial;
-      for (const auto& r : t->ratings) {
-        beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index + 1,
-                           Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
-                           x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
-                           Num(r.score), Num(r.response_time_s), Cell(r.source));
-        ++rows;
-      }
-    }
-    WriteText(dir / (stem + "_beh.tsv"), beh);
-    WriteJson(dir / (stem + "_beh.json"), BehSidecar(s));
-    files.push_back({(dir / (stem + "_beh.tsv")).string(), rows});
-    ratings += rows;
-    trials += by_plan.size();
-    for (const auto* t : by_plan)
-      for (const auto& r : t->streams) {
-        const std::string name = stem + "_run-" + std::to_string(t->trial.plan_index + 1) +
-                                 "_recording-" + Alnum(r.stream) + "_physio";
-        const fs::path gz = dir / (name + ".tsv.gz");
-        files.push_back({gz.string(), WritePhysio(r, gz, dir / (name + ".json"), s)});
-        samples += files.back().rows;
-        ++recordings;
-      }
+    const std::string sub =
+        "sub-" + participants.label_of.at(s.study.name + "\n" + s.participant.code);
+    WriteBidsSession(s, sub, root, files, n);
     // One line per participant, after their last session.
     const bool last =
         si + 1 == sessions.size() || sessions[si + 1].participant.id != s.participant.id;
@@ -329,8 +375,8 @@ std::vector<ExportedFile> ExportBids(const Database& db, const std::string& out_
       progress(
           fmt::format("{} ({}): {} completed trials, {} ratings, {} physio recordings of {} "
                       "samples",
-                      sub, s.participant.code, trials, ratings, recordings, samples));
-    if (last) trials = recordings = samples = ratings = 0;
+                      sub, s.participant.code, n.trials, n.ratings, n.recordings, n.samples));
+    if (last) n = BidsCounts{};
   }
   return files;
 }

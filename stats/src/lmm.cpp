@@ -221,11 +221,10 @@ void KenwardRoger(const detail::LmmDesign& d, const MatrixXd& Phi, const VectorX
   }
 }
 
-}  // namespace
-
-LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOptions& options) {
-  const LmmFormula f = ParseLmmFormula(formula, data.source);
-  const detail::LmmDesign d = detail::BuildLmmDesign(data, f);
+// What FitLmm refuses before fitting: missing responses, a rank-deficient fixed design, no
+// residual df, and a Kenward-Roger request it cannot serve.
+void CheckLmmInput(const LongTable& data, const LmmFormula& f, const detail::LmmDesign& d,
+                   const LmmOptions& options) {
   for (double v : data.y)
     if (!std::isfinite(v))
       throw InputError(data.source, 0, f.response, "missing response values are not supported");
@@ -251,13 +250,11 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
             std::to_string(d.Z.cols()) + " (more than " +
             std::to_string(kKenwardRogerMaxRandomEffects) +
             "): use Satterthwaite df (--ddf satterthwaite)");
+}
 
-  Pls pls(d, options.reml);
-  LmmResult r;
-  r.formula = formula;
-  r.reml = options.reml;
-  r.ddf = options.kenward_roger ? "Kenward-Roger" : "Satterthwaite";
-  r.n = static_cast<int>(d.y.size());
+// θ̂: the profiled deviance minimised by Nelder-Mead from lme4's start (1 on the diagonals, 0
+// off them). Fills the optimizer's fields of r.
+VectorXd FitTheta(Pls& pls, const LmmOptions& options, LmmResult& r) {
   VectorXd theta0(pls.ntheta());
   for (int t = 0; t < pls.ntheta(); ++t)
     theta0[t] = pls.lower()[static_cast<std::size_t>(t)] == 0.0 ? 1.0 : 0.0;
@@ -272,11 +269,14 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
   r.message = opt.converged ? "converged: a restart no longer improved the deviance"
                             : "stopped at max_evaluations (" +
                                   std::to_string(options.max_evaluations) + ") before converging";
-  const VectorXd theta = opt.x;
-  r.theta.assign(theta.data(), theta.data() + theta.size());
+  r.theta.assign(opt.x.data(), opt.x.data() + opt.x.size());
   r.deviance = opt.f;
+  return opt.x;
+}
 
-  // Diagnostics: gradient over the free θ, singular fit (lme4's isSingular, tol 1e-4).
+// Diagnostics: gradient over the free θ, singular fit (lme4's isSingular, tol 1e-4).
+void CheckTheta(Pls& pls, const VectorXd& theta, LmmResult& r) {
+  auto dev = [&](const VectorXd& th) { return pls.Deviance(th); };
   for (int t = 0; t < pls.ntheta(); ++t) {
     const bool bounded = pls.lower()[static_cast<std::size_t>(t)] == 0.0;
     if (bounded && theta[t] < 1e-4) {
@@ -289,70 +289,90 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     b[t] -= h;
     r.gradient_max_abs = std::max(r.gradient_max_abs, std::abs(dev(a) - dev(b)) / (2 * h));
   }
+}
 
-  const auto sol = pls.Solve(theta);
-  const double n = pls.n();
-  r.sigma = std::sqrt(sol.r2 / (options.reml ? n - static_cast<double>(p) : n));
+// σ, the residuals and the information criteria at the PLS solution of θ̂.
+void FitStatistics(const Pls::Solution& sol, double n, Eigen::Index p, int ntheta, bool reml,
+                   LmmResult& r) {
+  r.sigma = std::sqrt(sol.r2 / (reml ? n - static_cast<double>(p) : n));
   r.residuals.assign(sol.resid.data(), sol.resid.data() + sol.resid.size());
   r.logLik = -0.5 * r.deviance;
-  r.n_parameters = static_cast<int>(p) + pls.ntheta() + 1;
+  r.n_parameters = static_cast<int>(p) + ntheta + 1;
   r.AIC = -2.0 * r.logLik + 2.0 * r.n_parameters;
   r.BIC = -2.0 * r.logLik + std::log(n) * r.n_parameters;
+}
 
-  for (std::size_t k = 0; k < d.blocks.size(); ++k) {
-    const auto& b = d.blocks[k];
-    const MatrixXd T = pls.Template(theta, k);
-    const MatrixXd S = r.sigma * r.sigma * T * T.transpose();
-    LmmRandomTerm rt;
-    rt.group = b.group;
-    // A grouping factor named again is "g.1", "g.2" (as lme4's VarCorr names it).
-    const auto again = std::count_if(d.blocks.begin(), d.blocks.begin() + static_cast<long>(k),
-                                     [&](const auto& o) { return o.group == b.group; });
-    if (again > 0) rt.group += "." + std::to_string(again);
-    rt.levels = b.levels;
-    rt.names = b.names;
-    for (int i = 0; i < b.p; ++i) {
-      rt.variance.push_back(S(i, i));
-      rt.sd.push_back(std::sqrt(S(i, i)));
-    }
-    rt.corr.assign(static_cast<std::size_t>(b.p),
-                   std::vector<double>(static_cast<std::size_t>(b.p), 1.0));
-    for (int i = 0; i < b.p; ++i)
-      for (int j = 0; j < b.p; ++j)
-        if (i != j) {
-          const double den = std::sqrt(S(i, i) * S(j, j));
-          rt.corr[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
-              den > 0 ? S(i, j) / den : std::numeric_limits<double>::quiet_NaN();
-        }
-    r.random.push_back(rt);
+// Block k's variances, standard deviations and correlations, σ² T T' (lme4's VarCorr).
+LmmRandomTerm RandomTerm(const detail::LmmDesign& d, const Pls& pls, const VectorXd& theta,
+                         std::size_t k, double sigma) {
+  const auto& b = d.blocks[k];
+  const MatrixXd T = pls.Template(theta, k);
+  const MatrixXd S = sigma * sigma * T * T.transpose();
+  LmmRandomTerm rt;
+  rt.group = b.group;
+  // A grouping factor named again is "g.1", "g.2" (as lme4's VarCorr names it).
+  const auto again = std::count_if(d.blocks.begin(), d.blocks.begin() + static_cast<long>(k),
+                                   [&](const auto& o) { return o.group == b.group; });
+  if (again > 0) rt.group += "." + std::to_string(again);
+  rt.levels = b.levels;
+  rt.names = b.names;
+  for (int i = 0; i < b.p; ++i) {
+    rt.variance.push_back(S(i, i));
+    rt.sd.push_back(std::sqrt(S(i, i)));
+  }
+  rt.corr.assign(static_cast<std::size_t>(b.p),
+                 std::vector<double>(static_cast<std::size_t>(b.p), 1.0));
+  for (int i = 0; i < b.p; ++i)
+    for (int j = 0; j < b.p; ++j)
+      if (i != j) {
+        const double den = std::sqrt(S(i, i) * S(j, j));
+        rt.corr[static_cast<std::size_t>(i)][static_cast<std::size_t>(j)] =
+            den > 0 ? S(i, j) / den : std::numeric_limits<double>::quiet_NaN();
+      }
+  return rt;
+}
+
+// Satterthwaite's df (lmerTest): A = 2 H⁻¹ over (θ, σ); J_i = ∂cov(β̂)/∂(θ, σ)_i; C = cov(β̂).
+struct SatterthwaiteDf {
+  SatterthwaiteDf(Pls& pls, const VectorXd& vp) {
+    const MatrixXd H = Hessian([&](const VectorXd& x) { return pls.DevianceVp(x); }, vp);
+    A = 2.0 * H.inverse();
+    C = pls.CovBeta(vp);
+    J = Jacobian([&](const VectorXd& x) { return pls.CovBeta(x); }, vp);
   }
 
-  VectorXd vp(pls.ntheta() + 1);
-  vp << theta, r.sigma;
-  if (options.kenward_roger) {
-    KenwardRoger(d, pls.CovBeta(vp), sol.beta, r);
-    return r;
-  }
-  // Satterthwaite (lmerTest): A = 2 H⁻¹ over (θ, σ); J_i = ∂cov(β̂)/∂(θ, σ)_i.
-  const MatrixXd H = Hessian([&](const VectorXd& x) { return pls.DevianceVp(x); }, vp);
-  const MatrixXd A = 2.0 * H.inverse();
-  const MatrixXd C = pls.CovBeta(vp);
-  const auto J = Jacobian([&](const VectorXd& x) { return pls.CovBeta(x); }, vp);
-  auto df_of = [&](const VectorXd& l, double var) {
+  // The df of l'β̂, whose variance is var.
+  double Df(const VectorXd& l, double var) const {
     VectorXd g(static_cast<Eigen::Index>(J.size()));
     for (std::size_t i = 0; i < J.size(); ++i) g[static_cast<Eigen::Index>(i)] = l.dot(J[i] * l);
     return 2.0 * var * var / g.dot(A * g);
-  };
+  }
+
+  MatrixXd A, C;
+  std::vector<MatrixXd> J;
+};
+
+// t tests of the coefficients.
+void SatterthwaiteFixed(const detail::LmmDesign& d, const VectorXd& beta, const SatterthwaiteDf& s,
+                        LmmResult& r) {
+  const Eigen::Index p = d.X.cols();
   for (Eigen::Index j = 0; j < p; ++j) {
     LmmCoefficient c;
     c.name = d.x_names[static_cast<std::size_t>(j)];
-    c.estimate = sol.beta[j];
-    c.se = std::sqrt(C(j, j));
+    c.estimate = beta[j];
+    c.se = std::sqrt(s.C(j, j));
     c.t = c.estimate / c.se;
-    c.df = df_of(VectorXd::Unit(p, j), C(j, j));
+    c.df = s.Df(VectorXd::Unit(p, j), s.C(j, j));
     c.p = PtTwoSided(c.t, c.df);
     r.fixed.push_back(c);
   }
+}
+
+// t tests of the requested contrasts (weights on named coefficients).
+void SatterthwaiteContrasts(const LongTable& data, const detail::LmmDesign& d,
+                            const LmmOptions& options, const VectorXd& beta,
+                            const SatterthwaiteDf& s, LmmResult& r) {
+  const Eigen::Index p = d.X.cols();
   for (const auto& con : options.contrasts) {
     VectorXd l = VectorXd::Zero(p);
     for (const auto& [name, w] : con.weights) {
@@ -364,28 +384,32 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     }
     LmmCoefficient c;
     c.name = con.name;
-    c.estimate = l.dot(sol.beta);
-    const double var = l.dot(C * l);
+    c.estimate = l.dot(beta);
+    const double var = l.dot(s.C * l);
     c.se = std::sqrt(var);
     c.t = c.estimate / c.se;
-    c.df = df_of(l, var);
+    c.df = s.Df(l, var);
     c.p = PtTwoSided(c.t, c.df);
     r.contrasts.push_back(c);
   }
-  // Type 3 F tests: with sum-to-zero contrasts and every cell observed, the hypothesis of a
-  // term is that its coefficients are zero (L selects them), as lmerTest's type 3 contrasts.
+}
+
+// Type 3 F tests: with sum-to-zero contrasts and every cell observed, the hypothesis of a
+// term is that its coefficients are zero (L selects them), as lmerTest's type 3 contrasts.
+void SatterthwaiteAnova(const detail::LmmDesign& d, const VectorXd& beta, const SatterthwaiteDf& s,
+                        LmmResult& r) {
   for (const auto& term : d.x_terms) {
-    const MatrixXd L = Selector(term.columns, p);
+    const MatrixXd L = Selector(term.columns, d.X.cols());
     const Eigen::Index q = L.rows();
-    Eigen::SelfAdjointEigenSolver<MatrixXd> eig(L * C * L.transpose());
+    Eigen::SelfAdjointEigenSolver<MatrixXd> eig(L * s.C * L.transpose());
     const MatrixXd PtL = eig.eigenvectors().transpose() * L;
     std::vector<double> nu;
     double F = 0;
     for (Eigen::Index m = 0; m < q; ++m) {
       const double dm = eig.eigenvalues()[m];
       const VectorXd l = PtL.row(m).transpose();
-      F += std::pow(l.dot(sol.beta), 2) / dm;
-      nu.push_back(df_of(l, dm));
+      F += std::pow(l.dot(beta), 2) / dm;
+      nu.push_back(s.Df(l, dm));
     }
     LmmFTest t;
     t.term = term.name;
@@ -395,6 +419,37 @@ LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOpt
     t.p = PfUpper(t.F, t.num_df, t.den_df);
     r.anova.push_back(t);
   }
+}
+
+}  // namespace
+
+LmmResult FitLmm(const LongTable& data, const std::string& formula, const LmmOptions& options) {
+  const LmmFormula f = ParseLmmFormula(formula, data.source);
+  const detail::LmmDesign d = detail::BuildLmmDesign(data, f);
+  CheckLmmInput(data, f, d, options);
+  Pls pls(d, options.reml);
+  LmmResult r;
+  r.formula = formula;
+  r.reml = options.reml;
+  r.ddf = options.kenward_roger ? "Kenward-Roger" : "Satterthwaite";
+  r.n = static_cast<int>(d.y.size());
+  const VectorXd theta = FitTheta(pls, options, r);
+  CheckTheta(pls, theta, r);
+  const auto sol = pls.Solve(theta);
+  FitStatistics(sol, pls.n(), d.X.cols(), pls.ntheta(), options.reml, r);
+  for (std::size_t k = 0; k < d.blocks.size(); ++k)
+    r.random.push_back(RandomTerm(d, pls, theta, k, r.sigma));
+
+  VectorXd vp(pls.ntheta() + 1);
+  vp << theta, r.sigma;
+  if (options.kenward_roger) {
+    KenwardRoger(d, pls.CovBeta(vp), sol.beta, r);
+    return r;
+  }
+  const SatterthwaiteDf s(pls, vp);
+  SatterthwaiteFixed(d, sol.beta, s, r);
+  SatterthwaiteContrasts(data, d, options, sol.beta, s, r);
+  SatterthwaiteAnova(d, sol.beta, s, r);
   return r;
 }
 

@@ -162,6 +162,162 @@ std::vector<std::string> DrawPsychometricPlot(const PsychometricPlot& p, const s
   return files;
 }
 
+namespace {
+
+// The CSV of every adaptive phase's fits, opened with its header at the first phase with data.
+void OpenFitsCsv(std::ofstream& csv, const std::string& out_dir, const std::string& sid,
+                 std::vector<std::string>* files) {
+  const std::string path = (fs::path(out_dir) / (sid + "_psychometric.csv")).string();
+  csv.open(path);
+  if (!csv) throw std::runtime_error(path + ": cannot write");
+  files->push_back(path);
+  csv << "phase,participant,trials,function,threshold,threshold_lo,threshold_hi,slope,slope_lo,"
+         "slope_hi,lapse,"
+         "jnd,jnd_lo,jnd_hi,weber,weber_lo,weber_hi,staircase_estimate\n";
+}
+
+PsychometricFitOptions FitOptionsOf(const protocols::AdaptiveSpec& a) {
+  PsychometricFitOptions o;
+  o.shape = a.fit;
+  o.guess = psychophysics::GuessRate(a.task, a.false_alarm);
+  o.lapse_free = a.fit_lapse_free;
+  o.lapse = a.fit_lapse;
+  return o;
+}
+
+// The phase's heading, what was fitted, and the table's header.
+std::string PhaseHeader(std::size_t pi, const protocols::Phase& ph, const PsychometricFitOptions& o,
+                        int replicates) {
+  const auto& a = *ph.adaptive;
+  const bool weber = a.reference > 0;
+  const bool staircase = ph.kind == protocols::PhaseKind::kStaircase;
+  std::ostringstream md;
+  md << fmt::format("\n### Phase {}: {} of `{}` ({} {}, {})\n\n", pi,
+                    psychophysics::ToString(a.task), a.parameter, a.material, a.method,
+                    protocols::ToString(ph.kind));
+  md << fmt::format(
+      "Stimulus x = comparison - reference ({} = {}). Fit: {} by maximum likelihood, guess rate "
+      "{:.3g} (task), "
+      "lapse {}; 95 % parametric-bootstrap intervals ({} replicates). JND = x at {:.1f} % "
+      "positive{}.\n\n",
+      a.parameter, a.reference, psychophysics::ToString(a.fit), o.guess,
+      o.lapse_free ? fmt::format("free in [0, {}]", o.max_lapse)
+                   : fmt::format("fixed at {}", o.lapse),
+      replicates, 100 * a.jnd_performance, weber ? "; Weber fraction = JND / reference" : "");
+  md << "| participant | trials | threshold [95 % CI] | slope [95 % CI] | lapse | JND [95 % CI] |"
+     << (weber ? " Weber fraction [95 % CI] |" : "")
+     << (staircase ? " staircase (mean of reversals) |" : "") << "\n|---|---|---|---|---|---|"
+     << (weber ? "---|" : "") << (staircase ? "---|" : "") << "\n";
+  return md.str();
+}
+
+// Staircase estimate: the tracks' reversal means, replayed from the record (NaN when none,
+// or when the record does not follow this protocol's rules).
+double StaircaseEstimate(const psychophysics::StaircaseConfig& spec,
+                         const std::vector<AdaptiveAnswer>& v) {
+  std::vector<psychophysics::StaircaseTrial> h;
+  for (const auto& x : v) h.push_back({x.track, x.level, x.positive});
+  try {
+    double sum = 0;
+    int n = 0;
+    for (const auto& t : psychophysics::ReplayStaircase(spec, h)) {
+      const double e = psychophysics::TrackEstimate(spec, t);
+      if (std::isfinite(e)) sum += e, ++n;
+    }
+    return n ? sum / n : NAN;
+  } catch (const InputError&) {
+    return NAN;
+  }
+}
+
+// One fit per participant, then (with more than one) the pooled fit; each with its own
+// bootstrap seed derived from the phase's.
+std::vector<FitRow> FitPhase(std::size_t pi, const protocols::Phase& ph,
+                             const PsychometricFitOptions& o, int replicates,
+                             const std::vector<AdaptiveAnswer>& answers,
+                             const std::map<std::string, std::vector<AdaptiveAnswer>>& by) {
+  const auto& a = *ph.adaptive;
+  std::vector<FitRow> rows;
+  std::uint64_t seed = DeriveSeed(0x5EED, pi);
+  for (const auto& [who, v] : by) {
+    rows.push_back(FitOne(who, v, a, o, replicates, seed = DeriveSeed(seed, 1)));
+    if (ph.kind == protocols::PhaseKind::kStaircase)
+      rows.back().staircase = StaircaseEstimate(a.staircase, v);
+  }
+  if (by.size() > 1)
+    rows.push_back(FitOne("all (pooled)", answers, a, o, replicates, DeriveSeed(seed, 2)));
+  return rows;
+}
+
+// One fit's row of the phase's table and of the CSV.
+void WriteFitRow(std::size_t pi, const protocols::Phase& ph, const FitRow& r,
+                 std::ostringstream& md, std::ofstream& csv) {
+  const auto& a = *ph.adaptive;
+  const bool weber = a.reference > 0;
+  const auto& f = r.fit;
+  const BootstrapInterval w{r.boot.jnd.lo / a.reference, r.boot.jnd.hi / a.reference};
+  if (!f.usable) {
+    md << fmt::format("| {} | {} | fit not usable: {} |\n", r.who, r.trials, f.message);
+    return;
+  }
+  md << fmt::format("| {} | {} | {} {} | {} {} | {} | {} {} |", r.who, r.trials,
+                    Num(f.params.threshold), Ci(r.boot.threshold), Num(f.params.slope),
+                    Ci(r.boot.slope), Num(f.params.lapse), Num(r.jnd), Ci(r.boot.jnd));
+  if (weber) md << fmt::format(" {} {} |", Num(r.jnd / a.reference), Ci(w));
+  if (ph.kind == protocols::PhaseKind::kStaircase) md << " " << Num(r.staircase) << " |";
+  md << "\n";
+  csv << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", pi, r.who, r.trials,
+                     psychophysics::ToString(a.fit), f.params.threshold, r.boot.threshold.lo,
+                     r.boot.threshold.hi, f.params.slope, r.boot.slope.lo, r.boot.slope.hi,
+                     f.params.lapse, r.jnd, r.boot.jnd.lo, r.boot.jnd.hi,
+                     weber ? r.jnd / a.reference : NAN, weber ? w.lo : NAN, weber ? w.hi : NAN,
+                     r.staircase);
+}
+
+// The simulated observer's truth, when the protocol names one.
+std::string ObserverNote(const protocols::AdaptiveSpec& a, const PsychometricFitOptions& o) {
+  if (!a.simulated_observer) return "";
+  const auto& so = *a.simulated_observer;
+  const psychophysics::PsychometricParams truth{so.threshold, so.slope, o.guess, so.lapse};
+  const auto true_jnd = psychophysics::Psi(so.shape, 0, truth) < a.jnd_performance
+                            ? psychophysics::StimulusAt(so.shape, truth, a.jnd_performance)
+                            : std::nullopt;
+  return fmt::format(
+      "\nSessions run with `--device sim` and no `--ui` answered from the simulated observer: "
+      "{} threshold "
+      "{}, slope {}, lapse "
+      "{}; its true JND is {}{}.\n",
+      psychophysics::ToString(so.shape), so.threshold, so.slope, so.lapse,
+      true_jnd ? Num(*true_jnd) : "n/a",
+      true_jnd && a.reference > 0
+          ? fmt::format(" (Weber fraction {})", Num(*true_jnd / a.reference))
+          : "");
+}
+
+// The figure: the pooled fit over the binned answers of everyone; returns its Markdown.
+std::string PhaseFigure(std::size_t pi, const protocols::AdaptiveSpec& a, const FitRow& pooled,
+                        const std::vector<AdaptiveAnswer>& answers, const std::string& who,
+                        const std::string& base, std::vector<std::string>* files) {
+  PsychometricPlot plot;
+  plot.title =
+      fmt::format("{}: {} {} ({})", a.material, a.parameter, psychophysics::ToString(a.task), who);
+  plot.x_label = fmt::format("{} difference from {}", a.parameter, a.reference);
+  plot.binned = BinForPlot(ToData(answers));
+  plot.shape = a.fit;
+  plot.fit = pooled.fit.params;
+  plot.jnd = pooled.jnd;
+  plot.jnd_performance = a.jnd_performance;
+  const auto f = DrawPsychometricPlot(plot, base);
+  files->insert(files->end(), f.begin(), f.end());
+  return fmt::format("\n![psychometric function, phase {}]({}.png)\n\n", pi,
+                     fs::path(base).filename().string()) +
+         "The curve is the pooled fit; circles are the answers binned by x (area "
+         "proportional to the "
+         "trials in the bin); the dashed lines mark the JND.\n";
+}
+
+}  // namespace
+
 std::string AdaptiveReport(const std::string& db_path, const std::string& study,
                            const std::string& protocol_toml, const std::string& out_dir,
                            bool figures, std::vector<std::string>* files, int replicates) {
@@ -175,120 +331,19 @@ std::string AdaptiveReport(const std::string& db_path, const std::string& study,
     const auto& a = *ph.adaptive;
     const auto answers = AdaptiveAnswers(db_path, study, static_cast<int>(pi));
     if (answers.empty()) continue;
-    if (!csv.is_open()) {
-      const std::string path = (fs::path(out_dir) / (sid + "_psychometric.csv")).string();
-      csv.open(path);
-      if (!csv) throw std::runtime_error(path + ": cannot write");
-      files->push_back(path);
-      csv << "phase,participant,trials,function,threshold,threshold_lo,threshold_hi,slope,slope_lo,"
-             "slope_hi,lapse,"
-             "jnd,jnd_lo,jnd_hi,weber,weber_lo,weber_hi,staircase_estimate\n";
-    }
-    PsychometricFitOptions o;
-    o.shape = a.fit;
-    o.guess = psychophysics::GuessRate(a.task, a.false_alarm);
-    o.lapse_free = a.fit_lapse_free;
-    o.lapse = a.fit_lapse;
-    const bool weber = a.reference > 0;
-    md << fmt::format("\n### Phase {}: {} of `{}` ({} {}, {})\n\n", pi,
-                      psychophysics::ToString(a.task), a.parameter, a.material, a.method,
-                      protocols::ToString(ph.kind));
-    md << fmt::format(
-        "Stimulus x = comparison - reference ({} = {}). Fit: {} by maximum likelihood, guess rate "
-        "{:.3g} (task), "
-        "lapse {}; 95 % parametric-bootstrap intervals ({} replicates). JND = x at {:.1f} % "
-        "positive{}.\n\n",
-        a.parameter, a.reference, psychophysics::ToString(a.fit), o.guess,
-        o.lapse_free ? fmt::format("free in [0, {}]", o.max_lapse)
-                     : fmt::format("fixed at {}", o.lapse),
-        replicates, 100 * a.jnd_performance, weber ? "; Weber fraction = JND / reference" : "");
-    md << "| participant | trials | threshold [95 % CI] | slope [95 % CI] | lapse | JND [95 % CI] |"
-       << (weber ? " Weber fraction [95 % CI] |" : "")
-       << (ph.kind == protocols::PhaseKind::kStaircase ? " staircase (mean of reversals) |" : "")
-       << "\n|---|---|---|---|---|---|" << (weber ? "---|" : "")
-       << (ph.kind == protocols::PhaseKind::kStaircase ? "---|" : "") << "\n";
+    if (!csv.is_open()) OpenFitsCsv(csv, out_dir, sid, files);
+    const PsychometricFitOptions o = FitOptionsOf(a);
+    md << PhaseHeader(pi, ph, o, replicates);
     std::map<std::string, std::vector<AdaptiveAnswer>> by;
     for (const auto& x : answers) by[x.participant].push_back(x);
-    std::vector<FitRow> rows;
-    std::uint64_t seed = DeriveSeed(0x5EED, pi);
-    for (const auto& [who, v] : by) {
-      rows.push_back(FitOne(who, v, a, o, replicates, seed = DeriveSeed(seed, 1)));
-      if (ph.kind == protocols::PhaseKind::kStaircase) {
-        // Staircase estimate: the tracks' reversal means, replayed from the record.
-        std::vector<psychophysics::StaircaseTrial> h;
-        for (const auto& x : v) h.push_back({x.track, x.level, x.positive});
-        try {
-          double sum = 0;
-          int n = 0;
-          for (const auto& t : psychophysics::ReplayStaircase(a.staircase, h)) {
-            const double e = psychophysics::TrackEstimate(a.staircase, t);
-            if (std::isfinite(e)) sum += e, ++n;
-          }
-          rows.back().staircase = n ? sum / n : NAN;
-        } catch (const InputError&) {
-          // A record that does not follow this protocol's rules gets no staircase estimate.
-        }
-      }
-    }
-    if (by.size() > 1)
-      rows.push_back(FitOne("all (pooled)", answers, a, o, replicates, DeriveSeed(seed, 2)));
-    for (const auto& r : rows) {
-      const auto& f = r.fit;
-      const BootstrapInterval w{r.boot.jnd.lo / a.reference, r.boot.jnd.hi / a.reference};
-      if (!f.usable) {
-        md << fmt::format("| {} | {} | fit not usable: {} |\n", r.who, r.trials, f.message);
-        continue;
-      }
-      md << fmt::format("| {} | {} | {} {} | {} {} | {} | {} {} |", r.who, r.trials,
-                        Num(f.params.threshold), Ci(r.boot.threshold), Num(f.params.slope),
-                        Ci(r.boot.slope), Num(f.params.lapse), Num(r.jnd), Ci(r.boot.jnd));
-      if (weber) md << fmt::format(" {} {} |", Num(r.jnd / a.reference), Ci(w));
-      if (ph.kind == protocols::PhaseKind::kStaircase) md << " " << Num(r.staircase) << " |";
-      md << "\n";
-      csv << fmt::format("{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}\n", pi, r.who,
-                         r.trials, psychophysics::ToString(a.fit), f.params.threshold,
-                         r.boot.threshold.lo, r.boot.threshold.hi, f.params.slope, r.boot.slope.lo,
-                         r.boot.slope.hi, f.params.lapse, r.jnd, r.boot.jnd.lo, r.boot.jnd.hi,
-                         weber ? r.jnd / a.reference : NAN, weber ? w.lo : NAN, weber ? w.hi : NAN,
-                         r.staircase);
-    }
-    if (a.simulated_observer) {
-      const auto& so = *a.simulated_observer;
-      const psychophysics::PsychometricParams truth{so.threshold, so.slope, o.guess, so.lapse};
-      const auto true_jnd = psychophysics::Psi(so.shape, 0, truth) < a.jnd_performance
-                                ? psychophysics::StimulusAt(so.shape, truth, a.jnd_performance)
-                                : std::nullopt;
-      md << fmt::format(
-          "\nSessions run with `--device sim` and no `--ui` answered from the simulated observer: "
-          "{} threshold "
-          "{}, slope {}, lapse "
-          "{}; its true JND is {}{}.\n",
-          psychophysics::ToString(so.shape), so.threshold, so.slope, so.lapse,
-          true_jnd ? Num(*true_jnd) : "n/a",
-          true_jnd && weber ? fmt::format(" (Weber fraction {})", Num(*true_jnd / a.reference))
-                            : "");
-    }
-    // The figure: the pooled fit over the binned answers of everyone.
-    const FitRow& pooled = rows.back();
-    if (figures && pooled.fit.usable) {
-      PsychometricPlot plot;
-      plot.title =
-          fmt::format("{}: {} {} ({})", a.material, a.parameter, psychophysics::ToString(a.task),
-                      by.size() > 1 ? "all participants" : by.begin()->first);
-      plot.x_label = fmt::format("{} difference from {}", a.parameter, a.reference);
-      plot.binned = BinForPlot(ToData(answers));
-      plot.shape = a.fit;
-      plot.fit = pooled.fit.params;
-      plot.jnd = pooled.jnd;
-      plot.jnd_performance = a.jnd_performance;
+    const std::vector<FitRow> rows = FitPhase(pi, ph, o, replicates, answers, by);
+    for (const auto& r : rows) WriteFitRow(pi, ph, r, md, csv);
+    md << ObserverNote(a, o);
+    if (figures && rows.back().fit.usable) {
       const std::string base =
           (fs::path(out_dir) / fmt::format("{}_phase{}_psychometric", sid, pi)).string();
-      const auto f = DrawPsychometricPlot(plot, base);
-      files->insert(files->end(), f.begin(), f.end());
-      md << "\n![psychometric function, phase " << pi << "](" << fs::path(base).filename().string()
-         << ".png)\n\nThe curve is the pooled fit; circles are the answers binned by x (area "
-            "proportional to the "
-            "trials in the bin); the dashed lines mark the JND.\n";
+      md << PhaseFigure(pi, a, rows.back(), answers,
+                        by.size() > 1 ? "all participants" : by.begin()->first, base, files);
     }
   }
   return md.str();
