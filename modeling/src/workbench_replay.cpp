@@ -19,6 +19,23 @@
 
 namespace hapticlab::modeling::wb {
 
+// (workbench_internal.hpp; workbench_vibration.cpp picks a fixed model's bins the same way)
+std::vector<std::vector<int>> internal::BandBins(const Replay& r, int n, double rate) {
+  const std::size_t nb = r.band_lo_hz.size();
+  std::vector<std::vector<int>> bins(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    for (int k = 1; k < n / 2; ++k) {
+      const double f = k * rate / n;
+      if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
+    }
+    if (bins[b].empty())
+      bins[b].push_back(std::clamp(
+          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
+          n / 2 - 1));
+  }
+  return bins;
+}
+
 namespace {
 
 // Centre value of a quadratic Savitzky-Golay fit over rows i-h..i+h into *out (closed-form
@@ -243,23 +260,6 @@ void SetBands(const Measurement& m, const ReplayOptions& o, double rate, Replay*
   }
 }
 
-// The FFT bins (1 .. n/2-1) of each of r's bands: those inside it, at least the nearest one.
-std::vector<std::vector<int>> BandBins(const Replay& r, int n, double rate) {
-  const std::size_t nb = r.band_lo_hz.size();
-  std::vector<std::vector<int>> bins(nb);
-  for (std::size_t b = 0; b < nb; ++b) {
-    for (int k = 1; k < n / 2; ++k) {
-      const double f = k * rate / n;
-      if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
-    }
-    if (bins[b].empty())
-      bins[b].push_back(std::clamp(
-          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
-          n / 2 - 1));
-  }
-  return bins;
-}
-
 // The motion over one window of n rows from w0: mean speed and load, their SDs, the mean
 // acceleration, the speed-weighted direction moments (cos, sin of the angle and of twice it)
 // and whether every row is in contact.
@@ -350,7 +350,7 @@ class HannPeriodogram {
   double wss_ = 0;
   double* in_;
   fftw_complex* out_;
-  fftw_plan plan_;
+  fftw_plan plan_ = nullptr;
 };
 
 // The steady vibration windows (n rows, a power of two near window_s, every n/4 rows) with the
@@ -361,7 +361,7 @@ void AddVibrationWindows(const Measurement& m, const ReplayOptions& o, double ra
   int n = 64;
   while (n * 2 <= o.window_s * rate * 1.5) n *= 2;
   SetBands(m, o, rate, r);
-  const auto bins = BandBins(*r, n, rate);
+  const auto bins = internal::BandBins(*r, n, rate);
   const double t0 = m.rows.front().t_s;
   HannPeriodogram periodogram(n);
   for (std::size_t w0 = 0; w0 + n <= m.rows.size(); w0 += n / 4) {
