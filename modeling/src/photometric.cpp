@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <utility>
 
 #include "hapticlab/core/diagnostics.hpp"
@@ -126,6 +127,205 @@ std::pair<double, double> CurlMedians(const std::vector<Eigen::Vector3f>& n,
   return {RobustSd(given), RobustSd(mirrored)};
 }
 
+// One solve's state: the inside pixels' flat-field-corrected readings (pixel-major: pixel k's
+// reading under light j at k * m + j), each pixel's b = albedo * normal, the lights it uses and
+// whether it solved, the lights' scaled directions and the residual rule's parameters.
+struct PixelSolve {
+  std::size_t m = 0, nin = 0;
+  std::vector<std::size_t> inside;  // image index of each inside pixel
+  std::vector<float> inten;
+  std::vector<Eigen::Vector3d> b;
+  std::vector<std::uint8_t> use, solved;
+  std::vector<Eigen::Vector3d> L;  // light_scale[j] * direction of light j
+  RobustParams rp;
+  std::size_t stride = 1;  // residuals are sampled on at most ~100k pixels for the robust SD
+};
+
+// The inside pixels' readings, divided by the reference's where one is given (0 where it is
+// dark).
+void GatherReadings(const ImageStack& st, const ImageStack* ref,
+                    const std::vector<std::uint8_t>& mask, PixelSolve* s) {
+  for (std::size_t i = 0; i < mask.size(); ++i)
+    if (mask[i]) s->inside.push_back(i);
+  s->nin = s->inside.size();
+  s->inten.assign(s->nin * s->m, 0.f);
+  for (std::size_t j = 0; j < s->m; ++j)
+    for (std::size_t k = 0; k < s->nin; ++k) {
+      const std::size_t i = s->inside[k];
+      float v = st.images[j][i];
+      if (ref) v = ref->images[j][i] > 1e-6f ? v / ref->images[j][i] : 0.f;
+      s->inten[k * s->m + j] = v;
+    }
+}
+
+// The lights each pixel starts with (and the whole of the brightest rule): lights darker than
+// shadow_fraction of the pixel's brightest reading are out; the brightest rule also drops its
+// brightest few.
+void StartingLights(const PhotometricOptions& o, PixelSolve* s) {
+  const std::size_t m = s->m;
+  s->use.assign(s->nin * m, 0);
+  for (std::size_t k = 0; k < s->nin; ++k) {
+    const float* I = &s->inten[k * m];
+    const float mx = *std::max_element(I, I + m);
+    std::vector<std::size_t> idx;
+    for (std::size_t j = 0; j < m; ++j)
+      if (I[j] > o.shadow_fraction * mx) idx.push_back(j);
+    std::size_t drop = 0;
+    if (o.rejection == Rejection::kBrightest) {
+      std::sort(idx.begin(), idx.end(), [&](auto a, auto c) { return I[a] < I[c]; });
+      drop = idx.size() >= 6 ? static_cast<std::size_t>(std::floor(o.specular_fraction *
+                                                                   static_cast<double>(idx.size())))
+                             : 0;
+    }
+    for (std::size_t q = 0; q + drop < idx.size(); ++q) s->use[k * m + idx[q]] = 1;
+  }
+}
+
+// The residual rule's first scale: plain least squares on the starting lights (an overestimate
+// when highlights are common; each alternation re-estimates it), at least the noise floor.
+double InitialResidualSd(const PixelSolve& s, double noise_floor) {
+  const std::size_t m = s.m;
+  std::vector<float> sample;
+  for (std::size_t k = 0; k < s.nin; k += s.stride) {
+    Eigen::Matrix3d Ainv;
+    Eigen::Vector3d bb;
+    if (!SolvePixel(&s.inten[k * m], &s.use[k * m], s.L, &bb, &Ainv) || !(bb.norm() > 0)) continue;
+    for (std::size_t j = 0; j < m; ++j)
+      if (s.use[k * m + j])
+        sample.push_back(
+            static_cast<float>(std::abs(static_cast<double>(s.inten[k * m + j]) - s.L[j].dot(bb)) /
+                               (s.L[j].norm() * bb.norm()) /
+                               std::sqrt(std::max(1 - s.L[j].dot(Ainv * s.L[j]), 1e-3))));
+  }
+  return std::max(RobustSd(sample), noise_floor);
+}
+
+// One pass over every `step`-th pixel: the robust (or fixed-set) fit with the current light
+// scales, then the robust SD re-estimated from the kept residuals. Progress from p0 to p1.
+void PixelPass(const PhotometricOptions& o, std::size_t step, double p0, double p1,
+               const std::function<void(double)>& progress, PixelSolve* s) {
+  const std::size_t m = s->m;
+  std::vector<float> sample;
+  std::vector<double> t(m);
+  const std::size_t every = std::max<std::size_t>(1, s->stride / step);
+  for (std::size_t k = 0; k < s->nin; k += step) {
+    if (o.rejection == Rejection::kResidual) {
+      s->solved[k] =
+          RobustPixel(&s->inten[k * m], &s->use[k * m], s->L, s->rp, &s->b[k], t.data()) ? 1 : 0;
+      if (s->solved[k] && (k / step) % every == 0)
+        for (std::size_t j = 0; j < m; ++j)
+          if (s->use[k * m + j]) sample.push_back(static_cast<float>(std::abs(t[j])));
+    } else {
+      Eigen::Matrix3d Ainv;
+      s->solved[k] = SolvePixel(&s->inten[k * m], &s->use[k * m], s->L, &s->b[k], &Ainv) ? 1 : 0;
+      if (!s->solved[k]) s->b[k].setZero();
+    }
+    if (progress && k % 65536 == 0)
+      progress(p0 + (p1 - p0) * static_cast<double>(k) / static_cast<double>(s->nin));
+  }
+  if (o.rejection == Rejection::kResidual && !sample.empty())
+    s->rp.sigma = std::max(RobustSd(sample), o.noise_floor);
+}
+
+// Per light: s_j = argmin sum_i (I_ij - s_j l_j . b_i)^2 over every `step`-th pixel using it,
+// with a weak prior towards the mean (weight kScalePrior of the data: where the data cannot
+// tell a light's intensity from the normals, a nearly flat sample, it stays); not yet
+// normalized to mean 1.
+std::vector<double> LightScales(const PixelSolve& s, const std::vector<Light>& lights,
+                                std::size_t step) {
+  constexpr double kScalePrior = 1e-3;
+  const std::size_t m = s.m;
+  std::vector<double> s_new(m, 1.0);
+  for (std::size_t j = 0; j < m; ++j) {
+    double num = 0, den = 0;
+    for (std::size_t k = 0; k < s.nin; k += step) {
+      if (!s.use[k * m + j] || !s.solved[k]) continue;
+      const double pred = lights[j].direction.dot(s.b[k]);
+      num += pred * s.inten[k * m + j];
+      den += pred * pred;
+    }
+    s_new[j] = den > 0 ? (num + kScalePrior * den) / (den * (1 + kScalePrior)) : 1.0;
+  }
+  return s_new;
+}
+
+// Alternations between the pixels and the light scales (mean 1) into r->light_scale, on a
+// subsample of at most kAlsPixels pixels (the m light scales need far fewer readings than
+// there are), until no scale changes by more than kAlsTolerance or o.iterations are run.
+void AlternateLightScales(const std::vector<Light>& lights, const PhotometricOptions& o,
+                          const std::function<void(double)>& progress, PixelSolve* s,
+                          PhotometricResult* r) {
+  constexpr std::size_t kAlsPixels = 1000;
+  constexpr double kAlsTolerance = 1e-6;
+  const std::size_t m = s->m, als_step = std::max<std::size_t>(1, s->nin / kAlsPixels);
+  r->alternations = 0;
+  for (int it = 0; it < o.iterations; ++it) {
+    PixelPass(o, als_step, 0, 0, progress, s);
+    const std::vector<double> s_new = LightScales(*s, lights, als_step);
+    double mean = 0;
+    for (std::size_t j = 0; j < m; ++j) mean += s_new[j];
+    mean /= static_cast<double>(m);
+    double change = 0;
+    for (std::size_t j = 0; j < m; ++j) {
+      change = std::max(change, std::abs(s_new[j] / mean - r->light_scale[j]));
+      r->light_scale[j] = s_new[j] / mean;
+    }
+    for (std::size_t j = 0; j < m; ++j) s->L[j] = r->light_scale[j] * lights[j].direction;
+    ++r->alternations;
+    if (progress) progress(0.5 * (it + 1.0) / o.iterations);
+    if (change < kAlsTolerance) break;
+  }
+}
+
+// The solved pixels' albedo and normals (+z where unsolved) into r, with each light's share of
+// the pixels that used it and the readings dropped as too bright or too dark.
+void CollectPixels(const PixelSolve& s, double shadow_fraction, PhotometricResult* r) {
+  const std::size_t m = s.m;
+  std::size_t bright = 0, dark = 0;
+  for (std::size_t k = 0; k < s.nin; ++k) {
+    const std::size_t i = s.inside[k];
+    const Eigen::Vector3d& b = s.b[k];
+    const double a = b.norm();
+    if (!s.solved[k] || !(a > 0) || !(b.z() > 0)) {
+      ++r->unsolved_pixels;
+      r->normals[i] = Eigen::Vector3f::UnitZ();
+      continue;
+    }
+    r->albedo[i] = static_cast<float>(a);
+    r->normals[i] = (b / a).cast<float>();
+    for (std::size_t j = 0; j < m; ++j) {
+      const auto reading = static_cast<double>(s.inten[k * m + j]);
+      if (s.use[k * m + j]) {
+        r->light_use[j] += 1;
+      } else if (reading > s.L[j].dot(b) && reading >= shadow_fraction * s.L[j].norm() * a) {
+        ++bright;
+      } else {
+        ++dark;
+      }
+    }
+  }
+  for (auto& u : r->light_use) u /= std::max<double>(1, static_cast<double>(s.nin));
+  const double readings =
+      std::max<double>(1, static_cast<double>(s.nin - r->unsolved_pixels) * static_cast<double>(m));
+  r->dropped_bright = static_cast<double>(bright) / readings;
+  r->dropped_dark = static_cast<double>(dark) / readings;
+}
+
+// The integrability check of the normals' frame and their integration into r->height_m (the
+// masked solve where the mask is irregular).
+void CheckAndIntegrate(const PhotometricOptions& o, bool irregular, PhotometricResult* r) {
+  const auto [given, mirrored] = CurlMedians(r->normals, r->mask, r->width, r->height);
+  r->mirrored_curl_ratio = mirrored > 0 ? given / mirrored : 1.0;
+  r->axis_flip_suspected = r->mirrored_curl_ratio > kAxisFlipRatio;
+  if (!irregular) {
+    r->height_m = o.integration == Integration::kPoisson
+                      ? IntegrateNormalsPoisson(r->normals, r->width, r->height, o.pitch_m)
+                      : IntegrateNormals(r->normals, r->width, r->height, o.pitch_m);
+  } else {
+    r->height_m = IntegrateNormalsMasked(r->normals, r->mask, r->width, r->height, o.pitch_m);
+  }
+}
+
 }  // namespace
 
 PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Light>& lights,
@@ -152,162 +352,26 @@ PhotometricResult PhotometricStereo(const ImageStack& st, const std::vector<Ligh
   r.normals.assign(npx, Eigen::Vector3f::Zero());
   r.light_scale.assign(m, 1.0);
   r.light_use.assign(m, 0.0);
-  std::vector<std::size_t> inside;
-  for (std::size_t i = 0; i < npx; ++i)
-    if (r.mask[i]) inside.push_back(i);
-  const std::size_t nin = inside.size();
-  std::vector<float> inten(nin * m);  // pixel-major copy of the inside pixels, flat-field corrected
-  for (std::size_t j = 0; j < m; ++j)
-    for (std::size_t k = 0; k < nin; ++k) {
-      const std::size_t i = inside[k];
-      float v = st.images[j][i];
-      if (ref) v = ref->images[j][i] > 1e-6f ? v / ref->images[j][i] : 0.f;
-      inten[k * m + j] = v;
-    }
-  std::vector<Eigen::Vector3d> b(nin, Eigen::Vector3d::Zero());
-  std::vector<std::uint8_t> use(nin * m, 0), solved(nin, 0);
-  // Start (and the whole of the brightest rule): lights darker than shadow_fraction of the
-  // pixel's brightest reading are out; the brightest rule also drops its brightest few.
-  for (std::size_t k = 0; k < nin; ++k) {
-    const float* I = &inten[k * m];
-    const float mx = *std::max_element(I, I + m);
-    std::vector<std::size_t> idx;
-    for (std::size_t j = 0; j < m; ++j)
-      if (I[j] > o.shadow_fraction * mx) idx.push_back(j);
-    std::size_t drop = 0;
-    if (o.rejection == Rejection::kBrightest) {
-      std::sort(idx.begin(), idx.end(), [&](auto a, auto c) { return I[a] < I[c]; });
-      drop = idx.size() >= 6 ? static_cast<std::size_t>(std::floor(o.specular_fraction *
-                                                                   static_cast<double>(idx.size())))
-                             : 0;
-    }
-    for (std::size_t q = 0; q + drop < idx.size(); ++q) use[k * m + idx[q]] = 1;
-  }
-  std::vector<Eigen::Vector3d> L(m);
-  auto set_lights = [&] {
-    for (std::size_t j = 0; j < m; ++j) L[j] = r.light_scale[j] * lights[j].direction;
-  };
-  set_lights();
-  // Residuals are sampled on at most ~100k pixels for the robust SD.
-  const std::size_t stride = std::max<std::size_t>(1, nin / 100000);
-  std::vector<float> sample;
-  std::vector<double> t(m);
-  RobustParams rp{.sigma = 0,
-                  .threshold = o.outlier_sigmas,
-                  .shadow_fraction = o.shadow_fraction,
-                  .min_lights = std::max(3, o.min_lights)};
-  // The residual rule's first scale: plain least squares on the starting lights (an
-  // overestimate when highlights are common; each alternation below re-estimates it).
-  if (o.rejection == Rejection::kResidual) {
-    for (std::size_t k = 0; k < nin; k += stride) {
-      Eigen::Matrix3d Ainv;
-      Eigen::Vector3d bb;
-      if (!SolvePixel(&inten[k * m], &use[k * m], L, &bb, &Ainv) || !(bb.norm() > 0)) continue;
-      for (std::size_t j = 0; j < m; ++j)
-        if (use[k * m + j])
-          sample.push_back(static_cast<float>(
-              std::abs(static_cast<double>(inten[k * m + j]) - L[j].dot(bb)) /
-              (L[j].norm() * bb.norm()) / std::sqrt(std::max(1 - L[j].dot(Ainv * L[j]), 1e-3))));
-    }
-    rp.sigma = std::max(RobustSd(sample), o.noise_floor);
-  }
-  // One pass over every `step`-th pixel: robust (or fixed-set) fit with the current light
-  // scales, then the robust SD re-estimated from the kept residuals.
-  auto pixel_pass = [&](std::size_t step, double p0, double p1) {
-    sample.clear();
-    const std::size_t every = std::max<std::size_t>(1, stride / step);
-    for (std::size_t k = 0; k < nin; k += step) {
-      if (o.rejection == Rejection::kResidual) {
-        solved[k] = RobustPixel(&inten[k * m], &use[k * m], L, rp, &b[k], t.data()) ? 1 : 0;
-        if (solved[k] && (k / step) % every == 0)
-          for (std::size_t j = 0; j < m; ++j)
-            if (use[k * m + j]) sample.push_back(static_cast<float>(std::abs(t[j])));
-      } else {
-        Eigen::Matrix3d Ainv;
-        solved[k] = SolvePixel(&inten[k * m], &use[k * m], L, &b[k], &Ainv) ? 1 : 0;
-        if (!solved[k]) b[k].setZero();
-      }
-      if (progress && k % 65536 == 0)
-        progress(p0 + (p1 - p0) * static_cast<double>(k) / static_cast<double>(nin));
-    }
-    if (o.rejection == Rejection::kResidual && !sample.empty())
-      rp.sigma = std::max(RobustSd(sample), o.noise_floor);
-  };
-  // Alternations on a subsample of at most kAlsPixels pixels (the m light scales need far
-  // fewer readings than there are), until no scale changes by more than kAlsTolerance.
-  constexpr std::size_t kAlsPixels = 1000;
-  constexpr double kAlsTolerance = 1e-6;
-  constexpr double kScalePrior = 1e-3;
-  const std::size_t als_step = std::max<std::size_t>(1, nin / kAlsPixels);
-  r.alternations = 0;
-  for (int it = 0; it < o.iterations; ++it) {
-    pixel_pass(als_step, 0, 0);
-    // Per light: s_j = argmin sum_i (I_ij - s_j l_j . b_i)^2 over the pixels using it, mean 1.
-    std::vector<double> s_new(m, 1.0);
-    double mean = 0;
-    for (std::size_t j = 0; j < m; ++j) {
-      double num = 0, den = 0;
-      for (std::size_t k = 0; k < nin; k += als_step) {
-        if (!use[k * m + j] || !solved[k]) continue;
-        const double pred = lights[j].direction.dot(b[k]);
-        num += pred * inten[k * m + j];
-        den += pred * pred;
-      }
-      // A weak prior towards the mean (weight kScalePrior of the data): where the data
-      // cannot tell a light's intensity from the normals (a nearly flat sample), it stays.
-      s_new[j] = den > 0 ? (num + kScalePrior * den) / (den * (1 + kScalePrior)) : 1.0;
-      mean += s_new[j];
-    }
-    mean /= static_cast<double>(m);
-    double change = 0;
-    for (std::size_t j = 0; j < m; ++j) {
-      change = std::max(change, std::abs(s_new[j] / mean - r.light_scale[j]));
-      r.light_scale[j] = s_new[j] / mean;
-    }
-    set_lights();
-    ++r.alternations;
-    if (progress) progress(0.5 * (it + 1.0) / o.iterations);
-    if (change < kAlsTolerance) break;
-  }
-  pixel_pass(1, 0.5, 0.95);  // every pixel with the final light scales
-  r.residual_sd = rp.sigma;
-  std::size_t bright = 0, dark = 0;
-  for (std::size_t k = 0; k < nin; ++k) {
-    const std::size_t i = inside[k];
-    const double a = b[k].norm();
-    if (!solved[k] || !(a > 0) || !(b[k].z() > 0)) {
-      ++r.unsolved_pixels;
-      r.normals[i] = Eigen::Vector3f::UnitZ();
-      continue;
-    }
-    r.albedo[i] = static_cast<float>(a);
-    r.normals[i] = (b[k] / a).cast<float>();
-    for (std::size_t j = 0; j < m; ++j) {
-      if (use[k * m + j]) {
-        r.light_use[j] += 1;
-      } else if (static_cast<double>(inten[k * m + j]) > L[j].dot(b[k]) &&
-                 static_cast<double>(inten[k * m + j]) >= o.shadow_fraction * L[j].norm() * a) {
-        ++bright;
-      } else {
-        ++dark;
-      }
-    }
-  }
-  for (auto& u : r.light_use) u /= std::max<double>(1, static_cast<double>(nin));
-  const double readings =
-      std::max<double>(1, static_cast<double>(nin - r.unsolved_pixels) * static_cast<double>(m));
-  r.dropped_bright = static_cast<double>(bright) / readings;
-  r.dropped_dark = static_cast<double>(dark) / readings;
-  const auto [given, mirrored] = CurlMedians(r.normals, r.mask, r.width, r.height);
-  r.mirrored_curl_ratio = mirrored > 0 ? given / mirrored : 1.0;
-  r.axis_flip_suspected = r.mirrored_curl_ratio > kAxisFlipRatio;
-  if (!irregular) {
-    r.height_m = o.integration == Integration::kPoisson
-                     ? IntegrateNormalsPoisson(r.normals, r.width, r.height, o.pitch_m)
-                     : IntegrateNormals(r.normals, r.width, r.height, o.pitch_m);
-  } else {
-    r.height_m = IntegrateNormalsMasked(r.normals, r.mask, r.width, r.height, o.pitch_m);
-  }
+
+  PixelSolve s;
+  s.m = m;
+  GatherReadings(st, ref, r.mask, &s);
+  s.b.assign(s.nin, Eigen::Vector3d::Zero());
+  s.solved.assign(s.nin, 0);
+  StartingLights(o, &s);
+  s.L.resize(m);
+  for (std::size_t j = 0; j < m; ++j) s.L[j] = r.light_scale[j] * lights[j].direction;
+  s.stride = std::max<std::size_t>(1, s.nin / 100000);
+  s.rp = {.sigma = 0,
+          .threshold = o.outlier_sigmas,
+          .shadow_fraction = o.shadow_fraction,
+          .min_lights = std::max(3, o.min_lights)};
+  if (o.rejection == Rejection::kResidual) s.rp.sigma = InitialResidualSd(s, o.noise_floor);
+  AlternateLightScales(lights, o, progress, &s, &r);
+  PixelPass(o, 1, 0.5, 0.95, progress, &s);  // every pixel with the final light scales
+  r.residual_sd = s.rp.sigma;
+  CollectPixels(s, o.shadow_fraction, &r);
+  CheckAndIntegrate(o, irregular, &r);
   if (progress) progress(1.0);
   return r;
 }

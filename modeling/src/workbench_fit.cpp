@@ -95,153 +95,178 @@ FitSummary FromCeres(const std::string& what, const ceres::Solver::Summary& sum)
   return f;
 }
 
-ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
-  ChannelFit out;
-  out.channel = c;
-  out.summary.what = ChannelName(c);
-  auto* cost = new ChannelCost{c, &r, {}, Resolve(*m, r, c), {}, {}, {}, {}};
-  // The normal cap selects by the smoothed load, not the noisy measured force: selecting on the
-  // response keeps the samples whose noise is negative near the cap and biases the law low.
+// The samples whose residuals a channel's fit takes: in contact and in the split's blocks. The
+// normal cap selects by the smoothed load, not the noisy measured force: selecting on the
+// response keeps the samples whose noise is negative near the cap and biases the law low.
+std::vector<int> FitSamples(const Replay& r, Channel c, const FitOptions& o) {
+  std::vector<int> idx;
   for (std::size_t i = 0; i < r.samples().size(); ++i)
     if (r.samples()[i].contact && InSplit(r.samples()[i].block, o.split) &&
         (c != Channel::kNormal || r.samples()[i].fload_N <= o.max_normal_force_N))
-      cost->idx.push_back(static_cast<int>(i));
-  // Algorithm 1 starts a friction model that has never been fitted (coulomb and dahl at their
-  // initial values): the Ceres refinement is then the joint batch step of the dissertation.
-  if (c == Channel::kFriction && o.algorithm1_init && m->Has(effect::kCoulomb) &&
-      m->Has(effect::kDahl)) {
-    auto slot = [&](ParamKey key) -> double* {
-      for (auto& x : cost->eff)
-        if (x.name == key.effect)
-          for (std::size_t k = 0; k < x.specs.size(); ++k)
-            if (x.specs[k].name == key.name) return &x.p[k];
-      return nullptr;
-    };
-    auto init = [&](ParamKey key) {
-      for (const auto& spec : FindEffect(key.effect)->Params(r))
-        if (spec.name == key.name) return spec.init;
-      return std::numeric_limits<double>::quiet_NaN();
-    };
-    double* mu_k = slot(key::kMuK);
-    double* kappa = slot(key::kKappa_N_per_m);
-    double* mu_b = slot(key::kMuB_Ns_per_m);
-    if (mu_k && kappa && *mu_k == init(key::kMuK) && *kappa == init(key::kKappa_N_per_m) &&
-        (!mu_b || *mu_b == init(key::kMuB_Ns_per_m))) {
-      try {
-        const auto a = AlgorithmOne(r, o.split);
-        if (std::isfinite(a.mu_k) && a.mu_k > 0) *mu_k = std::min(a.mu_k, 3.0);
-        if (std::isfinite(a.kappa_N_per_m) && a.kappa_N_per_m > 0)
-          *kappa = std::clamp(a.kappa_N_per_m, 10.0, 1e6);
-        if (mu_b && std::isfinite(a.mu_b_Ns_per_m))
-          *mu_b = std::clamp(a.mu_b_Ns_per_m, 0.0, 1000.0);
-      } catch (const InputError&) {
-        // Too few pre-sliding or sliding samples for Algorithm 1: start from the neutral values.
-      }
-    }
+      idx.push_back(static_cast<int>(i));
+  return idx;
+}
+
+// Algorithm 1 starts a friction model that has never been fitted (mu_k, kappa and mu_b at their
+// initial values): the Ceres refinement is then the joint batch step of the dissertation.
+void StartFromAlgorithmOne(const Replay& r, Split split, std::vector<Resolved>* eff) {
+  auto slot = [&](ParamKey key) -> double* {
+    for (auto& x : *eff)
+      if (x.name == key.effect)
+        for (std::size_t k = 0; k < x.specs.size(); ++k)
+          if (x.specs[k].name == key.name) return &x.p[k];
+    return nullptr;
+  };
+  auto init = [&](ParamKey key) {
+    for (const auto& spec : FindEffect(key.effect)->Params(r))
+      if (spec.name == key.name) return spec.init;
+    return std::numeric_limits<double>::quiet_NaN();
+  };
+  double* mu_k = slot(key::kMuK);
+  double* kappa = slot(key::kKappa_N_per_m);
+  double* mu_b = slot(key::kMuB_Ns_per_m);
+  if (!mu_k || !kappa || *mu_k != init(key::kMuK) || *kappa != init(key::kKappa_N_per_m) ||
+      (mu_b && *mu_b != init(key::kMuB_Ns_per_m)))
+    return;
+  try {
+    const auto a = AlgorithmOne(r, split);
+    if (std::isfinite(a.mu_k) && a.mu_k > 0) *mu_k = std::min(a.mu_k, 3.0);
+    if (std::isfinite(a.kappa_N_per_m) && a.kappa_N_per_m > 0)
+      *kappa = std::clamp(a.kappa_N_per_m, 10.0, 1e6);
+    if (mu_b && std::isfinite(a.mu_b_Ns_per_m)) *mu_b = std::clamp(a.mu_b_Ns_per_m, 0.0, 1000.0);
+  } catch (const InputError&) {
+    // Too few pre-sliding or sliding samples for Algorithm 1: start from the neutral values.
   }
+}
+
+// The fitted parameters as the solver sees them: divided by their scales, started inside their
+// bounds. cost->slots and cost->scale get one entry per unknown.
+struct Unknowns {
   std::vector<double> x, lo, hi;
+};
+
+Unknowns CollectUnknowns(ChannelCost* cost) {
+  Unknowns u;
   for (std::size_t e = 0; e < cost->eff.size(); ++e)
     for (std::size_t k = 0; k < cost->eff[e].specs.size(); ++k) {
       const auto& s = cost->eff[e].specs[k];
       if (!s.fitted) continue;
       cost->slots.emplace_back(static_cast<int>(e), static_cast<int>(k));
       cost->scale.push_back(s.scale);
-      x.push_back(std::clamp(cost->eff[e].p[k], s.lo, s.hi) / s.scale);
-      lo.push_back(s.lo / s.scale);
-      hi.push_back(s.hi / s.scale);
+      u.x.push_back(std::clamp(cost->eff[e].p[k], s.lo, s.hi) / s.scale);
+      u.lo.push_back(s.lo / s.scale);
+      u.hi.push_back(s.hi / s.scale);
     }
-  out.samples = static_cast<int>(cost->idx.size());
-  if (x.empty() || cost->idx.size() < x.size() * 3) {
-    out.summary.termination =
-        x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
-    out.summary.usable = x.empty();
-    delete cost;
-    return out;
-  }
-  cost->ftx.resize(r.samples().size());
-  cost->fty.resize(r.samples().size());
-  const int per = c == Channel::kNormal ? 1 : 2;
-  const int nres = static_cast<int>(cost->idx.size()) * per;
-  auto* fn = new ceres::DynamicNumericDiffCostFunction<ChannelCost, ceres::CENTRAL>(cost);
-  fn->AddParameterBlock(static_cast<int>(x.size()));
+  return u;
+}
+
+// Ceres' bounded trust region over the channel's nres residuals from u->x; the optimum into
+// u->x.
+ceres::Solver::Summary SolveChannel(const ChannelCost& cost, int nres, int max_iterations,
+                                    Unknowns* u) {
+  auto* fn = new ceres::DynamicNumericDiffCostFunction<ChannelCost, ceres::CENTRAL>(
+      &cost, ceres::DO_NOT_TAKE_OWNERSHIP);
+  fn->AddParameterBlock(static_cast<int>(u->x.size()));
   fn->SetNumResiduals(nres);
   ceres::Problem problem;
-  problem.AddResidualBlock(fn, nullptr, x.data());
-  for (std::size_t k = 0; k < x.size(); ++k) {
-    problem.SetParameterLowerBound(x.data(), static_cast<int>(k), lo[k]);
-    problem.SetParameterUpperBound(x.data(), static_cast<int>(k), hi[k]);
+  problem.AddResidualBlock(fn, nullptr, u->x.data());
+  for (std::size_t k = 0; k < u->x.size(); ++k) {
+    problem.SetParameterLowerBound(u->x.data(), static_cast<int>(k), u->lo[k]);
+    problem.SetParameterUpperBound(u->x.data(), static_cast<int>(k), u->hi[k]);
   }
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::DENSE_QR;
-  so.max_num_iterations = o.max_iterations;
+  so.max_num_iterations = max_iterations;
   so.function_tolerance = 1e-10;
   so.parameter_tolerance = 1e-10;
   so.logging_type = ceres::SILENT;
   so.num_threads = 1;
   ceres::Solver::Summary sum;
   ceres::Solve(so, &problem, &sum);
-  out.summary = FromCeres(ChannelName(c), sum);
-  // Copy the optimum back (the functor's copy holds the last evaluated point, not the best).
-  std::vector<Resolved> eff = cost->eff;
-  for (std::size_t k = 0; k < cost->slots.size(); ++k)
-    eff[cost->slots[k].first].p[cost->slots[k].second] = x[k] * cost->scale[k];
+  return sum;
+}
+
+// The optimum into the model (the functor's copy holds the last evaluated point, not the best)
+// and one estimate per unknown, its interval the point until the jackknife widens it; those at
+// a bound are named in out->summary.at_bounds.
+void StoreOptimum(Model* m, const ChannelCost& cost, const Unknowns& u, ChannelFit* out) {
+  std::vector<Resolved> eff = cost.eff;
+  for (std::size_t k = 0; k < cost.slots.size(); ++k)
+    eff[cost.slots[k].first].p[cost.slots[k].second] = u.x[k] * cost.scale[k];
   Store(m, eff);
-  const std::size_t np = x.size();
-  for (std::size_t k = 0; k < np; ++k) {
-    const auto& x_eff = eff[cost->slots[k].first];
-    const auto& spec = x_eff.specs[cost->slots[k].second];
+  for (std::size_t k = 0; k < u.x.size(); ++k) {
+    const auto& x_eff = eff[cost.slots[k].first];
+    const auto& spec = x_eff.specs[cost.slots[k].second];
     ParamEstimate pe;
     pe.effect = x_eff.name;
     pe.name = spec.name;
-    pe.value = x[k] * cost->scale[k];
+    pe.value = u.x[k] * cost.scale[k];
     pe.lo95 = pe.hi95 = pe.value;
     pe.bound_lo = spec.lo;
     pe.bound_hi = spec.hi;
     // At a bound: within 1e-6 of the parameter's range (or of its scale, for open ranges).
-    const double tol = 1e-6 * std::max(1.0, std::min(hi[k] - lo[k], 1e6));
-    const bool at_lo = x[k] - lo[k] <= tol, at_hi = hi[k] - x[k] <= tol;
+    const double tol = 1e-6 * std::max(1.0, std::min(u.hi[k] - u.lo[k], 1e6));
+    const bool at_lo = u.x[k] - u.lo[k] <= tol, at_hi = u.hi[k] - u.x[k] <= tol;
     // A bound at exactly zero of a non-negative amplitude (mu_b, B, dmu_s) is its neutral value.
-    pe.at_bound = at_hi || (at_lo && lo[k] != 0.0);
+    pe.at_bound = at_hi || (at_lo && u.lo[k] != 0.0);
     if (pe.at_bound)
-      out.summary.at_bounds.push_back(fmt::format("{}.{} at its {} bound ({:.6g})", pe.effect,
-                                                  pe.name, at_hi ? "upper" : "lower", pe.value));
-    out.params.push_back(pe);
+      out->summary.at_bounds.push_back(fmt::format("{}.{} at its {} bound ({:.6g})", pe.effect,
+                                                   pe.name, at_hi ? "upper" : "lower", pe.value));
+    out->params.push_back(pe);
   }
-  if (!o.uncertainty) return out;
+}
 
-  // Sandwich covariance over the split's blocks, in scaled parameters, from a central-difference
-  // Jacobian of the residuals at the optimum.
-  Eigen::MatrixXd J(nres, static_cast<Eigen::Index>(np));
-  std::vector<double> r0(nres), rp(nres), rm(nres), xs = x;
+// The residuals at x (scaled parameters) into *r0 and their central-difference Jacobian.
+Eigen::MatrixXd ResidualJacobian(const ChannelCost& cost, const std::vector<double>& x, int nres,
+                                 std::vector<double>* r0) {
+  Eigen::MatrixXd J(nres, static_cast<Eigen::Index>(x.size()));
+  std::vector<double> rp(nres), rm(nres), xs = x;
   const double* xp[1] = {xs.data()};
-  (*cost)(xp, r0.data());
-  for (std::size_t k = 0; k < np; ++k) {
+  r0->assign(nres, 0);
+  cost(xp, r0->data());
+  for (std::size_t k = 0; k < x.size(); ++k) {
     const double h = 1e-5 * std::max(1.0, std::abs(x[k]));
     std::copy(x.begin(), x.end(), xs.begin());
     xs[k] = x[k] + h;
-    (*cost)(xp, rp.data());
+    cost(xp, rp.data());
     xs[k] = x[k] - h;
-    (*cost)(xp, rm.data());
+    cost(xp, rm.data());
     for (int i = 0; i < nres; ++i) J(i, static_cast<Eigen::Index>(k)) = (rp[i] - rm[i]) / (2 * h);
   }
-  // Cluster (delete-one-cluster) jackknife, by the one-step Gauss-Newton update
-  // d_g = (J'J - J_g'J_g)^-1 J_g' r_g of leaving cluster g out: cov = (G-1)/G sum (d_g - d)(d_g -
-  // d)'. The plain CR0 sandwich G/(G-1) (J'J)^-1 sum s_g s_g' (J'J)^-1 is biased low with the ten
-  // clusters of a 30 s recording (it covered the truth in 15-17 of 20 seeds); the jackknife
-  // (CR3, MacKinnon & White 1985; Cameron & Miller 2015, sec. VI) corrects for each cluster's
-  // leverage.
-  const auto npi = static_cast<Eigen::Index>(np);
+  return J;
+}
+
+// Per cluster of kClusterBlocks blocks: (J_g'J_g, J_g'r_g) of its residuals (`per` a sample).
+std::map<int, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> ClusterSums(
+    const Replay& r, const std::vector<int>& idx, int per, const Eigen::MatrixXd& J,
+    const std::vector<double>& r0) {
+  const Eigen::Index np = J.cols();
   std::map<int, std::pair<Eigen::MatrixXd, Eigen::VectorXd>> cl;
-  for (int i = 0; i < nres; ++i) {
-    const int blk = r.samples()[cost->idx[i / per]].block / kClusterBlocks;
-    auto it =
-        cl.try_emplace(blk, Eigen::MatrixXd::Zero(npi, npi), Eigen::VectorXd::Zero(npi)).first;
+  for (Eigen::Index i = 0; i < J.rows(); ++i) {
+    const int blk = r.samples()[idx[i / per]].block / kClusterBlocks;
+    auto it = cl.try_emplace(blk, Eigen::MatrixXd::Zero(np, np), Eigen::VectorXd::Zero(np)).first;
     it->second.first += J.row(i).transpose() * J.row(i);
     it->second.second += J.row(i).transpose() * r0[static_cast<std::size_t>(i)];
   }
+  return cl;
+}
+
+// Sandwich covariance over the split's blocks, in scaled parameters, from the Jacobian J of the
+// residuals r0 at the optimum, by the cluster (delete-one-cluster) jackknife: the one-step
+// Gauss-Newton update d_g = (J'J - J_g'J_g)^-1 J_g' r_g of leaving cluster g out gives cov =
+// (G-1)/G sum (d_g - d)(d_g - d)'. The plain CR0 sandwich G/(G-1) (J'J)^-1 sum s_g s_g' (J'J)^-1
+// is biased low with the ten clusters of a 30 s recording (it covered the truth in 15-17 of 20
+// seeds); the jackknife (CR3, MacKinnon & White 1985; Cameron & Miller 2015, sec. VI) corrects
+// for each cluster's leverage. Into out: clusters, covariance (unscaled) and the estimates' SDs
+// and t intervals (cut at their bounds: one-sided at a bound). Nothing with fewer than 2.
+void JackknifeCovariance(const Replay& r, const ChannelCost& cost, int per,
+                         const Eigen::MatrixXd& J, const std::vector<double>& r0, ChannelFit* out) {
+  const auto cl = ClusterSums(r, cost.idx, per, J, r0);
   const double G = static_cast<double>(cl.size());
-  out.clusters = static_cast<int>(cl.size());
-  if (G < 2) return out;
+  out->clusters = static_cast<int>(cl.size());
+  if (G < 2) return;
+  const Eigen::Index npi = J.cols();
+  const auto np = static_cast<std::size_t>(npi);
   const Eigen::MatrixXd JtJ = J.transpose() * J;
   std::vector<Eigen::VectorXd> d;
   Eigen::VectorXd mean = Eigen::VectorXd::Zero(npi);
@@ -251,19 +276,47 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   }
   Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(npi, npi);
   for (const auto& dg : d) cov += (G - 1) / G * (dg - mean) * (dg - mean).transpose();
-  const double t = TQuantile975(out.clusters - 1);
-  out.covariance.assign(np * np, 0);
+  const double t = TQuantile975(out->clusters - 1);
+  out->covariance.assign(np * np, 0);
   for (std::size_t a = 0; a < np; ++a)
     for (std::size_t b = 0; b < np; ++b)
-      out.covariance[a * np + b] = cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) *
-                                   cost->scale[a] * cost->scale[b];
+      out->covariance[a * np + b] =
+          cov(static_cast<Eigen::Index>(a), static_cast<Eigen::Index>(b)) * cost.scale[a] *
+          cost.scale[b];
   for (std::size_t k = 0; k < np; ++k) {
-    auto& pe = out.params[k];
-    pe.sd = std::sqrt(std::max(out.covariance[k * np + k], 0.0));
-    // The interval stays in the physical range: a one-sided interval at a bound.
+    auto& pe = out->params[k];
+    pe.sd = std::sqrt(std::max(out->covariance[k * np + k], 0.0));
     pe.lo95 = std::max(pe.value - t * pe.sd, pe.bound_lo);
     pe.hi95 = std::min(pe.value + t * pe.sd, pe.bound_hi);
   }
+}
+
+ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
+  ChannelFit out;
+  out.channel = c;
+  out.summary.what = ChannelName(c);
+  ChannelCost cost{c, &r, FitSamples(r, c, o), Resolve(*m, r, c), {}, {}, {}, {}};
+  if (c == Channel::kFriction && o.algorithm1_init && m->Has(effect::kCoulomb) &&
+      m->Has(effect::kDahl))
+    StartFromAlgorithmOne(r, o.split, &cost.eff);
+  Unknowns u = CollectUnknowns(&cost);
+  out.samples = static_cast<int>(cost.idx.size());
+  if (u.x.empty() || cost.idx.size() < u.x.size() * 3) {
+    out.summary.termination =
+        u.x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
+    out.summary.usable = u.x.empty();
+    return out;
+  }
+  cost.ftx.resize(r.samples().size());
+  cost.fty.resize(r.samples().size());
+  const int per = c == Channel::kNormal ? 1 : 2;
+  const int nres = static_cast<int>(cost.idx.size()) * per;
+  out.summary = FromCeres(ChannelName(c), SolveChannel(cost, nres, o.max_iterations, &u));
+  StoreOptimum(m, cost, u, &out);
+  if (!o.uncertainty) return out;
+  std::vector<double> r0;
+  const Eigen::MatrixXd J = ResidualJacobian(cost, u.x, nres, &r0);
+  JackknifeCovariance(r, cost, per, J, r0, &out);
   return out;
 }
 

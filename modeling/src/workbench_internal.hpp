@@ -59,4 +59,8 @@ inline double NoiseSdFromSecondDifferences(std::vector<double> d2) {
   return *mid / 0.674489750196 / std::sqrt(6.0);
 }
 
+/// The FFT bins (1 .. n/2-1) of each of r's bands for a window of n samples at `rate`: those
+/// inside the band, else the one nearest its centre (as PrepareReplay picks them).
+std::vector<std::vector<int>> BandBins(const Replay& r, int n, double rate);
+
 }  // namespace hapticlab::modeling::wb::internal

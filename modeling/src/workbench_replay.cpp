@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <mutex>
@@ -17,6 +18,23 @@
 #include "workbench_internal.hpp"
 
 namespace hapticlab::modeling::wb {
+
+// (workbench_internal.hpp; workbench_vibration.cpp picks a fixed model's bins the same way)
+std::vector<std::vector<int>> internal::BandBins(const Replay& r, int n, double rate) {
+  const std::size_t nb = r.band_lo_hz.size();
+  std::vector<std::vector<int>> bins(nb);
+  for (std::size_t b = 0; b < nb; ++b) {
+    for (int k = 1; k < n / 2; ++k) {
+      const double f = k * rate / n;
+      if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
+    }
+    if (bins[b].empty())
+      bins[b].push_back(std::clamp(
+          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
+          n / 2 - 1));
+  }
+  return bins;
+}
 
 namespace {
 
@@ -91,124 +109,137 @@ std::size_t IciHalfWidth(const Measurement& m, std::size_t i,
   return best;
 }
 
-}  // namespace
-
-// ---------------------------------------------------------------------------------------------
-Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
-  Replay r;
-  r.file = m.file;
-  r.block_s = o.block_s;
-  r.position_resolution_m = o.position_resolution_m;
-  // The position noise (SD) the adaptive smoothing below compares its windows with: measured
-  // from the rows at rest, else a given resolution's quarter, else that of the 1 um default.
-  double position_sigma_m = o.position_resolution_m > 0 ? 0.25 * o.position_resolution_m : 0.25e-6;
-  if (!(o.position_resolution_m > 0)) {
-    // Position noise from rows at rest in contact: the second difference of white noise has
-    // variance 6 sigma^2, its median absolute value 0.6745 of its SD.
-    std::vector<double> d2;
-    for (std::size_t i = 1; i + 1 < m.rows.size(); ++i) {
-      const auto &a = m.rows[i - 1], &b = m.rows[i], &c = m.rows[i + 1];
-      if (b.v_mps.head<2>().norm() > 1e-3 || !(b.f_N.z() > o.contact_force_N)) continue;
-      for (int k = 0; k < 2; ++k) d2.push_back(std::abs(a.p_m[k] - 2 * b.p_m[k] + c.p_m[k]));
-    }
-    r.position_resolution_m = 1e-6;
-    if (d2.size() >= 200) {
-      const double sigma = internal::NoiseSdFromSecondDifferences(std::move(d2));
-      r.position_resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
-      position_sigma_m = 0.25 * r.position_resolution_m;
-    }
+// The position noise (SD) the adaptive smoothing compares its windows with: a given
+// resolution's quarter; else measured from the rows at rest in contact, and *resolution_m set
+// from it (1 um, SD 0.25 um, where too few rows rest). The second difference of white noise has
+// variance 6 sigma^2, its median absolute value 0.6745 of its SD.
+double PositionNoiseSd(const Measurement& m, const ReplayOptions& o, double* resolution_m) {
+  if (o.position_resolution_m > 0) return 0.25 * o.position_resolution_m;
+  std::vector<double> d2;
+  for (std::size_t i = 1; i + 1 < m.rows.size(); ++i) {
+    const auto &a = m.rows[i - 1], &b = m.rows[i], &c = m.rows[i + 1];
+    if (b.v_mps.head<2>().norm() > 1e-3 || !(b.f_N.z() > o.contact_force_N)) continue;
+    for (int k = 0; k < 2; ++k) d2.push_back(std::abs(a.p_m[k] - 2 * b.p_m[k] + c.p_m[k]));
   }
-  if (m.rows.size() < 2) throw InputError(m.file, 0, "", "a measurement needs at least two rows");
+  *resolution_m = 1e-6;
+  if (d2.size() < 200) return 0.25e-6;
+  const double sigma = internal::NoiseSdFromSecondDifferences(std::move(d2));
+  *resolution_m = std::clamp(4 * sigma, 0.05e-6, 5e-6);
+  return 0.25 * *resolution_m;
+}
+
+// The measurement's rate: the inverse of the median time step, rounded to a whole number of
+// Hz where it is one up to the time stamps' rounding.
+double MeasurementRate(const Measurement& m) {
   std::vector<double> dt;
   for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
   std::nth_element(dt.begin(), dt.begin() + dt.size() / 2, dt.end());
-  double rate = 1.0 / dt[dt.size() / 2];
-  if (std::abs(rate - std::round(rate)) < 1e-6 * rate)
-    rate = std::round(rate);  // time stamps' rounding
-  const int stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
-  const auto half_load =
+  const double rate = 1.0 / dt[dt.size() / 2];
+  return std::abs(rate - std::round(rate)) < 1e-6 * rate ? std::round(rate) : rate;
+}
+
+// How the force samples are taken from the rows: every `stride`-th row, the load smoothed over
+// rows i -+ half_load, the position over i -+ half_pos (adaptively: one of pos_halves).
+struct ForceSampling {
+  int stride = 1;
+  std::size_t half_load = 0, half_pos = 0;
+  std::vector<std::size_t> pos_halves;  // raw (0), then 2 rows growing by half up to half_pos
+  double position_sigma_m = 0;          // the noise the adaptive windows are compared with
+  double contact_force_N = 0;
+  bool position_adaptive = false, load_savgol = false;
+};
+
+ForceSampling ForceSamplingOf(double rate, const ReplayOptions& o, double position_sigma_m) {
+  ForceSampling g;
+  g.stride = std::max(1, static_cast<int>(std::lround(rate / o.max_force_rate_hz)));
+  g.half_load =
       static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.load_smoothing_s * rate)));
-  const auto half_pos =
+  g.half_pos =
       static_cast<std::size_t>(std::max(0L, std::lround(0.5 * o.position_smoothing_s * rate)));
-  if (!(o.position_resolution_m > 0) && half_pos >= 2) {
-    // The smoothed positions' noise: the centre weight is the variance factor of the SG fit.
-    const double hm = static_cast<double>(half_pos);
-    r.position_resolution_m = std::max(
-        0.05e-6, r.position_resolution_m * std::sqrt(3 * (3 * hm * hm + 3 * hm - 1) /
-                                                     ((2 * hm - 1) * (2 * hm + 1) * (2 * hm + 3))));
+  g.pos_halves = {0};
+  for (std::size_t h = 2; g.half_pos >= 2; h = std::max(h + 1, h * 3 / 2)) {
+    g.pos_halves.push_back(std::min(h, g.half_pos));
+    if (h >= g.half_pos) break;
   }
-  // Candidate half-widths of the adaptive position smoothing: raw (0), then 2 rows and growing
-  // by half up to the configured window.
-  std::vector<std::size_t> pos_halves{0};
-  for (std::size_t h = 2; half_pos >= 2; h = std::max(h + 1, h * 3 / 2)) {
-    pos_halves.push_back(std::min(h, half_pos));
-    if (h >= half_pos) break;
-  }
-  r.rate_hz = rate / stride;
+  g.position_sigma_m = position_sigma_m;
+  g.contact_force_N = o.contact_force_N;
+  g.position_adaptive = o.position_adaptive;
+  g.load_savgol = o.load_savgol;
+  return g;
+}
+
+// The load at row i: a quadratic Savitzky-Golay fit (closed-form centre weights, SavGol2) where
+// the whole window is in contact: a moving average would bias the load by W^2 f''/24 wherever
+// it curves (ends of strokes, pokes), a bias that friction's speed terms absorb (mu_b +1.5 % on
+// noise-free free-hand data). Elsewhere the mean of the rows in contact (fn_N where none is).
+double SmoothedLoad(const Measurement& m, std::size_t i, const ForceSampling& g, double fn_N) {
+  double sum = 0;
+  int count = 0;
+  const std::size_t lo = i >= g.half_load ? i - g.half_load : 0,
+                    hi = std::min(m.rows.size() - 1, i + g.half_load);
+  for (std::size_t k = lo; k <= hi; ++k)
+    if (m.rows[k].f_N.z() > g.contact_force_N) sum += m.rows[k].f_N.z(), ++count;
+  double load_N = count ? sum / count : fn_N;
+  if (g.load_savgol)
+    SavGol2(
+        m, i, g.half_load, [](const MeasurementRow& w) { return w.f_N.z(); },
+        [&](const MeasurementRow& w) { return w.f_N.z() > g.contact_force_N; }, &load_N);
+  return load_N;
+}
+
+// The force sample of row i (its direction of motion, dir_rad, is set by the caller: at rest it
+// is the last motion's).
+Replay::Sample ForceSample(const Measurement& m, std::size_t i, const ForceSampling& g, double t0,
+                           double block_s) {
+  const auto& row = m.rows[i];
+  Replay::Sample s{};
+  s.t_s = row.t_s;
+  const std::size_t h =
+      g.position_adaptive ? IciHalfWidth(m, i, g.pos_halves, g.position_sigma_m) : g.half_pos;
+  SmoothPosition(m, i, h, &s.x_m, &s.y_m);
+  s.d_m = std::max(0.0, -row.p_m.z());
+  s.ddot_mps = -row.v_mps.z();
+  s.vx_mps = row.v_mps.x();
+  s.vy_mps = row.v_mps.y();
+  s.speed_mps = std::hypot(s.vx_mps, s.vy_mps);
+  s.fn_N = row.f_N.z();
+  s.fload_N = SmoothedLoad(m, i, g, s.fn_N);
+  s.ftx_N = row.f_N.x();
+  s.fty_N = row.f_N.y();
+  s.contact = s.fn_N > g.contact_force_N;
+  s.block = static_cast<int>(std::floor((row.t_s - t0) / block_s));
+  s.row = static_cast<int>(i);
+  s.recording = m.recording_ids.empty() ? 0 : m.recording_ids[i];
+  return s;
+}
+
+// Every stride-th row as a force sample; the extent of the samples in contact into r's
+// x/y_min/max. Throws InputError where no sample is in contact.
+void AddForceSamples(const Measurement& m, const ForceSampling& g, Replay* r) {
   const double t0 = m.rows.front().t_s;
   double dir = 0;
   bool any = false;
-  for (std::size_t i = 0; i < m.rows.size(); i += stride) {
-    const auto& row = m.rows[i];
-    Replay::Sample s{};
-    s.t_s = row.t_s;
-    s.x_m = row.p_m.x();
-    s.y_m = row.p_m.y();
-    if (o.position_adaptive) {
-      const std::size_t h = IciHalfWidth(m, i, pos_halves, position_sigma_m);
-      SmoothPosition(m, i, h, &s.x_m, &s.y_m);
-    } else {
-      SmoothPosition(m, i, half_pos, &s.x_m, &s.y_m);
-    }
-    s.d_m = std::max(0.0, -row.p_m.z());
-    s.ddot_mps = -row.v_mps.z();
-    s.vx_mps = row.v_mps.x();
-    s.vy_mps = row.v_mps.y();
-    s.speed_mps = std::hypot(s.vx_mps, s.vy_mps);
+  for (std::size_t i = 0; i < m.rows.size(); i += g.stride) {
+    Replay::Sample s = ForceSample(m, i, g, t0, r->block_s);
     if (s.speed_mps > 1e-3) dir = std::atan2(s.vy_mps, s.vx_mps);  // at rest: the last motion's
     s.dir_rad = dir;
-    s.fn_N = row.f_N.z();
-    {
-      // Quadratic Savitzky-Golay smoothing (closed-form centre weights, hand-written: five lines)
-      // where the whole window is in contact: a moving average would bias the load by
-      // W^2 f''/24 wherever it curves (ends of strokes, pokes), a bias that friction's speed
-      // terms absorb (mu_b +1.5 % on noise-free free-hand data). Elsewhere the mean of the rows
-      // in contact.
-      double sum = 0;
-      int count = 0;
-      const std::size_t lo = i >= half_load ? i - half_load : 0,
-                        hi = std::min(m.rows.size() - 1, i + half_load);
-      for (std::size_t k = lo; k <= hi; ++k)
-        if (m.rows[k].f_N.z() > o.contact_force_N) sum += m.rows[k].f_N.z(), ++count;
-      s.fload_N = count ? sum / count : s.fn_N;
-      if (o.load_savgol)
-        SavGol2(
-            m, i, half_load, [](const MeasurementRow& w) { return w.f_N.z(); },
-            [&](const MeasurementRow& w) { return w.f_N.z() > o.contact_force_N; }, &s.fload_N);
-    }
-    s.ftx_N = row.f_N.x();
-    s.fty_N = row.f_N.y();
-    s.contact = s.fn_N > o.contact_force_N;
-    s.block = static_cast<int>(std::floor((row.t_s - t0) / o.block_s));
-    s.row = static_cast<int>(i);
-    s.recording = m.recording_ids.empty() ? 0 : m.recording_ids[i];
     if (s.contact) {
-      if (!any) r.x_min = r.x_max = s.x_m, r.y_min = r.y_max = s.y_m;
+      if (!any) r->x_min = r->x_max = s.x_m, r->y_min = r->y_max = s.y_m;
       any = true;
-      r.x_min = std::min(r.x_min, s.x_m), r.x_max = std::max(r.x_max, s.x_m);
-      r.y_min = std::min(r.y_min, s.y_m), r.y_max = std::max(r.y_max, s.y_m);
+      r->x_min = std::min(r->x_min, s.x_m), r->x_max = std::max(r->x_max, s.x_m);
+      r->y_min = std::min(r->y_min, s.y_m), r->y_max = std::max(r->y_max, s.y_m);
     }
-    r.mutable_samples().push_back(s);
+    r->mutable_samples().push_back(s);
   }
   if (!any)
     throw InputError(m.file, 0, "fz_N",
-                     fmt::format("no sample in contact (fz_N > {} N)", o.contact_force_N));
+                     fmt::format("no sample in contact (fz_N > {} N)", g.contact_force_N));
+}
 
-  if (!m.has_acceleration) return r;
-  r.has_vibration = true;
-  r.acc_rate_hz = rate;
-  int n = 64;
-  while (n * 2 <= o.window_s * rate * 1.5) n *= 2;
+// The analysis bands into r: a model's explicit edges (InputError where they pass the
+// measurement's Nyquist frequency), else `bands` log-spaced from 20 Hz to min(1000 Hz,
+// 0.45 rate, max_band_hz).
+void SetBands(const Measurement& m, const ReplayOptions& o, double rate, Replay* r) {
   double fmax = std::min(1000.0, 0.45 * rate);
   if (o.max_band_hz > 0) fmax = std::min(fmax, o.max_band_hz);
   if (!o.band_edges_hz.empty()) {
@@ -219,92 +250,161 @@ Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
               "the model's vibration bands reach {:.0f} Hz, above this measurement's Nyquist "
               "frequency {:.0f} Hz",
               o.band_edges_hz.back(), 0.5 * rate));
-    r.band_lo_hz.assign(o.band_edges_hz.begin(), o.band_edges_hz.end() - 1);
-    r.band_hi_hz.assign(o.band_edges_hz.begin() + 1, o.band_edges_hz.end());
-  } else {
-    for (int b = 0; b < o.bands; ++b) {
-      r.band_lo_hz.push_back(20 * std::pow(fmax / 20, static_cast<double>(b) / o.bands));
-      r.band_hi_hz.push_back(20 * std::pow(fmax / 20, static_cast<double>(b + 1) / o.bands));
-    }
+    r->band_lo_hz.assign(o.band_edges_hz.begin(), o.band_edges_hz.end() - 1);
+    r->band_hi_hz.assign(o.band_edges_hz.begin() + 1, o.band_edges_hz.end());
+    return;
   }
-  const int nb = static_cast<int>(r.band_lo_hz.size());
-  // Bins of each band (at least the nearest bin).
-  std::vector<std::vector<int>> bins(nb);
-  for (int b = 0; b < nb; ++b) {
-    for (int k = 1; k < n / 2; ++k) {
-      const double f = k * rate / n;
-      if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
-    }
-    if (bins[b].empty())
-      bins[b].push_back(std::clamp(
-          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
-          n / 2 - 1));
+  for (int b = 0; b < o.bands; ++b) {
+    r->band_lo_hz.push_back(20 * std::pow(fmax / 20, static_cast<double>(b) / o.bands));
+    r->band_hi_hz.push_back(20 * std::pow(fmax / 20, static_cast<double>(b + 1) / o.bands));
   }
-  std::vector<double> win(n);
-  double wss = 0;
+}
+
+// The motion over one window of n rows from w0: mean speed and load, their SDs, the mean
+// acceleration, the speed-weighted direction moments (cos, sin of the angle and of twice it)
+// and whether every row is in contact.
+struct WindowMotion {
+  double speed_mps = 0, force_N = 0, mean_acc_mps2 = 0, speed_sd_mps = 0, force_sd_N = 0;
+  std::array<double, 4> dir{};
+  bool contact = true;
+};
+
+WindowMotion MeasureWindow(const Measurement& m, std::size_t w0, int n, double contact_force_N) {
+  WindowMotion w;
+  double sp = 0, f = 0, mean = 0, wsum = 0, sp2 = 0, f2 = 0;
+  auto& d = w.dir;
   for (int k = 0; k < n; ++k) {
-    win[k] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * k / n);
-    wss += win[k] * win[k];
-  }
-  double* in = fftw_alloc_real(n);
-  fftw_complex* out = fftw_alloc_complex(n / 2 + 1);
-  static std::mutex plan_mutex;  // FFTW's planner is not thread-safe
-  fftw_plan plan;
-  {
-    std::lock_guard<std::mutex> lock(plan_mutex);
-    plan = fftw_plan_dft_r2c_1d(n, in, out, FFTW_ESTIMATE);
-  }
-  for (std::size_t w0 = 0; w0 + n <= m.rows.size(); w0 += n / 4) {
-    double sp = 0, f = 0, mean = 0, wsum = 0, sp2 = 0, f2 = 0;
-    std::array<double, 4> d{};
-    bool contact = true;
-    for (int k = 0; k < n; ++k) {
-      const auto& row = m.rows[w0 + k];
-      if (!(row.f_N.z() > o.contact_force_N)) contact = false;
-      const double v = row.v_mps.head<2>().norm();
-      sp += v, sp2 += v * v;
-      f += row.f_N.z(), f2 += row.f_N.z() * row.f_N.z();
-      mean += row.acc_mps2;
-      if (v > 1e-4) {
-        const double ph = std::atan2(row.v_mps.y(), row.v_mps.x());
-        d[0] += v * std::cos(ph), d[1] += v * std::sin(ph), d[2] += v * std::cos(2 * ph),
-            d[3] += v * std::sin(2 * ph);
-        wsum += v;
-      }
+    const auto& row = m.rows[w0 + k];
+    if (!(row.f_N.z() > contact_force_N)) w.contact = false;
+    const double v = row.v_mps.head<2>().norm();
+    sp += v, sp2 += v * v;
+    f += row.f_N.z(), f2 += row.f_N.z() * row.f_N.z();
+    mean += row.acc_mps2;
+    if (v > 1e-4) {
+      const double ph = std::atan2(row.v_mps.y(), row.v_mps.x());
+      d[0] += v * std::cos(ph), d[1] += v * std::sin(ph), d[2] += v * std::cos(2 * ph),
+          d[3] += v * std::sin(2 * ph);
+      wsum += v;
     }
-    sp /= n, f /= n, mean /= n;
-    if (!contact || sp < o.min_speed_mps) continue;
-    // A window across two concatenated recordings is no one condition.
-    if (!m.recording_ids.empty() && m.recording_ids[w0] != m.recording_ids[w0 + n - 1]) continue;
-    // Only steady windows: a spectrum is a property of a condition, not of a transition.
-    const double sv = std::sqrt(std::max(0.0, sp2 / n - sp * sp)),
-                 sf = std::sqrt(std::max(0.0, f2 / n - f * f));
-    if (sv > o.max_variation * sp || sf > o.max_variation * f) continue;
-    for (auto& x : d) x /= std::max(wsum, 1e-12);
-    for (int k = 0; k < n; ++k) in[k] = (m.rows[w0 + k].acc_mps2 - mean) * win[k];
-    fftw_execute(plan);
+  }
+  sp /= n, f /= n, mean /= n;
+  w.speed_mps = sp;
+  w.force_N = f;
+  w.mean_acc_mps2 = mean;
+  w.speed_sd_mps = std::sqrt(std::max(0.0, sp2 / n - sp * sp));
+  w.force_sd_N = std::sqrt(std::max(0.0, f2 / n - f * f));
+  for (auto& x : d) x /= std::max(wsum, 1e-12);
+  return w;
+}
+
+// Whether the window from w0 is scored: in contact, fast enough, within one recording (a window
+// across two concatenated recordings is no one condition) and steady (a spectrum is a property
+// of a condition, not of a transition).
+bool Scored(const Measurement& m, std::size_t w0, int n, const WindowMotion& w,
+            const ReplayOptions& o) {
+  if (!w.contact || w.speed_mps < o.min_speed_mps) return false;
+  if (!m.recording_ids.empty() && m.recording_ids[w0] != m.recording_ids[w0 + n - 1]) return false;
+  return !(w.speed_sd_mps > o.max_variation * w.speed_mps ||
+           w.force_sd_N > o.max_variation * w.force_N);
+}
+
+std::mutex& FftwPlannerMutex() {
+  static std::mutex mutex;  // FFTW's planner is not thread-safe
+  return mutex;
+}
+
+// The Hann-windowed periodogram of n rows of acceleration, |X_k|^2 / sum w^2, on one FFTW plan.
+class HannPeriodogram {
+ public:
+  explicit HannPeriodogram(int n)
+      : n_(n), win_(n), in_(fftw_alloc_real(n)), out_(fftw_alloc_complex(n / 2 + 1)) {
+    for (int k = 0; k < n; ++k) {
+      win_[k] = 0.5 - 0.5 * std::cos(2 * std::numbers::pi * k / n);
+      wss_ += win_[k] * win_[k];
+    }
+    std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+    plan_ = fftw_plan_dft_r2c_1d(n, in_, out_, FFTW_ESTIMATE);
+  }
+  ~HannPeriodogram() {
+    {
+      std::lock_guard<std::mutex> lock(FftwPlannerMutex());
+      fftw_destroy_plan(plan_);
+    }
+    fftw_free(in_);
+    fftw_free(out_);
+  }
+  HannPeriodogram(const HannPeriodogram&) = delete;
+  HannPeriodogram& operator=(const HannPeriodogram&) = delete;
+
+  // The rows w0 .. w0+n-1's acceleration less `mean`, transformed.
+  void Transform(const Measurement& m, std::size_t w0, double mean) {
+    for (int k = 0; k < n_; ++k) in_[k] = (m.rows[w0 + k].acc_mps2 - mean) * win_[k];
+    fftw_execute(plan_);
+  }
+  // Bin k's power of the last transform.
+  double Power(int k) const { return (out_[k][0] * out_[k][0] + out_[k][1] * out_[k][1]) / wss_; }
+
+ private:
+  int n_;
+  std::vector<double> win_;
+  double wss_ = 0;
+  double* in_;
+  fftw_complex* out_;
+  fftw_plan plan_ = nullptr;
+};
+
+// The steady vibration windows (n rows, a power of two near window_s, every n/4 rows) with the
+// mean periodogram power of each band into r.
+void AddVibrationWindows(const Measurement& m, const ReplayOptions& o, double rate, Replay* r) {
+  r->has_vibration = true;
+  r->acc_rate_hz = rate;
+  int n = 64;
+  while (n * 2 <= o.window_s * rate * 1.5) n *= 2;
+  SetBands(m, o, rate, r);
+  const auto bins = internal::BandBins(*r, n, rate);
+  const double t0 = m.rows.front().t_s;
+  HannPeriodogram periodogram(n);
+  for (std::size_t w0 = 0; w0 + n <= m.rows.size(); w0 += n / 4) {
+    const WindowMotion motion = MeasureWindow(m, w0, n, o.contact_force_N);
+    if (!Scored(m, w0, n, motion, o)) continue;
+    periodogram.Transform(m, w0, motion.mean_acc_mps2);
     Replay::Window w{};
     w.t_s = m.rows[w0].t_s;
-    w.speed_mps = sp;
-    w.force_N = f;
-    w.dir = d;
+    w.speed_mps = motion.speed_mps;
+    w.force_N = motion.force_N;
+    w.dir = motion.dir;
     w.block = static_cast<int>(std::floor((m.rows[w0 + n / 2].t_s - t0) / o.block_s));
     w.recording = m.recording_ids.empty() ? 0 : m.recording_ids[w0];
     w.row0 = static_cast<int>(w0);
     w.rows = n;
-    for (int b = 0; b < nb; ++b) {
+    for (const auto& band : bins) {
       double p = 0;
-      for (const int k : bins[b]) p += (out[k][0] * out[k][0] + out[k][1] * out[k][1]) / wss;
-      w.band_power.push_back(std::max(p / static_cast<double>(bins[b].size()), 1e-300));
+      for (const int k : band) p += periodogram.Power(k);
+      w.band_power.push_back(std::max(p / static_cast<double>(band.size()), 1e-300));
     }
-    r.windows.push_back(std::move(w));
+    r->windows.push_back(std::move(w));
   }
-  {
-    std::lock_guard<std::mutex> lock(plan_mutex);
-    fftw_destroy_plan(plan);
-  }
-  fftw_free(in);
-  fftw_free(out);
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+Replay PrepareReplay(const Measurement& m, const ReplayOptions& o) {
+  Replay r;
+  r.file = m.file;
+  r.block_s = o.block_s;
+  r.position_resolution_m = o.position_resolution_m;
+  const double position_sigma_m = PositionNoiseSd(m, o, &r.position_resolution_m);
+  if (m.rows.size() < 2) throw InputError(m.file, 0, "", "a measurement needs at least two rows");
+  const double rate = MeasurementRate(m);
+  const ForceSampling g = ForceSamplingOf(rate, o, position_sigma_m);
+  // The smoothed positions' noise: the centre weight is the variance factor of the SG fit.
+  if (!(o.position_resolution_m > 0) && g.half_pos >= 2)
+    r.position_resolution_m =
+        std::max(0.05e-6, r.position_resolution_m * std::sqrt(SavGol2Variance(g.half_pos)));
+  r.rate_hz = rate / g.stride;
+  AddForceSamples(m, g, &r);
+  if (m.has_acceleration) AddVibrationWindows(m, o, rate, &r);
   return r;
 }
 

@@ -22,23 +22,6 @@
 namespace hapticlab::modeling::wb {
 namespace {
 
-// The FFT bins of each band of a window of `n` samples at `rate` (as PrepareReplay picks them:
-// the bins inside the band, else the bin nearest its centre).
-std::vector<std::vector<int>> BandBins(const Replay& r, int n, double rate) {
-  std::vector<std::vector<int>> bins(r.band_lo_hz.size());
-  for (std::size_t b = 0; b < bins.size(); ++b) {
-    for (int k = 1; k < n / 2; ++k) {
-      const double f = k * rate / n;
-      if (f >= r.band_lo_hz[b] && f < r.band_hi_hz[b]) bins[b].push_back(k);
-    }
-    if (bins[b].empty())
-      bins[b].push_back(std::clamp(
-          static_cast<int>(std::lround(std::sqrt(r.band_lo_hz[b] * r.band_hi_hz[b]) * n / rate)), 1,
-          n / 2 - 1));
-  }
-  return bins;
-}
-
 // Per-sample power spectrum of the interpolated AR(MA) filter at frequency f [Hz] of a model
 // running at `rate`: gain^2 sigma^2 |1 + sum b_j z^-j|^2 / |1 - sum c_i z^-i|^2, z = e^{i w}.
 double FilterSpectrum(const renderer::ArFilter& flt, double f, double rate) {
@@ -109,7 +92,7 @@ std::vector<std::vector<double>> PredictModelBands(const renderer::MaterialModel
   if (r.windows.empty()) return out;
   const double fs_model = ModelRate(vm), fs_meas = r.acc_rate_hz;
   const int n = r.windows.front().rows;
-  const auto bins = BandBins(r, n, fs_meas);
+  const auto bins = internal::BandBins(r, n, fs_meas);
   // The model's spectrum at a condition, as a function of frequency [Hz], per sample of the
   // model; a band's power is its mean over the band's bins, converted to the measurement's
   // per-bin units by fs_meas / fs_model (the same continuous density at either rate).
