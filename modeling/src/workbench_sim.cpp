@@ -79,7 +79,7 @@ std::vector<double> TruthValues(const TruthParams& t, const Effect& e) {
 // A truth's effects (catalogue order) with their parameter values, by channel.
 struct TruthEffects {
   struct Active {
-    const Effect* effect;
+    const Effect* effect = nullptr;
     std::vector<double> p;
   };
   std::vector<Active> normal, friction, vibration;

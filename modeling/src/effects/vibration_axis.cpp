@@ -25,7 +25,7 @@ struct Axis {
   const char* cause;
   // The simulator's truth: its parameters and how they shape the excitation.
   std::vector<ParamSpec> truth;
-  void (*truth_hook)(const double* p, const TruthSample& s, TruthVibrationTerms& t);
+  void (*truth_hook)(const double* p, const TruthSample& s, TruthVibrationTerms& t) = nullptr;
   double Key(const Replay::Window& w) const { return speed ? w.speed_mps : w.force_N; }
   double LnKey(const Replay::Window& w) const {
     return speed ? std::log(w.speed_mps) : std::log(std::max(w.force_N, 1e-3));

@@ -166,7 +166,8 @@ TEST(EffectRegistry, AToyEffectIsSimulatedFitScoredAndDiagnosedLikeABuiltInOne) 
   const auto r = PrepareReplay(sim.m);
   EXPECT_EQ(TruthModel(sim, r).At(kRibs), 0.3);
 
-  // Fit on the training blocks recovers it; held out, it beats the model without it.
+  // Fit on the training blocks recovers it; held out, the model with it is at the noise floor
+  // (the truth replayed through the noisy kinematics), the model without it well above.
   Model without, with;
   AddEffects(&without, {"coulomb", "hc-exponent"}, r);
   AddEffects(&with, {"coulomb", "hc-exponent", "toy-ribs"}, r);
@@ -176,7 +177,9 @@ TEST(EffectRegistry, AToyEffectIsSimulatedFitScoredAndDiagnosedLikeABuiltInOne) 
   EXPECT_NEAR(with.At(kRibs), 0.3, 0.03);
   const double e0 = ComputeErrors(r, Predict(without, r), Split::kHeldOut).friction.normalized;
   const double e1 = ComputeErrors(r, Predict(with, r), Split::kHeldOut).friction.normalized;
-  EXPECT_LT(e1, 0.7 * e0) << "held-out friction error " << e0 << " -> " << e1;
+  const double floor = NoiseFloor(sim, r, Split::kHeldOut).friction.normalized;
+  EXPECT_LE(e1, 1.10 * floor) << "held-out friction error " << e1 << ", floor " << floor;
+  EXPECT_GT(e0, 1.2 * floor) << "without the ribs " << e0 << ", floor " << floor;
 
   // Diagnosed: among every catalogue effect the model lacks, the toy ranks first, supported.
   const auto dx = Diagnose(without, r, {.threads = 2});
