@@ -32,7 +32,7 @@ void TruthParams::Set(ParamKey k, double value) {
 
 namespace {
 
-// The spec of truth parameter `k`, or nullptr when its effect does not declare it.
+// The spec of truth parameter `k`, or none when its effect does not declare it.
 std::optional<ParamSpec> FindTruthSpec(ParamKey k) {
   const Effect* e = FindEffect(k.effect);
   HL_REQUIRE(e != nullptr, fmt::format("the truth names an unknown effect '{}'", k.effect));
