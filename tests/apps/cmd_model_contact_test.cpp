@@ -1,6 +1,6 @@
 // hapticlab model fit-contact through the command line (apps/hapticlab/cmd_model_contact.cpp):
-// on a short simulated measurement of the baseline truth (modeling/workbench_sim.hpp
-// TruthParams defaults), the estimates and their intervals, and the written material: what
+// on a short simulated measurement of the baseline truth (modeling/workbench_sim.hpp, the
+// truth's defaults), the estimates and their intervals, and the written material: what
 // the renderer loads is what was reported. ContactCli: on a free-hand measurement
 // (tests/modeling/contact_freehand.hpp), `model fit-contact` agrees with `hapticlab fit` and
 // `model build` keeps every effect. (Coverage over seeds: ContactFreeHand in

@@ -1,9 +1,9 @@
 // hapticlab fit through the command line (apps/hapticlab/cmd_workbench_fit.cpp): on a short
-// simulated measurement of the baseline truth (modeling/workbench_sim.hpp TruthParams
-// defaults: K1mm 1.5 N, n 1.3, B1mm 20 N s/m, mu_k 0.3, kappa 3000 N/m, mu_b 0.5 N s/m), the
-// estimates, and the written model: its renderer tables in SI units from the workbench's
-// parameters (K = K1mm / (1 mm)^n). (fit --add and held-out errors:
-// WorkbenchCli.FromRawMeasurementToImprovedModel in cmd_workbench_test.cpp.)
+// simulated measurement of the baseline truth (modeling/workbench_sim.hpp; the defaults of
+// TruthParams and the effects' TruthSpecs: K1mm 1.5 N, n 1.3, B1mm 20 N s/m, mu_k 0.3,
+// kappa 3000 N/m, mu_b 0.5 N s/m), the estimates, and the written model: its renderer tables
+// in SI units from the workbench's parameters (K = K1mm / (1 mm)^n). (fit --add and held-out
+// errors: WorkbenchCli.FromRawMeasurementToImprovedModel in cmd_workbench_test.cpp.)
 
 #include <gtest/gtest.h>
 

@@ -26,7 +26,7 @@ TEST(WorkbenchCompare, BreakdownShowsWhereTheModelFails) {
   t.duration_s = 60;
   t.effects = BaselineEffects();
   t.effects.push_back("stribeck");
-  t.stribeck_dmu = 0.3;
+  t.Set(key::kStribeckDmu, 0.3);
   const auto sim = Simulate(t);
   const auto r = PrepareReplay(sim.m);
   Model m;

@@ -6,6 +6,7 @@
 #include <fmt/ranges.h>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -26,6 +27,10 @@ std::vector<std::string> Without(std::vector<std::string> v, const std::vector<s
   return v;
 }
 
+void SetAnisotropy(TruthParams& t, const std::array<double, 4>& harmonics) {
+  for (int k = 0; k < 4; ++k) t.Set(key::kAnisotropy[k], harmonics[static_cast<std::size_t>(k)]);
+}
+
 struct Scenario {
   std::string effect;
   std::string variant;
@@ -34,41 +39,51 @@ struct Scenario {
 
 std::vector<Scenario> Scenarios() {
   return {
-      {"coulomb", "mu_k 0.2", [](TruthParams& t) { t.mu_k = 0.2; }},
-      {"coulomb", "mu_k 0.45", [](TruthParams& t) { t.mu_k = 0.45; }},
-      {"viscous", "mu_b 1", [](TruthParams& t) { t.mu_b_Ns_per_m = 1.0; }},
-      {"viscous", "mu_b 2", [](TruthParams& t) { t.mu_b_Ns_per_m = 2.0; }},
-      {"dahl", "kappa 1500", [](TruthParams& t) { t.kappa_N_per_m = 1500; }},
-      {"dahl", "kappa 4000", [](TruthParams& t) { t.kappa_N_per_m = 4000; }},
-      {"stribeck", "dmu 0.15 vs 4 mm/s", [](TruthParams& t) { t.stribeck_dmu = 0.15; }},
+      {"coulomb", "mu_k 0.2", [](TruthParams& t) { t.Set(key::kMuK, 0.2); }},
+      {"coulomb", "mu_k 0.45", [](TruthParams& t) { t.Set(key::kMuK, 0.45); }},
+      {"viscous", "mu_b 1", [](TruthParams& t) { t.Set(key::kMuB_Ns_per_m, 1.0); }},
+      {"viscous", "mu_b 2", [](TruthParams& t) { t.Set(key::kMuB_Ns_per_m, 2.0); }},
+      {"dahl", "kappa 1500", [](TruthParams& t) { t.Set(key::kKappa_N_per_m, 1500); }},
+      {"dahl", "kappa 4000", [](TruthParams& t) { t.Set(key::kKappa_N_per_m, 4000); }},
+      {"stribeck", "dmu 0.15 vs 4 mm/s", [](TruthParams& t) { t.Set(key::kStribeckDmu, 0.15); }},
       {"stribeck", "dmu 0.3 vs 8 mm/s",
-       [](TruthParams& t) { t.stribeck_dmu = 0.3, t.stribeck_vs_mps = 0.008; }},
+       [](TruthParams& t) {
+         t.Set(key::kStribeckDmu, 0.3), t.Set(key::kStribeckSpeed_mps, 0.008);
+       }},
       {"anisotropic-friction", "cos 2phi 0.25",
        [](TruthParams& t) {
-         t.aniso = {0, 0, 0.25, 0};
+         SetAnisotropy(t, {0, 0, 0.25, 0});
        }},
       {"anisotropic-friction", "cos phi 0.15, sin 2phi 0.1",
        [](TruthParams& t) {
-         t.aniso = {0.15, 0, 0, 0.1};
+         SetAnisotropy(t, {0.15, 0, 0, 0.1});
        }},
-      {"load-dependent-friction", "alpha 0.6", [](TruthParams& t) { t.load_alpha = 0.6; }},
-      {"load-dependent-friction", "alpha 0.8", [](TruthParams& t) { t.load_alpha = 0.8; }},
-      {"position-dependent-friction", "amplitude 0.2", [](TruthParams& t) { t.tile_amp = 0.2; }},
-      {"position-dependent-friction", "amplitude 0.35", [](TruthParams& t) { t.tile_amp = 0.35; }},
-      {"hc-damping", "B 15 N s/m at 1 mm", [](TruthParams& t) { t.B1mm_Ns_per_m = 15; }},
-      {"hc-damping", "B 40 N s/m at 1 mm", [](TruthParams& t) { t.B1mm_Ns_per_m = 40; }},
-      {"hc-exponent", "n 1.4", [](TruthParams& t) { t.n = 1.4; }},
-      {"hc-exponent", "n 1.8", [](TruthParams& t) { t.n = 1.8; }},
+      {"load-dependent-friction", "alpha 0.6", [](TruthParams& t) { t.Set(key::kLoadAlpha, 0.6); }},
+      {"load-dependent-friction", "alpha 0.8", [](TruthParams& t) { t.Set(key::kLoadAlpha, 0.8); }},
+      {"position-dependent-friction", "amplitude 0.2",
+       [](TruthParams& t) { t.Set(truth_key::kTileAmplitude, 0.2); }},
+      {"position-dependent-friction", "amplitude 0.35",
+       [](TruthParams& t) { t.Set(truth_key::kTileAmplitude, 0.35); }},
+      {"hc-damping", "B 15 N s/m at 1 mm", [](TruthParams& t) { t.Set(key::kB1mm_Ns_per_m, 15); }},
+      {"hc-damping", "B 40 N s/m at 1 mm", [](TruthParams& t) { t.Set(key::kB1mm_Ns_per_m, 40); }},
+      {"hc-exponent", "n 1.4", [](TruthParams& t) { t.Set(key::kN, 1.4); }},
+      {"hc-exponent", "n 1.8", [](TruthParams& t) { t.Set(key::kN, 1.8); }},
       {"base-layer", "6000 N/m under 0.6 mm",
-       [](TruthParams& t) { t.base_K_N_per_m = 6000, t.layer_m = 0.6e-3; }},
+       [](TruthParams& t) { t.Set(key::kBaseK_N_per_m, 6000), t.Set(key::kLayer_m, 0.6e-3); }},
       {"base-layer", "3000 N/m under 0.45 mm",
-       [](TruthParams& t) { t.base_K_N_per_m = 3000, t.layer_m = 0.45e-3; }},
-      {"vibration-speed", "power ~ v^2", [](TruthParams& t) { t.vib_speed_exp = 1.0; }},
-      {"vibration-speed", "power ~ v^3", [](TruthParams& t) { t.vib_speed_exp = 1.5; }},
-      {"vibration-force", "power ~ f^1.6", [](TruthParams& t) { t.vib_force_exp = 0.8; }},
-      {"vibration-force", "power ~ f^2.4", [](TruthParams& t) { t.vib_force_exp = 1.2; }},
-      {"vibration-direction", "+-3.5 dB", [](TruthParams& t) { t.vib_dir_amp = 0.8; }},
-      {"vibration-direction", "+-5.2 dB", [](TruthParams& t) { t.vib_dir_amp = 1.2; }},
+       [](TruthParams& t) { t.Set(key::kBaseK_N_per_m, 3000), t.Set(key::kLayer_m, 0.45e-3); }},
+      {"vibration-speed", "power ~ v^2",
+       [](TruthParams& t) { t.Set(truth_key::kSpeedExponent, 1.0); }},
+      {"vibration-speed", "power ~ v^3",
+       [](TruthParams& t) { t.Set(truth_key::kSpeedExponent, 1.5); }},
+      {"vibration-force", "power ~ f^1.6",
+       [](TruthParams& t) { t.Set(truth_key::kForceExponent, 0.8); }},
+      {"vibration-force", "power ~ f^2.4",
+       [](TruthParams& t) { t.Set(truth_key::kForceExponent, 1.2); }},
+      {"vibration-direction", "+-3.5 dB",
+       [](TruthParams& t) { t.Set(truth_key::kDirectionAmplitude, 0.8); }},
+      {"vibration-direction", "+-5.2 dB",
+       [](TruthParams& t) { t.Set(truth_key::kDirectionAmplitude, 1.2); }},
   };
 }
 
@@ -166,7 +181,7 @@ TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
   t.duration_s = 60;
   t.effects = Without(BaselineEffects(), {"hc-exponent"});
   t.effects.push_back("hc-exponent");
-  t.n = 1.8;
+  t.Set(key::kN, 1.8);
   const auto sim = Simulate(t);
   const auto r = PrepareReplay(sim.m);
   Model m;

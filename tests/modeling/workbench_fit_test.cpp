@@ -13,10 +13,10 @@ namespace {
 TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
   TruthParams t;
   t.effects = {"coulomb", "viscous", "hc-exponent"};
-  t.mu_k = 0.35;
-  t.mu_b_Ns_per_m = 0.8;
+  t.Set(key::kMuK, 0.35);
+  t.Set(key::kMuB_Ns_per_m, 0.8);
   t.K1mm_N = 1.7;
-  t.n = 1.4;
+  t.Set(key::kN, 1.4);
   t.duration_s = 12;
   t.seed = 7;
   // Exact kinematics: measured velocities with noise bias mu_k against mu_b (errors in the

@@ -11,6 +11,7 @@
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 #include "hapticlab/renderer/ar.hpp"
 #include "hapticlab/renderer/material.hpp"
@@ -45,6 +46,33 @@ TEST(WorkbenchSimulator, TruthModelReproducesTheIndependentSimulator) {
   // What remains: force noise on the measured load that scales the friction, Euler substeps.
   EXPECT_LT(std::sqrt(en / sn), 1e-6);
   EXPECT_LT(std::sqrt(et / st), 0.01);
+}
+
+// The truth's values come from the effects' declarations (Effect::TruthSpecs): defaults, and
+// a value no effect declares, or outside its bounds, is refused before anything is simulated.
+TEST(WorkbenchSimulator, TruthValuesAreTheEffectsDeclarations) {
+  TruthParams t;
+  EXPECT_EQ(t.Get(key::kMuK), 0.3) << "coulomb's declared default";
+  EXPECT_EQ(t.Get(truth_key::kWavelength_m), 0.4e-3);
+  t.Set(key::kMuK, 0.45);
+  EXPECT_EQ(t.Get(key::kMuK), 0.45);
+  EXPECT_THROW(t.Get({"coulomb", "no-such"}), PreconditionError);
+  EXPECT_THROW(t.Get({"no-such-effect", "mu_k"}), PreconditionError);
+  t.duration_s = 1;
+  EXPECT_NO_THROW(Simulate(t));
+  const std::pair<ParamKey, double> bad[] = {{key::kMuK, -0.1},
+                                             {key::kMuK, std::nan("")},
+                                             {key::kLoadAlpha, 1e100},
+                                             {{"coulomb", "no-such"}, 1},
+                                             {{"no-such-effect", "x"}, 1}};
+  for (const auto& [k, v] : bad) {
+    TruthParams b = t;
+    b.Set(k, v);
+    EXPECT_THROW(Simulate(b), PreconditionError) << k.effect << "." << k.name << " = " << v;
+  }
+  TruthParams unknown = t;
+  unknown.effects = {"coulomb", "wobble"};
+  EXPECT_THROW(Simulate(unknown), PreconditionError);
 }
 
 // The truth's friction law (hapticlab::sim_truth) used by this simulator and the simulated rig:

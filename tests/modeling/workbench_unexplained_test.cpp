@@ -79,7 +79,7 @@ TEST(WorkbenchUnexplained, ConcatenatedRecordingsAreNotDiagnosedAsDrift) {
   ta.seed = 3;
   TruthParams tb = ta;
   tb.seed = 4;
-  tb.mu_k = 0.42;
+  tb.Set(key::kMuK, 0.42);
   const auto sa = Simulate(ta);
   Measurement both = sa.m;
   const Measurement mb = Simulate(tb).m;

@@ -33,6 +33,20 @@ class AnisotropicFriction final : public BasicEffect {
                      p[2] * std::cos(2 * s.dir_rad) + p[3] * std::sin(2 * s.dir_rad);
     t.mu_scale *= std::max(f, 0.05);
   }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    const char* docs[4] = {"cos phi", "sin phi", "cos 2 phi", "sin 2 phi"};
+    const double init[4] = {0, 0, 0.25, 0};
+    std::vector<ParamSpec> p;
+    for (int k = 0; k < 4; ++k) {
+      p.push_back(ModulationCoefficient(std::string(key::kAnisotropy[k].name), docs[k]));
+      p.back().init = init[k];
+    }
+    return p;
+  }
+  void TruthFriction(const double* p, const TruthSample& s, TruthFrictionTerms& t) const override {
+    t.mu_scale *= 1 + p[0] * std::cos(s.dir_rad) + p[1] * std::sin(s.dir_rad) +
+                  p[2] * std::cos(2 * s.dir_rad) + p[3] * std::sin(2 * s.dir_rad);
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     std::vector<double> edges;
     for (int k = 0; k <= 8; ++k) edges.push_back(-std::numbers::pi + k * std::numbers::pi / 4);

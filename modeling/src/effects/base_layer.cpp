@@ -48,6 +48,23 @@ class BaseLayer final : public BasicEffect {
   void Normal(const double* p, const Replay::Sample& s, NormalTerms& t) const override {
     t.extra_N += p[0] * std::max(0.0, s.d_m - p[1]);
   }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kBaseK_N_per_m.name),
+             .unit = "N/m",
+             .init = 6000,
+             .lo = 0,
+             .hi = 1e6,
+             .doc = "base stiffness"},
+            {.name = std::string(key::kLayer_m.name),
+             .unit = "m",
+             .init = 0.6e-3,
+             .lo = 0,
+             .hi = 0.01,
+             .doc = "layer thickness"}};
+  }
+  void TruthNormal(const double* p, const TruthSample& s, NormalTerms& t) const override {
+    if (s.d_m > p[1]) t.extra_N += p[0] * (s.d_m - p[1]);
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     double dmax = 0;
     for (const auto& s : r.samples())

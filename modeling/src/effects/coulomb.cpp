@@ -38,6 +38,18 @@ class Coulomb final : public BasicEffect {
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
     t.mu_k = p[0];
   }
+  // Truth: the simulator's Coulomb level mu_k (times the other effects' modulations).
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kMuK.name),
+             .unit = "1",
+             .init = 0.3,
+             .lo = 0,
+             .hi = 3,
+             .doc = "kinetic friction coefficient"}};
+  }
+  void TruthFriction(const double* p, const TruthSample&, TruthFrictionTerms& t) const override {
+    t.mu_k = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = SampleBins(
         r, [&](std::size_t i) { return res.friction_N[i]; },

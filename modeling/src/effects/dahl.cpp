@@ -29,6 +29,18 @@ class Dahl final : public BasicEffect {
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
     t.kappa = p[0];
   }
+  // Truth: the simulator integrates the bristle itself (explicit Euler, 20 substeps).
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kKappa_N_per_m.name),
+             .unit = "N/m",
+             .init = 3000,
+             .lo = 10,
+             .hi = 1e6,
+             .doc = "pre-sliding stiffness"}};
+  }
+  void TruthFriction(const double* p, const TruthSample&, TruthFrictionTerms& t) const override {
+    t.kappa_N_per_m = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Residual magnitude in pre-sliding / starting samples vs steady sliding.
     double pre = 0, sl = 0;

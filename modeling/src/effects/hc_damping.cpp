@@ -28,6 +28,17 @@ class HcDamping final : public BasicEffect {
              .doc = "damping at 1 mm penetration"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.B = p[0]; }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kB1mm_Ns_per_m.name),
+             .unit = "N s/m",
+             .init = 20,
+             .lo = 0,
+             .hi = 1e5,
+             .doc = "damping at 1 mm penetration"}};
+  }
+  void TruthNormal(const double* p, const TruthSample&, NormalTerms& t) const override {
+    t.B = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const double c = Correlation(
         r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; },

@@ -38,6 +38,17 @@ class HcExponent final : public BasicEffect {
              .doc = "exponent"}};
   }
   void Normal(const double* p, const Replay::Sample&, NormalTerms& t) const override { t.n = p[0]; }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kN.name),
+             .unit = "1",
+             .init = 1.3,
+             .lo = 1,
+             .hi = 2,
+             .doc = "exponent"}};
+  }
+  void TruthNormal(const double* p, const TruthSample&, NormalTerms& t) const override {
+    t.n = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = BinMeans(
         r.samples().size(), [&](std::size_t i) { return res.normal_N[i]; },

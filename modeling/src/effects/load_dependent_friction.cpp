@@ -31,6 +31,17 @@ class LoadDependentFriction final : public BasicEffect {
   void Friction(const double* p, const Replay::Sample& s, FrictionTerms& t) const override {
     t.mu_scale *= std::pow(std::max(s.fload_N, 0.02), p[0] - 1);
   }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kLoadAlpha.name),
+             .unit = "1",
+             .init = 0.7,
+             .lo = 0.2,
+             .hi = 1.8,
+             .doc = "load exponent (1: Coulomb)"}};
+  }
+  void TruthFriction(const double* p, const TruthSample& s, TruthFrictionTerms& t) const override {
+    t.mu_scale *= std::pow(s.fn_N, p[0] - 1);
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = SampleBins(
         r, [&](std::size_t i) { return res.ratio[i]; },

@@ -1,4 +1,5 @@
 // position-dependent-friction: the friction coefficient varies over the surface.
+#include <Eigen/Dense>
 #include <numbers>
 
 #include "effect_util.hpp"
@@ -12,6 +13,11 @@ using namespace detail;
 // coefficients. Polynomials keep their form under a change of the box, so a field fitted on
 // one measurement means the same on another of the same sample.
 constexpr int kOrder = 2;
+
+// The simulator's field (its truth, TruthSpecs), u, w in [-1, 1]: not of the model's form.
+double TruthField(double u, double w) {
+  return 0.8 * u - 0.5 * w + 0.6 * u * w - 0.4 * (1.5 * u * u - 0.5);
+}
 
 // What the effect is, for `hapticlab effects` and the reports.
 constexpr std::string_view kAbout =
@@ -61,6 +67,44 @@ class PositionDependentFriction final : public BasicEffect {
       for (int k = 0; k <= kOrder; ++k)
         if (j || k) f += p[i++] * cu[j] * cv[k];
     t.mu_scale *= std::max(f, 0.05);
+  }
+  // Truth: a quadratic field over the stroked square, u, w its coordinates scaled to [-1, 1].
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(truth_key::kTileAmplitude.name),
+             .unit = "1",
+             .init = 0.25,
+             .lo = 0,
+             .hi = 0.9,
+             .doc = "mu varies by about +- this over the area"}};
+  }
+  void TruthFriction(const double* p, const TruthSample& s, TruthFrictionTerms& t) const override {
+    t.mu_scale *= 1 + p[0] * TruthField(s.u, s.w);
+  }
+  void TruthToModel(const double* p, double half_side_m, Model* m) const override {
+    // The field is a quadratic in x, y: re-expand it exactly on the model's box by least
+    // squares on a grid.
+    const double x0 = m->Get(key::kTileX0_m, 0), x1 = m->Get(key::kTileX1_m, 0),
+                 y0 = m->Get(key::kTileY0_m, 0), y1 = m->Get(key::kTileY1_m, 0);
+    Eigen::MatrixXd A(121, 8);
+    Eigen::VectorXd b(121);
+    int row = 0;
+    for (int i = 0; i <= 10; ++i)
+      for (int j = 0; j <= 10; ++j, ++row) {
+        const double us = -1 + i / 5.0, vs = -1 + j / 5.0;
+        const double x = x0 + (us + 1) / 2 * (x1 - x0), y = y0 + (vs + 1) / 2 * (y1 - y0);
+        b(row) = p[0] * TruthField(x / half_side_m, y / half_side_m);
+        const double cu[3] = {1, us, 1.5 * us * us - 0.5}, cv[3] = {1, vs, 1.5 * vs * vs - 0.5};
+        int c = 0;
+        for (int jj = 0; jj <= kOrder; ++jj)
+          for (int kk = 0; kk <= kOrder; ++kk)
+            if (jj || kk) A(row, c++) = cu[jj] * cv[kk];
+      }
+    const Eigen::VectorXd g = A.colPivHouseholderQr().solve(b);
+    auto& pp = m->params[std::string(effect::kPositionDependentFriction)];
+    int c = 0;
+    for (int jj = 0; jj <= kOrder; ++jj)
+      for (int kk = 0; kk <= kOrder; ++kk)
+        if (jj || kk) pp[fmt::format("{}{}{}", kLegendrePrefix, jj, kk)] = g(c++);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Friction-ratio residual per tile of a 3 x 3 grid.

@@ -1,42 +1,60 @@
-// The effect catalogue. Adding an effect: write effects/<name>.cpp with a Make<Name>() factory
-// and add one line below (docs/workbench.md).
+// The effect catalogue (workbench_model.hpp). Adding an effect: write effects/<name>.cpp with a
+// Make<Name>() factory and add one X(<Name>) line below; the folder is compiled by a glob
+// (docs/workbench.md, "Adding an effect").
+#include <algorithm>
+
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/workbench.hpp"
+
+// One line per effect, in catalogue order.
+#define HL_BUILT_IN_EFFECTS(X) \
+  X(Coulomb)                   \
+  X(Viscous)                   \
+  X(Dahl)                      \
+  X(Stribeck)                  \
+  X(AnisotropicFriction)       \
+  X(LoadDependentFriction)     \
+  X(PositionDependentFriction) \
+  X(HcDamping)                 \
+  X(HcExponent)                \
+  X(BaseLayer)                 \
+  X(VibrationSpeed)            \
+  X(VibrationForce)            \
+  X(VibrationDirection)
 
 namespace hapticlab::modeling::wb {
 
-std::unique_ptr<Effect> MakeCoulomb();
-std::unique_ptr<Effect> MakeViscous();
-std::unique_ptr<Effect> MakeDahl();
-std::unique_ptr<Effect> MakeStribeck();
-std::unique_ptr<Effect> MakeAnisotropicFriction();
-std::unique_ptr<Effect> MakeLoadDependentFriction();
-std::unique_ptr<Effect> MakePositionDependentFriction();
-std::unique_ptr<Effect> MakeHcDamping();
-std::unique_ptr<Effect> MakeHcExponent();
-std::unique_ptr<Effect> MakeBaseLayer();
-std::unique_ptr<Effect> MakeVibrationSpeed();
-std::unique_ptr<Effect> MakeVibrationForce();
-std::unique_ptr<Effect> MakeVibrationDirection();
+#define HL_DECLARE_EFFECT(Name) std::unique_ptr<Effect> Make##Name();
+HL_BUILT_IN_EFFECTS(HL_DECLARE_EFFECT)
+#undef HL_DECLARE_EFFECT
 
-const std::vector<std::unique_ptr<Effect>>& Catalogue() {
-  static const std::vector<std::unique_ptr<Effect>> kCatalogue = [] {
+namespace {
+std::vector<std::unique_ptr<Effect>>& Registry() {
+  static std::vector<std::unique_ptr<Effect>> catalogue = [] {
     std::vector<std::unique_ptr<Effect>> v;
-    v.push_back(MakeCoulomb());
-    v.push_back(MakeViscous());
-    v.push_back(MakeDahl());
-    v.push_back(MakeStribeck());
-    v.push_back(MakeAnisotropicFriction());
-    v.push_back(MakeLoadDependentFriction());
-    v.push_back(MakePositionDependentFriction());
-    v.push_back(MakeHcDamping());
-    v.push_back(MakeHcExponent());
-    v.push_back(MakeBaseLayer());
-    v.push_back(MakeVibrationSpeed());
-    v.push_back(MakeVibrationForce());
-    v.push_back(MakeVibrationDirection());
+#define HL_ADD_EFFECT(Name) v.push_back(Make##Name());
+    HL_BUILT_IN_EFFECTS(HL_ADD_EFFECT)
+#undef HL_ADD_EFFECT
     return v;
   }();
-  return kCatalogue;
+  return catalogue;
+}
+}  // namespace
+
+const std::vector<std::unique_ptr<Effect>>& Catalogue() { return Registry(); }
+
+EffectRegistration::EffectRegistration(std::unique_ptr<Effect> effect) {
+  HL_REQUIRE(effect != nullptr, "EffectRegistration needs an effect");
+  name_ = std::string(effect->name());
+  HL_REQUIRE(!name_.empty() && name_ != effect::kCore && FindEffect(name_) == nullptr,
+             "effect '" + name_ + "' is registered twice (or is the core's name)");
+  Registry().push_back(std::move(effect));
+}
+
+EffectRegistration::~EffectRegistration() {
+  auto& v = Registry();
+  v.erase(std::remove_if(v.begin(), v.end(), [&](const auto& e) { return e->name() == name_; }),
+          v.end());
 }
 
 }  // namespace hapticlab::modeling::wb

@@ -36,6 +36,25 @@ class Stribeck final : public BasicEffect {
     const double u = s.speed_mps / p[1];
     t.mu_add += p[0] * std::exp(-u * u);
   }
+  // Truth: sim_truth::StribeckFriction's Gaussian rise, mu_k + dmu_s exp(-(v / v_s)^2).
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kStribeckDmu.name),
+             .unit = "1",
+             .init = 0.25,
+             .lo = 0,
+             .hi = 3,
+             .doc = "static minus kinetic coefficient"},
+            {.name = std::string(key::kStribeckSpeed_mps.name),
+             .unit = "m/s",
+             .init = 0.004,
+             .lo = 2e-4,
+             .hi = 0.1,
+             .doc = "Stribeck speed"}};
+  }
+  void TruthFriction(const double* p, const TruthSample&, TruthFrictionTerms& t) const override {
+    t.dmu_s = p[0];
+    t.stribeck_speed_mps = p[1];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto b = SampleBins(
         r, [&](std::size_t i) { return RatioResidual(r, res, i); },

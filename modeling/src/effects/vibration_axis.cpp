@@ -23,6 +23,9 @@ struct Axis {
   const char* range_word;  // "speeds", "loads"
   const char* ln_symbol;   // "v", "f_n"
   const char* cause;
+  // The simulator's truth: its parameters and how they shape the excitation.
+  std::vector<ParamSpec> truth;
+  void (*truth_hook)(const double* p, const TruthSample& s, TruthVibrationTerms& t) = nullptr;
   double Key(const Replay::Window& w) const { return speed ? w.speed_mps : w.force_N; }
   double LnKey(const Replay::Window& w) const {
     return speed ? std::log(w.speed_mps) : std::log(std::max(w.force_N, 1e-3));
@@ -58,6 +61,11 @@ class VibrationAxis final : public Effect {
     double h[kMaxKnots];
     Hats(p, a_.knots, a_.LnKey(w), h);
     for (int i = 1; i < a_.knots; ++i) out[i - 1] = h[i];
+  }
+  std::vector<ParamSpec> TruthSpecs() const override { return a_.truth; }
+  void TruthVibration(const double* p, const TruthSample& s,
+                      TruthVibrationTerms& t) const override {
+    a_.truth_hook(p, s, t);
   }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [](std::size_t) { return true; };
@@ -102,7 +110,23 @@ std::unique_ptr<Effect> MakeVibrationSpeed() {
       .display_unit = "mm/s",
       .range_word = "speeds",
       .ln_symbol = "v",
-      .cause = "the vibration spectrum changes with speed"});
+      .cause = "the vibration spectrum changes with speed",
+      .truth = {{.name = std::string(truth_key::kSpeedExponent.name),
+                 .unit = "1",
+                 .init = 1.0,
+                 .lo = 0,
+                 .hi = 3,
+                 .doc = "power grows as (v / 50 mm/s)^(2 exponent)"},
+                {.name = std::string(truth_key::kWavelength_m.name),
+                 .unit = "m",
+                 .init = 0.4e-3,
+                 .lo = 1e-5,
+                 .hi = 0.01,
+                 .doc = "spatial period of the micro-geometry: resonance at v / wavelength"}},
+      .truth_hook = [](const double* p, const TruthSample& s, TruthVibrationTerms& t) {
+        t.resonance_hz = std::clamp(s.speed_mps / p[1], 30.0, 0.4 * s.rate_hz);
+        t.power *= std::pow(s.speed_mps / 0.05, 2 * p[0]);
+      }});
 }
 
 std::unique_ptr<Effect> MakeVibrationForce() {
@@ -123,7 +147,16 @@ std::unique_ptr<Effect> MakeVibrationForce() {
            .display_unit = "N",
            .range_word = "loads",
            .ln_symbol = "f_n",
-           .cause = "the vibration level changes with the normal force"});
+           .cause = "the vibration level changes with the normal force",
+           .truth = {{.name = std::string(truth_key::kForceExponent.name),
+                      .unit = "1",
+                      .init = 0.8,
+                      .lo = 0,
+                      .hi = 3,
+                      .doc = "power grows as (f_n / 1 N)^(2 exponent)"}},
+           .truth_hook = [](const double* p, const TruthSample& s, TruthVibrationTerms& t) {
+             t.power *= std::pow(s.fn_N, 2 * p[0]);
+           }});
 }
 
 }  // namespace hapticlab::modeling::wb

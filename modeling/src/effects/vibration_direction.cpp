@@ -22,6 +22,19 @@ class VibrationDirection final : public Effect {
   void VibrationFeatures(const double*, const Replay::Window& w, double* out) const override {
     for (int i = 0; i < 4; ++i) out[i] = w.dir[i];
   }
+  // Truth: across the grain at 0.3 rad + 90 deg the excitation is strongest.
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(truth_key::kDirectionAmplitude.name),
+             .unit = "1",
+             .init = 0.8,
+             .lo = 0,
+             .hi = 5,
+             .doc = "power factor exp(amplitude cos 2 (phi - 0.3 rad))"}};
+  }
+  void TruthVibration(const double* p, const TruthSample& s,
+                      TruthVibrationTerms& t) const override {
+    t.power *= std::exp(p[0] * std::cos(2 * (s.dir_rad - 0.3)));
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     // Axial direction (0-180 deg) bins: along vs across a structure.
     std::vector<double> e;

@@ -27,6 +27,17 @@ class Viscous final : public BasicEffect {
   void Friction(const double* p, const Replay::Sample&, FrictionTerms& t) const override {
     t.mu_b = p[0];
   }
+  std::vector<ParamSpec> TruthSpecs() const override {
+    return {{.name = std::string(key::kMuB_Ns_per_m.name),
+             .unit = "N s/m",
+             .init = 0.5,
+             .lo = 0,
+             .hi = 1000,
+             .doc = "viscous coefficient"}};
+  }
+  void TruthFriction(const double* p, const TruthSample&, TruthFrictionTerms& t) const override {
+    t.mu_b_Ns_per_m = p[0];
+  }
   EvidenceNote Evidence(const Replay& r, const Residuals& res) const override {
     const auto use = [&](std::size_t i) { return Sliding(r, i); };
     const double c = Correlation(

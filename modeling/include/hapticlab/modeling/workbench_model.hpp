@@ -8,8 +8,8 @@
 ///                   window's speed, load and direction.
 /// Units: see each ParamSpec (unit field); lengths in the normal-force terms are relative to
 /// 1 mm of penetration (K1mm_N is the force at 1 mm, not renderer material.hpp's K [N/m^n]; the
-/// conversion is in workbench_params.hpp, ContactParameters). Effect and parameter names are
-/// declared once in workbench_params.hpp.
+/// conversion is in workbench_params.hpp, ContactParameters). The names other code refers to
+/// are declared once in workbench_params.hpp.
 
 #include <map>
 #include <memory>
@@ -27,6 +27,7 @@ struct MaterialModel;
 namespace hapticlab::modeling::wb {
 
 struct VibrationSpectra;  // workbench_vibration.hpp
+struct Model;
 
 enum class Channel { kNormal, kFriction, kVibration };
 const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration"
@@ -55,6 +56,36 @@ struct FrictionTerms {
 
 struct Residuals;
 
+/// One sample of the ground-truth simulator (workbench_sim.hpp) as an effect's truth sees it:
+/// the simulated contact's state, noise-free.
+struct TruthSample {
+  double x_m = 0, y_m = 0;  ///< position in the plane [m]
+  double u = 0, w = 0;      ///< x_m, y_m over half the side of the stroked square [1]
+  double d_m = 0;           ///< penetration [m]
+  double ddot_mps = 0;      ///< penetration rate [m/s] (0 where the static law is inverted)
+  double speed_mps = 0;     ///< sliding speed [m/s]
+  double dir_rad = 0;       ///< direction of the last motion faster than 1 mm/s [rad]
+  double fn_N = 0;          ///< the truth's normal force (0 in the normal channel's own hook) [N]
+  double rate_hz = 0;       ///< sample rate [Hz]
+};
+/// Per-sample terms of the truth's friction: Coulomb level f_C = f_n mu with
+/// mu = mu_k mu_scale + dmu_s exp(-(v / v_s)^2) (sim_truth::StribeckFriction), a Dahl bristle
+/// of stiffness kappa when kappa > 0 (else Coulomb smoothed over 0.5 mm/s), plus mu_b v.
+struct TruthFrictionTerms {
+  double mu_k = 0;                   ///< [1]
+  double mu_scale = 1;               ///< product of the modulations [1] (starts at the drift)
+  double dmu_s = 0;                  ///< [1]
+  double stribeck_speed_mps = 1e-3;  ///< v_s [m/s]
+  double kappa_N_per_m = 0;          ///< 0: no pre-sliding
+  double mu_b_Ns_per_m = 0;          ///< [N s/m]
+};
+/// Per-sample terms of the truth's vibration: an AR(2) resonance at `resonance_hz` excited
+/// with variance `power` [(m/s^2)^2] while sliding in contact.
+struct TruthVibrationTerms {
+  double resonance_hz = 200;
+  double power = 0;  ///< starts at the core's level squared; effects scale it
+};
+
 /// What the current model's residuals say about an effect: the pattern as measured, and the
 /// cause it would point to. Reports assert the cause only for supported effects.
 struct EvidenceNote {
@@ -67,7 +98,11 @@ struct EvidenceNote {
 };
 
 /// A physical effect of the catalogue. Implementations live in modeling/src/effects/, one
-/// file each, registered in effects/registry.cpp.
+/// file each, registered by one line in effects/registry.cpp (docs/workbench.md, "Adding an
+/// effect"). An effect states its physics twice: for the model (Params, Normal, Friction,
+/// VibrationFeatures, fitted to measurements) and for the ground-truth simulator (TruthSpecs
+/// and the Truth* hooks, workbench_sim.hpp), written apart so that the simulator's
+/// measurements do not test the model against itself.
 class Effect {
  public:
   virtual ~Effect() = default;
@@ -89,11 +124,40 @@ class Effect {
   /// What pattern of the current model's residuals points to this effect, and whether the
   /// residuals show it.
   virtual EvidenceNote Evidence(const Replay& r, const Residuals& res) const = 0;
+
+  // The ground truth (workbench_sim.hpp): the simulator calls the hook of the effect's channel
+  // for every sample of a truth that has the effect, with the truth's values of TruthSpecs.
+  /// The truth's parameters: name, unit, default (`init`), bounds [lo, hi], doc.
+  virtual std::vector<ParamSpec> TruthSpecs() const { return {}; }
+  virtual void TruthNormal(const double* /*p*/, const TruthSample& /*s*/,
+                           NormalTerms& /*t*/) const {}
+  virtual void TruthFriction(const double* /*p*/, const TruthSample& /*s*/,
+                             TruthFrictionTerms& /*t*/) const {}
+  virtual void TruthVibration(const double* /*p*/, const TruthSample& /*s*/,
+                              TruthVibrationTerms& /*t*/) const {}
+  /// Writes the truth's values `p` into a model that has this effect (TruthModel; `half_side_m`:
+  /// half the side of the stroked square [m]). By default each truth parameter named like one
+  /// of the model's sets it.
+  virtual void TruthToModel(const double* p, double half_side_m, Model* m) const;
 };
 
-/// The catalogue, in a fixed order. The core ("contact": K and the vibration intercept) is
-/// not an entry: every model has it.
+/// The catalogue, in a fixed order: the built-in effects (effects/registry.cpp), then those
+/// registered. The core ("contact": K and the vibration intercept) is not an entry: every
+/// model has it.
 const std::vector<std::unique_ptr<Effect>>& Catalogue();
+/// Adds an effect after the others for as long as it lives (a plug-in keeps one for the
+/// program's life; a test's toy effect is gone after the test). Register before threads use
+/// the catalogue. Precondition (HL_REQUIRE): a new name, not the core's.
+class EffectRegistration {
+ public:
+  explicit EffectRegistration(std::unique_ptr<Effect> effect);
+  ~EffectRegistration();
+  EffectRegistration(const EffectRegistration&) = delete;
+  EffectRegistration& operator=(const EffectRegistration&) = delete;
+
+ private:
+  std::string name_;
+};
 /// The entry named `name`, or nullptr.
 const Effect* FindEffect(std::string_view name);
 /// The thesis's model: coulomb, viscous, dahl, hc-damping, hc-exponent, vibration-speed,

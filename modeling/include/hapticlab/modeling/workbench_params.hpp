@@ -8,7 +8,8 @@
 
 namespace hapticlab::modeling::wb {
 
-/// Effect names of the catalogue (effects/*.cpp) and the core every model has.
+/// Effect names of the built-in catalogue (effects/*.cpp) that other code refers to, and the
+/// core every model has. A new effect needs a line here only when code outside its file names it.
 namespace effect {
 inline constexpr std::string_view kCore = "core";
 inline constexpr std::string_view kCoulomb = "coulomb";
@@ -66,6 +67,20 @@ inline constexpr ParamKey kTileX1_m{effect::kPositionDependentFriction, "x1"};
 inline constexpr ParamKey kTileY0_m{effect::kPositionDependentFriction, "y0"};
 inline constexpr ParamKey kTileY1_m{effect::kPositionDependentFriction, "y1"};
 }  // namespace key
+
+/// Parameters of the simulator's ground truth (workbench_sim.hpp, Effect::TruthSpecs) that no
+/// model parameter shares; the others have their model parameter's key (key::kMuK, ...).
+namespace truth_key {
+/// Amplitude of the truth's friction field over the surface [1].
+inline constexpr ParamKey kTileAmplitude{effect::kPositionDependentFriction, "amplitude"};
+/// Vibration power grows as (v / 50 mm/s)^(2 exponent) [1]; resonance at v / wavelength [m].
+inline constexpr ParamKey kSpeedExponent{effect::kVibrationSpeed, "exponent"};
+inline constexpr ParamKey kWavelength_m{effect::kVibrationSpeed, "wavelength"};
+/// Vibration power grows as (f_n / 1 N)^(2 exponent) [1].
+inline constexpr ParamKey kForceExponent{effect::kVibrationForce, "exponent"};
+/// Vibration power scales by exp(amplitude cos 2 (phi - 0.3 rad)) [1].
+inline constexpr ParamKey kDirectionAmplitude{effect::kVibrationDirection, "amplitude"};
+}  // namespace truth_key
 
 /// Names of the parameter families an effect numbers ("knot0", "g01", ...).
 inline constexpr std::string_view kKnotPrefix = "knot";   ///< vibration-speed/-force knots

@@ -3,6 +3,7 @@
 
 #include <array>
 #include <cstdint>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -11,21 +12,20 @@
 namespace hapticlab::modeling::wb {
 
 // ---------------------------------------------------------------------------------------------
-// Ground-truth simulator (tests, docs, `hapticlab measurement simulate`): an independent
-// implementation of the effects' physics (Euler-integrated bristles at 20 substeps per sample,
-// an AR(2) resonance at the surface's spatial frequency for vibration) driven by human-like
-// strokes; noise on forces, positions, velocities and acceleration.
+// Ground-truth simulator (tests, docs, `hapticlab measurement simulate`): human-like strokes on
+// a sample whose physics has a chosen set of effects; noise on forces, positions, velocities
+// and acceleration. The strokes, the inversion of the normal law for a commanded load, the Dahl
+// bristle (explicit Euler, 20 substeps per sample) and the AR(2) vibration resonance are the
+// simulator's; what each effect adds is its own truth hook (Effect::TruthNormal, ...), an
+// implementation apart from the model's.
 struct TruthParams {
   std::vector<std::string> effects;  ///< which effects the truth has (BaselineEffects() by default)
-  double K1mm_N = 1.5, n = 1.3, B1mm_Ns_per_m = 20;  ///< n with hc-exponent, B with hc-damping
-  double base_K_N_per_m = 6000, layer_m = 0.6e-3;    ///< base-layer
-  double mu_k = 0.3, kappa_N_per_m = 3000, mu_b_Ns_per_m = 0.5;
-  double stribeck_dmu = 0.25, stribeck_vs_mps = 0.004;
-  std::array<double, 4> aniso{0.0, 0.0, 0.25, 0.0};  ///< a1, b1, a2, b2 of 1 + a1 cos φ + ...
-  double load_alpha = 0.7;                           ///< f_C ∝ f_n^alpha
-  double tile_amp = 0.25;                            ///< µ varies by about ± this over the area
-  double vib_sigma = 2.0, vib_speed_exp = 1.0, vib_force_exp = 0.8, vib_dir_amp = 0.8;
-  double wavelength_m = 0.4e-3;  ///< spatial period of the micro-geometry
+  double K1mm_N = 1.5;               ///< the core's normal force at 1 mm penetration [N]
+  double vib_sigma = 2.0;            ///< the core's vibration excitation [m/s^2]
+  /// The effects' truth parameters set away from their defaults (Effect::TruthSpecs):
+  /// effect -> name -> value. Set / Get with the keys of workbench_params.hpp (key::kMuK,
+  /// truth_key::kTileAmplitude, ...).
+  std::map<std::string, std::map<std::string, double>> params;
   /// Out of the catalogue (tests of `diagnose`'s unexplained report): mu_k drifts linearly by
   /// this fraction over the recording (mu_k (1 + mu_drift (t / duration - 1/2))), and the
   /// stiffness varies over the surface (K1mm (1 + K_position_amp x / (area / 2))).
@@ -35,6 +35,10 @@ struct TruthParams {
   double area_m = 0.04;  ///< strokes stay in a square of this side
   std::uint64_t seed = 1;
   bool Has(std::string_view e) const;
+  void Set(ParamKey k, double value);
+  /// The value set, else the effect's default. Precondition (HL_REQUIRE): the effect is in the
+  /// catalogue and declares the parameter.
+  double Get(ParamKey k) const;
 };
 struct SimulatedMeasurement {
   TruthParams truth;
@@ -44,6 +48,8 @@ struct SimulatedMeasurement {
   /// (the expected periodogram follows analytically).
   std::vector<std::array<double, 4>> acc_state;
 };
+/// Precondition (HL_REQUIRE): every effect of `t` is in the catalogue, and every parameter set
+/// is one its effect declares, finite and within its bounds.
 SimulatedMeasurement Simulate(const TruthParams& t);
 /// The truth expressed as a workbench model (force channels; the vibration truth has another
 /// form): the truth's parameters, the position field re-expanded on the replay's area.
@@ -52,7 +58,5 @@ Model TruthModel(const SimulatedMeasurement& sim, const Replay& r);
 /// force channels — no model can beat it on average — and, for vibration, E_s of the measured
 /// band powers against their analytic expectation.
 Errors NoiseFloor(const SimulatedMeasurement& sim, const Replay& r, Split split);
-/// The noise-free forces against the measurement (below NoiseFloor by the input noise).
-Errors CleanSignalErrors(const SimulatedMeasurement& sim, const Replay& r, Split split);
 
 }  // namespace hapticlab::modeling::wb
