@@ -26,7 +26,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::contact_test {
 namespace {
 
 TEST(ContactFreeHand, EveryParameterRecoveredWithUsableFits) {
@@ -176,4 +176,4 @@ TEST(ContactOneLine, RefusesTooLittleDataNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::contact_test

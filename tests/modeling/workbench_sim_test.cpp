@@ -17,7 +17,7 @@
 #include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_sim_test {
 namespace {
 
 // parameters the workbench must reproduce the simulator's noise-free forces.
@@ -60,4 +60,4 @@ TEST(WorkbenchSimulator, TruthFrictionLawMapsTheRatioForm) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_sim_test

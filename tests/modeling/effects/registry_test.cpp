@@ -11,7 +11,7 @@
 
 #include "hapticlab/modeling/workbench.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::registry_test {
 namespace {
 
 TEST(EffectRegistry, ListsEverySourceFileOnceInAFixedOrder) {
@@ -80,4 +80,4 @@ TEST(EffectRegistry, ChannelsAndDependenciesFollowThePhysics) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::registry_test
