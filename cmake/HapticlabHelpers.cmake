@@ -43,6 +43,13 @@ endfunction()
 # HL_TEST_ONLY (cache list of <module>/<source>): build only these files, e.g. the threaded
 # tests in the ThreadSanitizer build (scripts/test).
 set(HL_TEST_ONLY "" CACHE STRING "Only these test files (<module>/<source>;...); empty: all")
+# HL_UNITY: compile each module's test files in batches of HL_UNITY_BATCH files, one compile
+# unit per batch (CMake's UNITY_BUILD): gtest's, Eigen's and fmt's inline code is parsed and
+# generated once per batch instead of once per file (docs/performance.md, "Build and CI";
+# scripts/test uses it in CI). Each test file keeps its file-local names in a namespace of its
+# own (tests/<module>/<name>_test.cpp: namespace ...::<name>_test), so they cannot meet.
+option(HL_UNITY "Compile the module test files in unity batches" OFF)
+set(HL_UNITY_BATCH 8 CACHE STRING "Test files per unity compile unit (HL_UNITY)")
 
 function(hl_add_test module source)
   cmake_parse_arguments(T "SERIAL" "ENVIRONMENT" "DEPS;TOOLS" ${ARGN})
@@ -52,6 +59,18 @@ function(hl_add_test module source)
   set(file ${CMAKE_CURRENT_SOURCE_DIR}/${source}_test.cpp)
   if(NOT EXISTS ${file})
     set(file ${CMAKE_CURRENT_SOURCE_DIR}/${module}/${source}_test.cpp)
+  endif()
+  # A unity batch (HL_UNITY) is one compile unit: each file keeps its tests and helpers in a
+  # namespace named after it, so that two files' file-local names cannot meet.
+  get_filename_component(stem ${file} NAME_WE)
+  file(STRINGS ${file} own REGEX "^namespace [A-Za-z_:]+::${stem} {$")
+  if(NOT own)
+    set(level WARNING)
+    if(HL_UNITY)
+      set(level FATAL_ERROR)
+    endif()
+    message(${level} "${file}: no namespace named after the file: put its code in "
+            "`namespace hapticlab[::module]::${stem} { namespace { ... } }` (HL_UNITY)")
   endif()
   get_property(modules GLOBAL PROPERTY HL_TEST_MODULES)
   if(NOT module IN_LIST modules)
@@ -101,6 +120,10 @@ function(hl_add_module_tests)
     list(REMOVE_DUPLICATES deps)
     set(target ${module}_tests)
     add_executable(${target} ${sources})
+    if(HL_UNITY)
+      set_target_properties(${target} PROPERTIES UNITY_BUILD ON
+                            UNITY_BUILD_BATCH_SIZE ${HL_UNITY_BATCH})
+    endif()
     if(TARGET hapticlab::${module})
       target_link_libraries(${target} PRIVATE hapticlab::${module})
     endif()

@@ -12,7 +12,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "sqlite_count.hpp"
 
-namespace hapticlab {
+namespace hapticlab::audit_cli_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -147,4 +147,4 @@ TEST(AuditCli, HelpListsExitCodeThreeAndReportsHoldNoAbsolutePath) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::audit_cli_test

@@ -14,7 +14,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/status.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cli_common_test {
 namespace {
 
 // Runs `body` under cli::Guard; stderr into *err.
@@ -141,4 +141,4 @@ TEST(CliCommon, PrintJsonStderrLogAndPlannedCommands) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cli_common_test

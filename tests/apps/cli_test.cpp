@@ -13,7 +13,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cli_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -145,4 +145,4 @@ TEST(Cli, ImageCodecsAreNotLoadedAtStartUp) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cli_test

@@ -16,7 +16,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_analyze_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -100,4 +100,4 @@ TEST(AnalyzeCli, AMissingDatabaseIsBadInputNamingItAndTheOption) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_analyze_test

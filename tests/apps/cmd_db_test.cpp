@@ -12,7 +12,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "sqlite_count.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_db_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -56,4 +56,4 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_db_test

@@ -8,7 +8,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_demo_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -75,4 +75,4 @@ TEST(DemoCli, ABadProtocolOrParticipantCountIsRefusedBeforeAnythingIsWritten) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_demo_test

@@ -8,7 +8,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_device_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -70,4 +70,4 @@ TEST(DeviceCli, FalconLoadNamesTheFirmwareFileAndTheOption) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_device_test

@@ -22,7 +22,7 @@
 #include "hapticlab/test/bids.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_export_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -398,4 +398,4 @@ TEST_F(Interchange, ExportsPrintOneLinePerParticipantAndASummary) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_export_test

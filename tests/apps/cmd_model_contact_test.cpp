@@ -25,7 +25,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_model_contact_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -107,9 +107,9 @@ TEST(ModelContactCli, BadMeasurementsAreNamedWithFileLineAndColumn) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_model_contact_test
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::cmd_model_contact_test {
 namespace {
 
 // Both commands on one free-hand file, and `model build` keeping every effect.
@@ -197,4 +197,4 @@ TEST(ContactCli, FitContactAndWorkbenchFitAgreeAndBuildKeepsEveryEffect) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::cmd_model_contact_test

@@ -25,7 +25,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_model_photometric_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -141,10 +141,10 @@ TEST(PhotometricCli, OptionsAndLightsAreCheckedBeforeAnyWork) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_model_photometric_test
 
 // The scenes rendered to image files and run through the command line.
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::cmd_model_photometric_test {
 namespace {
 
 using namespace scenes;  // NOLINT(google-build-using-namespace): the shared test scenes
@@ -304,4 +304,4 @@ TEST(Photometric, CommandLineDiLiGenTLayoutMaskFrameAndFloatOutputs) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::cmd_model_photometric_test

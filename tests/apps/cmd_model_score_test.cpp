@@ -14,7 +14,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_model_score_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -102,4 +102,4 @@ TEST(ModelScoreCli, ScoresAndIdentifiesTexturesFromWavFiles) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_model_score_test

@@ -10,7 +10,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "sine_model.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_model_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -151,4 +151,4 @@ TEST(ModelCli, ImportPennThenRenderWithTheTrajectorysForce) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_model_test

@@ -13,7 +13,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_model_vibration_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -257,4 +257,4 @@ TEST(ModelCli, VibrationOptionsAreCheckedAndNamed) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_model_vibration_test

@@ -11,7 +11,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_participant_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -82,4 +82,4 @@ TEST(ParticipantCli, NewInfersThePrefixOfTheProtocolsOwnPattern) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_participant_test

@@ -8,7 +8,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_power_test {
 namespace {
 
 using nlohmann::json;
@@ -137,4 +137,4 @@ TEST(PowerCli, JsonShardsMergeAndThreads) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_power_test

@@ -11,7 +11,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_rig_test {
 namespace {
 
 std::string RigCli() { return std::string(HL_CLI_PATH); }
@@ -224,4 +224,4 @@ TEST(RigCli, TouchOnTheFalconTwinRecordsPointsCalibrateTurnsIntoTheTruePose) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_rig_test

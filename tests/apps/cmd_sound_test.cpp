@@ -15,7 +15,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_sound_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -225,4 +225,4 @@ TEST(SoundCli, BadSoundInputExitsTwoNamingFileAndField) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_sound_test

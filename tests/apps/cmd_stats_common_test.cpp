@@ -17,7 +17,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::cli::stats_cmd {
+namespace hapticlab::cli::stats_cmd::cmd_stats_common_test {
 namespace {
 
 // "file|line|field" of the first diagnostic of what `f` throws, or "no error".
@@ -138,4 +138,4 @@ TEST(StatsCommon, BadInputNamesFileLineAndField) {
 }
 
 }  // namespace
-}  // namespace hapticlab::cli::stats_cmd
+}  // namespace hapticlab::cli::stats_cmd::cmd_stats_common_test

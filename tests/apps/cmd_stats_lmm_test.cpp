@@ -8,7 +8,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_stats_lmm_test {
 namespace {
 
 using nlohmann::json;
@@ -90,4 +90,4 @@ TEST(StatsCli, LmmFormulaLanguage) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_stats_lmm_test

@@ -11,7 +11,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_stats_psychometric_test {
 namespace {
 
 using nlohmann::json;
@@ -173,4 +173,4 @@ TEST(StatsPsychometricCli, BadInputExitsTwoNamingFileLineAndColumn) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_stats_psychometric_test

@@ -12,7 +12,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_stats_test {
 namespace {
 
 using nlohmann::json;
@@ -345,4 +345,4 @@ TEST(StatsCli, ExtremeValuesGiveFiniteResultsOrANamedRefusal) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_stats_test

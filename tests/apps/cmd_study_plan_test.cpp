@@ -11,7 +11,7 @@
 #include "hapticlab/replication/plan.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_study_plan_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -350,4 +350,4 @@ TEST(StudyPlanCli, RunWithPlanRecordsTheHashAndAnalyzeListsDeviations) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_study_plan_test

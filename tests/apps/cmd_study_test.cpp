@@ -8,7 +8,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_study_test {
 namespace {
 
 using nlohmann::json;
@@ -170,4 +170,4 @@ TEST(StudyCli, WindowsAndDevicesAreCheckedBeforeAnythingIsRecorded) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_study_test

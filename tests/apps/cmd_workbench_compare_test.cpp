@@ -14,7 +14,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_workbench_compare_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -179,4 +179,4 @@ TEST(WorkbenchCompareCli, AnArBanksVibrationIsScoredBySpeedAndForce) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_workbench_compare_test

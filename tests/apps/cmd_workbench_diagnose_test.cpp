@@ -10,7 +10,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_workbench_diagnose_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -54,4 +54,4 @@ TEST(WorkbenchDiagnoseCli, BadModelOrMeasurementIsBadInputNamingFileLineAndField
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_workbench_diagnose_test

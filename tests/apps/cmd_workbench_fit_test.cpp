@@ -16,7 +16,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_workbench_fit_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -161,4 +161,4 @@ TEST(WorkbenchFitCli, BadInputNamesTheFileOrTheOptionBeforeAnyWork) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_workbench_fit_test

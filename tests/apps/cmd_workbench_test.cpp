@@ -14,7 +14,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::cmd_workbench_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -232,4 +232,4 @@ TEST(WorkbenchCli, SimulateIsReproducibleAndEffectsListTheCatalogueOnce) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::cmd_workbench_test

@@ -20,7 +20,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::fault_cli_test {
 namespace {
 
 using nlohmann::json;
@@ -274,4 +274,4 @@ TEST(FaultCli, InputsThatCrashedEarlierBuildsGiveExit2NamingTheFile) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::fault_cli_test

@@ -13,7 +13,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::psychophysics_cli_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -62,4 +62,4 @@ TEST(PsychophysicsCli, ExampleJndStudyRunsAndReportsTheJnd) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::psychophysics_cli_test

@@ -19,7 +19,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::replication_cli_test {
 namespace {
 
 using nlohmann::json;
@@ -269,4 +269,4 @@ TEST(ReplicationCli, PowerForSitesTimesParticipants) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::replication_cli_test

@@ -8,7 +8,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "sine_model.hpp"
 
-namespace hapticlab {
+namespace hapticlab::rig_timing_test {
 namespace {
 
 nlohmann::json RunJson(const std::string& args, int* rc) {
@@ -126,4 +126,4 @@ TEST(RigTimingCli, HardwareIsAcceptedAndAnAbsentDeviceSaysWhatToCheck) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::rig_timing_test

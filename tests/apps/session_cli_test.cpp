@@ -19,7 +19,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "sqlite_count.hpp"
 
-namespace hapticlab {
+namespace hapticlab::session_cli_test {
 namespace {
 
 using nlohmann::json;
@@ -357,4 +357,4 @@ TEST(SessionCli, SigtermStopsCleanlyAndTheMainFileAloneHoldsTheRatings) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::session_cli_test

@@ -12,7 +12,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::trial_number_cli_test {
 namespace {
 
 std::string Cli() { return HL_CLI_PATH; }
@@ -117,4 +117,4 @@ TEST(TrialNumberCli, LogPlanEventsAndExportsAgree) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::trial_number_cli_test

@@ -4,7 +4,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 
-namespace hapticlab {
+namespace hapticlab::csv_test {
 namespace {
 
 TEST(Csv, ParsesCommentsMetadataHeaderAndQuotedCells) {
@@ -40,9 +40,9 @@ TEST(Csv, EscapeRoundTrips) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::csv_test
 
-namespace hapticlab {
+namespace hapticlab::csv_test {
 namespace {
 
 TEST(Csv, AUtf8ByteOrderMarkIsNotPartOfTheFirstColumn) {
@@ -56,4 +56,4 @@ TEST(Csv, AUtf8ByteOrderMarkIsNotPartOfTheFirstColumn) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::csv_test

@@ -2,7 +2,7 @@
 
 #include <gtest/gtest.h>
 
-namespace hapticlab {
+namespace hapticlab::diagnostics_test {
 namespace {
 
 TEST(Diagnostics, FormatsFileLineFieldAndMessageOmittingEmptyParts) {
@@ -48,4 +48,4 @@ TEST(Diagnostics, ASingleInputErrorCarriesItsDiagnostic) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::diagnostics_test

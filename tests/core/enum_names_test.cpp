@@ -4,7 +4,7 @@
 
 #include <gtest/gtest.h>
 
-namespace hapticlab {
+namespace hapticlab::enum_names_test {
 namespace {
 
 enum class Fruit { kApple, kPear, kQuince };
@@ -36,4 +36,4 @@ TEST(EnumNames, ParseNameListsTheNamesInItsError) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::enum_names_test

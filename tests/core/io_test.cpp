@@ -11,7 +11,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::io_test {
 namespace {
 
 std::string Repeat(const std::string& s, int n) {
@@ -125,4 +125,4 @@ TEST(WriteTextFile, FailuresNameTheFile) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::io_test

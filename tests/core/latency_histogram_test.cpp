@@ -10,7 +10,7 @@
 #include <cmath>
 #include <random>
 
-namespace hapticlab {
+namespace hapticlab::latency_histogram_test {
 namespace {
 
 double NearestRank(std::vector<double> v, double q) {
@@ -97,4 +97,4 @@ TEST(LatencyHistogram, RowsCountATickInTheOverflowBinOnce) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::latency_histogram_test

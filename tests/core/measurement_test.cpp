@@ -5,7 +5,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::measurement_test {
 namespace {
 
 TEST(Measurement, ReadsAndRoundTrips) {
@@ -147,4 +147,4 @@ TEST(Measurement, VibrationOnlyFilesAreAKindWhenAskedFor) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::measurement_test

@@ -7,7 +7,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::spsc_queue_test {
 namespace {
 
 TEST(SpscQueue, CapacityRoundsUpToPowerOfTwo) {
@@ -67,4 +67,4 @@ TEST(SpscQueue, TwoThreadsTransferEveryElementInOrder) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::spsc_queue_test

@@ -12,7 +12,7 @@
 #include "hapticlab/core/fields.hpp"
 #include "hapticlab/core/io.hpp"
 
-namespace hapticlab {
+namespace hapticlab::toml_util_test {
 namespace {
 
 // The InputError the parser throws for `text` ("" when it parses).
@@ -192,4 +192,4 @@ TEST(Fields, MarkdownTableShowsTypesRangesUnitsAndDefaultsFromTheStruct) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::toml_util_test

@@ -8,7 +8,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab {
+namespace hapticlab::triple_buffer_test {
 namespace {
 
 // A value whose fields must agree: a torn read (half old, half new) breaks the relation.
@@ -111,4 +111,4 @@ TEST(TripleBuffer, TwoThreadsSeeWholeValuesInOrder) {
 }
 
 }  // namespace
-}  // namespace hapticlab
+}  // namespace hapticlab::triple_buffer_test

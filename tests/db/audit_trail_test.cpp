@@ -7,7 +7,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::audit_trail_test {
 namespace {
 
 // Rows of writer_lease, counted by an independent SQLite connection.
@@ -76,4 +76,4 @@ TEST(AuditTrail, TheWriterLeaseLeavesNoHostNameWhenItEnds) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::audit_trail_test

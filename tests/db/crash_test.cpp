@@ -12,7 +12,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::crash_test {
 namespace {
 
 constexpr int kCriteria = 8;  // ratings per trial
@@ -76,4 +76,4 @@ TEST(Crash, SigkillMidCommitLeavesEachTrialWholeOrEmpty) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::crash_test

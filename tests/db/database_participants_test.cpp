@@ -4,7 +4,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::database_participants_test {
 namespace {
 
 TEST(Database, ParticipantCodesMustBePseudonymous) {
@@ -77,4 +77,4 @@ TEST(WriteTransaction, TakesTheWriteLockWhenMade) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::database_participants_test

@@ -4,7 +4,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::database_recordings_test {
 namespace {
 
 TEST(Database, StoresModelsEventsAndChunks) {
@@ -36,4 +36,4 @@ TEST(Database, StoresModelsEventsAndChunks) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::database_recordings_test

@@ -5,7 +5,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::database_test {
 namespace {
 
 // Fills the tables that exist at schema `version` with one row each.
@@ -213,4 +213,4 @@ TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::database_test

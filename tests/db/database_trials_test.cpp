@@ -5,7 +5,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::database_trials_test {
 namespace {
 
 TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
@@ -107,4 +107,4 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::database_trials_test

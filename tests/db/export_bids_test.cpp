@@ -19,7 +19,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::export_bids_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -116,4 +116,4 @@ TEST(ExportBids, CodesThatShareALabelAreRefused) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::export_bids_test

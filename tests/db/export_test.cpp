@@ -12,7 +12,7 @@
 #include "hapticlab/db/export_formats.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::export_test {
 namespace {
 
 TEST(Export, TablesRoundTripThroughCsv) {
@@ -209,4 +209,4 @@ TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::export_test

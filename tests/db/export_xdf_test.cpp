@@ -22,7 +22,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::export_xdf_test {
 namespace {
 
 namespace tr = test_record;
@@ -272,4 +272,4 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::export_xdf_test

@@ -23,7 +23,7 @@
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::fault_test {
 namespace {
 
 constexpr double kRate = 1000;            // stream rate [Hz]
@@ -388,4 +388,4 @@ TEST(Fault, ConcurrentSchemaCreationWaitsInsteadOfFailing) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::fault_test

@@ -12,7 +12,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
-namespace hapticlab::db::internal {
+namespace hapticlab::db::internal::interchange_test {
 namespace {
 
 TEST(InterchangeLoad, ChannelUnitsComeFromTheLongestSuffix) {
@@ -119,4 +119,4 @@ TEST(InterchangeLoad, UnknownParticipantAndDisagreeingChunksAreRefused) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db::internal
+}  // namespace hapticlab::db::internal::interchange_test

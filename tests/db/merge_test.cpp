@@ -21,7 +21,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::merge_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -283,4 +283,4 @@ TEST(Merge, SigkillMidMergeLeavesNoPartialOutput) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::merge_test

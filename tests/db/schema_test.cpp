@@ -12,7 +12,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::schema_test {
 namespace {
 
 // Rows of `sql` on a fresh read-only connection, each row's columns joined by '|'.
@@ -120,4 +120,4 @@ TEST(Schema, MigratedFilesPassSqlitesForeignKeyAndIntegrityChecks) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::schema_test

@@ -9,7 +9,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::session_mode_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -188,4 +188,4 @@ TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::session_mode_test

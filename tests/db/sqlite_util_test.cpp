@@ -15,7 +15,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db::internal {
+namespace hapticlab::db::internal::sqlite_util_test {
 namespace {
 
 struct Connection {
@@ -124,4 +124,4 @@ TEST(SqliteUtil, ErrorsNameTheFileAndExplainTheCode) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db::internal
+}  // namespace hapticlab::db::internal::sqlite_util_test

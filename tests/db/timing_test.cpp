@@ -13,7 +13,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::timing_test {
 namespace {
 
 // A study with one participant, session and trial; returns {study id, trial id}.
@@ -105,4 +105,4 @@ TEST(Timing, ASecondRowForTheSameLoopReplacesTheFirstAndStudiesStayApart) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::timing_test

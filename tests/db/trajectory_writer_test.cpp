@@ -9,7 +9,7 @@
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db {
+namespace hapticlab::db::trajectory_writer_test {
 namespace {
 
 struct Fixture {
@@ -175,4 +175,4 @@ TEST(TrajectoryWriter, AFailedCommitIsRetriedSoNothingIsLost) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db
+}  // namespace hapticlab::db::trajectory_writer_test

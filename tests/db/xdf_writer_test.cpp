@@ -15,7 +15,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::db::internal {
+namespace hapticlab::db::internal::xdf_writer_test {
 namespace {
 
 std::string FloatInfo(const std::string& name, int channels, double rate_hz) {
@@ -101,4 +101,4 @@ TEST(XdfWriter, BadPathAndMismatchedTimestampsAreRefused) {
 }
 
 }  // namespace
-}  // namespace hapticlab::db::internal
+}  // namespace hapticlab::db::internal::xdf_writer_test

@@ -18,7 +18,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::design {
+namespace hapticlab::design::calibration_test {
 namespace {
 
 // A targets file with the given [[param]] tables (one protocol, one target).
@@ -101,4 +101,4 @@ TEST(CalibratedObserver, ReproducesTables53To55And41) {
 }
 
 }  // namespace
-}  // namespace hapticlab::design
+}  // namespace hapticlab::design::calibration_test

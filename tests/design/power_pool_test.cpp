@@ -18,7 +18,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::design {
+namespace hapticlab::design::power_pool_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -143,4 +143,4 @@ repetitions = 1
 }
 
 }  // namespace
-}  // namespace hapticlab::design
+}  // namespace hapticlab::design::power_pool_test

@@ -10,7 +10,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::audio_test {
 namespace {
 
 class FakeStream : public AudioStream {
@@ -163,4 +163,4 @@ TEST(Audio, BadConfigurationsNameTheField) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::audio_test

@@ -13,7 +13,7 @@
 #include "dhdc.h"
 #include "hapticlab/devices/vendor.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::dhd_test {
 namespace {
 
 std::string ErrorOf(const auto& f) {
@@ -75,4 +75,4 @@ TEST(Dhd, ReadsWritesAndShutsDownOnItsDevice) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::dhd_test

@@ -12,7 +12,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/error_of.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::factory_test {
 namespace {
 
 using test::ErrorOf;
@@ -36,4 +36,4 @@ TEST(DeviceFactory, ARatingBoxIdIsHexVidColonPid) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::factory_test

@@ -15,7 +15,7 @@
 #include "hapticlab/devices/falcon.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::devices::falcon {
+namespace hapticlab::devices::falcon::falcon_firmware_test {
 namespace {
 
 TEST(Falcon, FirmwareLoadFollowsTheRecordedSequence) {
@@ -74,4 +74,4 @@ TEST(Falcon, FirmwareLoadRetriesAndNamesTheFailingState) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices::falcon
+}  // namespace hapticlab::devices::falcon::falcon_firmware_test

@@ -15,7 +15,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::devices::falcon {
+namespace hapticlab::devices::falcon::falcon_test {
 namespace {
 
 std::vector<std::uint8_t> Hex(const std::string& path) {
@@ -147,4 +147,4 @@ TEST(Falcon, APacketSplitAcrossTwoReadsIsReassembled) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices::falcon
+}  // namespace hapticlab::devices::falcon::falcon_test

@@ -7,7 +7,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::hid_rating_test {
 namespace {
 
 TEST(HidRating, ParsesReportsOfASliderBox) {
@@ -93,4 +93,4 @@ TEST(HidRating, OffsetsOutsideAReportAreRefusedBeforeTheyIndexIt) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::hid_rating_test

@@ -16,7 +16,7 @@
 #include "HD/hd.h"
 #include "hapticlab/devices/vendor.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::openhaptics_test {
 namespace {
 
 TEST(OpenHaptics, AnInitialisationErrorIsReportedWithItsCode) {
@@ -85,4 +85,4 @@ TEST(OpenHaptics, TheEnginesForceGoesOutWhileFreshAndZeroOnceStale) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::openhaptics_test

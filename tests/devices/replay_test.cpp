@@ -10,7 +10,7 @@
 
 #include "hapticlab/test/replay_device.hpp"
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::replay_test {
 namespace {
 
 using test::ReplayDevice;
@@ -74,4 +74,4 @@ TEST(Replay, RefusesAnEmptyOrUnorderedTrajectory) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::replay_test

@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace hapticlab::devices {
+namespace hapticlab::devices::velocity_filter_test {
 namespace {
 
 TEST(VelocityFilter, ARampConvergesLikeAFirstOrderLowPass) {
@@ -41,4 +41,4 @@ TEST(VelocityFilter, IrregularStepsUseTheirOwnDtAndStaleReadingsAreIgnored) {
 }
 
 }  // namespace
-}  // namespace hapticlab::devices
+}  // namespace hapticlab::devices::velocity_filter_test

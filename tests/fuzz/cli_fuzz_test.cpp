@@ -25,7 +25,7 @@
 #include "mutate.hpp"
 #include "seeds.hpp"
 
-namespace hapticlab::fuzz {
+namespace hapticlab::fuzz::cli_fuzz_test {
 namespace {
 
 #ifdef HL_FUZZ_SANITIZED
@@ -216,4 +216,4 @@ TEST(CliFuzz, StudyDatabase) {
 }
 
 }  // namespace
-}  // namespace hapticlab::fuzz
+}  // namespace hapticlab::fuzz::cli_fuzz_test

@@ -13,7 +13,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "seeds.hpp"
 
-namespace hapticlab::fuzz {
+namespace hapticlab::fuzz::cli_regression_test {
 namespace {
 
 #ifdef HL_FUZZ_SANITIZED
@@ -189,4 +189,4 @@ TEST(CliRegression, DatabasesThatAreNotStudyRecords) {
 }
 
 }  // namespace
-}  // namespace hapticlab::fuzz
+}  // namespace hapticlab::fuzz::cli_regression_test

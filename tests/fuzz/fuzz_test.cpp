@@ -19,7 +19,7 @@
 #include "seeds.hpp"
 #include "targets.hpp"
 
-namespace hapticlab::fuzz {
+namespace hapticlab::fuzz::fuzz_test {
 namespace {
 
 using Target = int (*)(std::string_view, const std::string&);
@@ -60,4 +60,4 @@ TEST(Fuzz, StudyDatabase) {
 }
 
 }  // namespace
-}  // namespace hapticlab::fuzz
+}  // namespace hapticlab::fuzz::fuzz_test

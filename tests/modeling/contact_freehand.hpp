@@ -21,8 +21,7 @@ namespace hapticlab::modeling {
 namespace {
 
 // Internal linkage (an unnamed namespace): one copy per test file or program that includes this.
-constexpr double kPi = std::numbers::pi;  // NOLINT(misc-definitions-in-headers)
-constexpr int kSubsteps = 400;            // NOLINT(misc-definitions-in-headers)
+constexpr int kSubsteps = 400;  // NOLINT(misc-definitions-in-headers)
 // Position and velocity noise (bench/contact_freehand sets them).
 double g_pnoise = 1e-7;  // NOLINT(misc-definitions-in-headers)
 double g_vnoise = 1e-4;  // NOLINT(misc-definitions-in-headers)
@@ -53,32 +52,36 @@ inline Measurement FreeHand(const Truth& tr, std::uint64_t seed, double duration
     // A stroke.
     const double len = U(0.004, 0.025), vp = std::exp(U(std::log(0.003), std::log(0.12))),
                  T = 2 * len / vp;
-    double th = U(-kPi, kPi);
+    double th = U(-std::numbers::pi, std::numbers::pi);
     const double turn = U(-1.5, 1.5);
     if (std::hypot(px + len * std::cos(th), py + len * std::sin(th)) > box)
       th = std::atan2(-py, -px) + U(-0.5, 0.5);
     const double L0 = std::exp(U(std::log(0.4), std::log(2.0))), wob = U(0.5, 3),
-                 ph = U(0, 2 * kPi);
+                 ph = U(0, 2 * std::numbers::pi);
     const std::size_t n = static_cast<std::size_t>(T * fs);
     for (std::size_t k = 0; k < n && i < N; ++k, ++i) {
       const double tau = static_cast<double>(k) / static_cast<double>(n);
-      const double v = vp * std::pow(std::sin(kPi * tau), 2), heading = th + turn * tau;
+      const double v = vp * std::pow(std::sin(std::numbers::pi * tau), 2),
+                   heading = th + turn * tau;
       px += v * dt * std::cos(heading);
       py += v * dt * std::sin(heading);
       x[i] = px, y[i] = py;
-      load[i] = L0 * (1 + 0.3 * std::sin(2 * kPi * wob * static_cast<double>(k) * dt + ph));
+      load[i] =
+          L0 * (1 + 0.3 * std::sin(2 * std::numbers::pi * wob * static_cast<double>(k) * dt + ph));
     }
     // Rest with tremor, a lift-off, or a poke.
     const double u = U(0, 1);
-    const double rest = U(0.1, 0.4), trem = U(3e-6, 6e-6), tf = U(8, 10), tph = U(0, 2 * kPi);
+    const double rest = U(0.1, 0.4), trem = U(3e-6, 6e-6), tf = U(8, 10),
+                 tph = U(0, 2 * std::numbers::pi);
     const std::size_t nr = static_cast<std::size_t>(rest * fs);
     const bool lift = u < 0.1, poke = pokes && u > 0.8;
     const double peak = U(1.6, 2.6);
     for (std::size_t k = 0; k < nr && i < N; ++k, ++i) {
       const double tk = static_cast<double>(k) * dt,
-                   s = std::sin(kPi * static_cast<double>(k) / static_cast<double>(nr));
-      x[i] = px + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::cos(th));
-      y[i] = py + (poke ? 0 : trem * std::sin(2 * kPi * tf * tk + tph) * std::sin(th));
+                   s = std::sin(std::numbers::pi * static_cast<double>(k) /
+                                static_cast<double>(nr));
+      x[i] = px + (poke ? 0 : trem * std::sin(2 * std::numbers::pi * tf * tk + tph) * std::cos(th));
+      y[i] = py + (poke ? 0 : trem * std::sin(2 * std::numbers::pi * tf * tk + tph) * std::sin(th));
       load[i] = lift ? -0.4 : (poke ? 0.1 + (peak - 0.1) * s * s : L0);
     }
   }

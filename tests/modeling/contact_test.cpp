@@ -26,7 +26,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::contact_test {
 namespace {
 
 TEST(ContactFreeHand, EveryParameterRecoveredWithUsableFits) {
@@ -113,8 +113,9 @@ TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
       x += dir * v * 1e-3;
       t += 1e-3;
       renderer::ToolState s;
-      s.p_m = {x, 0, -0.5e-3 - 0.3e-3 * std::sin(2 * kPi * 0.7 * t)};
-      s.v_mps = {dir * v, 0, 0.3e-3 * 2 * kPi * 0.7 * std::cos(2 * kPi * 0.7 * t)};
+      s.p_m = {x, 0, -0.5e-3 - 0.3e-3 * std::sin(2 * std::numbers::pi * 0.7 * t)};
+      s.v_mps = {dir * v, 0,
+                 0.3e-3 * 2 * std::numbers::pi * 0.7 * std::cos(2 * std::numbers::pi * 0.7 * t)};
       const auto f = model.Step(s);
       MeasurementRow r;
       r.t_s = t;
@@ -129,7 +130,7 @@ TEST(ContactOneLine, StrokesAlongALineAndSeparatePokes) {
   pokes.file = "pokes";
   const double K = 3.0e4, B = 9.0e4, n = 1.3;
   for (int i = 0; i < 3000; ++i) {
-    const double tt = i * 1e-3, w = 2 * kPi * 4;
+    const double tt = i * 1e-3, w = 2 * std::numbers::pi * 4;
     const double d = 0.35e-3 * (1 - std::cos(w * tt)), dd = 0.35e-3 * w * std::sin(w * tt);
     MeasurementRow r;
     r.t_s = tt;
@@ -176,4 +177,4 @@ TEST(ContactOneLine, RefusesTooLittleDataNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::contact_test

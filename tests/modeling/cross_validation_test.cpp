@@ -10,7 +10,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::cross_validation_test {
 namespace {
 
 std::vector<Recording> Grid() {
@@ -85,4 +85,4 @@ TEST(CrossValidation, FewerThanThreeTrainingRecordingsIsBadInput) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::cross_validation_test

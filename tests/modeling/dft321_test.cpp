@@ -15,7 +15,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::dft321_test {
 namespace {
 
 using Cx = std::complex<double>;
@@ -128,4 +128,4 @@ TEST(Dft321Stream, KeepsTheAxesEnergyAndPicksColumns) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::dft321_test

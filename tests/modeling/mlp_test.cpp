@@ -7,7 +7,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::mlp_test {
 namespace {
 
 TEST(Mlp, BackpropagationMatchesFiniteDifferences) {
@@ -71,9 +71,9 @@ TEST(Mlp, LearnsANonlinearArProcessBetterThanALinearFit) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::mlp_test
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::mlp_test {
 namespace {
 
 TEST(Mlp, BatchGradientIsTheMeanOfSampleGradients) {
@@ -102,4 +102,4 @@ TEST(Mlp, BatchGradientIsTheMeanOfSampleGradients) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::mlp_test

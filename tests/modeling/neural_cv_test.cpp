@@ -8,7 +8,7 @@
 
 #include "neural_fig37.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::neural_cv_test {
 namespace {
 
 // Fig. 3.7 on synthetic textures: training and cross-validation E_s of LPC, Γ_U and Γ_D on the
@@ -82,4 +82,4 @@ TEST(NeuralFig37, LinearAndNonlinearArGrids) {
   EXPECT_GE(below, 3u) << diffs;
 }
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::neural_cv_test

@@ -10,7 +10,7 @@
 
 #include "../../modeling/src/neural_internal.hpp"
 
-namespace hapticlab::modeling::neural_internal {
+namespace hapticlab::modeling::neural_internal::neural_data_test {
 namespace {
 
 TEST(NeuralData, GridValuesAreMatchedWithinARelativeTolerance) {
@@ -48,4 +48,4 @@ TEST(NeuralData, BandSplitIsAnIdealBandPassWhoseBandsSumToTheSignal) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::neural_internal
+}  // namespace hapticlab::modeling::neural_internal::neural_data_test

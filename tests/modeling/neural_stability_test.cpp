@@ -12,7 +12,7 @@
 #include "hapticlab/modeling/cross_validation.hpp"
 #include "neural_fixture.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::neural_stability_test {
 namespace {
 
 using neural_internal::ActiveConditionTerms;
@@ -172,4 +172,4 @@ TEST(NeuralStability, PerCellFallbackTakesOverWhereTheConditionBasisMissesItsLim
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::neural_stability_test

@@ -9,7 +9,7 @@
 
 #include "neural_fixture.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::neural_test {
 namespace {
 
 TEST(Neural, ModelHasTheThesisStructure) {
@@ -233,4 +233,4 @@ TEST(Neural, FreeRunningMlpMatchesANonlinearProcessBetterThanLinearAr) {
   EXPECT_LT(es_mlp, es_ar);
 }
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::neural_test

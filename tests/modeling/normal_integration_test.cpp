@@ -13,7 +13,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "photometric_scenes.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::normal_integration_test {
 namespace {
 
 using namespace scenes;  // NOLINT(google-build-using-namespace): the shared test scenes
@@ -174,4 +174,4 @@ TEST(Photometric, MaskedPoissonIntegration) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::normal_integration_test

@@ -17,7 +17,7 @@
 #include "hapticlab/modeling/photometric.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::photometric_io_test {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
@@ -394,4 +394,4 @@ TEST(Photometric, TgaImagesReadLikeThePngsOfTheSamePixels) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::photometric_io_test

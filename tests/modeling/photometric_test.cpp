@@ -13,7 +13,7 @@
 
 #include "photometric_scenes.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::photometric_test {
 namespace {
 
 using namespace scenes;  // NOLINT(google-build-using-namespace): the shared test scenes
@@ -192,4 +192,4 @@ TEST(Photometric, MirroredLightFrameIsReported) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::photometric_test

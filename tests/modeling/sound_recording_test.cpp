@@ -17,7 +17,7 @@
 #include "hapticlab/modeling/vibration.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::sound_recording_test {
 namespace {
 
 // Writes interleaved samples (`channels` per frame) with libsndfile.
@@ -247,4 +247,4 @@ TEST(SoundRecording, RecordingsOfOneConditionArePooled) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::sound_recording_test

@@ -13,7 +13,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::vibration_recording_test {
 namespace {
 
 TEST(Vibration, RecordingsWithoutMetadataAreCutIntoSteadyParts) {
@@ -93,4 +93,4 @@ TEST(Vibration, ARecordingsFolderThatIsMissingOrEmptyIsNamed) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::vibration_recording_test

@@ -13,7 +13,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/vibration.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::vibration_score_test {
 namespace {
 
 // AR(2) with a resonance at `peak` (fraction of the sample rate), pole radius 0.95.
@@ -76,4 +76,4 @@ TEST(VibrationScore, UnlabelledRecordingsTakeAOneCellModelsConditionOnly) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::vibration_score_test

@@ -16,7 +16,7 @@
 #include "hapticlab/renderer/vibration.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::vibration_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -227,4 +227,4 @@ TEST(Vibration, AModelRateBeyondEightfoldUpsamplingIsBadInputNamingTheField) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::vibration_test

@@ -15,7 +15,7 @@
 #include "hapticlab/modeling/contact.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::workbench_bootstrap_test {
 namespace {
 
 // Smooth motion unlike the free-hand generator's: circles at 20 mm/s with a 2 s rest every
@@ -121,4 +121,4 @@ TEST(WorkbenchBootstrap, NotAppliedWithoutMeasurableNoise) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::workbench_bootstrap_test

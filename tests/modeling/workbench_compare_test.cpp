@@ -17,7 +17,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_compare_test {
 namespace {
 
 TEST(WorkbenchCompare, BreakdownShowsWhereTheModelFails) {
@@ -168,4 +168,4 @@ TEST(WorkbenchCompare, ArBankSpectrumFollowsTheFiltersShape) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_compare_test

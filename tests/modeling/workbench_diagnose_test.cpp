@@ -19,7 +19,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_diagnose_test {
 namespace {
 
 std::vector<std::string> Without(std::vector<std::string> v, const std::vector<std::string>& drop) {
@@ -209,4 +209,4 @@ TEST(WorkbenchDiagnose, ConfoundedEffectsAreReportedTogether) {
 // vibration (the periodogram's spread is approximated; see EstimateNoiseFloor).
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_diagnose_test

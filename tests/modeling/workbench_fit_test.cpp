@@ -7,7 +7,7 @@
 
 #include "hapticlab/modeling/workbench.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_fit_test {
 namespace {
 
 TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
@@ -70,4 +70,4 @@ TEST(WorkbenchFit, TooFewSamplesIsReportedNotThrown) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_fit_test

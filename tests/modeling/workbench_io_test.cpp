@@ -17,7 +17,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_io_test {
 namespace {
 
 TEST(WorkbenchFiles, SavedModelsLoadInTheRendererAndRoundTrip) {
@@ -163,4 +163,4 @@ TEST(WorkbenchFiles, RendererMaterialsAreReadAsBaselineModels) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_io_test

@@ -17,7 +17,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_model_test {
 namespace {
 
 TEST(WorkbenchCatalogue, HasEveryNamedEffectWithDescriptionsAndSaneParameters) {
@@ -130,4 +130,4 @@ TEST(WorkbenchParams, ContactParametersViewAndRendererUnits) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_model_test

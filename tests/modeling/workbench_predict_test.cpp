@@ -8,7 +8,7 @@
 
 #include "hapticlab/modeling/workbench.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_predict_test {
 namespace {
 
 Replay::Sample Touching(double d_m, double ddot_mps, double vx_mps, double vy_mps, double load_N,
@@ -92,4 +92,4 @@ TEST(WorkbenchPredict, ErrorsAreNormalisedPerChannelAndSplitByBlock) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_predict_test

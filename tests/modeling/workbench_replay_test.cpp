@@ -18,7 +18,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_replay_test {
 namespace {
 
 TEST(WorkbenchReplay, SplitsIntoAlternateBlocksAndSteadyVibrationWindows) {
@@ -109,4 +109,4 @@ TEST(WorkbenchMeasurement, SummaryReportsRateRangesAndGaps) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_replay_test

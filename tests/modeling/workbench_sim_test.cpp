@@ -18,7 +18,7 @@
 #include "hapticlab/sim_truth/friction.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_sim_test {
 namespace {
 
 // parameters the workbench must reproduce the simulator's noise-free forces.
@@ -88,4 +88,4 @@ TEST(WorkbenchSimulator, TruthFrictionLawMapsTheRatioForm) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_sim_test

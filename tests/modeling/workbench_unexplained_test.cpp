@@ -17,7 +17,7 @@
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::workbench_unexplained_test {
 namespace {
 
 TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths) {
@@ -180,4 +180,4 @@ INSTANTIATE_TEST_SUITE_P(Cases, OutOfCatalogue,
                          });
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::workbench_unexplained_test

@@ -6,7 +6,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::protocols {
+namespace hapticlab::protocols::adaptive_test {
 namespace {
 
 const char* kBase = R"(
@@ -185,4 +185,4 @@ TEST(AdaptiveProtocol, QuestPlusProblems) {
 }
 
 }  // namespace
-}  // namespace hapticlab::protocols
+}  // namespace hapticlab::protocols::adaptive_test

@@ -5,7 +5,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::protocols {
+namespace hapticlab::protocols::canonical_test {
 namespace {
 
 std::string Small() { return test::ReadFile(test::DataPath("protocols/small.toml")); }
@@ -88,4 +88,4 @@ TEST(CanonicalForm, InvalidTomlIsAnInputErrorNamingTheFile) {
 }
 
 }  // namespace
-}  // namespace hapticlab::protocols
+}  // namespace hapticlab::protocols::canonical_test

@@ -7,7 +7,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::protocols {
+namespace hapticlab::protocols::participant_code_test {
 namespace {
 
 Protocol WithPattern(const std::string& pattern) {
@@ -63,4 +63,4 @@ TEST(ParticipantCode, APatternWithoutAFixedPrefixNeedsOne) {
 }
 
 }  // namespace
-}  // namespace hapticlab::protocols
+}  // namespace hapticlab::protocols::participant_code_test

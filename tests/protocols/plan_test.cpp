@@ -10,7 +10,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::protocols {
+namespace hapticlab::protocols::plan_test {
 namespace {
 
 std::string Small() { return test::ReadFile(test::DataPath("protocols/small.toml")); }
@@ -126,4 +126,4 @@ TEST(Plan, LatinSquareBalancesBlockOrderAcrossParticipants) {
 }
 
 }  // namespace
-}  // namespace hapticlab::protocols
+}  // namespace hapticlab::protocols::plan_test

@@ -14,7 +14,7 @@
 #include "hapticlab/test/doc_block.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::protocols {
+namespace hapticlab::protocols::protocol_test {
 namespace {
 
 std::string Small() { return test::ReadFile(test::DataPath("protocols/small.toml")); }
@@ -284,4 +284,4 @@ TEST(Protocol, RefusesNonFiniteAndOutOfRangeNumbersNamingLineAndField) {
 }
 
 }  // namespace
-}  // namespace hapticlab::protocols
+}  // namespace hapticlab::protocols::protocol_test

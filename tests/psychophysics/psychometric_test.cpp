@@ -7,7 +7,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/psychophysics/simulated_observer.hpp"
 
-namespace hapticlab::psychophysics {
+namespace hapticlab::psychophysics::psychometric_test {
 namespace {
 
 TEST(Psychometric, ThresholdIsWhereTheCoreHasItsDefiningValue) {
@@ -43,4 +43,4 @@ TEST(Psychometric, ParsesNames) {
 }
 
 }  // namespace
-}  // namespace hapticlab::psychophysics
+}  // namespace hapticlab::psychophysics::psychometric_test

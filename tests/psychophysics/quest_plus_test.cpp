@@ -7,7 +7,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/sim/psychophysical_observer.hpp"
 
-namespace hapticlab::psychophysics {
+namespace hapticlab::psychophysics::quest_plus_test {
 namespace {
 
 std::vector<double> LogSpace(double lo, double hi, int n) {
@@ -130,4 +130,4 @@ TEST(QuestPlus, PosteriorConcentratesOnTheTrueParameters) {
 }
 
 }  // namespace
-}  // namespace hapticlab::psychophysics
+}  // namespace hapticlab::psychophysics::quest_plus_test

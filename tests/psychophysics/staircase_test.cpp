@@ -8,7 +8,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/sim/psychophysical_observer.hpp"
 
-namespace hapticlab::psychophysics {
+namespace hapticlab::psychophysics::staircase_test {
 namespace {
 
 TEST(Staircase, OneUpTwoDownMovesByTheRules) {
@@ -162,4 +162,4 @@ TEST(Staircase, OneUpTwoDownConvergesOnThe707PercentPoint) {
 }
 
 }  // namespace
-}  // namespace hapticlab::psychophysics
+}  // namespace hapticlab::psychophysics::staircase_test

@@ -11,7 +11,7 @@
 #include "hapticlab/renderer/vibration.hpp"
 #include "spectrum_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::ar_test {
 namespace {
 
 // A random stable AR(p): poles drawn inside a disc of radius 0.95, as conjugate pairs.
@@ -152,4 +152,4 @@ TEST(Ar, SynthesizedSpectrumMatchesAnalyticPsd) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::ar_test

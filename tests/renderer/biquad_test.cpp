@@ -7,7 +7,7 @@
 
 #include "hapticlab/core/status.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::biquad_test {
 namespace {
 
 // Amplitude of a filtered sine after its transient has died out.
@@ -45,4 +45,4 @@ TEST(Biquad, RejectsCutoffAboveNyquist) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::biquad_test

@@ -8,7 +8,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/renderer/material.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::delaunay_test {
 namespace {
 
 double Area(const std::vector<double>& x, const std::vector<double>& y,
@@ -94,4 +94,4 @@ variance = 1.0
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::delaunay_test

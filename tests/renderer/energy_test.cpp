@@ -5,7 +5,7 @@
 #include <cmath>
 #include <numbers>
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::energy_test {
 namespace {
 
 MaterialModel Elastic() {
@@ -54,4 +54,4 @@ TEST(Energy, FrictionAlgorithmsGainLittleOnPathB) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::energy_test

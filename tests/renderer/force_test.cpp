@@ -6,7 +6,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::force_test {
 namespace {
 
 MaterialModel Flat(double mu_k = 0.4, double mu_b = 0.5) {
@@ -142,4 +142,4 @@ TEST(Force, ParsesAlgorithmNames) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::force_test

@@ -7,7 +7,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::height_map_test {
 namespace {
 
 TEST(HeightMap, BilinearIsExactOnAPlane) {
@@ -55,4 +55,4 @@ TEST(HeightMap, RawFileRoundTripAndErrors) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::height_map_test

@@ -10,7 +10,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "test_materials.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::hybrid_test {
 namespace {
 
 DeviceSample Sample(double x, double z, double vx, double t) {
@@ -188,4 +188,4 @@ TEST(Hybrid, ForceAndVibrationTicksRunOnTwoThreads) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::hybrid_test

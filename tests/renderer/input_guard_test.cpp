@@ -8,7 +8,7 @@
 #include "hapticlab/renderer/penn_import.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::input_guard_test {
 namespace {
 
 // The InputError message of `f` ("" when it succeeds).
@@ -63,4 +63,4 @@ TEST(InputGuard, PennIndicesOutOfIntRangeAreRefusedWithTheirLine) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::input_guard_test

@@ -7,7 +7,7 @@
 #include "hapticlab/test/doc_block.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::material_test {
 namespace {
 
 constexpr const char* kGood = R"(name = "Denim"
@@ -247,4 +247,4 @@ TEST(Material, RefusesNonFiniteAndOutOfRangeNumbersAtTheirLine) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::material_test

@@ -6,7 +6,7 @@
 #include "../modeling/neural_fixture.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::neural_io_test {
 namespace {
 
 TEST(Neural, ModelFilesRoundTripAndPlayInTheHybridRenderer) {
@@ -161,4 +161,4 @@ TEST(Neural, UnifiedModelFilesRoundTripAndOlderVersionsLoad) {
   expect_error("unstable.toml", unstable, {"cell_ar[1]", "not minimum phase"});
 }
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::neural_io_test

@@ -7,7 +7,7 @@
 #include "../modeling/neural_fixture.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::modeling {
+namespace hapticlab::modeling::neural_test {
 namespace {
 
 TEST(Neural, SynthesisIsAllocationFreeDeterministicAndSilentOutOfContact) {
@@ -150,4 +150,4 @@ TEST(Neural, BandCrossoversArePowerComplementary) {
   EXPECT_LT(std::abs(worst_db), 0.75) << "at " << worst_hz << " Hz";
 }
 }  // namespace
-}  // namespace hapticlab::modeling
+}  // namespace hapticlab::modeling::neural_test

@@ -14,7 +14,7 @@
 #include "penn_xml.hpp"
 #include "spectrum_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::penn_import_test {
 namespace {
 
 struct Generated {
@@ -349,4 +349,4 @@ TEST(PennImport, IntegerFieldsAreRangeCheckedBeforeConversion) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::penn_import_test

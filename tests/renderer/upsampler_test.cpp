@@ -13,7 +13,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::upsampler_test {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -93,4 +93,4 @@ TEST(Upsampler, FactorOnePassesThroughAndOutputsAllocateNothing) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::upsampler_test

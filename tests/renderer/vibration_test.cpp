@@ -7,7 +7,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "test_materials.hpp"
 
-namespace hapticlab::renderer {
+namespace hapticlab::renderer::vibration_test {
 namespace {
 
 void ExpectFilterIsCell(const ArFilter& f, const ArCell& c) {
@@ -120,4 +120,4 @@ TEST(Vibration, NoiseIsDeterministicPerSeed) {
 }
 
 }  // namespace
-}  // namespace hapticlab::renderer
+}  // namespace hapticlab::renderer::vibration_test

@@ -22,7 +22,7 @@
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::adaptive_phase_test {
 namespace {
 
 std::string Protocol(const std::string& phases) {
@@ -374,4 +374,4 @@ lapse = 0.0
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::adaptive_phase_test

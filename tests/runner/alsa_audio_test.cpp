@@ -29,7 +29,7 @@
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::alsa_audio_test {
 namespace {
 
 // Between the engine and the sound card: forwards SetSource, and keeps what the source gave
@@ -260,4 +260,4 @@ TEST(AlsaAudio, PortAudioThroughAlsaFilePcmCarriesEveryRendererSample) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::alsa_audio_test

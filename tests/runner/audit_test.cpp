@@ -13,7 +13,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "study_checks.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::audit_test {
 namespace {
 
 using test_checks::SmallProtocol;
@@ -216,4 +216,4 @@ TEST(Audit, EveryFaultedAttemptIsPrintedCountedAndNamesItsCause) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::audit_test

@@ -28,7 +28,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "screenshot_util.hpp"
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::console_session_test {
 namespace {
 
 using test_screens::Bright;
@@ -286,4 +286,4 @@ TEST(Screenshot, ConsentModalNamesTheDocumentAndTakesOnlyACode) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::console_session_test

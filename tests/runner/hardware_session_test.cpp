@@ -20,7 +20,7 @@
 #include "hapticlab/test/replay_device.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::hardware_session_test {
 namespace {
 
 // Strokes in 1 cm circles at 5 cm/s, pressing 0.5 mm into the surface. From the `nan_from`-th
@@ -275,4 +275,4 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::hardware_session_test

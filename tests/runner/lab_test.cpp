@@ -12,7 +12,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner::internal {
+namespace hapticlab::runner::internal::lab_test {
 namespace {
 
 TEST(Lab, ParseStimulusSplitsKindAndId) {
@@ -79,4 +79,4 @@ TEST(Lab, ReportsEveryMissingFileTogetherNamingTheProtocol) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::internal
+}  // namespace hapticlab::runner::internal::lab_test

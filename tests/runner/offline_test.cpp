@@ -4,7 +4,7 @@
 
 #include "../renderer/test_materials.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::offline_test {
 namespace {
 
 TEST(Offline, SameTicksAsTheForceModelAndVibrationAtItsRate) {
@@ -37,4 +37,4 @@ TEST(Offline, SameTicksAsTheForceModelAndVibrationAtItsRate) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::offline_test

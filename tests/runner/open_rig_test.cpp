@@ -24,7 +24,7 @@
 #include "hapticlab/test/error_of.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::open_rig_test {
 namespace {
 
 using test::ErrorOf;
@@ -244,4 +244,4 @@ TEST(OpenRig, DeviceNamesAreLiteralsOnlyInTheRegistry) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::open_rig_test

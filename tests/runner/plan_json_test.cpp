@@ -9,7 +9,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::plan_json_test {
 namespace {
 
 TEST(PlanJson, EqualsTheGoldenPlanTheCliWrote) {
@@ -39,4 +39,4 @@ TEST(PlanJson, NumbersTrialsFromOneAndKeepsThePlanIndex) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::plan_json_test

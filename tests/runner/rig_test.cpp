@@ -13,7 +13,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/sim/falcon_twin.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::rig_test {
 namespace {
 
 TEST(Rig, RoundTripsAndLocatesEveryProblem) {
@@ -118,4 +118,4 @@ TEST(Rig, CalibrateRecoversATiltedPlaneFromNoisyTouches) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::rig_test

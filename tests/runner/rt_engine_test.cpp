@@ -9,7 +9,7 @@
 #include "hapticlab/test/replay_device.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::rt_engine_test {
 namespace {
 
 // A 0.4 s stroke at 5 cm/s, 0.2 mm below the base top, sampled at 4 kHz.
@@ -173,9 +173,9 @@ TEST(RtEngine, StaleDeviceDataDrivesForceToZeroOnTheNextTick) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::rt_engine_test
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::rt_engine_test {
 namespace {
 
 // A stylus held 0.2 mm into the surface, read over a link that returns no new data on a
@@ -316,4 +316,4 @@ TEST(RtEngine, ARunawayVibrationModelFaultsTheTrial) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::rt_engine_test

@@ -17,7 +17,7 @@
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::rt_thread_test {
 namespace {
 
 // A stylus held still 0.2 mm into the surface, stamped with the engine's clock.
@@ -140,4 +140,4 @@ TEST(RtThread, AnOutOfRangeCpuIsReported) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::rt_thread_test

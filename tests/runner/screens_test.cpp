@@ -7,7 +7,7 @@
 #include <gtest/gtest.h>
 #include <imgui.h>
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::screens_test {
 namespace {
 
 class Headless : public ::testing::Test {
@@ -181,9 +181,9 @@ TEST_F(Headless, ConsoleButtonsReport) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::screens_test
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::screens_test {
 namespace {
 
 // Adaptive trials: one button per answer; a click or a number key answers, nothing else does.
@@ -211,9 +211,9 @@ TEST_F(Headless, ChoiceAnswersByClickOrKey) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::screens_test
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::screens_test {
 namespace {
 
 // Placing samples: the console names what goes where; the button or Enter on the console
@@ -263,4 +263,4 @@ TEST_F(Headless, PlaceSamplesConfirmsByButtonOrEnterOnly) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::screens_test

@@ -13,7 +13,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "study_checks.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::session_queue_test {
 namespace {
 
 using test_checks::ExpectCompleteAndWhole;
@@ -72,4 +72,4 @@ TEST(SessionQueue, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::session_queue_test

@@ -13,7 +13,7 @@
 #include "hapticlab/runner_ui/ui_windows.hpp"
 #include "screenshot_util.hpp"
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::session_ui_test {
 namespace {
 
 using test_screens::Bright;
@@ -125,4 +125,4 @@ TEST(Screenshot, RatingBoxDrivesTheParticipantWindow) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::session_ui_test

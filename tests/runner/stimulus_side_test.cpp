@@ -19,7 +19,7 @@
 #include "hapticlab/db/trajectory_writer.hpp"
 #include "trial_fixture.hpp"
 
-namespace hapticlab::runner::internal {
+namespace hapticlab::runner::internal::stimulus_side_test {
 namespace {
 
 using test_trial::Session;
@@ -137,4 +137,4 @@ TEST(StimulusSide, ALinkDropoutFaultsTheSideAndIsLogged) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::internal
+}  // namespace hapticlab::runner::internal::stimulus_side_test

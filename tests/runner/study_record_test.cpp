@@ -15,7 +15,7 @@
 #include "hapticlab/runner/study_runner.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::study_record_test {
 namespace {
 
 namespace fs = std::filesystem;
@@ -217,4 +217,4 @@ TEST(StudyRecord, RecordedModesParseOnceAndUnknownNamesAreBadInput) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::study_record_test

@@ -22,7 +22,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "study_checks.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::study_runner_test {
 namespace {
 
 using test_checks::ExpectCompleteAndWhole;
@@ -327,4 +327,4 @@ TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::study_runner_test

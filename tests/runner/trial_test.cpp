@@ -14,7 +14,7 @@
 #include "../../runner/src/participant.hpp"
 #include "trial_fixture.hpp"
 
-namespace hapticlab::runner::internal {
+namespace hapticlab::runner::internal::trial_test {
 namespace {
 
 using test_trial::Session;
@@ -111,4 +111,4 @@ TEST(Trial, ALinkDropoutFaultsTheTrialWithoutRatings) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::internal
+}  // namespace hapticlab::runner::internal::trial_test

@@ -15,7 +15,7 @@
 
 #include "screenshot_util.hpp"
 
-namespace hapticlab::runner::ui {
+namespace hapticlab::runner::ui::ui_windows_test {
 namespace {
 
 using test_screens::Bright;
@@ -128,4 +128,4 @@ TEST(Screenshot, ParticipantWindowAndConsole) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner::ui
+}  // namespace hapticlab::runner::ui::ui_windows_test

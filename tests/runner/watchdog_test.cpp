@@ -10,7 +10,7 @@
 
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::runner {
+namespace hapticlab::runner::watchdog_test {
 namespace {
 
 constexpr double kPeriod = 1e-3;
@@ -160,4 +160,4 @@ TEST(Watchdog, PersistentFaultsQueueBoundedEvents) {
 }
 
 }  // namespace
-}  // namespace hapticlab::runner
+}  // namespace hapticlab::runner::watchdog_test

@@ -19,7 +19,7 @@
 #include "hapticlab/sim/sim_device.hpp"
 #include "hapticlab/sim/sim_lab.hpp"
 
-namespace hapticlab::sim {
+namespace hapticlab::sim::falcon_twin_test {
 namespace {
 
 namespace fal = devices::falcon;
@@ -142,4 +142,4 @@ TEST(FalconTwin, DropoutsEmptyReadsAndSplitPackets) {
 }
 
 }  // namespace
-}  // namespace hapticlab::sim
+}  // namespace hapticlab::sim::falcon_twin_test

@@ -7,7 +7,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/psychophysics/psychometric.hpp"
 
-namespace hapticlab::sim {
+namespace hapticlab::sim::psychophysical_observer_test {
 namespace {
 
 using psychophysics::Shape;
@@ -35,4 +35,4 @@ TEST(SimulatedObserver, AnswersWithItsPsychometricFunction) {
 }
 
 }  // namespace
-}  // namespace hapticlab::sim
+}  // namespace hapticlab::sim::psychophysical_observer_test

@@ -12,7 +12,7 @@
 #include "hapticlab/runner/rt_engine.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::sim {
+namespace hapticlab::sim::sim_device_test {
 namespace {
 
 struct SideRun {
@@ -116,4 +116,4 @@ TEST(SimRig, TheHandPressesOnARealSampleWithTheStrokesLoad) {
 }
 
 }  // namespace
-}  // namespace hapticlab::sim
+}  // namespace hapticlab::sim::sim_device_test

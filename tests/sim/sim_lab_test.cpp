@@ -12,7 +12,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::sim {
+namespace hapticlab::sim::sim_lab_test {
 namespace {
 
 ObserverParams Quiet() {
@@ -141,4 +141,4 @@ TEST(Observer, ShippedObserverFileLoads) {
 }
 
 }  // namespace
-}  // namespace hapticlab::sim
+}  // namespace hapticlab::sim::sim_lab_test

@@ -15,7 +15,7 @@
 #include "hapticlab/stats/tukey.hpp"
 #include "long_table_fixture.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::anova_test {
 namespace {
 
 using fixture::Make;
@@ -113,4 +113,4 @@ TEST(RmAnova, AContrastWithoutErrorVarianceGivesMauchlysWZero) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::anova_test

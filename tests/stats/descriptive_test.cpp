@@ -8,7 +8,7 @@
 
 #include "hapticlab/core/status.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::descriptive_test {
 namespace {
 
 const std::vector<double> kX = {4.17, 5.58, 5.18, 6.11, 4.50, 4.61, 5.17, 4.53, 5.33, 5.14, 9.80};
@@ -55,4 +55,4 @@ TEST(Descriptive, PearsonAndSpearmanMatchRsCorTest) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::descriptive_test

@@ -19,7 +19,7 @@
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::distributions_test {
 namespace {
 
 struct Row {
@@ -92,4 +92,4 @@ TEST(TukeyAccuracy, IssueCaseKTenDfSevenIsInTheVectors) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::distributions_test

@@ -15,7 +15,7 @@
 #include "hapticlab/stats/tukey.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::example_study_test {
 namespace {
 
 using nlohmann::json;
@@ -252,4 +252,4 @@ TEST_F(ExampleStudy, ShapiroOutliersDescriptivesCorrelation) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::example_study_test

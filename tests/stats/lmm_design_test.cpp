@@ -8,7 +8,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/lmm.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::lmm_design_test {
 namespace {
 
 TEST(Lmm, FormulaParsing) {
@@ -56,4 +56,4 @@ TEST(Lmm, FormulaLanguage) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::lmm_design_test

@@ -18,7 +18,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "lmm_reference.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::lmm_formula_test {
 namespace {
 
 using nlohmann::json;
@@ -103,4 +103,4 @@ TEST(LmmFormula, RefusalsNameTheColumn) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::lmm_formula_test

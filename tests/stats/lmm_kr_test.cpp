@@ -9,7 +9,7 @@
 #include "hapticlab/stats/lmm.hpp"
 #include "lmm_reference.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::lmm_kr_test {
 namespace {
 
 using lmm_reference::ExpectClose;
@@ -59,4 +59,4 @@ TEST(Lmm, KenwardRogerNeedsReml) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::lmm_kr_test

@@ -11,7 +11,7 @@
 #include <limits>
 #include <vector>
 
-namespace hapticlab::stats::lmm_internal {
+namespace hapticlab::stats::lmm_internal::lmm_numerics_test {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -78,4 +78,4 @@ TEST(LmmNumerics, HessianAndJacobianMatchAnalyticDerivatives) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats::lmm_internal
+}  // namespace hapticlab::stats::lmm_internal::lmm_numerics_test

@@ -19,7 +19,7 @@
 #include "hapticlab/test/test_util.hpp"
 #include "lmm_reference.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::lmm_test {
 namespace {
 
 using lmm_reference::ExpectClose;
@@ -82,4 +82,4 @@ TEST(Lmm, ConditionalResidualsAndTheirNormalityMatchR) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::lmm_test

@@ -14,7 +14,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::long_table_test {
 namespace {
 
 constexpr const char* kCsv =
@@ -96,4 +96,4 @@ TEST(LongTable, EmptyKeyCellsAndUnknownColumnsAreNamed) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::long_table_test

@@ -16,7 +16,7 @@
 #include "hapticlab/stats/tukey.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::mixed_anova_test {
 namespace {
 
 using nlohmann::json;
@@ -207,4 +207,4 @@ TEST(AnovaResiduals, MixedDesignEqualsAfexAndShapiroTestOnObrienKaiser) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::mixed_anova_test

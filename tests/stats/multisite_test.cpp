@@ -17,7 +17,7 @@
 #include "hapticlab/stats/plot.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::multisite_test {
 namespace {
 
 using nlohmann::json;
@@ -209,4 +209,4 @@ TEST(MultiSite, ForestPlotMarkersSitWhereTheEstimatesAre) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::multisite_test

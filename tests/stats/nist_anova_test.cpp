@@ -7,7 +7,7 @@
 #include "hapticlab/stats/anova.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::nist_anova_test {
 namespace {
 
 // Log relative error: the number of correct significant digits (NIST's measure).
@@ -31,4 +31,4 @@ TEST(NistAnova, SiRstvCertifiedValues) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::nist_anova_test

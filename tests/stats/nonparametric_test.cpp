@@ -10,7 +10,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::nonparametric_test {
 namespace {
 
 LongTable Groups(const std::vector<std::string>& g, const std::vector<double>& y) {
@@ -51,4 +51,4 @@ TEST(Nonparametric, RefusesOneGroupAndAllTiedValues) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::nonparametric_test

@@ -17,7 +17,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::plot_test {
 namespace {
 
 // The palette's first two colours (Okabe-Ito blue, orange), as OpenCV's BGR.
@@ -259,4 +259,4 @@ TEST(Plot, PowerLinesHaveMarkersAndQqPlotsTheirPoints) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::plot_test

@@ -15,7 +15,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::power_test {
 namespace {
 
 constexpr double kSigmaE = 10, kSigmaSubject = 8;
@@ -133,4 +133,4 @@ TEST(StudyPower, WilsonIntervalMatchesPublishedValues) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::power_test

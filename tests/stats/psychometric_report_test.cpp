@@ -8,7 +8,7 @@
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/stats/psychometric.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::psychometric_report_test {
 namespace {
 
 TEST(PsychometricReport, BinsKeepEveryTrialInOrder) {
@@ -39,4 +39,4 @@ TEST(PsychometricReport, BinsKeepEveryTrialInOrder) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::psychometric_report_test

@@ -14,7 +14,7 @@
 #include "hapticlab/stats/psychometric_report.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::psychometric_test {
 namespace {
 
 using psychophysics::Shape;
@@ -243,4 +243,4 @@ TEST(PsychometricCsv, NamesFileLineAndColumnOfABadCell) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::psychometric_test

@@ -16,7 +16,7 @@
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::reference_vectors_test {
 namespace {
 
 std::map<std::string, std::string> Args(const std::string& s) {
@@ -178,4 +178,4 @@ TEST(Distributions, TabulatedFamilyAgreesWithDirectQuadrature) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::reference_vectors_test

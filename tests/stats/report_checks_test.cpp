@@ -12,7 +12,7 @@
 #include "hapticlab/stats/shapiro.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats::report_internal {
+namespace hapticlab::stats::report_internal::report_checks_test {
 namespace {
 
 // 12 subjects x 2 cells whose residuals are strongly skewed (exponential quantiles).
@@ -60,4 +60,4 @@ TEST(ReportChecks, NormalityIsAdviceOnlyWhereAConclusionIsAtStake) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats::report_internal
+}  // namespace hapticlab::stats::report_internal::report_checks_test

@@ -19,7 +19,7 @@
 #include "hapticlab/stats/report.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::report_sources_test {
 namespace {
 
 struct Fixture {
@@ -166,4 +166,4 @@ TEST(ReportSources, AScoreOffTheProtocolsScaleIsRefused) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::report_sources_test

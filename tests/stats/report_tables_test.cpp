@@ -14,7 +14,7 @@
 #include "../../stats/src/report_internal.hpp"
 #include "hapticlab/protocols/protocol.hpp"
 
-namespace hapticlab::stats::report_internal {
+namespace hapticlab::stats::report_internal::report_tables_test {
 namespace {
 
 TEST(ReportTables, PValuesAndStarsAtTheirBoundaries) {
@@ -157,4 +157,4 @@ TEST(ReportTables, BetweenEffectsHaveNoSphericityCells) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats::report_internal
+}  // namespace hapticlab::stats::report_internal::report_tables_test

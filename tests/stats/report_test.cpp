@@ -20,7 +20,7 @@
 #include "hapticlab/stats/analysis.hpp"
 #include "hapticlab/test/test_util.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::report_test {
 namespace {
 
 // Score of participant p (0-based) for a planned trial and criterion; nullopt: not rated.
@@ -349,4 +349,4 @@ TEST(Report, UnknownAnalysisKeywordsAreRefusedWithTheRegisteredNames) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::report_test

@@ -6,7 +6,7 @@
 #include <boost/math/distributions/normal.hpp>
 #include <vector>
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::shapiro_test {
 namespace {
 
 TEST(Shapiro, MatchesRsShapiroTest) {
@@ -37,4 +37,4 @@ TEST(Shapiro, RefusesWhatItCannotTest) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::shapiro_test

@@ -15,7 +15,7 @@
 #include "hapticlab/stats/nonparametric.hpp"
 #include "long_table_fixture.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::tukey_test {
 namespace {
 
 using fixture::Make;
@@ -74,4 +74,4 @@ TEST(Grouping, LettersAgainstTheRealRealLimits) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::tukey_test

@@ -17,7 +17,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/stats/descriptive.hpp"
 
-namespace hapticlab::stats {
+namespace hapticlab::stats::within_ci_test {
 namespace {
 
 // participant x method x material with 2 repetitions; participant offsets are large.
@@ -136,4 +136,4 @@ TEST(WithinCi, IncompleteParticipantsAreLeftOutAndTooFewGiveNaN) {
 }
 
 }  // namespace
-}  // namespace hapticlab::stats
+}  // namespace hapticlab::stats::within_ci_test

@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::anisotropic_friction_test {
 namespace {
 using namespace effect_test;
 
@@ -91,4 +91,4 @@ TEST(AnisotropicFrictionEffect, EvidenceNamesTheDirectionsAndIsAbsentOnIsotropic
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::anisotropic_friction_test

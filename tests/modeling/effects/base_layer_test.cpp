@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::base_layer_test {
 namespace {
 using namespace effect_test;
 
@@ -81,4 +81,4 @@ TEST(BaseLayerEffect, EvidenceIsExcessForceAtTheDeepestPenetration) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::base_layer_test

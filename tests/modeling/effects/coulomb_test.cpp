@@ -8,7 +8,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::coulomb_test {
 namespace {
 using namespace effect_test;
 
@@ -93,4 +93,4 @@ TEST(CoulombEffect, EvidenceSeesMissingFrictionAndNoneOnFrictionlessData) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::coulomb_test

@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::dahl_test {
 namespace {
 using namespace effect_test;
 
@@ -144,4 +144,4 @@ TEST(DahlEffect, EvidenceIsResidualConcentratedAtStartsAndReversals) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::dahl_test

@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::effect_util_test {
 namespace {
 using namespace detail;
 
@@ -167,4 +167,4 @@ TEST(EffectUtil, SlidingAndRatioResidualFollowTheRegimeThresholds) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::effect_util_test

@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::hc_damping_test {
 namespace {
 using namespace effect_test;
 
@@ -71,4 +71,4 @@ TEST(HcDampingEffect, EvidenceIsAResidualCorrelatedWithThePenetrationRate) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::hc_damping_test

@@ -8,7 +8,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::hc_exponent_test {
 namespace {
 using namespace effect_test;
 
@@ -67,4 +67,4 @@ TEST(HcExponentEffect, EvidenceIsAnUpwardBendAgainstALinearSpring) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::hc_exponent_test

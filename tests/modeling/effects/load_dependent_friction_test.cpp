@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::load_dependent_friction_test {
 namespace {
 using namespace effect_test;
 
@@ -83,4 +83,4 @@ TEST(LoadDependentFrictionEffect, EvidenceIsARatioResidualThatChangesWithLoad) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::load_dependent_friction_test

@@ -11,7 +11,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::position_dependent_friction_test {
 namespace {
 using namespace effect_test;
 
@@ -130,4 +130,4 @@ TEST(PositionDependentFrictionEffect, EvidenceNamesTheTilesAndIsAbsentOnAUniform
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::position_dependent_friction_test

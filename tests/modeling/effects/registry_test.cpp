@@ -17,7 +17,7 @@
 #include "hapticlab/core/status.hpp"
 #include "hapticlab/modeling/workbench.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::registry_test {
 namespace {
 
 TEST(EffectRegistry, ListsEverySourceFileOnceInAFixedOrder) {
@@ -193,4 +193,4 @@ TEST(EffectRegistry, AToyEffectIsSimulatedFitScoredAndDiagnosedLikeABuiltInOne) 
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::registry_test

@@ -8,7 +8,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::stribeck_test {
 namespace {
 using namespace effect_test;
 
@@ -92,4 +92,4 @@ TEST(StribeckEffect, EvidenceIsExcessFrictionAtLowSpeedOnly) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::stribeck_test

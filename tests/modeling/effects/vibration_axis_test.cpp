@@ -10,7 +10,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::vibration_axis_test {
 namespace {
 using namespace effect_test;
 
@@ -155,4 +155,4 @@ TEST(VibrationAxisEffect, EvidenceReportsTheResidualAtBothEndsOfItsAxis) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::vibration_axis_test

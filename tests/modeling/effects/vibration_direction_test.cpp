@@ -9,7 +9,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::vibration_direction_test {
 namespace {
 using namespace effect_test;
 
@@ -63,4 +63,4 @@ TEST(VibrationDirectionEffect, EvidenceNamesTheLoudestAxisOfMotion) {
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::vibration_direction_test

@@ -7,7 +7,7 @@
 
 #include "strokes.hpp"
 
-namespace hapticlab::modeling::wb {
+namespace hapticlab::modeling::wb::viscous_test {
 namespace {
 using namespace effect_test;
 
@@ -78,4 +78,4 @@ TEST(ViscousEffect, EvidenceIsFrictionRisingWithSpeedAndNotFrictionFallingWithIt
 }
 
 }  // namespace
-}  // namespace hapticlab::modeling::wb
+}  // namespace hapticlab::modeling::wb::viscous_test
