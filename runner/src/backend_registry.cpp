@@ -23,10 +23,12 @@ constexpr const char* kCommandLine = "<command line>";
 struct Registry {
   std::mutex m;
   std::deque<RigBackend> list;
+  std::size_t built_in = 0;  ///< the first `built_in` entries
   Registry() {
 #define HL_REGISTER_BACKEND(Name) list.push_back(backends::Name());
     HL_BUILT_IN_BACKENDS(HL_REGISTER_BACKEND)
 #undef HL_REGISTER_BACKEND
+    built_in = list.size();
   }
 };
 
@@ -44,6 +46,14 @@ void RegisterBackend(RigBackend backend) {
   Registry& r = TheRegistry();
   const std::lock_guard lock(r.m);
   r.list.push_back(std::move(backend));
+}
+
+void UnregisterBackend(const std::string& name) {
+  Registry& r = TheRegistry();
+  const std::lock_guard lock(r.m);
+  HL_REQUIRE(r.list.size() > r.built_in && r.list.back().name == name,
+             "back-end '" + name + "' is not the last one a program registered");
+  r.list.pop_back();  // a deque's pop_back leaves the other elements' addresses valid
 }
 
 std::vector<const RigBackend*> Backends() {

@@ -136,19 +136,30 @@ TEST(OpenRig, BuiltInRigsFollowTheBackEndsFrame) {
   EXPECT_EQ(ParseRig(text, "r.toml").device, "sim");
 }
 
+// A back-end registered for one test's scope, so no other test of the binary sees it (a unity
+// build runs the tests of several files in one process, in an order of CMake's choosing).
+class ScopedBackend {
+ public:
+  explicit ScopedBackend(RigBackend b) : name_(b.name) { RegisterBackend(std::move(b)); }
+  ScopedBackend(const ScopedBackend&) = delete;
+  ScopedBackend& operator=(const ScopedBackend&) = delete;
+  ~ScopedBackend() { UnregisterBackend(name_); }
+
+ private:
+  std::string name_;
+};
+
 TEST(OpenRig, ABackEndRegisteredHereOpensByName) {
   static int opened = 0;
-  if (!FindBackend("toy-open")) {
-    RigBackend b;
-    b.name = "toy-open";
-    b.help = "a toy";
-    b.open = [](const RigRequest& q, const RigFile& rf, Rig* rig) {
-      ++opened;
-      rig->device = rig->parts.Keep(std::make_unique<ToyDevice>());
-      return q.device + " (" + std::to_string(rf.motor_units_per_Nm) + ")";
-    };
-    RegisterBackend(std::move(b));
-  }
+  RigBackend b;
+  b.name = "toy-open";
+  b.help = "a toy";
+  b.open = [](const RigRequest& q, const RigFile& rf, Rig* rig) {
+    ++opened;
+    rig->device = rig->parts.Keep(std::make_unique<ToyDevice>());
+    return q.device + " (" + std::to_string(rf.motor_units_per_Nm) + ")";
+  };
+  const ScopedBackend registered(std::move(b));
   const auto names = BackendNames();
   EXPECT_NE(std::find(names.begin(), names.end(), "toy-open"), names.end());
   const int before = opened;
@@ -164,25 +175,38 @@ TEST(OpenRig, ABackEndRegisteredHereOpensByName) {
   EXPECT_THROW(RegisterBackend(again), PreconditionError);
 }
 
+TEST(OpenRig, AScopedRegistrationEndsWithItsScopeAndBuiltInsStay) {
+  const auto before = BackendNames();
+  {
+    RigBackend b;
+    b.name = "toy-scoped";
+    b.open = [](const RigRequest&, const RigFile&, Rig*) { return std::string(); };
+    const ScopedBackend registered(std::move(b));
+    EXPECT_NE(FindBackend("toy-scoped"), nullptr);
+  }
+  EXPECT_EQ(FindBackend("toy-scoped"), nullptr);
+  EXPECT_EQ(BackendNames(), before);
+  EXPECT_THROW(UnregisterBackend(DefaultBackendName()), PreconditionError);
+  EXPECT_NE(FindBackend(DefaultBackendName()), nullptr);
+}
+
 // A simulated toy back-end registered here: a whole session runs on it (virtual clock, the
 // simulated hand and observer behind the Participant seam) like on the built-in `sim`.
 TEST(OpenRig, ASessionRunsOnAToyBackEndRegisteredHere) {
-  if (!FindBackend("toy-sim")) {
-    RigBackend b;
-    b.name = "toy-sim";
-    b.kind = DeviceKind::kSimulated;
-    b.help = "a toy simulated device";
-    b.open = [](const RigRequest& q, const RigFile& rf, Rig* rig) {
-      auto* s = rig->parts.Keep(std::make_unique<sim::SimRig>(
-          q.generic,
-          std::array<Eigen::Isometry3d, 2>{rf.DeviceFromSample(0), rf.DeviceFromSample(1)}));
-      rig->sim = s;
-      rig->device = s->device;
-      rig->actuator = &s->actuator;
-      return std::string("toy-sim");
-    };
-    RegisterBackend(std::move(b));
-  }
+  RigBackend b;
+  b.name = "toy-sim";
+  b.kind = DeviceKind::kSimulated;
+  b.help = "a toy simulated device";
+  b.open = [](const RigRequest& q, const RigFile& rf, Rig* rig) {
+    auto* s = rig->parts.Keep(std::make_unique<sim::SimRig>(
+        q.generic,
+        std::array<Eigen::Isometry3d, 2>{rf.DeviceFromSample(0), rf.DeviceFromSample(1)}));
+    rig->sim = s;
+    rig->device = s->device;
+    rig->actuator = &s->actuator;
+    return std::string("toy-sim");
+  };
+  const ScopedBackend registered(std::move(b));
   test::TempDir dir;
   const auto p = protocols::LoadProtocol(test::DataPath("protocols/small.toml"));
   const auto rig = OpenRig({.device = "toy-sim"});

@@ -135,6 +135,10 @@ struct RigBackend {
 /// Adds a back-end to the registry (a program's own, e.g. a test's toy device). Precondition:
 /// no back-end of that name is registered, `open` is set.
 void RegisterBackend(RigBackend backend);
+/// Removes a back-end a program registered, e.g. at the end of a test's scope. Precondition: it
+/// is the last one registered and not built in (registrations end in reverse order, so every
+/// other back-end's address stays valid), and no Rig opened from it is alive.
+void UnregisterBackend(const std::string& name);
 /// Every registered back-end, the built-in ones first (registry order).
 std::vector<const RigBackend*> Backends();
 /// Their names, for a CLI's list of choices.
