@@ -74,7 +74,8 @@ void NoteFit(const FitReport& rep, Channel channel, Candidate* c) {
       c->rejected.push_back(
           fmt::format("its fit ended with {} at a bound ({:.4g})", p.name, p.value));
   if (!cf->summary.usable)
-    c->rejected.push_back(fmt::format("its fit did not converge ({})", cf->summary.termination));
+    c->rejected.push_back(
+        fmt::format("its fit did not converge ({})", TerminationText(cf->summary)));
 }
 
 // Effect e added to the baseline, fitted on the training blocks (its channel only) and scored
