@@ -12,7 +12,7 @@
 namespace hapticlab::cli {
 
 inline nlohmann::json FitSummaryJson(const modeling::wb::FitSummary& s) {
-  return {{"what", s.what},
+  return {{"what", modeling::wb::ChannelName(s.channel)},
           {"method", s.method},
           {"termination", modeling::wb::TerminationText(s)},
           {"message", s.message},
@@ -24,9 +24,10 @@ inline nlohmann::json FitSummaryJson(const modeling::wb::FitSummary& s) {
 }
 
 inline std::string FitSummaryLine(const modeling::wb::FitSummary& s) {
-  std::string line = fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}", s.what,
-                                 modeling::wb::TerminationText(s), s.iterations, s.initial_cost,
-                                 s.final_cost, s.usable ? "" : " -- NOT USABLE");
+  std::string line =
+      fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}",
+                  modeling::wb::ChannelName(s.channel), modeling::wb::TerminationText(s),
+                  s.iterations, s.initial_cost, s.final_cost, s.usable ? "" : " -- NOT USABLE");
   if (!s.at_bounds.empty()) line += fmt::format("; at a bound: {}", fmt::join(s.at_bounds, ", "));
   return line;
 }

@@ -68,9 +68,9 @@ double TQuantile975(int dof) {
          (3 * std::pow(z, 7) + 19 * std::pow(z, 5) + 17 * z * z * z - 15 * z) / (384 * v * v * v);
 }
 
-FitSummary FromCeres(const std::string& what, const ceres::Solver::Summary& sum) {
+FitSummary FromCeres(Channel c, const ceres::Solver::Summary& sum) {
   FitSummary f;
-  f.what = what;
+  f.channel = c;
   f.method = "ceres (bounded trust region, numeric derivatives of the replay)";
   switch (sum.termination_type) {
     case ceres::CONVERGENCE:
@@ -292,7 +292,7 @@ void JackknifeCovariance(const Replay& r, const ChannelCost& cost, int per,
 ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
   ChannelFit out;
   out.channel = c;
-  out.summary.what = ChannelName(c);
+  out.summary.channel = c;
   ChannelCost cost{c, &r, FitSamples(r, c, o), Resolve(*m, r, c), {}, {}, {}, {}};
   if (c == Channel::kFriction && o.algorithm1_init && m->Has(effect::kCoulomb) &&
       m->Has(effect::kDahl))
@@ -309,7 +309,7 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   cost.fty.resize(r.samples().size());
   const int per = c == Channel::kNormal ? 1 : 2;
   const int nres = static_cast<int>(cost.idx.size()) * per;
-  out.summary = FromCeres(ChannelName(c), SolveChannel(cost, nres, o.max_iterations, &u));
+  out.summary = FromCeres(c, SolveChannel(cost, nres, o.max_iterations, &u));
   StoreOptimum(m, cost, u, &out);
   if (!o.uncertainty) return out;
   std::vector<double> r0;
@@ -321,7 +321,7 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
 ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   ChannelFit out;
   out.channel = Channel::kVibration;
-  out.summary.what = "vibration";
+  out.summary.channel = Channel::kVibration;
   out.summary.method = "linear least squares (ridge on the effect columns)";
   if (!r.has_vibration) {
     out.summary.termination = FitTermination::kNotRun;

@@ -32,7 +32,7 @@ TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
   EXPECT_TRUE(rep.IsUsable());
   for (const auto& c : rep.channels) {
     const SolverSummary& s = c.summary;  // a FitSummary is a SolverSummary
-    EXPECT_TRUE(s.converged) << c.summary.what << ": " << s.message;
+    EXPECT_TRUE(s.converged) << ChannelName(c.summary.channel) << ": " << s.message;
     EXPECT_GT(s.iterations, 0);
     EXPECT_LE(s.final_cost, s.initial_cost);
     EXPECT_EQ(c.summary.termination, FitTermination::kConverged);

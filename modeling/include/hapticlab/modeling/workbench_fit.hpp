@@ -56,7 +56,7 @@ inline constexpr EnumTable<FitNotRun, 5> kFitNotRunNames{
 /// solver's common report (core/solver_summary.hpp: converged, iterations, costs as 1/2 sum of
 /// squared residuals [N^2 or ln^2], the solver's own message) plus the workbench's context.
 struct FitSummary : SolverSummary {
-  std::string what;    ///< channel name ("friction", "normal_force", "vibration")
+  Channel channel = Channel::kNormal;  ///< the channel fitted
   std::string method;  ///< "ceres (numeric derivatives of the replay)" or "linear least squares"
   FitTermination termination = FitTermination::kNotRun;
   FitNotRun not_run = FitNotRun::kNone;  ///< why, when termination is kNotRun
