@@ -32,7 +32,7 @@ using namespace modeling::wb;
 
 nlohmann::json ErrorsJson(const Errors& e) {
   nlohmann::json j = {{"overall", e.overall}};
-  for (const auto& [k, v] : e.Normalized()) j["channels"][k] = v;
+  for (const auto& [k, v] : e.Normalized()) j["channels"][ChannelName(k)] = v;
   j["rms"] = {{"normal_force_N", e.normal_force_rms_N},
               {"tangential_N", e.tangential_rms_N},
               {"friction_ratio", e.friction_ratio_rms}};
@@ -78,7 +78,7 @@ void PrintEsCells(const std::string& title, const std::vector<EsCell>& cells) {
 
 std::string ErrorsLine(const Errors& e) {
   std::string s = fmt::format("overall {:.4f}", e.overall);
-  for (const auto& [k, v] : e.Normalized()) s += fmt::format(", {} {:.4f}", k, v);
+  for (const auto& [k, v] : e.Normalized()) s += fmt::format(", {} {:.4f}", ChannelName(k), v);
   s += fmt::format(" (rms: normal {:.4f} N, tangential {:.4f} N, friction ratio {:.4f})",
                    e.normal_force_rms_N, e.tangential_rms_N, e.friction_ratio_rms);
   return s;

@@ -205,7 +205,7 @@ void AddCompare(CLI::App& app) {
                   {{"bin", row.label}, {"n", row.n}, {"mean", row.mean}, {"rms", row.rms}});
         for (const auto& x : axes)
           ax.push_back({{"axis", x.axis},
-                        {"channel", x.channel},
+                        {"channel", ChannelName(x.channel)},
                         {"share", x.share},
                         {"description", x.description}});
         for (const auto& f : largest)
@@ -231,7 +231,7 @@ void AddCompare(CLI::App& app) {
       PrintEsCells("vibration E_s by speed and force", es_cells);
       fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
       for (std::size_t k = 0; k < axes.size() && k < 5; ++k)
-        fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, axes[k].channel,
+        fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, ChannelName(axes[k].channel),
                    100 * axes[k].share, axes[k].description);
       fmt::print("\nlargest systematic residuals:\n");
       for (const auto& f : largest)

@@ -53,7 +53,7 @@ nlohmann::json DiagnosisJson(const Diagnosis& dx, const std::string& vib_note) {
   nlohmann::json c = nlohmann::json::array();
   for (const auto& x : dx.candidates)
     c.push_back({{"effect", x.effect},
-                 {"channel", x.channel},
+                 {"channel", ChannelName(x.channel)},
                  {"error_after", x.error_after},
                  {"error_reduction", x.error_reduction},
                  {"relative_reduction", x.relative_reduction},
@@ -66,18 +66,20 @@ nlohmann::json DiagnosisJson(const Diagnosis& dx, const std::string& vib_note) {
                  {"rejected", x.rejected}});
   nlohmann::json ch = nlohmann::json::array(), ax = nlohmann::json::array();
   for (const auto& x : u.channels)
-    ch.push_back({{"channel", x.channel},
+    ch.push_back({{"channel", ChannelName(x.channel)},
                   {"error", x.error},
                   {"noise_floor", x.noise_floor},
                   {"ratio", x.ratio}});
   for (const auto& x : u.axes)
     ax.push_back({{"axis", x.axis},
-                  {"channel", x.channel},
+                  {"channel", ChannelName(x.channel)},
                   {"share", x.share},
                   {"description", x.description}});
+  nlohmann::json base = nlohmann::json::object();
+  for (const auto& [k, v] : dx.baseline_channel) base[ChannelName(k)] = v;
   return nlohmann::json{
       {"baseline_error", dx.baseline_error},
-      {"baseline_channels", dx.baseline_channel},
+      {"baseline_channels", base},
       {"candidates", c},
       {"unexplained",
        {{"channels", ch}, {"axes", ax}, {"flagged", u.flagged}, {"summary", u.summary}}},
@@ -90,8 +92,8 @@ void PrintCandidates(const Diagnosis& dx) {
   int rank = 0;
   for (const auto& x : dx.candidates) {
     fmt::print("{}. {} ({}): held-out error {:.4f} ({:+.4f}; {} error {:+.1f} %, t = {:.1f}) {}\n",
-               ++rank, x.effect, x.channel, x.error_after, -x.error_reduction, x.channel,
-               -100 * x.relative_reduction, x.t_statistic,
+               ++rank, x.effect, ChannelName(x.channel), x.error_after, -x.error_reduction,
+               ChannelName(x.channel), -100 * x.relative_reduction, x.t_statistic,
                x.supported ? "SUPPORTED" : "not supported");
     fmt::print("   {}\n", x.evidence);
     if (x.supported) {
@@ -109,12 +111,12 @@ void PrintUnexplained(const Unexplained& u) {
       "\nunexplained (held-out error against the noise floor estimated from the "
       "measurement):\n");
   for (const auto& x : u.channels)
-    fmt::print("  {:13s} error {:.4f}, floor {:.4f}, {:.1f}x\n", x.channel, x.error, x.noise_floor,
-               x.ratio);
+    fmt::print("  {:13s} error {:.4f}, floor {:.4f}, {:.1f}x\n", ChannelName(x.channel), x.error,
+               x.noise_floor, x.ratio);
   fmt::print(
       "where the residual lives (share of a channel's residual variance along each axis):\n");
   for (std::size_t k = 0; k < u.axes.size() && k < 6; ++k)
-    fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", u.axes[k].axis, u.axes[k].channel,
+    fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", u.axes[k].axis, ChannelName(u.axes[k].channel),
                100 * u.axes[k].share, u.axes[k].description);
 }
 
@@ -124,7 +126,7 @@ void PrintDiagnosis(const Diagnosis& dx, const std::string& model, const std::st
   if (!vib_note.empty()) fmt::print("{}\n\n", vib_note);
   fmt::print("held-out error of {} (refitted on the training blocks): {:.4f}", model,
              dx.baseline_error);
-  for (const auto& [k, v] : dx.baseline_channel) fmt::print(", {} {:.4f}", k, v);
+  for (const auto& [k, v] : dx.baseline_channel) fmt::print(", {} {:.4f}", ChannelName(k), v);
   fmt::print("\n");
   PrintEsCells("held-out vibration E_s by speed and force", dx.vibration_by_condition);
   fmt::print("\n");

@@ -12,9 +12,9 @@
 namespace hapticlab::cli {
 
 inline nlohmann::json FitSummaryJson(const modeling::wb::FitSummary& s) {
-  return {{"what", s.what},
+  return {{"what", modeling::wb::ChannelName(s.channel)},
           {"method", s.method},
-          {"termination", s.termination},
+          {"termination", modeling::wb::TerminationText(s)},
           {"message", s.message},
           {"iterations", s.iterations},
           {"initial_cost", s.initial_cost},
@@ -25,7 +25,8 @@ inline nlohmann::json FitSummaryJson(const modeling::wb::FitSummary& s) {
 
 inline std::string FitSummaryLine(const modeling::wb::FitSummary& s) {
   std::string line =
-      fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}", s.what, s.termination,
+      fmt::format("{} fit: {}, {} iterations, cost {:.6g} -> {:.6g}{}",
+                  modeling::wb::ChannelName(s.channel), modeling::wb::TerminationText(s),
                   s.iterations, s.initial_cost, s.final_cost, s.usable ? "" : " -- NOT USABLE");
   if (!s.at_bounds.empty()) line += fmt::format("; at a bound: {}", fmt::join(s.at_bounds, ", "));
   return line;

@@ -96,7 +96,7 @@ bool RefitCopies(const Model& model, const Measurement& m, const Replay& truth,
     ++out->replicates;
     if (cf == nullptr || !cf->summary.usable || cf->params.size() != np) {
       out->why_not = fmt::format("the fit of simulated copy {} was not usable: {}", b + 1,
-                                 cf ? cf->summary.termination : "no friction channel");
+                                 cf ? TerminationText(cf->summary) : "no friction channel");
       return false;
     }
     for (std::size_t k = 0; k < np; ++k) (*est)[k].push_back(cf->params[k].value);

@@ -74,7 +74,8 @@ void NoteFit(const FitReport& rep, Channel channel, Candidate* c) {
       c->rejected.push_back(
           fmt::format("its fit ended with {} at a bound ({:.4g})", p.name, p.value));
   if (!cf->summary.usable)
-    c->rejected.push_back(fmt::format("its fit did not converge ({})", cf->summary.termination));
+    c->rejected.push_back(
+        fmt::format("its fit did not converge ({})", TerminationText(cf->summary)));
 }
 
 // Effect e added to the baseline, fitted on the training blocks (its channel only) and scored
@@ -92,7 +93,7 @@ Candidate ScoreCandidate(const Effect& e, const Baseline& base, const Replay& r,
   const auto err = ComputeErrors(r, *pred, Split::kHeldOut);
   Candidate c;
   c.effect = std::string(e.name());
-  c.channel = ChannelName(e.channel());
+  c.channel = e.channel();
   NoteFit(rep, e.channel(), &c);
   c.error_after = err.overall;
   c.error_reduction = base.errors.overall - err.overall;
@@ -109,7 +110,7 @@ Candidate ScoreCandidate(const Effect& e, const Baseline& base, const Replay& r,
   c.supported = numbers && c.rejected.empty();
   if (!numbers) c.rejected.clear();  // the numbers alone say no; the reasons above add nothing
   for (const auto& [name, v] : m.params[c.effect]) c.params[name] = v;
-  if (c.channel == "vibration") {
+  if (c.channel == Channel::kVibration) {
     // Summarize the coefficients by their spread in dB.
     const auto& v = m.coef[c.effect];
     double mx = 0;
@@ -144,10 +145,10 @@ void ScoreCandidates(const std::vector<const Effect*>& cands, const Baseline& ba
 
 // A candidate's change to the prediction on the held-out data: ln band-power ratios for
 // vibration, force differences in contact for the force channels.
-std::vector<double> PredictionChange(const Replay& r, const std::string& channel,
-                                     const Prediction& p, const Prediction& pbase) {
+std::vector<double> PredictionChange(const Replay& r, Channel channel, const Prediction& p,
+                                     const Prediction& pbase) {
   std::vector<double> v;
-  if (channel == "vibration") {
+  if (channel == Channel::kVibration) {
     for (std::size_t w = 0; w < r.windows.size(); ++w)
       if (r.windows[w].block % 2)
         for (std::size_t b = 0; b < p.band_power[w].size(); ++b)
@@ -156,7 +157,7 @@ std::vector<double> PredictionChange(const Replay& r, const std::string& channel
   }
   for (std::size_t i = 0; i < r.samples().size(); ++i) {
     if (!r.samples()[i].contact || r.samples()[i].block % 2 == 0) continue;
-    if (channel == "normal_force") {
+    if (channel == Channel::kNormal) {
       v.push_back(p.fn_N[i] - pbase.fn_N[i]);
     } else {
       v.push_back(p.ftx_N[i] - pbase.ftx_N[i]);
@@ -192,7 +193,7 @@ std::string EvidenceOf(const Candidate& c, const EvidenceNote& note) {
     return fmt::format(
         "not supported: held-out {} error {} by {:.1f} % (paired t = {:.1f}){}; residual "
         "pattern: {}",
-        c.channel, c.relative_reduction >= 0 ? "falls" : "rises",
+        ChannelName(c.channel), c.relative_reduction >= 0 ? "falls" : "rises",
         std::abs(c.relative_reduction) * 100, c.t_statistic,
         c.rejected.empty() ? "" : fmt::format(", but {}", fmt::join(c.rejected, "; ")),
         note.pattern);

@@ -68,29 +68,27 @@ double TQuantile975(int dof) {
          (3 * std::pow(z, 7) + 19 * std::pow(z, 5) + 17 * z * z * z - 15 * z) / (384 * v * v * v);
 }
 
-FitSummary FromCeres(const std::string& what, const ceres::Solver::Summary& sum) {
+FitSummary FromCeres(Channel c, const ceres::Solver::Summary& sum) {
   FitSummary f;
-  f.what = what;
+  f.channel = c;
   f.method = "ceres (bounded trust region, numeric derivatives of the replay)";
   switch (sum.termination_type) {
     case ceres::CONVERGENCE:
-      f.termination = "converged";
+    case ceres::USER_SUCCESS:
+      f.termination = FitTermination::kConverged;
       break;
     case ceres::NO_CONVERGENCE:
-      f.termination = "iteration limit";
-      break;
-    case ceres::USER_SUCCESS:
-      f.termination = "converged";
+      f.termination = FitTermination::kIterationLimit;
       break;
     default:
-      f.termination = "failed";
+      f.termination = FitTermination::kFailed;
       break;
   }
   f.message = sum.message;
   f.iterations = sum.num_successful_steps + sum.num_unsuccessful_steps;
   f.initial_cost = sum.initial_cost;
   f.final_cost = sum.final_cost;
-  f.converged = f.termination == "converged";
+  f.converged = f.termination == FitTermination::kConverged;
   f.usable = f.converged && std::isfinite(sum.final_cost);
   return f;
 }
@@ -294,7 +292,7 @@ void JackknifeCovariance(const Replay& r, const ChannelCost& cost, int per,
 ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOptions& o) {
   ChannelFit out;
   out.channel = c;
-  out.summary.what = ChannelName(c);
+  out.summary.channel = c;
   ChannelCost cost{c, &r, FitSamples(r, c, o), Resolve(*m, r, c), {}, {}, {}, {}};
   if (c == Channel::kFriction && o.algorithm1_init && m->Has(effect::kCoulomb) &&
       m->Has(effect::kDahl))
@@ -302,8 +300,8 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   Unknowns u = CollectUnknowns(&cost);
   out.samples = static_cast<int>(cost.idx.size());
   if (u.x.empty() || cost.idx.size() < u.x.size() * 3) {
-    out.summary.termination =
-        u.x.empty() ? "not run (no fitted parameter)" : "not run (too few samples)";
+    out.summary.termination = FitTermination::kNotRun;
+    out.summary.not_run = u.x.empty() ? FitNotRun::kNoFittedParameter : FitNotRun::kTooFewSamples;
     out.summary.usable = u.x.empty();
     return out;
   }
@@ -311,7 +309,7 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
   cost.fty.resize(r.samples().size());
   const int per = c == Channel::kNormal ? 1 : 2;
   const int nres = static_cast<int>(cost.idx.size()) * per;
-  out.summary = FromCeres(ChannelName(c), SolveChannel(cost, nres, o.max_iterations, &u));
+  out.summary = FromCeres(c, SolveChannel(cost, nres, o.max_iterations, &u));
   StoreOptimum(m, cost, u, &out);
   if (!o.uncertainty) return out;
   std::vector<double> r0;
@@ -323,10 +321,11 @@ ChannelFit FitForceChannel(Model* m, const Replay& r, Channel c, const FitOption
 ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   ChannelFit out;
   out.channel = Channel::kVibration;
-  out.summary.what = "vibration";
+  out.summary.channel = Channel::kVibration;
   out.summary.method = "linear least squares (ridge on the effect columns)";
   if (!r.has_vibration) {
-    out.summary.termination = "not run (no acceleration)";
+    out.summary.termination = FitTermination::kNotRun;
+    out.summary.not_run = FitNotRun::kNoAcceleration;
     return out;
   }
   const auto vib = Resolve(*m, r, Channel::kVibration);
@@ -337,7 +336,8 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   for (const auto& x : vib) cols += x.e->VibrationColumns();
   out.samples = static_cast<int>(use.size());
   if (use.size() < static_cast<std::size_t>(cols) + 2) {
-    out.summary.termination = "not run (too few vibration windows)";
+    out.summary.termination = FitTermination::kNotRun;
+    out.summary.not_run = FitNotRun::kTooFewVibrationWindows;
     return out;
   }
   const std::size_t nb = r.band_lo_hz.size();
@@ -391,7 +391,7 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
   const Eigen::MatrixXd fitted = X * C;
   for (Eigen::Index k = 0; k < fitted.rows(); ++k)
     for (Eigen::Index b = 0; b < fitted.cols(); ++b) sse += std::pow(Y(k, b) - fitted(k, b), 2);
-  out.summary.termination = "converged";
+  out.summary.termination = FitTermination::kConverged;
   out.summary.converged = true;
   out.summary.iterations = 1;
   out.summary.final_cost = 0.5 * sse;
@@ -400,6 +400,13 @@ ChannelFit FitVibration(Model* m, const Replay& r, Split split) {
 }
 
 }  // namespace
+
+std::string TerminationText(const FitSummary& s) {
+  std::string text(NameOf(kFitTerminationNames, s.termination));
+  if (s.termination == FitTermination::kNotRun && s.not_run != FitNotRun::kNone)
+    text += " (" + std::string(NameOf(kFitNotRunNames, s.not_run)) + ")";
+  return text;
+}
 
 FitReport Fit(Model* m, const Replay& r, const FitOptions& o) {
   FitReport rep;

@@ -90,15 +90,8 @@ void Store(Model* m, const std::vector<Resolved>& res) {
 using internal::CoreEffect;
 
 const char* ChannelName(Channel c) {
-  switch (c) {
-    case Channel::kNormal:
-      return "normal_force";
-    case Channel::kFriction:
-      return "friction";
-    case Channel::kVibration:
-      return "vibration";
-  }
-  return "?";
+  const std::string_view name = NameOf(kChannelNames, c);  // the table's literals end in NUL
+  return name.empty() ? "?" : name.data();
 }
 
 const Effect* FindEffect(std::string_view name) {

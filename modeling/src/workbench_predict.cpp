@@ -174,10 +174,10 @@ const ChannelErrors& Errors::Of(Channel c) const {
   return vibration;
 }
 
-std::map<std::string, double> Errors::Normalized() const {
-  std::map<std::string, double> out;
+std::map<Channel, double> Errors::Normalized() const {
+  std::map<Channel, double> out;
   for (const Channel c : {Channel::kNormal, Channel::kFriction, Channel::kVibration})
-    if (Of(c).present) out[ChannelName(c)] = Of(c).normalized;
+    if (Of(c).present) out[c] = Of(c).normalized;
   return out;
 }
 
@@ -234,7 +234,7 @@ Errors ComputeErrors(const Replay& r, const Prediction& p, Split split) {
       ++count;
     }
   }
-  double sum = 0;  // in ChannelName order, as the reports list the channels
+  double sum = 0;  // in Channel order, as the reports list the channels
   for (const auto& [k, v] : e.Normalized()) sum += v;
   e.overall = count ? sum / count : 0;
   return e;

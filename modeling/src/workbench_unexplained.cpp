@@ -75,7 +75,8 @@ AxisBins Categorical(const std::string& axis, std::vector<std::string> labels) {
 }
 
 struct Quantity {
-  std::string channel, name;
+  Channel channel = Channel::kNormal;
+  std::string name;
   std::function<std::string(double)> fmt;
 };
 
@@ -178,8 +179,8 @@ std::string Hint(const std::string& axis) {
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
-std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m) {
-  std::map<std::string, double> floor;
+std::map<Channel, double> EstimateNoiseFloor(const Replay& r, Split split, const Model* m) {
+  std::map<Channel, double> floor;
   std::vector<double> dn, dx, dy, dvz, dvx, dvy;
   for (std::size_t i = 1; i + 1 < r.samples().size(); ++i) {
     const auto &a = r.samples()[i - 1], &b = r.samples()[i], &c = r.samples()[i + 1];
@@ -216,8 +217,8 @@ std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, c
     vn += sn * sn + gn[i] * gn[i] * svz * svz;
     vt += st2 + 2 * gt[i] * gt[i] * svt * svt;
   }
-  if (nn > 0) floor["normal_force"] = std::sqrt(vn / nn);
-  if (nt > 0) floor["friction"] = std::sqrt(vt / nt);
+  if (nn > 0) floor[Channel::kNormal] = std::sqrt(vn / nn);
+  if (nt > 0) floor[Channel::kFriction] = std::sqrt(vt / nt);
   // Vibration: a band's power is the mean of k periodogram bins, about k / 1.5 of them
   // independent under a Hann window (its noise bandwidth is 1.5 bins); for X = mean of k_eff
   // unit exponentials E(sqrt X - 1)^2 = 2 - 2 Gamma(k + 1/2) / (Gamma(k) sqrt k), so the
@@ -241,7 +242,7 @@ std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split, c
       }
       if (den > 0) se += std::sqrt(num / den), ++nw;
     }
-    if (nw) floor["vibration"] = se / nw;
+    if (nw) floor[Channel::kVibration] = se / nw;
   }
   return floor;
 }
@@ -335,7 +336,7 @@ void RankForceAxes(const Axes& ax, const Replay& r, const Residuals& res,
   // Normal force: every sample in contact.
   std::vector<char> use(n);
   for (std::size_t i = 0; i < n; ++i) use[i] = r.samples()[i].contact;
-  analyze({"normal_force", "normal-force residual",
+  analyze({Channel::kNormal, "normal-force residual",
            [](double v) { return fmt::format("{:+.4f} N", v); }},
           res.normal_N, use);
   // Friction: the friction ratio along the motion (friction / measured load) where the motion
@@ -346,9 +347,9 @@ void RankForceAxes(const Axes& ax, const Replay& r, const Residuals& res,
     use[i] = s.contact && s.speed_mps >= kPreslidingSpeed_mps && s.fn_N > 0.05;
     if (use[i]) v[i] = res.friction_N[i] / s.fn_N;
   }
-  analyze(
-      {"friction", "friction-ratio residual", [](double x) { return fmt::format("{:+.3f}", x); }},
-      v, use);
+  analyze({Channel::kFriction, "friction-ratio residual",
+           [](double x) { return fmt::format("{:+.3f}", x); }},
+          v, use);
 }
 
 // Vibration: the window's mean band-power residual over time, speed, load and direction (and
@@ -356,7 +357,7 @@ void RankForceAxes(const Axes& ax, const Replay& r, const Residuals& res,
 void RankVibrationAxes(const Axes& ax, const Replay& r, const Residuals& res,
                        std::vector<ResidualAxis>* out) {
   if (res.log_band.empty()) return;
-  const Quantity q{"vibration", "band-power residual",
+  const Quantity q{Channel::kVibration, "band-power residual",
                    [](double v) { return fmt::format("{:+.1f} dB", v); }};
   const std::size_t nw = r.windows.size(), nb = r.band_lo_hz.size();
   const double db = 10 / std::log(10.0);
@@ -406,7 +407,7 @@ Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction
                             const Errors& ebase, bool any_supported, double unexplained_ratio) {
   Unexplained u;
   const auto floor = EstimateNoiseFloor(r, Split::kHeldOut, &base);
-  std::set<std::string> above;
+  std::set<Channel> above;
   for (const auto& [ch, e] : ebase.Normalized()) {
     UnexplainedChannel x{ch, e, floor.count(ch) ? floor.at(ch) : 0, 0};
     x.ratio = x.noise_floor > 0 ? x.error / x.noise_floor : 0;
@@ -437,19 +438,19 @@ Unexplained ExplainResidual(const Model& base, const Replay& r, const Prediction
           "{:.4f}). It lives mostly along {} ({:.0f} % of its variance): {}. An effect of the {} "
           "channel {} is needed; "
           "docs/workbench.md, \"Adding an effect\", shows how to add one.",
-          worst.channel, worst.ratio, worst.error, worst.noise_floor, top->axis, 100 * top->share,
-          top->description, worst.channel, Hint(top->axis));
+          ChannelName(worst.channel), worst.ratio, worst.error, worst.noise_floor, top->axis,
+          100 * top->share, top->description, ChannelName(worst.channel), Hint(top->axis));
     } else if (!above.empty() && top) {
       u.summary = fmt::format(
           "The held-out {} error is {:.1f}x its noise floor; most of its residual variance is "
           "along "
           "{} ({:.0f} %): {}.",
-          worst.channel, worst.ratio, top->axis, 100 * top->share, top->description);
+          ChannelName(worst.channel), worst.ratio, top->axis, 100 * top->share, top->description);
     } else {
       u.summary = fmt::format(
           "Every channel's held-out error is within {:.1f}x its noise floor (largest: {} at "
           "{:.2f}x).",
-          unexplained_ratio, worst.channel, worst.ratio);
+          unexplained_ratio, ChannelName(worst.channel), worst.ratio);
     }
   }
   return u;

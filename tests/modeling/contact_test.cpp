@@ -33,9 +33,9 @@ TEST(ContactFreeHand, EveryParameterRecoveredWithUsableFits) {
   const Truth t;
   const auto m = FreeHand(t, 11, 60, 0.008, true);
   const auto f = FitContact(m);
-  EXPECT_TRUE(f.IsUsable()) << f.friction_summary.termination << " / "
-                            << f.normal_summary.termination;
-  EXPECT_EQ(f.friction_summary.termination, "converged");
+  EXPECT_TRUE(f.IsUsable()) << wb::TerminationText(f.friction_summary) << " / "
+                            << wb::TerminationText(f.normal_summary);
+  EXPECT_EQ(f.friction_summary.termination, wb::FitTermination::kConverged);
   EXPECT_TRUE(f.friction_summary.at_bounds.empty());
   EXPECT_GT(f.friction_summary.iterations, 0);
   EXPECT_LE(f.friction_summary.final_cost, f.friction_summary.initial_cost);

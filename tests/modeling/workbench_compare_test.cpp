@@ -120,7 +120,7 @@ TEST(WorkbenchCompare, ArBankIsScoredBySpectrumAndConditionShowsWhereItFails) {
   EXPECT_EQ(cells[1].label, "100-150 mm/s, 1-1.5 N");
   // Matched level: only the periodograms' own scatter, which the noise floor estimates from the
   // measurement alone (about 0.26 here: two or three FFT bins in the lowest bands).
-  const double floor = EstimateNoiseFloor(r, Split::kAll).at("vibration");
+  const double floor = EstimateNoiseFloor(r, Split::kAll).at(Channel::kVibration);
   EXPECT_LT(cells[0].es, 1.25 * floor) << "floor " << floor;
   EXPECT_NEAR(cells[1].es, 0.5, 0.1) << "twice the amplitude";
   EXPECT_GT(cells[1].es, cells[0].es + 0.2);

@@ -114,8 +114,8 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndFittingItReachesTheNoiseFloor) {
   std::string table;
   for (const auto& c : dx.candidates)
     table += fmt::format("  {:28s} reduction {:+.5f} ({:+.1f} % of {}), t {:.1f}{}\n", c.effect,
-                         c.error_reduction, 100 * c.relative_reduction, c.channel, c.t_statistic,
-                         c.supported ? ", supported" : "");
+                         c.error_reduction, 100 * c.relative_reduction, ChannelName(c.channel),
+                         c.t_statistic, c.supported ? ", supported" : "");
   const auto& top = dx.candidates.front();
   EXPECT_EQ(top.effect, sc.effect) << sc.variant << "\n" << table;
   EXPECT_TRUE(top.supported) << table;
@@ -131,7 +131,7 @@ TEST_P(HiddenEffect, DiagnoseRanksItFirstAndFittingItReachesTheNoiseFloor) {
   const Channel channel = FindEffect(sc.effect)->channel();
   const std::string ch = ChannelName(channel);
   ASSERT_TRUE(err.Of(channel).present && floor.Of(channel).present) << ch;
-  const double before = dx.baseline_channel.at(ch), after = err.Of(channel).normalized,
+  const double before = dx.baseline_channel.at(channel), after = err.Of(channel).normalized,
                fl = floor.Of(channel).normalized;
   EXPECT_LE(after, 1.10 * fl) << sc.effect << " (" << sc.variant << "): held-out " << ch
                               << " error " << after << ", noise floor " << fl << ", before "
@@ -169,7 +169,7 @@ TEST_P(NullCase, NoCandidateClaimsAMeaningfulReduction) {
     EXPECT_FALSE(c.supported) << c.effect << ": " << c.evidence;
     EXPECT_LT(c.relative_reduction, 0.02) << c.effect;
     fmt::print("[null] seed {} {:28s} {:+.2f} % of {} (t {:.1f})\n", t.seed, c.effect,
-               100 * c.relative_reduction, c.channel, c.t_statistic);
+               100 * c.relative_reduction, ChannelName(c.channel), c.t_statistic);
   }
 }
 INSTANTIATE_TEST_SUITE_P(Seeds, NullCase, ::testing::Range(0, 2));

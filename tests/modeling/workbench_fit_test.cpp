@@ -32,10 +32,11 @@ TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
   EXPECT_TRUE(rep.IsUsable());
   for (const auto& c : rep.channels) {
     const SolverSummary& s = c.summary;  // a FitSummary is a SolverSummary
-    EXPECT_TRUE(s.converged) << c.summary.what << ": " << s.message;
+    EXPECT_TRUE(s.converged) << ChannelName(c.summary.channel) << ": " << s.message;
     EXPECT_GT(s.iterations, 0);
     EXPECT_LE(s.final_cost, s.initial_cost);
-    EXPECT_EQ(c.summary.termination, "converged");
+    EXPECT_EQ(c.summary.termination, FitTermination::kConverged);
+    EXPECT_EQ(TerminationText(c.summary), "converged");
   }
   EXPECT_NE(mu_start, m.At(key::kMuK));
   EXPECT_NEAR(m.At(key::kMuK), 0.35, 0.01);
@@ -46,6 +47,27 @@ TEST(WorkbenchFit, RecoversCoulombViscousAndStiffnessWithConvergedSummaries) {
   ASSERT_NE(fr, nullptr);
   EXPECT_EQ(fr->params.size(), 2u);
   EXPECT_EQ(rep.Find(Channel::kVibration), nullptr);
+}
+
+// The termination's words are the reports' (fit, diagnose, model fit-contact, JSON): every value
+// has a name that parses back, and a fit not run says why in parentheses.
+TEST(WorkbenchFit, EveryTerminationHasANameAndANotRunFitSaysWhy) {
+  for (const auto t : {FitTermination::kConverged, FitTermination::kIterationLimit,
+                       FitTermination::kFailed, FitTermination::kNotRun}) {
+    EXPECT_FALSE(NameOf(kFitTerminationNames, t).empty());
+    EXPECT_EQ(FromName(kFitTerminationNames, NameOf(kFitTerminationNames, t)), t);
+  }
+  for (const auto w : {FitNotRun::kNoFittedParameter, FitNotRun::kTooFewSamples,
+                       FitNotRun::kNoAcceleration, FitNotRun::kTooFewVibrationWindows}) {
+    EXPECT_FALSE(NameOf(kFitNotRunNames, w).empty());
+    EXPECT_EQ(FromName(kFitNotRunNames, NameOf(kFitNotRunNames, w)), w);
+  }
+  FitSummary s;
+  s.termination = FitTermination::kIterationLimit;
+  EXPECT_EQ(TerminationText(s), "iteration limit");
+  s.termination = FitTermination::kNotRun;
+  s.not_run = FitNotRun::kTooFewVibrationWindows;
+  EXPECT_EQ(TerminationText(s), "not run (too few vibration windows)");
 }
 
 TEST(WorkbenchFit, TooFewSamplesIsReportedNotThrown) {
@@ -65,7 +87,9 @@ TEST(WorkbenchFit, TooFewSamplesIsReportedNotThrown) {
   ASSERT_NE(fr, nullptr);
   EXPECT_FALSE(fr->summary.converged);
   EXPECT_FALSE(fr->summary.usable);
-  EXPECT_EQ(fr->summary.termination, "not run (too few samples)");
+  EXPECT_EQ(fr->summary.termination, FitTermination::kNotRun);
+  EXPECT_EQ(fr->summary.not_run, FitNotRun::kTooFewSamples);
+  EXPECT_EQ(TerminationText(fr->summary), "not run (too few samples)");
   EXPECT_FALSE(rep.IsUsable());
 }
 

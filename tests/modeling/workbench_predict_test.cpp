@@ -5,6 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "hapticlab/modeling/workbench.hpp"
 
@@ -60,6 +63,21 @@ TEST(WorkbenchPredict, ForcesFollowTheChannelFormulas) {
   EXPECT_EQ(p.fty_N[2], 0.0);
 }
 
+// Channels are typed inside the workbench and named only where printed: every channel has a
+// name that parses back, and a map keyed by Channel (Errors::Normalized, the noise floors)
+// iterates in name order, the order the reports have always listed the channels in.
+TEST(WorkbenchPredict, EveryChannelHasANameAndChannelOrderIsNameOrder) {
+  std::vector<std::string> names;
+  for (const auto& [c, name] :
+       std::map<Channel, std::string>{{Channel::kNormal, ChannelName(Channel::kNormal)},
+                                      {Channel::kFriction, ChannelName(Channel::kFriction)},
+                                      {Channel::kVibration, ChannelName(Channel::kVibration)}}) {
+    EXPECT_EQ(FromName(kChannelNames, name), c) << name;
+    names.push_back(name);
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"friction", "normal_force", "vibration"}));
+}
+
 TEST(WorkbenchPredict, ErrorsAreNormalisedPerChannelAndSplitByBlock) {
   Replay r;
   r.mutable_samples().push_back(Touching(1e-3, 0, 0.02, 0, 1.0, 0));  // train
@@ -77,7 +95,7 @@ TEST(WorkbenchPredict, ErrorsAreNormalisedPerChannelAndSplitByBlock) {
   EXPECT_NEAR(all.normal_force.normalized, std::sqrt(0.17 / 5.0), 1e-12);
   EXPECT_NEAR(all.friction.normalized, std::sqrt(0.09 / 1.25), 1e-12);
   EXPECT_EQ(all.Normalized().size(), 2U);
-  EXPECT_NEAR(all.Normalized().at("friction"), all.friction.normalized, 0);
+  EXPECT_NEAR(all.Normalized().at(Channel::kFriction), all.friction.normalized, 0);
   EXPECT_NEAR(all.overall, (std::sqrt(0.17 / 5.0) + std::sqrt(0.09 / 1.25)) / 2, 1e-12);
   EXPECT_NEAR(all.normal_force_rms_N, std::sqrt(0.17 / 2), 1e-12);
   const auto train = ComputeErrors(r, p, Split::kTrain);

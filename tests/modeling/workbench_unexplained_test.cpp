@@ -33,14 +33,15 @@ TEST(WorkbenchUnexplained, NoiseFloorEstimatedFromTheMeasurementMatchesTheTruths
     const auto truth = NoiseFloor(sim, r, Split::kHeldOut);
     for (const Channel c : {Channel::kNormal, Channel::kFriction}) {
       const std::string ch = ChannelName(c);
-      ASSERT_TRUE(est.count(ch) && truth.Of(c).present) << ch;
+      ASSERT_TRUE(est.count(c) && truth.Of(c).present) << ch;
       // 20 %: the estimate sees the force noise and the velocity noise through the model; the
       // truth's floor also holds the load noise through f_C.
-      EXPECT_NEAR(est.at(ch), truth.Of(c).normalized, 0.2 * truth.Of(c).normalized)
+      EXPECT_NEAR(est.at(c), truth.Of(c).normalized, 0.2 * truth.Of(c).normalized)
           << ch << " at " << noise << " N";
     }
-    ASSERT_TRUE(est.count("vibration") && truth.vibration.present);
-    EXPECT_NEAR(est.at("vibration"), truth.vibration.normalized, 0.35 * truth.vibration.normalized);
+    ASSERT_TRUE(est.count(Channel::kVibration) && truth.vibration.present);
+    EXPECT_NEAR(est.at(Channel::kVibration), truth.vibration.normalized,
+                0.35 * truth.vibration.normalized);
   }
 }
 
@@ -63,7 +64,7 @@ TEST(WorkbenchUnexplained, ResidualAxesRankTheAxisThatCarriesTheResidual) {
   const auto axes = RankResidualAxes(truth, r, pred);
   ASSERT_FALSE(axes.empty());
   EXPECT_EQ(axes.front().axis, "position");
-  EXPECT_EQ(axes.front().channel, "friction");
+  EXPECT_EQ(axes.front().channel, Channel::kFriction);
   EXPECT_GT(axes.front().share, 0.3);
   EXPECT_NE(axes.front().description.find("right"), std::string::npos) << axes.front().description;
   for (std::size_t k = 1; k < axes.size(); ++k) EXPECT_LE(axes[k].share, axes[k - 1].share);
@@ -97,7 +98,7 @@ TEST(WorkbenchUnexplained, ConcatenatedRecordingsAreNotDiagnosedAsDrift) {
     const auto p = Predict(model, r);
     std::map<std::string, double> share;
     for (const auto& a : RankResidualAxes(model, r, p))
-      if (a.channel == "friction") share[a.axis] = a.share;
+      if (a.channel == Channel::kFriction) share[a.axis] = a.share;
     const auto u = ExplainResidual(model, r, p, ComputeErrors(r, p, Split::kHeldOut), false, 1.5);
     return std::pair{share, u.summary};
   };
@@ -116,13 +117,15 @@ TEST(WorkbenchUnexplained, ConcatenatedRecordingsAreNotDiagnosedAsDrift) {
 
 // Out-of-catalogue truths: the baseline plus a mechanism no effect of the catalogue models.
 struct OutOfCatalogueCase {
-  std::string name, channel, axis;
+  std::string name;
+  Channel channel;
+  std::string axis;
   std::function<void(TruthParams&)> set;
 };
 std::vector<OutOfCatalogueCase> OutOfCatalogueCases() {
-  return {{"friction drifts by 40 % over the recording (a warming or wearing surface)", "friction",
-           "time", [](TruthParams& t) { t.mu_drift = 0.4; }},
-          {"stiffness varies by -+30 % across the surface", "normal_force", "position",
+  return {{"friction drifts by 40 % over the recording (a warming or wearing surface)",
+           Channel::kFriction, "time", [](TruthParams& t) { t.mu_drift = 0.4; }},
+          {"stiffness varies by -+30 % across the surface", Channel::kNormal, "position",
            [](TruthParams& t) { t.K_position_amp = 0.3; }}};
 }
 
@@ -143,7 +146,7 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
   std::string table;
   for (const auto& c : dx.candidates)
     table += fmt::format("  {:28s} {:+.1f} % of {}, t {:.1f}{} | {}\n", c.effect,
-                         100 * c.relative_reduction, c.channel, c.t_statistic,
+                         100 * c.relative_reduction, ChannelName(c.channel), c.t_statistic,
                          c.supported ? " SUPPORTED" : "", c.evidence);
   const auto& u = dx.unexplained;
   // The residuals of the fitted baseline, for each effect's cause sentence.
@@ -169,8 +172,8 @@ TEST_P(OutOfCatalogue, NothingSupportedErrorFlaggedAndItsAxisRankedFirst) {
   EXPECT_NE(u.summary.find("No catalogue effect"), std::string::npos) << u.summary;
   EXPECT_NE(u.summary.find(oc.axis), std::string::npos) << u.summary;
   fmt::print("[out-of-catalogue] {}: {} error {:.1f}x floor; first axis {} ({:.0f} %): {}\n",
-             oc.name, u.channels.front().channel, u.channels.front().ratio, u.axes.front().axis,
-             100 * u.axes.front().share, u.axes.front().description);
+             oc.name, ChannelName(u.channels.front().channel), u.channels.front().ratio,
+             u.axes.front().axis, 100 * u.axes.front().share, u.axes.front().description);
 }
 INSTANTIATE_TEST_SUITE_P(Cases, OutOfCatalogue,
                          ::testing::Range(0, static_cast<int>(OutOfCatalogueCases().size())),

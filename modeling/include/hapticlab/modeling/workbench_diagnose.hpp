@@ -17,7 +17,7 @@ namespace hapticlab::modeling::wb {
 /// on the held-out blocks.
 struct Candidate {
   std::string effect;
-  std::string channel;
+  Channel channel = Channel::kNormal;
   double error_after = 0;         ///< held-out overall error with the effect
   double error_reduction = 0;     ///< baseline_error - error_after
   double relative_reduction = 0;  ///< of the channel's held-out error
@@ -37,14 +37,14 @@ struct Candidate {
 /// itself (force channels: sensor noise from the median absolute second difference of each
 /// force component; vibration: the spread of a band-averaged Hann periodogram about its mean).
 struct UnexplainedChannel {
-  std::string channel;
+  Channel channel = Channel::kNormal;
   double error = 0, noise_floor = 0, ratio = 0;
 };
 /// How much of a channel's residual variance one axis explains (between-bin over total sum of
 /// squares), with the shape of the dependence in words.
 struct ResidualAxis {
   std::string axis;  ///< time, speed, load, direction, position, regime, band
-  std::string channel;
+  Channel channel = Channel::kNormal;
   double share = 0;  ///< 0..1
   std::string description;
 };
@@ -61,7 +61,7 @@ struct Unexplained {
 
 struct Diagnosis {
   double baseline_error = 0;
-  std::map<std::string, double> baseline_channel;
+  std::map<Channel, double> baseline_channel;
   std::vector<Candidate> candidates;  ///< sorted by error_reduction, descending
   Unexplained unexplained;
   /// The baseline's held-out vibration E_s by speed and force (empty without vibration).
@@ -82,8 +82,8 @@ Diagnosis Diagnose(const Model& m, const Replay& r, const DiagnoseOptions& o = {
 /// measurement alone (see UnexplainedChannel). With a model, the noise of the measured
 /// velocities (same estimator) is added through the model's sensitivity to them (the damping
 /// and viscous terms), as the model sees it when replayed.
-std::map<std::string, double> EstimateNoiseFloor(const Replay& r, Split split,
-                                                 const Model* m = nullptr);
+std::map<Channel, double> EstimateNoiseFloor(const Replay& r, Split split,
+                                             const Model* m = nullptr);
 
 /// Where a model's residual lives: every axis of every channel present, by share.
 std::vector<ResidualAxis> RankResidualAxes(const Model& m, const Replay& r, const Prediction& p);

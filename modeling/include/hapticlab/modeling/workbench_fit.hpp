@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/core/enum_names.hpp"
 #include "hapticlab/core/solver_summary.hpp"
 #include "hapticlab/modeling/workbench_predict.hpp"
 
@@ -27,18 +28,46 @@ struct FitOptions {
   bool algorithm1_init = true;
 };
 
+/// How a channel's solve ended (Ceres' termination type, or not run at all).
+enum class FitTermination { kConverged, kIterationLimit, kFailed, kNotRun };
+inline constexpr EnumTable<FitTermination, 4> kFitTerminationNames{
+    {{FitTermination::kConverged, "converged"},
+     {FitTermination::kIterationLimit, "iteration limit"},
+     {FitTermination::kFailed, "failed"},
+     {FitTermination::kNotRun, "not run"}}};
+
+/// Why a channel was not fitted (FitTermination::kNotRun); kNone for a solve that ran.
+enum class FitNotRun {
+  kNone,
+  kNoFittedParameter,
+  kTooFewSamples,
+  kNoAcceleration,
+  kTooFewVibrationWindows
+};
+inline constexpr EnumTable<FitNotRun, 5> kFitNotRunNames{
+    {{FitNotRun::kNone, ""},
+     {FitNotRun::kNoFittedParameter, "no fitted parameter"},
+     {FitNotRun::kTooFewSamples, "too few samples"},
+     {FitNotRun::kNoAcceleration, "no acceleration"},
+     {FitNotRun::kTooFewVibrationWindows, "too few vibration windows"}}};
+
 /// What one fit did, kept from Ceres' Summary (STYLE.md §6): a fit that stopped at its
 /// iteration limit or with a parameter at a bound must not look like a converged one. The
 /// solver's common report (core/solver_summary.hpp: converged, iterations, costs as 1/2 sum of
 /// squared residuals [N^2 or ln^2], the solver's own message) plus the workbench's context.
 struct FitSummary : SolverSummary {
-  std::string what;    ///< channel name ("friction", "normal_force", "vibration")
+  Channel channel = Channel::kNormal;  ///< the channel fitted
   std::string method;  ///< "ceres (numeric derivatives of the replay)" or "linear least squares"
-  std::string termination;  ///< "converged", "iteration limit", "failed", "not run (...)"
-  std::vector<std::string> at_bounds;  ///< "effect.param at its lower|upper bound (value)"
-  bool usable = false;                 ///< converged (or a linear solve) with a finite cost
+  FitTermination termination = FitTermination::kNotRun;
+  FitNotRun not_run = FitNotRun::kNone;  ///< why, when termination is kNotRun
+  std::vector<std::string> at_bounds;    ///< "effect.param at its lower|upper bound (value)"
+  bool usable = false;                   ///< converged (or a linear solve) with a finite cost
   bool IsUsable() const { return usable; }
 };
+
+/// The termination in words, as reports print it: "converged", "iteration limit", "failed" or
+/// "not run (too few samples)" (the reason in parentheses).
+std::string TerminationText(const FitSummary& s);
 
 /// One fitted parameter with its uncertainty.
 struct ParamEstimate {

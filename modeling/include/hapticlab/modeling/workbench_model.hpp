@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "hapticlab/core/enum_names.hpp"
 #include "hapticlab/modeling/workbench_params.hpp"
 #include "hapticlab/modeling/workbench_replay.hpp"
 
@@ -29,8 +30,14 @@ namespace hapticlab::modeling::wb {
 struct VibrationSpectra;  // workbench_vibration.hpp
 struct Model;
 
-enum class Channel { kNormal, kFriction, kVibration };
-const char* ChannelName(Channel c);  ///< "normal_force", "friction", "vibration"
+/// A model's output channels, declared in the order reports list them (by name): a map keyed by
+/// Channel iterates as the reports print the channels.
+enum class Channel { kFriction, kNormal, kVibration };
+inline constexpr EnumTable<Channel, 3> kChannelNames{{{Channel::kFriction, "friction"},
+                                                      {Channel::kNormal, "normal_force"},
+                                                      {Channel::kVibration, "vibration"}}};
+/// NameOf(kChannelNames, c) as a C string: "friction", "normal_force", "vibration".
+const char* ChannelName(Channel c);
 
 /// One parameter of an effect. Fitted parameters are optimized (Ceres) within [lo, hi]; fixed
 /// ones (e.g. the tile grid's bounds) are set from the data when the effect is added.

@@ -48,9 +48,8 @@ struct Errors {
   double tangential_rms_N = 0;    ///< RMS of |tangential residual| over samples in contact
   double friction_ratio_rms = 0;  ///< RMS of the friction-ratio residual while sliding [1]
   const ChannelErrors& Of(Channel c) const;
-  /// The normalized errors of the present channels by ChannelName (in name order, as reports
-  /// list them).
-  std::map<std::string, double> Normalized() const;
+  /// The normalized errors of the present channels (in Channel order, as reports list them).
+  std::map<Channel, double> Normalized() const;
 };
 Errors ComputeErrors(const Replay& r, const Prediction& p, Split split);
 
