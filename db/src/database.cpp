@@ -102,6 +102,13 @@ void CheckSharedMemoryFile(const std::string& path) {
     throw InputError(shm, 0, "db",
                      "the database's shared-memory file is read-only; make it writable (and the "
                      "-wal file) or, when no HapticLab process uses the database, delete it");
+  // A connection opening the database at the same time grows the file a 4 KiB page at a
+  // time up to a whole 32 KiB region, so a size between regions can be a moment of that:
+  // only a size that stays between regions for 100 ms is a truncated file.
+  for (int i = 0; st.st_size % 32768 != 0 && i < 20; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    if (::stat(shm.c_str(), &st) != 0) return;
+  }
   if (st.st_size % 32768 != 0)
     throw InputError(shm, 0, "db",
                      "the database's shared-memory file is truncated (" +
