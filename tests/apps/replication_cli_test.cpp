@@ -12,6 +12,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -128,6 +129,19 @@ TEST(ReplicationCli, TwoSitesMergeAndTheSiteModelRecoversTheInjectedSiteSd) {
   EXPECT_LT(without.sd, with.sd);
 }
 
+// What docs/replication.md quotes from the worked example's report under "#### overall across
+// sites": the site table's rows and the site SD sentence.
+std::vector<std::string> DocumentedSiteLines() {
+  const std::string doc = test::ReadFile(std::string(HL_SOURCE_DIR) + "/docs/replication.md");
+  const auto at = doc.find("#### overall across sites");
+  std::istringstream in(doc.substr(at == std::string::npos ? doc.size() : at));
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l) && l != "```";)
+    if (l.rfind("| S0", 0) == 0 || l.rfind("| pooled", 0) == 0 || l.rfind("Site SD", 0) == 0)
+      out.push_back(l);
+  return out;
+}
+
 // Runs plan indices first..first+2 (codes P<index+1>) with `run_options` (the protocol, --plan,
 // the rig), every rating shifted by `offset`.
 void RunLab(const std::string& db, const std::string& run_options, double offset, int first) {
@@ -233,6 +247,10 @@ TEST(ReplicationCli, WorkedExampleFreezeBundleImportRunAtTwoSitesMergeAnalyze) {
                     "session(s): S02:P04, S02:P05, S02:P06 |\n"),
             std::string::npos)
       << md;
+  // The docs quote this walk's numbers: they are the report's, to the last digit.
+  const auto quoted = DocumentedSiteLines();
+  EXPECT_EQ(quoted.size(), 4u) << "docs/replication.md: the site table and its SD line";
+  for (const auto& l : quoted) EXPECT_NE(md.find(l + "\n"), std::string::npos) << l << "\n" << md;
   const double injected = 12 / std::sqrt(2.0);  // offsets +6 and -6, as a variance component
   EXPECT_LE(with.low, injected);
   EXPECT_GE(with.high, injected);
