@@ -1,7 +1,8 @@
 // The documentation names only commands and options the CLI has: every `hapticlab ...`
 // command line of README.md and docs/*.md (fenced code blocks and inline code) is resolved
 // against the command tree the binary builds (cli::BuildApp), and each --option it names
-// must be an option of that command or of a group above it.
+// must be an option of that command or of a group above it, and the choices it lists of an
+// option with a fixed set must be in the set.
 
 #include <gtest/gtest.h>
 
@@ -78,10 +79,31 @@ CLI::App* Subcommand(CLI::App* app, std::string word) {
   return nullptr;
 }
 
-bool HasOption(const CLI::App* app, const std::string& option) {
+const CLI::Option* FindOption(const CLI::App* app, const std::string& option) {
   for (; app != nullptr; app = app->get_parent())
-    if (app->get_option_no_throw(option) != nullptr) return true;
-  return false;
+    if (const CLI::Option* o = app->get_option_no_throw(option)) return o;
+  return nullptr;
+}
+
+// Documented choices of an option with a fixed set ("--correction GG|HF|none" against its
+// type "TEXT:{GG,HF,none}"): each must be in the set, except placeholders in capitals (N,
+// FILE) that the set lacks.
+void CheckChoices(const CLI::App* app, const std::string& cmd, const std::string& where,
+                  std::vector<std::string>* problems) {
+  static const std::regex kChoices(
+      R"((--[a-z][a-z0-9-]*)[ =]([A-Za-z0-9][A-Za-z0-9:.-]*(\|[A-Za-z0-9:.-]+)+))");
+  for (std::sregex_iterator it(cmd.begin(), cmd.end(), kChoices), end; it != end; ++it) {
+    const CLI::Option* o = FindOption(app, (*it)[1].str());
+    const std::string type = o == nullptr ? "" : o->get_type_name();
+    const auto open = type.find('{'), close = type.find('}');
+    if (open == std::string::npos || close == std::string::npos) continue;
+    const std::string set = "," + type.substr(open + 1, close - open - 1) + ",";
+    std::istringstream choices((*it)[2].str());
+    for (std::string c; std::getline(choices, c, '|');)
+      if (set.find("," + c + ",") == std::string::npos &&
+          !std::regex_match(c, std::regex("[A-Z]+")))
+        problems->push_back(where + ": " + (*it)[1].str() + " has no choice '" + c + "'");
+  }
 }
 
 // One command line after "hapticlab " (`stats` true for "hapticlab-stats "): its problems,
@@ -108,8 +130,9 @@ bool CheckCommand(CLI::App& root, const std::string& line, bool stats, int at,
   if (!named) return false;
   static const std::regex kOption("--[a-z][a-z0-9-]*");
   for (std::sregex_iterator it(cmd.begin(), cmd.end(), kOption), end; it != end; ++it)
-    if (it->str() != "--help" && !HasOption(app, it->str()))
+    if (it->str() != "--help" && FindOption(app, it->str()) == nullptr)
       problems->push_back(std::to_string(at) + ": " + path + ": no option " + it->str());
+  CheckChoices(app, cmd, std::to_string(at) + ": " + path, problems);
   return true;
 }
 
@@ -162,13 +185,15 @@ TEST(CliDocs, TheCheckFindsAMissingCommandAndAMissingOption) {
       "Run `hapticlab study run P --db F --no-such-flag`, then\n"
       "```sh\nhapticlab workbench --x \\\n  --y\nhapticlab model check M --json  # fine\n```\n"
       "| `hapticlab rig show\\|calibrate\\|check ...` | fine |\n"
-      "\nA span may wrap: `hapticlab study\nstatus --jsn`.\n",
+      "\nA span may wrap: `hapticlab study\nstatus --jsn`.\n"
+      "`hapticlab analyze --db F --correction GG\\|hf\\|none --plan N\\|M`\n",
       &checked);
-  ASSERT_EQ(problems.size(), 3u) << ::testing::PrintToString(problems);
+  ASSERT_EQ(problems.size(), 4u) << ::testing::PrintToString(problems);
   EXPECT_EQ(problems[0], "1: hapticlab study run: no option --no-such-flag");
   EXPECT_EQ(problems[1], "3: hapticlab: no command 'workbench'");
   EXPECT_EQ(problems[2], "9: hapticlab study status: no option --jsn");
-  EXPECT_EQ(checked, 4);
+  EXPECT_EQ(problems[3], "11: hapticlab analyze: --correction has no choice 'hf'");
+  EXPECT_EQ(checked, 5);
 }
 
 TEST(CliDocs, EveryDocumentedCommandLineNamesCommandsAndOptionsThatExist) {
