@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include <iterator>
 #include <nlohmann/json.hpp>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -128,6 +130,47 @@ TEST(ReplicationCli, TwoSitesMergeAndTheSiteModelRecoversTheInjectedSiteSd) {
   EXPECT_LT(without.sd, with.sd);
 }
 
+// What docs/replication.md quotes from the worked example's report under "#### overall across
+// sites": the site table's rows and the site SD sentence.
+std::vector<std::string> DocumentedSiteLines() {
+  const std::string doc = test::ReadFile(std::string(HL_SOURCE_DIR) + "/docs/replication.md");
+  const auto at = doc.find("#### overall across sites");
+  std::istringstream in(doc.substr(at == std::string::npos ? doc.size() : at));
+  std::vector<std::string> out;
+  for (std::string l; std::getline(in, l) && l != "```";)
+    if (l.rfind("| S0", 0) == 0 || l.rfind("| pooled", 0) == 0 || l.rfind("Site SD", 0) == 0)
+      out.push_back(l);
+  return out;
+}
+
+// The numbers of a line, in order.
+std::vector<double> NumbersOf(const std::string& line) {
+  static const std::regex kNumber(R"(-?[0-9]+(\.[0-9]+)?)");
+  std::vector<double> out;
+  for (std::sregex_iterator it(line.begin(), line.end(), kNumber), end; it != end; ++it)
+    out.push_back(std::stod(it->str()));
+  return out;
+}
+
+// `report` (from its first line on) has a line with the label of the `documented` one (its first
+// table cell, or its first two words) whose numbers are the documented ones, each within 1 % or
+// 0.05, whichever is larger (another machine's libm may round a last bit otherwise, and a rating to
+// the scale step with it).
+void ExpectReportHasLine(const std::string& report, const std::string& documented) {
+  const auto cut = documented.rfind("| ", 0) == 0 ? documented.find(" |", 2) : 7;
+  const std::string label = documented.substr(0, cut);
+  const auto at = report.find("\n" + label);
+  ASSERT_NE(at, std::string::npos) << "no line '" << label << "' in the report:\n" << report;
+  const std::string line = report.substr(at + 1, report.find('\n', at + 1) - at - 1);
+  const auto want = NumbersOf(documented), got = NumbersOf(line);
+  ASSERT_EQ(want.size(), got.size()) << documented << "\n" << line;
+  for (std::size_t i = 0; i < want.size(); ++i)
+    EXPECT_NEAR(got[i], want[i], std::max(0.05, 0.01 * std::abs(want[i])))
+        << "number " << i + 1 << " of the documented line\n"
+        << documented << "\nreport:\n"
+        << line;
+}
+
 // Runs plan indices first..first+2 (codes P<index+1>) with `run_options` (the protocol, --plan,
 // the rig), every rating shifted by `offset`.
 void RunLab(const std::string& db, const std::string& run_options, double offset, int first) {
@@ -233,6 +276,12 @@ TEST(ReplicationCli, WorkedExampleFreezeBundleImportRunAtTwoSitesMergeAnalyze) {
                     "session(s): S02:P04, S02:P05, S02:P06 |\n"),
             std::string::npos)
       << md;
+  // The docs quote this walk's numbers: they are the report's.
+  const auto quoted = DocumentedSiteLines();
+  EXPECT_EQ(quoted.size(), 4u) << "docs/replication.md: the site table and its SD line";
+  const auto overall = md.find("#### overall across sites");
+  for (const auto& l : quoted)
+    ExpectReportHasLine(md.substr(overall == std::string::npos ? md.size() : overall), l);
   const double injected = 12 / std::sqrt(2.0);  // offsets +6 and -6, as a variance component
   EXPECT_LE(with.low, injected);
   EXPECT_GE(with.high, injected);

@@ -14,8 +14,11 @@
 #include <functional>
 #include <map>
 #include <random>
+#include <regex>
+#include <string>
 #include <thread>
 #include <utility>
+#include <vector>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
@@ -286,6 +289,17 @@ std::map<std::string, double> SimulateAndAverage(
   return means;
 }
 
+// The numbers docs/studies.md quotes after `pattern` (a regex whose groups are the numbers),
+// so that the text stays what these tests measure.
+std::vector<double> Documented(const std::string& pattern) {
+  const std::string doc = test::ReadFile(std::string(HL_SOURCE_DIR) + "/docs/studies.md");
+  std::smatch m;
+  std::vector<double> out;
+  if (std::regex_search(doc, m, std::regex(pattern)))
+    for (std::size_t i = 1; i < m.size(); ++i) out.push_back(std::stod(m[i].str()));
+  return out;
+}
+
 TEST(StudyRunner, SimulatedChapter4RealRealPairsSpanTheThesisLimits) {
   // 10 simulated participants on the chapter IV.5 protocol's reference phase: a material
   // against itself is rated near the observer's upper limit U = 78 (the thesis's real-real
@@ -308,6 +322,14 @@ TEST(StudyRunner, SimulatedChapter4RealRealPairsSpanTheThesisLimits) {
   EXPECT_GT(m.at("same"), 72.0);
   EXPECT_LT(m.at("same"), 84.0);
   EXPECT_LT(m.at("different"), m.at("same") - 10.0);
+  // docs/studies.md quotes the two means to one decimal: within 0.06 (its rounding, and a
+  // last bit rounded otherwise on another machine may move a rating by a scale step: 0.01
+  // in these means).
+  const auto doc =
+      Documented(R"(real-real pairs average ([0-9.]+) and different-material pairs ([0-9.]+))");
+  ASSERT_EQ(doc.size(), 2u) << "docs/studies.md: the distance check's sentence";
+  EXPECT_NEAR(m.at("same"), doc[0], 0.06);
+  EXPECT_NEAR(m.at("different"), doc[1], 0.06);
 }
 
 TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
@@ -324,6 +346,13 @@ TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
   std::printf("roughness similarity: Hybrid %.1f, FF %.1f, LPC %.1f\n", hybrid, ff, lpc);
   EXPECT_GT(hybrid, ff);
   EXPECT_GT(hybrid, lpc);
+  // docs/studies.md quotes the three means to one decimal (as above).
+  const auto doc =
+      Documented(R"(roughness similarity is Hybrid ([0-9.]+) > LPC ([0-9.]+) > FF ([0-9.]+))");
+  ASSERT_EQ(doc.size(), 3u) << "docs/studies.md: the main result's sentence";
+  EXPECT_NEAR(hybrid, doc[0], 0.06);
+  EXPECT_NEAR(lpc, doc[1], 0.06);
+  EXPECT_NEAR(ff, doc[2], 0.06);
 }
 
 }  // namespace
