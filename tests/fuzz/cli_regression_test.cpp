@@ -3,13 +3,13 @@
 // must end as stated (exit 0 or 2, never a signal, a timeout, exit 1, library text or SQL).
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <string>
 #include <vector>
 
 #include "cli_child.hpp"
 #include "cli_pool.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "seeds.hpp"
 
@@ -158,10 +158,7 @@ TEST(CliRegression, LargeCsvFilesStayWithinTheBound) {
 // An SQLite file with the given statements applied to the seed study database.
 std::string Tampered(const std::string& slot, const std::string& sql) {
   std::string path = Put(slot, "s.db", StudyDatabaseSeed(slot));
-  sqlite3* db = nullptr;
-  sqlite3_open(path.c_str(), &db);
-  sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr);
-  sqlite3_close(db);
+  test::ExecSql(path, sql);
   return path;
 }
 
@@ -176,10 +173,7 @@ TEST(CliRegression, DatabasesThatAreNotStudyRecords) {
   Replay({
       {"another program's SQLite file",
        [](const std::string& s) {
-         sqlite3* db = nullptr;
-         sqlite3_open((s + "/other.db").c_str(), &db);
-         sqlite3_exec(db, "CREATE TABLE notes(id INTEGER, text TEXT)", nullptr, nullptr, nullptr);
-         sqlite3_close(db);
+         test::ExecSql(s + "/other.db", "CREATE TABLE notes(id INTEGER, text TEXT)");
          return Job{.args = {"study", "status", "--db", s + "/other.db", "--json"}, .allowed = {2}};
        }},
       {"a table dropped", status("DROP TABLE rating")},
