@@ -5,6 +5,7 @@
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::audit_trail_test {
@@ -18,10 +19,7 @@ TEST(AuditTrail, MigrationToV7MarksTheUnconfirmedConsentAndEveryOlderEvent) {
   const std::string path = dir.File("v6.db");
   {
     Database old(path, {.migrate_to = 6});
-    old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-    old.Exec(
-        "INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
-    old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'falcon'), (2,'sim')");
+    test::InsertTwoSessions(old, "falcon", "sim");
     // What earlier builds wrote at every session start, and a fault.
     old.Exec(
         "INSERT INTO event(session_id, kind, detail) VALUES (1,'consent','consent form signed'), "

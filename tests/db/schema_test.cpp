@@ -10,6 +10,7 @@
 
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::schema_test {
@@ -83,15 +84,7 @@ TEST(Schema, MigratedFilesPassSqlitesForeignKeyAndIntegrityChecks) {
     const auto path = dir.File("a.db");
     {
       Database old(path, {.migrate_to = from});
-      old.Exec(
-          "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-      old.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11)");
-      old.Exec("INSERT INTO session(participant_id) VALUES (1)");
-      old.Exec(
-          "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','D')");
-      old.Exec(
-          "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
-          "(1,'overall',61.5,2.0)");
+      test::InsertOneRowEach(old, from);
     }
     { Database db(path); }
     EXPECT_EQ(test::QueryRows(path, "PRAGMA foreign_key_check"), std::vector<std::string>{});

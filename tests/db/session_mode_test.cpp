@@ -7,6 +7,7 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::session_mode_test {
@@ -76,10 +77,7 @@ TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   const std::string path = dir.File("v4.db");
   {
     Database old(path, {.migrate_to = 4});
-    old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-    old.Exec(
-        "INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
-    old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'sim'), (2,'falcon')");
+    test::InsertTwoSessions(old, "sim", "falcon");
     old.Exec(
         "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','A'), "
         "(2,0,'main','A')");

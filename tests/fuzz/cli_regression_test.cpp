@@ -16,12 +16,6 @@
 namespace hapticlab::fuzz::cli_regression_test {
 namespace {
 
-#ifdef HL_FUZZ_SANITIZED
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
 // One finding: its files are written by `setup` into the slot folder, then `job` runs.
 struct Case {
   std::string name;
@@ -30,10 +24,7 @@ struct Case {
 
 void Replay(const std::vector<Case>& cases) {
   test::TempDir dir;
-  ChildLimits limits;
-  limits.timeout_s = kSanitized ? 100 : 20;
-  limits.max_as = kSanitized ? 0 : OwnAddressSpace() + (std::size_t{1} << 30);
-  Pool pool(1, limits, dir.path());
+  Pool pool(1, CliLimits(20), dir.path());
   for (const auto& c : cases) {
     const auto findings = pool.Run(
         1, [&](int, const std::string& slot) { return c.job(slot); }, c.name, "");
