@@ -1,7 +1,7 @@
 // The audit trail through the command line (issue 31): consent recorded as it happened, faulted
 // attempts printed and counted, no host name or absolute path left in the record or a report,
 // a resume whose recorded mode cannot start here refused as bad input, exit code 3 listed.
-// The database is read by the test's own SQLite connection (sqlite_count.hpp).
+// The database is read by the test's own SQLite connection (test::QueryInt).
 
 #include <gtest/gtest.h>
 
@@ -9,8 +9,8 @@
 #include <nlohmann/json.hpp>
 #include <regex>
 
+#include "hapticlab/test/sqlite_peek.hpp"
 #include "hapticlab/test/test_util.hpp"
-#include "sqlite_count.hpp"
 
 namespace hapticlab::audit_cli_test {
 namespace {
@@ -29,13 +29,13 @@ TEST(AuditCli, AHeadlessSimulatedRunRecordsConsentAsNotApplicableAndClearsTheLea
   const std::string db = dir.File("s.db");
   std::string out;
   ASSERT_EQ(test::RunCommand(RunCmd(db, "P01", "--quiet --record none"), &out), 0) << out;
-  EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
-  EXPECT_EQ(Count(db,
-                  "SELECT count(*) FROM event WHERE kind = 'consent' AND detail LIKE 'not "
-                  "applicable: simulated%' AND established_by = 'hapticlab:session-mode'"),
+  EXPECT_EQ(test::QueryInt(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
+  EXPECT_EQ(test::QueryInt(db,
+                           "SELECT count(*) FROM event WHERE kind = 'consent' AND detail LIKE 'not "
+                           "applicable: simulated%' AND established_by = 'hapticlab:session-mode'"),
             1);
-  EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE established_by = ''"), 0);
-  EXPECT_EQ(Count(db, "SELECT count(*) FROM writer_lease"), 0) << "the host name stayed";
+  EXPECT_EQ(test::QueryInt(db, "SELECT count(*) FROM event WHERE established_by = ''"), 0);
+  EXPECT_EQ(test::QueryInt(db, "SELECT count(*) FROM writer_lease"), 0) << "the host name stayed";
   // The events export names each event's source.
   ASSERT_EQ(
       test::RunCommand(
@@ -78,11 +78,13 @@ TEST(AuditCli, FaultedAttemptsArePrintedAndCountedByStatus) {
   const auto st = json::parse(out)["participants"][0];
   EXPECT_EQ(st["faulted"], faults);
   EXPECT_EQ(st["completed"], st["planned"]);
-  EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE kind = 'attempt-faulted'"), faults);
-  EXPECT_GE(Count(db,
-                  "SELECT count(*) FROM event WHERE kind = 'device-fault' AND established_by = "
-                  "'simulation:inject-faults'"),
+  EXPECT_EQ(test::QueryInt(db, "SELECT count(*) FROM event WHERE kind = 'attempt-faulted'"),
             faults);
+  EXPECT_GE(
+      test::QueryInt(db,
+                     "SELECT count(*) FROM event WHERE kind = 'device-fault' AND established_by = "
+                     "'simulation:inject-faults'"),
+      faults);
 }
 
 TEST(AuditCli, AConsoleSessionCarriesTheExperimenterAndAResumeWithoutDisplayIsBadInput) {
@@ -104,12 +106,13 @@ TEST(AuditCli, AConsoleSessionCarriesTheExperimenterAndAResumeWithoutDisplayIsBa
           &out),
       3)
       << out;
-  EXPECT_EQ(Count(db,
-                  "SELECT count(*) FROM event WHERE kind = 'consent' AND established_by = "
-                  "'experimenter:E01' AND detail LIKE '%E01 (command line)%' AND detail LIKE "
-                  "'%\"test-small consent form\", version \"2026-11\"%'"),
-            1);
-  EXPECT_EQ(Count(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
+  EXPECT_EQ(
+      test::QueryInt(db,
+                     "SELECT count(*) FROM event WHERE kind = 'consent' AND established_by = "
+                     "'experimenter:E01' AND detail LIKE '%E01 (command line)%' AND detail LIKE "
+                     "'%\"test-small consent form\", version \"2026-11\"%'"),
+      1);
+  EXPECT_EQ(test::QueryInt(db, "SELECT count(*) FROM event WHERE detail LIKE '%signed%'"), 0);
   // Resumed in its recorded mode (screens on) where there is no display: bad input naming
   // both the recorded mode and the one that could start, not a GLFW failure.
   EXPECT_EQ(test::RunCommand("env -u DISPLAY -u WAYLAND_DISPLAY " + Cli() + " study resume --db " +

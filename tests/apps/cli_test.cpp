@@ -11,6 +11,7 @@
 
 #include "app.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::cli_test {
@@ -113,9 +114,7 @@ TEST(Cli, ExportWritesTables) {
   test::TempDir dir;
   {
     db::Database d(dir.File("s.db"));
-    const auto st = d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-    const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
-    const auto se = d.StartSession({.participant_id = p});
+    const auto se = test::AddStudySession(d).session;
     const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
     d.CompleteTrial(t, {{"overall", 55, 1}});
   }

@@ -9,8 +9,9 @@
 #include <string>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
-#include "sqlite_count.hpp"
 
 namespace hapticlab::cmd_db_test {
 namespace {
@@ -22,9 +23,7 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   const std::string src = dir.File("s.db"), dest = dir.File("copy.db");
   // The writer stays open while the backup runs: committed rows may still sit in s.db-wal.
   db::Database d(src);
-  const auto st = d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-  const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = d.StartSession({.participant_id = p});
+  const auto se = test::AddStudySession(d).session;
   for (int k = 0; k < 5; ++k) {
     const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
     d.CompleteTrial(t, {{"overall", 40.0 + k, 1}, {"roughness", 60.0 - k, 2}});
@@ -32,11 +31,11 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   std::string out;
   ASSERT_EQ(test::RunCommand(Cli() + " db backup " + src + " " + dest, &out), 0) << out;
   EXPECT_NE(out.find("backup complete"), std::string::npos) << out;
-  EXPECT_EQ(Count(dest, "SELECT count(*) FROM rating"), 10);
-  EXPECT_EQ(Count(dest, "SELECT count(*) FROM trial WHERE status = 'completed'"), 5);
-  EXPECT_EQ(Count(dest, "SELECT sum(score) FROM rating WHERE criterion = 'overall'"),
+  EXPECT_EQ(test::QueryInt(dest, "SELECT count(*) FROM rating"), 10);
+  EXPECT_EQ(test::QueryInt(dest, "SELECT count(*) FROM trial WHERE status = 'completed'"), 5);
+  EXPECT_EQ(test::QueryInt(dest, "SELECT sum(score) FROM rating WHERE criterion = 'overall'"),
             40 + 41 + 42 + 43 + 44);
-  EXPECT_EQ(Count(dest, "SELECT count(*) FROM participant WHERE code = 'P01'"), 1);
+  EXPECT_EQ(test::QueryInt(dest, "SELECT count(*) FROM participant WHERE code = 'P01'"), 1);
 
   // DEST exists: refused as bad input naming it, and the file is left as it was.
   const auto size = std::filesystem::file_size(dest);
@@ -45,7 +44,7 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   EXPECT_EQ(test::RunCommand(Cli() + " db backup " + src + " " + dest, &out), 2);
   EXPECT_NE(out.find(dest + ": DEST: already exists"), std::string::npos) << out;
   EXPECT_EQ(std::filesystem::file_size(dest), size);
-  EXPECT_EQ(Count(dest, "SELECT count(*) FROM rating"), 10);
+  EXPECT_EQ(test::QueryInt(dest, "SELECT count(*) FROM rating"), 10);
   // No source: named, and nothing created.
   EXPECT_EQ(
       test::RunCommand(Cli() + " db backup " + dir.File("none.db") + " " + dir.File("n.db"), &out),

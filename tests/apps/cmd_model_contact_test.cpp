@@ -24,6 +24,7 @@
 #include "hapticlab/modeling/workbench_io.hpp"
 #include "hapticlab/renderer/material.hpp"
 #include "hapticlab/test/test_util.hpp"
+#include "simulate_measurement.hpp"
 
 namespace hapticlab::cmd_model_contact_test {
 namespace {
@@ -34,11 +35,7 @@ TEST(ModelContactCli, FitContactRecoversTheTruthAndTheRendererLoadsWhatWasReport
   test::TempDir dir;
   const auto meas = dir.File("m.csv"), model = dir.File("c.toml");
   std::string out;
-  ASSERT_EQ(
-      test::RunCommand(
-          Cli() + " measurement simulate --duration 10 --seed 3 -o " + meas + " > /dev/null", &out),
-      0)
-      << out;
+  ASSERT_EQ(test::SimulateMeasurement("--duration 10 --seed 3", meas, &out), 0) << out;
   ASSERT_EQ(test::RunCommand(
                 Cli() + " model fit-contact --json --measurement " + meas + " -o " + model, &out),
             0)

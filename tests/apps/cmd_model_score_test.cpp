@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/test/sound_file.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::cmd_model_score_test {
@@ -22,24 +23,8 @@ std::string Cli() { return HL_CLI_PATH; }
 // A mono 16-bit 10 kHz WAV of a resonance at `peak_hz`, from a seeded LCG.
 void WriteTexture(const std::string& path, double peak_hz, std::uint64_t seed, double gain) {
   const double c1 = 2 * 0.97 * std::cos(2 * std::numbers::pi * peak_hz / 10000), c2 = -0.97 * 0.97;
-  std::vector<double> x(30000);
-  double a1 = 0, a2 = 0;
-  std::uint64_t state = seed;
-  for (auto& v : x) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    const double e = static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5;
-    v = c1 * a1 + c2 * a2 + gain * e;
-    a2 = a1;
-    a1 = v;
-  }
-  SF_INFO info{};
-  info.samplerate = 10000;
-  info.channels = 1;
-  info.format = SF_FORMAT_WAV | SF_FORMAT_PCM_16;
-  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
-  ASSERT_NE(f, nullptr);
-  sf_writef_double(f, x.data(), static_cast<sf_count_t>(x.size()));
-  sf_close(f);
+  test::WriteSound(path, SF_FORMAT_WAV | SF_FORMAT_PCM_16, 10000, 1,
+                   test::Ar2LcgNoise(30000, seed, c1, c2, gain));
 }
 
 int RunCli(const std::string& args, std::string* out) {

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/test/sound_file.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::cmd_sound_test {
@@ -22,17 +23,7 @@ std::string Cli() { return HL_CLI_PATH; }
 
 // An AR(2) resonance whose level grows with speed, from a seeded LCG (no library RNG).
 std::vector<double> Resonance(std::size_t n, std::uint64_t seed, double gain) {
-  std::vector<double> x(n);
-  double a1 = 0, a2 = 0;
-  std::uint64_t state = seed;
-  for (auto& v : x) {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    const double e = static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5;
-    v = 1.6 * a1 - 0.9 * a2 + gain * e;
-    a2 = a1;
-    a1 = v;
-  }
-  return x;
+  return test::Ar2LcgNoise(n, seed, 1.6, -0.9, gain);
 }
 
 void WriteWav3(const std::string& path, std::uint64_t seed, double gain) {
@@ -40,14 +31,7 @@ void WriteWav3(const std::string& path, std::uint64_t seed, double gain) {
   const auto a = Resonance(20000, seed, gain), b = Resonance(20000, seed + 100, gain);
   std::vector<double> inter;
   for (std::size_t i = 0; i < a.size(); ++i) inter.insert(inter.end(), {a[i], b[i], 0.5 * a[i]});
-  SF_INFO info{};
-  info.samplerate = 10000;
-  info.channels = 3;
-  info.format = SF_FORMAT_WAV | SF_FORMAT_PCM_16;
-  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
-  ASSERT_NE(f, nullptr);
-  sf_writef_double(f, inter.data(), static_cast<sf_count_t>(a.size()));
-  sf_close(f);
+  test::WriteSound(path, SF_FORMAT_WAV | SF_FORMAT_PCM_16, 10000, 3, inter);
 }
 
 // A 2 x 2 grid of 3-axis WAVs with sidecars, and a second recording at (0.10 m/s, 1.0 N).

@@ -15,22 +15,11 @@
 
 #include "cli_common.hpp"
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/error_of.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::cli::stats_cmd::cmd_stats_common_test {
 namespace {
-
-// "file|line|field" of the first diagnostic of what `f` throws, or "no error".
-template <class F>
-std::string Where(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const auto& d = e.diagnostics().at(0);
-    return d.file + "|" + std::to_string(d.line) + "|" + d.field;
-  }
-  return "no error";
-}
 
 // key column `name` -> row -> response, for a table with unique key combinations.
 std::map<std::string, double> ByKey(const stats::LongTable& t, const std::string& name) {
@@ -125,16 +114,16 @@ TEST(StatsCommon, BadInputNamesFileLineAndField) {
                   "S1,rough,1\n"
                   "S2,rough,oops\n");
   Common c{.csv = csv, .dv = "score"};
-  EXPECT_EQ(Where([&] { Load(c, {"subject"}); }), csv + "|3|score");
+  EXPECT_EQ(test::WhereOf([&] { Load(c, {"subject"}); }), csv + "|3|score");
   // A --where without '=' (or without a column) is the command line's error.
   c.where = {"criterion"};
-  EXPECT_EQ(Where([&] { Load(c, {"subject"}); }), std::string(kCommandLine) + "|0|--where");
+  EXPECT_EQ(test::WhereOf([&] { Load(c, {"subject"}); }), std::string(kCommandLine) + "|0|--where");
   c.where = {"=rough"};
-  EXPECT_EQ(Where([&] { Load(c, {"subject"}); }), std::string(kCommandLine) + "|0|--where");
+  EXPECT_EQ(test::WhereOf([&] { Load(c, {"subject"}); }), std::string(kCommandLine) + "|0|--where");
   // A selection that keeps no row names the file and the option.
   test::WriteFile(csv, "subject,criterion,score\nS1,rough,1\n");
   c.where = {"criterion=soft"};
-  EXPECT_EQ(Where([&] { Load(c, {"subject"}); }), csv + "|0|--where");
+  EXPECT_EQ(test::WhereOf([&] { Load(c, {"subject"}); }), csv + "|0|--where");
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "hapticlab/test/test_util.hpp"
+#include "simulate_measurement.hpp"
 
 namespace hapticlab::cmd_workbench_compare_test {
 namespace {
@@ -34,11 +35,7 @@ TEST(WorkbenchCompareCli, AWrongFrictionCoefficientShowsAsAConstantFrictionRatio
   test::TempDir dir;
   const auto meas = dir.File("m.csv");
   std::string out;
-  ASSERT_EQ(
-      test::RunCommand(
-          Cli() + " measurement simulate --duration 10 --seed 3 -o " + meas + " > /dev/null", &out),
-      0)
-      << out;
+  ASSERT_EQ(test::SimulateMeasurement("--duration 10 --seed 3", meas, &out), 0) << out;
   test::WriteFile(dir.File("truth.toml"), TruthModel(0.3));
   test::WriteFile(dir.File("wrong.toml"), TruthModel(0.36));
   auto compare = [&](const std::string& model) {
@@ -111,11 +108,7 @@ TEST(WorkbenchCompareCli, AnArBanksVibrationIsScoredBySpeedAndForce) {
   test::TempDir dir;
   const auto meas = dir.File("m.csv");
   std::string out;
-  ASSERT_EQ(
-      test::RunCommand(
-          Cli() + " measurement simulate --duration 5 --seed 3 -o " + meas + " > /dev/null", &out),
-      0)
-      << out;
+  ASSERT_EQ(test::SimulateMeasurement("--duration 5 --seed 3", meas, &out), 0) << out;
   // 2 x 2 AR(1) banks, written by hand in the renderer's format, at two levels.
   for (const char* variance : {"1.0", "10000.0"}) {
     std::string bank =

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "hapticlab/test/test_util.hpp"
+#include "simulate_measurement.hpp"
 
 namespace hapticlab::cmd_workbench_fit_test {
 namespace {
@@ -47,11 +48,7 @@ TEST(WorkbenchFitCli, RecoversTheTruthAndWritesTheRendererTablesFromTheParameter
   test::TempDir dir;
   const auto meas = dir.File("m.csv"), model = dir.File("f.toml");
   std::string out;
-  ASSERT_EQ(
-      test::RunCommand(
-          Cli() + " measurement simulate --duration 10 --seed 3 -o " + meas + " > /dev/null", &out),
-      0)
-      << out;
+  ASSERT_EQ(test::SimulateMeasurement("--duration 10 --seed 3", meas, &out), 0) << out;
   // --quiet: stdout only (the JSON); nothing on stderr.
   ASSERT_EQ(test::RunCommand("{ " + Cli() + " fit --json --quiet --measurement " + meas + " -o " +
                                  model + " 2> " + dir.File("err.txt") + "; }",
@@ -101,12 +98,9 @@ TEST(WorkbenchFitCli, StribeckStrokesFitWithMuBAtItsBoundAndDiagnoseRanksStribec
   test::TempDir dir;
   const auto meas = dir.File("m.csv"), model = dir.File("f.toml");
   std::string out;
-  ASSERT_EQ(test::RunCommand(Cli() +
-                                 " measurement simulate --duration 60 --seed 5 --effects coulomb "
-                                 "dahl stribeck hc-damping hc-exponent vibration-speed "
-                                 "vibration-force -o " +
-                                 meas + " > /dev/null",
-                             &out),
+  ASSERT_EQ(test::SimulateMeasurement("--duration 60 --seed 5 --effects coulomb dahl stribeck "
+                                      "hc-damping hc-exponent vibration-speed vibration-force",
+                                      meas, &out),
             0)
       << out;
   ASSERT_EQ(

@@ -16,8 +16,8 @@
 
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
 #include "hapticlab/test/test_util.hpp"
-#include "sqlite_count.hpp"
 
 namespace hapticlab::session_cli_test {
 namespace {
@@ -314,7 +314,7 @@ TEST(SessionCli, SigtermStopsCleanlyAndTheMainFileAloneHoldsTheRatings) {
   const std::string rated = "SELECT count(*) FROM rating";
   int status = 0;
   bool exited = false;
-  for (int i = 0; i < 6000 && Count(db, rated) < 6; ++i) {
+  for (int i = 0; i < 6000 && test::TryQueryInt(db, rated).value_or(-1) < 6; ++i) {
     if (waitpid(pid, &status, WNOHANG) == pid) {
       exited = true;
       break;
@@ -322,16 +322,17 @@ TEST(SessionCli, SigtermStopsCleanlyAndTheMainFileAloneHoldsTheRatings) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   }
   ASSERT_FALSE(exited) << test::ReadFile(dir.File("err.txt"));
-  ASSERT_GE(Count(db, rated), 6);
+  ASSERT_GE(test::QueryInt(db, rated), 6);
   // An online backup while the session writes: whole (every completed rated trial has both
   // criteria) and at least what was committed before it began.
   std::string out;
   ASSERT_EQ(test::RunCommand(Cli() + " db backup " + db + " " + dir.File("b.db"), &out), 0) << out;
-  EXPECT_GE(Count(dir.File("b.db"), rated), 6);
+  EXPECT_GE(test::QueryInt(dir.File("b.db"), rated), 6);
   EXPECT_EQ(
-      Count(dir.File("b.db"), rated),
-      2 * Count(dir.File("b.db"),
-                "SELECT count(*) FROM trial WHERE status = 'completed' AND phase <> 'training'"));
+      test::QueryInt(dir.File("b.db"), rated),
+      2 * test::QueryInt(
+              dir.File("b.db"),
+              "SELECT count(*) FROM trial WHERE status = 'completed' AND phase <> 'training'"));
   EXPECT_NE(test::RunCommand(Cli() + " db backup " + db + " " + dir.File("b.db"), &out),
             0);  // never overwrites
   EXPECT_NE(out.find("already exists"), std::string::npos) << out;
@@ -344,16 +345,18 @@ TEST(SessionCli, SigtermStopsCleanlyAndTheMainFileAloneHoldsTheRatings) {
       << test::ReadFile(dir.File("out.txt"));
   // The main file alone, copied without -wal, holds every committed rating.
   fs::copy_file(db, dir.File("alone.db"));
-  const int committed = Count(db, rated);
+  const int committed = test::QueryInt(db, rated);
   EXPECT_GT(committed, 6);
-  EXPECT_EQ(Count(dir.File("alone.db"), rated), committed);
-  EXPECT_EQ(Count(dir.File("alone.db"), "SELECT count(*) FROM event WHERE kind = 'interrupted'"),
-            1);
-  EXPECT_EQ(Count(dir.File("alone.db"), "SELECT count(*) FROM session WHERE status = 'aborted'"),
-            1);
+  EXPECT_EQ(test::QueryInt(dir.File("alone.db"), rated), committed);
+  EXPECT_EQ(
+      test::QueryInt(dir.File("alone.db"), "SELECT count(*) FROM event WHERE kind = 'interrupted'"),
+      1);
+  EXPECT_EQ(
+      test::QueryInt(dir.File("alone.db"), "SELECT count(*) FROM session WHERE status = 'aborted'"),
+      1);
   // And resume continues it.
   RunStopped(Cli() + " study resume --db " + db + " --participant P01 --quiet --stop-after 2");
-  EXPECT_EQ(Count(db, rated), committed + 4);
+  EXPECT_EQ(test::QueryInt(db, rated), committed + 4);
 }
 
 }  // namespace

@@ -2,37 +2,24 @@
 // leaving no host name behind.
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::audit_trail_test {
 namespace {
 
-// Rows of writer_lease, counted by an independent SQLite connection.
-int LeaseRows(const std::string& path) {
-  sqlite3* h = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, "SELECT count(*) FROM writer_lease", -1, &s, nullptr), SQLITE_OK)
-      << sqlite3_errmsg(h);
-  int n = -1;
-  if (sqlite3_step(s) == SQLITE_ROW) n = sqlite3_column_int(s, 0);
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return n;
-}
+// Rows of writer_lease, counted by an independent SQLite connection (test::QueryInt).
+const char* const kLeaseRows = "SELECT count(*) FROM writer_lease";
 
 TEST(AuditTrail, MigrationToV7MarksTheUnconfirmedConsentAndEveryOlderEvent) {
   test::TempDir dir;
   const std::string path = dir.File("v6.db");
   {
     Database old(path, {.migrate_to = 6});
-    old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-    old.Exec(
-        "INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
-    old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'falcon'), (2,'sim')");
+    test::InsertTwoSessions(old, "falcon", "sim");
     // What earlier builds wrote at every session start, and a fault.
     old.Exec(
         "INSERT INTO event(session_id, kind, detail) VALUES (1,'consent','consent form signed'), "
@@ -65,14 +52,14 @@ TEST(AuditTrail, TheWriterLeaseLeavesNoHostNameWhenItEnds) {
   const std::string path = dir.File("l.db");
   {
     const WriterLease lease(path);
-    EXPECT_EQ(LeaseRows(path), 1) << "held: named for a second writer";
+    EXPECT_EQ(test::QueryInt(path, kLeaseRows), 1) << "held: named for a second writer";
   }
-  EXPECT_EQ(LeaseRows(path), 0);
+  EXPECT_EQ(test::QueryInt(path, kLeaseRows), 0);
   {
     const WriterLease again(path);  // the next writer takes it as before
-    EXPECT_EQ(LeaseRows(path), 1);
+    EXPECT_EQ(test::QueryInt(path, kLeaseRows), 1);
   }
-  EXPECT_EQ(LeaseRows(path), 0);
+  EXPECT_EQ(test::QueryInt(path, kLeaseRows), 0);
 }
 
 }  // namespace

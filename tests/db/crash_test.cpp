@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::crash_test {
@@ -42,9 +43,7 @@ TEST(Crash, SigkillMidCommitLeavesEachTrialWholeOrEmpty) {
   std::int64_t session = 0;
   {
     Database db(path);
-    const auto st = db.CreateStudy({.name = "crash", .protocol_toml = "x", .seed = 1});
-    const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-    session = db.StartSession({.participant_id = p});
+    session = test::AddStudySession(db, {.name = "crash", .protocol_toml = "x", .seed = 1}).session;
   }
   std::mt19937_64 rng(20261121);  // fixed seed: the kill moments are reproducible
   std::uniform_int_distribution<int> delay_ms(30, 400);

@@ -2,6 +2,7 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::database_recordings_test {
@@ -13,9 +14,7 @@ TEST(Database, StoresModelsEventsAndChunks) {
   const auto a = db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 1\n");
   EXPECT_EQ(db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 1\n"), a);  // same hash
   EXPECT_NE(db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 2\n"), a);
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = db.StartSession({.participant_id = p});
+  const auto se = test::AddStudySession(db).session;
   const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
   db.LogEvent({.session_id = se, .trial_id = t, .kind = "device-fault", .detail = "stale"});
   ASSERT_EQ(db.Events(se).size(), 1u);

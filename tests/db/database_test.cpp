@@ -3,22 +3,11 @@
 #include <gtest/gtest.h>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::database_test {
 namespace {
-
-// Fills the tables that exist at schema `version` with one row each.
-void Populate(Database& db, int version) {
-  db.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-  db.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11)");
-  db.Exec("INSERT INTO session(participant_id) VALUES (1)");
-  db.Exec("INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','Denim')");
-  db.Exec(
-      "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
-      "(1,'overall',61.5,2.0)");
-  if (version >= 2) db.Exec("INSERT INTO event(session_id, kind) VALUES (1,'break')");
-}
 
 TEST(Database, CreatesLatestSchemaFromEmptyFile) {
   test::TempDir dir;
@@ -34,7 +23,7 @@ TEST(Database, MigratesForwardFromEveryEarlierVersionKeepingData) {
     {
       Database old(dir.File("a.db"), {.migrate_to = from});
       ASSERT_EQ(old.SchemaVersion(), from);
-      Populate(old, from);
+      test::InsertOneRowEach(old, from);
     }
     Database db(dir.File("a.db"));
     EXPECT_EQ(db.SchemaVersion(), kSchemaVersion);
@@ -77,7 +66,7 @@ TEST(Database, RefusesFilesWhoseTablesAreNotTheSchemaWithoutSql) {
     const std::string path = dir.File(name);
     {
       Database db(path);
-      Populate(db, kSchemaVersion);
+      test::InsertOneRowEach(db, kSchemaVersion);
       db.Exec(sql);
     }
     for (bool reading : {true, false}) {
@@ -117,7 +106,7 @@ TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
   const std::string path = dir.File("old.db");
   {
     Database old(path, {.migrate_to = 3});
-    Populate(old, 3);  // trial 1: never started, one rating
+    test::InsertOneRowEach(old, 3);  // trial 1: never started, one rating
     old.Exec(
         "INSERT INTO trial(session_id, plan_index, phase, material, status, attempts) VALUES "
         "(1,1,'main','A','completed',1), (1,2,'main','B','completed',2), "
@@ -157,7 +146,7 @@ TEST(Database, OpenForReadingMigratesAnOlderFileFirst) {
   const std::string path = dir.File("v3.db");
   {
     Database old(path, {.migrate_to = 3});
-    Populate(old, 3);
+    test::InsertOneRowEach(old, 3);
   }
   const Database d = OpenForReading(path);
   EXPECT_EQ(d.SchemaVersion(), kSchemaVersion);
@@ -168,7 +157,7 @@ TEST(Database, OpenForReadingMigratesAnOlderFileFirst) {
 TEST(Database, ScoresThatAreNotFiniteNumbersAreRefusedOnRead) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
-  Populate(db, kSchemaVersion);
+  test::InsertOneRowEach(db, kSchemaVersion);
   EXPECT_EQ(db.Ratings(1).size(), 1u);
   for (const char* bad : {"'abc'", "x'00'", "9e999"}) {
     SCOPED_TRACE(bad);
@@ -188,7 +177,7 @@ TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
   const std::string path = dir.File("a.db");
   {
     Database db(path);
-    Populate(db, kSchemaVersion);
+    test::InsertOneRowEach(db, kSchemaVersion);
     for (int i = 0; i < 200; ++i)
       db.Exec("INSERT INTO event(session_id, kind, detail) VALUES (1, 'x', '" +
               std::string(400, 'e') + "')");

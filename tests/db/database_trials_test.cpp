@@ -1,8 +1,8 @@
 #include <gtest/gtest.h>
 
-#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::database_trials_test {
@@ -11,12 +11,10 @@ namespace {
 TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = db.StartSession({.participant_id = p});
-  const auto ids =
-      AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
-                     {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
+  const auto se = test::AddStudySession(db).session;
+  const auto ids = test::AddTrials(
+      db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
+           {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);
@@ -37,9 +35,7 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
 TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = db.StartSession({.participant_id = p});
+  const auto se = test::AddStudySession(db).session;
   const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
   EXPECT_EQ(db.StartTrial(t), 1);
   EXPECT_EQ(db.StartTrial(t), 2);

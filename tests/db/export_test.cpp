@@ -5,11 +5,11 @@
 #include <cmath>
 #include <map>
 
-#include "add_trials.hpp"
 #include "hapticlab/core/csv.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/export_formats.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::export_test {
@@ -18,23 +18,23 @@ namespace {
 TEST(Export, TablesRoundTripThroughCsv) {
   test::TempDir dir;
   Database db(dir.File("e.db"));
-  const auto st = db.CreateStudy({.name = "ch5, hybrid", .protocol_toml = "x", .seed = 3});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
-  const auto se = db.StartSession({.participant_id = p});
+  const auto se =
+      test::AddStudySession(db, {.name = "ch5, hybrid", .protocol_toml = "x", .seed = 3}, "P02")
+          .session;
   // Plan indices 4 and 7 (plan numbers 5 and 8), unlike the rows' ids 1 and 2.
-  const auto ids = AddTrials(db, {{.session_id = se,
-                                   .plan_index = 4,
-                                   .phase = "main",
-                                   .material = "Denim",
-                                   .comparison = "virtual",
-                                   .method = "hybrid",
-                                   .left = "real",
-                                   .right = "virtual"},
-                                  {.session_id = se,
-                                   .plan_index = 7,
-                                   .phase = "reference",
-                                   .material = "Cork",
-                                   .comparison = "Velvet"}});
+  const auto ids = test::AddTrials(db, {{.session_id = se,
+                                         .plan_index = 4,
+                                         .phase = "main",
+                                         .material = "Denim",
+                                         .comparison = "virtual",
+                                         .method = "hybrid",
+                                         .left = "real",
+                                         .right = "virtual"},
+                                        {.session_id = se,
+                                         .plan_index = 7,
+                                         .phase = "reference",
+                                         .material = "Cork",
+                                         .comparison = "Velvet"}});
   db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
   db.LogEvent(
       {.session_id = se, .trial_id = ids[1], .kind = "break", .detail = "after \"block\" 1"});
@@ -89,12 +89,11 @@ TEST(Export, TablesRoundTripThroughCsv) {
 TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
   test::TempDir dir;
   Database db(dir.File("e.db"));
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 3});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P02"});
-  const auto se = db.StartSession({.participant_id = p});
-  const auto ids =
-      AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
-                     {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
+  const auto se =
+      test::AddStudySession(db, {.name = "s", .protocol_toml = "x", .seed = 3}, "P02").session;
+  const auto ids = test::AddTrials(
+      db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
+           {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
   db.StartTrial(ids[0]);  // attempt 1: interrupted after one chunk
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
@@ -187,10 +186,8 @@ TEST(ExportFormats, BuiltInsAndAToyFormatRegisteredInTheTest) {
 TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
   test::TempDir dir;
   Database db(dir.File("c.db"));
-  const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = db.StartSession({.participant_id = p});
-  const auto ids = AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main"}});
+  const auto se = test::AddStudySession(db).session;
+  const auto ids = test::AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main"}});
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
                             .start_time_s = 0,

@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/interchange.hpp"
 #include "hapticlab/test/bids.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "interchange_record.hpp"
 
@@ -130,11 +130,12 @@ TEST(ExportXdf, AFileHoldsOneSessionAndAFolderOnePerSession) {
 TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   test::TempDir dir;
   db::Database d(dir.File("g.db"));
-  const auto st = d.CreateStudy({.name = "gap study",
-                                 .protocol_toml = "# protocol",
-                                 .protocol_hash = db::HashText("# protocol")});
-  const auto p = d.AddParticipant({.study_id = st, .code = "P07"});
-  const auto se = d.StartSession({.participant_id = p});
+  const auto se = test::AddStudySession(d,
+                                        {.name = "gap study",
+                                         .protocol_toml = "# protocol",
+                                         .protocol_hash = db::HashText("# protocol")},
+                                        "P07")
+                      .session;
   // Three main trials; the second has the virtual sample on the left.
   std::vector<db::Trial> planned;
   for (const char* name : {"Cork", "Denim", "Towel"}) {
@@ -149,7 +150,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
                        .left = (k == 1 ? "virtual:" : "real:") + m,
                        .right = (k == 1 ? "real:" : "virtual:") + m});
   }
-  const auto ids = AddTrials(d, planned);
+  const auto ids = test::AddTrials(d, planned);
   auto ramp = [](std::size_t n, float base) {
     std::vector<float> v;
     for (std::size_t i = 0; i < n; ++i) v.push_back(base + static_cast<float>(i) * 0.25f);

@@ -17,10 +17,10 @@
 #include <random>
 #include <thread>
 
-#include "add_trials.hpp"
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/db/trajectory_writer.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::fault_test {
@@ -32,9 +32,7 @@ constexpr int kChannels = 4;
 const std::vector<std::string> kStreams = {"left_force", "right_force"};
 
 std::int64_t MakeSession(Database& db) {
-  const auto st = db.CreateStudy({.name = "fault", .protocol_toml = "x", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  return db.StartSession({.participant_id = p});
+  return test::AddStudySession(db, {.name = "fault", .protocol_toml = "x", .seed = 1}).session;
 }
 
 // One attempt of a trial as the runner makes it: start, record every stream, complete with
@@ -99,7 +97,7 @@ std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n, int fi
   std::vector<Trial> t;
   for (int i = first_index; i < first_index + n; ++i)
     t.push_back({.session_id = session, .plan_index = i, .phase = "main", .material = "m"});
-  return AddTrials(db, t);
+  return test::AddTrials(db, t);
 }
 
 // Runs every trial not yet completed, in plan order, until all are (the resume).

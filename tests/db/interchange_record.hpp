@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "add_trials.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 
 namespace hapticlab::db::test_record {
 
@@ -34,31 +34,31 @@ struct Ids {
 };
 
 inline Ids Fill(Database& d) {
-  const auto st = d.CreateStudy({.name = "Two Words", .protocol_toml = "# p", .seed = 1});
-  const auto p = d.AddParticipant({.study_id = st, .code = "P-01"});
-  const auto se = d.StartSession({.participant_id = p});
-  const auto ids = AddTrials(d, {{.session_id = se,
-                                  .plan_index = 0,
-                                  .phase = "main",
-                                  .material = "Cork",
-                                  .comparison = "virtual",
-                                  .method = "FF",
-                                  .left = "real:Cork",
-                                  .right = "virtual:Cork"},
-                                 {.session_id = se,
-                                  .plan_index = 1,
-                                  .phase = "main",
-                                  .material = "Denim",
-                                  .comparison = "virtual",
-                                  .method = "FF",
-                                  .left = "virtual:Denim",
-                                  .right = "real:Denim"},
-                                 {.session_id = se,
-                                  .plan_index = 2,
-                                  .phase = "main",
-                                  .material = "Towel",
-                                  .comparison = "virtual",
-                                  .method = "FF"}});
+  const auto se =
+      test::AddStudySession(d, {.name = "Two Words", .protocol_toml = "# p", .seed = 1}, "P-01")
+          .session;
+  const auto ids = test::AddTrials(d, {{.session_id = se,
+                                        .plan_index = 0,
+                                        .phase = "main",
+                                        .material = "Cork",
+                                        .comparison = "virtual",
+                                        .method = "FF",
+                                        .left = "real:Cork",
+                                        .right = "virtual:Cork"},
+                                       {.session_id = se,
+                                        .plan_index = 1,
+                                        .phase = "main",
+                                        .material = "Denim",
+                                        .comparison = "virtual",
+                                        .method = "FF",
+                                        .left = "virtual:Denim",
+                                        .right = "real:Denim"},
+                                       {.session_id = se,
+                                        .plan_index = 2,
+                                        .phase = "main",
+                                        .material = "Towel",
+                                        .comparison = "virtual",
+                                        .method = "FF"}});
   Ids out{ids[0], ids[1], ids[2]};
   d.StartTrial(out.a);
   d.InsertTrajectoryChunk({.trial_id = out.a,

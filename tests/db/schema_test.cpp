@@ -3,38 +3,18 @@
 // migration leaves a row pointing at nothing.
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <set>
 #include <string>
 #include <vector>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::schema_test {
 namespace {
-
-// Rows of `sql` on a fresh read-only connection, each row's columns joined by '|'.
-std::vector<std::string> Query(const std::string& path, const std::string& sql) {
-  sqlite3* h = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
-  std::vector<std::string> rows;
-  while (s != nullptr && sqlite3_step(s) == SQLITE_ROW) {
-    std::string row;
-    for (int c = 0; c < sqlite3_column_count(s); ++c) {
-      const auto* text = sqlite3_column_text(s, c);
-      if (c > 0) row += '|';
-      row += text == nullptr ? "NULL" : reinterpret_cast<const char*>(text);
-    }
-    rows.push_back(row);
-  }
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return rows;
-}
 
 // SQLite checks a foreign key's parent only when a row is written ("foreign key mismatch",
 // sqlite.org/foreignkeys.html §3): the parent key must be the parent's primary key or carry a
@@ -43,22 +23,23 @@ TEST(Schema, EveryForeignKeyReferencesAPrimaryOrUniqueKey) {
   test::TempDir dir;
   const auto path = dir.File("a.db");
   { Database db(path); }
-  const auto tables = Query(path, "SELECT name FROM sqlite_master WHERE type = 'table'");
+  const auto tables = test::QueryRows(path, "SELECT name FROM sqlite_master WHERE type = 'table'");
   ASSERT_GE(tables.size(), 5u);
   int keys = 0;
   for (const auto& table : tables) {
     // id|seq|table|from|to|on_update|on_delete|match
-    for (const auto& fk :
-         Query(path, "SELECT \"table\", \"to\" FROM pragma_foreign_key_list('" + table + "')")) {
+    for (const auto& fk : test::QueryRows(
+             path, "SELECT \"table\", \"to\" FROM pragma_foreign_key_list('" + table + "')")) {
       ++keys;
       const auto bar = fk.find('|');
       const std::string parent = fk.substr(0, bar), to = fk.substr(bar + 1);
       SCOPED_TRACE(table + " -> " + parent + "(" + to + ")");
-      const auto pk =
-          Query(path, "SELECT name FROM pragma_table_info('" + parent + "') WHERE pk > 0");
-      ASSERT_FALSE(Query(path, "SELECT name FROM sqlite_master WHERE type = 'table' AND name = '" +
-                                   parent + "'")
-                       .empty())
+      const auto pk = test::QueryRows(
+          path, "SELECT name FROM pragma_table_info('" + parent + "') WHERE pk > 0");
+      ASSERT_FALSE(
+          test::QueryRows(path, "SELECT name FROM sqlite_master WHERE type = 'table' AND name = '" +
+                                    parent + "'")
+              .empty())
           << "parent table missing";
       if (to == "NULL") {  // REFERENCES parent: its primary key
         EXPECT_EQ(pk.size(), 1u);
@@ -66,9 +47,10 @@ TEST(Schema, EveryForeignKeyReferencesAPrimaryOrUniqueKey) {
       }
       std::set<std::string> unique;  // single-column keys only
       if (pk.size() == 1) unique.insert(pk[0]);
-      for (const auto& index : Query(
+      for (const auto& index : test::QueryRows(
                path, "SELECT name FROM pragma_index_list('" + parent + "') WHERE \"unique\" = 1")) {
-        const auto cols = Query(path, "SELECT name FROM pragma_index_info('" + index + "')");
+        const auto cols =
+            test::QueryRows(path, "SELECT name FROM pragma_index_info('" + index + "')");
         if (cols.size() == 1) unique.insert(cols[0]);
       }
       EXPECT_TRUE(unique.count(to) == 1) << "parent key is neither primary nor unique";
@@ -85,12 +67,12 @@ TEST(Schema, TheMeasurementTableIsGoneAfterMigration9) {
   const std::string kTables =
       "SELECT name FROM sqlite_master WHERE type='table' AND name='measurement'";
   { Database old(path, {.migrate_to = 8}); }
-  EXPECT_EQ(Query(path, kTables), std::vector<std::string>{"measurement"});
+  EXPECT_EQ(test::QueryRows(path, kTables), std::vector<std::string>{"measurement"});
   { Database db(path); }
-  EXPECT_EQ(Query(path, kTables), std::vector<std::string>{});
+  EXPECT_EQ(test::QueryRows(path, kTables), std::vector<std::string>{});
   const auto fresh = dir.File("new.db");
   { Database db(fresh); }
-  EXPECT_EQ(Query(fresh, kTables), std::vector<std::string>{});
+  EXPECT_EQ(test::QueryRows(fresh, kTables), std::vector<std::string>{});
 }
 
 // Migrations rewrite rows (attempt numbers, rating sources, events): after each one, SQLite's
@@ -102,20 +84,12 @@ TEST(Schema, MigratedFilesPassSqlitesForeignKeyAndIntegrityChecks) {
     const auto path = dir.File("a.db");
     {
       Database old(path, {.migrate_to = from});
-      old.Exec(
-          "INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-      old.Exec("INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11)");
-      old.Exec("INSERT INTO session(participant_id) VALUES (1)");
-      old.Exec(
-          "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','D')");
-      old.Exec(
-          "INSERT INTO rating(trial_id, criterion, score, response_time_s) VALUES "
-          "(1,'overall',61.5,2.0)");
+      test::InsertOneRowEach(old, from);
     }
     { Database db(path); }
-    EXPECT_EQ(Query(path, "PRAGMA foreign_key_check"), std::vector<std::string>{});
-    EXPECT_EQ(Query(path, "PRAGMA integrity_check"), std::vector<std::string>{"ok"});
-    EXPECT_EQ(Query(path, "SELECT count(*) FROM rating"), std::vector<std::string>{"1"});
+    EXPECT_EQ(test::QueryRows(path, "PRAGMA foreign_key_check"), std::vector<std::string>{});
+    EXPECT_EQ(test::QueryRows(path, "PRAGMA integrity_check"), std::vector<std::string>{"ok"});
+    EXPECT_EQ(test::QueryRows(path, "SELECT count(*) FROM rating"), std::vector<std::string>{"1"});
   }
 }
 

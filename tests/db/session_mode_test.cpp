@@ -1,12 +1,13 @@
 // Schema v5 (session mode, rating source), WAL checkpoint and the online backup.
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <filesystem>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::session_mode_test {
@@ -14,19 +15,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Ratings counted by a fresh, independent SQLite connection (not our Database class).
-int CountRatings(const std::string& path, const std::string& where = "1") {
-  sqlite3* h = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* s = nullptr;
-  const std::string sql = "SELECT count(*) FROM rating WHERE " + where;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
-  int n = -1;
-  if (sqlite3_step(s) == SQLITE_ROW) n = sqlite3_column_int(s, 0);
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return n;
-}
+// Ratings counted by an independent SQLite connection (test::QueryInt), not our Database class.
+const char* const kRatings = "SELECT count(*) FROM rating";
 
 // A study with one participant, one session in `device`'s mode and `trials` main trials.
 std::int64_t OneSession(Database& db, const Session& mode, int trials) {
@@ -41,19 +31,6 @@ std::int64_t OneSession(Database& db, const Session& mode, int trials) {
   return session;
 }
 
-// The text of one cell, read by an independent SQLite connection.
-std::string Cell(const std::string& path, const std::string& sql) {
-  sqlite3* h = nullptr;
-  EXPECT_EQ(sqlite3_open_v2(path.c_str(), &h, SQLITE_OPEN_READONLY, nullptr), SQLITE_OK);
-  sqlite3_stmt* s = nullptr;
-  EXPECT_EQ(sqlite3_prepare_v2(h, sql.c_str(), -1, &s, nullptr), SQLITE_OK) << sqlite3_errmsg(h);
-  std::string out = "(no row)";
-  if (sqlite3_step(s) == SQLITE_ROW) out = reinterpret_cast<const char*>(sqlite3_column_text(s, 0));
-  sqlite3_finalize(s);
-  sqlite3_close(h);
-  return out;
-}
-
 // Statuses are enums in the program and their names in the file (the names the schema's CHECK
 // and every earlier file use); a status the program does not know is bad input naming the
 // file and the column, never a silent default.
@@ -63,23 +40,24 @@ TEST(SessionMode, StatusesAreStoredByNameAndReadBackOnce) {
   Database db(path);
   const auto session = OneSession(db, {.device = "sim", .actuator = "none"}, 1);
   const auto trial = db.Trials(session)[0].id;
-  EXPECT_EQ(Cell(path, "SELECT status FROM session"), "running");
-  EXPECT_EQ(Cell(path, "SELECT status FROM trial"), "planned");
+  EXPECT_EQ(test::QueryCell(path, "SELECT status FROM session"), "running");
+  EXPECT_EQ(test::QueryCell(path, "SELECT status FROM trial"), "planned");
   for (const char* name : {"running", "completed", "aborted", "failed"}) {
     const auto status = FromName(kSessionStatusNames, name);
     ASSERT_TRUE(status.has_value()) << name;
     db.EndSession(session, *status);
-    EXPECT_EQ(Cell(path, "SELECT status FROM session"), name);
+    EXPECT_EQ(test::QueryCell(path, "SELECT status FROM session"), name);
     EXPECT_EQ(db.Sessions(1)[0].status, *status) << name;
   }
   db.ReopenSession(session);
-  EXPECT_EQ(Cell(path, "SELECT status || '/' || coalesce(ended_at, 'open') FROM session"),
-            "running/open");
+  EXPECT_EQ(
+      test::QueryCell(path, "SELECT status || '/' || coalesce(ended_at, 'open') FROM session"),
+      "running/open");
   for (const char* name : {"planned", "running", "completed", "faulted", "aborted"}) {
     const auto status = FromName(kTrialStatusNames, name);
     ASSERT_TRUE(status.has_value()) << name;
     db.SetTrialStatus(trial, *status);
-    EXPECT_EQ(Cell(path, "SELECT status FROM trial"), name);
+    EXPECT_EQ(test::QueryCell(path, "SELECT status FROM trial"), name);
     EXPECT_EQ(db.Trials(session)[0].status, *status) << name;
   }
   db.Exec("UPDATE session SET status = 'paused'");
@@ -99,10 +77,7 @@ TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   const std::string path = dir.File("v4.db");
   {
     Database old(path, {.migrate_to = 4});
-    old.Exec("INSERT INTO study(name, protocol_toml, protocol_hash, seed) VALUES ('s','p','h',7)");
-    old.Exec(
-        "INSERT INTO participant(study_id, code, idx, seed) VALUES (1,'P01',0,11), (1,'P02',1,12)");
-    old.Exec("INSERT INTO session(participant_id, device) VALUES (1,'sim'), (2,'falcon')");
+    test::InsertTwoSessions(old, "sim", "falcon");
     old.Exec(
         "INSERT INTO trial(session_id, plan_index, phase, material) VALUES (1,0,'main','A'), "
         "(2,0,'main','A')");
@@ -162,7 +137,7 @@ TEST(SessionMode, CheckpointLeavesEveryCommittedRatingInTheMainFile) {
   ASSERT_TRUE(db.Checkpoint());
   EXPECT_EQ(fs::file_size(path + "-wal"), 0u);
   fs::copy_file(path, dir.File("copy.db"));
-  EXPECT_EQ(CountRatings(dir.File("copy.db")), 5);
+  EXPECT_EQ(test::QueryInt(dir.File("copy.db"), kRatings), 5);
 }
 
 TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
@@ -178,7 +153,7 @@ TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
   ASSERT_GT(fs::file_size(path + "-wal"), 0u);
   db.Backup(dir.File("b.db"));
   EXPECT_FALSE(fs::exists(dir.File("b.db-wal")) && fs::file_size(dir.File("b.db-wal")) > 0);
-  EXPECT_EQ(CountRatings(dir.File("b.db")), 8);
+  EXPECT_EQ(test::QueryInt(dir.File("b.db"), kRatings), 8);
   EXPECT_EQ(Database(dir.File("b.db"), {.create = false, .read_only = true}).IntegrityCheck(),
             "ok");
   // An existing destination is refused and left alone.

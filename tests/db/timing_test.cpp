@@ -11,6 +11,7 @@
 #include <utility>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::timing_test {
@@ -18,10 +19,10 @@ namespace {
 
 // A study with one participant, session and trial; returns {study id, trial id}.
 std::pair<std::int64_t, std::int64_t> OneTrial(Database& db, const std::string& name) {
-  const auto st = db.CreateStudy({.name = name, .protocol_toml = "p", .seed = 1});
-  const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-  const auto se = db.StartSession({.participant_id = p});
-  return {st, db.AddTrial({.session_id = se, .plan_index = 0, .phase = "main", .material = "D"})};
+  const auto r = test::AddStudySession(db, {.name = name, .protocol_toml = "p", .seed = 1});
+  return {
+      r.study,
+      db.AddTrial({.session_id = r.session, .plan_index = 0, .phase = "main", .material = "D"})};
 }
 
 SideTiming Distinct(std::int64_t trial) {

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::db::trajectory_writer_test {
@@ -18,9 +19,8 @@ struct Fixture {
   std::int64_t trial = 0;
   Fixture() {
     Database db(path);
-    const auto st = db.CreateStudy({.name = "w", .protocol_toml = "x", .seed = 1});
-    const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
-    const auto se = db.StartSession({.participant_id = p});
+    const auto se =
+        test::AddStudySession(db, {.name = "w", .protocol_toml = "x", .seed = 1}).session;
     trial = db.AddTrial({.session_id = se, .phase = "main", .material = "m"});
   }
 };

@@ -111,4 +111,10 @@ std::size_t OwnAddressSpace() {
   return pages * static_cast<std::size_t>(::sysconf(_SC_PAGESIZE));
 }
 
+ChildLimits CliLimits(double timeout_s) {
+  constexpr double kSanitizerSlowdown = 5;
+  return {.timeout_s = kSanitized ? kSanitizerSlowdown * timeout_s : timeout_s,
+          .max_as = kSanitized ? 0 : OwnAddressSpace() + (std::size_t{1} << 30)};
+}
+
 }  // namespace hapticlab::fuzz

@@ -42,4 +42,16 @@ std::string ForbiddenText(const std::string& output);
 /// The test process's own address-space size (bytes), the base of the RLIMIT_AS bound.
 std::size_t OwnAddressSpace();
 
+/// True in the sanitizer builds (CMake defines HL_FUZZ_SANITIZED with HL_SANITIZE).
+#ifdef HL_FUZZ_SANITIZED
+inline constexpr bool kSanitized = true;
+#else
+inline constexpr bool kSanitized = false;
+#endif
+
+/// The limits the CLI fuzz tests run their children under: `timeout_s` (five times it under
+/// the sanitizers), and 1 GiB of address space beyond what the forked test process already
+/// maps (no bound under the sanitizers).
+ChildLimits CliLimits(double timeout_s);
+
 }  // namespace hapticlab::fuzz

@@ -28,23 +28,9 @@
 namespace hapticlab::fuzz::cli_fuzz_test {
 namespace {
 
-#ifdef HL_FUZZ_SANITIZED
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
-
 double EnvNumber(const char* name, double fallback) {
   const char* v = std::getenv(name);
   return v ? std::atof(v) : fallback;
-}
-
-ChildLimits Limits() {
-  ChildLimits l;
-  l.timeout_s = kSanitized ? 50 : 10;
-  // The allocation bound: 1 GiB beyond what the forked test process already maps.
-  l.max_as = kSanitized ? 0 : OwnAddressSpace() + (std::size_t{1} << 30);
-  return l;
 }
 
 std::string Findings() {
@@ -66,7 +52,7 @@ struct Reader {
 void FuzzReader(const Reader& r, const std::vector<std::string>& seeds, std::uint64_t seed) {
   ASSERT_FALSE(seeds.empty()) << r.name;
   test::TempDir dir;
-  Pool pool(static_cast<int>(EnvNumber("HL_FUZZ_JOBS", 2)), Limits(), dir.path());
+  Pool pool(static_cast<int>(EnvNumber("HL_FUZZ_JOBS", 2)), CliLimits(10), dir.path());
   int mutants = static_cast<int>(r.mutants * EnvNumber("HL_FUZZ_SCALE", 1));
   if (kSanitized) mutants = std::max(10, mutants / 10);
   const int total = static_cast<int>(seeds.size()) + mutants;

@@ -3,24 +3,18 @@
 // must end as stated (exit 0 or 2, never a signal, a timeout, exit 1, library text or SQL).
 
 #include <gtest/gtest.h>
-#include <sqlite3.h>
 
 #include <string>
 #include <vector>
 
 #include "cli_child.hpp"
 #include "cli_pool.hpp"
+#include "hapticlab/test/sqlite_peek.hpp"
 #include "hapticlab/test/test_util.hpp"
 #include "seeds.hpp"
 
 namespace hapticlab::fuzz::cli_regression_test {
 namespace {
-
-#ifdef HL_FUZZ_SANITIZED
-constexpr bool kSanitized = true;
-#else
-constexpr bool kSanitized = false;
-#endif
 
 // One finding: its files are written by `setup` into the slot folder, then `job` runs.
 struct Case {
@@ -30,10 +24,7 @@ struct Case {
 
 void Replay(const std::vector<Case>& cases) {
   test::TempDir dir;
-  ChildLimits limits;
-  limits.timeout_s = kSanitized ? 100 : 20;
-  limits.max_as = kSanitized ? 0 : OwnAddressSpace() + (std::size_t{1} << 30);
-  Pool pool(1, limits, dir.path());
+  Pool pool(1, CliLimits(20), dir.path());
   for (const auto& c : cases) {
     const auto findings = pool.Run(
         1, [&](int, const std::string& slot) { return c.job(slot); }, c.name, "");
@@ -158,10 +149,7 @@ TEST(CliRegression, LargeCsvFilesStayWithinTheBound) {
 // An SQLite file with the given statements applied to the seed study database.
 std::string Tampered(const std::string& slot, const std::string& sql) {
   std::string path = Put(slot, "s.db", StudyDatabaseSeed(slot));
-  sqlite3* db = nullptr;
-  sqlite3_open(path.c_str(), &db);
-  sqlite3_exec(db, sql.c_str(), nullptr, nullptr, nullptr);
-  sqlite3_close(db);
+  test::ExecSql(path, sql);
   return path;
 }
 
@@ -176,10 +164,7 @@ TEST(CliRegression, DatabasesThatAreNotStudyRecords) {
   Replay({
       {"another program's SQLite file",
        [](const std::string& s) {
-         sqlite3* db = nullptr;
-         sqlite3_open((s + "/other.db").c_str(), &db);
-         sqlite3_exec(db, "CREATE TABLE notes(id INTEGER, text TEXT)", nullptr, nullptr, nullptr);
-         sqlite3_close(db);
+         test::ExecSql(s + "/other.db", "CREATE TABLE notes(id INTEGER, text TEXT)");
          return Job{.args = {"study", "status", "--db", s + "/other.db", "--json"}, .allowed = {2}};
        }},
       {"a table dropped", status("DROP TABLE rating")},

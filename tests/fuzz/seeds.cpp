@@ -5,6 +5,7 @@
 #include <string>
 
 #include "hapticlab/db/database.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::fuzz {
@@ -28,12 +29,11 @@ std::string StudyDatabaseSeed(const std::string& scratch) {
   const std::string path = scratch + "/seed.db";
   {
     db::Database d(path);
-    const auto st =
-        d.CreateStudy({.name = "f",
-                       .protocol_toml = test::ReadFile(CorpusPath("protocol/small.toml")),
-                       .seed = 1});
-    const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
-    const auto se = d.StartSession({.participant_id = p});
+    const auto se = test::AddStudySession(
+                        d, {.name = "f",
+                            .protocol_toml = test::ReadFile(CorpusPath("protocol/small.toml")),
+                            .seed = 1})
+                        .session;
     const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Denim"});
     d.StartTrial(t);
     d.InsertTrajectoryChunk({.trial_id = t,

@@ -15,24 +15,13 @@
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/modeling/photometric.hpp"
+#include "hapticlab/test/error_of.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling::photometric_io_test {
 namespace {
 
 constexpr double kPi = 3.141592653589793;
-
-// "file|line|field" of the first diagnostic, or "no error".
-template <class F>
-std::string Where(F&& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    const auto& d = e.diagnostics().at(0);
-    return fmt::format("{}|{}|{}", d.file, d.line, d.field);
-  }
-  return "no error";
-}
 
 template <class F>
 std::string Message(F&& f) {
@@ -80,7 +69,7 @@ TEST(PhotometricIo, MalformedLightsFilesNameFileLineAndField) {
   test::TempDir dir;
   const auto at = [&](const std::string& name, const std::string& text) {
     test::WriteFile(dir.File(name), text);
-    std::string w = Where([&] { LoadLights(dir.File(name)); });
+    std::string w = test::WhereOf([&] { LoadLights(dir.File(name)); });
     if (w.rfind(dir.path() + "/", 0) == 0) w.erase(0, dir.path().size() + 1);
     return w;
   };
@@ -99,14 +88,16 @@ TEST(PhotometricIo, MalformedLightsFilesNameFileLineAndField) {
             "photometric stereo needs at least 3 lights");
   EXPECT_NE(Message([&] { LoadLights(dir.File("comma.csv")); }).find("empty cell"),
             std::string::npos);
-  EXPECT_EQ(Where([&] { LoadLights(dir.File("missing.txt")); }).find(dir.File("missing.txt")), 0u);
+  EXPECT_EQ(
+      test::WhereOf([&] { LoadLights(dir.File("missing.txt")); }).find(dir.File("missing.txt")),
+      0u);
 }
 
 TEST(PhotometricIo, LightsFilesAndImageHeadersAreBoundedBeforeAllocation) {
   test::TempDir dir;
   const auto at = [&](const std::string& name, const std::string& text) {
     test::WriteFile(dir.File(name), text);
-    std::string w = Where([&] { LoadLights(dir.File(name)); });
+    std::string w = test::WhereOf([&] { LoadLights(dir.File(name)); });
     if (w.rfind(dir.path() + "/", 0) == 0) w.erase(0, dir.path().size() + 1);
     return w;
   };
@@ -144,10 +135,11 @@ TEST(PhotometricIo, ImageListsNameTheLineOfAMalformedEntry) {
   test::WriteFile(dir.File("l.txt"), "0 0 1\n1 0 1\n0 1 1\n");
   auto L = LoadLights(dir.File("l.txt"));
   test::WriteFile(dir.File("list.txt"), "# images\na.png\nb c.png\nd.png\n");
-  EXPECT_EQ(Where([&] { ApplyImageList(dir.File("list.txt"), L); }), dir.File("list.txt") + "|3|");
+  EXPECT_EQ(test::WhereOf([&] { ApplyImageList(dir.File("list.txt"), L); }),
+            dir.File("list.txt") + "|3|");
   EXPECT_TRUE(L[0].file.empty()) << "nothing applied on error";
   // Without names, reading the images names the lights file, the light's line and "file".
-  EXPECT_EQ(Where([&] { ReadImages(dir.path(), L); }), dir.File("l.txt") + "|1|file");
+  EXPECT_EQ(test::WhereOf([&] { ReadImages(dir.path(), L); }), dir.File("l.txt") + "|1|file");
 }
 
 // A w x h test pattern with distinct values per pixel (row-major).
@@ -207,11 +199,11 @@ TEST(PhotometricIo, ImagesWrittenByOpenCvReadBackAsGreyInTheirStoredOrder) {
   std::vector<Light> lights = LoadLights("dome");
   lights.resize(3);
   lights[0].file = "g8.png", lights[1].file = "c8.png", lights[2].file = "small.png";
-  EXPECT_EQ(Where([&] { ReadImages(dir.path(), lights); }), dir.File("small.png") + "|0|");
+  EXPECT_EQ(test::WhereOf([&] { ReadImages(dir.path(), lights); }), dir.File("small.png") + "|0|");
   lights[2].file = "nope.png";
   EXPECT_EQ(Message([&] { ReadImages(dir.path(), lights); }), "image not found");
   test::WriteFile(dir.File("text.png"), "not an image");
-  EXPECT_EQ(Where([&] { ReadGreyImage(dir.File("text.png"), &ww, &hh); }),
+  EXPECT_EQ(test::WhereOf([&] { ReadGreyImage(dir.File("text.png"), &ww, &hh); }),
             dir.File("text.png") + "|0|");
   lights[2].file = "g16.png";
   const auto stack = ReadImages(dir.path(), lights);
@@ -228,7 +220,8 @@ TEST(PhotometricIo, MaskIsAnyNonZeroColourChannelWithAlphaIgnored) {
   ASSERT_TRUE(cv::imwrite(dir.File("mask.png"), m));
   const auto mask = ReadMask(dir.File("mask.png"), 3, 2);
   EXPECT_EQ(mask, (std::vector<std::uint8_t>{0, 1, 0, 0, 0, 1}));
-  EXPECT_EQ(Where([&] { ReadMask(dir.File("mask.png"), 2, 3); }), dir.File("mask.png") + "|0|");
+  EXPECT_EQ(test::WhereOf([&] { ReadMask(dir.File("mask.png"), 2, 3); }),
+            dir.File("mask.png") + "|0|");
   EXPECT_NE(Message([&] { ReadMask(dir.File("mask.png"), 2, 3); }).find("mask is 3x2"),
             std::string::npos);
 }
@@ -281,7 +274,7 @@ TEST(PhotometricIo, TgaVariantsAndTruncatedFiles) {
       {Tga(2, 24, 0, 0, 1, {}), "TGA: zero width or height"},
       {{0, 0, 2}, "TGA: file shorter than its 18-byte header"}};
   for (const auto& [bytes, what] : bad) {
-    EXPECT_EQ(Where([&] { ReadTga(dir, bytes, &w, &h); }), t) << what;
+    EXPECT_EQ(test::WhereOf([&] { ReadTga(dir, bytes, &w, &h); }), t) << what;
     EXPECT_EQ(Message([&] { ReadTga(dir, bytes, &w, &h); }).find(what), 0u)
         << Message([&] { ReadTga(dir, bytes, &w, &h); });
   }

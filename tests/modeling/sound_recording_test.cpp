@@ -15,24 +15,13 @@
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/rng.hpp"
 #include "hapticlab/modeling/vibration.hpp"
+#include "hapticlab/test/sound_file.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::modeling::sound_recording_test {
 namespace {
 
-// Writes interleaved samples (`channels` per frame) with libsndfile.
-void WriteSound(const std::string& path, int format, int rate, int channels,
-                const std::vector<double>& data) {
-  SF_INFO info{};
-  info.samplerate = rate;
-  info.channels = channels;
-  info.format = format;
-  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
-  ASSERT_NE(f, nullptr) << sf_strerror(nullptr);
-  const auto frames = static_cast<sf_count_t>(data.size() / static_cast<std::size_t>(channels));
-  ASSERT_EQ(sf_writef_double(f, data.data(), frames), frames);
-  sf_close(f);
-}
+using test::WriteSound;
 
 // An AR(2) resonance (1.6, -0.9) driven by seeded noise, peak around 0.4.
 std::vector<double> Resonance(std::size_t n, std::uint64_t seed, double gain = 0.05) {

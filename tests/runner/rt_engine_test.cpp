@@ -7,6 +7,7 @@
 #include "../renderer/test_materials.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/replay_device.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner::rt_engine_test {
@@ -32,9 +33,8 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
   std::int64_t trial;
   {
     db::Database d(dir.File("e.db"));
-    const auto st = d.CreateStudy({.name = "e", .protocol_toml = "x", .seed = 1});
-    const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
-    const auto se = d.StartSession({.participant_id = p});
+    const auto se =
+        test::AddStudySession(d, {.name = "e", .protocol_toml = "x", .seed = 1}).session;
     trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
   }
   const auto m = test::TexturedMaterial();

@@ -14,6 +14,7 @@
 #include "hapticlab/protocols/protocol.hpp"
 #include "hapticlab/runner/open_rig.hpp"
 #include "hapticlab/runner/rig.hpp"
+#include "hapticlab/test/study_rows.hpp"
 #include "hapticlab/test/test_util.hpp"
 
 namespace hapticlab::runner::test_trial {
@@ -29,9 +30,8 @@ struct Session {
 
   Session() {
     lab.protocol = &protocol;
-    const auto st = database.CreateStudy({.name = protocol.name, .protocol_toml = "# p"});
-    const auto p = database.AddParticipant({.study_id = st, .code = "P01"});
-    session = database.StartSession({.participant_id = p});
+    session =
+        test::AddStudySession(database, {.name = protocol.name, .protocol_toml = "# p"}).session;
   }
   // A started trial of this session.
   db::Trial Trial(const std::string& phase, const std::string& left, const std::string& right,

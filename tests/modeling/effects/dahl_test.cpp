@@ -101,18 +101,13 @@ Replay Oscillations(bool dahl, double fc_N, double kappa, double noise_N, unsign
           }
         const double bristle = dahl ? F : fc_N * std::tanh(v / 0.5e-3);
         Replay::Sample s{};
-        s.t_s = t_s;
         s.x_m = x * std::cos(phi), s.y_m = x * std::sin(phi);
         s.vx_mps = v * std::cos(phi), s.vy_mps = v * std::sin(phi), s.speed_mps = std::abs(v);
         s.dir_rad = std::atan2(s.vy_mps, s.vx_mps);
         s.fn_N = s.fload_N = 1.5;
         s.ftx_N = -bristle * std::cos(phi) + noise(rng);
         s.fty_N = -bristle * std::sin(phi) + noise(rng);
-        s.contact = true;
-        s.block = static_cast<int>(t_s);
-        s.row = static_cast<int>(r.samples().size());
-        r.mutable_samples().push_back(s);
-        t_s += 1 / kRate_hz;
+        Append(&r, s, true, &t_s);
       }
       LiftOff(&r, &t_s);
     }

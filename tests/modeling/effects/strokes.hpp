@@ -44,16 +44,20 @@ inline void Finish(Replay* r) {
   r->file = "hand-written strokes";
 }
 
+/// Appends `s` as the next force sample: its time *t_s (then advanced by one sample period),
+/// `contact`, its block (the whole second) and its row are set here.
+inline void Append(Replay* r, Replay::Sample s, bool contact, double* t_s) {
+  s.t_s = *t_s;
+  s.contact = contact;
+  s.block = static_cast<int>(*t_s);
+  s.row = static_cast<int>(r->samples().size());
+  r->mutable_samples().push_back(s);
+  *t_s += 1 / kRate_hz;
+}
+
 /// Appends `n` samples out of contact (a lift-off between strokes).
 inline void LiftOff(Replay* r, double* t_s, int n = 10) {
-  for (int k = 0; k < n; ++k) {
-    Replay::Sample s{};
-    s.t_s = *t_s;
-    s.block = static_cast<int>(*t_s);
-    s.row = static_cast<int>(r->samples().size());
-    r->mutable_samples().push_back(s);
-    *t_s += 1 / kRate_hz;
-  }
+  for (int k = 0; k < n; ++k) Append(r, {}, false, t_s);
 }
 
 /// Strokes with the friction -(f_C u + mu_b v) (u the unit velocity, ideal Coulomb: no
@@ -73,7 +77,6 @@ inline Replay MakeStrokes(const std::vector<Stroke>& strokes, const FrictionLaw&
       const double v = st.v0_mps + (st.v1_mps - st.v0_mps) * a;
       const double f = st.f0_N + (st.f1_N - st.f0_N) * a;
       Replay::Sample s{};
-      s.t_s = t_s;
       s.x_m = x, s.y_m = y;
       s.vx_mps = v * ux, s.vy_mps = v * uy;
       s.speed_mps = v;
@@ -81,15 +84,11 @@ inline Replay MakeStrokes(const std::vector<Stroke>& strokes, const FrictionLaw&
       s.fload_N = f;
       s.fn_N = f + noise_N * noise(rng);
       s.d_m = f * 0.5e-3;  // a 2 N/mm layer (the friction channel does not read it)
-      s.contact = true;
-      s.block = static_cast<int>(t_s);
-      s.row = static_cast<int>(r.samples().size());
       const double c = fc(s);
       s.ftx_N = -(c * ux + mu_b_Ns_per_m * s.vx_mps) + noise_N * noise(rng);
       s.fty_N = -(c * uy + mu_b_Ns_per_m * s.vy_mps) + noise_N * noise(rng);
-      r.mutable_samples().push_back(s);
       x += s.vx_mps / kRate_hz, y += s.vy_mps / kRate_hz;
-      t_s += 1 / kRate_hz;
+      Append(&r, s, true, &t_s);
     }
     LiftOff(&r, &t_s);
   }
@@ -129,17 +128,12 @@ inline Replay MakePresses(const std::function<double(double, double)>& law, doub
     for (int k = 1; k < n; ++k) {
       const double w = 2 * 3.141592653589793 / T, tau = k / kRate_hz;
       Replay::Sample s{};
-      s.t_s = t_s;
       s.d_m = dmax * (1 - std::cos(w * tau)) / 2;
       s.ddot_mps = dmax * w * std::sin(w * tau) / 2;
       const double f = law(s.d_m, s.ddot_mps);
       s.fn_N = f + noise_N * noise(rng);
       s.fload_N = f;
-      s.contact = true;
-      s.block = static_cast<int>(t_s);
-      s.row = static_cast<int>(r.samples().size());
-      r.mutable_samples().push_back(s);
-      t_s += 1 / kRate_hz;
+      Append(&r, s, true, &t_s);
     }
     LiftOff(&r, &t_s);
   }

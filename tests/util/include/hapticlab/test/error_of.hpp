@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <string>
+
 #include "hapticlab/core/diagnostics.hpp"
 
 namespace hapticlab::test {
@@ -19,6 +21,19 @@ Diagnostic ErrorOf(F f) {
   }
   ADD_FAILURE() << "no InputError";
   return {};
+}
+
+/// "file|line|field" of the first diagnostic of the InputError `f` throws, or "no error" when
+/// it throws none: a test compares the place a refusal names in one string.
+template <typename F>
+std::string WhereOf(F f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    const auto& d = e.diagnostics().at(0);
+    return d.file + "|" + std::to_string(d.line) + "|" + d.field;
+  }
+  return "no error";
 }
 
 }  // namespace hapticlab::test
