@@ -41,10 +41,32 @@ std::string SiteCodeProblem(const std::string& code) {
   return PseudonymousCodeProblem(code);
 }
 
+namespace {
+
+// True when the file starts with the 16 bytes every SQLite 3 database starts with.
+bool HasSqliteHeader(const std::string& path) {
+  constexpr char kHeader[] = "SQLite format 3";  // and its terminating NUL: 16 bytes
+  char head[sizeof kHeader] = {};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return true;  // unreadable: left for SQLite to report
+  const ssize_t n = ::read(fd, head, sizeof head);
+  ::close(fd);
+  return n == static_cast<ssize_t>(sizeof head) && std::memcmp(head, kHeader, sizeof head) == 0;
+}
+
+}  // namespace
+
 Database OpenForReading(const std::string& path) {
   struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw InputError(path, 0, "db", "a folder, not a study database file");
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
     throw InputError(path, 0, "db", "no such database file");
+  // Another kind of file (a protocol given as --db, say) is named as such, not as damaged.
+  if (st.st_size > 0 && !HasSqliteHeader(path))
+    throw InputError(path, 0, "db",
+                     "not a SQLite database (it does not start with SQLite's file header): "
+                     "expected the study database that 'study run' writes");
   std::string report;
   try {
     Database d(path, {.create = false, .read_only = true});
@@ -346,6 +368,11 @@ void Database::Backup(const std::string& dest) const {
   struct ::stat st {};
   if (::stat(dest.c_str(), &st) == 0)
     throw InputError(dest, 0, "DEST", "already exists; a backup never overwrites a file");
+  const std::string folder = dest.find('/') == std::string::npos
+                                 ? std::string(".")
+                                 : dest.substr(0, std::max<std::size_t>(dest.rfind('/'), 1));
+  if (::stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+    throw InputError(dest, 0, "DEST", "its folder " + folder + " does not exist");
   sqlite3* out = nullptr;
   if (sqlite3_open_v2(dest.c_str(), &out, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
       SQLITE_OK) {

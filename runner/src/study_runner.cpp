@@ -211,7 +211,9 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
                              " is reserved and has no session yet; start it with 'hapticlab "
                              "study run PROTOCOL --participant " +
                              participant + "'");
-      return RecordedModeOf(sessions.back(), db_path);
+      auto mode = RecordedModeOf(sessions.back(), db_path);
+      mode.study = st.name;
+      return mode;
     }
   throw InputError(db_path, 0, "participant",
                    "no participant " + participant + " with a session in this database");
@@ -239,8 +241,8 @@ int ParticipantIndex(const std::string& db_path, const std::string& study,
   if (!part)
     throw InputError(db_path, 0, "participant",
                      "no participant " + code + " in study '" + study +
-                         "' (a code not yet run has no plan index; "
-                         "give its plan index)");
+                         "' (a code not yet run or reserved has no plan index; give "
+                         "--index N instead)");
   return part->index;
 }
 
@@ -274,10 +276,17 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   // A code reserved by `participant new` (a participant without a session) runs with the plan
   // index it was given; any other known code already has its session.
   const auto reserved = database.FindParticipant(study_id, opt.participant);
-  if (reserved && !database.IsReserved(reserved->id))
+  if (reserved && !database.IsReserved(reserved->id)) {
+    const auto sessions = database.Sessions(reserved->id);
+    if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
+      throw InputError(opt.db_path, 0, "participant",
+                       "participant " + opt.participant +
+                           " has already completed a session of this study; a new participant "
+                           "needs a new code ('hapticlab participant new')");
     throw InputError(opt.db_path, 0, "participant",
                      "participant " + opt.participant +
                          " already has a session; continue it with 'hapticlab study resume'");
+  }
   if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
     throw InputError(opt.db_path, 0, "participant",
                      fmt::format("participant {} was reserved with plan index {}; run it without "

@@ -265,6 +265,7 @@ struct SessionMode {
   std::optional<ActuatorKind> actuator = ActuatorKind::kNone;
   bool screens = false;  ///< --ui
   Rater rater;           ///< the simulated observer, or the participant's input device
+  std::string study;     ///< the study's name (RecordedMode fills it in; not part of the mode)
   std::string Describe()
       const;  ///< e.g. "device sim, actuator none, screens off, ratings simulated"
 };
