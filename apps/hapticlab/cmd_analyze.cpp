@@ -52,8 +52,8 @@ void RegisterAnalyze(CLI::App& app) {
                   "from the plan (docs/replication.md)");
   cmd->callback([o] {
     RunGuarded({{"db", "--db"}, {"out", "--out"}}, [&] {
-      if (std::error_code ec; std::filesystem::exists(o->out, ec) &&
-                              !std::filesystem::is_directory(o->out, ec))
+      if (std::error_code ec;
+          std::filesystem::exists(o->out, ec) && !std::filesystem::is_directory(o->out, ec))
         throw InputError(o->out, 0, "--out",
                          "exists and is not a folder: the report is written into a folder");
       stats::ReportOptions ro{.out_dir = o->out,

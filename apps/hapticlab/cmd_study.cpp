@@ -188,8 +188,10 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   PrintSummary(sum, a.json);
   if (sum.status != db::SessionStatus::kAborted) return kExitOk;
   if (!a.json) {
+    std::fflush(stdout);  // the summary first, then how to continue
     const int sig = runner::StopRequested();
-    fmt::print(stderr, "{}: stopped before the session's end{}; continue with 'hapticlab study "
+    fmt::print(stderr,
+               "{}: stopped before the session's end{}; continue with 'hapticlab study "
                "resume --db {} --participant {}'\n",
                sum.participant,
                sig == SIGINT    ? " by SIGINT (Ctrl-C)"

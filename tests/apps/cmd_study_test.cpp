@@ -84,8 +84,8 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
       2);
   EXPECT_NE(out.find("already completed"), std::string::npos) << out;
   // A report or an export over a file that is not a folder: exit 2 naming --out.
-  for (const std::string& cmd : {" analyze --db " + db + " --out " + Small(),
-                                " export --db " + db + " --out " + Small()}) {
+  for (const std::string& cmd :
+       {" analyze --db " + db + " --out " + Small(), " export --db " + db + " --out " + Small()}) {
     EXPECT_EQ(test::RunCommand(Cli() + cmd, &out), 2) << cmd;
     EXPECT_NE(out.find("--out: exists and is not a folder"), std::string::npos) << out;
   }

@@ -26,7 +26,7 @@ class ScriptedUi final : public SessionUi {
  public:
   std::vector<double> scores{static_cast<double>(0.8f) * 100, static_cast<double>(0.37f) * 100};
   std::optional<std::string> console_code;
-  bool abort_placement = false;  // the experimenter aborts at the first PLACE SAMPLES
+  bool abort_placement = false;      // the experimenter aborts at the first PLACE SAMPLES
   bool signal_at_placement = false;  // Ctrl-C arrives while PLACE SAMPLES waits
   std::vector<ConsentRequest> asked;
   bool Stimulus(const TrialScreen&, int, const Eigen::Vector3d&, double) override { return true; }

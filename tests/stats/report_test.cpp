@@ -204,8 +204,7 @@ TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   // The scale the means, differences and CIs are in is named; the correlation names its unit
   // and n: main-phase trials rated on every criterion, 8 participants x (4 materials x 2
   // methods x 2 repetitions), less P08's 2 unrated FF Cork trials.
-  EXPECT_NE(two.find("Rating scale: 0 to 100 (the protocol's `scale`)"), std::string::npos)
-      << two;
+  EXPECT_NE(two.find("Rating scale: 0 to 100 (the protocol's `scale`)"), std::string::npos) << two;
   EXPECT_NE(two.find("n = 126 trials rated on every criterion"), std::string::npos) << two;
   // The dropped participant is named with the cell it lacks.
   const std::string dropped = Section(two, "- dropped P08: ", "\n");

@@ -368,10 +368,10 @@ void WindowSessionUi::UpdateTimes() {
   cv_.eta_s = std::max(0.0, left * per_trial_s + next_.breaks_left * next_.break_s + break_ahead_s -
                                 std::min(into_s, per_trial_s));
   const int breaks = next_.breaks_left + (break_ahead_s > 0 ? 1 : 0);
-  cv_.eta_basis = fmt::format("{} trials at {:.{}f} s each ({}), {} planned break{} of {:.0f} s",
-                              left, per_trial_s, per_trial_s < 10 ? 1 : 0,
-                              measured ? "measured" : "from the plan", breaks,
-                              breaks == 1 ? "" : "s", next_.break_s);
+  cv_.eta_basis =
+      fmt::format("{} trials at {:.{}f} s each ({}), {} planned break{} of {:.0f} s", left,
+                  per_trial_s, per_trial_s < 10 ? 1 : 0, measured ? "measured" : "from the plan",
+                  breaks, breaks == 1 ? "" : "s", next_.break_s);
 }
 
 bool WindowSessionUi::BoxPressed() {
