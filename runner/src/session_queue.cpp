@@ -294,6 +294,7 @@ TrialScreen SessionQueue::Screen(const db::Trial& t, const TrialStimuli& stimuli
   auto screen = ScreenOf(p_, t, stimuli, training ? training_done_ + 1 : rated_done_ + 1,
                          training ? training_total_ : rated_total_);
   screen.training = training;
+  screen.break_s = p_.break_duration_s / participant_->PlaybackSpeed();  // as Break takes it
   screen.rated_done = rated_done_;
   screen.rated_total = rated_total_;
   screen.training_done = training_done_;
