@@ -2,6 +2,9 @@
 
 #include <fmt/format.h>
 
+#include <csignal>
+#include <stdexcept>
+
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/core/participant_code.hpp"
 
@@ -62,6 +65,14 @@ std::optional<ConsentRecord> ObtainConsent(const protocols::Protocol& p, const R
                                           .version = r.version})) {
       r.confirmed_by = *code;
       r.via = "console";
+    } else if (const int sig = StopRequested()) {
+      throw std::runtime_error(fmt::format(
+          "stopped by signal {} ({}) while the console asked for consent; the session did not "
+          "start (nothing of it recorded)",
+          sig,
+          sig == SIGINT    ? "SIGINT"
+          : sig == SIGTERM ? "SIGTERM"
+                           : "signal"));
     }
   }
   if (r.confirmed_by.empty())

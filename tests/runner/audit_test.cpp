@@ -34,8 +34,10 @@ class ScriptedUi final : public SessionUi {
   bool Break(double) override { return true; }
   std::optional<std::string> ConfirmConsent(const ConsentRequest& r) override {
     asked.push_back(r);
+    if (signal_at_consent) RequestStop(SIGTERM);  // the console's wait then ends
     return console_code;
   }
+  bool signal_at_consent = false;  // SIGTERM arrives while the consent modal waits
   std::optional<std::string> ConfirmPlacement(const TrialScreen& t) override {
     if (signal_at_placement) RequestStop(SIGINT);  // the window's wait then ends
     if (abort_placement || signal_at_placement) return std::nullopt;
@@ -203,6 +205,26 @@ TEST(Audit, ASignalWhilePlacingSamplesIsRecordedAsTheSignalNotAsTheExperimenter)
     EXPECT_NE(e.detail.find("SIGINT"), std::string::npos) << e.detail;
   }
   EXPECT_EQ(interrupted, 1);
+}
+
+TEST(Audit, ASignalWhileTheConsoleAsksForConsentIsNotBadInputAndRecordsNothing) {
+  struct ClearStop {
+    ~ClearStop() { RequestStop(0); }
+  } clear;
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  ui.signal_at_consent = true;
+  const auto o = PersonRun(dir.File("s.db"), "P11", &ui);
+  try {
+    RunStudy(p, o);
+    ADD_FAILURE() << "the session ran";
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "a signal is not bad input: " << e.what();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("SIGTERM"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(EventsOf(o.db_path, "P11").empty());
 }
 
 TEST(Audit, ACodeWithANameIsRefusedWhereverItIsGiven) {

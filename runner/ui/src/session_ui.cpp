@@ -424,7 +424,7 @@ std::optional<std::string> WindowSessionUi::ConfirmConsent(const ConsentRequest&
   consent_confirm_ = false;
   std::optional<std::string> code;
   for (;;) {
-    if (!Frame()) break;
+    if (StopRequested() || !Frame()) break;  // Ctrl-C or SIGTERM: the runner says so
     if (!consent_confirm_) continue;
     consent_confirm_ = false;
     const std::string& c = cv_.consent_code;
