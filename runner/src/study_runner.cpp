@@ -211,6 +211,10 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
                              " is reserved and has no session yet; start it with 'hapticlab "
                              "study run PROTOCOL --participant " +
                              participant + "'");
+      // Nothing to resume: said before any mode is compared (resume --device X on it).
+      if (sessions.back().status == db::SessionStatus::kCompleted)
+        throw InputError(db_path, 0, "participant",
+                         participant + "'s session is already completed; nothing to resume");
       auto mode = RecordedModeOf(sessions.back(), db_path);
       mode.study = st.name;
       return mode;

@@ -83,6 +83,11 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
           Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet", &out),
       2);
   EXPECT_NE(out.find("already completed"), std::string::npos) << out;
+  // Resuming it, in another mode too, says that it is completed (not that the mode differs).
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " study resume --db " + db + " --participant P01 --device falcon", &out),
+            2);
+  EXPECT_NE(out.find("already completed"), std::string::npos) << out;
   // A report or an export over a file that is not a folder: exit 2 naming --out.
   for (const std::string& cmd :
        {" analyze --db " + db + " --out " + Small(), " export --db " + db + " --out " + Small()}) {

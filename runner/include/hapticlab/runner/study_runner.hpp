@@ -280,7 +280,8 @@ bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool c
 SessionMode ModeOf(const RunOptions& options);
 
 /// The recorded mode of a participant's last session (for `study resume` to default to).
-/// @throws InputError when the database or the participant does not exist, or the session
+/// @throws InputError when the database or the participant does not exist, the session is
+/// completed (nothing to resume), or the session
 /// records an actuator or rater this build does not know (field session.actuator/rater)
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant);
 
