@@ -250,6 +250,26 @@ int ParticipantIndex(const std::string& db_path, const std::string& study,
   return part->index;
 }
 
+namespace {
+
+// `study run` on a code that already has a session: a completed one needs a new code, any
+// other is continued with 'study resume'.
+[[noreturn]] void RefuseParticipantWithASession(const db::Database& database,
+                                                const db::Participant& participant,
+                                                const std::string& db_path) {
+  const auto sessions = database.Sessions(participant.id);
+  if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
+    throw InputError(db_path, 0, "participant",
+                     "participant " + participant.code +
+                         " has already completed a session of this study; a new participant "
+                         "needs a new code ('hapticlab participant new')");
+  throw InputError(db_path, 0, "participant",
+                   "participant " + participant.code +
+                       " already has a session; continue it with 'hapticlab study resume'");
+}
+
+}  // namespace
+
 void RequestStop(int signal_number) noexcept { g_stop_signal.store(signal_number); }
 int StopRequested() noexcept { return g_stop_signal.load(); }
 
@@ -280,17 +300,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   // A code reserved by `participant new` (a participant without a session) runs with the plan
   // index it was given; any other known code already has its session.
   const auto reserved = database.FindParticipant(study_id, opt.participant);
-  if (reserved && !database.IsReserved(reserved->id)) {
-    const auto sessions = database.Sessions(reserved->id);
-    if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
-      throw InputError(opt.db_path, 0, "participant",
-                       "participant " + opt.participant +
-                           " has already completed a session of this study; a new participant "
-                           "needs a new code ('hapticlab participant new')");
-    throw InputError(opt.db_path, 0, "participant",
-                     "participant " + opt.participant +
-                         " already has a session; continue it with 'hapticlab study resume'");
-  }
+  if (reserved && !database.IsReserved(reserved->id))
+    RefuseParticipantWithASession(database, *reserved, opt.db_path);
   if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
     throw InputError(opt.db_path, 0, "participant",
                      fmt::format("participant {} was reserved with plan index {}; run it without "
