@@ -199,6 +199,9 @@ TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
   // A file of another kind (a protocol given as --db) or a folder is named as such, without
   // SQLite's own words.
   test::WriteFile(dir.File("p.toml"), "[study]\nname = \"x\"\n");
+  // A writer refuses it too, and leaves it as it was.
+  EXPECT_THROW(Database(dir.File("p.toml")), InputError);
+  EXPECT_EQ(test::ReadFile(dir.File("p.toml")), "[study]\nname = \"x\"\n");
   for (const std::string& other : {dir.File("p.toml"), dir.path()}) {
     try {
       OpenForReading(other);
