@@ -3,11 +3,13 @@
 #include <fmt/core.h>
 #include <fmt/ranges.h>
 
+#include <filesystem>
 #include <memory>
 #include <nlohmann/json.hpp>
 
 #include "cli_common.hpp"
 #include "commands.hpp"
+#include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/replication/bundle.hpp"
 #include "hapticlab/replication/deviations.hpp"
@@ -50,6 +52,10 @@ void RegisterAnalyze(CLI::App& app) {
                   "from the plan (docs/replication.md)");
   cmd->callback([o] {
     RunGuarded({{"db", "--db"}, {"out", "--out"}}, [&] {
+      if (std::error_code ec;
+          std::filesystem::exists(o->out, ec) && !std::filesystem::is_directory(o->out, ec))
+        throw InputError(o->out, 0, "--out",
+                         "exists and is not a folder: the report is written into a folder");
       stats::ReportOptions ro{.out_dir = o->out,
                               .figures = !o->no_figures,
                               .include_simulated = o->include_simulated,

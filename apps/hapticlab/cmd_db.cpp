@@ -76,8 +76,8 @@ void RegisterDb(CLI::App& app) {
   cmd->add_option("SRC", o->src, "Study database")->required();
   cmd->add_option("DEST", o->dest, "New file for the copy (never overwritten)")->required();
   cmd->callback([o] {
-    RunGuarded([&] {
-      std::error_code ec;  // a path that cannot be looked up is not there
+    RunGuarded({{"db", "SRC"}}, [&] {  // the database layer names its file "db"
+      std::error_code ec;              // a path that cannot be looked up is not there
       if (!std::filesystem::is_regular_file(o->src, ec))
         throw InputError(o->src, 0, "SRC", "no such database file");
       if (std::filesystem::exists(o->dest, ec))

@@ -61,6 +61,10 @@ void CheckOptions(const ExportOpts& o, const db::ExportFormat& f) {
             " always hold them)");
   if (o.trajectories && o.no_trajectories)
     throw InputError(kCommandLine, 0, "--trajectories", "contradicts --no-trajectories");
+  const bool file_out = !f.file_extension.empty() && o.out.ends_with(f.file_extension);
+  if (std::error_code ec;
+      !file_out && std::filesystem::exists(o.out, ec) && !std::filesystem::is_directory(o.out, ec))
+    throw InputError(o.out, 0, "--out", "exists and is not a folder: the export writes a folder");
   for (const auto& other : db::ExportFormats())
     if (&other != &f && !other.file_extension.empty() && o.out.ends_with(other.file_extension))
       throw InputError(

@@ -6,6 +6,7 @@
 #include <csignal>
 #include <cstdio>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 
@@ -185,7 +186,20 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   InstallStopHandlers();
   const auto sum = session(o);
   PrintSummary(sum, a.json);
-  return sum.status == db::SessionStatus::kAborted ? kExitStopped : kExitOk;
+  if (sum.status != db::SessionStatus::kAborted) return kExitOk;
+  if (!a.json) {
+    std::fflush(stdout);  // the summary first, then how to continue
+    const int sig = runner::StopRequested();
+    fmt::print(stderr,
+               "{}: stopped before the session's end{}; continue with 'hapticlab study "
+               "resume --db {} --participant {}'\n",
+               sum.participant,
+               sig == SIGINT    ? " by SIGINT (Ctrl-C)"
+               : sig == SIGTERM ? " by SIGTERM"
+                                : "",
+               a.db, sum.participant);
+  }
+  return kExitStopped;
 }
 
 // RunGuarded, with the runner's names for what the user gave ("participant", "db", ...)
@@ -252,7 +266,7 @@ void RegisterStudyPlan(CLI::App* study) {
                      "--index", *index,
                      "Plan index of the participant (0-based; 'study run' gives the next free one)")
                   ->capture_default_str()
-                  ->check(CLI::NonNegativeNumber);
+                  ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   auto* part =
       cmd->add_option("--participant", *code,
                       "Participant code (e.g. P07) of a participant in --db: their plan index");
@@ -356,9 +370,8 @@ void RegisterStudyRun(CLI::App* study) {
       "participant answers with --ui, else the phase's simulated observer; "
       "docs/psychophysics.md).\n"
       "Exit status: 0 the session completed; 3 it stopped before its end (Abort in the console,\n"
-      "--stop-after, or trials that touched nothing): completed trials are recorded, continue "
-      "with\n"
-      "'study resume'; 2 bad input; 1 any other failure.");
+      "Ctrl-C or SIGTERM, --stop-after, or trials that touched nothing): completed trials are\n"
+      "recorded, continue with 'study resume'; 2 bad input; 1 any other failure.");
   cmd->add_option("PROTOCOL", a->protocol,
                   "Study protocol (.toml); with --plan: instead of the plan's");
   cmd->add_option("--plan", a->plan,
@@ -370,7 +383,8 @@ void RegisterStudyRun(CLI::App* study) {
                   "'participant new' (it runs with its reserved plan index)")
       ->required();
   cmd->add_option("--index", a->index,
-                  "Plan index of the participant (default: the reserved or the next free one)");
+                  "Plan index of the participant (default: the reserved or the next free one)")
+      ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   AddHardwareOptions(cmd, *a);
   AddSessionOptions(cmd, *a);
   cmd->add_option("--stop-after", a->stop_after, "Abort after this many trials (to test resume)");
@@ -440,7 +454,7 @@ void RegisterStudyResume(CLI::App* study) {
           a->change_mode, a->db, a->participant);
       runner::RunOptions o;
       o.change_mode = a->change_mode;
-      return RunSession(*a, "resume", o,
+      return RunSession(*a, rec.study, o,
                         [](const runner::RunOptions& ro) { return runner::ResumeStudy(ro); });
     });
   });

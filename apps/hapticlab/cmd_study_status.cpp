@@ -22,7 +22,9 @@ void RegisterStudyStatus(CLI::App& study) {
   auto* cmd = study.add_subcommand(
       "status",
       "Progress of each participant: planned, completed, faulted (attempts, each re-queued),\n"
-      "duplicates, session status (running, completed, aborted, failed)");
+      "duplicates, session status (running, completed, aborted, failed; a run that was killed\n"
+      "or crashed stays 'running' until 'study resume' continues it; reserved: a code from\n"
+      "'participant new' with no session yet)");
   cmd->add_option("--db", a->db, "Study database")->required();
   cmd->add_option("--participant", a->participant, "Only this participant");
   cmd->add_flag("--json", a->json,

@@ -1,5 +1,6 @@
 #include "hapticlab/core/io.hpp"
 
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <vector>
@@ -9,6 +10,9 @@
 namespace hapticlab {
 
 std::string ReadTextFile(const std::string& path, const std::string& what, std::size_t max_bytes) {
+  // A folder opens as a stream that reads nothing: named here, not read as an empty file.
+  if (std::error_code ec; std::filesystem::is_directory(path, ec))
+    throw InputError(path, 0, "", "a folder, not a file: " + what + " expected");
   std::ifstream f(path, std::ios::binary);
   if (!f) throw InputError(path, 0, "", "cannot open " + what);
   // Read in blocks and stop past the limit: the size a file claims is not trusted (a path

@@ -43,6 +43,8 @@ std::string SiteCodeProblem(const std::string& code) {
 
 Database OpenForReading(const std::string& path) {
   struct stat st {};
+  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+    throw InputError(path, 0, "db", "a folder, not a study database file");
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
     throw InputError(path, 0, "db", "no such database file");
   std::string report;
@@ -133,7 +135,30 @@ void EnterWalMode(sqlite3* db, int busy_timeout_ms) {
 
 }  // namespace
 
+namespace {
+
+// Refuses a file that is not a SQLite database (a protocol given as --db, say), naming it as
+// such rather than as damaged. Only bytes that differ from SQLite's 16-byte header count: a
+// file another process is creating reads as zeros or as a part of the header, and is left to
+// SQLite's own locking.
+void RefuseAnotherKindOfFile(const std::string& path) {
+  constexpr char kHeader[] = "SQLite format 3";  // and its terminating NUL: 16 bytes
+  char head[sizeof kHeader] = {};
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return;  // missing or unreadable: SQLite reports it
+  const ssize_t n = ::read(fd, head, sizeof head);
+  ::close(fd);
+  for (ssize_t i = 0; i < n; ++i)
+    if (head[i] != '\0' && head[i] != kHeader[i])
+      throw InputError(path, 0, "db",
+                       "not a SQLite database (it does not start with SQLite's file header): "
+                       "expected the study database that 'study run' writes");
+}
+
+}  // namespace
+
 Database::Database(const std::string& path, const OpenOptions& options) : path_(path) {
+  if (path != ":memory:") RefuseAnotherKindOfFile(path);
   if (!options.read_only) CheckSharedMemoryFile(path);
   int flags = options.read_only ? SQLITE_OPEN_READONLY : SQLITE_OPEN_READWRITE;
   if (options.create && !options.read_only) flags |= SQLITE_OPEN_CREATE;
@@ -346,6 +371,11 @@ void Database::Backup(const std::string& dest) const {
   struct ::stat st {};
   if (::stat(dest.c_str(), &st) == 0)
     throw InputError(dest, 0, "DEST", "already exists; a backup never overwrites a file");
+  const std::string folder = dest.find('/') == std::string::npos
+                                 ? std::string(".")
+                                 : dest.substr(0, std::max<std::size_t>(dest.rfind('/'), 1));
+  if (::stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
+    throw InputError(dest, 0, "DEST", "its folder " + folder + " does not exist");
   sqlite3* out = nullptr;
   if (sqlite3_open_v2(dest.c_str(), &out, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr) !=
       SQLITE_OK) {

@@ -217,7 +217,7 @@ std::vector<ExportedFile> ExportXdf(const Database& db, const std::string& out,
       throw InputError(
           out, 0, "out",
           fmt::format("a file name holds one session and the selection has {}; name a directory, "
-                      "or choose one participant",
+                      "or choose one participant (--participant CODE)",
                       sessions.size()));
     files.push_back(WriteSession(sessions[0], out));
     if (progress) progress(Progress(sessions[0], 1, files.back().streams, files.back().samples));

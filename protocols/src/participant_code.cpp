@@ -38,12 +38,8 @@ std::string LiteralPrefix(const std::string& pattern) {
 }
 
 bool Matches(const Protocol& p, const std::string& code) {
-  try {
-    CheckParticipantCode(p, code);
-    return true;
-  } catch (const InputError&) {
-    return false;
-  }
+  std::string why;
+  return ParticipantCodeAccepted(p, code, &why);
 }
 
 long Limit(int digits) {

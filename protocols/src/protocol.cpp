@@ -17,6 +17,7 @@
 #include "hapticlab/core/io.hpp"
 #include "hapticlab/core/participant_code.hpp"
 #include "hapticlab/core/toml_util.hpp"
+#include "hapticlab/protocols/participant_code.hpp"
 #include "protocol_fields.hpp"
 
 namespace hapticlab::protocols {
@@ -130,19 +131,35 @@ bool ValidCodePattern(const std::string& pattern, std::string* why) {
   return true;
 }
 
-void CheckParticipantCode(const Protocol& p, const std::string& code) {
-  const std::string rule =
-      "a pseudonymous code matching " + p.participant_code +
-      " (e.g. P07; 'hapticlab participant new' hands out the next free one), never a name, "
-      "birth date or phone number";
+// True when p accepts `code`: 1-32 letters, digits, '-' or '_' matching p's pattern (then
+// `why` stays empty) and the database's own rule, whatever the pattern admits
+// (Anna_Kowalski_19850312; then `why` says what it refuses).
+bool ParticipantCodeAccepted(const Protocol& p, const std::string& code, std::string* why) {
   // The code must be short and plain before the pattern is even tried.
   bool plain = !code.empty() && code.size() <= 32;
   for (unsigned char c : code) plain = plain && (std::isalnum(c) || c == '-' || c == '_');
-  if (!plain || !RE2::FullMatch(code, RE2(p.participant_code, CodePatternOptions())))
-    throw InputError(p.file, 0, "participant", "'" + code + "' is not " + rule);
-  // The database's own rule, whatever the pattern admits (Anna_Kowalski_19850312).
-  if (const std::string why = PseudonymousCodeProblem(code); !why.empty())
-    throw InputError(p.file, 0, "participant", "'" + code + "' is not " + rule + " (" + why + ")");
+  if (!plain || !RE2::FullMatch(code, RE2(p.participant_code, CodePatternOptions()))) return false;
+  *why = PseudonymousCodeProblem(code);
+  return why->empty();
+}
+
+void CheckParticipantCode(const Protocol& p, const std::string& code) {
+  std::string why;
+  if (ParticipantCodeAccepted(p, code, &why)) return;
+  // An example the pattern accepts (the first code 'participant new' would hand out); none
+  // when the pattern has no fixed prefix to build one from.
+  std::string example;
+  try {
+    example = "e.g. " + NextFreeCode(p, InferCodeFormat(p), {}) + "; ";
+  } catch (const InputError&) {
+    // no example: the message gives the pattern alone
+  }
+  throw InputError(p.file, 0, "participant",
+                   "'" + code + "' is not a pseudonymous code matching " + p.participant_code +
+                       " (" + example +
+                       "'hapticlab participant new' hands out the next free one), never a "
+                       "name, birth date or phone number" +
+                       (why.empty() ? "" : " (" + why + ")"));
 }
 
 namespace {

@@ -2,7 +2,11 @@
 
 #include <fmt/format.h>
 
+#include <csignal>
+#include <stdexcept>
+
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/participant_code.hpp"
 
 namespace hapticlab::runner {
 
@@ -21,12 +25,12 @@ constexpr const char* kField = "consent_confirmed_by";
 constexpr const char* kConsentPrefix = "confirmed by experimenter ";
 
 void CheckCode(const std::string& where, const std::string& code) {
-  if (!db::IsPseudonymousCode(code))
+  if (const std::string why = PseudonymousCodeProblem(code); !why.empty())
     throw InputError(where, 0, kField,
-                     "'" + code +
-                         "' is not an experimenter code: expected a pseudonymous code of 1-32 "
-                         "letters, digits, '-' or '_' with at least one digit (e.g. E01), never "
-                         "a name");
+                     "'" + code + "' is not an experimenter code (" + why +
+                         "): expected a pseudonymous code of 1-32 letters, digits, '-' or '_' "
+                         "with at least one digit and no more than 3 letters in a row (e.g. "
+                         "E01), never a name");
 }
 
 }  // namespace
@@ -61,6 +65,14 @@ std::optional<ConsentRecord> ObtainConsent(const protocols::Protocol& p, const R
                                           .version = r.version})) {
       r.confirmed_by = *code;
       r.via = "console";
+    } else if (const int sig = StopRequested()) {
+      throw std::runtime_error(fmt::format(
+          "stopped by signal {} ({}) while the console asked for consent; the session did not "
+          "start (nothing of it recorded)",
+          sig,
+          sig == SIGINT    ? "SIGINT"
+          : sig == SIGTERM ? "SIGTERM"
+                           : "signal"));
     }
   }
   if (r.confirmed_by.empty())

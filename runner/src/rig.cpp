@@ -166,7 +166,7 @@ RigFile ParseRig(const std::string& text, const std::string& path) {
   return r;
 }
 
-RigFile LoadRig(const std::string& path) { return ParseRig(ReadTextFile(path), path); }
+RigFile LoadRig(const std::string& path) { return ParseRig(ReadTextFile(path, "rig file"), path); }
 
 std::string RigToToml(const RigFile& r) {
   auto pose = [](const std::string& name, const Eigen::Isometry3d& T) {

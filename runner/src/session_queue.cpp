@@ -294,6 +294,7 @@ TrialScreen SessionQueue::Screen(const db::Trial& t, const TrialStimuli& stimuli
   auto screen = ScreenOf(p_, t, stimuli, training ? training_done_ + 1 : rated_done_ + 1,
                          training ? training_total_ : rated_total_);
   screen.training = training;
+  screen.break_s = p_.break_duration_s / participant_->PlaybackSpeed();  // as Break takes it
   screen.rated_done = rated_done_;
   screen.rated_total = rated_total_;
   screen.training_done = training_done_;
@@ -326,15 +327,24 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
                             speed != 1.0 ? fmt::format("; played {:g} times faster", speed) : ""),
                         .established_by = requested ? source::kConsole : source::kPlan});
     trial_under_way_ = t.id;
-    if (!opt_.ui->Break(break_s))
-      return Abort({.detail = "the experimenter aborted during a break",
+    if (!opt_.ui->Break(break_s)) {
+      if (auto stopped = StopRequestedBefore(t)) return stopped;  // a signal ended the break
+      return Abort({.trial_id = t.id,
+                    .detail = "the experimenter aborted during a break",
                     .established_by = source::kConsole});
+    }
   }
   if (screen.real_sample) {
     // No trial with a real sample starts before the experimenter confirms its samples.
     trial_under_way_ = t.id;
     const auto how = opt_.ui->ConfirmPlacement(screen);
-    if (!how) return Abort({.detail = "the experimenter aborted while placing the samples"});
+    if (!how) {
+      if (auto stopped = StopRequestedBefore(t)) return stopped;  // a signal ended the wait
+      return Abort({.trial_id = t.id,
+                    .detail = "the experimenter aborted while placing the samples; 'study "
+                              "resume' continues with this trial",
+                    .established_by = source::kConsole});
+    }
     database_.LogEvent(
         {.session_id = session_,
          .trial_id = t.id,

@@ -211,7 +211,13 @@ SessionMode RecordedMode(const std::string& db_path, const std::string& particip
                              " is reserved and has no session yet; start it with 'hapticlab "
                              "study run PROTOCOL --participant " +
                              participant + "'");
-      return RecordedModeOf(sessions.back(), db_path);
+      // Nothing to resume: said before any mode is compared (resume --device X on it).
+      if (sessions.back().status == db::SessionStatus::kCompleted)
+        throw InputError(db_path, 0, "participant",
+                         participant + "'s session is already completed; nothing to resume");
+      auto mode = RecordedModeOf(sessions.back(), db_path);
+      mode.study = st.name;
+      return mode;
     }
   throw InputError(db_path, 0, "participant",
                    "no participant " + participant + " with a session in this database");
@@ -239,10 +245,30 @@ int ParticipantIndex(const std::string& db_path, const std::string& study,
   if (!part)
     throw InputError(db_path, 0, "participant",
                      "no participant " + code + " in study '" + study +
-                         "' (a code not yet run has no plan index; "
-                         "give its plan index)");
+                         "' (a code not yet run or reserved has no plan index; give "
+                         "--index N instead)");
   return part->index;
 }
+
+namespace {
+
+// `study run` on a code that already has a session: a completed one needs a new code, any
+// other is continued with 'study resume'.
+[[noreturn]] void RefuseParticipantWithASession(const db::Database& database,
+                                                const db::Participant& participant,
+                                                const std::string& db_path) {
+  const auto sessions = database.Sessions(participant.id);
+  if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
+    throw InputError(db_path, 0, "participant",
+                     "participant " + participant.code +
+                         " has already completed a session of this study; a new participant "
+                         "needs a new code ('hapticlab participant new')");
+  throw InputError(db_path, 0, "participant",
+                   "participant " + participant.code +
+                       " already has a session; continue it with 'hapticlab study resume'");
+}
+
+}  // namespace
 
 void RequestStop(int signal_number) noexcept { g_stop_signal.store(signal_number); }
 int StopRequested() noexcept { return g_stop_signal.load(); }
@@ -275,9 +301,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   // index it was given; any other known code already has its session.
   const auto reserved = database.FindParticipant(study_id, opt.participant);
   if (reserved && !database.IsReserved(reserved->id))
-    throw InputError(opt.db_path, 0, "participant",
-                     "participant " + opt.participant +
-                         " already has a session; continue it with 'hapticlab study resume'");
+    RefuseParticipantWithASession(database, *reserved, opt.db_path);
   if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
     throw InputError(opt.db_path, 0, "participant",
                      fmt::format("participant {} was reserved with plan index {}; run it without "

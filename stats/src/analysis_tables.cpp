@@ -79,6 +79,12 @@ void RunCorrelation(AnalysisContext& c) {
         c.md, "correlation",
         fmt::format("it needs three or more main-phase trials rated on every criterion ({} so far)",
                     col["overall"].size()));
+  c.md << fmt::format(
+      "\nPearson r of each main-phase trial's overall rating with its rating on each other "
+      "criterion and with the lowest (min), highest (max) and mean of those ratings; n = {} "
+      "trials rated on every criterion, each one point (p treats the trials as independent, "
+      "though each participant rated several).\n",
+      col["overall"].size());
   c.md << "\n| with | Pearson r | p |\n|---|---|---|\n";
   for (const auto& [name, v] : col) {
     if (name == "overall") continue;

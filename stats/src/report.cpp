@@ -181,7 +181,11 @@ void StudySection(const db::Database& d, const std::string& db_path, const db::S
   md << "\n## Study `" << st.name << "`\n\n"
      << proto.description << "\n\n"
      << "Participants: " << study.Levels("participant").size() << "; ratings: " << study.rows()
-     << "\n";
+     << "\n"
+     << fmt::format(
+            "\nRating scale: {:g} to {:g} (the protocol's `scale`); means, differences and "
+            "their confidence intervals below are in points of this scale.\n",
+            proto.scale_min, proto.scale_max);
   for (const auto& a : proto.analyses)
     if (!FindAnalysis(a))
       NotRun(md, a, "no analysis of that name is registered (expected " + AnalysisNames() + ")");

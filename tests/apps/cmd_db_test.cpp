@@ -52,6 +52,17 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   EXPECT_NE(out.find(dir.File("none.db") + ": SRC: no such database file"), std::string::npos)
       << out;
   EXPECT_FALSE(std::filesystem::exists(dir.File("n.db")));
+  // A source of another kind (a protocol) is named as SRC, in plain words, exit 2.
+  test::WriteFile(dir.File("p.toml"), "[study]\n");
+  EXPECT_EQ(
+      test::RunCommand(Cli() + " db backup " + dir.File("p.toml") + " " + dir.File("n.db"), &out),
+      2);
+  EXPECT_NE(out.find(dir.File("p.toml") + ": SRC: not a SQLite database"), std::string::npos)
+      << out;
+  EXPECT_FALSE(std::filesystem::exists(dir.File("n.db")));
+  // A destination in a folder that does not exist: exit 2, in plain words.
+  EXPECT_EQ(test::RunCommand(Cli() + " db backup " + src + " " + dir.File("none/n.db"), &out), 2);
+  EXPECT_NE(out.find("DEST: its folder"), std::string::npos) << out;
 }
 
 }  // namespace

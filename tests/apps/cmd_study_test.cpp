@@ -33,6 +33,10 @@ TEST(StudyCli, ValidateAndPlan) {
   EXPECT_EQ(test::RunCommand(Cli() + " study validate " + dir.File("bad.toml"), &out), 2);
   EXPECT_NE(out.find("bad.toml:"), std::string::npos) << out;
   EXPECT_NE(out.find("method[0].algorithm"), std::string::npos) << out;
+  // A negative plan index is refused in a line, not with a 300-digit bound.
+  EXPECT_EQ(test::RunCommand(Cli() + " study plan " + Small() + " --index -1", &out), 2);
+  EXPECT_NE(out.find("--index"), std::string::npos) << out;
+  EXPECT_LT(out.size(), 200u) << out;
 }
 
 TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
@@ -44,6 +48,9 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
                                  " --participant P01 --quiet --stop-after 9",
                              &out),
             3)
+      << out;
+  EXPECT_NE(out.find("continue with 'hapticlab study resume --db " + db + " --participant P01'"),
+            std::string::npos)
       << out;
   ASSERT_EQ(test::RunCommand(Cli() + " study status --db " + db + " --json", &out), 0) << out;
   auto st = json::parse(out)["participants"][0];
@@ -75,6 +82,18 @@ TEST(StudyCli, RunStopResumeStatusAnalyzeExport) {
       test::RunCommand(
           Cli() + " study run " + Small() + " --db " + db + " --participant P01 --quiet", &out),
       2);
+  EXPECT_NE(out.find("already completed"), std::string::npos) << out;
+  // Resuming it, in another mode too, says that it is completed (not that the mode differs).
+  EXPECT_EQ(test::RunCommand(
+                Cli() + " study resume --db " + db + " --participant P01 --device falcon", &out),
+            2);
+  EXPECT_NE(out.find("already completed"), std::string::npos) << out;
+  // A report or an export over a file that is not a folder: exit 2 naming --out.
+  for (const std::string& cmd :
+       {" analyze --db " + db + " --out " + Small(), " export --db " + db + " --out " + Small()}) {
+    EXPECT_EQ(test::RunCommand(Cli() + cmd, &out), 2) << cmd;
+    EXPECT_NE(out.find("--out: exists and is not a folder"), std::string::npos) << out;
+  }
   EXPECT_EQ(
       test::RunCommand(
           Cli() + " study run " + Small() + " --db " + db + " --participant Alice --quiet", &out),

@@ -96,6 +96,18 @@ TEST(ReadTextFile, RefusesFilesLargerThanTheLimit) {
   }
 }
 
+TEST(ReadTextFile, AFolderIsNamedAsOneNotReadAsAnEmptyFile) {
+  test::TempDir dir;
+  try {
+    (void)ReadTextFile(dir.path(), "protocol");
+    ADD_FAILURE() << "a folder was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("a folder, not a file: protocol expected"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 // The message of the std::runtime_error WriteTextFile throws ("" when it succeeds).
 std::string WriteFailure(const std::string& path, const std::string& text) {
   try {

@@ -185,6 +185,25 @@ TEST(Database, OpenForReadingRefusesDamagedFilesWithAClearMessage) {
   }
   EXPECT_NO_THROW(OpenForReading(path));
   EXPECT_THROW(OpenForReading(dir.File("missing.db")), InputError);
+  // A file of another kind (a protocol given as --db) or a folder is named as such, without
+  // SQLite's own words.
+  test::WriteFile(dir.File("p.toml"), "[study]\nname = \"x\"\n");
+  // A writer refuses it too, and leaves it as it was.
+  EXPECT_THROW(Database(dir.File("p.toml")), InputError);
+  EXPECT_EQ(test::ReadFile(dir.File("p.toml")), "[study]\nname = \"x\"\n");
+  for (const std::string& other : {dir.File("p.toml"), dir.path()}) {
+    try {
+      OpenForReading(other);
+      ADD_FAILURE() << "accepted " << other;
+    } catch (const InputError& e) {
+      const std::string msg = e.what();
+      EXPECT_EQ(msg.find("damaged"), std::string::npos) << msg;
+      EXPECT_EQ(msg.find("file is not a database"), std::string::npos) << msg;
+      EXPECT_TRUE(msg.find("not a SQLite database") != std::string::npos ||
+                  msg.find("a folder") != std::string::npos)
+          << msg;
+    }
+  }
   // Overwrite pages in the middle of the file.
   {
     std::string bytes = test::ReadFile(path);

@@ -160,6 +160,15 @@ TEST(SessionMode, OnlineBackupCopiesTheWalAndNeverOverwrites) {
   const auto before = fs::file_size(dir.File("b.db"));
   EXPECT_THROW(db.Backup(dir.File("b.db")), InputError);
   EXPECT_EQ(fs::file_size(dir.File("b.db")), before);
+  // A destination in a folder that does not exist is named as such, not in SQLite's words.
+  try {
+    db.Backup(dir.File("no-such-folder/c.db"));
+    ADD_FAILURE() << "backed up into a missing folder";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("no-such-folder does not exist"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("unable to open"), std::string::npos) << msg;
+  }
 }
 
 }  // namespace

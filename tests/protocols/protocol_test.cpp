@@ -116,6 +116,15 @@ TEST(Protocol, ParticipantCodesFollowThePatternAndAreNeverNames) {
   const auto q = ParseProtocol(text, "q.toml");
   EXPECT_NO_THROW(CheckParticipantCode(q, "lab2-014"));
   EXPECT_THROW(CheckParticipantCode(q, "P07"), InputError);
+  // The refusal's example is one the protocol's pattern accepts, not the default's P07.
+  try {
+    CheckParticipantCode(q, "JohnSmith");
+    ADD_FAILURE() << "accepted JohnSmith";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("e.g. lab2-001"), std::string::npos) << msg;
+    EXPECT_EQ(msg.find("P07"), std::string::npos) << msg;
+  }
 }
 
 TEST(Protocol, CodePatternsMatchInLinearTimeAndNeverAdmitNames) {

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <csignal>
 #include <optional>
 #include <vector>
 
@@ -25,13 +26,22 @@ class ScriptedUi final : public SessionUi {
  public:
   std::vector<double> scores{static_cast<double>(0.8f) * 100, static_cast<double>(0.37f) * 100};
   std::optional<std::string> console_code;
+  bool abort_placement = false;      // the experimenter aborts at the first PLACE SAMPLES
+  bool signal_at_placement = false;  // Ctrl-C arrives while PLACE SAMPLES waits
   std::vector<ConsentRequest> asked;
   bool Stimulus(const TrialScreen&, int, const Eigen::Vector3d&, double) override { return true; }
   std::optional<std::vector<double>> Rate(const TrialScreen&) override { return scores; }
   bool Break(double) override { return true; }
   std::optional<std::string> ConfirmConsent(const ConsentRequest& r) override {
     asked.push_back(r);
+    if (signal_at_consent) RequestStop(SIGTERM);  // the console's wait then ends
     return console_code;
+  }
+  bool signal_at_consent = false;  // SIGTERM arrives while the consent modal waits
+  std::optional<std::string> ConfirmPlacement(const TrialScreen& t) override {
+    if (signal_at_placement) RequestStop(SIGINT);  // the window's wait then ends
+    if (abort_placement || signal_at_placement) return std::nullopt;
+    return SessionUi::ConfirmPlacement(t);
   }
 };
 
@@ -154,6 +164,84 @@ TEST(Audit, AConsoleConfirmationIsRecordedThroughTheSameRecord) {
   const auto session = d.Sessions(d.FindParticipant(d.Studies()[0].id, "P05")->id).at(0).id;
   EXPECT_THROW(RecordConsent(d, session, {"Bob", "doc", "1", "console"}), InputError);
   EXPECT_THROW(RecordConsent(d, session, {"E02", "", "1", "console"}), InputError);
+}
+
+TEST(Audit, AnAbortWhilePlacingSamplesIsTheExperimentersAtThatTrial) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  ui.abort_placement = true;
+  auto o = PersonRun(dir.File("s.db"), "P08", &ui);
+  o.consent_confirmed_by = "E01";
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
+  int aborts = 0;
+  for (const auto& e : EventsOf(o.db_path, "P08")) {
+    if (e.kind != "abort") continue;
+    ++aborts;
+    EXPECT_EQ(e.established_by, source::kConsole) << e.detail;
+    EXPECT_TRUE(e.trial_id.has_value()) << "the trial whose samples were being placed";
+    EXPECT_NE(e.detail.find("placing the samples"), std::string::npos) << e.detail;
+  }
+  EXPECT_EQ(aborts, 1);
+}
+
+TEST(Audit, ASignalWhilePlacingSamplesIsRecordedAsTheSignalNotAsTheExperimenter) {
+  struct ClearStop {
+    ~ClearStop() { RequestStop(0); }
+  } clear;
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  ui.signal_at_placement = true;
+  auto o = PersonRun(dir.File("s.db"), "P10", &ui);
+  o.consent_confirmed_by = "E01";
+  EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
+  int interrupted = 0;
+  for (const auto& e : EventsOf(o.db_path, "P10")) {
+    EXPECT_NE(e.kind, "abort") << "nobody aborted: " << e.detail;
+    if (e.kind != "interrupted") continue;
+    ++interrupted;
+    EXPECT_EQ(e.established_by, source::kSignal);
+    EXPECT_NE(e.detail.find("SIGINT"), std::string::npos) << e.detail;
+  }
+  EXPECT_EQ(interrupted, 1);
+}
+
+TEST(Audit, ASignalWhileTheConsoleAsksForConsentIsNotBadInputAndRecordsNothing) {
+  struct ClearStop {
+    ~ClearStop() { RequestStop(0); }
+  } clear;
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  ui.signal_at_consent = true;
+  const auto o = PersonRun(dir.File("s.db"), "P11", &ui);
+  try {
+    RunStudy(p, o);
+    ADD_FAILURE() << "the session ran";
+  } catch (const InputError& e) {
+    ADD_FAILURE() << "a signal is not bad input: " << e.what();
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("SIGTERM"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(EventsOf(o.db_path, "P11").empty());
+}
+
+TEST(Audit, ACodeWithANameIsRefusedWhereverItIsGiven) {
+  test::TempDir dir;
+  const auto p = protocols::LoadProtocol(SmallProtocol());
+  ScriptedUi ui;
+  auto o = PersonRun(dir.File("s.db"), "P09", &ui);
+  // A digit does not make a name a code: the database's rule (no more than 3 letters in a
+  // row), which the console applies too (runner/ui ConfirmConsent).
+  o.consent_confirmed_by = "Smith1";
+  try {
+    RunStudy(p, o);
+    ADD_FAILURE() << "Smith1 was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.diagnostics().at(0).field, "consent_confirmed_by");
+    EXPECT_NE(std::string(e.what()).find("more than 3 letters"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Audit, RatingsAreStoredAsTheScalesValues) {

@@ -258,8 +258,8 @@ TEST(Screenshot, ConsentModalNamesTheDocumentAndTakesOnlyACode) {
   ui.SetConsoleScript([&](const ConsoleView& cv, const Drawn& d) {
     ConsoleAction a;
     if (!Find(d, "consent-modal") || ++step < 3) return a;  // the popup shows from its 2nd frame
-    if (step == 3) {                                        // a name is refused
-      a.consent_code = "Smith";
+    if (step == 3) {  // a name is refused, with a digit too (the database's rule)
+      a.consent_code = "Smith1";
       a.consent_confirmed = true;
     } else if (step == 6) {
       refused = cv.consent_error;
@@ -281,7 +281,7 @@ TEST(Screenshot, ConsentModalNamesTheDocumentAndTakesOnlyACode) {
       {.study = "s", .participant = "P07", .document = "consent-form.pdf", .version = "2026-03"});
   ASSERT_TRUE(code.has_value());
   EXPECT_EQ(*code, "E07");
-  EXPECT_NE(refused.find("'Smith' is not an experimenter code"), std::string::npos) << refused;
+  EXPECT_NE(refused.find("'Smith1' is not an experimenter code"), std::string::npos) << refused;
   EXPECT_EQ(ui.console().state, S::kStarting) << "the console goes back to where it was";
 }
 

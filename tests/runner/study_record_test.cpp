@@ -126,6 +126,16 @@ TEST(StudyRecord, ReservedCodesAreDistinctAndRunWithTheirPlanIndex) {
   status = StudyStatus(db_path);
   EXPECT_FALSE(status[0].session_status.has_value());  // reserved: no session yet
   EXPECT_EQ(status[1].session_status, db::SessionStatus::kCompleted);
+  // Running a completed code again is refused without sending the user to 'study resume'
+  // (which refuses a completed session).
+  try {
+    RunStudy(p, o);
+    ADD_FAILURE() << "P02 ran twice";
+  } catch (const InputError& e) {
+    const std::string why = e.what();
+    EXPECT_NE(why.find("already completed"), std::string::npos) << why;
+    EXPECT_EQ(why.find("study resume"), std::string::npos) << why;
+  }
   // A reserved code run with another plan index is refused; a new code takes the next index.
   o.participant = "P01";
   o.participant_index = 5;

@@ -107,7 +107,7 @@ class ScriptedUi : public SessionUi {
  public:
   int stimulus_frames = 0, rated = 0, breaks = 0, abort_at_trial = -1, break_request_at = -1;
   std::vector<int> sides_seen;
-  std::vector<double> break_s;
+  std::vector<double> break_s, screen_break_s;     // taken; announced on the screens
   std::vector<std::pair<int, int>> rated_numbers;  // (index, total) per rated trial
   std::vector<std::array<int, 3>> progress;        // (rated done, training done, training total)
   bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p,
@@ -124,6 +124,7 @@ class ScriptedUi : public SessionUi {
     ++rated;
     EXPECT_FALSE(t.training);
     rated_numbers.emplace_back(t.index, t.total);
+    screen_break_s.push_back(t.break_s);
     progress.push_back({t.rated_done, t.training_done, t.training_total});
     std::vector<double> r;
     for (std::size_t i = 0; i < t.criteria.size(); ++i)
@@ -178,6 +179,8 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   // The simulated rig's breaks run --ui-speed times faster, like its strokes (30 s / 200).
   ASSERT_FALSE(ui.break_s.empty());
   for (double b : ui.break_s) EXPECT_DOUBLE_EQ(b, p.break_duration_s / 200);
+  // The console's time estimate counts the breaks as long as they are.
+  for (double b : ui.screen_break_s) EXPECT_DOUBLE_EQ(b, p.break_duration_s / 200);
   // The screens number the rated trials 1, 2, ... of the 22, with the 4 training trials
   // (done before them) counted apart.
   ASSERT_EQ(ui.rated_numbers.size(), 11u) << "aborted at rated trial 12";

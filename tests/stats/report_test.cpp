@@ -201,6 +201,11 @@ TEST(Report, UnrunnableAnalysesSayWhyAndViolationsAreFlagged) {
   // Normality is tested once, on the ANOVA's residuals; no bold alarm per method.
   EXPECT_NE(two.find("Normality of the ANOVA's residuals"), std::string::npos) << two;
   EXPECT_EQ(two.find("Normality violated"), std::string::npos) << two;
+  // The scale the means, differences and CIs are in is named; the correlation names its unit
+  // and n: main-phase trials rated on every criterion, 8 participants x (4 materials x 2
+  // methods x 2 repetitions), less P08's 2 unrated FF Cork trials.
+  EXPECT_NE(two.find("Rating scale: 0 to 100 (the protocol's `scale`)"), std::string::npos) << two;
+  EXPECT_NE(two.find("n = 126 trials rated on every criterion"), std::string::npos) << two;
   // The dropped participant is named with the cell it lacks.
   const std::string dropped = Section(two, "- dropped P08: ", "\n");
   EXPECT_NE(dropped.find("Cork"), std::string::npos) << two;

@@ -9,6 +9,8 @@
 #include <thread>
 #include <utility>
 
+#include "hapticlab/core/participant_code.hpp"
+
 namespace hapticlab::runner::ui {
 
 WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& participant,
@@ -241,7 +243,7 @@ bool WindowSessionUi::Break(double seconds) {
         seconds - std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (left <= 0) break;
     pv_.break_remaining_s = cv_.break_remaining_s = left;
-    if (!Frame()) {
+    if (StopRequested() || !Frame()) {  // a signal ends the break as the runner records it
       go_on = false;
       break;
     }
@@ -365,10 +367,11 @@ void WindowSessionUi::UpdateTimes() {
                                                                            : 0.0;
   cv_.eta_s = std::max(0.0, left * per_trial_s + next_.breaks_left * next_.break_s + break_ahead_s -
                                 std::min(into_s, per_trial_s));
+  const int breaks = next_.breaks_left + (break_ahead_s > 0 ? 1 : 0);
   cv_.eta_basis =
-      fmt::format("{} trials at {:.{}f} s each ({}), {} planned breaks of {:.0f} s", left,
+      fmt::format("{} trials at {:.{}f} s each ({}), {} planned break{} of {:.0f} s", left,
                   per_trial_s, per_trial_s < 10 ? 1 : 0, measured ? "measured" : "from the plan",
-                  next_.breaks_left + (break_ahead_s > 0 ? 1 : 0), next_.break_s);
+                  breaks, breaks == 1 ? "" : "s", next_.break_s);
 }
 
 bool WindowSessionUi::BoxPressed() {
@@ -389,7 +392,8 @@ std::optional<std::string> WindowSessionUi::ConfirmPlacement(const TrialScreen& 
   placed_ = placed_by_key_ = false;
   std::optional<std::string> how;
   for (;;) {
-    if (!Frame()) break;
+    // Ctrl-C or SIGTERM ends the wait: the runner records the signal (a trial boundary).
+    if (StopRequested() || !Frame()) break;
     const bool box = BoxPressed();
     if (placed_ || box) {
       how = fmt::format("confirmed by the experimenter: {}", box              ? "rating box button"
@@ -420,25 +424,21 @@ std::optional<std::string> WindowSessionUi::ConfirmConsent(const ConsentRequest&
   consent_confirm_ = false;
   std::optional<std::string> code;
   for (;;) {
-    if (!Frame()) break;
+    if (StopRequested() || !Frame()) break;  // Ctrl-C or SIGTERM: the runner says so
     if (!consent_confirm_) continue;
     consent_confirm_ = false;
     const std::string& c = cv_.consent_code;
-    const bool ok =
-        c.size() >= 2 && c.size() <= 16 &&
-        std::all_of(
-            c.begin(), c.end(),
-            [](char ch) { return std::isalnum(static_cast<unsigned char>(ch)) || ch == '-'; }) &&
-        std::any_of(c.begin(), c.end(),
-                    [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)); });
-    if (ok) {
+    // The database's rule for every pseudonymous code (the runner records the code only if it
+    // passes it), so the console never accepts a code the session then refuses.
+    const std::string why = PseudonymousCodeProblem(c);
+    if (why.empty()) {
       code = c;
       break;
     }
     cv_.consent_error = fmt::format(
-        "'{}' is not an experimenter code: 2 to 16 letters, digits or '-', with at least one "
-        "digit (e.g. E07)",
-        c);
+        "'{}' is not an experimenter code ({}): 1 to 32 letters, digits, '-' or '_', with at "
+        "least one digit and no more than 3 letters in a row (e.g. E07), never a name",
+        c, why);
   }
   pv_ = saved;
   cv_.state = state;

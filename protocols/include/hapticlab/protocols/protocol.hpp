@@ -124,8 +124,12 @@ inline constexpr std::size_t kMaxCodePatternBytes = 128;
 /// RE2 regular expression: ECMAScript's common syntax without back-references or
 /// look-arounds); else `why` says what is wrong.
 bool ValidCodePattern(const std::string& pattern, std::string* why);
-/// Refuses (InputError naming the protocol and --participant) a code that is not 1-32 letters,
-/// digits, '-' or '_' matching the protocol's participant_code pattern.
+/// True when `code` is 1-32 letters, digits, '-' or '_' matching the protocol's
+/// participant_code pattern and passes the database's rule (PseudonymousCodeProblem); when
+/// only that rule refuses it, `why` says what it refuses. Builds no message.
+bool ParticipantCodeAccepted(const Protocol& p, const std::string& code, std::string* why);
+/// Refuses (InputError naming the protocol and --participant) a code ParticipantCodeAccepted
+/// does not accept; the message gives an example the pattern accepts when it can build one.
 void CheckParticipantCode(const Protocol& p, const std::string& code);
 
 /// Reads and validates a protocol. Throws hapticlab::InputError listing every problem.

@@ -265,6 +265,7 @@ struct SessionMode {
   std::optional<ActuatorKind> actuator = ActuatorKind::kNone;
   bool screens = false;  ///< --ui
   Rater rater;           ///< the simulated observer, or the participant's input device
+  std::string study;     ///< the study's name (RecordedMode fills it in; not part of the mode)
   std::string Describe()
       const;  ///< e.g. "device sim, actuator none, screens off, ratings simulated"
 };
@@ -279,7 +280,8 @@ bool CheckResumeMode(const SessionMode& recorded, const SessionMode& now, bool c
 SessionMode ModeOf(const RunOptions& options);
 
 /// The recorded mode of a participant's last session (for `study resume` to default to).
-/// @throws InputError when the database or the participant does not exist, or the session
+/// @throws InputError when the database or the participant does not exist, the session is
+/// completed (nothing to resume), or the session
 /// records an actuator or rater this build does not know (field session.actuator/rater)
 SessionMode RecordedMode(const std::string& db_path, const std::string& participant);
 
