@@ -116,7 +116,7 @@ TEST(Cli, ExportWritesTables) {
     const auto st = d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
     const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
     const auto se = d.StartSession({.participant_id = p});
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+    const auto t = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
     d.CompleteTrial(t, {{"overall", 55, 1}});
   }
   std::string out;

@@ -16,8 +16,9 @@ TEST(Database, StoresModelsEventsAndChunks) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
-  db.LogEvent({.session_id = se, .trial_id = t, .kind = "device-fault", .detail = "stale"});
+  const auto t = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
+  db.LogEvent(
+      {.session_id = se, .trial_id = t, .kind = db::EventKind::kDeviceFault, .detail = "stale"});
   ASSERT_EQ(db.Events(se).size(), 1u);
   EXPECT_EQ(*db.Events(se)[0].trial_id, t);
   TrajectoryChunk c{.trial_id = t,

@@ -14,9 +14,9 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto ids =
-      AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
-                     {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
+  const auto ids = AddTrials(
+      db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain, .material = "Cork"},
+           {.session_id = se, .plan_index = 1, .phase = PhaseKind::kMain, .material = "Denim"}});
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);
@@ -40,7 +40,7 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   const auto st = db.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+  const auto t = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
   EXPECT_EQ(db.StartTrial(t), 1);
   EXPECT_EQ(db.StartTrial(t), 2);
   // Attempt 1 left a chunk behind; attempt 2 wrote 3 samples of "force".

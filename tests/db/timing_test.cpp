@@ -21,7 +21,8 @@ std::pair<std::int64_t, std::int64_t> OneTrial(Database& db, const std::string& 
   const auto st = db.CreateStudy({.name = name, .protocol_toml = "p", .seed = 1});
   const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = db.StartSession({.participant_id = p});
-  return {st, db.AddTrial({.session_id = se, .plan_index = 0, .phase = "main", .material = "D"})};
+  return {st, db.AddTrial(
+                  {.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain, .material = "D"})};
 }
 
 SideTiming Distinct(std::int64_t trial) {

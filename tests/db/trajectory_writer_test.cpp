@@ -21,7 +21,7 @@ struct Fixture {
     const auto st = db.CreateStudy({.name = "w", .protocol_toml = "x", .seed = 1});
     const auto p = db.AddParticipant({.study_id = st, .code = "P01"});
     const auto se = db.StartSession({.participant_id = p});
-    trial = db.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+    trial = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
   }
 };
 

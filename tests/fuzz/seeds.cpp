@@ -34,7 +34,7 @@ std::string StudyDatabaseSeed(const std::string& scratch) {
                        .seed = 1});
     const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
     const auto se = d.StartSession({.participant_id = p});
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Denim"});
+    const auto t = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Denim"});
     d.StartTrial(t);
     d.InsertTrajectoryChunk({.trial_id = t,
                              .stream = "force",

@@ -35,7 +35,7 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
     const auto st = d.CreateStudy({.name = "e", .protocol_toml = "x", .seed = 1});
     const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
     const auto se = d.StartSession({.participant_id = p});
-    trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+    trial = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
   }
   const auto m = test::TexturedMaterial();
   renderer::RenderOptions ro;
