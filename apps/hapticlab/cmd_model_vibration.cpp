@@ -154,10 +154,15 @@ void AddFitVibration(CLI::App& model) {
   });
 }
 
+// fit-neural --topology: the names the neural model file uses (renderer/neural_io.cpp).
+inline constexpr EnumTable<renderer::NeuralTopology, 2> kTopologyNames{
+    {{renderer::NeuralTopology::kUnified, "unified"},
+     {renderer::NeuralTopology::kDecomposed, "decomposed"}}};
+
 void AddFitNeural(CLI::App& model) {
   struct O {
     VibArgs a;
-    std::string topology = "unified";
+    renderer::NeuralTopology topology = renderer::NeuralTopology::kUnified;
     int epochs = 40;
     double input_noise = 0.3;
     std::uint64_t seed = 1;
@@ -175,9 +180,8 @@ void AddFitNeural(CLI::App& model) {
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");
   cmd->add_option("--recordings", o->a.recordings, kRecordingsHelp)->required();
   AddSoundFlags(cmd, o->a.sound);
-  cmd->add_option("--topology", o->topology, "unified (Γ_U) or decomposed (Γ_D)")
-      ->check(CLI::IsMember({"unified", "decomposed"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--topology", o->topology, kTopologyNames,
+                "unified (Γ_U) or decomposed (Γ_D)");
   cmd->add_option("-o,--out", o->a.out, "Neural model file to write (.toml)")->required();
   cmd->add_option("--rate", o->a.rate, "Model sample rate [Hz]")->capture_default_str();
   cmd->add_option("--epochs", o->epochs, "Maximum training epochs per network")
@@ -196,8 +200,7 @@ void AddFitNeural(CLI::App& model) {
       modeling::RequireConditions(loaded, "fit-neural");
       const auto recs = modeling::PoolByCondition(loaded);  // one per grid cell
       modeling::NeuralFitOptions no;
-      no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified
-                                             : renderer::NeuralTopology::kDecomposed;
+      no.topology = o->topology;
       no.preprocess = VibOptions(o->a);
       no.train.max_epochs = o->epochs;
       no.train.seed = o->seed;
@@ -211,8 +214,9 @@ void AddFitNeural(CLI::App& model) {
       const auto m = modeling::FitNeural(recs, no);
       renderer::SaveNeuralModel(m, o->a.out);
       fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}{}\n",
-                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(),
-                 o->a.out, CalibrationNote(modeling::AllCalibrated(recs)));
+                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(),
+                 NameOf(kTopologyNames, o->topology), m.bands.size(), o->a.out,
+                 CalibrationNote(modeling::AllCalibrated(recs)));
       return kExitOk;
     });
   });
