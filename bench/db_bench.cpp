@@ -42,7 +42,7 @@ std::int64_t MakeTrial(db::Database& d) {
   const auto st = d.CreateStudy({.name = "bench", .protocol_toml = "x", .seed = 1});
   const auto p = d.AddParticipant({.study_id = st, .code = "P01"});
   const auto se = d.StartSession({.participant_id = p});
-  return d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+  return d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
 }
 
 void BM_WriterSamples(benchmark::State& state) {

@@ -5,7 +5,10 @@
 #include <functional>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
+
+#include "hapticlab/core/enum_names.hpp"
 
 namespace hapticlab::cli {
 
@@ -49,6 +52,31 @@ std::string JsonText(const nlohmann::json& j, int indent = -1);
 
 /// The progress log of a long command: each line to stderr, or nowhere when `quiet`.
 std::function<void(const std::string&)> StderrLog(bool quiet);
+
+/// Adds an option whose value is one of `table`'s names (an EnumTable, core/enum_names.hpp):
+/// CLI11 checks it against the names, which --help lists in table order with `value`'s
+/// current name as the default, and the name is parsed into `value` once, when given.
+/// `value` must outlive the parse.
+template <typename E, std::size_t N>
+CLI::Option* AddEnumOption(CLI::App* cmd, const std::string& name, E& value,
+                           const EnumTable<E, N>& table, const std::string& description) {
+  return cmd
+      ->add_option_function<std::string>(
+          name, [&value, &table](const std::string& s) { value = *FromName(table, s); },
+          description)
+      ->check(CLI::IsMember(Names(table)))
+      ->default_str(std::string(NameOf(table, value)));
+}
+
+/// AddEnumOption for a value with no default: nullopt until the option is given.
+template <typename E, std::size_t N>
+CLI::Option* AddEnumOption(CLI::App* cmd, const std::string& name, std::optional<E>& value,
+                           const EnumTable<E, N>& table, const std::string& description) {
+  return cmd
+      ->add_option_function<std::string>(
+          name, [&value, &table](const std::string& s) { value = FromName(table, s); }, description)
+      ->check(CLI::IsMember(Names(table)));
+}
 
 /// Registers a command group whose work lands with a later issue; running it explains that.
 void AddPlanned(CLI::App& parent, const std::string& name, const std::string& description,

@@ -107,7 +107,7 @@ std::string RealTimeCheck(const std::string& profiles_path) {
 void PowerLine(const protocols::Protocol& p, const design::FeltPool& pool) {
   bool has_main = false;
   for (const auto& v : pool.participants)
-    for (const auto& t : v) has_main |= t.phase == "main";
+    for (const auto& t : v) has_main |= t.phase == PhaseKind::kMain;
   if (!has_main || p.methods.size() < 2) return;
   const auto model = design::ChooseObserver(p, p.observer.empty() ? "builtin" : "");
   stats::PowerOptions po;
@@ -142,6 +142,14 @@ void PowerLine(const protocols::Protocol& p, const design::FeltPool& pool) {
       po.simulations, s, observer, line);
 }
 
+// What the demo records: the study's --record modes, plus 'first' (all of the first
+// participant, none of the others).
+enum class DemoRecord { kFirst, kAll, kForce, kNone };
+inline constexpr EnumTable<DemoRecord, 4> kDemoRecordNames{{{DemoRecord::kFirst, "first"},
+                                                            {DemoRecord::kAll, "all"},
+                                                            {DemoRecord::kForce, "force"},
+                                                            {DemoRecord::kNone, "none"}}};
+
 }  // namespace
 
 void RegisterDemo(CLI::App& app) {
@@ -149,7 +157,7 @@ void RegisterDemo(CLI::App& app) {
     std::string out,
         protocol = std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml";
     int participants = 8;
-    std::string record = "first";
+    DemoRecord record = DemoRecord::kFirst;
   };
   auto o = std::make_shared<O>();
   auto* cmd = app.add_subcommand(
@@ -164,12 +172,9 @@ void RegisterDemo(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::Range(2, 100));
   cmd->add_option("--protocol", o->protocol, "Study protocol to run")->capture_default_str();
-  cmd->add_option(
-         "--record", o->record,
-         "Trajectories to record: 'first' (every stream of the first participant, none of\n"
-         "the others: keeps the database near 30 MB), 'all', 'force', 'none'")
-      ->check(CLI::IsMember({"first", "all", "force", "none"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--record", o->record, kDemoRecordNames,
+                "Trajectories to record: 'first' (every stream of the first participant, none of\n"
+                "the others: keeps the database near 30 MB), 'all', 'force', 'none'");
   cmd->callback([o] {
     RunGuarded([&] {
       const auto t0 = std::chrono::steady_clock::now();
@@ -192,10 +197,10 @@ void RegisterDemo(CLI::App& app) {
         runner::RunOptions ro;
         ro.db_path = db_path;
         ro.participant = fmt::format("SIM{:02d}", i + 1);
-        ro.record = o->record == "all" || (o->record == "first" && i == 0)
+        ro.record = o->record == DemoRecord::kAll || (o->record == DemoRecord::kFirst && i == 0)
                         ? runner::RecordMode::kAll
-                    : o->record == "force" ? runner::RecordMode::kForce
-                                           : runner::RecordMode::kNone;
+                    : o->record == DemoRecord::kForce ? runner::RecordMode::kForce
+                                                      : runner::RecordMode::kNone;
         ro.on_felt = [&pool, i](const runner::FeltTrial& t) {
           auto& v = pool.participants[static_cast<std::size_t>(i)];
           if (!v.empty() && v.back().plan_index == t.plan_index)

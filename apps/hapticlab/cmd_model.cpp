@@ -80,9 +80,17 @@ void AddCheck(CLI::App& model) {
   });
 }
 
+// render --force-source: the normal force the vibration model reads.
+enum class ForceSource { kAuto, kTrajectory, kModel };
+inline constexpr EnumTable<ForceSource, 3> kForceSourceNames{
+    {{ForceSource::kAuto, "auto"},
+     {ForceSource::kTrajectory, "trajectory"},
+     {ForceSource::kModel, "model"}}};
+
 void AddRender(CLI::App& model) {
   struct O {
-    std::string model, trajectory, out, vib_out, algorithm = "fric2", force_source = "auto";
+    std::string model, trajectory, out, vib_out, algorithm = "fric2";
+    ForceSource force_source = ForceSource::kAuto;
     double force_rate = 1000, vib_rate = 10000, max_force = 8;
     bool no_vibration = false, no_filter = false;
     std::uint64_t seed = 1;
@@ -107,12 +115,9 @@ void AddRender(CLI::App& model) {
   cmd->add_option("--vibration-rate", o->vib_rate, "Vibration loop rate [Hz]")
       ->capture_default_str();
   cmd->add_option("--max-force", o->max_force, "Device force limit [N]")->capture_default_str();
-  cmd->add_option(
-         "--force-source", o->force_source,
-         "Normal force of the vibration model: auto (the trajectory's when it has forces),\n"
-         "trajectory (required), model (the rendered normal force)")
-      ->check(CLI::IsMember({"auto", "trajectory", "model"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--force-source", o->force_source, kForceSourceNames,
+                "Normal force of the vibration model: auto (the trajectory's when it has forces),\n"
+                "trajectory (required), model (the rendered normal force)");
   cmd->add_flag("--no-vibration", o->no_vibration, "Force only");
   cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
   cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
@@ -133,11 +138,11 @@ void AddRender(CLI::App& model) {
       ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) /
                          (traj.rows.back().t_s - traj.rows.front().t_s);
       ro.stale_after_s = 1e9;  // offline: samples are never stale
-      if (o->force_source == "trajectory" && !traj.has_forces)
+      if (o->force_source == ForceSource::kTrajectory && !traj.has_forces)
         throw InputError(o->trajectory, 0, "fz_N",
                          "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
       runner::OfflineOptions oo;
-      oo.measured_normal_force = o->force_source != "model" && traj.has_forces;
+      oo.measured_normal_force = o->force_source != ForceSource::kModel && traj.has_forces;
       const auto res = runner::RenderOffline(m, ro, traj, oo);
       std::string csv =
           "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,"

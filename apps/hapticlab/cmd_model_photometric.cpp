@@ -102,9 +102,19 @@ void WriteAlbedo(const std::string& path, const modeling::PhotometricResult& r) 
 
 }  // namespace photometric_out
 
+// --integration: a modeling::Integration, or auto (poisson with --mask, else frankot-chellappa).
+enum class IntegrationChoice { kAuto, kFrankotChellappa, kPoisson };
+inline constexpr EnumTable<IntegrationChoice, 3> kIntegrationNames{
+    {{IntegrationChoice::kAuto, "auto"},
+     {IntegrationChoice::kFrankotChellappa, "frankot-chellappa"},
+     {IntegrationChoice::kPoisson, "poisson"}}};
+inline constexpr EnumTable<modeling::Rejection, 2> kRejectionNames{
+    {{modeling::Rejection::kResidual, "residual"}, {modeling::Rejection::kBrightest, "brightest"}}};
+
 struct PhotometricArgs {
-  std::string images, lights = "dome", image_list, reference, mask, out, csv, tiff, normals, albedo,
-                      integration = "auto", rejection = "residual";
+  std::string images, lights = "dome", image_list, reference, mask, out, csv, tiff, normals, albedo;
+  IntegrationChoice integration = IntegrationChoice::kAuto;
+  modeling::Rejection rejection = modeling::Rejection::kResidual;
   double pitch = 0, shadow_fraction = 0.05, outlier_sigmas = 3, noise_floor = 1e-3,
          specular_fraction = 0.1;
   int min_lights = 4;
@@ -141,19 +151,15 @@ void AddPhotometricInputs(CLI::App* cmd, PhotometricArgs& o) {
 
 // How the normals are integrated and which readings each pixel's fit rejects.
 void AddPhotometricSolverOptions(CLI::App* cmd, PhotometricArgs& o) {
-  cmd->add_option("--integration", o.integration,
-                  "frankot-chellappa (periodic, FFT; whole image only), poisson (Neumann boundary: "
-                  "DCT on the\n"
-                  "whole image, sparse solve on a mask), or auto (poisson with --mask, else "
-                  "frankot-chellappa)")
-      ->check(CLI::IsMember({"auto", "frankot-chellappa", "poisson"}))
-      ->capture_default_str();
-  cmd->add_option(
-         "--rejection", o.rejection,
-         "residual (per pixel, from its Lambertian fit residuals) or brightest (the fixed rule:\n"
-         "drop the brightest --specular-fraction of each pixel's lights)")
-      ->check(CLI::IsMember({"residual", "brightest"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--integration", o.integration, kIntegrationNames,
+                "frankot-chellappa (periodic, FFT; whole image only), poisson (Neumann boundary: "
+                "DCT on the\n"
+                "whole image, sparse solve on a mask), or auto (poisson with --mask, else "
+                "frankot-chellappa)");
+  AddEnumOption(
+      cmd, "--rejection", o.rejection, kRejectionNames,
+      "residual (per pixel, from its Lambertian fit residuals) or brightest (the fixed rule:\n"
+      "drop the brightest --specular-fraction of each pixel's lights)");
   cmd->add_option(
          "--outlier-sigmas", o.outlier_sigmas,
          "residual rule: a reading is an outlier beyond this many robust SDs of all residuals")
@@ -196,7 +202,7 @@ void AddPhotometricOutputs(CLI::App* cmd, PhotometricArgs& o) {
 void CheckPhotometricArgs(const PhotometricArgs& o) {
   photometric_out::CheckImageOutput(o.normals, "--normals");
   photometric_out::CheckImageOutput(o.albedo, "--albedo");
-  if (!o.mask.empty() && o.integration == "frankot-chellappa")
+  if (!o.mask.empty() && o.integration == IntegrationChoice::kFrankotChellappa)
     throw InputError(kCommandLine, 0, "--integration",
                      "frankot-chellappa integrates the whole image; with --mask use poisson");
 }
@@ -215,11 +221,11 @@ modeling::PhotometricOptions PhotometricSolverOptions(const PhotometricArgs& o, 
                                                       int height) {
   modeling::PhotometricOptions po;
   po.pitch_m = o.pitch;
-  po.integration = o.integration == "poisson" || (o.integration == "auto" && !o.mask.empty())
+  po.integration = o.integration == IntegrationChoice::kPoisson ||
+                           (o.integration == IntegrationChoice::kAuto && !o.mask.empty())
                        ? modeling::Integration::kPoisson
                        : modeling::Integration::kFrankotChellappa;
-  po.rejection =
-      o.rejection == "brightest" ? modeling::Rejection::kBrightest : modeling::Rejection::kResidual;
+  po.rejection = o.rejection;
   po.shadow_fraction = o.shadow_fraction;
   po.outlier_sigmas = o.outlier_sigmas;
   po.noise_floor = o.noise_floor;

@@ -60,8 +60,12 @@ std::vector<double> ParseList(const std::string& s, const char* opt) {
 const std::map<std::string, std::string> kVibFlags = {{"recordings", "--recordings"},
                                                       {"model_rate_hz", "--rate"}};
 
+inline constexpr EnumTable<modeling::OrderCriterion, 2> kCriterionNames{
+    {{modeling::OrderCriterion::kAic, "aic"}, {modeling::OrderCriterion::kBic, "bic"}}};
+
 struct VibArgs {
-  std::string recordings, out, order = "auto", criterion = "aic";
+  std::string recordings, out, order = "auto";
+  modeling::OrderCriterion criterion = modeling::OrderCriterion::kAic;
   double rate = 2000, band_lo = 20;
   SoundFlags sound;
   int max_order = 30;
@@ -83,9 +87,7 @@ void AddVibOptions(CLI::App* cmd, VibArgs& a) {
                   "cap is reported")
       ->check(CLI::Range(1, renderer::kMaxArOrder))
       ->capture_default_str();
-  cmd->add_option("--criterion", a.criterion, "Order criterion")
-      ->check(CLI::IsMember({"aic", "bic"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--criterion", a.criterion, kCriterionNames, "Order criterion");
   cmd->add_option("--band-low", a.band_lo, "High-pass of the band limit [Hz]")
       ->capture_default_str();
 }
@@ -95,8 +97,7 @@ modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
   o.model_rate_hz = a.rate;
   o.band_lo_hz = a.band_lo;
   o.max_order = a.max_order;
-  o.criterion =
-      a.criterion == "bic" ? modeling::OrderCriterion::kBic : modeling::OrderCriterion::kAic;
+  o.criterion = a.criterion;
   if (a.order != "auto") {
     try {
       o.order = std::stoi(a.order);
@@ -112,7 +113,8 @@ modeling::VibrationFitOptions VibOptions(const VibArgs& a) {
 // The criterion chose the cap itself: it may want a larger order.
 std::string AtCapNote(const VibArgs& a, int order) {
   return a.order == "auto" && order == a.max_order
-             ? fmt::format(" (the --max-order cap: the {} may prefer more)", a.criterion)
+             ? fmt::format(" (the --max-order cap: the {} may prefer more)",
+                           NameOf(kCriterionNames, a.criterion))
              : std::string();
 }
 
@@ -152,10 +154,15 @@ void AddFitVibration(CLI::App& model) {
   });
 }
 
+// fit-neural --topology: the names the neural model file uses (renderer/neural_io.cpp).
+inline constexpr EnumTable<renderer::NeuralTopology, 2> kTopologyNames{
+    {{renderer::NeuralTopology::kUnified, "unified"},
+     {renderer::NeuralTopology::kDecomposed, "decomposed"}}};
+
 void AddFitNeural(CLI::App& model) {
   struct O {
     VibArgs a;
-    std::string topology = "unified";
+    renderer::NeuralTopology topology = renderer::NeuralTopology::kUnified;
     int epochs = 40;
     double input_noise = 0.3;
     std::uint64_t seed = 1;
@@ -173,9 +180,8 @@ void AddFitNeural(CLI::App& model) {
       "it from a material with [neural] file = \"F\" (docs/modeling-neural.md).");
   cmd->add_option("--recordings", o->a.recordings, kRecordingsHelp)->required();
   AddSoundFlags(cmd, o->a.sound);
-  cmd->add_option("--topology", o->topology, "unified (Γ_U) or decomposed (Γ_D)")
-      ->check(CLI::IsMember({"unified", "decomposed"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--topology", o->topology, kTopologyNames,
+                "unified (Γ_U) or decomposed (Γ_D)");
   cmd->add_option("-o,--out", o->a.out, "Neural model file to write (.toml)")->required();
   cmd->add_option("--rate", o->a.rate, "Model sample rate [Hz]")->capture_default_str();
   cmd->add_option("--epochs", o->epochs, "Maximum training epochs per network")
@@ -194,8 +200,7 @@ void AddFitNeural(CLI::App& model) {
       modeling::RequireConditions(loaded, "fit-neural");
       const auto recs = modeling::PoolByCondition(loaded);  // one per grid cell
       modeling::NeuralFitOptions no;
-      no.topology = o->topology == "unified" ? renderer::NeuralTopology::kUnified
-                                             : renderer::NeuralTopology::kDecomposed;
+      no.topology = o->topology;
       no.preprocess = VibOptions(o->a);
       no.train.max_epochs = o->epochs;
       no.train.seed = o->seed;
@@ -209,12 +214,20 @@ void AddFitNeural(CLI::App& model) {
       const auto m = modeling::FitNeural(recs, no);
       renderer::SaveNeuralModel(m, o->a.out);
       fmt::print("{} recordings ({} speeds x {} forces) -> {} model, {} bands -> {}{}\n",
-                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(), o->topology, m.bands.size(),
-                 o->a.out, CalibrationNote(modeling::AllCalibrated(recs)));
+                 loaded.size(), m.speeds_mps.size(), m.forces_N.size(),
+                 NameOf(kTopologyNames, o->topology), m.bands.size(), o->a.out,
+                 CalibrationNote(modeling::AllCalibrated(recs)));
       return kExitOk;
     });
   });
 }
+
+// cv-vibration --model-kind: the AR bank or a neural topology.
+enum class VibModelKind { kLpc, kNeuralUnified, kNeuralDecomposed };
+inline constexpr EnumTable<VibModelKind, 3> kVibModelKindNames{
+    {{VibModelKind::kLpc, "lpc"},
+     {VibModelKind::kNeuralUnified, "neural-unified"},
+     {VibModelKind::kNeuralDecomposed, "neural-decomposed"}}};
 
 void AddCvVibration(CLI::App& model) {
   auto a = std::make_shared<VibArgs>();
@@ -223,7 +236,7 @@ void AddCvVibration(CLI::App& model) {
   auto json_out = std::make_shared<bool>(false);
   auto seed = std::make_shared<std::uint64_t>(1);
   auto plots = std::make_shared<std::string>();
-  auto kind = std::make_shared<std::string>("lpc");
+  auto kind = std::make_shared<VibModelKind>(VibModelKind::kLpc);
   auto epochs = std::make_shared<int>(40);
   auto* cmd = model.add_subcommand(
       "cv-vibration",
@@ -240,12 +253,10 @@ void AddCvVibration(CLI::App& model) {
                   "Write measured vs synthesized spectra per condition here (SVG and PNG)");
   cmd->add_flag("--json", *json_out,
                 "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
-  cmd->add_option(
-         "--model-kind", *kind,
-         "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
-         "Fig. 3.7: run all three on the same recordings for one E_s table)")
-      ->check(CLI::IsMember({"lpc", "neural-unified", "neural-decomposed"}))
-      ->capture_default_str();
+  AddEnumOption(
+      cmd, "--model-kind", *kind, kVibModelKindNames,
+      "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
+      "Fig. 3.7: run all three on the same recordings for one E_s table)");
   cmd->add_option("--epochs", *epochs, "Neural models: maximum training epochs")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
@@ -254,13 +265,13 @@ void AddCvVibration(CLI::App& model) {
       const auto recs = modeling::LoadRecordings(a->recordings, Labels(a->sound));
       const bool calibrated = modeling::AllCalibrated(recs);
       modeling::CvResult cv;
-      if (*kind == "lpc") {
+      if (*kind == VibModelKind::kLpc) {
         cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"),
                                      ParseList(*tf, "--train-forces"), VibOptions(*a), *seed);
       } else {
         modeling::NeuralFitOptions no;
-        no.topology = *kind == "neural-unified" ? renderer::NeuralTopology::kUnified
-                                                : renderer::NeuralTopology::kDecomposed;
+        no.topology = *kind == VibModelKind::kNeuralUnified ? renderer::NeuralTopology::kUnified
+                                                            : renderer::NeuralTopology::kDecomposed;
         no.preprocess = VibOptions(*a);
         no.train.max_epochs = *epochs;
         no.train.seed = *seed;
@@ -296,7 +307,7 @@ void AddCvVibration(CLI::App& model) {
                           {"split", r.train ? "train" : "test"},
                           {"es", r.es}});
         }
-        PrintJson(nlohmann::json{{"model_kind", *kind},
+        PrintJson(nlohmann::json{{"model_kind", std::string(NameOf(kVibModelKindNames, *kind))},
                                  {"calibrated", calibrated},
                                  {"conditions", rows},
                                  {"mean_es_train", cv.mean_es_train},
@@ -312,11 +323,13 @@ void AddCvVibration(CLI::App& model) {
       }
       const bool any_test =
           std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
-      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n", *kind, cv.mean_es_train,
+      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n",
+                 NameOf(kVibModelKindNames, *kind), cv.mean_es_train,
                  any_test ? fmt::format("{:.3f}", cv.mean_es_test)
                           : std::string("n/a (no held-out conditions)"),
-                 *kind == "lpc" ? fmt::format(" (AR order {}{})", cv.order, AtCapNote(*a, cv.order))
-                                : std::string(),
+                 *kind == VibModelKind::kLpc
+                     ? fmt::format(" (AR order {}{})", cv.order, AtCapNote(*a, cv.order))
+                     : std::string(),
                  CalibrationNote(calibrated));
       return kExitOk;
     });

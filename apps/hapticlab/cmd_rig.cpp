@@ -69,8 +69,14 @@ std::vector<Eigen::Vector3d> ParseTouchPoints(const std::string& arg) {
 
 namespace {
 
+// rig check --clock: the stroke check on the virtual clock, or the timing check on the real one.
+enum class CheckClock { kVirtual, kReal };
+inline constexpr EnumTable<CheckClock, 2> kCheckClockNames{
+    {{CheckClock::kVirtual, "virtual"}, {CheckClock::kReal, "real"}}};
+
 struct CheckArgs {
-  std::string path, device = DefaultCheckDevice(), clock, firmware;
+  std::string path, device = DefaultCheckDevice(), firmware;
+  std::optional<CheckClock> clock;  ///< none given: real for hardware, else virtual
   double seconds = 2, empty = 0, split = 0;
   bool json = false, no_vibration = false;
   TimingCheckArgs timing;
@@ -227,18 +233,15 @@ void RegisterRigCheck(CLI::App& rig) {
   cmd->add_option("--device", o->device, DeviceHelp("Device back-end"))
       ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
-  cmd->add_option("--clock", o->clock,
-                  "virtual: the stroke check (simulated rigs; their default); real: the timing "
-                  "check (hardware's default)")
-      ->check(CLI::IsMember({"virtual", "real"}));
+  AddEnumOption(cmd, "--clock", o->clock, kCheckClockNames,
+                "virtual: the stroke check (simulated rigs; their default); real: the timing "
+                "check (hardware's default)");
   cmd->add_option("--firmware", o->firmware, "falcon: the firmware file (docs/hardware.md)");
   cmd->add_option("--rate", o->timing.rate_hz, "--clock real: force loop rate [Hz]")
       ->check(CLI::Range(100.0, 20000.0))
       ->capture_default_str();
-  cmd->add_option("--actuator", o->timing.actuator,
-                  "--clock real: vibrotactile actuator (audio: PortAudio)")
-      ->check(CLI::IsMember({"none", "audio"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--actuator", o->timing.actuator, runner::kActuatorNames,
+                "--clock real: vibrotactile actuator (audio: PortAudio)");
   cmd->add_option("--audio-device", o->timing.audio_device,
                   "--clock real: PortAudio output device (name substring)");
   cmd->add_flag("--no-vibration", o->no_vibration, "--clock real: run the force loop only");
@@ -264,14 +267,14 @@ void RegisterRigCheck(CLI::App& rig) {
     RunGuarded([&] {
       const runner::RigBackend& backend = runner::GetBackend(o->device);
       const bool hardware = !backend.simulated();
-      if (o->clock.empty()) o->clock = hardware ? "real" : "virtual";
-      if (hardware && o->clock == "virtual")
+      if (!o->clock) o->clock = hardware ? CheckClock::kReal : CheckClock::kVirtual;
+      if (hardware && o->clock == CheckClock::kVirtual)
         throw InputError(kCommandLine, 0, "--clock",
                          "'" + o->device +
                              "' is hardware: it runs on the real clock (--clock real); the "
                              "virtual-clock check strokes a simulated rig (" +
                              runner::SimulatedBackendList() + ")");
-      if (o->clock == "real") {
+      if (o->clock == CheckClock::kReal) {
         TimingCheckArgs a = o->timing;
         a.device = o->device;
         a.firmware = o->firmware;
@@ -288,7 +291,8 @@ void RegisterRigCheck(CLI::App& rig) {
 
 void RegisterRigCalibrate(CLI::App& rig) {
   struct O {
-    std::string path, side = "left", points, out, up;
+    std::string path, points, out, up;
+    SampleSide side = SampleSide::kLeft;
   };
   auto o = std::make_shared<O>();
   auto* cmd = rig.add_subcommand(
@@ -299,9 +303,7 @@ void RegisterRigCalibrate(CLI::App& rig) {
       "offset is added. +z of the sample is the plane normal on the side of --up (default:\n"
       "the current pose's normal); x points from the first touch to the second.");
   cmd->add_option("RIG", o->path, "Rig file to update (.toml)")->required();
-  cmd->add_option("--side", o->side, "Which sample")
-      ->check(CLI::IsMember({"left", "right"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--side", o->side, kSampleSideNames, "Which sample");
   cmd->add_option("--points", o->points, "Touches: a CSV file (x_m,y_m,z_m) or \"x,y,z;x,y,z;...\"")
       ->required();
   cmd->add_option("--up", o->up, "Direction out of the sample, device frame: x,y,z");
@@ -309,7 +311,7 @@ void RegisterRigCalibrate(CLI::App& rig) {
   cmd->callback([o] {
     RunGuarded([&] {
       auto r = runner::LoadRig(o->path);
-      const int side = o->side == "left" ? 0 : 1;
+      const int side = static_cast<int>(o->side);
       auto pts = ParseTouchPoints(o->points);
       for (auto& p : pts) p += r.tip_offset_m;  // the tip, not the reported point
       Eigen::Vector3d up =
@@ -329,7 +331,8 @@ void RegisterRigCalibrate(CLI::App& rig) {
       fmt::print(stderr,
                  "{} sample from {} touches: origin {} m, normal {} (device frame); residual RMS "
                  "{:.3f} mm, max {:.3f} mm\n",
-                 o->side, pts.size(), Vec(fit.device_from_sample.translation()).dump(),
+                 NameOf(kSampleSideNames, o->side), pts.size(),
+                 Vec(fit.device_from_sample.translation()).dump(),
                  Vec(fit.device_from_sample.linear().col(2)).dump(), fit.rms_residual_m * 1e3,
                  fit.max_residual_m * 1e3);
       PrintOrWrite(text, o->out);

@@ -58,7 +58,8 @@ bool EnterPressed(bool* closed) {
 }
 
 struct TouchArgs {
-  std::string device, rig, side = "left", firmware, script, out;
+  std::string device, rig, firmware, script, out;
+  SampleSide side = SampleSide::kLeft;
   int points = 4;
 };
 
@@ -105,14 +106,14 @@ int RunTouch(const TouchArgs& a) {
   const bool have_rig = !a.rig.empty();
   const auto rf = have_rig ? runner::LoadRig(a.rig)
                            : runner::DefaultRig(runner::GetBackend(a.device).RigDevice());
-  const int side = a.side == "left" ? 0 : 1;
+  const int side = static_cast<int>(a.side);
   std::vector<Eigen::Vector3d> script;
   if (!a.script.empty()) script = ParseTouchPoints(a.script);
   const int wanted = script.empty() ? a.points : static_cast<int>(script.size());
   TouchDevice d = OpenTouchDevice(a, rf);
   const Eigen::Isometry3d sample_from_device = rf.DeviceFromSample(side).inverse();
   fmt::print(stderr, "{}: touch {} points on the {} sample; {} records each\n", a.device, wanted,
-             a.side,
+             NameOf(kSampleSideNames, a.side),
              !script.empty() ? "the script"
              : d.falcon      ? "Enter or a grip button"
                              : "Enter");
@@ -143,18 +144,20 @@ int RunTouch(const TouchArgs& a) {
             pts.size(), wanted));
       if (++since_print >= 100) {  // 10 lines a second
         since_print = 0;
-        fmt::print(
-            stderr, "tip {} mm device{}\n", Mm(p),
-            have_rig ? fmt::format(", {} mm {} sample", Mm(sample_from_device * p), a.side) : "");
+        fmt::print(stderr, "tip {} mm device{}\n", Mm(p),
+                   have_rig ? fmt::format(", {} mm {} sample", Mm(sample_from_device * p),
+                                          NameOf(kSampleSideNames, a.side))
+                            : "");
       }
     }
     if (!record || filled < kMean) continue;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const auto& q : ring) mean += q / kMean;
     pts.push_back(mean);
-    fmt::print(
-        stderr, "point {}: {} mm device{}\n", pts.size(), Mm(mean),
-        have_rig ? fmt::format(", {} mm {} sample", Mm(sample_from_device * mean), a.side) : "");
+    fmt::print(stderr, "point {}: {} mm device{}\n", pts.size(), Mm(mean),
+               have_rig ? fmt::format(", {} mm {} sample", Mm(sample_from_device * mean),
+                                      NameOf(kSampleSideNames, a.side))
+                        : "");
     filled = 0;
     reads_held = 0;
     if (!script.empty() && pts.size() < script.size())
@@ -169,7 +172,7 @@ int RunTouch(const TouchArgs& a) {
     fmt::print(stderr,
                "wrote {} ({} points, device frame; `hapticlab rig calibrate RIG --side {} "
                "--points {}`)\n",
-               a.out, pts.size(), a.side, a.out);
+               a.out, pts.size(), NameOf(kSampleSideNames, a.side), a.out);
   }
   return kExitOk;
 }
@@ -208,9 +211,8 @@ void RegisterRigSetup(CLI::App& rig) {
       ->check(CLI::IsMember(runner::BackendNames()))
       ->required();
   cmd->add_option("--rig", o->rig, "Rig file: also show the tip in the sample's frame");
-  cmd->add_option("--side", o->side, "Which sample (for the sample frame and --script)")
-      ->check(CLI::IsMember({"left", "right"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--side", o->side, kSampleSideNames,
+                "Which sample (for the sample frame and --script)");
   cmd->add_option("--points", o->points, "How many touches to record")
       ->check(CLI::Range(3, 100))
       ->capture_default_str();

@@ -218,9 +218,15 @@ void AddRmAnova(CLI::App& s) {
   cmd->callback([o] { RunGuarded([&] { return RunRmAnova(*o); }); });
 }
 
+// tukey --error: the within-subject error term, pooled (univariate) or per pair.
+enum class TukeyError { kUnivariate, kMultivariate };
+inline constexpr EnumTable<TukeyError, 2> kTukeyErrorNames{
+    {{TukeyError::kUnivariate, "univariate"}, {TukeyError::kMultivariate, "multivariate"}}};
+
 struct TukeyArgs {
   std::shared_ptr<Common> c = std::make_shared<Common>();
-  std::string factor, subject, within, between, method = "univariate";
+  std::string factor, subject, within, between;
+  TukeyError error = TukeyError::kUnivariate;
 };
 
 // The comparisons: between groups without --subject, else within subjects (the ANOVA's
@@ -247,7 +253,7 @@ stats::TukeyResult FitTukey(const TukeyArgs& o, stats::RmAnovaResult* a,
   const auto data = Load(*o.c, keys);
   Fitted(data, [&] {
     *a = stats::RmAnova(data, o.subject, factors, groups);
-    r = stats::TukeyWithin(*a, o.factor, o.method == "multivariate");
+    r = stats::TukeyWithin(*a, o.factor, o.error == TukeyError::kMultivariate);
   });
   *checked = data;
   return r;
@@ -321,9 +327,7 @@ void AddTukey(CLI::App& s) {
       "--between", o->between,
       "Between-subject factors of a mixed design (with --subject); --factor may be one of them");
   AddMissing(cmd, o->c);
-  cmd->add_option("--error", o->method, "Within-subject error term")
-      ->check(CLI::IsMember({"univariate", "multivariate"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--error", o->error, kTukeyErrorNames, "Within-subject error term");
   cmd->callback([o] { RunGuarded([&] { return RunTukey(*o); }); });
 }
 

@@ -106,13 +106,18 @@ void PrintLmm(const stats::LmmResult& r) {
           : "");
 }
 
+// lmm --ddf: the denominator df of the t and F tests.
+enum class Ddf { kSatterthwaite, kKenwardRoger };
+inline constexpr EnumTable<Ddf, 2> kDdfNames{
+    {{Ddf::kSatterthwaite, "satterthwaite"}, {Ddf::kKenwardRoger, "kenward-roger"}}};
+
 }  // namespace
 
 void AddLmm(CLI::App& s) {
   auto c = std::make_shared<Common>();
   auto formula = std::make_shared<std::string>();
   auto ml = std::make_shared<bool>(false);
-  auto ddf = std::make_shared<std::string>("satterthwaite");
+  auto ddf = std::make_shared<Ddf>(Ddf::kSatterthwaite);
   auto* cmd = s.add_subcommand(
       "lmm",
       "Linear mixed model, fitted as lme4::lmer (penalised least squares, sparse Cholesky,\n"
@@ -137,13 +142,11 @@ void AddLmm(CLI::App& s) {
       cmd->add_flag("--reml", *reml, "Restricted maximum likelihood (the default, as lmer)");
   cmd->add_flag("--ml", *ml, "Maximum likelihood (for comparing fixed effects by likelihood ratio)")
       ->excludes(reml_flag);
-  cmd->add_option(
-         "--ddf", *ddf,
-         "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or "
-         "kenward-roger\n"
-         "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)")
-      ->check(CLI::IsMember({"satterthwaite", "kenward-roger"}))
-      ->capture_default_str();
+  AddEnumOption(
+      cmd, "--ddf", *ddf, kDdfNames,
+      "Denominator df of the t and F tests: satterthwaite (lmerTest's default) or "
+      "kenward-roger\n"
+      "(pbkrtest's adjusted SEs and scaled F, as lmerTest ddf = \"Kenward-Roger\"; REML only)");
   cmd->add_flag("--json", c->json, "Print results as JSON");
   cmd->callback([=] {
     RunGuarded([&] {
@@ -155,7 +158,7 @@ void AddLmm(CLI::App& s) {
         keys.erase(keys.begin());
         stats::LmmOptions o;
         o.reml = !*ml;
-        o.kenward_roger = *ddf == "kenward-roger";
+        o.kenward_roger = *ddf == Ddf::kKenwardRoger;
         const auto data = Load(*c, keys);
         stats::LmmResult r;
         Fitted(data, [&] { r = stats::FitLmm(data, *formula, o); });

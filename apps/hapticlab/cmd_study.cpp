@@ -30,12 +30,14 @@ namespace {
 using nlohmann::json;
 
 struct RunArgs {
-  std::string protocol, db, participant, device = runner::DefaultBackendName(), record = "all";
+  std::string protocol, db, participant, device = runner::DefaultBackendName();
+  runner::RecordMode record = runner::RecordMode::kAll;
   int index = -1, stop_after = -1;
   double fault_rate = 0;
   bool ui = false, json = false, quiet = false, change_mode = false;
   // Hardware and screens.
-  std::string firmware, actuator = "none", audio_device, rig_file, rating_box, rating_layout;
+  std::string firmware, audio_device, rig_file, rating_box, rating_layout;
+  runner::ActuatorKind actuator = runner::ActuatorKind::kNone;
   double noise_rms = 0.1, ui_speed = 1.0, full_scale_mps2 = 50;
   bool fullscreen = false;
   runner::RtThreadOptions rt;
@@ -64,7 +66,7 @@ class Rig {
   void Open(const RunArgs& a, const std::string& study, const std::string& participant,
             runner::RunOptions* o) {
     o->device = a.device;
-    o->actuator = ParseName(runner::kActuatorNames, a.actuator, kCommandLine, 0, "actuator");
+    o->actuator = a.actuator;
     o->rating_box = a.rating_box;
     const runner::RigBackend& backend = runner::GetBackend(a.device);
     if (!backend.simulated() && !a.ui) {  // before any device is opened
@@ -111,7 +113,8 @@ class Rig {
                         "Resume it where a display is, or continue in mode [device {}, "
                         "actuator {}, screens off, ratings simulated] with '--ui=false "
                         "--change-mode' (logged; each rating records its source)",
-                        participant, a.recorded_mode, e.what(), a.device, a.actuator));
+                        participant, a.recorded_mode, e.what(), a.device,
+                        NameOf(runner::kActuatorNames, a.actuator)));
       }
       o->ui = ui_.get();
       o->ui_playback_speed = a.ui_speed;
@@ -121,12 +124,6 @@ class Rig {
   std::unique_ptr<runner::Rig> rig_;
   std::unique_ptr<runner::ui::WindowSessionUi> ui_;
 };
-
-runner::RecordMode ParseRecord(const std::string& s) {
-  if (s == "none") return runner::RecordMode::kNone;
-  if (s == "force") return runner::RecordMode::kForce;
-  return runner::RecordMode::kAll;
-}
 
 void PrintSummary(const runner::RunSummary& s, bool json_out) {
   if (json_out) {
@@ -177,7 +174,7 @@ int RunSession(const RunArgs& a, const std::string& study, runner::RunOptions o,
   Rig rig(a, study, a.participant, &o);
   o.db_path = a.db;
   o.participant = a.participant;
-  o.record = ParseRecord(a.record);
+  o.record = a.record;
   o.stop_after_trials = a.stop_after;
   o.rt = a.rt;
   o.consent_confirmed_by = a.consent_by;
@@ -313,10 +310,8 @@ void AddHardwareOptions(CLI::App* cmd, RunArgs& a) {
       ->check(CLI::IsMember(runner::BackendNames()))
       ->capture_default_str();
   cmd->add_option("--firmware", a.firmware, "Falcon firmware file (yours; docs/hardware.md)");
-  cmd->add_option("--actuator", a.actuator,
-                  "Vibrotactile actuator: audio (PortAudio, with masking noise) or none")
-      ->check(CLI::IsMember({"audio", "none"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--actuator", a.actuator, runner::kActuatorNames,
+                "Vibrotactile actuator: audio (PortAudio, with masking noise) or none");
   cmd->add_option("--audio-device", a.audio_device,
                   "PortAudio output device (name substring; default: the default output)");
   cmd->add_option("--full-scale", a.full_scale_mps2,
@@ -346,9 +341,7 @@ void AddHardwareOptions(CLI::App* cmd, RunArgs& a) {
 
 // What study run and resume record and print.
 void AddSessionOptions(CLI::App* cmd, RunArgs& a) {
-  cmd->add_option("--record", a.record, "What to record per trial")
-      ->check(CLI::IsMember({"all", "force", "none"}))
-      ->capture_default_str();
+  AddEnumOption(cmd, "--record", a.record, runner::kRecordModeNames, "What to record per trial");
   cmd->add_flag("--json", a.json, "Print the summary as JSON");
   cmd->add_flag("--quiet", a.quiet,
                 "No per-trial progress (faulted attempts are still printed, on stderr)");
@@ -440,17 +433,14 @@ void RegisterStudyResume(CLI::App* study) {
       // Options not given take the recorded mode's values.
       const auto rec = runner::RecordedMode(a->db, a->participant);
       if (cmd->count("--device") == 0) a->device = rec.device;
-      if (cmd->count("--actuator") == 0 && rec.actuator)
-        a->actuator = NameOf(runner::kActuatorNames, *rec.actuator);
+      if (cmd->count("--actuator") == 0 && rec.actuator) a->actuator = *rec.actuator;
       if (cmd->count("--ui") == 0) a->ui = rec.screens;
       if (cmd->count("--rating-box") == 0 && rec.rater.kind == runner::RaterKind::kRatingBox)
         a->rating_box = rec.rater.box;
       a->recorded_mode = rec.Describe();
       // Refused before any device or window is opened.
       runner::CheckResumeMode(
-          rec,
-          {a->device, ParseName(runner::kActuatorNames, a->actuator, kCommandLine, 0, "actuator"),
-           a->ui, runner::RaterOf(a->ui, a->rating_box)},
+          rec, {a->device, a->actuator, a->ui, runner::RaterOf(a->ui, a->rating_box)},
           a->change_mode, a->db, a->participant);
       runner::RunOptions o;
       o.change_mode = a->change_mode;

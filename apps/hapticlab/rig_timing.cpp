@@ -194,7 +194,7 @@ int RunTimingCheck(const TimingCheckArgs& a) {
     if (simulation->twin) simulation->twin->BeginRun();
   }
   std::unique_ptr<devices::AudioOutput> audio;
-  if (a.actuator == "audio") {
+  if (a.actuator == runner::ActuatorKind::kAudio) {
     devices::AudioConfig c;
     c.device = a.audio_device;
     c.input_rate_hz = ro.vibration_rate_hz;

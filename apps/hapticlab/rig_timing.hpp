@@ -13,6 +13,11 @@
 
 namespace hapticlab::cli {
 
+/// A rig's two sample poses (`--side`): the value is the pose's index.
+enum class SampleSide { kLeft = 0, kRight = 1 };
+inline constexpr EnumTable<SampleSide, 2> kSampleSideNames{
+    {{SampleSide::kLeft, "left"}, {SampleSide::kRight, "right"}}};
+
 /// Touch points [m]: a CSV file (x_m,y_m,z_m per line, an optional header) or
 /// "x,y,z;x,y,z;...". @throws InputError naming the file (or --points) and line.
 std::vector<Eigen::Vector3d> ParseTouchPoints(const std::string& arg);
@@ -36,7 +41,8 @@ struct TimingCheckArgs {
   std::string device = runner::DefaultBackendName();
   std::string firmware;                     ///< a back-end that needs firmware: the file
   std::optional<runner::RigFile> rig_file;  ///< --rig (force calibration); none: built-in
-  std::string actuator = "none";            ///< "none" or "audio" (PortAudio, --audio-device)
+  /// The vibrotactile actuator (audio: PortAudio, --audio-device).
+  runner::ActuatorKind actuator = runner::ActuatorKind::kNone;
   std::string audio_device;
   /// Material model (.toml) to render while a simulated hand strokes the virtual sample on
   /// the real clock (the tick durations of that model); empty: a resting grip out of contact,

@@ -70,7 +70,7 @@ Trial ReadTrial(const Stmt& s, const std::string& path) {
   t.id = s.Int(0);
   t.session_id = s.Int(1);
   t.plan_index = static_cast<int>(s.Int(2));
-  t.phase = s.Text(3);
+  t.phase = ParseName(kPhaseKindNames, s.Text(3), path, 0, "trial.phase");
   t.material = s.Text(4);
   t.comparison = s.Text(5);
   t.method = s.Text(6);
@@ -92,7 +92,7 @@ constexpr const char* kInsertTrial =
 void BindTrial(Stmt& s, const Trial& t) {
   s.Bind(1, t.session_id)
       .Bind(2, t.plan_index)
-      .Bind(3, t.phase)
+      .Bind(3, std::string(NameOf(kPhaseKindNames, t.phase)))
       .Bind(4, t.material)
       .Bind(5, t.comparison)
       .Bind(6, t.method)
@@ -284,7 +284,7 @@ std::int64_t Database::LogEvent(const Event& e) {
     s.Bind(2, *e.trial_id);
   else
     s.BindNull(2);
-  s.Bind(3, e.kind)
+  s.Bind(3, std::string(NameOf(kEventKindNames, e.kind)))
       .Bind(4, e.detail)
       .Bind(5, e.established_by.empty() ? std::string("hapticlab") : e.established_by)
       .Run();
@@ -298,7 +298,10 @@ std::vector<Event> Database::Events(std::int64_t session_id) const {
   s.Bind(1, session_id);
   std::vector<Event> out;
   while (s.Step()) {
-    Event e{s.Int(0), s.Int(1), std::nullopt, s.Text(3), s.Text(4), s.Text(5), s.Text(6)};
+    Event e{s.Int(0),     s.Int(1),
+            std::nullopt, ParseName(kEventKindNames, s.Text(3), path_, 0, "event.kind"),
+            s.Text(4),    s.Text(5),
+            s.Text(6)};
     if (!s.IsNull(2)) e.trial_id = s.Int(2);
     out.push_back(std::move(e));
   }

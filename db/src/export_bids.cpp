@@ -304,9 +304,10 @@ std::string BehTable(const std::vector<const internal::TrialRecord*>& by_plan, s
     const auto& x = t->trial;
     for (const auto& r : t->ratings) {
       beh += fmt::format("{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\t{}\n", x.plan_index + 1,
-                         Cell(x.phase), Cell(x.material), Cell(x.comparison), Cell(x.method),
-                         x.repetition, Cell(x.left), Cell(x.right), x.attempts, Cell(r.criterion),
-                         Num(r.score), Num(r.response_time_s), Cell(r.source));
+                         Cell(std::string(NameOf(kPhaseKindNames, x.phase))), Cell(x.material),
+                         Cell(x.comparison), Cell(x.method), x.repetition, Cell(x.left),
+                         Cell(x.right), x.attempts, Cell(r.criterion), Num(r.score),
+                         Num(r.response_time_s), Cell(r.source));
       ++*rows;
     }
   }

@@ -145,23 +145,24 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
   std::vector<std::pair<double, std::string>> events;
   for (const auto& t : s.trials) {
     const auto& x = t.trial;
-    events.emplace_back(t.origin_s, nlohmann::json{{"marker", "trial_start"},
-                                                   {"trial", x.plan_index + 1},
-                                                   {"phase", x.phase},
-                                                   {"material", x.material},
-                                                   {"comparison", x.comparison},
-                                                   {"method", x.method},
-                                                   {"repetition", x.repetition},
-                                                   {"left", x.left},
-                                                   {"right", x.right},
-                                                   {"attempts", x.attempts},
-                                                   {"stimulus_s", t.stimulus_s}}
-                                        .dump());
+    events.emplace_back(t.origin_s,
+                        nlohmann::json{{"marker", "trial_start"},
+                                       {"trial", x.plan_index + 1},
+                                       {"phase", std::string(NameOf(kPhaseKindNames, x.phase))},
+                                       {"material", x.material},
+                                       {"comparison", x.comparison},
+                                       {"method", x.method},
+                                       {"repetition", x.repetition},
+                                       {"left", x.left},
+                                       {"right", x.right},
+                                       {"attempts", x.attempts},
+                                       {"stimulus_s", t.stimulus_s}}
+                            .dump());
   }
   for (std::size_t i = 0; i < s.events.size(); ++i) {
     const auto& e = s.events[i];
     nlohmann::json j{{"marker", "event"},
-                     {"kind", e.kind},
+                     {"kind", std::string(NameOf(kEventKindNames, e.kind))},
                      {"detail", e.detail},
                      {"established_by", e.established_by}};
     for (const auto& t : s.trials)

@@ -136,7 +136,7 @@ stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams
     const sim::Observer obs(observer, rng.NextU64(), pool.criteria);
     const std::string code = fmt::format("S{:03d}", i + 1);
     for (const auto& tr : trials) {
-      if (main_only && tr.phase != "main") continue;
+      if (main_only && tr.phase != PhaseKind::kMain) continue;
       for (std::size_t c = 0; c < pool.criteria.size() && c < tr.distances.size(); ++c) {
         const double y = obs.RateDistance(pool.criteria[c], tr.material, tr.method, tr.distances[c],
                                           pool.scale_min, pool.scale_max, rng);
@@ -148,7 +148,7 @@ stats::LongTable SimulateRatings(const FeltPool& pool, const sim::ObserverParams
         } else {
           t.keys[0].push_back(code);
           t.keys[1].push_back(pool.criteria[c]);
-          t.keys[2].push_back(tr.phase);
+          t.keys[2].emplace_back(NameOf(kPhaseKindNames, tr.phase));
           t.keys[3].push_back(tr.material);
           t.keys[4].push_back(tr.comparison);
           t.keys[5].push_back(tr.method);

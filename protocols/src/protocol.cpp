@@ -76,19 +76,8 @@ std::size_t Bounded(const std::string& file, Diagnostics* d, const toml::array& 
 }  // namespace
 
 const char* ToString(PhaseKind k) {
-  switch (k) {
-    case PhaseKind::kTraining:
-      return "training";
-    case PhaseKind::kReference:
-      return "reference";
-    case PhaseKind::kMain:
-      return "main";
-    case PhaseKind::kStaircase:
-      return "staircase";
-    case PhaseKind::kQuestPlus:
-      return "quest-plus";
-  }
-  return "?";
+  const std::string_view name = NameOf(kPhaseKindNames, k);  // a literal: NUL-terminated
+  return name.empty() ? "?" : name.data();
 }
 
 const Material* Protocol::FindMaterial(const std::string& id) const {

@@ -12,6 +12,20 @@
 namespace hapticlab::protocols::internal {
 
 inline constexpr std::string_view kPhaseKinds = "training|reference|main|staircase|quest-plus";
+// `kind`'s choice i is PhaseKind(i), stored by its name: the choices are kPhaseKindNames'
+// names, in the enum's order.
+constexpr bool PhaseChoicesAreTheKindNames() {
+  std::string_view rest = kPhaseKinds;
+  for (std::size_t i = 0; i < kPhaseKindNames.size(); ++i) {
+    const auto& e = kPhaseKindNames[i];
+    if (static_cast<std::size_t>(e.value) != i || !rest.starts_with(e.name)) return false;
+    rest.remove_prefix(e.name.size());
+    if (!rest.empty() && !rest.starts_with('|')) return false;
+    if (!rest.empty()) rest.remove_prefix(1);
+  }
+  return rest.empty();
+}
+static_assert(PhaseChoicesAreTheKindNames());
 
 std::span<const fields::Field<Protocol>> TopLevelFields();
 std::span<const fields::Field<Protocol>> StudyFields();

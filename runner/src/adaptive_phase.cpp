@@ -47,7 +47,7 @@ void History(db::Database& database, std::int64_t session, std::size_t phase_ind
              std::vector<Answered>* done, std::optional<db::Trial>* pending, int* max_plan_index) {
   for (const auto& t : database.Trials(session)) {
     *max_plan_index = std::max(*max_plan_index, t.plan_index);
-    if (PhaseOf(t.phase) != kind) continue;
+    if (t.phase != kind) continue;
     // The phase index is part of the row's comparison text ("phase <i>: <parameter>").
     if (t.comparison.rfind(fmt::format("phase {}:", phase_index), 0) != 0) continue;
     if (t.status != db::TrialStatus::kCompleted) {
@@ -194,7 +194,7 @@ void AbortSession(const TrialContext& c, std::optional<std::int64_t> trial_id,
                   const std::string& why, const std::string& by) {
   c.database.LogEvent({.session_id = c.session,
                        .trial_id = trial_id,
-                       .kind = "abort",
+                       .kind = db::EventKind::kAbort,
                        .detail = why,
                        .established_by = by});
   c.database.EndSession(c.session, db::SessionStatus::kAborted);
@@ -207,7 +207,7 @@ void RecordFault(const TrialContext& c, const protocols::Phase& ph, const db::Tr
   c.database.SetTrialStatus(t.id, db::TrialStatus::kFaulted);
   c.database.LogEvent({.session_id = c.session,
                        .trial_id = t.id,
-                       .kind = "device-fault",
+                       .kind = db::EventKind::kDeviceFault,
                        .detail = shown.detail,
                        .established_by = shown.untouched
                                              ? std::string(source::kRunner)
@@ -217,7 +217,7 @@ void RecordFault(const TrialContext& c, const protocols::Phase& ph, const db::Tr
                   protocols::ToString(ph.kind), t.plan_index + 1, t.attempts, shown.detail);
   c.database.LogEvent({.session_id = c.session,
                        .trial_id = t.id,
-                       .kind = "attempt-faulted",
+                       .kind = db::EventKind::kAttemptFaulted,
                        .detail = line,
                        .established_by = source::kRunner});
   if (c.opt.warn) c.opt.warn(line);
@@ -234,7 +234,7 @@ db::Trial TrialToRun(const TrialContext& c, const AdaptiveSpec& a, const protoco
   if (pending) return *pending;
   db::Trial t{.session_id = c.session,
               .plan_index = max_index + 1,
-              .phase = protocols::ToString(ph.kind),
+              .phase = ph.kind,
               .material = a.material,
               .comparison = fmt::format("phase {}: {}", pi, a.parameter),
               .method = a.method,

@@ -92,7 +92,7 @@ std::int64_t RecordConsent(db::Database& database, std::int64_t session, const C
                      "a consent record names the document, its version and how it was confirmed");
   return database.LogEvent(
       {.session_id = session,
-       .kind = "consent",
+       .kind = db::EventKind::kConsent,
        .detail = fmt::format("{}{} ({}): consent document \"{}\", version \"{}\"", kConsentPrefix,
                              r.confirmed_by, r.via, r.document, r.version),
        .established_by = source::Experimenter(r.confirmed_by)});
@@ -102,14 +102,15 @@ std::int64_t RecordConsentNotApplicable(db::Database& database, std::int64_t ses
                                         const std::string& mode) {
   return database.LogEvent(
       {.session_id = session,
-       .kind = "consent",
+       .kind = db::EventKind::kConsent,
        .detail = "not applicable: simulated (no person takes part; " + mode + ")",
        .established_by = source::kSessionMode});
 }
 
 bool HasConfirmedConsent(const db::Database& database, std::int64_t session) {
   for (const auto& e : database.Events(session))
-    if (e.kind == "consent" && e.established_by.rfind("experimenter:", 0) == 0) return true;
+    if (e.kind == db::EventKind::kConsent && e.established_by.rfind("experimenter:", 0) == 0)
+      return true;
   return false;
 }
 

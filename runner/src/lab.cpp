@@ -123,10 +123,6 @@ Lab LoadLab(const protocols::Protocol& p, const std::string& device,
   return lab;
 }
 
-std::optional<protocols::PhaseKind> PhaseOf(const std::string& recorded) {
-  return FromName(kPhaseKindNames, recorded);
-}
-
 Stimulus ParseStimulus(const std::string& stimulus) {
   const auto colon = stimulus.find(':');
   if (colon == std::string::npos) return {.real = false, .id = stimulus};

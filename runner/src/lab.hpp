@@ -30,19 +30,7 @@ struct Lab {
 Lab LoadLab(const protocols::Protocol& p, const std::string& device,
             const std::map<std::string, std::string>& model_files = {});
 
-// The phases' names as protocols::ToString gives them and the database records them.
-inline constexpr EnumTable<protocols::PhaseKind, 5> kPhaseKindNames{
-    {{protocols::PhaseKind::kTraining, "training"},
-     {protocols::PhaseKind::kReference, "reference"},
-     {protocols::PhaseKind::kMain, "main"},
-     {protocols::PhaseKind::kStaircase, "staircase"},
-     {protocols::PhaseKind::kQuestPlus, "quest-plus"}}};
-
-// The phase a trial row records (kPhaseKindNames); nullopt for a name no phase has.
-std::optional<protocols::PhaseKind> PhaseOf(const std::string& recorded);
-inline bool IsTraining(const std::string& recorded) {
-  return PhaseOf(recorded) == protocols::PhaseKind::kTraining;
-}
+inline bool IsTraining(PhaseKind phase) { return phase == PhaseKind::kTraining; }
 
 // One stimulus of a plan ("real:Denim", "virtual:Denim"): which kind, which material id.
 struct Stimulus {

@@ -49,7 +49,7 @@ void MarkFailed(db::Database& database, std::int64_t session, const std::string&
     db::WriteTransaction tx(database);
     database.LogEvent(
         {.session_id = session,
-         .kind = "stopped",
+         .kind = db::EventKind::kStopped,
          .detail = "the session stopped on an error: " + WithoutFolder(database, why) +
                    "; completed trials are recorded; fix the cause, then "
                    "'hapticlab study resume'",
@@ -98,7 +98,7 @@ class SessionQueue {
   std::optional<RunSummary> StopRequestedBefore(const db::Trial& t);
   TrialScreen Screen(const db::Trial& t, const TrialStimuli& stimuli) const;
   std::optional<RunSummary> BreakAndPlacement(const db::Trial& t, const TrialScreen& screen);
-  void Requeue(db::Trial& t, const char* kind, const std::string& cause, const std::string& by);
+  void Requeue(db::Trial& t, db::EventKind kind, const std::string& cause, const std::string& by);
   std::optional<RunSummary> AfterTrial(db::Trial& t, const Outcome& o, const TrialScreen& screen,
                                        std::vector<db::Trial>* queue);
 
@@ -148,7 +148,6 @@ RunSummary SessionQueue::Finish(db::SessionStatus status) {
 
 RunSummary SessionQueue::Abort(db::Event why) {
   why.session_id = session_;
-  if (why.kind.empty()) why.kind = "abort";
   database_.LogEvent(why);
   database_.EndSession(session_, db::SessionStatus::kAborted);
   return Finish(db::SessionStatus::kAborted);
@@ -168,7 +167,7 @@ void SessionQueue::CountTrials() {
     if (completed) (IsTraining(t.phase) ? training_done_ : rated_done_) += 1;
   }
   for (const auto& e : database_.Events(session_))
-    if (e.kind == "break-planned" && e.trial_id) break_before_.insert(*e.trial_id);
+    if (e.kind == db::EventKind::kBreakPlanned && e.trial_id) break_before_.insert(*e.trial_id);
 }
 
 RunSummary SessionQueue::Run() {
@@ -179,7 +178,7 @@ RunSummary SessionQueue::Run() {
   participant_ = MakeParticipant(rig_, lab_, opt_, part_.seed);
   if (opt_.rig)  // a rig the caller opened (the one a simulated session opens is not logged)
     database_.LogEvent({.session_id = session_,
-                        .kind = "device",
+                        .kind = db::EventKind::kDevice,
                         .detail = rig_.description,
                         .established_by = source::Device(opt_.device)});
   // Masking noise on the headphones for the whole session (ch. IV.5.1, V.2.1).
@@ -200,7 +199,7 @@ RunSummary SessionQueue::Run() {
     }
   } ui_events{opt_.ui};
   if (opt_.ui)
-    opt_.ui->log_event = [this](const std::string& kind, const std::string& detail) {
+    opt_.ui->log_event = [this](db::EventKind kind, const std::string& detail) {
       database_.LogEvent({.session_id = session_,
                           .trial_id = trial_under_way_,
                           .kind = kind,
@@ -226,11 +225,11 @@ RunSummary SessionQueue::Run() {
 std::optional<RunSummary> SessionQueue::RunPlannedPhase(protocols::PhaseKind phase) {
   std::vector<db::Trial> queue;
   for (const auto& t : trials_)
-    if (PhaseOf(t.phase) == phase && t.status != db::TrialStatus::kCompleted &&
+    if (t.phase == phase && t.status != db::TrialStatus::kCompleted &&
         t.status != db::TrialStatus::kFaulted)
       queue.push_back(t);
   for (const auto& t : trials_)  // faulted before a crash: retried at the phase's end
-    if (PhaseOf(t.phase) == phase && t.status == db::TrialStatus::kFaulted) queue.push_back(t);
+    if (t.phase == phase && t.status == db::TrialStatus::kFaulted) queue.push_back(t);
   while (!queue.empty()) {
     const std::size_t pick = Pick(queue, phase);
     db::Trial t = queue[pick];
@@ -264,7 +263,7 @@ std::size_t SessionQueue::Pick(const std::vector<db::Trial>& queue, protocols::P
   if (queue.size() > 1)
     database_.LogEvent({.session_id = session_,
                         .trial_id = queue[0].id,
-                        .kind = "constraint-relaxed",
+                        .kind = db::EventKind::kConstraintRelaxed,
                         .detail = "only trials of the same material remain in the phase",
                         .established_by = source::kRunner});
   return 0;
@@ -274,7 +273,7 @@ std::size_t SessionQueue::Pick(const std::vector<db::Trial>& queue, protocols::P
 std::optional<RunSummary> SessionQueue::StopRequestedBefore(const db::Trial& t) {
   if (const int sig = StopRequested()) {
     return Abort({.trial_id = t.id,
-                  .kind = "interrupted",
+                  .kind = db::EventKind::kInterrupted,
                   .detail = fmt::format("stopped by signal {} ({}) before this trial; 'study "
                                         "resume' continues with it",
                                         sig,
@@ -284,7 +283,8 @@ std::optional<RunSummary> SessionQueue::StopRequestedBefore(const db::Trial& t) 
                   .established_by = source::kSignal});
   }
   if (opt_.stop_after_trials >= 0 && sum_.executed >= opt_.stop_after_trials)
-    return Abort({.detail = "stopped after the requested number of trials",
+    return Abort({.kind = db::EventKind::kAbort,
+                  .detail = "stopped after the requested number of trials",
                   .established_by = source::CommandLine("--stop-after")});
   return std::nullopt;
 }
@@ -320,7 +320,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
     const double break_s = p_.break_duration_s / speed;
     database_.LogEvent({.session_id = session_,
                         .trial_id = t.id,
-                        .kind = "break",
+                        .kind = db::EventKind::kBreak,
                         .detail = fmt::format(
                             "{:.0f} s break ({}{})", break_s,
                             requested ? "requested by the experimenter" : "planned",
@@ -330,6 +330,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
     if (!opt_.ui->Break(break_s)) {
       if (auto stopped = StopRequestedBefore(t)) return stopped;  // a signal ended the break
       return Abort({.trial_id = t.id,
+                    .kind = db::EventKind::kAbort,
                     .detail = "the experimenter aborted during a break",
                     .established_by = source::kConsole});
     }
@@ -341,6 +342,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
     if (!how) {
       if (auto stopped = StopRequestedBefore(t)) return stopped;  // a signal ended the wait
       return Abort({.trial_id = t.id,
+                    .kind = db::EventKind::kAbort,
                     .detail = "the experimenter aborted while placing the samples; 'study "
                               "resume' continues with this trial",
                     .established_by = source::kConsole});
@@ -348,7 +350,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
     database_.LogEvent(
         {.session_id = session_,
          .trial_id = t.id,
-         .kind = "samples-placed",
+         .kind = db::EventKind::kSamplesPlaced,
          .detail = fmt::format("trial {}: {}; {}", screen.plan_number, screen.placement, *how),
          .established_by = how->starts_with("not confirmed") ? source::kRunner : source::kConsole});
   }
@@ -358,7 +360,7 @@ std::optional<RunSummary> SessionQueue::BreakAndPlacement(const db::Trial& t,
 // A faulted attempt of trial `t`: its cause as an event (established by `by`), then the
 // runner's re-queue as an 'attempt-faulted' event (counted by 'study status') and a line on
 // the log even without progress lines. The caller re-queues `t`.
-void SessionQueue::Requeue(db::Trial& t, const char* kind, const std::string& cause,
+void SessionQueue::Requeue(db::Trial& t, db::EventKind kind, const std::string& cause,
                            const std::string& by) {
   ++sum_.faults;
   database_.SetTrialStatus(t.id, db::TrialStatus::kFaulted);
@@ -373,10 +375,11 @@ void SessionQueue::Requeue(db::Trial& t, const char* kind, const std::string& ca
       why.resize(why.size() - std::strlen(tail));
   const std::string line =
       fmt::format("trial {} ({}, attempt {}) faulted: {}; re-queued at the end of the {} phase",
-                  t.plan_index + 1, t.phase, t.attempts, why, t.phase);
+                  t.plan_index + 1, NameOf(kPhaseKindNames, t.phase), t.attempts, why,
+                  NameOf(kPhaseKindNames, t.phase));
   database_.LogEvent({.session_id = session_,
                       .trial_id = t.id,
-                      .kind = "attempt-faulted",
+                      .kind = db::EventKind::kAttemptFaulted,
                       .detail = line,
                       .established_by = source::kRunner});
   Warn(opt_, part_.code + ": " + line);
@@ -395,17 +398,19 @@ std::optional<RunSummary> SessionQueue::AfterTrial(db::Trial& t, const Outcome& 
   untouched_in_a_row_ = o.untouched ? untouched_in_a_row_ + 1 : 0;
   if (o.aborted)
     return Abort({.trial_id = t.id,
+                  .kind = db::EventKind::kAbort,
                   .detail = "the experimenter aborted in the console; 'study resume' continues "
                             "with this trial",
                   .established_by = source::kConsole});
   if (o.fault) {
-    Requeue(t, "device-fault", o.fault_detail,
+    Requeue(t, db::EventKind::kDeviceFault, o.fault_detail,
             o.untouched ? std::string(source::kRunner) : source::Watchdog(opt_.device, o.injected));
     if (opt_.ui)
       opt_.ui->Event(fmt::format("{} {}: {} (re-queued)", what, screen.index, o.fault_detail));
     queue->push_back(t);
     if (untouched_in_a_row_ >= opt_.max_untouched_trials)
-      return Abort({.detail = fmt::format(
+      return Abort({.kind = db::EventKind::kAbort,
+                    .detail = fmt::format(
                         "{} trials in a row touched nothing: the rig's sample poses are probably "
                         "wrong (hapticlab rig show / rig calibrate)",
                         untouched_in_a_row_),
@@ -416,7 +421,8 @@ std::optional<RunSummary> SessionQueue::AfterTrial(db::Trial& t, const Outcome& 
     database_.CompleteTrial(t.id, o.ratings, writer_.TakeReports(t.id));
     trajectory_faults_ = 0;
   } catch (const db::TrajectoryIncomplete& e) {
-    Requeue(t, "trajectory-fault", WithoutFolder(database_, e.what()), source::kDatabase);
+    Requeue(t, db::EventKind::kTrajectoryFault, WithoutFolder(database_, e.what()),
+            source::kDatabase);
     if (opt_.ui)
       opt_.ui->Event(fmt::format("{} {}: trajectories not stored (re-queued)", what, screen.index));
     if (++trajectory_faults_ >= kMaxTrajectoryFaults)
@@ -432,9 +438,10 @@ std::optional<RunSummary> SessionQueue::AfterTrial(db::Trial& t, const Outcome& 
   (training ? training_done_ : rated_done_) += 1;
   last_material_ = t.material;
   // The plan's 1-based number, as `study plan`, events.csv and the exports number it.
-  Log(opt_, fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part_.code,
-                        t.plan_index + 1, sum_.planned, t.phase, t.material,
-                        t.method.empty() ? t.comparison : t.method, sum_.completed, sum_.planned));
+  Log(opt_,
+      fmt::format("{} trial {}/{} ({} {} {}) done; {} of {} completed", part_.code,
+                  t.plan_index + 1, sum_.planned, NameOf(kPhaseKindNames, t.phase), t.material,
+                  t.method.empty() ? t.comparison : t.method, sum_.completed, sum_.planned));
   return std::nullopt;
 }
 

@@ -164,7 +164,7 @@ SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng
   while (engine.watchdog().PopEvent(&e))
     database.LogEvent({.session_id = c.session,
                        .trial_id = t.id,
-                       .kind = "device-fault",
+                       .kind = db::EventKind::kDeviceFault,
                        .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
                                              e.t_s, side.label, e.tick),
                        .established_by = source::Watchdog(opt.device, injected)});

@@ -53,7 +53,7 @@ void LogPlanEvents(db::Database& database, std::int64_t session,
       database.LogEvent(
           {.session_id = session,
            .trial_id = ids[i],
-           .kind = "break-planned",
+           .kind = db::EventKind::kBreakPlanned,
            .detail = fmt::format("{:.0f} s break before this trial", p.break_duration_s),
            .established_by = source::kPlan});
 }
@@ -364,7 +364,7 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
     for (const auto& t : plan)
       rows.push_back({.session_id = session,
                       .plan_index = t.index,
-                      .phase = protocols::ToString(t.phase),
+                      .phase = t.phase,
                       .material = t.material,
                       .comparison = t.comparison,
                       .method = t.method,
@@ -437,7 +437,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
         RecordConsent(database, se.id, *consent);
     if (differs) {
       database.LogEvent({.session_id = se.id,
-                         .kind = "mode-change",
+                         .kind = db::EventKind::kModeChange,
                          .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
                                                recorded.Describe(), now.Describe()),
                          .established_by = source::CommandLine("--change-mode")});
@@ -459,7 +459,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
     int done = 0;
     for (const auto& t : database.Trials(se.id)) done += t.status == db::TrialStatus::kCompleted;
     database.LogEvent({.session_id = se.id,
-                       .kind = "resume",
+                       .kind = db::EventKind::kResume,
                        .detail = fmt::format("resumed with {} of {} trials completed{}", done,
                                              database.Trials(se.id).size(), unclosed),
                        .established_by = source::CommandLine("study resume")});
@@ -491,7 +491,7 @@ std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
         // an older session counts the trials still waiting in 'faulted').
         int attempts_faulted = 0, waiting = 0;
         for (const auto& e : database.Events(se.id))
-          attempts_faulted += e.kind == "attempt-faulted";
+          attempts_faulted += e.kind == db::EventKind::kAttemptFaulted;
         for (const auto& t : database.Trials(se.id)) {
           ++s.planned;
           if (t.status == db::TrialStatus::kCompleted) {

@@ -52,7 +52,7 @@ TrialScreen ScreenOf(const protocols::Protocol& p, const db::Trial& t, const Tri
   TrialScreen s;
   s.index = index;
   s.total = total;
-  s.phase = t.phase;
+  s.phase = NameOf(kPhaseKindNames, t.phase);
   s.left = t.left;
   s.right = t.right;
   s.method = t.method;
@@ -113,7 +113,7 @@ Outcome ExecuteTraining(const Lab& lab, const db::Trial& t, const TrialStimuli& 
     c.database.LogEvent(
         {.session_id = c.session,
          .trial_id = t.id,
-         .kind = "device-fault",
+         .kind = db::EventKind::kDeviceFault,
          .detail = "watchdog: " + r.detail + "; force was zeroed; training trial not repeated",
          .established_by = source::Watchdog(c.opt.device, false)});
     if (c.opt.ui) c.opt.ui->Event(fmt::format("training trial {}: {}", t.plan_index + 1, r.detail));

@@ -141,7 +141,7 @@ LongTable RatingsFromDatabase(const std::string& db_path, bool include_simulated
             }
             const std::string row[] = {st.name,
                                        p.code,
-                                       tr.phase,
+                                       std::string(NameOf(kPhaseKindNames, tr.phase)),
                                        tr.material,
                                        tr.comparison,
                                        tr.method,

@@ -118,6 +118,45 @@ TEST(CliCommon, ParseAndRunReturnsTheCommandsCodeOrTwoForBadUsage) {
   EXPECT_NE(out.find("error: x.db: --db: no such database file"), std::string::npos) << out;
 }
 
+// A named-value option (--record, --actuator): CLI11 checks the name against the table, --help
+// lists the names in table order with the default's name, and the value arrives parsed.
+enum class Speed { kSlow, kFast, kOff };
+inline constexpr EnumTable<Speed, 3> kSpeedNames{
+    {{Speed::kFast, "fast"}, {Speed::kSlow, "slow"}, {Speed::kOff, "off"}}};
+
+TEST(CliCommon, EnumOptionsTakeTheTablesNamesAndListThemInHelp) {
+  for (const auto& [arg, want] : std::vector<std::pair<std::string, Speed>>{
+           {"", Speed::kSlow}, {"fast", Speed::kFast}, {"off", Speed::kOff}}) {
+    CLI::App app("t");
+    Speed speed = Speed::kSlow;
+    cli::AddEnumOption(&app, "--speed", speed, kSpeedNames, "How fast");
+    std::vector<const char*> argv{"t"};
+    if (!arg.empty()) argv.insert(argv.end(), {"--speed", arg.c_str()});
+    std::string out;
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    const int rc = cli::ParseAndRun(app, static_cast<int>(argv.size()), argv.data());
+    out = testing::internal::GetCapturedStdout() + testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, 0) << out;
+    EXPECT_EQ(speed, want) << arg;
+  }
+  CLI::App app("t");
+  Speed speed = Speed::kOff;
+  cli::AddEnumOption(&app, "--speed", speed, kSpeedNames, "How fast");
+  EXPECT_NE(app.help().find("--speed TEXT:{fast,slow,off}=off"), std::string::npos) << app.help();
+  for (const char* bad : {"Fast", "medium", ""}) {
+    const std::vector<const char*> argv{"t", "--speed", bad};
+    testing::internal::CaptureStdout();
+    testing::internal::CaptureStderr();
+    const int rc = cli::ParseAndRun(app, 3, argv.data());
+    const std::string out =
+        testing::internal::GetCapturedStdout() + testing::internal::GetCapturedStderr();
+    EXPECT_EQ(rc, cli::kExitBadInput) << bad;
+    EXPECT_NE(out.find("{fast,slow,off}"), std::string::npos) << out;
+    EXPECT_EQ(speed, Speed::kOff) << "a refused name leaves the value";
+  }
+}
+
 TEST(CliCommon, PrintJsonStderrLogAndPlannedCommands) {
   testing::internal::CaptureStdout();
   cli::PrintJson(nlohmann::json{{"a", 1}});

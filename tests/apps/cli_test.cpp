@@ -115,7 +115,7 @@ TEST(Cli, ExportWritesTables) {
   {
     db::Database d(dir.File("s.db"));
     const auto se = test::AddStudySession(d).session;
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+    const auto t = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
     d.CompleteTrial(t, {{"overall", 55, 1}});
   }
   std::string out;

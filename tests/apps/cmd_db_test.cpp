@@ -25,7 +25,7 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
   db::Database d(src);
   const auto se = test::AddStudySession(d).session;
   for (int k = 0; k < 5; ++k) {
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+    const auto t = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
     d.CompleteTrial(t, {{"overall", 40.0 + k, 1}, {"roughness", 60.0 - k, 2}});
   }
   std::string out;
@@ -39,7 +39,7 @@ TEST(DbCli, BackupOfAnOpenDatabaseHoldsEveryCommittedRowAndNeverOverwrites) {
 
   // DEST exists: refused as bad input naming it, and the file is left as it was.
   const auto size = std::filesystem::file_size(dest);
-  d.CompleteTrial(d.AddTrial({.session_id = se, .phase = "main", .material = "Cork"}),
+  d.CompleteTrial(d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"}),
                   {{"overall", 50, 1}, {"roughness", 50, 2}});
   EXPECT_EQ(test::RunCommand(Cli() + " db backup " + src + " " + dest, &out), 2);
   EXPECT_NE(out.find(dest + ": DEST: already exists"), std::string::npos) << out;

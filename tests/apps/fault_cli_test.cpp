@@ -81,7 +81,7 @@ TEST(FaultCli, FullDiskStopsWithAClearErrorAndResumeCompletesEveryTrialWhole) {
     EXPECT_EQ(se.status, db::SessionStatus::kFailed);
     int stopped = 0;
     for (const auto& e : d.Events(se.id)) {
-      stopped += e.kind == "stopped";
+      stopped += e.kind == db::EventKind::kStopped;
       EXPECT_EQ(e.detail.find(dir.path()), std::string::npos) << e.detail;
     }
     EXPECT_EQ(stopped, 1);

@@ -29,7 +29,7 @@ std::string Cli() { return HL_CLI_PATH; }
 std::string Small() { return test::DataPath("protocols/small.toml"); }
 
 // Events of a kind in the database (read through the library).
-int CountEvents(const std::string& db_path, const std::string& kind) {
+int CountEvents(const std::string& db_path, db::EventKind kind) {
   db::Database d(db_path, {.create = false, .read_only = true});
   int n = 0;
   for (const auto& st : d.Studies())
@@ -69,20 +69,20 @@ TEST(SessionCli, ResumeContinuesInTheRecordedModeAndRefusesAnotherUnlessTold) {
                              &out),
             2);
   EXPECT_NE(out.find("screens on"), std::string::npos) << out;
-  EXPECT_EQ(CountEvents(db, "mode-change"), 0);
+  EXPECT_EQ(CountEvents(db, db::EventKind::kModeChange), 0);
   // Told explicitly: continues in the new mode and logs the change.
   RunStopped(Cli() + " study resume --db " + db +
              " --participant P01 --quiet --device falcon-twin --change-mode "
              "--stop-after 1");
-  EXPECT_EQ(CountEvents(db, "mode-change"), 1);
+  EXPECT_EQ(CountEvents(db, db::EventKind::kModeChange), 1);
   {
     db::Database d(db, {.create = false, .read_only = true});
     EXPECT_EQ(d.Sessions(1).at(0).device, "falcon-twin");
   }
   // With no options, resume continues in the (new) recorded mode.
   RunStopped(Cli() + " study resume --db " + db + " --participant P01 --quiet --stop-after 2");
-  EXPECT_EQ(CountEvents(db, "mode-change"), 1);
-  EXPECT_EQ(CountEvents(db, "resume"), 2);
+  EXPECT_EQ(CountEvents(db, db::EventKind::kModeChange), 1);
+  EXPECT_EQ(CountEvents(db, db::EventKind::kResume), 2);
   // Every exported rating names its source.
   ASSERT_EQ(
       test::RunCommand(

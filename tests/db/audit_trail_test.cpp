@@ -30,18 +30,19 @@ TEST(AuditTrail, MigrationToV7MarksTheUnconfirmedConsentAndEveryOlderEvent) {
   ASSERT_EQ(db.SchemaVersion(), kSchemaVersion);
   const auto e1 = db.Events(1);
   ASSERT_EQ(e1.size(), 3u);
-  EXPECT_EQ(e1[0].kind, "consent");
+  EXPECT_EQ(e1[0].kind, db::EventKind::kConsent);
   EXPECT_EQ(e1[0].detail, "consent form signed") << "the record is not rewritten";
   EXPECT_EQ(e1[0].established_by.rfind("nobody", 0), 0u) << e1[0].established_by;
   EXPECT_EQ(e1[1].established_by, "unrecorded (before schema v7)");
-  EXPECT_EQ(e1[2].kind, "consent-unconfirmed");
+  EXPECT_EQ(e1[2].kind, db::EventKind::kConsentUnconfirmed);
   EXPECT_EQ(e1[2].established_by, "hapticlab:migration");
   const auto e2 = db.Events(2);
   ASSERT_EQ(e2.size(), 1u) << "a simulated session's consent needs no note";
   EXPECT_EQ(e2[0].established_by, "hapticlab:session-mode");
   // New events carry their source; an empty one is stored as hapticlab's.
-  db.LogEvent({.session_id = 2, .kind = "resume", .detail = "x"});
-  db.LogEvent({.session_id = 2, .kind = "pause", .established_by = "experimenter:console"});
+  db.LogEvent({.session_id = 2, .kind = db::EventKind::kResume, .detail = "x"});
+  db.LogEvent(
+      {.session_id = 2, .kind = db::EventKind::kPause, .established_by = "experimenter:console"});
   const auto now = db.Events(2);
   EXPECT_EQ(now[1].established_by, "hapticlab");
   EXPECT_EQ(now[2].established_by, "experimenter:console");

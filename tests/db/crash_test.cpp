@@ -25,7 +25,7 @@ constexpr int kCriteria = 8;  // ratings per trial
     for (int i = 0;; ++i) {
       const auto id = db.AddTrial({.session_id = session,
                                    .plan_index = i,
-                                   .phase = "main",
+                                   .phase = PhaseKind::kMain,
                                    .material = "m" + std::to_string(i % 10)});
       db.StartTrial(id);
       std::vector<Rating> r;

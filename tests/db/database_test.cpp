@@ -41,7 +41,7 @@ TEST(Database, MigratesForwardFromEveryEarlierVersionKeepingData) {
     EXPECT_DOUBLE_EQ(ratings[0].score, 61.5);
     // Tables of later versions work after the migration.
     db.SaveMaterialModel("Denim", "[contact]\n");
-    db.LogEvent({.session_id = sessions[0].id, .kind = "resume"});
+    db.LogEvent({.session_id = sessions[0].id, .kind = db::EventKind::kResume});
     EXPECT_EQ(db.IntegrityCheck(), "ok");
   }
 }
@@ -136,7 +136,7 @@ TEST(Database, MigrationToV4AttributesChunksOrLeavesThemOutOfEveryRead) {
   EXPECT_EQ(db.TrajectoryChunks(4)[0].attempt, 2);
   int unattributed = 0;
   for (const auto& e : db.Events(1))
-    unattributed += e.kind == "trajectory-unattributed" && e.trial_id == 3;
+    unattributed += e.kind == db::EventKind::kTrajectoryUnattributed && e.trial_id == 3;
   EXPECT_EQ(unattributed, 1);
   EXPECT_EQ(db.IntegrityCheck(), "ok");
 }

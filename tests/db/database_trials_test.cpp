@@ -13,8 +13,8 @@ TEST(Database, CompleteTrialStoresRatingsAndMarkerOnce) {
   Database db(dir.File("a.db"));
   const auto se = test::AddStudySession(db).session;
   const auto ids = test::AddTrials(
-      db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Cork"},
-           {.session_id = se, .plan_index = 1, .phase = "main", .material = "Denim"}});
+      db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain, .material = "Cork"},
+           {.session_id = se, .plan_index = 1, .phase = PhaseKind::kMain, .material = "Denim"}});
   db.StartTrial(ids[0]);
   db.CompleteTrial(ids[0], {{"roughness", 70, 1.5}, {"overall", 65, 2.5}});
   auto trials = db.Trials(se);
@@ -36,7 +36,7 @@ TEST(Database, CompletionVerifiesEveryStreamAndStoresNothingWhenOneIsNotWhole) {
   test::TempDir dir;
   Database db(dir.File("a.db"));
   const auto se = test::AddStudySession(db).session;
-  const auto t = db.AddTrial({.session_id = se, .phase = "main", .material = "Cork"});
+  const auto t = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
   EXPECT_EQ(db.StartTrial(t), 1);
   EXPECT_EQ(db.StartTrial(t), 2);
   // Attempt 1 left a chunk behind; attempt 2 wrote 3 samples of "force".

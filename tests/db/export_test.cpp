@@ -24,7 +24,7 @@ TEST(Export, TablesRoundTripThroughCsv) {
   // Plan indices 4 and 7 (plan numbers 5 and 8), unlike the rows' ids 1 and 2.
   const auto ids = test::AddTrials(db, {{.session_id = se,
                                          .plan_index = 4,
-                                         .phase = "main",
+                                         .phase = PhaseKind::kMain,
                                          .material = "Denim",
                                          .comparison = "virtual",
                                          .method = "hybrid",
@@ -32,12 +32,14 @@ TEST(Export, TablesRoundTripThroughCsv) {
                                          .right = "virtual"},
                                         {.session_id = se,
                                          .plan_index = 7,
-                                         .phase = "reference",
+                                         .phase = PhaseKind::kReference,
                                          .material = "Cork",
                                          .comparison = "Velvet"}});
   db.CompleteTrial(ids[0], {{"roughness", 71.25, 1.125}, {"overall", 0.1, 3.0}});
-  db.LogEvent(
-      {.session_id = se, .trial_id = ids[1], .kind = "break", .detail = "after \"block\" 1"});
+  db.LogEvent({.session_id = se,
+               .trial_id = ids[1],
+               .kind = db::EventKind::kBreak,
+               .detail = "after \"block\" 1"});
   std::vector<float> samples;
   for (int i = 0; i < 30; ++i) samples.push_back(std::sin(0.1f * static_cast<float>(i)) * 1e-3f);
   db.InsertTrajectoryChunk({.trial_id = ids[0],
@@ -92,8 +94,8 @@ TEST(Export, OnlyTheCompletingAttemptIsWrittenAndDamagedChunksAreRefused) {
   const auto se =
       test::AddStudySession(db, {.name = "s", .protocol_toml = "x", .seed = 3}, "P02").session;
   const auto ids = test::AddTrials(
-      db, {{.session_id = se, .plan_index = 0, .phase = "main", .material = "Denim"},
-           {.session_id = se, .plan_index = 1, .phase = "main", .material = "Cork"}});
+      db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain, .material = "Denim"},
+           {.session_id = se, .plan_index = 1, .phase = PhaseKind::kMain, .material = "Cork"}});
   db.StartTrial(ids[0]);  // attempt 1: interrupted after one chunk
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
@@ -187,7 +189,7 @@ TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
   test::TempDir dir;
   Database db(dir.File("c.db"));
   const auto se = test::AddStudySession(db).session;
-  const auto ids = test::AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = "main"}});
+  const auto ids = test::AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain}});
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
                             .start_time_s = 0,

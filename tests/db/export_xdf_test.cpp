@@ -143,7 +143,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
     const int k = static_cast<int>(planned.size());
     planned.push_back({.session_id = se,
                        .plan_index = k,
-                       .phase = "main",
+                       .phase = PhaseKind::kMain,
                        .material = m,
                        .comparison = "virtual",
                        .method = "FF",
@@ -183,8 +183,8 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
     d.CompleteTrial(id, {{"roughness", 40.5, 1.5}});
   }
   // A fourth trial that recorded samples and then faulted: not exported.
-  const auto faulted =
-      d.AddTrial({.session_id = se, .plan_index = 3, .phase = "main", .material = "Acryl"});
+  const auto faulted = d.AddTrial(
+      {.session_id = se, .plan_index = 3, .phase = PhaseKind::kMain, .material = "Acryl"});
   d.StartTrial(faulted);
   d.InsertTrajectoryChunk({.trial_id = faulted,
                            .stream = "left_force",
@@ -201,7 +201,7 @@ TEST(InterchangeRecord, GapsModelsAndTheSessionClock) {
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", ids[0]));
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.500Z' WHERE id={}", ids[1]));
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:01:00.123Z' WHERE id={}", ids[2]));
-  d.LogEvent({.session_id = se, .kind = "break", .detail = "after trial 2"});
+  d.LogEvent({.session_id = se, .kind = db::EventKind::kBreak, .detail = "after trial 2"});
   d.Exec("UPDATE event SET created_at='2026-01-01T10:00:02.000Z' WHERE kind='break'");
 
   // XDF through libxdf.

@@ -39,7 +39,7 @@ inline Ids Fill(Database& d) {
           .session;
   const auto ids = test::AddTrials(d, {{.session_id = se,
                                         .plan_index = 0,
-                                        .phase = "main",
+                                        .phase = PhaseKind::kMain,
                                         .material = "Cork",
                                         .comparison = "virtual",
                                         .method = "FF",
@@ -47,7 +47,7 @@ inline Ids Fill(Database& d) {
                                         .right = "virtual:Cork"},
                                        {.session_id = se,
                                         .plan_index = 1,
-                                        .phase = "main",
+                                        .phase = PhaseKind::kMain,
                                         .material = "Denim",
                                         .comparison = "virtual",
                                         .method = "FF",
@@ -55,7 +55,7 @@ inline Ids Fill(Database& d) {
                                         .right = "real:Denim"},
                                        {.session_id = se,
                                         .plan_index = 2,
-                                        .phase = "main",
+                                        .phase = PhaseKind::kMain,
                                         .material = "Towel",
                                         .comparison = "virtual",
                                         .method = "FF"}});
@@ -97,7 +97,7 @@ inline Ids Fill(Database& d) {
                            .samples = {99, 99, 99, 99, 99, 99, 99, 99, 99, 99},
                            .attempt = 1});
   d.SetTrialStatus(out.faulted, TrialStatus::kFaulted);
-  d.LogEvent({.session_id = se, .kind = "break", .detail = "pause"});
+  d.LogEvent({.session_id = se, .kind = db::EventKind::kBreak, .detail = "pause"});
   d.Exec("UPDATE session SET started_at='2026-01-01T10:00:00.000Z'");
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.000Z' WHERE id={}", out.a));
   d.Exec(fmt::format("UPDATE trial SET started_at='2026-01-01T10:00:01.010Z' WHERE id={}", out.b));

@@ -52,15 +52,18 @@ void MakeSite(const std::string& path, const SiteSpec& s) {
                                             R"(","rig":{"file_sha256":"r)" + s.site + R"("}})",
                          .site_code = s.site});
     for (int t = 0; t < s.trials; ++t) {
-      const auto id = db.AddTrial(
-          {.session_id = se, .plan_index = t, .phase = "main", .material = "D", .method = "m1"});
+      const auto id = db.AddTrial({.session_id = se,
+                                   .plan_index = t,
+                                   .phase = PhaseKind::kMain,
+                                   .material = "D",
+                                   .method = "m1"});
       db.StartTrial(id);
       TrajectoryChunk c{.trial_id = id, .stream = "force", .rate_hz = 1000, .channels = {"a", "b"}};
       for (int k = 0; k < 2 * s.chunk_samples; ++k) c.samples.push_back(static_cast<float>(k + t));
       c.attempt = 1;
       db.InsertTrajectoryChunk(c);
       db.CompleteTrial(id, {{"overall", 10.0 * static_cast<double>(i) + t, 1.5}});
-      db.LogEvent({.session_id = se, .trial_id = id, .kind = "note", .detail = s.site});
+      db.LogEvent({.session_id = se, .trial_id = id, .kind = EventKind::kBreak, .detail = s.site});
     }
     db.EndSession(se, SessionStatus::kCompleted);
   }

@@ -27,7 +27,8 @@ std::int64_t OneSession(Database& db, const Session& mode, int trials) {
   se.participant_id = p;
   const auto session = db.StartSession(se);
   for (int i = 0; i < trials; ++i)
-    db.AddTrial({.session_id = session, .plan_index = i, .phase = "main", .material = "Denim"});
+    db.AddTrial(
+        {.session_id = session, .plan_index = i, .phase = PhaseKind::kMain, .material = "Denim"});
   return session;
 }
 
@@ -72,6 +73,49 @@ TEST(SessionMode, StatusesAreStoredByNameAndReadBackOnce) {
   }
 }
 
+// Event kinds and trial phases likewise: each kind and phase is stored as its name (the text
+// every earlier file holds) and read back as the same value; a name the program does not know
+// is bad input naming the file and the column.
+TEST(SessionMode, EventKindsAndPhasesAreStoredByNameAndReadBackOnce) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  Database db(path);
+  const auto session = OneSession(db, {.device = "sim", .actuator = "none"}, 0);
+  for (const char* name : {"training", "reference", "main", "staircase", "quest-plus"}) {
+    const auto phase = FromName(kPhaseKindNames, name);
+    ASSERT_TRUE(phase.has_value()) << name;
+    const auto id = db.AddTrial({.session_id = session, .phase = *phase, .material = "D"});
+    EXPECT_EQ(Cell(path, "SELECT phase FROM trial WHERE id = " + std::to_string(id)), name);
+    EXPECT_EQ(db.Trials(session).back().phase, *phase) << name;
+  }
+  for (const auto& [kind, name] : kEventKindNames) {
+    const auto id = db.LogEvent({.session_id = session, .kind = kind});
+    EXPECT_EQ(Cell(path, "SELECT kind FROM event WHERE id = " + std::to_string(id)), name);
+    EXPECT_EQ(db.Events(session).back().kind, kind) << name;
+  }
+  // Names written by every earlier build, the migrations' included, are known.
+  for (const char* name :
+       {"abort", "attempt-faulted", "break", "break-planned", "consent", "consent-unconfirmed",
+        "constraint-relaxed", "device", "device-fault", "interrupted", "mode-change",
+        "mode-inferred", "pause", "render-stats", "resume", "samples-placed", "stopped",
+        "trajectory-fault", "trajectory-unattributed"})
+    EXPECT_TRUE(FromName(kEventKindNames, name).has_value()) << name;
+  for (const auto& [sql, column] : {std::pair{"UPDATE trial SET phase = 'warmup'", "trial.phase"},
+                                    std::pair{"UPDATE event SET kind = 'note'", "event.kind"}}) {
+    db.Exec(sql);
+    try {
+      (void)(std::string(column) == "trial.phase" ? db.Trials(session).size()
+                                                  : db.Events(session).size());
+      ADD_FAILURE() << "an unknown " << column << " was read";
+    } catch (const InputError& e) {
+      ASSERT_EQ(e.diagnostics().size(), 1u);
+      EXPECT_EQ(e.diagnostics()[0].file, path);
+      EXPECT_EQ(e.diagnostics()[0].field, column);
+      EXPECT_NE(e.diagnostics()[0].message.find("expected one of"), std::string::npos);
+    }
+  }
+}
+
 TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   test::TempDir dir;
   const std::string path = dir.File("v4.db");
@@ -98,7 +142,8 @@ TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {
   EXPECT_EQ(db.Ratings(2).at(0).source, "window");
   int inferred = 0;
   for (const auto& e : db.Events(2))
-    inferred += e.kind == "mode-inferred" && e.detail.find("falcon") != std::string::npos;
+    inferred +=
+        e.kind == db::EventKind::kModeInferred && e.detail.find("falcon") != std::string::npos;
   EXPECT_EQ(inferred, 1);
 }
 

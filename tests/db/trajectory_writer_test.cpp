@@ -21,7 +21,7 @@ struct Fixture {
     Database db(path);
     const auto se =
         test::AddStudySession(db, {.name = "w", .protocol_toml = "x", .seed = 1}).session;
-    trial = db.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+    trial = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
   }
 };
 

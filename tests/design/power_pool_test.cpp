@@ -30,18 +30,18 @@ FeltPool Pool(double distance) {
   pool.observer = sim::LoadProfiles(test::DataPath("protocols/profiles.toml")).observer;
   for (int i = 0; i < 2; ++i)
     pool.participants.push_back({{.plan_index = 0,
-                                  .phase = "reference",
+                                  .phase = PhaseKind::kReference,
                                   .material = "Cork",
                                   .comparison = "Towel",
                                   .distances = {distance, distance}},
                                  {.plan_index = 1,
-                                  .phase = "main",
+                                  .phase = PhaseKind::kMain,
                                   .material = "Cork",
                                   .comparison = "virtual",
                                   .method = "FF",
                                   .distances = {distance, distance}},
                                  {.plan_index = 2,
-                                  .phase = "main",
+                                  .phase = PhaseKind::kMain,
                                   .material = "Denim",
                                   .comparison = "virtual",
                                   .method = "Hybrid",
@@ -130,7 +130,7 @@ repetitions = 1
   ASSERT_EQ(pool.participants.size(), 2u);
   for (const auto& trials : pool.participants) {
     ASSERT_EQ(trials.size(), 1u);
-    EXPECT_EQ(trials[0].phase, "main");
+    EXPECT_EQ(trials[0].phase, PhaseKind::kMain);
     EXPECT_EQ(trials[0].material, "Cork");
     EXPECT_EQ(trials[0].distances.size(), 2u);
   }

@@ -34,7 +34,7 @@ std::string StudyDatabaseSeed(const std::string& scratch) {
                             .protocol_toml = test::ReadFile(CorpusPath("protocol/small.toml")),
                             .seed = 1})
                         .session;
-    const auto t = d.AddTrial({.session_id = se, .phase = "main", .material = "Denim"});
+    const auto t = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Denim"});
     d.StartTrial(t);
     d.InsertTrajectoryChunk({.trial_id = t,
                              .stream = "force",

@@ -201,7 +201,7 @@ TEST(AdaptivePhase, ALinkDropoutFaultsTheTrialThroughTheWatchdogAndItRunsAgain) 
   db::Database d(o.db_path);
   int watchdog_events = 0, trial_faults = 0;
   for (const auto& e : d.Events(s.session_id)) {
-    if (e.kind != "device-fault") continue;
+    if (e.kind != db::EventKind::kDeviceFault) continue;
     watchdog_events += e.detail.rfind("disconnect at ", 0) == 0 &&
                        e.detail.find("(interval 1, tick") != std::string::npos;
     trial_faults += e.detail.rfind("watchdog: interval 1: ", 0) == 0;

@@ -85,10 +85,12 @@ TEST(Audit, ASimulatedSessionRecordsConsentAsNotApplicableAndNothingSigned) {
   const auto events = EventsOf(o.db_path, "P01");
   int consent = 0;
   for (const auto& e : events) {
-    EXPECT_EQ(e.detail.find("signed"), std::string::npos) << e.kind << ": " << e.detail;
-    EXPECT_FALSE(e.established_by.empty()) << e.kind;
-    EXPECT_EQ(e.established_by.find("unrecorded"), std::string::npos) << e.kind;
-    if (e.kind != "consent") continue;
+    EXPECT_EQ(e.detail.find("signed"), std::string::npos)
+        << NameOf(db::kEventKindNames, e.kind) << ": " << e.detail;
+    EXPECT_FALSE(e.established_by.empty()) << NameOf(db::kEventKindNames, e.kind);
+    EXPECT_EQ(e.established_by.find("unrecorded"), std::string::npos)
+        << NameOf(db::kEventKindNames, e.kind);
+    if (e.kind != db::EventKind::kConsent) continue;
     ++consent;
     EXPECT_EQ(e.detail.rfind("not applicable: simulated", 0), 0u) << e.detail;
     EXPECT_EQ(e.established_by, source::kSessionMode);
@@ -119,7 +121,7 @@ TEST(Audit, APersonSessionNeedsAnExperimenterCodeAndRecordsItWithTheDocumentVers
   EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);  // stopped after 6 trials
   int consent = 0;
   for (const auto& e : EventsOf(o.db_path, "P03")) {
-    if (e.kind != "consent") continue;
+    if (e.kind != db::EventKind::kConsent) continue;
     ++consent;
     EXPECT_EQ(e.established_by, "experimenter:E01");
     EXPECT_NE(e.detail.find("E01"), std::string::npos) << e.detail;
@@ -150,7 +152,7 @@ TEST(Audit, AConsoleConfirmationIsRecordedThroughTheSameRecord) {
   EXPECT_EQ(ui.asked[0].participant, "P05");
   bool found = false;
   for (const auto& e : EventsOf(o.db_path, "P05"))
-    found |= e.kind == "consent" && e.established_by == "experimenter:E07" &&
+    found |= e.kind == db::EventKind::kConsent && e.established_by == "experimenter:E07" &&
              e.detail.find("(console)") != std::string::npos;
   EXPECT_TRUE(found);
   // Not confirmed in the console: refused, nothing of the participant written.
@@ -292,8 +294,8 @@ TEST(Audit, EveryFaultedAttemptIsPrintedCountedAndNamesItsCause) {
   }
   int requeued = 0, injected = 0;
   for (const auto& e : EventsOf(o.db_path, "P08")) {
-    requeued += e.kind == "attempt-faulted";
-    injected += e.kind == "device-fault" && e.established_by == source::kInjected;
+    requeued += e.kind == db::EventKind::kAttemptFaulted;
+    injected += e.kind == db::EventKind::kDeviceFault && e.established_by == source::kInjected;
   }
   EXPECT_EQ(requeued, s.faults);
   EXPECT_GE(injected, s.faults) << "a simulated fault says it was simulated";

@@ -184,7 +184,7 @@ TEST(Screenshot, RealVsVirtualSessionThroughTheConsole) {
     EXPECT_GE(seen.placed_frames[number], 4) << "trial " << number << " waited for it";
     int logged = 0;
     for (const auto& e : events)
-      if (e.kind == "samples-placed" && e.trial_id == t.id) {
+      if (e.kind == db::EventKind::kSamplesPlaced && e.trial_id == t.id) {
         ++logged;
         EXPECT_EQ(e.detail.rfind("trial " + std::to_string(number) + ": left = ", 0), 0u)
             << e.detail;
@@ -204,7 +204,7 @@ TEST(Screenshot, RealVsVirtualSessionThroughTheConsole) {
   ASSERT_TRUE(seen.break_checked) << "a planned break fell into the first 14 trials";
   const db::Event* brk = nullptr;
   for (const auto& e : events)
-    if (e.kind == "break") brk = &e;
+    if (e.kind == db::EventKind::kBreak) brk = &e;
   ASSERT_TRUE(brk && brk->trial_id);
   for (const auto& t : trials)
     if (t.id == *brk->trial_id) {

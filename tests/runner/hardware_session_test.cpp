@@ -115,13 +115,13 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   // (no timed assertions in unit tests).
   std::string faults;
   for (const auto& e : d.Events(se.id))
-    if (e.kind == "device-fault") faults += e.detail + "; ";
+    if (e.kind == db::EventKind::kDeviceFault) faults += e.detail + "; ";
   if (ui.rated == 0 && !faults.empty())
     GTEST_SKIP() << "every rated trial faulted on the real clock (a loaded machine): " << faults;
   EXPECT_GE(ui.rated, 1);
   int rated_trials = 0, chunks = 0;
   for (const auto& t : d.Trials(se.id)) {
-    if (t.status != db::TrialStatus::kCompleted || t.phase == "training") continue;
+    if (t.status != db::TrialStatus::kCompleted || t.phase == PhaseKind::kTraining) continue;
     ++rated_trials;
     EXPECT_EQ(d.Ratings(t.id).size(), 2u);
     chunks += static_cast<int>(d.TrajectoryChunks(t.id).size());
@@ -142,11 +142,11 @@ TEST(HardwareSession, RunsThroughTheEngineAndRecordsTrajectories) {
   }
   EXPECT_GE(force_rows, 2 * rated_trials);
   for (const auto& e : d.Events(se.id))  // on a loaded machine: deadline misses (real clock)
-    if (e.kind == "device-fault") std::printf("%s\n", e.detail.c_str());
+    if (e.kind == db::EventKind::kDeviceFault) std::printf("%s\n", e.detail.c_str());
   bool device_logged = false;
   for (const auto& e : d.Events(se.id))
-    device_logged |=
-        e.kind == "device" && e.detail.starts_with("circling test device; rig built-in");
+    device_logged |= e.kind == db::EventKind::kDevice &&
+                     e.detail.starts_with("circling test device; rig built-in");
   EXPECT_TRUE(device_logged);
   EXPECT_EQ(se.device, "circling");
 }
@@ -175,8 +175,9 @@ TEST(HardwareSession, AWatchdogFaultRequeuesTheTrial) {
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
   bool nan_logged = false, requeue = false;
   for (const auto& e : d.Events(se.id)) {
-    nan_logged |= e.kind == "device-fault" && e.detail.rfind("nan at", 0) == 0;
-    requeue |= e.kind == "device-fault" && e.detail.find("re-queued") != std::string::npos;
+    nan_logged |= e.kind == db::EventKind::kDeviceFault && e.detail.rfind("nan at", 0) == 0;
+    requeue |=
+        e.kind == db::EventKind::kDeviceFault && e.detail.find("re-queued") != std::string::npos;
   }
   EXPECT_TRUE(nan_logged);
   EXPECT_TRUE(requeue);
@@ -222,7 +223,7 @@ TEST(FalconTwinSession, RunsAWholeSessionThroughTheFalconBackEnd) {
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
   std::size_t n = 0, pressing = 0, near_surface = 0;
   for (const auto& t : d.Trials(se.id)) {
-    if (t.phase == "training") continue;
+    if (t.phase == PhaseKind::kTraining) continue;
     for (const auto& c : d.TrajectoryChunks(t.id)) {
       const bool virt = (c.stream == "left_force" ? t.left : t.right).rfind("virtual:", 0) == 0;
       for (std::size_t i = 0; i < c.sample_count(); ++i) {
@@ -263,10 +264,10 @@ TEST(FalconTwinSession, ARigFileWrongBy5cmTouchesNothingAndSaysSo) {
   int untouched = 0;
   bool abort_says_why = false;
   for (const auto& e : d.Events(se.id)) {
-    untouched +=
-        e.kind == "device-fault" && e.detail.find("nothing was touched") != std::string::npos;
-    abort_says_why |=
-        e.kind == "abort" && e.detail.find("sample poses are probably wrong") != std::string::npos;
+    untouched += e.kind == db::EventKind::kDeviceFault &&
+                 e.detail.find("nothing was touched") != std::string::npos;
+    abort_says_why |= e.kind == db::EventKind::kAbort &&
+                      e.detail.find("sample poses are probably wrong") != std::string::npos;
   }
   EXPECT_EQ(untouched, 3);
   EXPECT_TRUE(abort_says_why);

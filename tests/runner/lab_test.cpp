@@ -35,11 +35,10 @@ TEST(Lab, EveryPhaseHasItsRecordedName) {
   for (const PhaseKind k : {PhaseKind::kTraining, PhaseKind::kReference, PhaseKind::kMain,
                             PhaseKind::kStaircase, PhaseKind::kQuestPlus}) {
     EXPECT_EQ(NameOf(kPhaseKindNames, k), protocols::ToString(k));
-    EXPECT_EQ(PhaseOf(protocols::ToString(k)), k);
+    EXPECT_EQ(FromName(kPhaseKindNames, protocols::ToString(k)), k);
+    EXPECT_EQ(IsTraining(k), k == PhaseKind::kTraining);
   }
-  EXPECT_TRUE(IsTraining("training"));
-  EXPECT_FALSE(IsTraining("main"));
-  EXPECT_EQ(PhaseOf("Training"), std::nullopt);  // a name no phase has
+  EXPECT_EQ(FromName(kPhaseKindNames, "Training"), std::nullopt);  // a name no phase has
 }
 
 TEST(Lab, LoadsEveryPlaceholderModelFromItsProfile) {

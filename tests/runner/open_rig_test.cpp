@@ -225,7 +225,7 @@ TEST(OpenRig, ASessionRunsOnAToyBackEndRegisteredHere) {
   EXPECT_EQ(se.device, "toy-sim");
   int rated = 0;
   for (const auto& t : d.Trials(se.id))
-    if (t.status == db::TrialStatus::kCompleted && t.phase != "training") {
+    if (t.status == db::TrialStatus::kCompleted && t.phase != PhaseKind::kTraining) {
       ++rated;
       for (const auto& r : d.Ratings(t.id)) EXPECT_EQ(r.source, db::kRaterSimulated);
     }

@@ -35,7 +35,7 @@ TEST(RtEngine, LoopsRunAllocationFreeRecordAndStopAtDisconnect) {
     db::Database d(dir.File("e.db"));
     const auto se =
         test::AddStudySession(d, {.name = "e", .protocol_toml = "x", .seed = 1}).session;
-    trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+    trial = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
   }
   const auto m = test::TexturedMaterial();
   renderer::RenderOptions ro;

@@ -54,10 +54,11 @@ TEST(SessionQueue, FaultedTrialsAreRequeuedKeepingTheNoRepeatConstraint) {
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
   int relaxed = 0, faults = 0, disconnects = 0;
   for (const auto& e : d.Events(se.id)) {
-    relaxed += e.kind == "constraint-relaxed";
+    relaxed += e.kind == db::EventKind::kConstraintRelaxed;
     // Each injected dropout: the watchdog's event, then the trial's re-queue.
-    faults += e.kind == "device-fault" && e.detail.find("re-queued") != std::string::npos;
-    disconnects += e.kind == "device-fault" && e.detail.rfind("disconnect at", 0) == 0;
+    faults +=
+        e.kind == db::EventKind::kDeviceFault && e.detail.find("re-queued") != std::string::npos;
+    disconnects += e.kind == db::EventKind::kDeviceFault && e.detail.rfind("disconnect at", 0) == 0;
   }
   EXPECT_EQ(faults, s.faults);
   EXPECT_EQ(disconnects, s.faults) << "the link's dropouts, seen by the watchdog";

@@ -41,7 +41,9 @@ TEST(Screenshot, AbortAsksForConfirmationAndPauseAndBreakShowTheirState) {
   std::filesystem::create_directories(out);
   WindowSessionUi ui("s", "P01", "test", {.width = 900, .height = 650});
   std::vector<std::string> events;
-  ui.log_event = [&](const std::string& kind, const std::string&) { events.push_back(kind); };
+  ui.log_event = [&](db::EventKind kind, const std::string&) {
+    events.emplace_back(NameOf(db::kEventKindNames, kind));
+  };
   TrialScreen t;
   t.index = 3;
   t.total = 20;

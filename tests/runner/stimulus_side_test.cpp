@@ -86,7 +86,7 @@ double MaxCommand(const db::Database& d, std::int64_t trial, const std::string& 
 
 TEST(StimulusSide, ARealSideOnlyMeasuresAndAVirtualSidePushes) {
   Session s;
-  const auto t = s.Trial("main", "real:Denim", "virtual:Denim", "Hybrid");
+  const auto t = s.Trial(PhaseKind::kMain, "real:Denim", "virtual:Denim", "Hybrid");
   const auto real = RunSide(s, Side(s, true, "left"), t);
   const auto virt = RunSide(s, Side(s, false, "right"), t);
   EXPECT_FALSE(real.fault) << real.detail;
@@ -123,14 +123,14 @@ TEST(StimulusSide, ARealSideOnlyMeasuresAndAVirtualSidePushes) {
 
 TEST(StimulusSide, ALinkDropoutFaultsTheSideAndIsLogged) {
   Session s;
-  const auto t = s.Trial("main", "virtual:Denim", "real:Denim", "Hybrid");
+  const auto t = s.Trial(PhaseKind::kMain, "virtual:Denim", "real:Denim", "Hybrid");
   const auto out = RunSide(s, Side(s, false, "left"), t, true);
   EXPECT_TRUE(out.fault);
   EXPECT_EQ(out.detail.rfind("left side: ", 0), 0u) << out.detail;
   EXPECT_GT(out.stats.disconnects + out.stats.stale_faults, 0u) << out.detail;
   int logged = 0;
   for (const auto& e : s.database.Events(s.session))
-    if (e.kind == "device-fault" && e.trial_id == t.id &&
+    if (e.kind == db::EventKind::kDeviceFault && e.trial_id == t.id &&
         e.detail.find("left side") != std::string::npos)
       ++logged;
   EXPECT_GT(logged, 0);

@@ -26,7 +26,8 @@ inline void ExpectCompleteAndWhole(const std::string& db_path, int criteria) {
           ++seen[t.plan_index];
           EXPECT_EQ(t.status, db::TrialStatus::kCompleted) << p.code << " trial " << t.plan_index;
           const auto r = d.Ratings(t.id);
-          EXPECT_EQ(r.size(), t.phase == "training" ? 0u : static_cast<std::size_t>(criteria))
+          EXPECT_EQ(r.size(),
+                    t.phase == PhaseKind::kTraining ? 0u : static_cast<std::size_t>(criteria))
               << t.plan_index;
         }
         for (const auto& [i, n] : seen) EXPECT_EQ(n, 1) << "plan index " << i;

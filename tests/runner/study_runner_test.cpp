@@ -113,7 +113,7 @@ class ScriptedUi : public SessionUi {
   bool Stimulus(const TrialScreen& t, int side, const Eigen::Vector3d& p,
                 double remaining) override {
     if (stimulus_frames++ == 0 && log_event)
-      log_event("pause", "scripted");  // the console's actions reach the record
+      log_event(db::EventKind::kPause, "scripted");  // the console's actions reach the record
     EXPECT_TRUE(p.allFinite());
     EXPECT_GE(remaining, 0);
     EXPECT_FALSE(t.placement.empty());
@@ -168,10 +168,12 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   int pause_logged = 0;
   const auto se = d.Sessions(d.Participants(d.Studies()[0].id)[0].id)[0];
   for (const auto& e : d.Events(se.id)) {
-    pause_logged += e.kind == "pause" && e.detail == "scripted" && e.trial_id.has_value();
-    abort_logged |= e.kind == "abort" && e.detail.find("console") != std::string::npos;
-    break_logged |=
-        e.kind == "break" && e.detail.find("requested by the experimenter") != std::string::npos;
+    pause_logged +=
+        e.kind == db::EventKind::kPause && e.detail == "scripted" && e.trial_id.has_value();
+    abort_logged |=
+        e.kind == db::EventKind::kAbort && e.detail.find("console") != std::string::npos;
+    break_logged |= e.kind == db::EventKind::kBreak &&
+                    e.detail.find("requested by the experimenter") != std::string::npos;
   }
   EXPECT_TRUE(abort_logged);
   EXPECT_TRUE(break_logged);
@@ -190,7 +192,7 @@ TEST(StudyRunner, RatingsComeFromTheParticipantWindowAndTheConsoleCanAbort) {
   }
   // Ratings stored are the participant's, exactly.
   for (const auto& t : d.Trials(se.id)) {
-    if (t.status != db::TrialStatus::kCompleted || t.phase == "training") continue;
+    if (t.status != db::TrialStatus::kCompleted || t.phase == PhaseKind::kTraining) continue;
     for (const auto& r : d.Ratings(t.id))
       EXPECT_EQ(std::fmod(r.score, 10.0), r.criterion == p.criteria[0] ? 0.0 : 1.0)
           << r.criterion << " " << r.score;
@@ -314,7 +316,7 @@ TEST(StudyRunner, SimulatedChapter4RealRealPairsSpanTheThesisLimits) {
   const auto m = SimulateAndAverage(
       "ch4-realism.toml", 10, dir.File("ch4.db"),
       [](const db::Trial& t, const db::Rating&) -> std::string {
-        if (t.phase != "reference") return "";
+        if (t.phase != PhaseKind::kReference) return "";
         return t.material == t.comparison ? "same" : "different";
       },
       /*quiet_observer=*/true);
@@ -340,11 +342,11 @@ TEST(StudyRunner, SimulatedChapter5HybridStudyReproducesTheMainResult) {
   // similar to the real samples in roughness than force-only and vibration-only, because
   // only it reproduces both the force fluctuation and the vibration the real samples give.
   test::TempDir dir;
-  const auto rough =
-      SimulateAndAverage("ch5-hybrid-realism.toml", 20, dir.File("ch5.db"),
-                         [](const db::Trial& t, const db::Rating& r) -> std::string {
-                           return t.phase == "main" && r.criterion == "roughness" ? t.method : "";
-                         });
+  const auto rough = SimulateAndAverage(
+      "ch5-hybrid-realism.toml", 20, dir.File("ch5.db"),
+      [](const db::Trial& t, const db::Rating& r) -> std::string {
+        return t.phase == PhaseKind::kMain && r.criterion == "roughness" ? t.method : "";
+      });
   const double hybrid = rough.at("Hybrid"), ff = rough.at("FF"), lpc = rough.at("LPC");
   std::printf("roughness similarity: Hybrid %.1f, FF %.1f, LPC %.1f\n", hybrid, ff, lpc);
   EXPECT_GT(hybrid, ff);

@@ -34,7 +34,7 @@ struct Session {
         test::AddStudySession(database, {.name = protocol.name, .protocol_toml = "# p"}).session;
   }
   // A started trial of this session.
-  db::Trial Trial(const std::string& phase, const std::string& left, const std::string& right,
+  db::Trial Trial(PhaseKind phase, const std::string& left, const std::string& right,
                   const std::string& method, int plan_index = 0) {
     db::Trial t{.session_id = session,
                 .plan_index = plan_index,

@@ -21,7 +21,7 @@ using test_trial::Session;
 
 TEST(Trial, TheScreenSaysWhatLiesWhere) {
   Session s;
-  const auto t = s.Trial("main", "real:Cork", "virtual:Cork", "Hybrid");
+  const auto t = s.Trial(PhaseKind::kMain, "real:Cork", "virtual:Cork", "Hybrid");
   const auto screen = ScreenOf(s.protocol, t, ParseStimuli(t), 3, 12);
   EXPECT_EQ(screen.index, 3);
   EXPECT_EQ(screen.total, 12);
@@ -32,7 +32,7 @@ TEST(Trial, TheScreenSaysWhatLiesWhere) {
   EXPECT_EQ(screen.method, "Hybrid");
   EXPECT_EQ(screen.criteria, s.protocol.criteria);
   EXPECT_EQ(screen.scale_max, s.protocol.scale_max);
-  const auto training = s.Trial("training", "virtual:Denim", "", "FF", 1);
+  const auto training = s.Trial(PhaseKind::kTraining, "virtual:Denim", "", "FF", 1);
   const auto ts = ScreenOf(s.protocol, training, ParseStimuli(training), 1, 4);
   EXPECT_EQ(ts.placement, "left = virtual, right = nothing");
   EXPECT_FALSE(ts.real_sample) << "nothing real to place for a virtual training sample";
@@ -60,7 +60,7 @@ Ran Execute(Session& s, const db::Trial& t, std::uint64_t seed, double fault_rat
 
 TEST(Trial, BothSidesRunAndTheObserverRatesWhatTheHandFelt) {
   Session s;
-  const auto t = s.Trial("main", "real:Cork", "virtual:Cork", "Hybrid");
+  const auto t = s.Trial(PhaseKind::kMain, "real:Cork", "virtual:Cork", "Hybrid");
   const auto r = Execute(s, t, 1234);
   ASSERT_FALSE(r.outcome.fault) << r.outcome.fault_detail;
   EXPECT_FALSE(r.outcome.aborted);
@@ -83,7 +83,8 @@ TEST(Trial, BothSidesRunAndTheObserverRatesWhatTheHandFelt) {
   EXPECT_GT(r.felt[0].felt[1].mean_force_N, 0.1);
   // The same participant seed, trial and attempt: the same strokes, felt and ratings.
   Session again;
-  const auto r2 = Execute(again, again.Trial("main", "real:Cork", "virtual:Cork", "Hybrid"), 1234);
+  const auto r2 =
+      Execute(again, again.Trial(PhaseKind::kMain, "real:Cork", "virtual:Cork", "Hybrid"), 1234);
   ASSERT_EQ(r2.outcome.ratings.size(), r.outcome.ratings.size());
   for (std::size_t i = 0; i < r.outcome.ratings.size(); ++i)
     EXPECT_EQ(r2.outcome.ratings[i].score, r.outcome.ratings[i].score) << i;
@@ -92,7 +93,7 @@ TEST(Trial, BothSidesRunAndTheObserverRatesWhatTheHandFelt) {
 
 TEST(Trial, ASimulatedTrainingTrialWithoutScreensIsNotRendered) {
   Session s;
-  const auto r = Execute(s, s.Trial("training", "virtual:Denim", "", "FF"), 1);
+  const auto r = Execute(s, s.Trial(PhaseKind::kTraining, "virtual:Denim", "", "FF"), 1);
   EXPECT_EQ(r.sides, 0);
   EXPECT_TRUE(r.outcome.ratings.empty());
   EXPECT_FALSE(r.outcome.fault);
@@ -100,7 +101,7 @@ TEST(Trial, ASimulatedTrainingTrialWithoutScreensIsNotRendered) {
 
 TEST(Trial, ALinkDropoutFaultsTheTrialWithoutRatings) {
   Session s;
-  const auto r = Execute(s, s.Trial("main", "virtual:Cork", "real:Cork", "FF"), 7, 1.0);
+  const auto r = Execute(s, s.Trial(PhaseKind::kMain, "virtual:Cork", "real:Cork", "FF"), 7, 1.0);
   EXPECT_TRUE(r.outcome.fault);
   EXPECT_FALSE(r.outcome.untouched);
   EXPECT_NE(r.outcome.fault_detail.find("watchdog: left side"), std::string::npos)

@@ -30,7 +30,7 @@ struct Fixture {
     study = d.CreateStudy({.name = "s", .protocol_toml = "x", .seed = 1});
     const auto p = d.AddParticipant({.study_id = study, .code = "P01"});
     const auto se = d.StartSession({.participant_id = p});
-    trial = d.AddTrial({.session_id = se, .phase = "main", .material = "m"});
+    trial = d.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "m"});
   }
   // A force-loop row of `values` [s] (its percentiles from the histogram, as the engine stores
   // them).
@@ -105,7 +105,7 @@ std::int64_t RatedStudy(db::Database& d, const std::string& name, const std::str
   const auto se = d.StartSession({.participant_id = p});
   const auto t = d.AddTrial({.session_id = se,
                              .plan_index = 0,
-                             .phase = "main",
+                             .phase = PhaseKind::kMain,
                              .material = "Cork",
                              .comparison = "virtual",
                              .method = "FF",

@@ -47,7 +47,7 @@ void WriteStudy(const std::string& db_path, const std::string& protocol_text, in
       if (!t.rated) continue;
       const auto tid = d.AddTrial({.session_id = sid,
                                    .plan_index = t.index,
-                                   .phase = protocols::ToString(t.phase),
+                                   .phase = t.phase,
                                    .material = t.material,
                                    .comparison = t.comparison,
                                    .method = t.method,

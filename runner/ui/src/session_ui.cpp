@@ -28,8 +28,9 @@ WindowSessionUi::WindowSessionUi(const std::string& study, const std::string& pa
     cv_.traces.push_back({.id = id, .label = label, .values = {}, .t_s = 0, .none = "no data yet"});
 }
 
-void WindowSessionUi::Log(const std::string& kind, const std::string& detail) {
-  cv_.log.push_back(detail.empty() ? kind : kind + ": " + detail);
+void WindowSessionUi::Log(db::EventKind kind, const std::string& detail) {
+  const std::string name(NameOf(db::kEventKindNames, kind));
+  cv_.log.push_back(detail.empty() ? name : name + ": " + detail);
   if (log_event) log_event(kind, detail);
 }
 
@@ -69,30 +70,30 @@ bool WindowSessionUi::Frame(ParticipantAction* pa) {
     }
     if (cv_.confirm_abort) {
       if (ca.abort_confirmed) {
-        Log("abort-confirmed", cv_.now);
+        Log(db::EventKind::kAbortConfirmed, cv_.now);
         return false;
       }
       if (ca.abort_cancelled) {
         cv_.confirm_abort = false;
-        Log("abort-cancelled", "the session continues");
+        Log(db::EventKind::kAbortCancelled, "the session continues");
       }
     } else if (ca.abort) {
       cv_.confirm_abort = true;
-      Log("abort-requested", cv_.now);
+      Log(db::EventKind::kAbortRequested, cv_.now);
     }
     const bool on_break = cv_.state == ConsoleView::State::kBreak;
     if (ca.take_break && !on_break && !break_requested_) {
       break_requested_ = true;
-      Log("break-requested", "the break starts before the next trial");
+      Log(db::EventKind::kBreakRequested, "the break starts before the next trial");
     }
     if (ca.end_break && on_break) end_break_ = true;
     if (ca.pause && !cv_.paused) {
       cv_.paused = true;
-      Log("pause", cv_.now);
+      Log(db::EventKind::kPause, cv_.now);
     }
     if (ca.resume && cv_.paused) {
       cv_.paused = false;
-      Log("resume", cv_.now);
+      Log(db::EventKind::kResume, cv_.now);
     }
     std::this_thread::sleep_for(
         std::chrono::milliseconds(15));  // ~60 frames per second without vsync
@@ -248,7 +249,8 @@ bool WindowSessionUi::Break(double seconds) {
       break;
     }
     if (end_break_) {
-      Log("break-ended", fmt::format("the experimenter ended the break with {:.0f} s left", left));
+      Log(db::EventKind::kBreakEnded,
+          fmt::format("the experimenter ended the break with {:.0f} s left", left));
       break;
     }
   }

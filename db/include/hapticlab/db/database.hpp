@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "hapticlab/core/enum_names.hpp"
+#include "hapticlab/core/phase_kind.hpp"
+#include "hapticlab/db/event_kind.hpp"
 
 struct sqlite3;
 
@@ -96,14 +98,14 @@ inline constexpr EnumTable<TrialStatus, 5> kTrialStatusNames{
 struct Trial {
   std::int64_t id = 0;
   std::int64_t session_id = 0;
-  int plan_index = 0;      ///< position in the resolved plan (0-based)
-  std::string phase;       ///< training | reference | main
-  std::string material;    ///< material shown (real sample id / virtual model)
-  std::string comparison;  ///< the other stimulus: "virtual" or a material (reference)
-  std::string method;      ///< rendering method name; empty for real-real pairs
-  int repetition = 0;      ///< 0-based repetition index
-  std::string left;        ///< stimulus on the left square
-  std::string right;       ///< stimulus on the right square
+  int plan_index = 0;                  ///< position in the resolved plan (0-based)
+  PhaseKind phase = PhaseKind::kMain;  ///< stored by name (kPhaseKindNames)
+  std::string material;                ///< material shown (real sample id / virtual model)
+  std::string comparison;              ///< the other stimulus: "virtual" or a material (reference)
+  std::string method;                  ///< rendering method name; empty for real-real pairs
+  int repetition = 0;                  ///< 0-based repetition index
+  std::string left;                    ///< stimulus on the left square
+  std::string right;                   ///< stimulus on the right square
   TrialStatus status = TrialStatus::kPlanned;
   int attempts = 0;           ///< how many times the trial was started
   int completed_attempt = 0;  ///< the attempt whose data the trial holds (0 until completed)
@@ -125,7 +127,7 @@ struct Event {
   std::int64_t id = 0;
   std::int64_t session_id = 0;
   std::optional<std::int64_t> trial_id;
-  std::string kind;
+  EventKind kind{};  ///< stored by name (kEventKindNames); every writer names it
   std::string detail;
   std::string created_at;
   /// Who or what established the fact the event states (schema v7), e.g.

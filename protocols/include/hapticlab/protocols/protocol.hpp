@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "hapticlab/core/phase_kind.hpp"
 #include "hapticlab/protocols/adaptive.hpp"
 
 namespace hapticlab::protocols {
@@ -33,9 +34,8 @@ struct Method {
   int line = 0;
 };
 
-/// kStaircase and kQuestPlus are adaptive phases (protocols/adaptive.hpp): their trials are
-/// not planned ahead but chosen one by one from the answers so far.
-enum class PhaseKind { kTraining, kReference, kMain, kStaircase, kQuestPlus };
+/// The phase kinds (core/phase_kind.hpp); ToString gives a kind's name (kPhaseKindNames).
+using PhaseKind = hapticlab::PhaseKind;
 const char* ToString(PhaseKind k);
 
 struct Phase {

@@ -36,6 +36,9 @@ namespace hapticlab::runner {
 
 /// What to record of each trial's interactions.
 enum class RecordMode { kNone, kForce, kAll };
+/// Their names (`--record`), in the order --help lists them.
+inline constexpr EnumTable<RecordMode, 3> kRecordModeNames{
+    {{RecordMode::kAll, "all"}, {RecordMode::kForce, "force"}, {RecordMode::kNone, "none"}}};
 
 /// What a user interface shows of a trial (hapticlab study run --ui).
 struct TrialScreen {
@@ -154,7 +157,7 @@ class SessionUi {
   }
   /// Set by the runner while a session runs: the UI records the experimenter's actions
   /// (pause, resume, abort requested / cancelled, break ended early) as session events.
-  std::function<void(const std::string& kind, const std::string& detail)> log_event;
+  std::function<void(db::EventKind kind, const std::string& detail)> log_event;
 };
 
 /// What one trial side did in the engine (RunOptions::on_side; tests and diagnostics).
@@ -172,7 +175,8 @@ struct SideReport {
 /// the observer's perceptual scales).
 struct FeltTrial {
   int plan_index = 0;
-  std::string phase, material, comparison, method;
+  PhaseKind phase = PhaseKind::kMain;
+  std::string material, comparison, method;
   int repetition = 0;
   std::vector<double> distances;
   std::array<sim::Features, 2> felt{};

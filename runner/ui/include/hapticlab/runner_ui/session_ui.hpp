@@ -65,7 +65,7 @@ class WindowSessionUi final : public SessionUi {
   // for the runner. Returns false once the abort is confirmed.
   bool Frame(ParticipantAction* pa = nullptr);
   void Show(const TrialScreen& t);
-  void Log(const std::string& kind, const std::string& detail);
+  void Log(db::EventKind kind, const std::string& detail);
   void UpdateTimes();
   // A press of the rating box's button since the last call (edge), when it reports one.
   bool BoxPressed();
