@@ -276,6 +276,7 @@ std::vector<std::int64_t> Database::RatedTrialsInCompletionOrder(std::int64_t se
 }
 
 std::int64_t Database::LogEvent(const Event& e) {
+  HL_REQUIRE(e.kind != EventKind::kUnnamed, "every event names its kind (db::Event::kind)");
   Stmt s(db_,
          "INSERT INTO event(session_id, trial_id, kind, detail, established_by) VALUES "
          "(?,?,?,?,?)");

@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include "hapticlab/core/diagnostics.hpp"
+#include "hapticlab/core/status.hpp"
 #include "hapticlab/db/database.hpp"
 #include "hapticlab/test/sqlite_peek.hpp"
 #include "hapticlab/test/study_rows.hpp"
@@ -85,12 +86,14 @@ TEST(SessionMode, EventKindsAndPhasesAreStoredByNameAndReadBackOnce) {
     const auto phase = FromName(kPhaseKindNames, name);
     ASSERT_TRUE(phase.has_value()) << name;
     const auto id = db.AddTrial({.session_id = session, .phase = *phase, .material = "D"});
-    EXPECT_EQ(Cell(path, "SELECT phase FROM trial WHERE id = " + std::to_string(id)), name);
+    EXPECT_EQ(test::QueryCell(path, "SELECT phase FROM trial WHERE id = " + std::to_string(id)),
+              name);
     EXPECT_EQ(db.Trials(session).back().phase, *phase) << name;
   }
   for (const auto& [kind, name] : kEventKindNames) {
     const auto id = db.LogEvent({.session_id = session, .kind = kind});
-    EXPECT_EQ(Cell(path, "SELECT kind FROM event WHERE id = " + std::to_string(id)), name);
+    EXPECT_EQ(test::QueryCell(path, "SELECT kind FROM event WHERE id = " + std::to_string(id)),
+              name);
     EXPECT_EQ(db.Events(session).back().kind, kind) << name;
   }
   // Names written by every earlier build, the migrations' included, are known.
@@ -114,6 +117,22 @@ TEST(SessionMode, EventKindsAndPhasesAreStoredByNameAndReadBackOnce) {
       EXPECT_NE(e.diagnostics()[0].message.find("expected one of"), std::string::npos);
     }
   }
+}
+
+// An event whose writer forgot its kind is refused, not stored as the enum's first kind (a
+// false 'consent' in the audit trail); nothing reaches the table.
+TEST(SessionMode, AnEventWithoutItsKindIsRefusedAndNothingIsStored) {
+  test::TempDir dir;
+  const std::string path = dir.File("a.db");
+  Database db(path);
+  const auto session = OneSession(db, {.device = "sim", .actuator = "none"}, 0);
+  const auto before = db.Events(session).size();
+  EXPECT_THROW(db.LogEvent({.session_id = session, .detail = "forgot the kind"}),
+               PreconditionError);
+  EXPECT_EQ(db.Events(session).size(), before);
+  EXPECT_EQ(test::QueryCell(path, "SELECT count(*) FROM event WHERE detail = 'forgot the kind'"),
+            "0");
+  EXPECT_TRUE(NameOf(kEventKindNames, EventKind::kUnnamed).empty());
 }
 
 TEST(SessionMode, MigrationToV5InfersTheModeFromTheDeviceAndSaysSo) {

@@ -178,7 +178,7 @@ TEST(Audit, AnAbortWhilePlacingSamplesIsTheExperimentersAtThatTrial) {
   EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
   int aborts = 0;
   for (const auto& e : EventsOf(o.db_path, "P08")) {
-    if (e.kind != "abort") continue;
+    if (e.kind != db::EventKind::kAbort) continue;
     ++aborts;
     EXPECT_EQ(e.established_by, source::kConsole) << e.detail;
     EXPECT_TRUE(e.trial_id.has_value()) << "the trial whose samples were being placed";
@@ -200,8 +200,8 @@ TEST(Audit, ASignalWhilePlacingSamplesIsRecordedAsTheSignalNotAsTheExperimenter)
   EXPECT_EQ(RunStudy(p, o).status, db::SessionStatus::kAborted);
   int interrupted = 0;
   for (const auto& e : EventsOf(o.db_path, "P10")) {
-    EXPECT_NE(e.kind, "abort") << "nobody aborted: " << e.detail;
-    if (e.kind != "interrupted") continue;
+    EXPECT_NE(e.kind, db::EventKind::kAbort) << "nobody aborted: " << e.detail;
+    if (e.kind != db::EventKind::kInterrupted) continue;
     ++interrupted;
     EXPECT_EQ(e.established_by, source::kSignal);
     EXPECT_NE(e.detail.find("SIGINT"), std::string::npos) << e.detail;

@@ -127,7 +127,8 @@ struct Event {
   std::int64_t id = 0;
   std::int64_t session_id = 0;
   std::optional<std::int64_t> trial_id;
-  EventKind kind{};  ///< stored by name (kEventKindNames); every writer names it
+  EventKind kind =
+      EventKind::kUnnamed;  ///< stored by name (kEventKindNames); LogEvent refuses kUnnamed
   std::string detail;
   std::string created_at;
   /// Who or what established the fact the event states (schema v7), e.g.

@@ -31,6 +31,10 @@ enum class EventKind {
   kModeInferred,            ///< a schema migration inferred the session's mode
   kTrajectoryUnattributed,  ///< a schema migration could not attribute trajectories
   kRenderStats,             ///< written by the first `demo` builds only; read, never written
+  /// Not a kind: the value of an event nobody named. It has no name, and Database::LogEvent
+  /// refuses it, so a writer that forgets `.kind` fails instead of recording a false
+  /// consent (or any other) event.
+  kUnnamed,
 };
 
 inline constexpr EnumTable<EventKind, 24> kEventKindNames{
