@@ -12,6 +12,7 @@
 #include <atomic>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <memory>
 #include <thread>
@@ -84,6 +85,88 @@ std::string ObserverToml(const sim::ObserverParams& o, const std::string& header
   return s;
 }
 
+// The compass search from `best` (clamped to the bounds first): per sweep, each parameter's
+// first step (up, then down) that lowers the loss is taken; a sweep without one halves every
+// step. Returns the best loss; `best` holds its parameters.
+double CompassSearch(const design::CalibrationState& st, const design::CalibrationSpec& spec,
+                     const std::function<void(const std::string&)>& log,
+                     sim::ObserverParams* best_out) {
+  sim::ObserverParams& best = *best_out;
+  std::vector<Param> params;
+  for (const auto& p : spec.params) params.push_back({p.name, p.lo, p.hi, p.step});
+  for (const auto& p : params) Ref(best, p.name) = std::clamp(Ref(best, p.name), p.lo, p.hi);
+  double best_loss = design::EvaluateCalibration(st, spec, best, nullptr);
+  log(fmt::format("start: loss {:.4f}", best_loss));
+  for (int sweep = 0; sweep < spec.sweeps; ++sweep) {
+    bool improved = false;
+    for (auto& p : params) {
+      for (const double dir : {+1.0, -1.0}) {
+        sim::ObserverParams cand = best;
+        double& v = Ref(cand, p.name);
+        const double nv = std::clamp(v + dir * p.step, p.lo, p.hi);
+        if (nv == v) continue;
+        v = nv;
+        const double l = design::EvaluateCalibration(st, spec, cand, nullptr);
+        if (l < best_loss) {
+          best_loss = l;
+          best = cand;
+          improved = true;
+          break;
+        }
+      }
+    }
+    if (!improved)
+      for (auto& p : params) p.step *= 0.5;
+    log(fmt::format("sweep {}: loss {:.4f}{}", sweep + 1, best_loss,
+                    improved ? "" : " (steps halved)"));
+  }
+  return best_loss;
+}
+
+// The observer file's header: how it was written and what its keys mean.
+std::string ObserverHeader(const CalArgs& a, const design::CalibrationSpec& spec,
+                           double final_loss) {
+  return fmt::format(
+      "# The simulated observer of the dissertation's studies (sim::Observer; docs/studies.md\n"
+      "# \"The simulated observer\"). WRITTEN BY `hapticlab study calibrate {}`\n"
+      "# (seed {}, {} simulated studies per protocol per evaluation, pools of {}, {} sweeps; "
+      "loss {:.4f}).\n"
+      "# A rating on criterion c of a trial with material m and method k:\n"
+      "#   s0 = lower + (upper - lower) exp(-(sensitivity_c d_c)^2 / 2)     latent similarity\n"
+      "#   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e                  mid = scale "
+      "midpoint\n"
+      "# r = exp(N(0, range_sd)): the participant's use of the scale's range; o_c ~ N(0, "
+      "offset_sd),\n"
+      "# u_cm ~ N(0, material_sd), v_ck ~ N(0, method_sd): offset and participant x material / "
+      "x method\n"
+      "# effects; e ~ N(0, noise_sd) per rating; with probability lapse_rate a rating is "
+      "uniform on\n"
+      "# the scale. d_c: feature distance of what the hand felt on the two sides (scale_* "
+      "below).\n"
+      "# Keys in [observer] are the defaults of every criterion without a [criterion.NAME] "
+      "table.\n\n",
+      fs::path(a.targets).filename().string(), spec.seed, spec.simulations, spec.pool, spec.sweeps,
+      final_loss);
+}
+
+int RunCalibrate(const CalArgs& a) {
+  const auto spec = design::LoadCalibration(a.targets);
+  const auto log = StderrLog(a.quiet);
+  design::CalibrationState st = design::PrepareCalibration(spec, log);
+  sim::ObserverParams best = st.start;
+  CompassSearch(st, spec, log, &best);
+  std::vector<design::CalibrationRow> rows;
+  const double final_loss = design::EvaluateCalibration(st, spec, best, &rows);
+  const std::string out = a.out.empty() ? spec.observer_out : a.out;
+  WriteTextFile(out, ObserverToml(best, ObserverHeader(a, spec, final_loss)));
+  fmt::print("| protocol | statistic | target | weight | achieved |\n|---|---|---|---|---|\n");
+  for (const auto& r : rows)
+    fmt::print("| {} | {} | {:.3f} | {:g} | {:.3f} |\n", r.protocol, r.label, r.target, r.weight,
+               r.achieved);
+  fmt::print("\nloss {:.4f}; observer written to {}\n", final_loss, out);
+  return kExitOk;
+}
+
 }  // namespace
 
 void RegisterCalibrate(CLI::App& study) {
@@ -100,73 +183,7 @@ void RegisterCalibrate(CLI::App& study) {
   cmd->add_option("--out", a->out,
                   "Observer file to write (default: the targets file's `observer`)");
   cmd->add_flag("--quiet", a->quiet, "No progress on stderr");
-  cmd->callback([a] {
-    RunGuarded([&] {
-      const auto spec = design::LoadCalibration(a->targets);
-      const auto log = StderrLog(a->quiet);
-      design::CalibrationState st = design::PrepareCalibration(spec, log);
-      sim::ObserverParams best = st.start;
-      std::vector<Param> params;
-      for (const auto& p : spec.params) params.push_back({p.name, p.lo, p.hi, p.step});
-      for (const auto& p : params) Ref(best, p.name) = std::clamp(Ref(best, p.name), p.lo, p.hi);
-      double best_loss = design::EvaluateCalibration(st, spec, best, nullptr);
-      log(fmt::format("start: loss {:.4f}", best_loss));
-      for (int sweep = 0; sweep < spec.sweeps; ++sweep) {
-        bool improved = false;
-        for (auto& p : params) {
-          for (const double dir : {+1.0, -1.0}) {
-            sim::ObserverParams cand = best;
-            double& v = Ref(cand, p.name);
-            const double nv = std::clamp(v + dir * p.step, p.lo, p.hi);
-            if (nv == v) continue;
-            v = nv;
-            const double l = design::EvaluateCalibration(st, spec, cand, nullptr);
-            if (l < best_loss) {
-              best_loss = l;
-              best = cand;
-              improved = true;
-              break;
-            }
-          }
-        }
-        if (!improved)
-          for (auto& p : params) p.step *= 0.5;
-        log(fmt::format("sweep {}: loss {:.4f}{}", sweep + 1, best_loss,
-                        improved ? "" : " (steps halved)"));
-      }
-      std::vector<design::CalibrationRow> rows;
-      const double final_loss = design::EvaluateCalibration(st, spec, best, &rows);
-      const std::string header = fmt::format(
-          "# The simulated observer of the dissertation's studies (sim::Observer; docs/studies.md\n"
-          "# \"The simulated observer\"). WRITTEN BY `hapticlab study calibrate {}`\n"
-          "# (seed {}, {} simulated studies per protocol per evaluation, pools of {}, {} sweeps; "
-          "loss {:.4f}).\n"
-          "# A rating on criterion c of a trial with material m and method k:\n"
-          "#   s0 = lower + (upper - lower) exp(-(sensitivity_c d_c)^2 / 2)     latent similarity\n"
-          "#   s  = mid + r (s0 - mid) + o_c + u_cm + v_ck + e                  mid = scale "
-          "midpoint\n"
-          "# r = exp(N(0, range_sd)): the participant's use of the scale's range; o_c ~ N(0, "
-          "offset_sd),\n"
-          "# u_cm ~ N(0, material_sd), v_ck ~ N(0, method_sd): offset and participant x material / "
-          "x method\n"
-          "# effects; e ~ N(0, noise_sd) per rating; with probability lapse_rate a rating is "
-          "uniform on\n"
-          "# the scale. d_c: feature distance of what the hand felt on the two sides (scale_* "
-          "below).\n"
-          "# Keys in [observer] are the defaults of every criterion without a [criterion.NAME] "
-          "table.\n\n",
-          fs::path(a->targets).filename().string(), spec.seed, spec.simulations, spec.pool,
-          spec.sweeps, final_loss);
-      const std::string out = a->out.empty() ? spec.observer_out : a->out;
-      WriteTextFile(out, ObserverToml(best, header));
-      fmt::print("| protocol | statistic | target | weight | achieved |\n|---|---|---|---|---|\n");
-      for (const auto& r : rows)
-        fmt::print("| {} | {} | {:.3f} | {:g} | {:.3f} |\n", r.protocol, r.label, r.target,
-                   r.weight, r.achieved);
-      fmt::print("\nloss {:.4f}; observer written to {}\n", final_loss, out);
-      return kExitOk;
-    });
-  });
+  cmd->callback([a] { RunGuarded([&] { return RunCalibrate(*a); }); });
 }
 
 }  // namespace hapticlab::cli

@@ -150,16 +150,85 @@ inline constexpr EnumTable<DemoRecord, 4> kDemoRecordNames{{{DemoRecord::kFirst,
                                                             {DemoRecord::kForce, "force"},
                                                             {DemoRecord::kNone, "none"}}};
 
+struct DemoArgs {
+  std::string out,
+      protocol = std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml";
+  int participants = 8;
+  DemoRecord record = DemoRecord::kFirst;
+};
+
+// Runs the simulated participants SIM01.. into the database; what each felt goes to `pool`.
+// Returns the seconds of stimuli simulated.
+double RunParticipants(const protocols::Protocol& p, const DemoArgs& o, const std::string& db_path,
+                       design::FeltPool* pool_out) {
+  design::FeltPool& pool = *pool_out;
+  double stimulus_s = 0;
+  for (int i = 0; i < o.participants; ++i) {
+    runner::RunOptions ro;
+    ro.db_path = db_path;
+    ro.participant = fmt::format("SIM{:02d}", i + 1);
+    ro.record = o.record == DemoRecord::kAll || (o.record == DemoRecord::kFirst && i == 0)
+                    ? runner::RecordMode::kAll
+                : o.record == DemoRecord::kForce ? runner::RecordMode::kForce
+                                                 : runner::RecordMode::kNone;
+    ro.on_felt = [&pool, i](const runner::FeltTrial& t) {
+      auto& v = pool.participants[static_cast<std::size_t>(i)];
+      if (!v.empty() && v.back().plan_index == t.plan_index)
+        v.back() = t;
+      else
+        v.push_back(t);
+    };
+    const auto s = runner::RunStudy(p, ro);
+    stimulus_s += s.simulated_s;
+    fmt::print("  {}: {} trials, {}\n", s.participant, s.completed,
+               NameOf(db::kSessionStatusNames, s.status));
+  }
+  return stimulus_s;
+}
+
+int RunDemo(const DemoArgs& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  const fs::path dir = fs::path(o.out.empty() ? "demo-out" : o.out) / UtcStamp();
+  const auto p = protocols::LoadProtocol(o.protocol);  // before anything is written
+  fs::create_directories(dir);
+  const std::string db_path = (dir / "study.db").string();
+  fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n", kVersion,
+             kGitSha, p.name, o.participants, dir.string());
+  // What the simulated participants felt: the physics pool of the power line at the end.
+  design::FeltPool pool;
+  pool.protocol = p.name;
+  pool.criteria = p.criteria;
+  pool.scale_min = p.scale_min;
+  pool.scale_max = p.scale_max;
+  pool.observer = design::ProtocolObserver(p);
+  pool.participants.resize(static_cast<std::size_t>(o.participants));
+  const double stimulus_s = RunParticipants(p, o, db_path, &pool);
+  const auto report = stats::Analyze(db_path, {.out_dir = (dir / "report").string()});
+  db::Database database(db_path, {.create = false, .read_only = true});
+  // Trajectories stay in the database (`hapticlab export` writes them on request).
+  const auto files = db::ExportCsv(database, (dir / "export").string(), false);
+  const std::string timing = RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
+  {
+    std::ofstream md(report.markdown, std::ios::app);
+    md << "\n## Real-time check\n\n" << timing;
+    if (!md) throw std::runtime_error("cannot append the real-time check to " + report.markdown);
+  }
+  PowerLine(p, pool);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s, wall,
+             stimulus_s / wall);
+  fmt::print("database: {}\nreport:   {}\nexport:   {} ({} CSV files)\n", db_path, report.markdown,
+             (dir / "export").string(), files.size());
+  fmt::print(
+      "Models are placeholders derived from studies/shin2019/profiles.toml "
+      "(docs/studies.md).\n");
+  return kExitOk;
+}
+
 }  // namespace
 
 void RegisterDemo(CLI::App& app) {
-  struct O {
-    std::string out,
-        protocol = std::string(HL_SOURCE_DIR) + "/studies/shin2019/ch5-hybrid-realism.toml";
-    int participants = 8;
-    DemoRecord record = DemoRecord::kFirst;
-  };
-  auto o = std::make_shared<O>();
+  auto o = std::make_shared<DemoArgs>();
   auto* cmd = app.add_subcommand(
       "demo",
       "The main job: a complete simulated study end to end. Runs the dissertation's ch. V.3\n"
@@ -175,69 +244,7 @@ void RegisterDemo(CLI::App& app) {
   AddEnumOption(cmd, "--record", o->record, kDemoRecordNames,
                 "Trajectories to record: 'first' (every stream of the first participant, none of\n"
                 "the others: keeps the database near 30 MB), 'all', 'force', 'none'");
-  cmd->callback([o] {
-    RunGuarded([&] {
-      const auto t0 = std::chrono::steady_clock::now();
-      const fs::path dir = fs::path(o->out.empty() ? "demo-out" : o->out) / UtcStamp();
-      const auto p = protocols::LoadProtocol(o->protocol);  // before anything is written
-      fs::create_directories(dir);
-      const std::string db_path = (dir / "study.db").string();
-      fmt::print("HapticLab {} ({}) demo: study '{}' with {} simulated participants -> {}\n",
-                 kVersion, kGitSha, p.name, o->participants, dir.string());
-      double stimulus_s = 0;
-      // What the simulated participants felt: the physics pool of the power line at the end.
-      design::FeltPool pool;
-      pool.protocol = p.name;
-      pool.criteria = p.criteria;
-      pool.scale_min = p.scale_min;
-      pool.scale_max = p.scale_max;
-      pool.observer = design::ProtocolObserver(p);
-      pool.participants.resize(static_cast<std::size_t>(o->participants));
-      for (int i = 0; i < o->participants; ++i) {
-        runner::RunOptions ro;
-        ro.db_path = db_path;
-        ro.participant = fmt::format("SIM{:02d}", i + 1);
-        ro.record = o->record == DemoRecord::kAll || (o->record == DemoRecord::kFirst && i == 0)
-                        ? runner::RecordMode::kAll
-                    : o->record == DemoRecord::kForce ? runner::RecordMode::kForce
-                                                      : runner::RecordMode::kNone;
-        ro.on_felt = [&pool, i](const runner::FeltTrial& t) {
-          auto& v = pool.participants[static_cast<std::size_t>(i)];
-          if (!v.empty() && v.back().plan_index == t.plan_index)
-            v.back() = t;
-          else
-            v.push_back(t);
-        };
-        const auto s = runner::RunStudy(p, ro);
-        stimulus_s += s.simulated_s;
-        fmt::print("  {}: {} trials, {}\n", s.participant, s.completed,
-                   NameOf(db::kSessionStatusNames, s.status));
-      }
-      const auto report = stats::Analyze(db_path, {.out_dir = (dir / "report").string()});
-      db::Database database(db_path, {.create = false, .read_only = true});
-      // Trajectories stay in the database (`hapticlab export` writes them on request).
-      const auto files = db::ExportCsv(database, (dir / "export").string(), false);
-      const std::string timing =
-          RealTimeCheck((fs::path(p.file).parent_path() / p.profiles).string());
-      {
-        std::ofstream md(report.markdown, std::ios::app);
-        md << "\n## Real-time check\n\n" << timing;
-        if (!md)
-          throw std::runtime_error("cannot append the real-time check to " + report.markdown);
-      }
-      PowerLine(p, pool);
-      const double wall =
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      fmt::print("\n{:.0f} s of stimuli simulated in {:.1f} s ({:.0f}x real time)\n", stimulus_s,
-                 wall, stimulus_s / wall);
-      fmt::print("database: {}\nreport:   {}\nexport:   {} ({} CSV files)\n", db_path,
-                 report.markdown, (dir / "export").string(), files.size());
-      fmt::print(
-          "Models are placeholders derived from studies/shin2019/profiles.toml "
-          "(docs/studies.md).\n");
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded([&] { return RunDemo(*o); }); });
 }
 
 }  // namespace hapticlab::cli

@@ -87,15 +87,71 @@ inline constexpr EnumTable<ForceSource, 3> kForceSourceNames{
      {ForceSource::kTrajectory, "trajectory"},
      {ForceSource::kModel, "model"}}};
 
+struct RenderArgs {
+  std::string model, trajectory, out, vib_out, algorithm = "fric2";
+  ForceSource force_source = ForceSource::kAuto;
+  double force_rate = 1000, vib_rate = 10000, max_force = 8;
+  bool no_vibration = false, no_filter = false;
+  std::uint64_t seed = 1;
+};
+
+// The rendered rows (and with --vibration-out every vibration sample) as CSV files.
+void WriteRenderCsv(const RenderArgs& o, const runner::OfflineResult& res, const Measurement& traj,
+                    const renderer::RenderOptions& ro) {
+  std::string csv =
+      "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,"
+      "fault,acc_mps2\n";
+  for (const auto& r : res.rows)
+    fmt::format_to(
+        std::back_inserter(csv),
+        "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{:.9g}\n",
+        r.t_s, r.force_N.x(), r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(),
+        r.command_N.z(), r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0,
+        r.fault ? 1 : 0, r.acc_mps2);
+  WriteTextFile(o.out, csv);
+  if (!o.vib_out.empty()) {
+    std::string vib = "t_s,acc_mps2\n";
+    for (std::size_t k = 0; k < res.vibration_mps2.size(); ++k)
+      fmt::format_to(std::back_inserter(vib), "{:.9g},{:.9g}\n",
+                     traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz,
+                     res.vibration_mps2[k]);
+    WriteTextFile(o.vib_out, vib);
+  }
+}
+
+int RunRender(const RenderArgs& o) {
+  const auto m = renderer::LoadMaterial(o.model);
+  const auto traj = ReadMeasurementCsv(o.trajectory, {.kinematics_only = true});
+  if (traj.rows.size() < 2) throw InputError(o.trajectory, 0, "", "needs at least two samples");
+  renderer::RenderOptions ro;
+  ro.algorithm = renderer::ParseForceAlgorithm(o.algorithm);
+  ro.vibration = !o.no_vibration;
+  ro.hybrid_filter = !o.no_filter;
+  ro.vibration_rate_hz = o.vib_rate;
+  ro.max_force_N = o.max_force;
+  ro.seed = o.seed;
+  // The force loop runs at the trajectory's own rate.
+  ro.force_rate_hz =
+      static_cast<double>(traj.rows.size() - 1) / (traj.rows.back().t_s - traj.rows.front().t_s);
+  ro.stale_after_s = 1e9;  // offline: samples are never stale
+  if (o.force_source == ForceSource::kTrajectory && !traj.has_forces)
+    throw InputError(o.trajectory, 0, "fz_N",
+                     "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
+  runner::OfflineOptions oo;
+  oo.measured_normal_force = o.force_source != ForceSource::kModel && traj.has_forces;
+  const auto res = runner::RenderOffline(m, ro, traj, oo);
+  WriteRenderCsv(o, res, traj, ro);
+  fmt::print(stderr,
+             "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: "
+             "{}) -> {}\n",
+             res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(),
+             oo.measured_normal_force ? "the trajectory's fz_N" : "the rendered normal force",
+             o.out);
+  return kExitOk;
+}
+
 void AddRender(CLI::App& model) {
-  struct O {
-    std::string model, trajectory, out, vib_out, algorithm = "fric2";
-    ForceSource force_source = ForceSource::kAuto;
-    double force_rate = 1000, vib_rate = 10000, max_force = 8;
-    bool no_vibration = false, no_filter = false;
-    std::uint64_t seed = 1;
-  };
-  auto o = std::make_shared<O>();
+  auto o = std::make_shared<RenderArgs>();
   auto* cmd = model.add_subcommand(
       "render",
       "Run the real-time ticks offline over a recorded trajectory (measurement CSV v1;\n"
@@ -121,67 +177,91 @@ void AddRender(CLI::App& model) {
   cmd->add_flag("--no-vibration", o->no_vibration, "Force only");
   cmd->add_flag("--no-hybrid-filter", o->no_filter, "Do not low/high-pass at the model's f_c");
   cmd->add_option("--seed", o->seed, "Vibration noise seed")->capture_default_str();
-  cmd->callback([o] {
-    RunGuarded([&] {
-      const auto m = renderer::LoadMaterial(o->model);
-      const auto traj = ReadMeasurementCsv(o->trajectory, {.kinematics_only = true});
-      if (traj.rows.size() < 2)
-        throw InputError(o->trajectory, 0, "", "needs at least two samples");
-      renderer::RenderOptions ro;
-      ro.algorithm = renderer::ParseForceAlgorithm(o->algorithm);
-      ro.vibration = !o->no_vibration;
-      ro.hybrid_filter = !o->no_filter;
-      ro.vibration_rate_hz = o->vib_rate;
-      ro.max_force_N = o->max_force;
-      ro.seed = o->seed;
-      // The force loop runs at the trajectory's own rate.
-      ro.force_rate_hz = static_cast<double>(traj.rows.size() - 1) /
-                         (traj.rows.back().t_s - traj.rows.front().t_s);
-      ro.stale_after_s = 1e9;  // offline: samples are never stale
-      if (o->force_source == ForceSource::kTrajectory && !traj.has_forces)
-        throw InputError(o->trajectory, 0, "fz_N",
-                         "--force-source trajectory needs force columns (fx_N, fy_N, fz_N)");
-      runner::OfflineOptions oo;
-      oo.measured_normal_force = o->force_source != ForceSource::kModel && traj.has_forces;
-      const auto res = runner::RenderOffline(m, ro, traj, oo);
-      std::string csv =
-          "t_s,fx_N,fy_N,fz_N,cmd_fx_N,cmd_fy_N,cmd_fz_N,normal_N,friction_N,speed_mps,in_contact,"
-          "fault,acc_mps2\n";
-      for (const auto& r : res.rows)
-        fmt::format_to(
-            std::back_inserter(csv),
-            "{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{:.9g},{},{},{:.9g}\n",
-            r.t_s, r.force_N.x(), r.force_N.y(), r.force_N.z(), r.command_N.x(), r.command_N.y(),
-            r.command_N.z(), r.normal_N, r.friction_N, r.speed_mps, r.in_contact ? 1 : 0,
-            r.fault ? 1 : 0, r.acc_mps2);
-      WriteTextFile(o->out, csv);
-      if (!o->vib_out.empty()) {
-        std::string vib = "t_s,acc_mps2\n";
-        for (std::size_t k = 0; k < res.vibration_mps2.size(); ++k)
-          fmt::format_to(std::back_inserter(vib), "{:.9g},{:.9g}\n",
-                         traj.rows.front().t_s + static_cast<double>(k) / ro.vibration_rate_hz,
-                         res.vibration_mps2[k]);
-        WriteTextFile(o->vib_out, vib);
-      }
-      fmt::print(stderr,
-                 "rendered {} force ticks at {:.0f} Hz and {} vibration samples (vibration force: "
-                 "{}) -> {}\n",
-                 res.rows.size(), ro.force_rate_hz, res.vibration_mps2.size(),
-                 oo.measured_normal_force ? "the trajectory's fz_N" : "the rendered normal force",
-                 o->out);
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded([&] { return RunRender(*o); }); });
+}
+
+struct EnergyArgs {
+  std::string algorithm = "norm", sine, model;
+  double dx = 1e-4, dz = 0, stiffness = 1000, mu = 0;
+  int steps = 20000;
+  bool json = false;
+};
+
+// --sine AMPLITUDE_M,WAVELENGTH_M: both positive.
+std::pair<double, double> ParseSine(const std::string& sine) {
+  auto comma = sine.find(',');
+  double a = 0, l = 0;
+  try {
+    a = std::stod(sine.substr(0, comma));
+    l = comma == std::string::npos ? 0 : std::stod(sine.substr(comma + 1));
+  } catch (const std::exception&) {  // std::stod's own errors: not a number
+    comma = std::string::npos;
+  }
+  if (comma == std::string::npos)
+    throw InputError(kCommandLine, 0, "--sine",
+                     "expected AMPLITUDE_M,WAVELENGTH_M, got '" + sine + "'");
+  if (!(a > 0) || !(l > 0))
+    throw InputError(kCommandLine, 0, "--sine", "amplitude and wavelength must be > 0");
+  return {a, l};
+}
+
+void PrintEnergy(const EnergyArgs& o, const nlohmann::json& j, const renderer::EnergyResult& r,
+                 const renderer::EnergyPath& path) {
+  fmt::print("algorithm {} on path {}: energy {:.6e} J", o.algorithm, j["path"].get<std::string>(),
+             r.energy_J);
+  if (r.has_closed_form && path.kind == renderer::EnergyPath::Kind::kA)
+    fmt::print(" (eq. 5.2: {:.6e} J, difference {:.3f} %)", r.closed_form_J,
+               100 * (r.energy_J - r.closed_form_J) / r.closed_form_J);
+  fmt::print("\n");
+  if (path.kind == renderer::EnergyPath::Kind::kB)
+    fmt::print(
+        "normal part {:.3e} J (closed form {:.3e} J), tangential part {:.3e} J;\n"
+        "eq. (5.3) scale K mu^2 dx dz = {:.3e} J; gain bound = {:.3e} J\n",
+        r.normal_energy_J, r.closed_form_J, r.tangential_energy_J, r.bound_J, r.gain_bound_J);
+}
+
+int RunEnergy(const EnergyArgs& o) {
+  const auto [a, l] = ParseSine(o.sine);
+  renderer::MaterialModel m;
+  if (!o.model.empty()) {
+    m = renderer::LoadMaterial(o.model);
+  } else {
+    m.contact.texture = {o.stiffness, 0, 1};
+    m.contact.base = {2 * o.stiffness, 0, 1};
+    m.contact.layer_thickness_m = 1e-3;
+    m.friction = {2000, o.mu, 0};
+  }
+  const auto alg = renderer::ParseForceAlgorithm(o.algorithm);
+  renderer::EnergyPath path;
+  path.kind = alg == ForceAlgorithm::kNorm ? renderer::EnergyPath::Kind::kA
+                                           : renderer::EnergyPath::Kind::kB;
+  path.dx_max_m = o.dx;
+  path.dz_max_m = o.dz > 0 ? o.dz : a;
+  path.steps = o.steps;
+  const auto r = renderer::ComputeEnergy(m, alg, a, l, path);
+  nlohmann::json j = {{"algorithm", o.algorithm},
+                      {"path", path.kind == renderer::EnergyPath::Kind::kA ? "A" : "B"},
+                      {"energy_J", r.energy_J},
+                      {"normal_energy_J", r.normal_energy_J},
+                      {"tangential_energy_J", r.tangential_energy_J},
+                      {"closed_form_J", nlohmann::json()}};
+  if (path.kind == renderer::EnergyPath::Kind::kA) {
+    if (r.has_closed_form) j["closed_form_J"] = r.closed_form_J;
+  } else {
+    // Path B's closed form covers the normal part only (friction adds to it).
+    if (r.has_closed_form) j["normal_closed_form_J"] = r.closed_form_J;
+    j["bound_J"] = r.bound_J;
+    j["gain_bound_J"] = r.gain_bound_J;
+  }
+  if (o.json)
+    PrintJson(j);
+  else
+    PrintEnergy(o, j, r, path);
+  return kExitOk;
 }
 
 void AddEnergy(CLI::App& model) {
-  struct O {
-    std::string algorithm = "norm", sine, model;
-    double dx = 1e-4, dz = 0, stiffness = 1000, mu = 0;
-    int steps = 20000;
-    bool json = false;
-  };
-  auto o = std::make_shared<O>();
+  auto o = std::make_shared<EnergyArgs>();
   auto* cmd = model.add_subcommand(
       "energy",
       "Work done by the rendered force field around a closed path on h = A sin(2 pi x / l)\n"
@@ -202,70 +282,7 @@ void AddEnergy(CLI::App& model) {
   cmd->add_option("--dz-max", o->dz, "Path B penetration [m] (default: the amplitude)");
   cmd->add_option("--steps", o->steps, "Integration steps per side")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print {\"energy_J\", \"closed_form_J\", ...} as JSON");
-  cmd->callback([o] {
-    RunGuarded([&] {
-      auto comma = o->sine.find(',');
-      double a = 0, l = 0;
-      try {
-        a = std::stod(o->sine.substr(0, comma));
-        l = comma == std::string::npos ? 0 : std::stod(o->sine.substr(comma + 1));
-      } catch (const std::exception&) {  // std::stod's own errors: not a number
-        comma = std::string::npos;
-      }
-      if (comma == std::string::npos)
-        throw InputError(kCommandLine, 0, "--sine",
-                         "expected AMPLITUDE_M,WAVELENGTH_M, got '" + o->sine + "'");
-      if (!(a > 0) || !(l > 0))
-        throw InputError(kCommandLine, 0, "--sine", "amplitude and wavelength must be > 0");
-      renderer::MaterialModel m;
-      if (!o->model.empty()) {
-        m = renderer::LoadMaterial(o->model);
-      } else {
-        m.contact.texture = {o->stiffness, 0, 1};
-        m.contact.base = {2 * o->stiffness, 0, 1};
-        m.contact.layer_thickness_m = 1e-3;
-        m.friction = {2000, o->mu, 0};
-      }
-      const auto alg = renderer::ParseForceAlgorithm(o->algorithm);
-      renderer::EnergyPath path;
-      path.kind = alg == ForceAlgorithm::kNorm ? renderer::EnergyPath::Kind::kA
-                                               : renderer::EnergyPath::Kind::kB;
-      path.dx_max_m = o->dx;
-      path.dz_max_m = o->dz > 0 ? o->dz : a;
-      path.steps = o->steps;
-      const auto r = renderer::ComputeEnergy(m, alg, a, l, path);
-      nlohmann::json j = {{"algorithm", o->algorithm},
-                          {"path", path.kind == renderer::EnergyPath::Kind::kA ? "A" : "B"},
-                          {"energy_J", r.energy_J},
-                          {"normal_energy_J", r.normal_energy_J},
-                          {"tangential_energy_J", r.tangential_energy_J},
-                          {"closed_form_J", nlohmann::json()}};
-      if (path.kind == renderer::EnergyPath::Kind::kA) {
-        if (r.has_closed_form) j["closed_form_J"] = r.closed_form_J;
-      } else {
-        // Path B's closed form covers the normal part only (friction adds to it).
-        if (r.has_closed_form) j["normal_closed_form_J"] = r.closed_form_J;
-        j["bound_J"] = r.bound_J;
-        j["gain_bound_J"] = r.gain_bound_J;
-      }
-      if (o->json) {
-        PrintJson(j);
-      } else {
-        fmt::print("algorithm {} on path {}: energy {:.6e} J", o->algorithm,
-                   j["path"].get<std::string>(), r.energy_J);
-        if (r.has_closed_form && path.kind == renderer::EnergyPath::Kind::kA)
-          fmt::print(" (eq. 5.2: {:.6e} J, difference {:.3f} %)", r.closed_form_J,
-                     100 * (r.energy_J - r.closed_form_J) / r.closed_form_J);
-        fmt::print("\n");
-        if (path.kind == renderer::EnergyPath::Kind::kB)
-          fmt::print(
-              "normal part {:.3e} J (closed form {:.3e} J), tangential part {:.3e} J;\n"
-              "eq. (5.3) scale K mu^2 dx dz = {:.3e} J; gain bound = {:.3e} J\n",
-              r.normal_energy_J, r.closed_form_J, r.tangential_energy_J, r.bound_J, r.gain_bound_J);
-      }
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded([&] { return RunEnergy(*o); }); });
 }
 
 void AddImportPenn(CLI::App& model) {

@@ -222,6 +222,8 @@ void AddFitNeural(CLI::App& model) {
   });
 }
 
+namespace {
+
 // cv-vibration --model-kind: the AR bank or a neural topology.
 enum class VibModelKind { kLpc, kNeuralUnified, kNeuralDecomposed };
 inline constexpr EnumTable<VibModelKind, 3> kVibModelKindNames{
@@ -229,111 +231,127 @@ inline constexpr EnumTable<VibModelKind, 3> kVibModelKindNames{
      {VibModelKind::kNeuralUnified, "neural-unified"},
      {VibModelKind::kNeuralDecomposed, "neural-decomposed"}}};
 
+struct CvArgs {
+  VibArgs a;
+  std::string train_speeds = "0.04,0.08,0.12";
+  std::string train_forces = "0.54,1.18,1.91";
+  bool json = false;
+  std::uint64_t seed = 1;
+  std::string plots;
+  VibModelKind kind = VibModelKind::kLpc;
+  int epochs = 40;
+};
+
+// Measured vs synthesized spectra per condition (Figs. 3.5/3.6), SVG and PNG in o.plots.
+void DrawCvSpectra(const CvArgs& o, const modeling::CvResult& cv) {
+  std::filesystem::create_directories(o.plots);
+  for (const auto& r : cv.rows) {
+    stats::LinePlot lp;
+    lp.title = fmt::format("{:.0f} mm/s, {:.2f} N ({}), E_s = {:.3f}", r.speed_mps * 1e3, r.force_N,
+                           r.train ? "training" : "held out", r.es);
+    lp.x_label = "frequency [Hz]";
+    lp.y_label = "|A(f)|";
+    lp.log_y = true;
+    for (std::size_t k = 0; k < r.measured_spectrum.size(); ++k)
+      lp.x.push_back(static_cast<double>(k) * VibOptions(o.a).model_rate_hz /
+                     (2.0 * static_cast<double>(r.measured_spectrum.size() - 1)));
+    lp.series = {{"measured", r.measured_spectrum}, {"synthesized", r.synthesized_spectrum}};
+    stats::DrawLinePlot(
+        lp, (std::filesystem::path(o.plots) /
+             fmt::format("spectrum_v{:.0f}_f{:.0f}", r.speed_mps * 1e3, r.force_N * 100))
+                .string());
+  }
+}
+
+// The E_s table: one row per recording, then the means (or the same as JSON).
+void PrintCv(const CvArgs& o, const std::vector<modeling::Recording>& recs,
+             const modeling::CvResult& cv, bool calibrated) {
+  if (o.json) {
+    nlohmann::json rows = nlohmann::json::array();
+    for (std::size_t i = 0; i < cv.rows.size(); ++i) {
+      const auto& r = cv.rows[i];
+      rows.push_back({{"file", recs[i].file},
+                      {"speed_mps", r.speed_mps},
+                      {"force_N", r.force_N},
+                      {"split", r.train ? "train" : "test"},
+                      {"es", r.es}});
+    }
+    PrintJson(nlohmann::json{{"model_kind", std::string(NameOf(kVibModelKindNames, o.kind))},
+                             {"calibrated", calibrated},
+                             {"conditions", rows},
+                             {"mean_es_train", cv.mean_es_train},
+                             {"mean_es_test", cv.mean_es_test},
+                             {"order", cv.order}});
+    return;
+  }
+  fmt::print("{:>10} {:>9} {:>6} {:>7}  {}\n", "speed m/s", "force N", "split", "E_s", "file");
+  for (std::size_t i = 0; i < cv.rows.size(); ++i) {
+    const auto& r = cv.rows[i];
+    fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}  {}\n", r.speed_mps, r.force_N,
+               r.train ? "train" : "test", r.es, recs[i].file);
+  }
+  const bool any_test =
+      std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
+  fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n",
+             NameOf(kVibModelKindNames, o.kind), cv.mean_es_train,
+             any_test ? fmt::format("{:.3f}", cv.mean_es_test)
+                      : std::string("n/a (no held-out conditions)"),
+             o.kind == VibModelKind::kLpc
+                 ? fmt::format(" (AR order {}{})", cv.order, AtCapNote(o.a, cv.order))
+                 : std::string(),
+             CalibrationNote(calibrated));
+}
+
+int RunCvVibration(const CvArgs& o) {
+  const auto recs = modeling::LoadRecordings(o.a.recordings, Labels(o.a.sound));
+  const bool calibrated = modeling::AllCalibrated(recs);
+  modeling::CvResult cv;
+  if (o.kind == VibModelKind::kLpc) {
+    cv = modeling::CrossValidate(recs, ParseList(o.train_speeds, "--train-speeds"),
+                                 ParseList(o.train_forces, "--train-forces"), VibOptions(o.a),
+                                 o.seed);
+  } else {
+    modeling::NeuralFitOptions no;
+    no.topology = o.kind == VibModelKind::kNeuralUnified ? renderer::NeuralTopology::kUnified
+                                                         : renderer::NeuralTopology::kDecomposed;
+    no.preprocess = VibOptions(o.a);
+    no.train.max_epochs = o.epochs;
+    no.train.seed = o.seed;
+    cv = modeling::CrossValidateNeural(recs, ParseList(o.train_speeds, "--train-speeds"),
+                                       ParseList(o.train_forces, "--train-forces"), no, o.seed);
+  }
+  if (!o.plots.empty()) DrawCvSpectra(o, cv);
+  PrintCv(o, recs, cv, calibrated);
+  return kExitOk;
+}
+
+}  // namespace
+
 void AddCvVibration(CLI::App& model) {
-  auto a = std::make_shared<VibArgs>();
-  auto ts = std::make_shared<std::string>("0.04,0.08,0.12");
-  auto tf = std::make_shared<std::string>("0.54,1.18,1.91");
-  auto json_out = std::make_shared<bool>(false);
-  auto seed = std::make_shared<std::uint64_t>(1);
-  auto plots = std::make_shared<std::string>();
-  auto kind = std::make_shared<VibModelKind>(VibModelKind::kLpc);
-  auto epochs = std::make_shared<int>(40);
+  auto o = std::make_shared<CvArgs>();
   auto* cmd = model.add_subcommand(
       "cv-vibration",
       "Cross-validation as dissertation ch. III.4: fit on the training speeds x forces, then\n"
       "E_s (eq. 3.1) of the renderer's interpolated synthesis at every recorded condition;\n"
       "--plots draws measured vs synthesized spectra like Figs. 3.5/3.6.");
-  AddVibOptions(cmd, *a);
-  cmd->add_option("--train-speeds", *ts, "Training speeds [m/s], comma-separated")
+  AddVibOptions(cmd, o->a);
+  cmd->add_option("--train-speeds", o->train_speeds, "Training speeds [m/s], comma-separated")
       ->capture_default_str();
-  cmd->add_option("--train-forces", *tf, "Training forces [N], comma-separated")
+  cmd->add_option("--train-forces", o->train_forces, "Training forces [N], comma-separated")
       ->capture_default_str();
-  cmd->add_option("--seed", *seed, "Synthesis seed")->capture_default_str();
-  cmd->add_option("--plots", *plots,
+  cmd->add_option("--seed", o->seed, "Synthesis seed")->capture_default_str();
+  cmd->add_option("--plots", o->plots,
                   "Write measured vs synthesized spectra per condition here (SVG and PNG)");
-  cmd->add_flag("--json", *json_out,
+  cmd->add_flag("--json", o->json,
                 "Print {\"conditions\":[...],\"mean_es_train\",\"mean_es_test\"}");
   AddEnumOption(
-      cmd, "--model-kind", *kind, kVibModelKindNames,
+      cmd, "--model-kind", o->kind, kVibModelKindNames,
       "lpc: the AR bank; neural-unified: Γ_U; neural-decomposed: Γ_D (dissertation ch. III.3, "
       "Fig. 3.7: run all three on the same recordings for one E_s table)");
-  cmd->add_option("--epochs", *epochs, "Neural models: maximum training epochs")
+  cmd->add_option("--epochs", o->epochs, "Neural models: maximum training epochs")
       ->capture_default_str()
       ->check(CLI::Range(1, 10000));
-  cmd->callback([=] {
-    RunGuarded(kVibFlags, [&] {
-      const auto recs = modeling::LoadRecordings(a->recordings, Labels(a->sound));
-      const bool calibrated = modeling::AllCalibrated(recs);
-      modeling::CvResult cv;
-      if (*kind == VibModelKind::kLpc) {
-        cv = modeling::CrossValidate(recs, ParseList(*ts, "--train-speeds"),
-                                     ParseList(*tf, "--train-forces"), VibOptions(*a), *seed);
-      } else {
-        modeling::NeuralFitOptions no;
-        no.topology = *kind == VibModelKind::kNeuralUnified ? renderer::NeuralTopology::kUnified
-                                                            : renderer::NeuralTopology::kDecomposed;
-        no.preprocess = VibOptions(*a);
-        no.train.max_epochs = *epochs;
-        no.train.seed = *seed;
-        cv = modeling::CrossValidateNeural(recs, ParseList(*ts, "--train-speeds"),
-                                           ParseList(*tf, "--train-forces"), no, *seed);
-      }
-      if (!plots->empty()) {
-        std::filesystem::create_directories(*plots);
-        for (const auto& r : cv.rows) {
-          stats::LinePlot lp;
-          lp.title = fmt::format("{:.0f} mm/s, {:.2f} N ({}), E_s = {:.3f}", r.speed_mps * 1e3,
-                                 r.force_N, r.train ? "training" : "held out", r.es);
-          lp.x_label = "frequency [Hz]";
-          lp.y_label = "|A(f)|";
-          lp.log_y = true;
-          for (std::size_t k = 0; k < r.measured_spectrum.size(); ++k)
-            lp.x.push_back(static_cast<double>(k) * VibOptions(*a).model_rate_hz /
-                           (2.0 * static_cast<double>(r.measured_spectrum.size() - 1)));
-          lp.series = {{"measured", r.measured_spectrum}, {"synthesized", r.synthesized_spectrum}};
-          stats::DrawLinePlot(
-              lp, (std::filesystem::path(*plots) /
-                   fmt::format("spectrum_v{:.0f}_f{:.0f}", r.speed_mps * 1e3, r.force_N * 100))
-                      .string());
-        }
-      }
-      if (*json_out) {
-        nlohmann::json rows = nlohmann::json::array();
-        for (std::size_t i = 0; i < cv.rows.size(); ++i) {
-          const auto& r = cv.rows[i];
-          rows.push_back({{"file", recs[i].file},
-                          {"speed_mps", r.speed_mps},
-                          {"force_N", r.force_N},
-                          {"split", r.train ? "train" : "test"},
-                          {"es", r.es}});
-        }
-        PrintJson(nlohmann::json{{"model_kind", std::string(NameOf(kVibModelKindNames, *kind))},
-                                 {"calibrated", calibrated},
-                                 {"conditions", rows},
-                                 {"mean_es_train", cv.mean_es_train},
-                                 {"mean_es_test", cv.mean_es_test},
-                                 {"order", cv.order}});
-        return kExitOk;
-      }
-      fmt::print("{:>10} {:>9} {:>6} {:>7}  {}\n", "speed m/s", "force N", "split", "E_s", "file");
-      for (std::size_t i = 0; i < cv.rows.size(); ++i) {
-        const auto& r = cv.rows[i];
-        fmt::print("{:>10.3f} {:>9.3f} {:>6} {:>7.3f}  {}\n", r.speed_mps, r.force_N,
-                   r.train ? "train" : "test", r.es, recs[i].file);
-      }
-      const bool any_test =
-          std::any_of(cv.rows.begin(), cv.rows.end(), [](const auto& r) { return !r.train; });
-      fmt::print("mean E_s ({}): training {:.3f}, held-out {}{}{}\n",
-                 NameOf(kVibModelKindNames, *kind), cv.mean_es_train,
-                 any_test ? fmt::format("{:.3f}", cv.mean_es_test)
-                          : std::string("n/a (no held-out conditions)"),
-                 *kind == VibModelKind::kLpc
-                     ? fmt::format(" (AR order {}{})", cv.order, AtCapNote(*a, cv.order))
-                     : std::string(),
-                 CalibrationNote(calibrated));
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded(kVibFlags, [&] { return RunCvVibration(*o); }); });
 }
 
 void AddCutoff(CLI::App& model) {

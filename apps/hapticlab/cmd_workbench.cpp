@@ -169,103 +169,108 @@ void AddEffectsList(CLI::App& app) {
 }
 
 // ---------------------------------------------------------------------------------------------
+struct MeasurementCheckArgs {
+  std::string file;
+  bool json = false;
+  SoundFlags sound;
+};
+
+int RunMeasurementCheck(const MeasurementCheckArgs& o) {
+  if (modeling::IsSoundFile(o.file)) return CheckVibrationOnly(o.file, Labels(o.sound), o.json);
+  const auto m = ReadMeasurementCsv(o.file, {.allow_vibration_only = true});
+  if (!m.has_kinematics) return CheckVibrationOnly(o.file, Labels(o.sound), o.json);
+  const auto s = Summarize(m);
+  if (o.json) {
+    nlohmann::json ranges;
+    for (const auto& [k, v] : s.ranges) ranges[k] = {v.first, v.second};
+    PrintJson(nlohmann::json{{"file", o.file},
+                             {"material", m.material},
+                             {"samples", s.samples},
+                             {"duration_s", s.duration_s},
+                             {"rate_hz", s.rate_hz},
+                             {"gaps", s.gaps},
+                             {"max_gap_s", s.max_gap_s},
+                             {"contact_samples", s.contact_samples},
+                             {"has_acceleration", m.has_acceleration},
+                             {"ranges", ranges},
+                             {"warnings", s.warnings}});
+    return kExitOk;
+  }
+  fmt::print(
+      "{}: material '{}', {} samples, {:.3f} s at {:.1f} Hz, {} in contact, {} gap{} "
+      "(longest {:.4g} s)\n",
+      o.file, m.material, s.samples, s.duration_s, s.rate_hz, s.contact_samples, s.gaps,
+      s.gaps == 1 ? "" : "s", s.max_gap_s);
+  for (const auto& [k, v] : s.ranges)
+    fmt::print("  {:9s} {:+.6g} .. {:+.6g}\n", k, v.first, v.second);
+  for (const auto& w : s.warnings) fmt::print("warning: {}\n", w);
+  return kExitOk;
+}
+
+void AddMeasurementCheck(CLI::App* grp) {
+  auto o = std::make_shared<MeasurementCheckArgs>();
+  auto* cmd = grp->add_subcommand(
+      "check",
+      "Read a measurement CSV v1 (errors name file, line and column) and summarize it:\n"
+      "duration, rate, ranges per column, gaps, samples in contact, warnings. A WAV/FLAC\n"
+      "file or a vibration-only CSV (t_s, acc_mps2) is summarized as a vibration recording:\n"
+      "format, rate, axes, condition, calibration, level.");
+  cmd->add_option("FILE", o->file, "Measurement CSV v1, WAV or FLAC")->required();
+  cmd->add_flag("--json", o->json, "As JSON");
+  AddSoundFlags(cmd, o->sound);
+  cmd->callback([o] { RunGuarded([&] { return RunMeasurementCheck(*o); }); });
+}
+
+struct SimulateArgs {
+  std::string out;
+  std::vector<std::string> effects, add;
+  double duration_s = 120, rate_hz = 2000;
+  std::uint64_t seed = 1;
+};
+
+int RunMeasurementSimulate(const SimulateArgs& o) {
+  TruthParams t;
+  t.effects = o.effects.empty() ? BaselineEffects() : o.effects;
+  for (const auto& e : o.add) t.effects.push_back(e);
+  RequireKnownEffects(t.effects, "<command line>", "--effects/--add");
+  t.duration_s = o.duration_s;
+  t.rate_hz = o.rate_hz;
+  t.seed = o.seed;
+  auto sim = Simulate(t);
+  sim.m.material = "simulated";
+  WriteMeasurementCsv(o.out, sim.m);
+  fmt::print("wrote {} ({} samples, truth: {}, seed {})\n", o.out, sim.m.rows.size(),
+             fmt::join(t.effects, ", "), t.seed);
+  return kExitOk;
+}
+
+void AddMeasurementSimulate(CLI::App* grp) {
+  auto o = std::make_shared<SimulateArgs>();
+  auto* cmd = grp->add_subcommand(
+      "simulate",
+      "Write a measurement of simulated human-like strokes (2-150 mm/s, 0.3-2.5 N, pauses, "
+      "lift-offs)\n"
+      "on a ground-truth sample with the given effects (default: the baseline's), with sensor\n"
+      "noise. For learning the workbench and testing a pipeline; the seed is recorded in the "
+      "file.");
+  cmd->add_option("-o,--out", o->out, "Measurement CSV v1 to write")->required();
+  cmd->add_option("--effects", o->effects, "The truth's effects (default: the baseline's)");
+  cmd->add_option("--add", o->add, "Effects on top of the baseline's (repeatable)");
+  cmd->add_option("--duration", o->duration_s, "Length [s]")
+      ->capture_default_str()
+      ->check(CLI::Range(5.0, 3600.0));
+  cmd->add_option("--rate", o->rate_hz, "Sample rate [Hz]")
+      ->capture_default_str()
+      ->check(CLI::Range(1000.0, 20000.0));
+  cmd->add_option("--seed", o->seed, "Seed of every random draw")->capture_default_str();
+  cmd->callback([o] { RunGuarded([&] { return RunMeasurementSimulate(*o); }); });
+}
+
 void AddMeasurement(CLI::App& app) {
   auto* grp = app.add_subcommand("measurement", "Check or simulate measurement CSV v1 files");
   grp->require_subcommand(1);
-  {
-    struct O {
-      std::string file;
-      bool json = false;
-      SoundFlags sound;
-    };
-    auto o = std::make_shared<O>();
-    auto* cmd = grp->add_subcommand(
-        "check",
-        "Read a measurement CSV v1 (errors name file, line and column) and summarize it:\n"
-        "duration, rate, ranges per column, gaps, samples in contact, warnings. A WAV/FLAC\n"
-        "file or a vibration-only CSV (t_s, acc_mps2) is summarized as a vibration recording:\n"
-        "format, rate, axes, condition, calibration, level.");
-    cmd->add_option("FILE", o->file, "Measurement CSV v1, WAV or FLAC")->required();
-    cmd->add_flag("--json", o->json, "As JSON");
-    AddSoundFlags(cmd, o->sound);
-    cmd->callback([o] {
-      RunGuarded([&] {
-        if (modeling::IsSoundFile(o->file))
-          return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
-        const auto m = ReadMeasurementCsv(o->file, {.allow_vibration_only = true});
-        if (!m.has_kinematics) return CheckVibrationOnly(o->file, Labels(o->sound), o->json);
-        const auto s = Summarize(m);
-        if (o->json) {
-          nlohmann::json ranges;
-          for (const auto& [k, v] : s.ranges) ranges[k] = {v.first, v.second};
-          PrintJson(nlohmann::json{{"file", o->file},
-                                   {"material", m.material},
-                                   {"samples", s.samples},
-                                   {"duration_s", s.duration_s},
-                                   {"rate_hz", s.rate_hz},
-                                   {"gaps", s.gaps},
-                                   {"max_gap_s", s.max_gap_s},
-                                   {"contact_samples", s.contact_samples},
-                                   {"has_acceleration", m.has_acceleration},
-                                   {"ranges", ranges},
-                                   {"warnings", s.warnings}});
-          return kExitOk;
-        }
-        fmt::print(
-            "{}: material '{}', {} samples, {:.3f} s at {:.1f} Hz, {} in contact, {} gap{} "
-            "(longest {:.4g} s)\n",
-            o->file, m.material, s.samples, s.duration_s, s.rate_hz, s.contact_samples, s.gaps,
-            s.gaps == 1 ? "" : "s", s.max_gap_s);
-        for (const auto& [k, v] : s.ranges)
-          fmt::print("  {:9s} {:+.6g} .. {:+.6g}\n", k, v.first, v.second);
-        for (const auto& w : s.warnings) fmt::print("warning: {}\n", w);
-        return kExitOk;
-      });
-    });
-  }
-  {
-    struct O {
-      std::string out;
-      std::vector<std::string> effects, add;
-      double duration_s = 120, rate_hz = 2000;
-      std::uint64_t seed = 1;
-    };
-    auto o = std::make_shared<O>();
-    auto* cmd = grp->add_subcommand(
-        "simulate",
-        "Write a measurement of simulated human-like strokes (2-150 mm/s, 0.3-2.5 N, pauses, "
-        "lift-offs)\n"
-        "on a ground-truth sample with the given effects (default: the baseline's), with sensor\n"
-        "noise. For learning the workbench and testing a pipeline; the seed is recorded in the "
-        "file.");
-    cmd->add_option("-o,--out", o->out, "Measurement CSV v1 to write")->required();
-    cmd->add_option("--effects", o->effects, "The truth's effects (default: the baseline's)");
-    cmd->add_option("--add", o->add, "Effects on top of the baseline's (repeatable)");
-    cmd->add_option("--duration", o->duration_s, "Length [s]")
-        ->capture_default_str()
-        ->check(CLI::Range(5.0, 3600.0));
-    cmd->add_option("--rate", o->rate_hz, "Sample rate [Hz]")
-        ->capture_default_str()
-        ->check(CLI::Range(1000.0, 20000.0));
-    cmd->add_option("--seed", o->seed, "Seed of every random draw")->capture_default_str();
-    cmd->callback([o] {
-      RunGuarded([&] {
-        TruthParams t;
-        t.effects = o->effects.empty() ? BaselineEffects() : o->effects;
-        for (const auto& e : o->add) t.effects.push_back(e);
-        RequireKnownEffects(t.effects, "<command line>", "--effects/--add");
-        t.duration_s = o->duration_s;
-        t.rate_hz = o->rate_hz;
-        t.seed = o->seed;
-        auto sim = Simulate(t);
-        sim.m.material = "simulated";
-        WriteMeasurementCsv(o->out, sim.m);
-        fmt::print("wrote {} ({} samples, truth: {}, seed {})\n", o->out, sim.m.rows.size(),
-                   fmt::join(t.effects, ", "), t.seed);
-        return kExitOk;
-      });
-    });
-  }
+  AddMeasurementCheck(grp);
+  AddMeasurementSimulate(grp);
 }
 
 }  // namespace

@@ -28,11 +28,8 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Residual plots; with `before`, its residuals are drawn on the same axes (one plot per
 // dimension and quantity, so before and after share their scales). Speed is on a log axis.
-std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay& r,
-                               const std::string& dir, const Comparison* before,
-                               const Model* before_model) {
-  std::filesystem::create_directories(dir);
-  std::vector<std::string> files;
+void ResidualPlots(const Comparison& c, const std::string& dir, const Comparison* before,
+                   std::vector<std::string>* files) {
   static const std::map<std::string, std::string> kUnit = {
       {"normal_force_N", "normal-force residual [N]"},
       {"friction_N", "friction residual along the motion [N]"},
@@ -76,9 +73,13 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
       }
       for (const auto& f : stats::DrawLinePlot(
                p, (std::filesystem::path(dir) / fmt::format("residual_{}_{}", dim, q)).string()))
-        files.push_back(f);
+        files->push_back(f);
     }
-  // Traces: measured and predicted forces over the first 5 s.
+}
+
+// Traces: measured and predicted forces over the first 5 s (with `before_model`'s too).
+void TracePlots(const Model& m, const Replay& r, const std::string& dir, const Model* before_model,
+                std::vector<std::string>* files) {
   const auto pred = Predict(m, r);
   Prediction bpred;
   if (before_model) bpred = Predict(*before_model, r);
@@ -111,11 +112,21 @@ std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay
   if (fn.x.size() > 1) {
     for (const auto& f :
          stats::DrawLinePlot(fn, (std::filesystem::path(dir) / "trace_normal_force").string()))
-      files.push_back(f);
+      files->push_back(f);
     for (const auto& f :
          stats::DrawLinePlot(ft, (std::filesystem::path(dir) / "trace_friction").string()))
-      files.push_back(f);
+      files->push_back(f);
   }
+}
+
+// The residual and trace plots in `dir`; returns the files written.
+std::vector<std::string> Plots(const Comparison& c, const Model& m, const Replay& r,
+                               const std::string& dir, const Comparison* before,
+                               const Model* before_model) {
+  std::filesystem::create_directories(dir);
+  std::vector<std::string> files;
+  ResidualPlots(c, dir, before, &files);
+  TracePlots(m, r, dir, before_model, &files);
   return files;
 }
 
@@ -149,14 +160,107 @@ std::vector<Failure> LargestFailures(const Comparison& c, std::size_t count) {
   return out;
 }
 
+struct CompareArgs {
+  std::string measurement, model, plots, before;
+  bool json = false;
+};
+
+// What `compare` found, to print.
+struct CompareReport {
+  Comparison c;
+  std::vector<EsCell> es_cells;
+  std::vector<ResidualAxis> axes;
+  std::vector<Failure> largest;
+  std::vector<std::string> files;
+  std::string vib_note;
+};
+
+void PrintCompareJson(const CompareReport& x) {
+  const Comparison& c = x.c;
+  nlohmann::json b, ax = nlohmann::json::array(), lg = nlohmann::json::array();
+  for (const auto& [dim, qs] : c.breakdown)
+    for (const auto& [q, rows] : qs)
+      for (const auto& row : rows)
+        b[dim][q].push_back(
+            {{"bin", row.label}, {"n", row.n}, {"mean", row.mean}, {"rms", row.rms}});
+  for (const auto& a : x.axes)
+    ax.push_back({{"axis", a.axis},
+                  {"channel", ChannelName(a.channel)},
+                  {"share", a.share},
+                  {"description", a.description}});
+  for (const auto& f : x.largest)
+    lg.push_back({{"dimension", f.dimension},
+                  {"quantity", f.quantity},
+                  {"bin", f.bin},
+                  {"n", f.n},
+                  {"mean", f.mean},
+                  {"rms", f.rms}});
+  auto j = ErrorsJson(c.errors);
+  PrintJson(nlohmann::json{{"error", c.errors.overall},
+                           {"channels", j["channels"]},
+                           {"rms", j["rms"]},
+                           {"summary", {{"axes", ax}, {"largest", lg}}},
+                           {"breakdown", b},
+                           {"plots", x.files},
+                           {"vibration_model", x.vib_note},
+                           {"vibration_by_condition", EsCellsJson(x.es_cells)}});
+}
+
+void PrintCompare(const CompareArgs& o, const CompareReport& x) {
+  const Comparison& c = x.c;
+  fmt::print("{} on {}: {}\n", o.model, o.measurement, ErrorsLine(c.errors));
+  if (!x.vib_note.empty()) fmt::print("{}\n", x.vib_note);
+  PrintEsCells("vibration E_s by speed and force", x.es_cells);
+  fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
+  for (std::size_t k = 0; k < x.axes.size() && k < 5; ++k)
+    fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", x.axes[k].axis, ChannelName(x.axes[k].channel),
+               100 * x.axes[k].share, x.axes[k].description);
+  fmt::print("\nlargest systematic residuals:\n");
+  for (const auto& f : x.largest)
+    fmt::print("  {} by {}, {}: mean {:+.4f}, rms {:.4f} (n {})\n", f.quantity, f.dimension, f.bin,
+               f.mean, f.rms, f.n);
+  fmt::print("\ndetail:\n");
+  for (const auto& [dim, qs] : c.breakdown)
+    for (const auto& [q, rows] : qs) {
+      fmt::print("\n{} by {}:\n", q, dim);
+      for (const auto& row : rows)
+        if (row.n)
+          fmt::print("  {:28s} n {:6d}  mean {:+.4f}  rms {:.4f}\n", row.label, row.n, row.mean,
+                     row.rms);
+    }
+  if (!x.files.empty()) fmt::print("\nplots: {} files in {}\n", x.files.size(), o.plots);
+}
+
+int RunCompare(const CompareArgs& o) {
+  auto m = LoadModel(o.model);
+  CompareReport x;
+  x.vib_note = AttachVibration(o.model, &m);
+  const auto r = Load(o.measurement, &m);
+  x.c = Compare(m, r);
+  x.es_cells = VibrationEsByCondition(r, Predict(m, r), Split::kAll);
+  x.axes = RankResidualAxes(m, r, Predict(m, r));
+  x.largest = LargestFailures(x.c, 5);
+  if (!o.plots.empty()) {
+    if (!o.before.empty()) {
+      auto mb = LoadModel(o.before);
+      AttachVibration(o.before, &mb);
+      const auto cb = Compare(mb, r);
+      x.files = Plots(x.c, m, r, o.plots, &cb, &mb);
+    } else {
+      x.files = Plots(x.c, m, r, o.plots, nullptr, nullptr);
+    }
+  }
+  if (o.json)
+    PrintCompareJson(x);
+  else
+    PrintCompare(o, x);
+  return kExitOk;
+}
+
 }  // namespace
 
 void AddCompare(CLI::App& app) {
-  struct O {
-    std::string measurement, model, plots, before;
-    bool json = false;
-  };
-  auto o = std::make_shared<O>();
+  auto o = std::make_shared<CompareArgs>();
   auto* cmd = app.add_subcommand(
       "compare",
       "Replay a measurement's kinematics through a model and report its errors. It opens with a\n"
@@ -176,80 +280,7 @@ void AddCompare(CLI::App& app) {
   cmd->add_option("--plots", o->plots, "Folder for residual plots (SVG and PNG)");
   cmd->add_option("--before", o->before,
                   "An earlier model whose residuals the plots show on the same axes");
-  cmd->callback([o] {
-    RunGuarded([&] {
-      auto m = LoadModel(o->model);
-      const std::string vib_note = AttachVibration(o->model, &m);
-      const auto r = Load(o->measurement, &m);
-      const auto c = Compare(m, r);
-      const auto es_cells = VibrationEsByCondition(r, Predict(m, r), Split::kAll);
-      const auto axes = RankResidualAxes(m, r, Predict(m, r));
-      const auto largest = LargestFailures(c, 5);
-      std::vector<std::string> files;
-      if (!o->plots.empty()) {
-        if (!o->before.empty()) {
-          auto mb = LoadModel(o->before);
-          AttachVibration(o->before, &mb);
-          const auto cb = Compare(mb, r);
-          files = Plots(c, m, r, o->plots, &cb, &mb);
-        } else {
-          files = Plots(c, m, r, o->plots, nullptr, nullptr);
-        }
-      }
-      if (o->json) {
-        nlohmann::json b, ax = nlohmann::json::array(), lg = nlohmann::json::array();
-        for (const auto& [dim, qs] : c.breakdown)
-          for (const auto& [q, rows] : qs)
-            for (const auto& row : rows)
-              b[dim][q].push_back(
-                  {{"bin", row.label}, {"n", row.n}, {"mean", row.mean}, {"rms", row.rms}});
-        for (const auto& x : axes)
-          ax.push_back({{"axis", x.axis},
-                        {"channel", ChannelName(x.channel)},
-                        {"share", x.share},
-                        {"description", x.description}});
-        for (const auto& f : largest)
-          lg.push_back({{"dimension", f.dimension},
-                        {"quantity", f.quantity},
-                        {"bin", f.bin},
-                        {"n", f.n},
-                        {"mean", f.mean},
-                        {"rms", f.rms}});
-        auto j = ErrorsJson(c.errors);
-        PrintJson(nlohmann::json{{"error", c.errors.overall},
-                                 {"channels", j["channels"]},
-                                 {"rms", j["rms"]},
-                                 {"summary", {{"axes", ax}, {"largest", lg}}},
-                                 {"breakdown", b},
-                                 {"plots", files},
-                                 {"vibration_model", vib_note},
-                                 {"vibration_by_condition", EsCellsJson(es_cells)}});
-        return kExitOk;
-      }
-      fmt::print("{} on {}: {}\n", o->model, o->measurement, ErrorsLine(c.errors));
-      if (!vib_note.empty()) fmt::print("{}\n", vib_note);
-      PrintEsCells("vibration E_s by speed and force", es_cells);
-      fmt::print("\nwhere the residual lives (share of each channel's residual variance):\n");
-      for (std::size_t k = 0; k < axes.size() && k < 5; ++k)
-        fmt::print("  {:9s} {:13s} {:5.1f} %  {}\n", axes[k].axis, ChannelName(axes[k].channel),
-                   100 * axes[k].share, axes[k].description);
-      fmt::print("\nlargest systematic residuals:\n");
-      for (const auto& f : largest)
-        fmt::print("  {} by {}, {}: mean {:+.4f}, rms {:.4f} (n {})\n", f.quantity, f.dimension,
-                   f.bin, f.mean, f.rms, f.n);
-      fmt::print("\ndetail:\n");
-      for (const auto& [dim, qs] : c.breakdown)
-        for (const auto& [q, rows] : qs) {
-          fmt::print("\n{} by {}:\n", q, dim);
-          for (const auto& row : rows)
-            if (row.n)
-              fmt::print("  {:28s} n {:6d}  mean {:+.4f}  rms {:.4f}\n", row.label, row.n, row.mean,
-                         row.rms);
-        }
-      if (!files.empty()) fmt::print("\nplots: {} files in {}\n", files.size(), o->plots);
-      return kExitOk;
-    });
-  });
+  cmd->callback([o] { RunGuarded([&] { return RunCompare(*o); }); });
 }
 
 }  // namespace hapticlab::cli::workbench_cli

@@ -118,6 +118,62 @@ void PrintHistogram(const LatencySummary& s) {
   if (beyond) fmt::print("  >{:>3} us  {:>9}\n", kRows - 1, beyond);
 }
 
+// The check's report: rate, thread, lateness and tick-duration quantiles, the lateness
+// histogram and the verdict (or the same as JSON).
+void ReportTiming(const TimingCheckArgs& a, const runner::EngineStats& st,
+                  const runner::EngineTiming& tm, const std::string& verdict, bool ok) {
+  const double period_s = 1.0 / a.rate_hz;
+  if (a.json) {
+    json j = {{"device", a.device},
+              {"render", a.render.empty() ? json(nullptr) : json(a.render)},
+              {"contact_ticks", st.contact_ticks},
+              {"clock", "real"},
+              {"seconds", a.seconds},
+              {"requested_rate_hz", a.rate_hz},
+              {"force_rate_hz", st.achieved_force_rate_hz},
+              {"force_ticks", st.force_ticks},
+              {"jitter_us", Percentiles(tm.force_late)},
+              {"tick_us", Percentiles(tm.force_tick)},
+              {"misses", st.force_deadline_misses},
+              {"underruns", st.audio_underruns},
+              {"priority", st.force_thread.priority_status},
+              {"priority_granted", st.force_thread.fifo},
+              {"memory_locked", st.memory.locked},
+              {"memory_status", st.memory.status},
+              {"affinity", st.force_thread.affinity_status},
+              {"timer_slack_ns", st.force_thread.timer_slack_ns},
+              {"spin_us", a.rt.spin_us},
+              {"verdict", verdict},
+              {"ok", ok}};
+    if (a.vibration)
+      j["vibration"] = {{"rate_hz", st.achieved_vibration_rate_hz},
+                        {"jitter_us", Percentiles(tm.vibration_late)},
+                        {"misses", st.vibration_deadline_misses},
+                        {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
+    PrintJson(j);
+    return;
+  }
+  fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n",
+             st.achieved_force_rate_hz, a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
+  if (!a.render.empty())
+    fmt::print("rendering {} with a simulated hand stroking it: in contact on {} of {} ticks\n",
+               a.render, st.contact_ticks, st.force_ticks);
+  fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n",
+             st.force_thread.priority_status, st.force_thread.affinity_status, st.memory.status,
+             st.force_thread.timer_slack_ns);
+  fmt::print(
+      "wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses "
+      "{}\n",
+      tm.force_late.Quantile(0.5) * 1e6, tm.force_late.Quantile(0.99) * 1e6,
+      tm.force_late.Quantile(0.999) * 1e6, tm.force_late.max_s * 1e6, st.force_deadline_misses);
+  fmt::print("tick duration [us]: p50 {:.1f}, p99 {:.1f}, max {:.1f}; audio underruns {}\n",
+             tm.force_tick.Quantile(0.5) * 1e6, tm.force_tick.Quantile(0.99) * 1e6,
+             tm.force_tick.max_s * 1e6, st.audio_underruns);
+  fmt::print("histogram of wake-up lateness (1 us rows, ticks):\n");
+  PrintHistogram(tm.force_late);
+  fmt::print("verdict: {} (period {:.0f} us)\n", verdict, period_s * 1e6);
+}
+
 }  // namespace
 
 void PrintOrWrite(const std::string& text, const std::string& out) {
@@ -209,7 +265,6 @@ int RunTimingCheck(const TimingCheckArgs& a) {
   if (audio) audio->Stop();
   const auto st = engine.Stats();
   const auto tm = engine.Timing();
-  const double period_s = 1.0 / a.rate_hz;
   // The verdict: the loop kept its rate (within 1 %) and never started a tick a whole period late.
   const bool rate_ok = std::abs(st.achieved_force_rate_hz - a.rate_hz) <= 0.01 * a.rate_hz;
   const bool ok = rate_ok && st.force_deadline_misses == 0;
@@ -218,55 +273,7 @@ int RunTimingCheck(const TimingCheckArgs& a) {
          : fmt::format("NOT ok for {:.0f} Hz ({})", a.rate_hz,
                        rate_ok ? fmt::format("{} deadline misses", st.force_deadline_misses)
                                : fmt::format("achieved {:.1f} Hz", st.achieved_force_rate_hz));
-  if (a.json) {
-    json j = {{"device", a.device},
-              {"render", a.render.empty() ? json(nullptr) : json(a.render)},
-              {"contact_ticks", st.contact_ticks},
-              {"clock", "real"},
-              {"seconds", a.seconds},
-              {"requested_rate_hz", a.rate_hz},
-              {"force_rate_hz", st.achieved_force_rate_hz},
-              {"force_ticks", st.force_ticks},
-              {"jitter_us", Percentiles(tm.force_late)},
-              {"tick_us", Percentiles(tm.force_tick)},
-              {"misses", st.force_deadline_misses},
-              {"underruns", st.audio_underruns},
-              {"priority", st.force_thread.priority_status},
-              {"priority_granted", st.force_thread.fifo},
-              {"memory_locked", st.memory.locked},
-              {"memory_status", st.memory.status},
-              {"affinity", st.force_thread.affinity_status},
-              {"timer_slack_ns", st.force_thread.timer_slack_ns},
-              {"spin_us", a.rt.spin_us},
-              {"verdict", verdict},
-              {"ok", ok}};
-    if (a.vibration)
-      j["vibration"] = {{"rate_hz", st.achieved_vibration_rate_hz},
-                        {"jitter_us", Percentiles(tm.vibration_late)},
-                        {"misses", st.vibration_deadline_misses},
-                        {"timer_slack_ns", st.vibration_thread.timer_slack_ns}};
-    PrintJson(j);
-  } else {
-    fmt::print("force loop: {:.1f} Hz achieved of {:.0f} Hz over {} s ({} ticks); spin {} us\n",
-               st.achieved_force_rate_hz, a.rate_hz, a.seconds, st.force_ticks, a.rt.spin_us);
-    if (!a.render.empty())
-      fmt::print("rendering {} with a simulated hand stroking it: in contact on {} of {} ticks\n",
-                 a.render, st.contact_ticks, st.force_ticks);
-    fmt::print("thread: {}; affinity {}; memory {}; timer slack {} ns\n",
-               st.force_thread.priority_status, st.force_thread.affinity_status, st.memory.status,
-               st.force_thread.timer_slack_ns);
-    fmt::print(
-        "wake-up lateness [us]: p50 {:.1f}, p99 {:.1f}, p99.9 {:.1f}, max {:.1f}; deadline misses "
-        "{}\n",
-        tm.force_late.Quantile(0.5) * 1e6, tm.force_late.Quantile(0.99) * 1e6,
-        tm.force_late.Quantile(0.999) * 1e6, tm.force_late.max_s * 1e6, st.force_deadline_misses);
-    fmt::print("tick duration [us]: p50 {:.1f}, p99 {:.1f}, max {:.1f}; audio underruns {}\n",
-               tm.force_tick.Quantile(0.5) * 1e6, tm.force_tick.Quantile(0.99) * 1e6,
-               tm.force_tick.max_s * 1e6, st.audio_underruns);
-    fmt::print("histogram of wake-up lateness (1 us rows, ticks):\n");
-    PrintHistogram(tm.force_late);
-    fmt::print("verdict: {} (period {:.0f} us)\n", verdict, period_s * 1e6);
-  }
+  ReportTiming(a, st, tm, verdict, ok);
   return ok ? kExitOk : kExitFailure;
 }
 

@@ -81,53 +81,43 @@ std::string Footer(double first_s, double last_s, std::size_t n) {
          Tag("sample_count", std::to_string(n)) + "<clock_offsets></clock_offsets>";
 }
 
-// Writes one session's file; returns it with its stream and sample counts.
-ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
-  internal::XdfWriter w(path);
-  const std::string source =
-      "hapticlab:" + s.study.name + ":" + s.participant.code + ":ses-" + std::to_string(s.number);
-  // One XDF stream per (stream name, rate, channel layout), in order of first appearance.
-  std::vector<DataStream> streams;
-  auto find = [&](const internal::StreamRecording& r) -> DataStream& {
-    for (auto& d : streams)
-      if (d.name == r.stream && d.rate_hz == r.rate_hz && d.channels == r.channels) return d;
-    DataStream d;
-    d.id = static_cast<std::uint32_t>(streams.size() + 1);
-    d.name = r.stream;
-    for (const auto& e : streams)
-      if (e.name == r.stream) d.name = r.stream + "_" + std::to_string(d.id);
-    d.rate_hz = r.rate_hz;
-    d.channels = r.channels;
-    streams.push_back(d);
-    return streams.back();
-  };
-  for (const auto& t : s.trials)
-    for (const auto& r : t.streams) find(r);
-  for (const auto& d : streams) {
-    std::string ch = "<channels>";
-    for (const auto& c : d.channels) {
-      const auto m = internal::DescribeChannel(c);
-      ch += "<channel>" + Tag("label", c) + Tag("unit", m.unit) + Tag("type", ChannelType(m.unit)) +
-            Tag("description", m.description) + "</channel>";
-    }
-    ch += "</channels>";
-    w.StreamHeader(d.id, Header(d.name, StreamType(d.name), d.channels.size(), d.rate_hz, "float32",
-                                source + ":" + d.name, ch + CommonDesc(s)));
-  }
-  const auto events_id = static_cast<std::uint32_t>(streams.size() + 1);
-  const auto ratings_id = events_id + 1;
-  const std::string marker_ch =
-      "<channels><channel><label>marker</label><type>Marker</type>"
-      "<description>a JSON object per marker</description></channel></channels>";
-  w.StreamHeader(events_id, Header("events", "Markers", 1, 0, "string", source + ":events",
-                                   marker_ch + CommonDesc(s)));
-  w.StreamHeader(ratings_id, Header("ratings", "Markers", 1, 0, "string", source + ":ratings",
-                                    marker_ch + CommonDesc(s)));
+// The XDF stream of a recording: one per (stream name, rate, channel layout), in order of first
+// appearance; added to `streams` when new (a name taken by another layout gets "_<id>").
+DataStream& StreamOf(std::vector<DataStream>& streams, const internal::StreamRecording& r) {
+  for (auto& d : streams)
+    if (d.name == r.stream && d.rate_hz == r.rate_hz && d.channels == r.channels) return d;
+  DataStream d;
+  d.id = static_cast<std::uint32_t>(streams.size() + 1);
+  d.name = r.stream;
+  for (const auto& e : streams)
+    if (e.name == r.stream) d.name = r.stream + "_" + std::to_string(d.id);
+  d.rate_hz = r.rate_hz;
+  d.channels = r.channels;
+  streams.push_back(d);
+  return streams.back();
+}
 
+// A data stream's header: its channels (label, unit, type, description) and the session.
+void WriteDataHeader(internal::XdfWriter& w, const DataStream& d, const SessionRecord& s,
+                     const std::string& source) {
+  std::string ch = "<channels>";
+  for (const auto& c : d.channels) {
+    const auto m = internal::DescribeChannel(c);
+    ch += "<channel>" + Tag("label", c) + Tag("unit", m.unit) + Tag("type", ChannelType(m.unit)) +
+          Tag("description", m.description) + "</channel>";
+  }
+  ch += "</channels>";
+  w.StreamHeader(d.id, Header(d.name, StreamType(d.name), d.channels.size(), d.rate_hz, "float32",
+                              source + ":" + d.name, ch + CommonDesc(s)));
+}
+
+// Every recorded chunk on the session clock; returns the samples written.
+std::size_t WriteDataSamples(internal::XdfWriter& w, const SessionRecord& s,
+                             std::vector<DataStream>& streams) {
   std::size_t written = 0;
   for (const auto& t : s.trials)
     for (const auto& r : t.streams) {
-      auto& d = find(r);
+      auto& d = StreamOf(streams, r);
       for (const auto& c : r.chunks) {
         const std::size_t n = c.sample_count();
         if (n == 0) continue;
@@ -139,10 +129,15 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
         written += n;
       }
     }
+  return written;
+}
 
-  // Markers: trial starts and logged events, time-ordered (a stable sort keeps a trial's
-  // start before events stamped at the same instant).
-  std::vector<std::pair<double, std::string>> events;
+using Markers = std::vector<std::pair<double, std::string>>;
+
+// The event markers: trial starts and logged events, time-ordered (a stable sort keeps a
+// trial's start before events stamped at the same instant).
+Markers EventMarkers(const SessionRecord& s) {
+  Markers events;
   for (const auto& t : s.trials) {
     const auto& x = t.trial;
     events.emplace_back(t.origin_s,
@@ -171,7 +166,12 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
   }
   std::stable_sort(events.begin(), events.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
-  std::vector<std::pair<double, std::string>> ratings;
+  return events;
+}
+
+// The rating markers, each at its response after the trial's stimuli, time-ordered.
+Markers RatingMarkers(const SessionRecord& s) {
+  Markers ratings;
   for (const auto& t : s.trials)
     for (const auto& r : t.ratings)
       ratings.emplace_back(t.origin_s + t.stimulus_s + r.response_time_s,
@@ -183,6 +183,31 @@ ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
                                .dump());
   std::stable_sort(ratings.begin(), ratings.end(),
                    [](const auto& a, const auto& b) { return a.first < b.first; });
+  return ratings;
+}
+
+// Writes one session's file; returns it with its stream and sample counts.
+ExportedFile WriteSession(const SessionRecord& s, const std::string& path) {
+  internal::XdfWriter w(path);
+  const std::string source =
+      "hapticlab:" + s.study.name + ":" + s.participant.code + ":ses-" + std::to_string(s.number);
+  std::vector<DataStream> streams;
+  for (const auto& t : s.trials)
+    for (const auto& r : t.streams) StreamOf(streams, r);
+  for (const auto& d : streams) WriteDataHeader(w, d, s, source);
+  const auto events_id = static_cast<std::uint32_t>(streams.size() + 1);
+  const auto ratings_id = events_id + 1;
+  const std::string marker_ch =
+      "<channels><channel><label>marker</label><type>Marker</type>"
+      "<description>a JSON object per marker</description></channel></channels>";
+  w.StreamHeader(events_id, Header("events", "Markers", 1, 0, "string", source + ":events",
+                                   marker_ch + CommonDesc(s)));
+  w.StreamHeader(ratings_id, Header("ratings", "Markers", 1, 0, "string", source + ":ratings",
+                                    marker_ch + CommonDesc(s)));
+
+  std::size_t written = WriteDataSamples(w, s, streams);
+  const Markers events = EventMarkers(s);
+  const Markers ratings = RatingMarkers(s);
   for (const auto& [id, list] : {std::pair{events_id, &events}, std::pair{ratings_id, &ratings}}) {
     std::vector<std::string> v;
     std::vector<double> ts;

@@ -95,6 +95,40 @@ void EdgeGradients(const std::vector<Eigen::Vector3f>& nrm, int w, int h, std::v
     }
 }
 
+// The connected regions (4-neighbour) of the mask's pixels: region[id[k]] for each pixel k
+// inside (id: its unknown's index, kOut outside); each region is pinned at its first pixel
+// (diag += 1 there). Returns the number of regions.
+std::size_t PinRegions(const std::vector<std::uint8_t>& mask, const std::vector<std::size_t>& id,
+                       std::size_t W, std::size_t H, std::vector<double>* diag,
+                       std::vector<std::size_t>* region_out) {
+  constexpr std::size_t kOut = static_cast<std::size_t>(-1);
+  const std::size_t N = W * H;
+  std::vector<std::size_t>& region = *region_out;
+  region.assign(diag->size(), kOut);
+  std::vector<std::size_t> stack;
+  std::size_t regions = 0;
+  for (std::size_t k = 0; k < N; ++k) {
+    if (!mask[k] || region[id[k]] != kOut) continue;
+    (*diag)[id[k]] += 1;
+    region[id[k]] = regions;
+    stack.push_back(k);
+    while (!stack.empty()) {
+      const std::size_t c = stack.back();
+      stack.pop_back();
+      const std::size_t ci = c / W, cj = c % W;
+      const std::size_t nb[4] = {cj + 1 < W ? c + 1 : kOut, cj > 0 ? c - 1 : kOut,
+                                 ci + 1 < H ? c + W : kOut, ci > 0 ? c - W : kOut};
+      for (auto q : nb)
+        if (q != kOut && mask[q] && region[id[q]] == kOut) {
+          region[id[q]] = regions;
+          stack.push_back(q);
+        }
+    }
+    ++regions;
+  }
+  return regions;
+}
+
 }  // namespace
 
 std::vector<float> IntegrateNormalsPoisson(const std::vector<Eigen::Vector3f>& nrm, int w, int h,
@@ -174,27 +208,8 @@ std::vector<float> IntegrateNormalsMasked(const std::vector<Eigen::Vector3f>& nr
     }
   // Connected regions (4-neighbour): each is pinned at its first pixel (adding z^2 there
   // fixes the free constant without changing the rest) and shifted to zero mean afterwards.
-  std::vector<std::size_t> region(n, kOut), stack;
-  std::size_t regions = 0;
-  for (std::size_t k = 0; k < N; ++k) {
-    if (!mask[k] || region[id[k]] != kOut) continue;
-    diag[id[k]] += 1;
-    region[id[k]] = regions;
-    stack.push_back(k);
-    while (!stack.empty()) {
-      const std::size_t c = stack.back();
-      stack.pop_back();
-      const std::size_t ci = c / W, cj = c % W;
-      const std::size_t nb[4] = {cj + 1 < W ? c + 1 : kOut, cj > 0 ? c - 1 : kOut,
-                                 ci + 1 < H ? c + W : kOut, ci > 0 ? c - W : kOut};
-      for (auto q : nb)
-        if (q != kOut && mask[q] && region[id[q]] == kOut) {
-          region[id[q]] = regions;
-          stack.push_back(q);
-        }
-    }
-    ++regions;
-  }
+  std::vector<std::size_t> region;
+  const std::size_t regions = PinRegions(mask, id, W, H, &diag, &region);
   for (std::size_t v = 0; v < n; ++v)
     trip.emplace_back(static_cast<Eigen::Index>(v), static_cast<Eigen::Index>(v), diag[v]);
   Eigen::SparseMatrix<double> A(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(n));

@@ -123,99 +123,119 @@ std::vector<Light> DomePreset() {
   return l;
 }
 
-std::vector<Light> LoadLights(const std::string& path, bool y_up) {
-  std::vector<Light> out;
-  if (path == "dome") {
-    out = DomePreset();
-  } else {
-    const auto lines = SplitCells(ReadTextFile(path, "lights file"), path);
-    std::size_t k = 0;
-    std::optional<std::size_t> count;
-    int count_line = 0;
-    if (k < lines.size() && IsCount(lines[k])) {
-      const auto& digits = lines[k].cells[0];
-      std::size_t n = 0;
-      const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), n);
-      count_line = lines[k].line;
-      if (r.ec != std::errc() || n < 3 || n > kMaxLights)
-        throw InputError(path, count_line, "count",
-                         fmt::format("'{}' lights; expected 3..{}", digits, kMaxLights));
-      count = n;
-      ++k;
-    }
-    // Columns: from a header (every cell non-numeric) or from the first row's shape.
-    std::vector<std::string> cols;
-    if (k < lines.size() &&
-        std::none_of(lines[k].cells.begin(), lines[k].cells.end(),
-                     [](const std::string& c) { return ParseNumber(c).has_value(); }) &&
-        lines[k].cells.size() >= 3) {
-      for (const auto& c : lines[k].cells) cols.push_back(Lower(c));
-      const std::vector<std::vector<std::string>> known = {
-          {"file", "elevation_deg", "azimuth_deg"}, {"file", "lx", "ly", "lz"}, {"lx", "ly", "lz"}};
-      if (std::find(known.begin(), known.end(), cols) == known.end())
-        throw InputError(
-            path, lines[k].line, lines[k].cells[0],
-            "unknown header; expected file,elevation_deg,azimuth_deg or file,lx,ly,lz or lx,ly,lz");
-      ++k;
-    } else if (k < lines.size()) {
-      const auto& c = lines[k].cells;
-      const bool named = !ParseNumber(c[0]).has_value();
-      if (named && c.size() == 3)
-        cols = {"file", "elevation_deg", "azimuth_deg"};
-      else if (named && c.size() == 4)
-        cols = {"file", "lx", "ly", "lz"};
-      else if (!named && c.size() == 3)
-        cols = {"lx", "ly", "lz"};
-      else
-        throw InputError(
-            path, lines[k].line, "",
-            fmt::format(
-                "{} cells; expected file elevation_deg azimuth_deg, file lx ly lz, or lx ly lz",
-                c.size()));
-    }
-    const bool named = !cols.empty() && cols[0] == "file";
-    const bool angles = cols.size() == 3 && named;
-    for (; k < lines.size(); ++k) {
-      const auto& l = lines[k];
-      if (l.cells.size() != cols.size())
-        throw InputError(path, l.line, "",
-                         fmt::format("{} cells, expected {} ({})", l.cells.size(), cols.size(),
-                                     fmt::join(cols, ",")));
-      Light light;
-      light.line = l.line;
-      light.source = path;
-      const std::size_t first = named ? 1 : 0;
-      if (named) light.file = l.cells[0];
-      double v[3] = {0, 0, 0};
-      for (std::size_t c = first; c < cols.size(); ++c) {
-        const auto x = ParseNumber(l.cells[c]);
-        if (!x || !std::isfinite(*x))
-          throw InputError(path, l.line, cols[c],
-                           fmt::format("'{}' is not a finite number", l.cells[c]));
-        v[c - first] = *x;
-      }
-      if (angles) {
-        light.direction = FromAngles(v[0], v[1]);
-      } else {
-        light.direction = Eigen::Vector3d(v[0], v[1], v[2]);
-        if (!(light.direction.norm() > 0))
-          throw InputError(path, l.line, "lx", "zero light direction");
-        light.direction.normalize();
-      }
-      if (!(light.direction.z() > 0))
-        throw InputError(path, l.line, angles ? "elevation_deg" : "lz",
-                         "light at or below the sample plane (z must be > 0)");
-      out.push_back(light);
-    }
-    if (out.size() > kMaxLights)
-      throw InputError(path, lines.back().line, "",
-                       fmt::format("{} lights; at most {} are read", out.size(), kMaxLights));
-    if (count && *count != out.size())
+namespace {
+
+// The optional count line of a lights file (a lone integer, 3..kMaxLights) at lines[*k]: its
+// value, with *k past it and *count_line its line.
+std::optional<std::size_t> ReadCount(const std::vector<TextLine>& lines, const std::string& path,
+                                     std::size_t* k, int* count_line) {
+  if (!(*k < lines.size() && IsCount(lines[*k]))) return std::nullopt;
+  const auto& digits = lines[*k].cells[0];
+  std::size_t n = 0;
+  const auto r = std::from_chars(digits.data(), digits.data() + digits.size(), n);
+  *count_line = lines[*k].line;
+  if (r.ec != std::errc() || n < 3 || n > kMaxLights)
+    throw InputError(path, *count_line, "count",
+                     fmt::format("'{}' lights; expected 3..{}", digits, kMaxLights));
+  ++*k;
+  return n;
+}
+
+// The columns of a lights file at lines[*k]: from a header (every cell non-numeric; *k moves
+// past it) or from the first row's shape.
+std::vector<std::string> ReadColumns(const std::vector<TextLine>& lines, const std::string& path,
+                                     std::size_t* k) {
+  std::vector<std::string> cols;
+  if (*k < lines.size() &&
+      std::none_of(lines[*k].cells.begin(), lines[*k].cells.end(),
+                   [](const std::string& c) { return ParseNumber(c).has_value(); }) &&
+      lines[*k].cells.size() >= 3) {
+    for (const auto& c : lines[*k].cells) cols.push_back(Lower(c));
+    const std::vector<std::vector<std::string>> known = {
+        {"file", "elevation_deg", "azimuth_deg"}, {"file", "lx", "ly", "lz"}, {"lx", "ly", "lz"}};
+    if (std::find(known.begin(), known.end(), cols) == known.end())
       throw InputError(
-          path, count_line, "",
-          fmt::format("the count line says {} lights, the file has {}", *count, out.size()));
-    if (out.size() < 3) throw InputError(path, 0, "", "photometric stereo needs at least 3 lights");
+          path, lines[*k].line, lines[*k].cells[0],
+          "unknown header; expected file,elevation_deg,azimuth_deg or file,lx,ly,lz or lx,ly,lz");
+    ++*k;
+  } else if (*k < lines.size()) {
+    const auto& c = lines[*k].cells;
+    const bool named = !ParseNumber(c[0]).has_value();
+    if (named && c.size() == 3)
+      cols = {"file", "elevation_deg", "azimuth_deg"};
+    else if (named && c.size() == 4)
+      cols = {"file", "lx", "ly", "lz"};
+    else if (!named && c.size() == 3)
+      cols = {"lx", "ly", "lz"};
+    else
+      throw InputError(
+          path, lines[*k].line, "",
+          fmt::format(
+              "{} cells; expected file elevation_deg azimuth_deg, file lx ly lz, or lx ly lz",
+              c.size()));
   }
+  return cols;
+}
+
+// One light of a lights file in the columns `cols`: its direction a unit vector above the
+// sample plane.
+Light ReadLight(const TextLine& l, const std::vector<std::string>& cols, const std::string& path) {
+  const bool named = !cols.empty() && cols[0] == "file";
+  const bool angles = cols.size() == 3 && named;
+  if (l.cells.size() != cols.size())
+    throw InputError(path, l.line, "",
+                     fmt::format("{} cells, expected {} ({})", l.cells.size(), cols.size(),
+                                 fmt::join(cols, ",")));
+  Light light;
+  light.line = l.line;
+  light.source = path;
+  const std::size_t first = named ? 1 : 0;
+  if (named) light.file = l.cells[0];
+  double v[3] = {0, 0, 0};
+  for (std::size_t c = first; c < cols.size(); ++c) {
+    const auto x = ParseNumber(l.cells[c]);
+    if (!x || !std::isfinite(*x))
+      throw InputError(path, l.line, cols[c],
+                       fmt::format("'{}' is not a finite number", l.cells[c]));
+    v[c - first] = *x;
+  }
+  if (angles) {
+    light.direction = FromAngles(v[0], v[1]);
+  } else {
+    light.direction = Eigen::Vector3d(v[0], v[1], v[2]);
+    if (!(light.direction.norm() > 0)) throw InputError(path, l.line, "lx", "zero light direction");
+    light.direction.normalize();
+  }
+  if (!(light.direction.z() > 0))
+    throw InputError(path, l.line, angles ? "elevation_deg" : "lz",
+                     "light at or below the sample plane (z must be > 0)");
+  return light;
+}
+
+// A lights file: an optional count line, an optional header, then one light a line.
+std::vector<Light> ReadLightsFile(const std::string& path) {
+  std::vector<Light> out;
+  const auto lines = SplitCells(ReadTextFile(path, "lights file"), path);
+  std::size_t k = 0;
+  int count_line = 0;
+  const std::optional<std::size_t> count = ReadCount(lines, path, &k, &count_line);
+  const std::vector<std::string> cols = ReadColumns(lines, path, &k);
+  for (; k < lines.size(); ++k) out.push_back(ReadLight(lines[k], cols, path));
+  if (out.size() > kMaxLights)
+    throw InputError(path, lines.back().line, "",
+                     fmt::format("{} lights; at most {} are read", out.size(), kMaxLights));
+  if (count && *count != out.size())
+    throw InputError(
+        path, count_line, "",
+        fmt::format("the count line says {} lights, the file has {}", *count, out.size()));
+  if (out.size() < 3) throw InputError(path, 0, "", "photometric stereo needs at least 3 lights");
+  return out;
+}
+
+}  // namespace
+
+std::vector<Light> LoadLights(const std::string& path, bool y_up) {
+  std::vector<Light> out = path == "dome" ? DomePreset() : ReadLightsFile(path);
   if (y_up)
     for (auto& l : out) l.direction.y() = -l.direction.y();
   return out;

@@ -27,6 +27,78 @@ double MetaNumber(const Measurement& m, const char* key, double def) {
   return v;
 }
 
+// The sample rate of a recording (its metadata's, else 1 / the median sample period); a gap of
+// more than 1.5 periods is refused.
+double UniformRate(const Measurement& m, const std::string& path) {
+  std::vector<double> dt;
+  for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
+  std::vector<double> sorted(dt);
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
+                   sorted.end());
+  const double med = sorted[sorted.size() / 2];
+  const double rate_hz = MetaNumber(m, "rate_hz", 1.0 / med);
+  for (std::size_t i = 0; i < dt.size(); ++i)
+    if (dt[i] > 1.5 / rate_hz)
+      throw InputError(path, m.row_lines[i + 1], "t_s",
+                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)",
+                                   dt[i], 1.0 / rate_hz));
+  return rate_hz;
+}
+
+// The acceleration column; refused when the sensor clipped (20 or more samples at an extreme
+// value).
+std::vector<double> UnclippedAcceleration(const Measurement& m, const std::string& path) {
+  std::vector<double> acc;
+  double lo = 1e300, hi = -1e300;
+  for (const auto& row : m.rows) {
+    acc.push_back(row.acc_mps2);
+    lo = std::min(lo, row.acc_mps2);
+    hi = std::max(hi, row.acc_mps2);
+  }
+  // Clipping: a long run of samples pinned at the extreme value.
+  for (const double ext : {lo, hi}) {
+    int run = 0, worst = 0;
+    for (double a : acc) {
+      run = a == ext ? run + 1 : 0;
+      worst = std::max(worst, run);
+    }
+    int count = 0;
+    for (double a : acc) count += a == ext;
+    if (count >= 20 && hi > lo)
+      throw InputError(path, 0, "acc_mps2",
+                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped",
+                                   count, ext));
+  }
+  return acc;
+}
+
+// The condition of a steady scan from its rows: mean tangential speed and normal force, each
+// with a coefficient of variation of at most 25 %.
+void SteadyCondition(const Measurement& m, const std::string& path, Recording* r) {
+  if (!m.has_forces)
+    throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
+  std::vector<double> v, f;
+  for (const auto& row : m.rows) {
+    v.push_back(row.v_mps.head<2>().norm());
+    f.push_back(std::abs(row.f_N.z()));
+  }
+  auto mean_cv = [](const std::vector<double>& x) {
+    double s = 0, s2 = 0;
+    for (double a : x) s += a;
+    const double mean = s / static_cast<double>(x.size());
+    for (double a : x) s2 += (a - mean) * (a - mean);
+    return std::pair{mean, std::sqrt(s2 / static_cast<double>(x.size())) / std::max(mean, 1e-12)};
+  };
+  const auto [vm, vcv] = mean_cv(v);
+  const auto [fm, fcv] = mean_cv(f);
+  if (vcv > 0.25 || fcv > 0.25)
+    throw InputError(path, 0, vcv > 0.25 ? "speed" : "force",
+                     "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' "
+                     "and '# force_N:' metadata or cut the file to its steady part");
+  r->speed_mps = vm;
+  r->force_N = fm;
+}
+
 }  // namespace
 
 Recording LoadRecording(const std::string& path, const SoundLabels& labels) {
@@ -39,39 +111,8 @@ Recording LoadRecording(const std::string& path, const SoundLabels& labels) {
     throw InputError(path, 0, "", "too short: at least 256 samples are needed");
   Recording r;
   r.file = path;
-  // Sample rate and uniform sampling.
-  std::vector<double> dt;
-  for (std::size_t i = 1; i < m.rows.size(); ++i) dt.push_back(m.rows[i].t_s - m.rows[i - 1].t_s);
-  std::vector<double> sorted(dt);
-  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(sorted.size() / 2),
-                   sorted.end());
-  const double med = sorted[sorted.size() / 2];
-  r.rate_hz = MetaNumber(m, "rate_hz", 1.0 / med);
-  for (std::size_t i = 0; i < dt.size(); ++i)
-    if (dt[i] > 1.5 / r.rate_hz)
-      throw InputError(path, m.row_lines[i + 1], "t_s",
-                       fmt::format("gap of {:.3g} s in the recording (sample period {:.3g} s)",
-                                   dt[i], 1.0 / r.rate_hz));
-  double lo = 1e300, hi = -1e300;
-  for (const auto& row : m.rows) {
-    r.acc.push_back(row.acc_mps2);
-    lo = std::min(lo, row.acc_mps2);
-    hi = std::max(hi, row.acc_mps2);
-  }
-  // Clipping: a long run of samples pinned at the extreme value.
-  for (const double ext : {lo, hi}) {
-    int run = 0, worst = 0;
-    for (double a : r.acc) {
-      run = a == ext ? run + 1 : 0;
-      worst = std::max(worst, run);
-    }
-    int count = 0;
-    for (double a : r.acc) count += a == ext;
-    if (count >= 20 && hi > lo)
-      throw InputError(path, 0, "acc_mps2",
-                       fmt::format("{} samples sit at the extreme value {:.4g}: the sensor clipped",
-                                   count, ext));
-  }
+  r.rate_hz = UniformRate(m, path);
+  r.acc = UnclippedAcceleration(m, path);
   if (const auto it = m.metadata.find("calibration"); it != m.metadata.end()) {
     if (it->second != "uncalibrated" && it->second != "calibrated")
       throw InputError(path, 0, "calibration",
@@ -89,29 +130,7 @@ Recording LoadRecording(const std::string& path, const SoundLabels& labels) {
     r.speed_mps = MetaNumber(m, "speed_mps", 0);
     r.force_N = MetaNumber(m, "force_N", 0);
   } else {
-    if (!m.has_forces)
-      throw InputError(path, 0, "force_N", "no '# force_N:' metadata and no force columns");
-    std::vector<double> v, f;
-    for (const auto& row : m.rows) {
-      v.push_back(row.v_mps.head<2>().norm());
-      f.push_back(std::abs(row.f_N.z()));
-    }
-    auto mean_cv = [](const std::vector<double>& x) {
-      double s = 0, s2 = 0;
-      for (double a : x) s += a;
-      const double mean = s / static_cast<double>(x.size());
-      for (double a : x) s2 += (a - mean) * (a - mean);
-      return std::pair{mean, std::sqrt(s2 / static_cast<double>(x.size())) / std::max(mean, 1e-12)};
-    };
-    const auto [vm, vcv] = mean_cv(v);
-    const auto [fm, fcv] = mean_cv(f);
-    if (vcv > 0.25 || fcv > 0.25)
-      throw InputError(
-          path, 0, vcv > 0.25 ? "speed" : "force",
-          "not a steady scan (coefficient of variation above 25 %): add '# speed_mps:' and "
-          "'# force_N:' metadata or cut the file to its steady part");
-    r.speed_mps = vm;
-    r.force_N = fm;
+    SteadyCondition(m, path, &r);
   }
   if (!(r.speed_mps > 0) || !(r.force_N > 0))
     throw InputError(path, 0, "speed_mps", "speed and force of the condition must be positive");

@@ -46,6 +46,72 @@ class Fenwick {
   std::vector<std::size_t> t_;
 };
 
+// The items NoRepeatOrder has still to place: which are left (in their original order, and per
+// key in the key's order) and how many of each key.
+struct Remaining {
+  std::map<std::string, std::size_t> key_ids;
+  std::vector<std::string> keys;
+  std::vector<std::size_t> key_of, rank;
+  std::vector<std::vector<std::size_t>> positions;  // per key, ascending
+  Fenwick all;
+  std::vector<Fenwick> per_key;
+  std::vector<std::size_t> count;
+  std::set<std::pair<std::size_t, std::size_t>> by_count;  // (remaining, key)
+
+  explicit Remaining(const std::vector<Item>& items) : all(items.size()) {
+    const std::size_t n = items.size();
+    for (const auto& it : items) key_ids.emplace(it.key, 0);
+    for (auto& [k, id] : key_ids) id = keys.size(), keys.push_back(k);
+    key_of.resize(n);
+    rank.resize(n);
+    positions.resize(keys.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      key_of[i] = key_ids[items[i].key];
+      rank[i] = positions[key_of[i]].size();
+      positions[key_of[i]].push_back(i);
+    }
+    count.resize(keys.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      per_key.emplace_back(positions[k].size());
+      count[k] = positions[k].size();
+      by_count.emplace(count[k], k);
+    }
+  }
+  std::ptrdiff_t IdOf(const std::string& key) const {
+    const auto f = key_ids.find(key);
+    return f == key_ids.end() ? -1 : static_cast<std::ptrdiff_t>(f->second);
+  }
+  // The position of the (j+1)-th remaining item whose key is not `last` (-1: none excluded).
+  std::size_t NthAllowed(std::size_t j, std::ptrdiff_t last) const {
+    // The smallest position whose prefix holds j + 1 remaining items of another key.
+    auto allowed_before = [&](std::size_t end) {
+      std::size_t s = all.Prefix(end);
+      if (last >= 0) {
+        const auto& lp = positions[static_cast<std::size_t>(last)];
+        s -= per_key[static_cast<std::size_t>(last)].Prefix(
+            static_cast<std::size_t>(std::lower_bound(lp.begin(), lp.end(), end) - lp.begin()));
+      }
+      return s;
+    };
+    std::size_t lo = 0, hi = key_of.size() - 1;
+    while (lo < hi) {
+      const std::size_t mid = lo + (hi - lo) / 2;
+      if (allowed_before(mid + 1) >= j + 1)
+        hi = mid;
+      else
+        lo = mid + 1;
+    }
+    return lo;
+  }
+  void Remove(std::size_t pick) {
+    const std::size_t k = key_of[pick];
+    all.Remove(pick);
+    per_key[k].Remove(rank[pick]);
+    by_count.erase({count[k], k});
+    if (--count[k] > 0) by_count.emplace(count[k], k);
+  }
+};
+
 // Orders `items` randomly such that no two consecutive items share a key (and the first
 // differs from `prev`). Greedy with the majority rule: when a key holds more than half of
 // what is left it must go next; this succeeds whenever any valid order exists. Each step picks
@@ -58,38 +124,15 @@ std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev
     return items;
   }
   const std::size_t n = items.size();
-  std::map<std::string, std::size_t> key_ids;
-  for (const auto& it : items) key_ids.emplace(it.key, 0);
-  std::vector<std::string> keys;
-  for (auto& [k, id] : key_ids) id = keys.size(), keys.push_back(k);
-  std::vector<std::size_t> key_of(n), rank(n);
-  std::vector<std::vector<std::size_t>> positions(keys.size());  // per key, ascending
-  for (std::size_t i = 0; i < n; ++i) {
-    key_of[i] = key_ids[items[i].key];
-    rank[i] = positions[key_of[i]].size();
-    positions[key_of[i]].push_back(i);
-  }
-  Fenwick all(n);
-  std::vector<Fenwick> per_key;
-  std::vector<std::size_t> count(keys.size());
-  std::set<std::pair<std::size_t, std::size_t>> by_count;  // (remaining, key)
-  for (std::size_t k = 0; k < keys.size(); ++k) {
-    per_key.emplace_back(positions[k].size());
-    count[k] = positions[k].size();
-    by_count.emplace(count[k], k);
-  }
-  auto last_id = [&](const std::string& key) -> std::ptrdiff_t {
-    const auto f = key_ids.find(key);
-    return f == key_ids.end() ? -1 : static_cast<std::ptrdiff_t>(f->second);
-  };
-  std::ptrdiff_t last = last_id(prev);
+  Remaining r(items);
+  std::ptrdiff_t last = r.IdOf(prev);
   std::vector<Item> out;
   out.reserve(n);
   for (std::size_t rem = n; rem > 0; --rem) {
     // A key with 2c - 1 > rem cannot be placed at all; one with 2c - 1 == rem must go now (at
     // most one key can be either).
-    const auto [cmax, kmax] = *by_count.rbegin();
-    const std::size_t clast = last >= 0 ? count[static_cast<std::size_t>(last)] : 0;
+    const auto [cmax, kmax] = *r.by_count.rbegin();
+    const std::size_t clast = last >= 0 ? r.count[static_cast<std::size_t>(last)] : 0;
     const bool stuck_last = last >= 0 && 2 * clast - 1 == rem;
     if (2 * cmax - 1 > rem || stuck_last) {
       const std::size_t k = stuck_last ? static_cast<std::size_t>(last) : kmax;
@@ -98,44 +141,22 @@ std::vector<Item> NoRepeatOrder(std::vector<Item> items, const std::string& prev
           fmt::format(
               "the {} phase cannot avoid immediate repeats: '{}' fills {} of the {} "
               "remaining trials{}",
-              ToString(ph.kind), keys[k], count[k], rem,
+              ToString(ph.kind), r.keys[k], r.count[k], rem,
               static_cast<std::ptrdiff_t>(k) == last ? " and also ended the previous block" : ""));
     }
     std::size_t pick = 0;
     if (2 * cmax - 1 == rem) {  // forced: one of kmax's items, in their order
-      pick = positions[kmax][per_key[kmax].Kth(rng.Below(cmax))];
+      pick = r.positions[kmax][r.per_key[kmax].Kth(rng.Below(cmax))];
     } else {
       const std::size_t candidates = rem - clast;
       if (candidates == 0)
         throw InputError(
             p.file, ph.line, "randomization.no_immediate_repeat",
             fmt::format("the {} phase cannot avoid immediate repeats", ToString(ph.kind)));
-      const std::size_t j = rng.Below(candidates);
-      // The smallest position whose prefix holds j + 1 remaining items of another key.
-      auto allowed_before = [&](std::size_t end) {
-        std::size_t s = all.Prefix(end);
-        if (last >= 0) {
-          const auto& lp = positions[static_cast<std::size_t>(last)];
-          s -= per_key[static_cast<std::size_t>(last)].Prefix(
-              static_cast<std::size_t>(std::lower_bound(lp.begin(), lp.end(), end) - lp.begin()));
-        }
-        return s;
-      };
-      std::size_t lo = 0, hi = n - 1;
-      while (lo < hi) {
-        const std::size_t mid = lo + (hi - lo) / 2;
-        if (allowed_before(mid + 1) >= j + 1)
-          hi = mid;
-        else
-          lo = mid + 1;
-      }
-      pick = lo;
+      pick = r.NthAllowed(rng.Below(candidates), last);
     }
-    const std::size_t k = key_of[pick];
-    all.Remove(pick);
-    per_key[k].Remove(rank[pick]);
-    by_count.erase({count[k], k});
-    if (--count[k] > 0) by_count.emplace(count[k], k);
+    const std::size_t k = r.key_of[pick];
+    r.Remove(pick);
     last = static_cast<std::ptrdiff_t>(k);
     out.push_back(std::move(items[pick]));
   }

@@ -94,6 +94,64 @@ class Reader {
   Diagnostics* d_;
 };
 
+// One [[vibration.cells]] table: its AR part (order 1..kMaxArOrder, stable, and the stored LSFs
+// when given describing the same filter) and MA part (minimum phase).
+ArCell ReadCell(Reader& r, const toml::table& c, const std::string& prefix) {
+  ArCell cell;
+  fields::FieldReader(c, prefix, r.file(), &r.diag()).Read(internal::CellFields(), &cell);
+  const int line = r.Line(&c);
+  if (cell.coeffs.empty() || cell.coeffs.size() > static_cast<std::size_t>(kMaxArOrder)) {
+    r.diag().Add(r.file(), line, prefix + ".ar", fmt::format("order must be 1..{}", kMaxArOrder));
+  } else if (!IsStableAr(cell.coeffs)) {
+    r.diag().Add(r.file(), line, prefix + ".ar",
+                 "unstable AR filter (a root of A(z) on or outside the unit circle)");
+  } else {
+    cell.lsf = ArToLsf(cell.coeffs);
+    // Stored LSFs (written by fit-vibration) must describe the same filter.
+    const auto stored = r.Numbers(c, prefix, "lsf", false);
+    if (!stored.empty()) {
+      bool same = stored.size() == cell.lsf.size();
+      for (std::size_t k = 0; same && k < stored.size(); ++k)
+        same = std::abs(stored[k] - cell.lsf[k]) < 1e-6;
+      if (!same)
+        r.diag().Add(r.file(), line, prefix + ".lsf",
+                     "does not match the AR coefficients of the cell");
+    }
+  }
+  if (!cell.ma.empty()) {
+    std::vector<double> neg(cell.ma.size());
+    for (std::size_t k = 0; k < neg.size(); ++k) neg[k] = -cell.ma[k];
+    if (cell.ma.size() > static_cast<std::size_t>(kMaxArOrder) || !IsStableAr(neg))
+      r.diag().Add(
+          r.file(), line, prefix + ".ma",
+          "MA part must have order <= 64 and be minimum phase (roots inside the unit circle)");
+    else
+      cell.ma_lsf = ArToLsf(neg);
+  }
+  return cell;
+}
+
+// vibration.triangles: each [i, j, k] three 0-based indices of the bank's cells.
+void ReadTriangles(Reader& r, const toml::node* tri, VibrationBank* bank) {
+  const toml::array* arr = tri->as_array();
+  if (!arr) r.Error(tri, "vibration.triangles", "expected an array of [i, j, k]");
+  for (std::size_t i = 0; arr && i < arr->size(); ++i) {
+    const toml::array* one = (*arr)[i].as_array();
+    std::array<int, 3> idx{};
+    bool ok = one && one->size() == 3;
+    for (std::size_t k = 0; ok && k < 3; ++k) {
+      auto v = (*one)[k].value<std::int64_t>();
+      ok = v && *v >= 0 && *v < static_cast<std::int64_t>(bank->cells.size());
+      if (ok) idx[k] = static_cast<int>(*v);
+    }
+    if (!ok)
+      r.Error(&(*arr)[i], fmt::format("vibration.triangles[{}]", i),
+              fmt::format("expected three 0-based cell indices below {}", bank->cells.size()));
+    else
+      bank->triangles.push_back(idx);
+  }
+}
+
 void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path& base,
                    VibrationBank* bank, int depth);
 
@@ -149,58 +207,10 @@ void ReadVibration(Reader& r, const toml::table& t, const std::filesystem::path&
       r.Error(&(*cells)[i], prefix, "expected a table");
       continue;
     }
-    ArCell cell;
-    fields::FieldReader(*c, prefix, r.file(), &r.diag()).Read(internal::CellFields(), &cell);
-    const int line = r.Line(c);
-    if (cell.coeffs.empty() || cell.coeffs.size() > static_cast<std::size_t>(kMaxArOrder)) {
-      r.diag().Add(r.file(), line, prefix + ".ar", fmt::format("order must be 1..{}", kMaxArOrder));
-    } else if (!IsStableAr(cell.coeffs)) {
-      r.diag().Add(r.file(), line, prefix + ".ar",
-                   "unstable AR filter (a root of A(z) on or outside the unit circle)");
-    } else {
-      cell.lsf = ArToLsf(cell.coeffs);
-      // Stored LSFs (written by fit-vibration) must describe the same filter.
-      const auto stored = r.Numbers(*c, prefix, "lsf", false);
-      if (!stored.empty()) {
-        bool same = stored.size() == cell.lsf.size();
-        for (std::size_t k = 0; same && k < stored.size(); ++k)
-          same = std::abs(stored[k] - cell.lsf[k]) < 1e-6;
-        if (!same)
-          r.diag().Add(r.file(), line, prefix + ".lsf",
-                       "does not match the AR coefficients of the cell");
-      }
-    }
-    if (!cell.ma.empty()) {
-      std::vector<double> neg(cell.ma.size());
-      for (std::size_t k = 0; k < neg.size(); ++k) neg[k] = -cell.ma[k];
-      if (cell.ma.size() > static_cast<std::size_t>(kMaxArOrder) || !IsStableAr(neg))
-        r.diag().Add(
-            r.file(), line, prefix + ".ma",
-            "MA part must have order <= 64 and be minimum phase (roots inside the unit circle)");
-      else
-        cell.ma_lsf = ArToLsf(neg);
-    }
+    ArCell cell = ReadCell(r, *c, prefix);
     bank->cells.push_back(std::move(cell));
   }
-  if (const toml::node* tri = t.get("triangles")) {
-    const toml::array* arr = tri->as_array();
-    if (!arr) r.Error(tri, "vibration.triangles", "expected an array of [i, j, k]");
-    for (std::size_t i = 0; arr && i < arr->size(); ++i) {
-      const toml::array* one = (*arr)[i].as_array();
-      std::array<int, 3> idx{};
-      bool ok = one && one->size() == 3;
-      for (std::size_t k = 0; ok && k < 3; ++k) {
-        auto v = (*one)[k].value<std::int64_t>();
-        ok = v && *v >= 0 && *v < static_cast<std::int64_t>(bank->cells.size());
-        if (ok) idx[k] = static_cast<int>(*v);
-      }
-      if (!ok)
-        r.Error(&(*arr)[i], fmt::format("vibration.triangles[{}]", i),
-                fmt::format("expected three 0-based cell indices below {}", bank->cells.size()));
-      else
-        bank->triangles.push_back(idx);
-    }
-  }
+  if (const toml::node* tri = t.get("triangles")) ReadTriangles(r, tri, bank);
 }
 
 // [geometry]: a height-map file, a sine or flat (keys declared in material_fields.cpp).

@@ -158,97 +158,120 @@ void SaveNeuralModel(const NeuralModel& m, const std::string& path) {
   WriteTextFile(path, s);
 }
 
-NeuralModel LoadNeuralModel(const std::string& path) {
-  const toml::table doc = ParseTomlFile(path);
-  Diagnostics d;
-  auto line = [](const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; };
-  auto numbers = [&](const toml::node* n, const std::string& key, std::vector<double>* out) {
+namespace {
+
+// A neural model file being read: its problems collected with file, line and key.
+struct NeuralReader {
+  const std::string& path;
+  Diagnostics& d;
+
+  static int Line(const toml::node* n) { return n ? static_cast<int>(n->source().begin.line) : 0; }
+  void Numbers(const toml::node* n, const std::string& key, std::vector<double>* out) const {
     const auto* a = n ? n->as_array() : nullptr;
     if (!a) {
-      d.Add(path, line(n), key, "expected an array of numbers");
+      d.Add(path, Line(n), key, "expected an array of numbers");
       return;
     }
     for (const auto& x : *a) {
       const auto v = x.value<double>();
       if (!v) {
-        d.Add(path, line(&x), key, "expected numbers");
+        d.Add(path, Line(&x), key, "expected numbers");
         return;
       }
       out->push_back(*v);
     }
-  };
-  NeuralModel m;
-  // format_version: absent in version 1 files (before Γ_U's per-cell AR part).
-  const auto version = doc["format_version"].value<int64_t>().value_or(1);
-  if (doc.contains("format_version") && !doc["format_version"].value<int64_t>())
-    d.Add(path, line(doc.get("format_version")), "format_version", "expected an integer");
-  else if (version < 1 || version > kNeuralFormatVersion)
-    throw InputError(path, line(doc.get("format_version")), "format_version",
-                     fmt::format("version {}; this build reads versions 1 to {} (written by a "
-                                 "newer HapticLab?)",
-                                 version, kNeuralFormatVersion));
-  const auto topo = doc["topology"].value<std::string>();
-  if (topo == "unified")
-    m.topology = NeuralTopology::kUnified;
-  else if (topo == "decomposed")
-    m.topology = NeuralTopology::kDecomposed;
-  else
-    d.Add(path, line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
-  m.sample_rate_hz = doc["sample_rate_hz"].value_or(0.0);
-  m.min_speed_mps = doc["min_speed_mps"].value_or(0.01);
-  if (const auto* c = doc.get("calibration")) {
-    const auto word = c->value<std::string>();
-    if (word != "calibrated" && word != "uncalibrated")
-      d.Add(path, line(c), "calibration", "expected \"calibrated\" or \"uncalibrated\"");
-    m.calibrated = word != "uncalibrated";
   }
-  numbers(doc.get("speeds_mps"), "speeds_mps", &m.speeds_mps);
-  numbers(doc.get("forces_N"), "forces_N", &m.forces_N);
+
+  // The file's top-level keys (format_version, topology, rates, calibration, grid) into m;
+  // returns the format version (1 when absent: before Γ_U's per-cell AR part).
+  std::int64_t Header(const toml::table& doc, NeuralModel* m) const {
+    const auto version = doc["format_version"].value<int64_t>().value_or(1);
+    if (doc.contains("format_version") && !doc["format_version"].value<int64_t>())
+      d.Add(path, Line(doc.get("format_version")), "format_version", "expected an integer");
+    else if (version < 1 || version > kNeuralFormatVersion)
+      throw InputError(path, Line(doc.get("format_version")), "format_version",
+                       fmt::format("version {}; this build reads versions 1 to {} (written by a "
+                                   "newer HapticLab?)",
+                                   version, kNeuralFormatVersion));
+    const auto topo = doc["topology"].value<std::string>();
+    if (topo == "unified")
+      m->topology = NeuralTopology::kUnified;
+    else if (topo == "decomposed")
+      m->topology = NeuralTopology::kDecomposed;
+    else
+      d.Add(path, Line(doc.get("topology")), "topology", "expected \"unified\" or \"decomposed\"");
+    m->sample_rate_hz = doc["sample_rate_hz"].value_or(0.0);
+    m->min_speed_mps = doc["min_speed_mps"].value_or(0.01);
+    if (const auto* c = doc.get("calibration")) {
+      const auto word = c->value<std::string>();
+      if (word != "calibrated" && word != "uncalibrated")
+        d.Add(path, Line(c), "calibration", "expected \"calibrated\" or \"uncalibrated\"");
+      m->calibrated = word != "uncalibrated";
+    }
+    Numbers(doc.get("speeds_mps"), "speeds_mps", &m->speeds_mps);
+    Numbers(doc.get("forces_N"), "forces_N", &m->forces_N);
+    return version;
+  }
+
+  // One [[band]] table (k: "band[i]"): its nets, linear parts and per-cell AR filters.
+  NeuralBand Band(const toml::table& t, const std::string& k, std::int64_t version) const {
+    NeuralBand b;
+    b.lo_hz = t["lo_hz"].value_or(0.0);
+    b.hi_hz = t["hi_hz"].value_or(0.0);
+    b.decimation = static_cast<int>(t["decimation"].value_or(int64_t{0}));
+    b.history = static_cast<int>(t["history"].value_or(int64_t{0}));
+    b.scale = t["scale"].value_or(0.0);
+    std::vector<double> layers;
+    Numbers(t.get("layers"), k + ".layers", &layers);
+    Numbers(t.get("sigma"), k + ".sigma", &b.sigma);
+    const auto* nets = t["nets"].as_array();
+    if (!nets) d.Add(path, Line(&t), k + ".nets", "expected an array of parameter arrays");
+    for (std::size_t j = 0; nets && j < nets->size(); ++j) {
+      NeuralNet n;
+      for (const double x : layers) n.layers.push_back(static_cast<int>(x));
+      Numbers(nets->get(j), fmt::format("{}.nets[{}]", k, j + 1), &n.params);
+      b.nets.push_back(std::move(n));
+    }
+    if (const auto* lin = t["linear"].as_array()) {
+      if (lin->size() != b.nets.size())
+        d.Add(path, Line(t.get("linear")), k + ".linear",
+              fmt::format("expected one array per network ({})", b.nets.size()));
+      for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
+        Numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
+    }
+    if (const auto* car = t.get("cell_ar")) {
+      const auto* a = car->as_array();
+      if (version < 2)
+        d.Add(path, Line(car), k + ".cell_ar", "needs format_version = 2 (absent: version 1)");
+      else if (!a)
+        d.Add(path, Line(car), k + ".cell_ar", "expected an array of coefficient arrays");
+      for (std::size_t j = 0; version >= 2 && a && j < a->size(); ++j) {
+        b.cell_ar.emplace_back();
+        Numbers(a->get(j), fmt::format("{}.cell_ar[{}]", k, j + 1), &b.cell_ar.back());
+      }
+    }
+    return b;
+  }
+};
+
+}  // namespace
+
+NeuralModel LoadNeuralModel(const std::string& path) {
+  const toml::table doc = ParseTomlFile(path);
+  Diagnostics d;
+  const NeuralReader read{path, d};
+  NeuralModel m;
+  const std::int64_t version = read.Header(doc, &m);
   const auto* bands = doc["band"].as_array();
   if (!bands) d.Add(path, 0, "band", "expected [[band]] tables");
   for (std::size_t i = 0; bands && i < bands->size(); ++i) {
     const auto* t = bands->get(i)->as_table();
     const std::string k = fmt::format("band[{}]", i + 1);
     if (!t) {
-      d.Add(path, line(bands->get(i)), k, "expected a table");
+      d.Add(path, NeuralReader::Line(bands->get(i)), k, "expected a table");
       continue;
     }
-    NeuralBand b;
-    b.lo_hz = (*t)["lo_hz"].value_or(0.0);
-    b.hi_hz = (*t)["hi_hz"].value_or(0.0);
-    b.decimation = static_cast<int>((*t)["decimation"].value_or(int64_t{0}));
-    b.history = static_cast<int>((*t)["history"].value_or(int64_t{0}));
-    b.scale = (*t)["scale"].value_or(0.0);
-    std::vector<double> layers;
-    numbers(t->get("layers"), k + ".layers", &layers);
-    numbers(t->get("sigma"), k + ".sigma", &b.sigma);
-    const auto* nets = (*t)["nets"].as_array();
-    if (!nets) d.Add(path, line(t), k + ".nets", "expected an array of parameter arrays");
-    for (std::size_t j = 0; nets && j < nets->size(); ++j) {
-      NeuralNet n;
-      for (const double x : layers) n.layers.push_back(static_cast<int>(x));
-      numbers(nets->get(j), fmt::format("{}.nets[{}]", k, j + 1), &n.params);
-      b.nets.push_back(std::move(n));
-    }
-    if (const auto* lin = (*t)["linear"].as_array()) {
-      if (lin->size() != b.nets.size())
-        d.Add(path, line(t->get("linear")), k + ".linear",
-              fmt::format("expected one array per network ({})", b.nets.size()));
-      for (std::size_t j = 0; j < lin->size() && j < b.nets.size(); ++j)
-        numbers(lin->get(j), fmt::format("{}.linear[{}]", k, j + 1), &b.nets[j].linear);
-    }
-    if (const auto* car = t->get("cell_ar")) {
-      const auto* a = car->as_array();
-      if (version < 2)
-        d.Add(path, line(car), k + ".cell_ar", "needs format_version = 2 (absent: version 1)");
-      else if (!a)
-        d.Add(path, line(car), k + ".cell_ar", "expected an array of coefficient arrays");
-      for (std::size_t j = 0; version >= 2 && a && j < a->size(); ++j) {
-        b.cell_ar.emplace_back();
-        numbers(a->get(j), fmt::format("{}.cell_ar[{}]", k, j + 1), &b.cell_ar.back());
-      }
-    }
-    m.bands.push_back(std::move(b));
+    m.bands.push_back(read.Band(*t, k, version));
   }
   d.ThrowIfAny();
   if (const std::string problem = NeuralModelProblem(m); !problem.empty())

@@ -86,19 +86,9 @@ LiveFrame LiveOf(const RtEngine& engine, db::TrajectoryStream* fs, db::Trajector
   return f;
 }
 
-}  // namespace
-
-SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng& rng,
-                            double duration_s, const db::Trial& t, const TrialScreen& screen,
-                            int screen_side) {
-  SideOutcome out;
-  const double dur = duration_s;
-  const auto sample = static_cast<std::size_t>(side.sample);
-  Rig& rig = c.rig;
-  const RunOptions& opt = c.opt;
-  db::TrajectoryWriter* writer = c.writer;
-  db::Database& database = c.database;
-  const renderer::MaterialModel& model = *side.model;
+// The render options of one side: a real sample only measured (force held at zero), a virtual
+// one rendered within the device's limits.
+renderer::RenderOptions SideOptions(const StimulusSide& side, const Rig& rig) {
   renderer::RenderOptions ro;
   if (side.real) {
     // The real sample under the stylus: the device only measures; its force is held at zero.
@@ -111,6 +101,80 @@ SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng
     ro.device_max_stiffness_N_per_m =
         caps.max_stiffness_N_per_m;  // base stiffness: half of it (ch. V)
   }
+  return ro;
+}
+
+// Plays a started engine for `dur` seconds: at once on a virtual clock without screens, else in
+// stimulus frames for the screens (on a virtual clock, time runs ui_playback_speed times faster
+// than the wall clock). False when the screens abort the stimulus.
+bool PlayStimulus(RtEngine& engine, const StimulusSide& side, const TrialContext& c, double dur,
+                  const db::Trial& t, const TrialScreen& screen, int screen_side,
+                  db::TrajectoryStream* fs, db::TrajectoryStream* vs) {
+  const RunOptions& opt = c.opt;
+  if (engine.is_virtual() && !opt.ui) {
+    engine.AdvanceTo(dur);
+    return true;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const double speed = c.participant.PlaybackSpeed();
+  for (;;) {
+    const double el = std::min(
+        dur, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
+    if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
+    const auto s = engine.LastSample();
+    if (opt.ui) opt.ui->Live(LiveOf(engine, fs, vs, t, screen_side, side.stimulus, false));
+    if (opt.ui && !opt.ui->Stimulus(screen, screen_side, s.state.p_m, dur - el)) return false;
+    if (el >= dur) break;
+    if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  return true;
+}
+
+// The watchdog's faults of a side as events, its timing saved, and the side judged: faulted
+// (the watchdog tripped) or untouched (the stylus too rarely inside the surface).
+void RecordSideEnd(RtEngine& engine, const StimulusSide& side, const TrialContext& c,
+                   const db::Trial& t, const renderer::RenderOptions& ro, bool injected,
+                   SideOutcome* out) {
+  db::Database& database = c.database;
+  FaultEvent e;
+  while (engine.watchdog().PopEvent(&e))
+    database.LogEvent({.session_id = c.session,
+                       .trial_id = t.id,
+                       .kind = db::EventKind::kDeviceFault,
+                       .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
+                                             e.t_s, side.label, e.tick),
+                       .established_by = source::Watchdog(c.opt.device, injected)});
+  const auto st = engine.Stats();
+  out->stats = st;
+  SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
+  if (engine.watchdog().tripped()) {
+    out->fault = true;
+    out->detail = fmt::format(
+        "{}: {} disconnects, {} NaN, {} stale, {} missed-deadline, {} vibration-model "
+        "faults",
+        side.label, st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults,
+        st.vibration_faults);
+  } else if (static_cast<double>(st.contact_ticks) <
+             kMinContactFraction * static_cast<double>(st.force_ticks)) {
+    out->untouched = true;
+    out->detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks",
+                              side.label, side.stimulus, st.contact_ticks, st.force_ticks);
+  }
+}
+
+}  // namespace
+
+SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng& rng,
+                            double duration_s, const db::Trial& t, const TrialScreen& screen,
+                            int screen_side) {
+  SideOutcome out;
+  const double dur = duration_s;
+  const auto sample = static_cast<std::size_t>(side.sample);
+  Rig& rig = c.rig;
+  const RunOptions& opt = c.opt;
+  db::TrajectoryWriter* writer = c.writer;
+  const renderer::MaterialModel& model = *side.model;
+  renderer::RenderOptions ro = SideOptions(side, rig);
   renderer::HybridRenderer r(model, ro);
   // The participant takes the stylus: the simulated hand strokes the sample where it truly
   // is (on a real side its ground truth); a person at the rig explores by themselves.
@@ -133,66 +197,21 @@ SideOutcome RunStimulusSide(const StimulusSide& side, const TrialContext& c, Rng
   eo.sample_from_device = rig.device_from_sample[sample].inverse();
   RtEngine engine(r, *rig.device, ro.vibration ? rig.actuator : nullptr, eo, fs, vs);
   engine.Start();
-  bool go_on = true;
-  if (engine.is_virtual() && !opt.ui) {
-    engine.AdvanceTo(dur);
-  } else {
-    // Stimulus frames for the screens: on a virtual clock, time runs ui_playback_speed times
-    // faster than the wall clock.
-    const auto t0 = std::chrono::steady_clock::now();
-    const double speed = c.participant.PlaybackSpeed();
-    for (;;) {
-      const double el = std::min(
-          dur,
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() * speed);
-      if (engine.is_virtual() && !engine.AdvanceTo(el)) break;
-      const auto s = engine.LastSample();
-      if (opt.ui) opt.ui->Live(LiveOf(engine, fs, vs, t, screen_side, side.stimulus, false));
-      if (opt.ui && !opt.ui->Stimulus(screen, screen_side, s.state.p_m, dur - el)) {
-        go_on = false;
-        break;
-      }
-      if (el >= dur) break;
-      if (!opt.ui) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-  }
+  const bool go_on = PlayStimulus(engine, side, c, dur, t, screen, screen_side, fs, vs);
   engine.Stop();
   if (opt.ui) opt.ui->Live(LiveOf(engine, fs, vs, t, screen_side, side.stimulus, true));
   if (fs) writer->CloseStream(fs);
   if (vs) writer->CloseStream(vs);
-  FaultEvent e;
-  while (engine.watchdog().PopEvent(&e))
-    database.LogEvent({.session_id = c.session,
-                       .trial_id = t.id,
-                       .kind = db::EventKind::kDeviceFault,
-                       .detail = fmt::format("{} at {:.3f} s ({}, tick {})", FaultName(e.kind),
-                                             e.t_s, side.label, e.tick),
-                       .established_by = source::Watchdog(opt.device, injected)});
-  const auto st = engine.Stats();
-  out.stats = st;
-  SaveTiming(database, t.id, database.CurrentAttempt(t.id), side.stream, ro, engine);
-  if (engine.watchdog().tripped()) {
-    out.fault = true;
-    out.detail = fmt::format(
-        "{}: {} disconnects, {} NaN, {} stale, {} missed-deadline, {} vibration-model "
-        "faults",
-        side.label, st.disconnects, st.nan_faults, st.stale_faults, st.miss_faults,
-        st.vibration_faults);
-  } else if (static_cast<double>(st.contact_ticks) <
-             kMinContactFraction * static_cast<double>(st.force_ticks)) {
-    out.untouched = true;
-    out.detail = fmt::format("{} ({}): the stylus was inside the surface on {} of {} ticks",
-                             side.label, side.stimulus, st.contact_ticks, st.force_ticks);
-  }
+  RecordSideEnd(engine, side, c, t, ro, injected, &out);
   const SideFelt felt = c.participant.EndSide();
   if (opt.on_side)
     opt.on_side({.plan_index = t.plan_index,
                  .side = side.report_side,
                  .attempt = t.attempts,
                  .stimulus = side.stimulus,
-                 .engine = st,
+                 .engine = out.stats,
                  .hand_ticks = felt.hand_ticks,
-                 .contact_ticks = st.contact_ticks});
+                 .contact_ticks = out.stats.contact_ticks});
   out.felt = felt.felt;
   out.aborted = !go_on;
   return out;

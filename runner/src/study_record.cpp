@@ -2,14 +2,20 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <map>
 #include <set>
 
 #include "hapticlab/core/diagnostics.hpp"
 #include "hapticlab/protocols/canonical.hpp"
 #include "hapticlab/protocols/participant_code.hpp"
+#include "hapticlab/runner/study_runner.hpp"
 
 namespace hapticlab::runner {
 namespace {
+
+namespace fs = std::filesystem;
 
 // The refusal: what changed, key by key (at most 12 listed).
 [[noreturn]] void RefuseChanged(const db::Study& s, const protocols::Protocol& p,
@@ -88,6 +94,62 @@ Reservation ReserveParticipant(const std::string& db_path, const protocols::Prot
                            .seed = protocols::ParticipantSeed(p, r.index)});
   tx.Commit();
   return r;
+}
+
+// ParticipantIndex and StudyStatus (study_runner.hpp): read the study's rows only.
+
+int ParticipantIndex(const std::string& db_path, const std::string& study,
+                     const std::string& code) {
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
+  const db::Database database = db::OpenForReading(db_path);
+  const auto st = database.FindStudy(study);
+  if (!st) throw InputError(db_path, 0, "participant", "no study '" + study + "' in this database");
+  const auto part = database.FindParticipant(st->id, code);
+  if (!part)
+    throw InputError(db_path, 0, "participant",
+                     "no participant " + code + " in study '" + study +
+                         "' (a code not yet run or reserved has no plan index; give "
+                         "--index N instead)");
+  return part->index;
+}
+
+std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
+                                           const std::string& participant) {
+  if (std::error_code ec; !fs::exists(db_path, ec))
+    throw InputError(db_path, 0, "db", "no such database");
+  const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
+  std::vector<ParticipantStatus> out;
+  for (const auto& st : database.Studies())
+    for (const auto& part : database.Participants(st.id)) {
+      if (!participant.empty() && part.code != participant) continue;
+      ParticipantStatus s;
+      s.code = part.code;
+      std::map<int, int> completions;
+      for (const auto& se : database.Sessions(part.id)) {
+        s.session_status = se.status;
+        // Faulted attempts, each re-queued: the runner's 'attempt-faulted' events (schema v7;
+        // an older session counts the trials still waiting in 'faulted').
+        int attempts_faulted = 0, waiting = 0;
+        for (const auto& e : database.Events(se.id))
+          attempts_faulted += e.kind == db::EventKind::kAttemptFaulted;
+        for (const auto& t : database.Trials(se.id)) {
+          ++s.planned;
+          if (t.status == db::TrialStatus::kCompleted) {
+            ++s.completed;
+            ++completions[t.plan_index];
+          }
+          waiting += t.status == db::TrialStatus::kFaulted;
+        }
+        s.faulted += std::max(attempts_faulted, waiting);
+      }
+      for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
+      out.push_back(s);
+    }
+  if (!participant.empty() && out.empty())
+    throw InputError(db_path, 0, "participant",
+                     "no participant " + participant + " in this database");
+  return out;
 }
 
 }  // namespace hapticlab::runner

@@ -147,6 +147,185 @@ SessionMode RecordedModeOf(const db::Session& se, const std::string& db_path) {
           se.screens, ParseRater(se.rater, db_path, "session.rater")};
 }
 
+// The run's options that need no database: the participant code, the adaptive phases the
+// device can run, the site code and the site offset (checked before anything is written).
+void CheckRunOptions(const protocols::Protocol& p, const RunOptions& opt) {
+  protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
+  internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
+  if (const std::string why = db::SiteCodeProblem(opt.site); !why.empty())
+    throw InputError("<command line>", 0, "--site",
+                     "'" + opt.site + "' is not a site code (" + why +
+                         "): up to 8 letters, digits, '-' or '_' with a digit, e.g. S02");
+  if (opt.site_offset != 0 && PersonTakesPart(opt))
+    throw InputError("<command line>", 0, "--site-offset",
+                     "a site offset is added to the simulated observer's ratings; a person rates "
+                     "this session");
+}
+
+// `study run` on a code that already has a session: a completed one needs a new code, any
+// other is continued with 'study resume'.
+[[noreturn]] void RefuseParticipantWithASession(const db::Database& database,
+                                                const db::Participant& participant,
+                                                const std::string& db_path) {
+  const auto sessions = database.Sessions(participant.id);
+  if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
+    throw InputError(db_path, 0, "participant",
+                     "participant " + participant.code +
+                         " has already completed a session of this study; a new participant "
+                         "needs a new code ('hapticlab participant new')");
+  throw InputError(db_path, 0, "participant",
+                   "participant " + participant.code +
+                       " already has a session; continue it with 'hapticlab study resume'");
+}
+
+// The participant a run records, and its row when `participant new` reserved the code.
+struct NewParticipant {
+  std::optional<db::Participant> reserved;
+  db::Participant part;
+};
+NewParticipant ParticipantOf(const db::Database& database, const protocols::Protocol& p,
+                             std::int64_t study_id, const RunOptions& opt) {
+  // A code reserved by `participant new` (a participant without a session) runs with the plan
+  // index it was given; any other known code already has its session.
+  const auto reserved = database.FindParticipant(study_id, opt.participant);
+  if (reserved && !database.IsReserved(reserved->id))
+    RefuseParticipantWithASession(database, *reserved, opt.db_path);
+  if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
+    throw InputError(opt.db_path, 0, "participant",
+                     fmt::format("participant {} was reserved with plan index {}; run it without "
+                                 "--index or with --index {}",
+                                 opt.participant, reserved->index, reserved->index));
+  const int index = reserved ? reserved->index
+                    : opt.participant_index >= 0
+                        ? opt.participant_index
+                        : static_cast<int>(database.Participants(study_id).size());
+  return {reserved,
+          {.study_id = study_id,
+           .code = opt.participant,
+           .index = index,
+           .seed = protocols::ParticipantSeed(p, index)}};
+}
+
+// Provenance: everything needed to reproduce this session.
+json SessionProvenance(const protocols::Protocol& p, const RunOptions& opt, const Lab& lab,
+                       const std::string& hash, const db::Participant& part) {
+  json models = json::object();
+  for (const auto& [id, h] : lab.model_hashes) models[id] = h;
+  json prov = {
+      {"protocol_hash", hash},
+      {"protocol_canonical_sha256", ProtocolIdentity(p)},
+      // Relative to the database's folder (an absolute path would carry a user name).
+      {"protocol_path",
+       fs::weakly_canonical(fs::absolute(p.file))
+           .lexically_relative(fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path())
+           .string()},
+      {"study_seed", p.seed},
+      {"participant_index", part.index},
+      {"participant_seed", part.seed},
+      {"software", std::string(kVersion) + "+" + kGitSha},
+      {"device", opt.device},
+      {"rig", opt.rig ? json{{"description", opt.rig->description},
+                             {"file_sha256", opt.rig->rig_file_hash},
+                             {"content", opt.rig->calibration}}
+                      : json{{"description", "generic simulated rig"}}},
+      {"model_hashes", models},
+      {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
+  if (opt.site_offset != 0) prov["observer_site_offset"] = opt.site_offset;
+  AddPlanProvenance(opt, lab, &prov);
+  return prov;
+}
+
+// The session row a run starts: software, device, rig, provenance, plan and mode.
+db::Session SessionRow(std::int64_t participant_id, const RunOptions& opt, const SessionMode& mode,
+                       const json& prov, const json& plan_json) {
+  return {.participant_id = participant_id,
+          .software_version = std::string(kVersion) + "+" + kGitSha,
+          .device = opt.device,
+          .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
+          // Paths in the provenance may hold bytes that are not UTF-8: replaced, not thrown.
+          .provenance_json = prov.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+          .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
+          .actuator = ActuatorName(mode.actuator),
+          .screens = mode.screens,
+          .rater = mode.rater.Name(),
+          .site_code = opt.site};
+}
+
+// The plan's trials as rows of the session; returns their ids in plan order.
+std::vector<std::int64_t> AddPlannedTrials(db::Database& database, std::int64_t session,
+                                           const std::vector<protocols::PlannedTrial>& plan) {
+  std::vector<db::Trial> rows;
+  for (const auto& t : plan)
+    rows.push_back({.session_id = session,
+                    .plan_index = t.index,
+                    .phase = t.phase,
+                    .material = t.material,
+                    .comparison = t.comparison,
+                    .method = t.method,
+                    .repetition = t.repetition,
+                    .left = t.left,
+                    .right = t.right});
+  std::vector<std::int64_t> ids;
+  for (const auto& r : rows) ids.push_back(database.AddTrial(r));
+  return ids;
+}
+
+// The protocol a resumed session runs: the text from the database, with the folder it was run
+// from (for models and profiles); a note when the file there changed since.
+protocols::Protocol ResumedProtocol(const db::Study& st, const json& prov, const RunOptions& opt) {
+  // Stored relative to the database's folder (older sessions: absolute).
+  const std::string stored = prov.value("protocol_path", "");
+  const std::string path =
+      stored.empty() ? stored
+                     : (fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path() / stored)
+                           .lexically_normal()
+                           .string();
+  auto p = protocols::ParseProtocol(st.protocol_toml, path);
+  if (std::error_code ec;
+      !path.empty() && fs::exists(path, ec) && db::HashText(ReadTextFile(path)) != st.protocol_hash)
+    Log(opt, ProtocolOnDiskNote(st.protocol_toml, ReadTextFile(path)));
+  return p;
+}
+
+// The mode a resumed session runs in: a change (--change-mode) is logged; a session recorded
+// without its actuator (before schema v5) gets the current mode's.
+void RecordResumeMode(db::Database& database, std::int64_t session, const SessionMode& recorded,
+                      const SessionMode& now, bool differs, const RunOptions& opt) {
+  if (differs) {
+    database.LogEvent({.session_id = session,
+                       .kind = db::EventKind::kModeChange,
+                       .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
+                                             recorded.Describe(), now.Describe()),
+                       .established_by = source::CommandLine("--change-mode")});
+    database.SetSessionMode(session, now.device, ActuatorName(now.actuator), now.screens,
+                            now.rater.Name());
+    Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant, recorded.Describe(),
+                         now.Describe()));
+  } else if (!recorded.actuator) {
+    database.SetSessionMode(session, now.device, ActuatorName(now.actuator), now.screens,
+                            now.rater.Name());
+  }
+}
+
+// Reopens a session for `study resume` and logs it (with whether the previous run closed it);
+// returns the number of completed trials.
+int ReopenSession(db::Database& database, const db::Session& se) {
+  const std::string unclosed =
+      se.status == db::SessionStatus::kRunning
+          ? "; the previous run ended without closing the session (killed, crashed, or a "
+            "full disk)"
+          : "";
+  database.ReopenSession(se.id);
+  int done = 0;
+  for (const auto& t : database.Trials(se.id)) done += t.status == db::TrialStatus::kCompleted;
+  database.LogEvent({.session_id = se.id,
+                     .kind = db::EventKind::kResume,
+                     .detail = fmt::format("resumed with {} of {} trials completed{}", done,
+                                           database.Trials(se.id).size(), unclosed),
+                     .established_by = source::CommandLine("study resume")});
+  return done;
+}
+
 }  // namespace
 
 std::string Rater::Name() const {
@@ -234,56 +413,11 @@ void CheckRunnable(const protocols::Protocol& p, const std::string& device, bool
                      "version = \"...\" (docs/studies.md)");
 }
 
-int ParticipantIndex(const std::string& db_path, const std::string& study,
-                     const std::string& code) {
-  if (std::error_code ec; !fs::exists(db_path, ec))
-    throw InputError(db_path, 0, "db", "no such database");
-  const db::Database database = db::OpenForReading(db_path);
-  const auto st = database.FindStudy(study);
-  if (!st) throw InputError(db_path, 0, "participant", "no study '" + study + "' in this database");
-  const auto part = database.FindParticipant(st->id, code);
-  if (!part)
-    throw InputError(db_path, 0, "participant",
-                     "no participant " + code + " in study '" + study +
-                         "' (a code not yet run or reserved has no plan index; give "
-                         "--index N instead)");
-  return part->index;
-}
-
-namespace {
-
-// `study run` on a code that already has a session: a completed one needs a new code, any
-// other is continued with 'study resume'.
-[[noreturn]] void RefuseParticipantWithASession(const db::Database& database,
-                                                const db::Participant& participant,
-                                                const std::string& db_path) {
-  const auto sessions = database.Sessions(participant.id);
-  if (!sessions.empty() && sessions.back().status == db::SessionStatus::kCompleted)
-    throw InputError(db_path, 0, "participant",
-                     "participant " + participant.code +
-                         " has already completed a session of this study; a new participant "
-                         "needs a new code ('hapticlab participant new')");
-  throw InputError(db_path, 0, "participant",
-                   "participant " + participant.code +
-                       " already has a session; continue it with 'hapticlab study resume'");
-}
-
-}  // namespace
-
 void RequestStop(int signal_number) noexcept { g_stop_signal.store(signal_number); }
 int StopRequested() noexcept { return g_stop_signal.load(); }
 
 RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
-  protocols::CheckParticipantCode(p, opt.participant);  // before anything is written
-  internal::CheckAdaptivePhases(p, opt.device, opt.ui != nullptr);
-  if (const std::string why = db::SiteCodeProblem(opt.site); !why.empty())
-    throw InputError("<command line>", 0, "--site",
-                     "'" + opt.site + "' is not a site code (" + why +
-                         "): up to 8 letters, digits, '-' or '_' with a digit, e.g. S02");
-  if (opt.site_offset != 0 && PersonTakesPart(opt))
-    throw InputError("<command line>", 0, "--site-offset",
-                     "a site offset is added to the simulated observer's ratings; a person rates "
-                     "this session");
+  CheckRunOptions(p, opt);
   Lab lab = LoadLab(p, opt.device, opt.model_files);
   lab.profiles.observer.site_offset = opt.site_offset;
   // Consent as it happened: "not applicable" when no person takes part, else confirmed by an
@@ -297,50 +431,12 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   const std::string hash = db::HashText(p.text);
   const SessionMode mode = ModeOf(opt);
   const std::int64_t study_id = FindOrCreateStudy(database, p, opt.db_path);
-  // A code reserved by `participant new` (a participant without a session) runs with the plan
-  // index it was given; any other known code already has its session.
-  const auto reserved = database.FindParticipant(study_id, opt.participant);
-  if (reserved && !database.IsReserved(reserved->id))
-    RefuseParticipantWithASession(database, *reserved, opt.db_path);
-  if (reserved && opt.participant_index >= 0 && opt.participant_index != reserved->index)
-    throw InputError(opt.db_path, 0, "participant",
-                     fmt::format("participant {} was reserved with plan index {}; run it without "
-                                 "--index or with --index {}",
-                                 opt.participant, reserved->index, reserved->index));
-  const int index = reserved ? reserved->index
-                    : opt.participant_index >= 0
-                        ? opt.participant_index
-                        : static_cast<int>(database.Participants(study_id).size());
-  const db::Participant part{.study_id = study_id,
-                             .code = opt.participant,
-                             .index = index,
-                             .seed = protocols::ParticipantSeed(p, index)};
-  const auto plan = protocols::Plan(p, index);
-  // Provenance: everything needed to reproduce this session.
-  json models = json::object();
-  for (const auto& [id, h] : lab.model_hashes) models[id] = h;
+  const NewParticipant np = ParticipantOf(database, p, study_id, opt);
+  const auto& reserved = np.reserved;
+  const db::Participant& part = np.part;
+  const auto plan = protocols::Plan(p, part.index);
   const json plan_json = PlanToJson(plan);
-  json prov = {
-      {"protocol_hash", hash},
-      {"protocol_canonical_sha256", ProtocolIdentity(p)},
-      // Relative to the database's folder (an absolute path would carry a user name).
-      {"protocol_path",
-       fs::weakly_canonical(fs::absolute(p.file))
-           .lexically_relative(fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path())
-           .string()},
-      {"study_seed", p.seed},
-      {"participant_index", index},
-      {"participant_seed", part.seed},
-      {"software", std::string(kVersion) + "+" + kGitSha},
-      {"device", opt.device},
-      {"rig", opt.rig ? json{{"description", opt.rig->description},
-                             {"file_sha256", opt.rig->rig_file_hash},
-                             {"content", opt.rig->calibration}}
-                      : json{{"description", "generic simulated rig"}}},
-      {"model_hashes", models},
-      {"masking_noise", {{"enabled", p.masking_noise}, {"level_dB", p.masking_level_dB}}}};
-  if (opt.site_offset != 0) prov["observer_site_offset"] = opt.site_offset;
-  AddPlanProvenance(opt, lab, &prov);
+  const json prov = SessionProvenance(p, opt, lab, hash, part);
   if (ask_console) consent = ObtainConsent(p, opt, opt.participant);
   // Participant, session, plan and consent in one transaction: a crash leaves all or none.
   std::int64_t session;
@@ -348,30 +444,8 @@ RunSummary RunStudy(const protocols::Protocol& p, const RunOptions& opt) {
   {
     db::WriteTransaction tx(database);
     const auto pid = reserved ? reserved->id : database.AddParticipant(part);
-    session = database.StartSession(
-        {.participant_id = pid,
-         .software_version = std::string(kVersion) + "+" + kGitSha,
-         .device = opt.device,
-         .calibration = opt.rig ? opt.rig->calibration : "simulated (no calibration)",
-         // Paths in the provenance may hold bytes that are not UTF-8: replaced, not thrown.
-         .provenance_json = prov.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-         .plan_json = plan_json.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace),
-         .actuator = ActuatorName(mode.actuator),
-         .screens = mode.screens,
-         .rater = mode.rater.Name(),
-         .site_code = opt.site});
-    std::vector<db::Trial> rows;
-    for (const auto& t : plan)
-      rows.push_back({.session_id = session,
-                      .plan_index = t.index,
-                      .phase = t.phase,
-                      .material = t.material,
-                      .comparison = t.comparison,
-                      .method = t.method,
-                      .repetition = t.repetition,
-                      .left = t.left,
-                      .right = t.right});
-    for (const auto& r : rows) ids.push_back(database.AddTrial(r));
+    session = database.StartSession(SessionRow(pid, opt, mode, prov, plan_json));
+    ids = AddPlannedTrials(database, session, plan);
     for (const auto& [id, text] : lab.model_texts) database.SaveMaterialModel(id, text);
     if (consent)
       RecordConsent(database, session, *consent);
@@ -408,19 +482,7 @@ RunSummary ResumeStudy(const RunOptions& opt) {
       throw InputError(opt.db_path, 0, "participant",
                        opt.participant + "'s session is already completed");
     const json prov = json::parse(se.provenance_json);
-    // Stored relative to the database's folder (older sessions: absolute).
-    const std::string stored = prov.value("protocol_path", "");
-    const std::string path =
-        stored.empty() ? stored
-                       : (fs::weakly_canonical(fs::absolute(opt.db_path)).parent_path() / stored)
-                             .lexically_normal()
-                             .string();
-    // The protocol text comes from the database; its folder (for models and profiles) from
-    // where it was run.
-    auto p = protocols::ParseProtocol(st.protocol_toml, path);
-    if (std::error_code ec; !path.empty() && fs::exists(path, ec) &&
-                            db::HashText(ReadTextFile(path)) != st.protocol_hash)
-      Log(opt, ProtocolOnDiskNote(st.protocol_toml, ReadTextFile(path)));
+    auto p = ResumedProtocol(st, prov, opt);
     // The recorded mode, or with --change-mode the new one (logged).
     const SessionMode recorded = RecordedModeOf(se, opt.db_path);
     const SessionMode now = ModeOf(opt);
@@ -435,80 +497,16 @@ RunSummary ResumeStudy(const RunOptions& opt) {
         (PersonTakesPart(opt) && !HasConfirmedConsent(database, se.id)))
       if (const auto consent = ObtainConsent(p, opt, opt.participant))
         RecordConsent(database, se.id, *consent);
-    if (differs) {
-      database.LogEvent({.session_id = se.id,
-                         .kind = db::EventKind::kModeChange,
-                         .detail = fmt::format("resumed in a new mode: [{}] -> [{}]",
-                                               recorded.Describe(), now.Describe()),
-                         .established_by = source::CommandLine("--change-mode")});
-      database.SetSessionMode(se.id, now.device, ActuatorName(now.actuator), now.screens,
-                              now.rater.Name());
-      Log(opt, fmt::format("{}: mode changed from [{}] to [{}]", opt.participant,
-                           recorded.Describe(), now.Describe()));
-    } else if (!recorded.actuator) {
-      database.SetSessionMode(se.id, now.device, ActuatorName(now.actuator), now.screens,
-                              now.rater.Name());
-    }
-    const RunOptions& o = opt;
-    const std::string unclosed =
-        se.status == db::SessionStatus::kRunning
-            ? "; the previous run ended without closing the session (killed, crashed, or a "
-              "full disk)"
-            : "";
-    database.ReopenSession(se.id);
-    int done = 0;
-    for (const auto& t : database.Trials(se.id)) done += t.status == db::TrialStatus::kCompleted;
-    database.LogEvent({.session_id = se.id,
-                       .kind = db::EventKind::kResume,
-                       .detail = fmt::format("resumed with {} of {} trials completed{}", done,
-                                             database.Trials(se.id).size(), unclosed),
-                       .established_by = source::CommandLine("study resume")});
+    RecordResumeMode(database, se.id, recorded, now, differs, opt);
+    const int done = ReopenSession(database, se);
     Log(opt, fmt::format("{}: resuming session {} ({} trials completed; {})", opt.participant,
                          se.id, done, now.Describe()));
     const CheckpointAtEnd checkpoint{&database};
-    const SessionRig rig = RigOf(o, part->seed);
-    return internal::ExecuteSession(database, lab, se.id, *part, o, *rig.rig);
+    const SessionRig rig = RigOf(opt, part->seed);
+    return internal::ExecuteSession(database, lab, se.id, *part, opt, *rig.rig);
   }
   throw InputError(opt.db_path, 0, "participant",
                    "no participant " + opt.participant + " in this database");
-}
-
-std::vector<ParticipantStatus> StudyStatus(const std::string& db_path,
-                                           const std::string& participant) {
-  if (std::error_code ec; !fs::exists(db_path, ec))
-    throw InputError(db_path, 0, "db", "no such database");
-  const db::Database database = db::OpenForReading(db_path);  // quick_check; migrates an older file
-  std::vector<ParticipantStatus> out;
-  for (const auto& st : database.Studies())
-    for (const auto& part : database.Participants(st.id)) {
-      if (!participant.empty() && part.code != participant) continue;
-      ParticipantStatus s;
-      s.code = part.code;
-      std::map<int, int> completions;
-      for (const auto& se : database.Sessions(part.id)) {
-        s.session_status = se.status;
-        // Faulted attempts, each re-queued: the runner's 'attempt-faulted' events (schema v7;
-        // an older session counts the trials still waiting in 'faulted').
-        int attempts_faulted = 0, waiting = 0;
-        for (const auto& e : database.Events(se.id))
-          attempts_faulted += e.kind == db::EventKind::kAttemptFaulted;
-        for (const auto& t : database.Trials(se.id)) {
-          ++s.planned;
-          if (t.status == db::TrialStatus::kCompleted) {
-            ++s.completed;
-            ++completions[t.plan_index];
-          }
-          waiting += t.status == db::TrialStatus::kFaulted;
-        }
-        s.faulted += std::max(attempts_faulted, waiting);
-      }
-      for (const auto& [i, c] : completions) s.duplicates += c > 1 ? c - 1 : 0;
-      out.push_back(s);
-    }
-  if (!participant.empty() && out.empty())
-    throw InputError(db_path, 0, "participant",
-                     "no participant " + participant + " in this database");
-  return out;
 }
 
 }  // namespace hapticlab::runner

@@ -212,47 +212,43 @@ class Variables {
   std::map<std::string, Column> raw_, cols_;
 };
 
-}  // namespace
-
-namespace detail {
-
-LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
-  const std::size_t n = data.rows();
-  Variables vars(data, f);
+// The fixed-effects matrix X with its column names and terms. R's coding: factor v of term T
+// gets contrasts when T without v is in the model.
+void FixedEffects(const LmmFormula& f, Variables& vars, std::size_t n, detail::LmmDesign* d) {
   auto& cols = vars.cols();
-  LmmDesign d;
-  d.y = detail::IsColumnName(f.response_term) ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
-                                                    data.y.data(), static_cast<Eigen::Index>(n)))
-                                              : vars.Evaluate(f.response_term);
-  // R's coding: factor v of term T gets contrasts when T without v is in the model.
   std::set<std::set<std::string>> model;
   if (f.intercept) model.insert(std::set<std::string>{});
   for (const auto& t : f.fixed) model.insert(std::set<std::string>(t.begin(), t.end()));
   std::vector<Eigen::VectorXd> xc;
   if (f.intercept) {
     xc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
-    d.x_names = {"(Intercept)"};
+    d->x_names = {"(Intercept)"};
   }
   for (const auto& t : f.fixed) {
     for (const auto& v : t) vars.Add(v);
-    LmmDesign::Term term{Join(t), {}};
+    detail::LmmDesign::Term term{Join(t), {}};
     const auto before = xc.size();
     auto full = [&](const std::string& v) {
       std::set<std::string> rest(t.begin(), t.end());
       rest.erase(v);
       return model.count(rest) == 0;
     };
-    TermColumns(t, cols, n, full, xc, d.x_names);
+    TermColumns(t, cols, n, full, xc, d->x_names);
     for (auto j = before; j < xc.size(); ++j) term.columns.push_back(static_cast<int>(j));
-    d.x_terms.push_back(term);
+    d->x_terms.push_back(term);
   }
-  d.X.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(xc.size()));
-  for (std::size_t j = 0; j < xc.size(); ++j) d.X.col(static_cast<Eigen::Index>(j)) = xc[j];
+  d->X.resize(static_cast<Eigen::Index>(n), static_cast<Eigen::Index>(xc.size()));
+  for (std::size_t j = 0; j < xc.size(); ++j) d->X.col(static_cast<Eigen::Index>(j)) = xc[j];
+}
 
+// The random-effects matrix Z and its blocks, in lme4's order: decreasing number of grouping
+// levels (stable).
+void RandomEffects(const LongTable& data, const LmmFormula& f, Variables& vars, std::size_t n,
+                   detail::LmmDesign* d) {
+  auto& cols = vars.cols();
   std::map<std::string, Column> group_cols;
   for (const auto& r : f.random)
     if (!group_cols.count(r.group)) group_cols.emplace(r.group, GroupColumn(data, r, vars.raw()));
-  // Random terms in lme4's order: decreasing number of grouping levels (stable).
   std::vector<std::size_t> order(f.random.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -264,7 +260,7 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
   for (auto i : order) {
     const auto& r = f.random[i];
     std::vector<Eigen::VectorXd> zc;
-    LmmDesign::Block b;
+    detail::LmmDesign::Block b;
     b.group = r.group;
     if (r.intercept) {
       zc.emplace_back(Eigen::VectorXd::Ones(static_cast<Eigen::Index>(n)));
@@ -294,10 +290,25 @@ LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
         if (v != 0.0) trip.emplace_back(static_cast<int>(row), offset + g.level[row] * b.p + c, v);
       }
     offset += b.levels * b.p;
-    d.blocks.push_back(b);
+    d->blocks.push_back(b);
   }
-  d.Z.resize(static_cast<Eigen::Index>(n), offset);
-  d.Z.setFromTriplets(trip.begin(), trip.end());
+  d->Z.resize(static_cast<Eigen::Index>(n), offset);
+  d->Z.setFromTriplets(trip.begin(), trip.end());
+}
+
+}  // namespace
+
+namespace detail {
+
+LmmDesign BuildLmmDesign(const LongTable& data, const LmmFormula& f) {
+  const std::size_t n = data.rows();
+  Variables vars(data, f);
+  LmmDesign d;
+  d.y = detail::IsColumnName(f.response_term) ? Eigen::VectorXd(Eigen::Map<const Eigen::VectorXd>(
+                                                    data.y.data(), static_cast<Eigen::Index>(n)))
+                                              : vars.Evaluate(f.response_term);
+  FixedEffects(f, vars, n, &d);
+  RandomEffects(data, f, vars, n, &d);
   return d;
 }
 

@@ -11,6 +11,63 @@ namespace hapticlab::stats::lmm_internal {
 using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
+namespace {
+
+// Sorts the simplex's vertices by their function values, best first.
+void SortSimplex(std::vector<VectorXd>& sx, std::vector<double>& fx) {
+  std::vector<std::size_t> o(sx.size());
+  for (std::size_t i = 0; i < o.size(); ++i) o[i] = i;
+  std::sort(o.begin(), o.end(), [&](auto a, auto b) { return fx[a] < fx[b]; });
+  std::vector<VectorXd> s2;
+  std::vector<double> f2;
+  for (auto i : o) {
+    s2.push_back(sx[i]);
+    f2.push_back(fx[i]);
+  }
+  sx = s2;
+  fx = f2;
+}
+
+// One move of the sorted simplex about the centroid c of all but its worst vertex: reflection,
+// expansion, contraction (outside or inside), or a shrink toward the best vertex. `project`
+// keeps a point within the bounds; `eval` evaluates (and counts) the function.
+template <class Project, class Eval>
+void Move(std::vector<VectorXd>& sx, std::vector<double>& fx, const VectorXd& c,
+          const Project& project, const Eval& eval) {
+  const VectorXd xr = project(c + (c - sx.back()));
+  const double fr = eval(xr);
+  if (fr < fx.front()) {
+    const VectorXd xe = project(c + 2.0 * (c - sx.back()));
+    const double fe = eval(xe);
+    if (fe < fr) {
+      sx.back() = xe;
+      fx.back() = fe;
+    } else {
+      sx.back() = xr;
+      fx.back() = fr;
+    }
+  } else if (fr < fx[fx.size() - 2]) {
+    sx.back() = xr;
+    fx.back() = fr;
+  } else {
+    const bool outside = fr < fx.back();
+    const VectorXd xc =
+        project(outside ? VectorXd(c + 0.5 * (xr - c)) : VectorXd(c + 0.5 * (sx.back() - c)));
+    const double fc = eval(xc);
+    if (fc < std::min(fr, fx.back())) {
+      sx.back() = xc;
+      fx.back() = fc;
+    } else {
+      for (std::size_t i = 1; i < sx.size(); ++i) {
+        sx[i] = project(sx[0] + 0.5 * (sx[i] - sx[0]));
+        fx[i] = eval(sx[i]);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 Minimum NelderMead(const std::function<double(const VectorXd&)>& f, const VectorXd& x0,
                    const std::vector<double>& lower, int max_evals) {
   const Eigen::Index m = x0.size();
@@ -34,17 +91,7 @@ Minimum NelderMead(const std::function<double(const VectorXd&)>& f, const Vector
     }
     bool done = false;
     while (best.evaluations < max_evals) {
-      std::vector<std::size_t> o(sx.size());
-      for (std::size_t i = 0; i < o.size(); ++i) o[i] = i;
-      std::sort(o.begin(), o.end(), [&](auto a, auto b) { return fx[a] < fx[b]; });
-      std::vector<VectorXd> s2;
-      std::vector<double> f2;
-      for (auto i : o) {
-        s2.push_back(sx[i]);
-        f2.push_back(fx[i]);
-      }
-      sx = s2;
-      fx = f2;
+      SortSimplex(sx, fx);
       double extent = 0;
       for (std::size_t i = 1; i < sx.size(); ++i)
         extent = std::max(extent, (sx[i] - sx[0]).lpNorm<Eigen::Infinity>());
@@ -59,36 +106,7 @@ Minimum NelderMead(const std::function<double(const VectorXd&)>& f, const Vector
         ++best.evaluations;
         return f(x);
       };
-      const VectorXd xr = project(c + (c - sx.back()));
-      const double fr = eval(xr);
-      if (fr < fx.front()) {
-        const VectorXd xe = project(c + 2.0 * (c - sx.back()));
-        const double fe = eval(xe);
-        if (fe < fr) {
-          sx.back() = xe;
-          fx.back() = fe;
-        } else {
-          sx.back() = xr;
-          fx.back() = fr;
-        }
-      } else if (fr < fx[fx.size() - 2]) {
-        sx.back() = xr;
-        fx.back() = fr;
-      } else {
-        const bool outside = fr < fx.back();
-        const VectorXd xc =
-            project(outside ? VectorXd(c + 0.5 * (xr - c)) : VectorXd(c + 0.5 * (sx.back() - c)));
-        const double fc = eval(xc);
-        if (fc < std::min(fr, fx.back())) {
-          sx.back() = xc;
-          fx.back() = fc;
-        } else {
-          for (std::size_t i = 1; i < sx.size(); ++i) {
-            sx[i] = project(sx[0] + 0.5 * (sx[i] - sx[0]));
-            fx[i] = eval(sx[i]);
-          }
-        }
-      }
+      Move(sx, fx, c, project, eval);
     }
     const auto it = std::min_element(fx.begin(), fx.end());
     const double improvement = best.f - *it;

@@ -73,84 +73,96 @@ TukeyResult TukeyBetween(const LongTable& data, const std::string& factor, doubl
   return r;
 }
 
-TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool multivariate,
-                        double conf) {
-  TukeyResult r;
-  r.factor = factor;
-  const std::size_t n = a.subjects.size(), nc = a.cells.empty() ? 0 : a.cells[0].size();
-  const std::size_t ng = a.group_sizes.empty() ? 1 : a.group_sizes.size();
-  auto group_of = [&](std::size_t s) {
+namespace {
+
+// The between cells of a (mixed) ANOVA's subjects: one cell when it has no between factors.
+struct BetweenCells {
+  const RmAnovaResult& a;
+  std::size_t n = 0, ng = 1;  // subjects, between cells
+  double nu = 0;              // error degrees of freedom of a per-subject quantity
+
+  explicit BetweenCells(const RmAnovaResult& anova)
+      : a(anova),
+        n(anova.subjects.size()),
+        ng(anova.group_sizes.empty() ? 1 : anova.group_sizes.size()),
+        nu(anova.error_df > 0 ? anova.error_df : static_cast<double>(n) - 1) {}
+  std::size_t GroupOf(std::size_t s) const {
     return a.subject_group.empty() ? std::size_t{0} : static_cast<std::size_t>(a.subject_group[s]);
-  };
-  auto size_of = [&](std::size_t g) {
+  }
+  double SizeOf(std::size_t g) const {
     return a.group_sizes.empty() ? static_cast<double>(n) : static_cast<double>(a.group_sizes[g]);
-  };
-  const double nu = a.error_df > 0 ? a.error_df : static_cast<double>(n) - 1;
+  }
   // Unweighted mean over the between cells of a per-subject quantity v (emmeans averages the
   // between cells equally), and the residual variance of v around its cell means.
-  auto unweighted = [&](const std::vector<double>& v, double* resid_var) {
+  double Unweighted(const std::vector<double>& v, double* resid_var) const {
     std::vector<double> sum(ng, 0.0);
-    for (std::size_t s = 0; s < n; ++s) sum[group_of(s)] += v[s];
+    for (std::size_t s = 0; s < n; ++s) sum[GroupOf(s)] += v[s];
     double mean = 0;
-    for (std::size_t g = 0; g < ng; ++g) mean += sum[g] / size_of(g);
+    for (std::size_t g = 0; g < ng; ++g) mean += sum[g] / SizeOf(g);
     if (resid_var) {
       double ss = 0;
       for (std::size_t s = 0; s < n; ++s)
-        ss += std::pow(v[s] - sum[group_of(s)] / size_of(group_of(s)), 2);
+        ss += std::pow(v[s] - sum[GroupOf(s)] / SizeOf(GroupOf(s)), 2);
       *resid_var = ss / nu;
     }
     return mean / static_cast<double>(ng);
-  };
-  // (1/G^2) sum_g 1/n_g: the variance factor of an unweighted mean over the between cells.
-  double inv_n = 0;
-  for (std::size_t g = 0; g < ng; ++g) inv_n += 1.0 / size_of(g);
-  inv_n /= static_cast<double>(ng * ng);
-
-  std::size_t bf = 0;
-  while (bf < a.between.size() && a.between[bf] != factor) ++bf;
-  if (bf < a.between.size()) {
-    // Between factor: each subject's mean over all cells; level means average the between
-    // cells of the level equally; per-cell error from the subjects around their cell means.
-    r.method = "between-subjects (mixed ANOVA)";
-    const auto& levels = a.between_levels[bf];
-    r.k = static_cast<int>(levels.size());
-    std::vector<double> m(n, 0.0);
-    for (std::size_t s = 0; s < n; ++s) {
-      for (double v : a.cells[s]) m[s] += v;
-      m[s] /= static_cast<double>(nc);
-    }
-    std::vector<double> mu(ng, 0.0);
-    for (std::size_t s = 0; s < n; ++s) mu[group_of(s)] += m[s];
-    double ss = 0;
-    for (std::size_t g = 0; g < ng; ++g) mu[g] /= size_of(g);
-    for (std::size_t s = 0; s < n; ++s) ss += std::pow(m[s] - mu[group_of(s)], 2);
-    r.mse = ss / nu;
-    r.df = nu;
-    std::size_t stride = 1;
-    for (std::size_t g = bf + 1; g < a.between.size(); ++g) stride *= a.between_levels[g].size();
-    const std::size_t kf = levels.size();
-    auto level_of = [&](std::size_t g) { return (g / stride) % kf; };
-    // ng is the product of the between factors' level counts, kf one of them: exact division.
-    const double per_level = static_cast<double>(ng / kf);  // NOLINT(bugprone-integer-division)
-    AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
-      double est = 0, var = 0;
-      for (std::size_t g = 0; g < ng; ++g) {
-        const double c = level_of(g) == j ? 1 / per_level : level_of(g) == i ? -1 / per_level : 0.0;
-        est += c * mu[g];
-        var += c * c / size_of(g);
-      }
-      *diff = est;
-      *se = std::sqrt(r.mse * var);
-    });
-    return r;
   }
+  // (1/G^2) sum_g 1/n_g: the variance factor of an unweighted mean over the between cells.
+  double InvN() const {
+    double inv_n = 0;
+    for (std::size_t g = 0; g < ng; ++g) inv_n += 1.0 / SizeOf(g);
+    inv_n /= static_cast<double>(ng * ng);
+    return inv_n;
+  }
+};
 
+// Between factor bf: each subject's mean over all cells; level means average the between cells
+// of the level equally; per-cell error from the subjects around their cell means.
+void PairsBetween(const BetweenCells& b, std::size_t bf, double conf, TukeyResult& r) {
+  const RmAnovaResult& a = b.a;
+  const std::size_t n = b.n, ng = b.ng, nc = a.cells.empty() ? 0 : a.cells[0].size();
+  r.method = "between-subjects (mixed ANOVA)";
+  const auto& levels = a.between_levels[bf];
+  r.k = static_cast<int>(levels.size());
+  std::vector<double> m(n, 0.0);
+  for (std::size_t s = 0; s < n; ++s) {
+    for (double v : a.cells[s]) m[s] += v;
+    m[s] /= static_cast<double>(nc);
+  }
+  std::vector<double> mu(ng, 0.0);
+  for (std::size_t s = 0; s < n; ++s) mu[b.GroupOf(s)] += m[s];
+  double ss = 0;
+  for (std::size_t g = 0; g < ng; ++g) mu[g] /= b.SizeOf(g);
+  for (std::size_t s = 0; s < n; ++s) ss += std::pow(m[s] - mu[b.GroupOf(s)], 2);
+  r.mse = ss / b.nu;
+  r.df = b.nu;
+  std::size_t stride = 1;
+  for (std::size_t g = bf + 1; g < a.between.size(); ++g) stride *= a.between_levels[g].size();
+  const std::size_t kf = levels.size();
+  auto level_of = [&](std::size_t g) { return (g / stride) % kf; };
+  // ng is the product of the between factors' level counts, kf one of them: exact division.
+  const double per_level = static_cast<double>(ng / kf);  // NOLINT(bugprone-integer-division)
+  AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
+    double est = 0, var = 0;
+    for (std::size_t g = 0; g < ng; ++g) {
+      const double c = level_of(g) == j ? 1 / per_level : level_of(g) == i ? -1 / per_level : 0.0;
+      est += c * mu[g];
+      var += c * c / b.SizeOf(g);
+    }
+    *diff = est;
+    *se = std::sqrt(r.mse * var);
+  });
+}
+
+// Within factor f: the subjects' marginal means of each level (averaged over the other
+// factors' cells), pairs from the ANOVA's error term (univariate) or each difference's own
+// variance (multivariate).
+void PairsWithin(const BetweenCells& b, std::size_t f, bool multivariate, double conf,
+                 TukeyResult& r) {
+  const RmAnovaResult& a = b.a;
+  const std::size_t n = b.n, nc = a.cells.empty() ? 0 : a.cells[0].size();
+  const double inv_n = b.InvN();
   r.method = multivariate ? "multivariate" : "univariate";
-  std::size_t f = 0;
-  while (f < a.factors.size() && a.factors[f] != factor) ++f;
-  if (f == a.factors.size())
-    throw InputError("<command line>", 0, "factor",
-                     "'" + factor + "' is not a factor of this ANOVA");
   const auto& levels = a.levels[f];
   r.k = static_cast<int>(levels.size());
   // Subject marginal means of each level (averaged over the other factors' cells).
@@ -165,18 +177,39 @@ TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool 
   }
   const AnovaEffect* main = nullptr;
   for (const auto& e : a.effects)
-    if (e.effect == factor) main = &e;
+    if (e.effect == r.factor) main = &e;
   r.mse = main->MSE;
-  r.df = multivariate ? nu : main->df2;
+  r.df = multivariate ? b.nu : main->df2;
   // nc / kf: exact, as above.
   const double cells_per_level = static_cast<double>(nc / kf);  // NOLINT(bugprone-integer-division)
   AddPairs(r, levels, conf, [&](std::size_t i, std::size_t j, double* diff, double* se) {
     std::vector<double> d(n);
     for (std::size_t s = 0; s < n; ++s) d[s] = m[s][j] - m[s][i];
     double var = 0;
-    *diff = unweighted(d, &var);
+    *diff = b.Unweighted(d, &var);
     *se = multivariate ? std::sqrt(var * inv_n) : std::sqrt(2 * r.mse / cells_per_level * inv_n);
   });
+}
+
+}  // namespace
+
+TukeyResult TukeyWithin(const RmAnovaResult& a, const std::string& factor, bool multivariate,
+                        double conf) {
+  TukeyResult r;
+  r.factor = factor;
+  const BetweenCells cells(a);
+  std::size_t bf = 0;
+  while (bf < a.between.size() && a.between[bf] != factor) ++bf;
+  if (bf < a.between.size()) {
+    PairsBetween(cells, bf, conf, r);
+    return r;
+  }
+  std::size_t f = 0;
+  while (f < a.factors.size() && a.factors[f] != factor) ++f;
+  if (f == a.factors.size())
+    throw InputError("<command line>", 0, "factor",
+                     "'" + factor + "' is not a factor of this ANOVA");
+  PairsWithin(cells, f, multivariate, conf, r);
   return r;
 }
 
