@@ -16,7 +16,8 @@ TEST(Database, StoresModelsEventsAndChunks) {
   EXPECT_NE(db.SaveMaterialModel("Cork", "[contact]\nK_N_per_m = 2\n"), a);
   const auto se = test::AddStudySession(db).session;
   const auto t = db.AddTrial({.session_id = se, .phase = PhaseKind::kMain, .material = "Cork"});
-  db.LogEvent({.session_id = se, .trial_id = t, .kind = db::EventKind::kDeviceFault, .detail = "stale"});
+  db.LogEvent(
+      {.session_id = se, .trial_id = t, .kind = db::EventKind::kDeviceFault, .detail = "stale"});
   ASSERT_EQ(db.Events(se).size(), 1u);
   EXPECT_EQ(*db.Events(se)[0].trial_id, t);
   TrajectoryChunk c{.trial_id = t,

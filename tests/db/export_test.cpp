@@ -189,7 +189,8 @@ TEST(ExportFormats, CsvThroughTheRegistryReportsLeftOutTrajectories) {
   test::TempDir dir;
   Database db(dir.File("c.db"));
   const auto se = test::AddStudySession(db).session;
-  const auto ids = test::AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain}});
+  const auto ids =
+      test::AddTrials(db, {{.session_id = se, .plan_index = 0, .phase = PhaseKind::kMain}});
   db.InsertTrajectoryChunk({.trial_id = ids[0],
                             .stream = "force",
                             .start_time_s = 0,

@@ -96,7 +96,8 @@ void ExpectWhole(const std::string& path, std::int64_t session, int planned) {
 std::vector<std::int64_t> Plan(Database& db, std::int64_t session, int n, int first_index = 0) {
   std::vector<Trial> t;
   for (int i = first_index; i < first_index + n; ++i)
-    t.push_back({.session_id = session, .plan_index = i, .phase = PhaseKind::kMain, .material = "m"});
+    t.push_back(
+        {.session_id = session, .plan_index = i, .phase = PhaseKind::kMain, .material = "m"});
   return test::AddTrials(db, t);
 }
 

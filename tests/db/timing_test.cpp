@@ -22,7 +22,8 @@ std::pair<std::int64_t, std::int64_t> OneTrial(Database& db, const std::string& 
   const auto r = test::AddStudySession(db, {.name = name, .protocol_toml = "p", .seed = 1});
   return {
       r.study,
-      db.AddTrial({.session_id = r.session, .plan_index = 0, .phase = PhaseKind::kMain, .material = "D"})};
+      db.AddTrial(
+          {.session_id = r.session, .plan_index = 0, .phase = PhaseKind::kMain, .material = "D"})};
 }
 
 SideTiming Distinct(std::int64_t trial) {
