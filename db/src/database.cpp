@@ -16,6 +16,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <map>
 #include <set>
 #include <stdexcept>
@@ -43,10 +44,10 @@ std::string SiteCodeProblem(const std::string& code) {
 
 Database OpenForReading(const std::string& path) {
   struct stat st {};
-  if (::stat(path.c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+  const bool exists = ::stat(path.c_str(), &st) == 0;
+  if (exists && S_ISDIR(st.st_mode))
     throw InputError(path, 0, "db", "a folder, not a study database file");
-  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-    throw InputError(path, 0, "db", "no such database file");
+  if (!exists || !S_ISREG(st.st_mode)) throw InputError(path, 0, "db", "no such database file");
   std::string report;
   try {
     Database d(path, {.create = false, .read_only = true});
@@ -371,9 +372,8 @@ void Database::Backup(const std::string& dest) const {
   struct ::stat st {};
   if (::stat(dest.c_str(), &st) == 0)
     throw InputError(dest, 0, "DEST", "already exists; a backup never overwrites a file");
-  const std::string folder = dest.find('/') == std::string::npos
-                                 ? std::string(".")
-                                 : dest.substr(0, std::max<std::size_t>(dest.rfind('/'), 1));
+  const std::filesystem::path parent = std::filesystem::path(dest).parent_path();
+  const std::string folder = parent.empty() ? std::string(".") : parent.string();
   if (::stat(folder.c_str(), &st) != 0 || !S_ISDIR(st.st_mode))
     throw InputError(dest, 0, "DEST", "its folder " + folder + " does not exist");
   sqlite3* out = nullptr;
