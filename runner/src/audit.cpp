@@ -28,9 +28,8 @@ void CheckCode(const std::string& where, const std::string& code) {
   if (const std::string why = PseudonymousCodeProblem(code); !why.empty())
     throw InputError(where, 0, kField,
                      "'" + code + "' is not an experimenter code (" + why +
-                         "): expected a pseudonymous code of 1-32 letters, digits, '-' or '_' "
-                         "with at least one digit and no more than 3 letters in a row (e.g. "
-                         "E01), never a name");
+                         "): expected a pseudonymous code such as E01 (" + kPseudonymousCodeRule +
+                         ")");
 }
 
 }  // namespace

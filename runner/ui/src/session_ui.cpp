@@ -437,10 +437,9 @@ std::optional<std::string> WindowSessionUi::ConfirmConsent(const ConsentRequest&
       code = c;
       break;
     }
-    cv_.consent_error = fmt::format(
-        "'{}' is not an experimenter code ({}): 1 to 32 letters, digits, '-' or '_', with at "
-        "least one digit and no more than 3 letters in a row (e.g. E07), never a name",
-        c, why);
+    cv_.consent_error =
+        fmt::format("'{}' is not an experimenter code ({}): expected a code such as E07 ({})", c,
+                    why, kPseudonymousCodeRule);
   }
   pv_ = saved;
   cv_.state = state;

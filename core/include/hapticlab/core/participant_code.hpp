@@ -12,4 +12,9 @@ namespace hapticlab {
 /// no day-month shape (1-2 digits, '-' or '_', 1-2 digits); '@' and '.' are not allowed.
 std::string PseudonymousCodeProblem(const std::string& code);
 
+/// The rule above in one sentence, for messages that ask for a code again.
+inline constexpr const char* kPseudonymousCodeRule =
+    "1-32 letters, digits, '-' or '_' with at least one digit, no more than 3 letters in a "
+    "row, at most 5 digits and no date-like digit groups; never a name";
+
 }  // namespace hapticlab
